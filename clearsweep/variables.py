@@ -1,0 +1,89 @@
+"""Registry of output variables: one place for dims, units and long names.
+
+Every dataset builder (one case, sweep summaries) reads this table and never
+repeats a unit or a long name (DESIGN.md section 8).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class VariableSpec:
+    dims: tuple[str, ...]
+    units: str
+    long_name: str
+    description: str = ""
+
+
+JOINTS = ("A", "B")
+AXES = ("x", "y", "z")
+
+#: Per-case variables (DESIGN.md section 8), plus the diagnostics the kernel keeps.
+CASE_VARIABLES: dict[str, VariableSpec] = {
+    "crank_angle": VariableSpec(("time",), "rad", "crank angle theta",
+                                "driven crank angle theta0 + omega t"),
+    "slider_position": VariableSpec(("time",), "m", "slider position x_B"),
+    "slider_velocity": VariableSpec(("time",), "m s-1", "slider velocity"),
+    "slider_acceleration": VariableSpec(("time",), "m s-2", "slider acceleration"),
+    "crank_torque": VariableSpec(("time",), "N m", "driving torque on the crank about X"),
+    "reaction_O": VariableSpec(("time", "axis"), "N", "reaction of the ground on the crank at O",
+                               "global frame"),
+    "joint_force": VariableSpec(("time", "joint", "axis"), "N", "force on the ball of the spherical joint",
+                                "global frame; constraint reaction (ideal joint) or contact force "
+                                "(clearance joint) acting on the ball"),
+    "normal_force": VariableSpec(("time", "joint"), "N", "normal contact force F_N",
+                                 "zero for ideal joints and while out of contact"),
+    "friction_force": VariableSpec(("time", "joint"), "N", "magnitude of the friction force F_t"),
+    "penetration": VariableSpec(("time", "joint"), "m", "penetration depth delta",
+                                "e - c_eff(n); negative while free flight"),
+    "eccentricity": VariableSpec(("time", "joint"), "m", "ball-centre offset e = |d|"),
+    "ball_offset": VariableSpec(("time", "joint", "axis"), "m", "ball-centre offset d in the socket frame",
+                                "d = ball centre - socket centre, socket body frame"),
+    "wear_depth_max": VariableSpec(("time", "joint"), "m", "maximum wear depth on the wear map",
+                                   "largest bin of the socket wear map so far"),
+    "energy_kinetic": VariableSpec(("time",), "J", "kinetic energy"),
+    "energy_potential": VariableSpec(("time",), "J", "potential energy (gravity + contact elastic)"),
+    "work_drive": VariableSpec(("time",), "J", "work done by the crank drive since t = 0"),
+    "energy_dissipated": VariableSpec(("time",), "J", "energy dissipated by contact damping and friction"),
+    "energy_residual": VariableSpec(("time",), "J", "energy balance residual",
+                                    "E_kin + E_pot - W_drive + E_diss - (E_kin + E_pot)(t=0)"),
+    "constraint_violation": VariableSpec(("time",), "m", "largest position-constraint violation"),
+    "wear_map": VariableSpec(("joint", "polar", "azimuth"), "m", "socket wear depth map",
+                             "bin-averaged Archard wear depth over the socket inner sphere, socket frame"),
+    "wear_projection": VariableSpec(("joint", "axis", "angle"), "m", "wear depth projected per axis",
+                                    "paper Eq. 15-17: k |F_N,axis| dS / A binned by the contact "
+                                    "direction's angle about the axis, socket frame"),
+    "wear_volume": VariableSpec(("joint",), "m3", "worn volume sum of k F_N dS"),
+    "substeps_used": VariableSpec((), "1", "largest number of RK4 sub-steps in one output step",
+                                  "2**k of the deepest sub-step level used (1 = never split)"),
+    "rk4_steps": VariableSpec((), "1", "RK4 steps taken, sub-steps included"),
+    "energy_residual_max": VariableSpec((), "J", "largest absolute energy residual"),
+    "energy_residual_relative": VariableSpec((), "1", "largest energy residual / peak kinetic energy"),
+    "wall_time": VariableSpec((), "s", "wall-clock time of the simulation"),
+}
+
+#: Coordinates and their attributes.
+COORDINATES: dict[str, VariableSpec] = {
+    "time": VariableSpec(("time",), "s", "time"),
+    "joint": VariableSpec(("joint",), "", "spherical joint (A: crank-rod, B: rod-slider)"),
+    "axis": VariableSpec(("axis",), "", "Cartesian axis"),
+    "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre",
+                          "measured from the socket frame's +z axis"),
+    "azimuth": VariableSpec(("azimuth",), "degree", "azimuth of the wear-map bin centre",
+                            "atan2(y, x) in the socket frame"),
+    "angle": VariableSpec(("angle",), "degree", "projection angle bin centre",
+                          "about x: atan2(n_z, n_y); about y: atan2(n_x, n_z); about z: atan2(n_y, n_x)"),
+}
+
+
+def attrs_for(name: str) -> dict[str, str]:
+    """CF attributes (units, long_name, description) of a registered variable."""
+    spec = CASE_VARIABLES.get(name) or COORDINATES[name]
+    out = {"long_name": spec.long_name}
+    if spec.units:
+        out["units"] = spec.units
+    if spec.description:
+        out["description"] = spec.description
+    return out
