@@ -1,0 +1,107 @@
+"""Coated spherical contact law, friction, contact area (DESIGN 3, 5; paper Table 1, Eq. 11-13).
+
+Pure functions of floats in SI units.
+"""
+
+import math
+
+from numba import njit
+
+
+@njit(cache=True)
+def elastic_force(delta, c, ew, ri):
+    """Elastic part F_el = k_N(delta) delta [N] and its slope dF_el/d delta [N/m].
+
+    k_N = (4 pi E_w R_i / 5) (2 delta c + delta^2) / (c + delta)^2 (Table 1, exponent n = 1).
+    """
+    kk = 4.0 * math.pi * ew * ri / 5.0
+    cd = c + delta
+    f = kk * delta * delta * (2.0 * c + delta) / (cd * cd)
+    df = kk * delta * (4.0 * c * c + 3.0 * c * delta + delta * delta) / (cd * cd * cd)
+    return f, df
+
+
+@njit(cache=True)
+def elastic_energy(delta, c, ew, ri):
+    """Elastic energy U [J] whose derivative is F_el (DESIGN 8).
+
+    U = K [delta^2/2 - c^2 ln(1 + delta/c) + c^2 delta/(c + delta)] = K c^2 u(x), x = delta/c,
+    u(x) = x^2/2 - log1p(x) + x/(1+x). The leading terms cancel (u ~ 2 x^3 / 3), so small x
+    uses the series u = sum_{n>=3} (-1)^(n+1) (n-1)/n x^n.
+    """
+    if delta <= 0.0:
+        return 0.0
+    kk = 4.0 * math.pi * ew * ri / 5.0
+    x = delta / c
+    if x < 1e-2:
+        u = 0.0
+        for n in range(11, 2, -1):
+            sign = 1.0 if n % 2 == 1 else -1.0
+            u = (u + sign * (n - 1.0) / n) * x if n > 3 else (u + sign * (n - 1.0) / n)
+        u *= x * x * x
+    else:
+        u = 0.5 * x * x - math.log1p(x) + x / (1.0 + x)
+    return kk * c * c * u
+
+
+@njit(cache=True)
+def damping_factor(cr, dv0):
+    """kappa = 20 (1 - c_r) / (13 c_r delta_dot0) [s/m], so that chi_N = kappa k_N (Table 1)."""
+    return 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
+
+
+@njit(cache=True)
+def normal_force(delta, ddot, c, ew, ri, kappa):
+    """Normal force F_N = k_N delta (1 + kappa delta_dot), clamped at 0 [N].
+
+    Returns (F_N, F_el, dF/d delta, dF/d delta_dot).
+    """
+    fel, dfel = elastic_force(delta, c, ew, ri)
+    fac = 1.0 + kappa * ddot
+    fn = fel * fac
+    if fn < 0.0:
+        return 0.0, fel, 0.0, 0.0
+    return fn, fel, dfel * fac, kappa * fel
+
+
+@njit(cache=True)
+def friction_factor(vt, v0, v1):
+    """Dynamic correction c_d of the improved Coulomb law (DESIGN 3.3)."""
+    if vt < v0:
+        return 0.0
+    if vt > v1:
+        return 1.0
+    return (vt - v0) / (v1 - v0)
+
+
+@njit(cache=True)
+def cap_height(e, ri, rj):
+    """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
+
+    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e), e the eccentricity.
+    """
+    return (e - ri + rj) * (e + rj + ri) / (2.0 * e)
+
+
+@njit(cache=True)
+def contact_area(e, ri, rj):
+    """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
+    return 2.0 * math.pi * rj * cap_height(e, ri, rj)
+
+
+@njit(cache=True)
+def contact_angle(e, ri, rj):
+    """Angle beta of Eq. 11 [rad], from the cancellation-free 1 + cos beta."""
+    opc = cap_height(e, ri, rj) / rj
+    return math.acos(max(-1.0, min(1.0, opc - 1.0)))
+
+
+@njit(cache=True)
+def stiff_rate(m_eff, k, c):
+    """Largest root magnitude |s| of m s^2 + c s + k = 0 [1/s] (DESIGN 4)."""
+    if m_eff <= 0.0:
+        return 0.0
+    disc = c * c - 4.0 * m_eff * k
+    if disc <= 0.0:
+        return math.sqrt(max(k, 0.0) / m_eff)
+    return (c + math.sqrt(disc)) / (2.0 * m_eff)

@@ -1,0 +1,543 @@
+"""Equations of motion of the RSSP mechanism (DESIGN 2-3; paper Eq. 5, 29).
+
+The Baumgarte-stabilised augmented system
+
+    [ M   Cq^T ] [ qdd    ]   [ Qe + Q_contact            ]
+    [ Cq  0    ] [ lambda ] = [ gamma - 2 a C_dot - b^2 C ]
+
+is solved exactly by exploiting its structure. Every constraint except the ideal spherical
+joints acts on one body only and fixes a coordinate's acceleration directly (crank: revolute
+O + driver, 6 rows on 6 coordinates; rod spin gamma3 = 0; slider: y, z and three angles).
+The remaining free coordinates z = [r3, alpha3, beta3, x4] carry a block-diagonal mass
+matrix and at most six rows (ideal A, ideal B), solved through the Schur complement
+S = C M^-1 C^T. The crank's multipliers (torque, reaction at O) follow from its own
+equations once the joint forces are known. Implemented: gamma3 = 0 as published (paper
+Eq. 24).
+"""
+
+import math
+
+from numba import njit
+
+from .contact import (damping_factor, elastic_energy, friction_factor, normal_force,
+                      stiff_rate)
+from .kinematics import (add, cross, dot, gdot_phidot, gmat, mtv, mv, point_accel_quadratic,
+                         point_jacobian_rot, point_state, rot_mass, rotation, scale, sub)
+from .layout import (D_CEFF, D_CONS, D_DDOT, D_DELTA, D_DFD, D_DFDD, D_NGLOBAL, D_ECC, D_FN, D_FT, D_HWEAR, D_JOINT_FORCE,
+                     D_KE, D_NORMAL, D_OFFSET, D_PDISS, D_PDRIVE, D_PE_GRAV, D_RATE, D_REACTION_O,
+                     D_SLIDER_ACC, D_TORQUE, D_UEL, D_VT, J_C, J_CLEARANCE, J_EW, J_MU, J_RI,
+                     J_RJ, P_BAUM_A, P_BAUM_B, P_CR, P_DV0_MIN, P_FRICTION, P_G, P_J2, P_J3, P_J4,
+                     P_L2, P_L3, P_M2, P_M3, P_M4, P_OMEGA, P_THETA0, P_V0, P_V1, P_WEAR, P_ZS,
+                     S_DV0, ST_OK, ST_SINGULAR, Y_DISS, Y_QD, Y_WORK)
+from .wear import map_bin
+
+NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
+
+
+@njit(cache=True)
+def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
+    """Contact state and force of one clearance joint (DESIGN 3).
+
+    Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
+    Returns (F on the ball [N], Q_j, Q_i, F_N, dF/d delta, dF/d delta_dot, delta, delta_dot,
+    e, n, d_socket, n_socket, |v_t|, c_eff, h, U_el, P_diss).
+    """
+    c = jp_j[J_C]
+    ri = jp_j[J_RI]
+    rj = jp_j[J_RJ]
+    pb, _ = point_state(rb, vb, Rb, wb, ub)
+    ps, _ = point_state(rs, vs, Rs, ws_, us)
+    d = sub(pb, ps)
+    e = math.sqrt(dot(d, d))
+    if e > 0.0:
+        n = scale(1.0 / e, d)
+    else:
+        n = (1.0, 0.0, 0.0)
+    d_s = mtv(Rs, d)
+    n_s = mtv(Rs, n)
+    h = 0.0
+    if p[P_WEAR] != 0.0:
+        ip, ia = map_bin(n_s, wmap_j.shape[0], wmap_j.shape[1])
+        h = wmap_j[ip, ia]
+    c_eff = c + h
+    delta = e - c_eff
+    qj = add(pb, scale(rj, n))
+    qi = add(ps, scale(ri, n))
+    zero = (0.0, 0.0, 0.0)
+    if delta <= 0.0:
+        return (zero, qj, qi, 0.0, 0.0, 0.0, delta, 0.0, e, n, d_s, n_s, 0.0, c_eff, h, 0.0, 0.0)
+    vqj = add(vb, mv(Rb, cross(wb, mtv(Rb, sub(qj, rb)))))
+    vqi = add(vs, mv(Rs, cross(ws_, mtv(Rs, sub(qi, rs)))))
+    v = sub(vqj, vqi)
+    ddot = dot(n, v)
+    vt = sub(v, scale(ddot, n))
+    vtn = math.sqrt(dot(vt, vt))
+    dv0 = s_j[S_DV0]
+    if dv0 <= 0.0:
+        dv0 = max(ddot, p[P_DV0_MIN])
+    kappa = damping_factor(p[P_CR], dv0)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, jp_j[J_EW], ri, kappa)
+    force = scale(-fn, n)
+    pdiss = (fn - fel) * ddot
+    if p[P_FRICTION] != 0.0 and vtn > 0.0:
+        ft = jp_j[J_MU] * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
+        force = add(force, scale(-ft / vtn, vt))
+        pdiss += ft * vtn
+    uel = elastic_energy(delta, c_eff, jp_j[J_EW], ri)
+    return (force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h, uel, pdiss)
+
+
+@njit(cache=True)
+def body_moment(R, r, q, f):
+    """Body-frame moment of the global force f applied at global point q."""
+    return mtv(R, cross(sub(q, r), f))
+
+
+@njit(cache=True)
+def solve_spd(S, b, nc, L):
+    """Solve S x = b in place (b <- x) by Cholesky; L receives the factor. False if singular."""
+    for i in range(nc):
+        for j in range(i + 1):
+            acc = S[i, j]
+            for k in range(j):
+                acc -= L[i, k] * L[j, k]
+            if i == j:
+                if acc <= 0.0:
+                    return False
+                L[i, i] = math.sqrt(acc)
+            else:
+                L[i, j] = acc / L[j, j]
+    chol_solve(L, b, nc)
+    return True
+
+
+@njit(cache=True)
+def chol_solve(L, b, nc):
+    """Solve L L^T x = b in place."""
+    for i in range(nc):
+        acc = b[i]
+        for k in range(i):
+            acc -= L[i, k] * b[k]
+        b[i] = acc / L[i, i]
+    for i in range(nc - 1, -1, -1):
+        acc = b[i]
+        for k in range(i + 1, nc):
+            acc -= L[k, i] * b[k]
+        b[i] = acc / L[i, i]
+
+
+@njit(cache=True)
+def minv_apply(minv, mr_inv, v, out):
+    """out = M_zz^-1 v for the block-diagonal free-coordinate mass matrix."""
+    out[0] = minv[0] * v[0]
+    out[1] = minv[0] * v[1]
+    out[2] = minv[0] * v[2]
+    out[3] = mr_inv[0] * v[3] + mr_inv[1] * v[4]
+    out[4] = mr_inv[2] * v[3] + mr_inv[3] * v[4]
+    out[5] = minv[1] * v[5]
+
+
+@njit(cache=True)
+def mobility(g, C, L, nc, minv, mr_inv, w1, w2, lam):
+    """g^T W g, W the constrained inverse mass of the free coordinates (DESIGN 4 m_eff)."""
+    minv_apply(minv, mr_inv, g, w1)
+    for i in range(nc):
+        acc = 0.0
+        for k in range(NZ):
+            acc += C[i, k] * w1[k]
+        lam[i] = acc
+    if nc > 0:
+        chol_solve(L, lam, nc)
+    for k in range(NZ):
+        acc = g[k]
+        for i in range(nc):
+            acc -= C[i, k] * lam[i]
+        w2[k] = acc
+    minv_apply(minv, mr_inv, w2, w1)
+    acc = 0.0
+    for k in range(NZ):
+        acc += g[k] * w1[k]
+    return acc
+
+
+@njit(cache=True)
+def rod_point_row(g, Jr, vec, sign):
+    """Add sign * (d r_P/d z)^T vec for a rod point with rotation block Jr."""
+    g[0] += sign * vec[0]
+    g[1] += sign * vec[1]
+    g[2] += sign * vec[2]
+    g[3] += sign * (Jr[0] * vec[0] + Jr[3] * vec[1] + Jr[6] * vec[2])
+    g[4] += sign * (Jr[1] * vec[0] + Jr[4] * vec[1] + Jr[7] * vec[2])
+
+
+@njit(cache=True)
+def contact_rate(j, vec, g, R3, G3, qi_or_qj_rod, r3, C, L, nc, minv, mr_inv, w1, w2, lam):
+    """Inverse effective mass 1/m_eff of joint j's relative contact motion along vec."""
+    for k in range(NZ):
+        g[k] = 0.0
+    # Rod point: the socket of A (sign -1: relative motion is ball - socket) or the ball of B.
+    Jr = point_jacobian_rot(R3, mtv(R3, sub(qi_or_qj_rod, r3)), G3)
+    if j == 0:
+        rod_point_row(g, Jr, vec, -1.0)
+    else:
+        rod_point_row(g, Jr, vec, 1.0)
+        g[5] -= vec[0]  # slider socket moves along X only
+    return mobility(g, C, L, nc, minv, mr_inv, w1, w2, lam)
+
+
+@njit(cache=True)
+def tangent_basis(n):
+    """Two unit vectors orthogonal to the unit vector n."""
+    if abs(n[0]) < 0.9:
+        a = (1.0, 0.0, 0.0)
+    else:
+        a = (0.0, 1.0, 0.0)
+    t1 = cross(n, a)
+    t1 = scale(1.0 / math.sqrt(dot(t1, t1)), t1)
+    return t1, cross(n, t1)
+
+
+@njit(cache=True)
+def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
+    """Right-hand side dy = f(t, y) of the mechanism; diagnostics into dg.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : float64[38]
+        State (layout.Y_*): q, qd, drive work, dissipated energy.
+    p, jp : float64 arrays
+        Packed parameters (layout.P_*, layout.J_*).
+    s : float64[2, 2]
+        Discrete contact state (impact velocity, contact angle) per joint.
+    wmap : float64[2, npolar, nazim]
+        Wear map [m].
+    dy : float64[38]
+        Output derivative.
+    dg : float64[N_D]
+        Output diagnostics (forces, contact state; with ``full`` also energies, constraint
+        violation and the stiff rate of DESIGN 4).
+    full : bool
+        Compute the energies, constraint violation and stiff rates too.
+    C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, 8x6).
+
+    Returns
+    -------
+    int
+        layout.ST_OK or layout.ST_SINGULAR.
+    """
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    l2 = p[P_L2]
+    l3 = p[P_L3]
+    m2 = p[P_M2]
+    m3 = p[P_M3]
+    m4 = p[P_M4]
+    grav = (p[P_G], p[P_G + 1], p[P_G + 2])
+    J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
+    J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
+    qd = Y_QD
+
+    # ---- bodies ----
+    r2 = (y[0], y[1], y[2])
+    r3 = (y[6], y[7], y[8])
+    r4 = (y[12], y[13], y[14])
+    v2 = (y[qd + 0], y[qd + 1], y[qd + 2])
+    v3 = (y[qd + 6], y[qd + 7], y[qd + 8])
+    v4 = (y[qd + 12], y[qd + 13], y[qd + 14])
+    pd2 = (y[qd + 3], y[qd + 4], y[qd + 5])
+    pd3 = (y[qd + 9], y[qd + 10], y[qd + 11])
+    pd4 = (y[qd + 15], y[qd + 16], y[qd + 17])
+    R2 = rotation(y[3], y[4], y[5])
+    R3 = rotation(y[9], y[10], y[11])
+    R4 = rotation(y[15], y[16], y[17])
+    G2 = gmat(y[4], y[5])
+    G3 = gmat(y[10], y[11])
+    G4 = gmat(y[16], y[17])
+    w2 = mv(G2, pd2)
+    w3 = mv(G3, pd3)
+    w4 = mv(G4, pd4)
+    gq2 = gdot_phidot(y[4], y[5], pd2[0], pd2[1], pd2[2])
+    gq3 = gdot_phidot(y[10], y[11], pd3[0], pd3[1], pd3[2])
+
+    uO = (0.0, 0.0, 0.5 * l2)
+    uA2 = (0.0, 0.0, -0.5 * l2)
+    uA3 = (-0.5 * l3, 0.0, 0.0)
+    uB3 = (0.5 * l3, 0.0, 0.0)
+    zero = (0.0, 0.0, 0.0)
+
+    # ---- accelerations fixed by single-body constraints (Baumgarte rows) ----
+    theta = p[P_THETA0] + p[P_OMEGA] * t
+    pdd2 = (-2.0 * a_b * pd2[0] - b_b * b_b * y[3],
+            -2.0 * a_b * pd2[1] - b_b * b_b * y[4],
+            -2.0 * a_b * (pd2[2] - p[P_OMEGA]) - b_b * b_b * (y[5] - theta))
+    wd2 = add(mv(G2, pdd2), gq2)
+    pO, vO = point_state(r2, v2, R2, w2, uO)
+    rdd2 = sub(sub(scale(-2.0 * a_b, vO), scale(b_b * b_b, pO)),
+               mv(R2, add(cross(wd2, uO), cross(w2, cross(w2, uO)))))
+    gdd3 = -2.0 * a_b * pd3[2] - b_b * b_b * y[11]
+    ydd4 = -2.0 * a_b * v4[1] - b_b * b_b * y[13]
+    zdd4 = -2.0 * a_b * v4[2] - b_b * b_b * (y[14] - p[P_ZS])
+    for k in range(3):
+        dy[qd + 15 + k] = -2.0 * a_b * y[qd + 15 + k] - b_b * b_b * y[15 + k]
+
+    # ---- applied forces: gravity, contact ----
+    F2 = scale(m2, grav)
+    N2 = zero
+    F3 = scale(m3, grav)
+    N3 = zero
+    F4x = m4 * grav[0]
+    pdiss = 0.0
+    for j in range(2):
+        dg[D_FN + j] = 0.0
+        dg[D_FT + j] = 0.0
+        dg[D_DELTA + j] = 0.0
+        dg[D_DDOT + j] = 0.0
+        dg[D_VT + j] = 0.0
+        dg[D_UEL + j] = 0.0
+        dg[D_HWEAR + j] = 0.0
+        dg[D_ECC + j] = 0.0
+        dg[D_CEFF + j] = 0.0
+        dg[D_DFD + j] = 0.0
+        dg[D_DFDD + j] = 0.0
+    fA = zero
+    fB = zero
+    # joint A: ball = crank pin, socket = rod end (socket frame: rod)
+    if jp[0, J_CLEARANCE] != 0.0:
+        cA = contact(jp[0], s[0], wmap[0], p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3)
+        fA = cA[0]
+        F2 = add(F2, fA)
+        N2 = add(N2, body_moment(R2, r2, cA[1], fA))
+        F3 = sub(F3, fA)
+        N3 = sub(N3, body_moment(R3, r3, cA[2], fA))
+        pdiss += cA[16]
+        store_contact(dg, 0, cA)
+    # joint B: ball = rod end, socket = slider (socket frame: slider)
+    if jp[1, J_CLEARANCE] != 0.0:
+        cB = contact(jp[1], s[1], wmap[1], p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero)
+        fB = cB[0]
+        F3 = add(F3, fB)
+        N3 = add(N3, body_moment(R3, r3, cB[1], fB))
+        F4x -= fB[0]
+        pdiss += cB[16]
+        store_contact(dg, 1, cB)
+
+    # ---- rod generalised forces ----
+    Jw3 = (J3[0] * w3[0], J3[1] * w3[1], J3[2] * w3[2])
+    Jg3 = (J3[0] * gq3[0], J3[1] * gq3[1], J3[2] * gq3[2])
+    mom3 = sub(N3, add(cross(w3, Jw3), Jg3))
+    Qp3 = mtv(G3, mom3)
+    Mr3 = rot_mass(J3, G3)
+    f = vz[0]
+    f[0] = F3[0]
+    f[1] = F3[1]
+    f[2] = F3[2]
+    f[3] = Qp3[0] - Mr3[2] * gdd3
+    f[4] = Qp3[1] - Mr3[5] * gdd3
+    f[5] = F4x
+    det = Mr3[0] * Mr3[4] - Mr3[1] * Mr3[3]
+    if not det > 0.0:
+        return ST_SINGULAR
+    mr_inv = (Mr3[4] / det, -Mr3[1] / det, -Mr3[3] / det, Mr3[0] / det)
+    minv = (1.0 / m3, 1.0 / m4)
+
+    # ---- ideal spherical joints: rows of C (free coordinates) and right-hand sides ----
+    nc = 0
+    rhs = vz[1]
+    a2A = add(add(rdd2, mv(R2, cross(wd2, uA2))), mv(R2, cross(w2, cross(w2, uA2))))
+    JrA = point_jacobian_rot(R3, uA3, G3)
+    JrB = point_jacobian_rot(R3, uB3, G3)
+    cons = 0.0
+    if jp[0, J_CLEARANCE] == 0.0:
+        p3A, v3A = point_state(r3, v3, R3, w3, uA3)
+        p2A, v2A = point_state(r2, v2, R2, w2, uA2)
+        cpos = sub(p3A, p2A)
+        cvel = sub(v3A, v2A)
+        quad = point_accel_quadratic(R3, w3, gq3, uA3)
+        for i in range(3):
+            for k in range(NZ):
+                C[nc + i, k] = 0.0
+            C[nc + i, i] = 1.0
+            C[nc + i, 3] = JrA[3 * i]
+            C[nc + i, 4] = JrA[3 * i + 1]
+            rhs[nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
+                           - quad[i] + a2A[i])
+            cons = max(cons, abs(cpos[i]))
+        nc += 3
+    if jp[1, J_CLEARANCE] == 0.0:
+        p3B, v3B = point_state(r3, v3, R3, w3, uB3)
+        cpos = sub(r4, p3B)
+        cvel = sub(v4, v3B)
+        quad = point_accel_quadratic(R3, w3, gq3, uB3)
+        known4 = (0.0, ydd4, zdd4)
+        for i in range(3):
+            for k in range(NZ):
+                C[nc + i, k] = 0.0
+            C[nc + i, i] = -1.0
+            C[nc + i, 3] = -JrB[3 * i]
+            C[nc + i, 4] = -JrB[3 * i + 1]
+            rhs[nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
+                           + JrB[3 * i + 2] * gdd3 + quad[i])
+            cons = max(cons, abs(cpos[i]))
+        C[nc, 5] = 1.0
+        nc += 3
+
+    # ---- Schur complement solve ----
+    zdd = vz[2]
+    mf = vz[3]
+    lam = vz[4]
+    minv_apply(minv, mr_inv, f, mf)
+    if nc > 0:
+        mcol = vz[5]
+        for i in range(nc):
+            acc = -rhs[i]
+            for k in range(NZ):
+                acc += C[i, k] * mf[k]
+            lam[i] = acc
+        for jj in range(nc):
+            for k in range(NZ):
+                mcol[k] = C[jj, k]
+            minv_apply(minv, mr_inv, mcol, vz[6])
+            for i in range(jj, nc):
+                acc = 0.0
+                for k in range(NZ):
+                    acc += C[i, k] * vz[6][k]
+                S[i, jj] = acc
+                S[jj, i] = acc
+        if not solve_spd(S, lam, nc, L):
+            return ST_SINGULAR
+        for k in range(NZ):
+            acc = f[k]
+            for i in range(nc):
+                acc -= C[i, k] * lam[i]
+            mcol[k] = acc
+        minv_apply(minv, mr_inv, mcol, zdd)
+    else:
+        for k in range(NZ):
+            zdd[k] = mf[k]
+
+    # ---- assemble qdd ----
+    for k in range(18):
+        dy[k] = y[qd + k]
+    dy[qd + 0] = rdd2[0]
+    dy[qd + 1] = rdd2[1]
+    dy[qd + 2] = rdd2[2]
+    dy[qd + 3] = pdd2[0]
+    dy[qd + 4] = pdd2[1]
+    dy[qd + 5] = pdd2[2]
+    dy[qd + 6] = zdd[0]
+    dy[qd + 7] = zdd[1]
+    dy[qd + 8] = zdd[2]
+    dy[qd + 9] = zdd[3]
+    dy[qd + 10] = zdd[4]
+    dy[qd + 11] = gdd3
+    dy[qd + 12] = zdd[5]
+    dy[qd + 13] = ydd4
+    dy[qd + 14] = zdd4
+
+    # ---- joint forces on the balls; crank multipliers ----
+    k0 = 0
+    if jp[0, J_CLEARANCE] == 0.0:
+        fA = (lam[0], lam[1], lam[2])
+        k0 = 3
+        qA = add(r2, mv(R2, uA2))
+        F2 = add(F2, fA)
+        N2 = add(N2, body_moment(R2, r2, qA, fA))
+    if jp[1, J_CLEARANCE] == 0.0:
+        fB = (lam[k0], lam[k0 + 1], lam[k0 + 2])
+    Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
+    Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
+    Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
+    Mr2 = rot_mass(J2, G2)
+    Mp2 = mv(Mr2, pdd2)
+    lamO = sub(F2, scale(m2, rdd2))
+    JO = point_jacobian_rot(R2, uO, G2)
+    lam_ang = sub(sub(Qp2, Mp2), mtv(JO, lamO))
+    torque = -lam_ang[2]
+    dy[Y_WORK] = torque * pd2[2]
+    dy[Y_DISS] = pdiss
+
+    dg[D_SLIDER_ACC] = zdd[5]
+    dg[D_TORQUE] = torque
+    for i in range(3):
+        dg[D_REACTION_O + i] = -lamO[i]
+        dg[D_JOINT_FORCE + i] = fA[i]
+        dg[D_JOINT_FORCE + 3 + i] = fB[i]
+    dg[D_PDRIVE] = dy[Y_WORK]
+    dg[D_PDISS] = pdiss
+
+    if full:
+        J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
+        ke = 0.5 * (m2 * dot(v2, v2) + m3 * dot(v3, v3) + m4 * dot(v4, v4))
+        ke += 0.5 * (J2[0] * w2[0] ** 2 + J2[1] * w2[1] ** 2 + J2[2] * w2[2] ** 2)
+        ke += 0.5 * (J3[0] * w3[0] ** 2 + J3[1] * w3[1] ** 2 + J3[2] * w3[2] ** 2)
+        ke += 0.5 * (J4[0] * w4[0] ** 2 + J4[1] * w4[1] ** 2 + J4[2] * w4[2] ** 2)
+        dg[D_KE] = ke
+        dg[D_PE_GRAV] = -(m2 * dot(grav, r2) + m3 * dot(grav, r3) + m4 * dot(grav, r4))
+        cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
+        cons = max(cons, max(abs(y[13]), abs(y[14] - p[P_ZS])))
+        dg[D_CONS] = cons
+        rate = 0.0
+        for j in range(2):
+            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+                rate = max(rate, joint_rate(j, jp[j], p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz))
+        dg[D_RATE] = rate
+    return ST_OK
+
+
+@njit(cache=True)
+def joint_rate(j, jp_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
+    """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (DESIGN 4).
+
+    The effective masses are those of the relative contact motion with every constraint in
+    place (the crank is driven, hence of infinite mass).
+    """
+    n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
+    if j == 0:
+        # the socket point Q_i on the rod
+        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp_j[J_RI], n))
+    else:
+        # the ball point Q_j on the rod
+        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp_j[J_RJ], n))
+    g = vz[7]
+    inv_m = contact_rate(j, n, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv, vz[2], vz[3], vz[4])
+    if not inv_m > 0.0:
+        return 0.0
+    rate = stiff_rate(1.0 / inv_m, dg[D_DFD + j], dg[D_DFDD + j])
+    mu = jp_j[J_MU]
+    fn = dg[D_FN + j]
+    if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+        t1, t2 = tangent_basis(n)
+        inv_t = max(contact_rate(j, t1, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv,
+                                 vz[2], vz[3], vz[4]),
+                    contact_rate(j, t2, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv,
+                                 vz[2], vz[3], vz[4]))
+        vt = dg[D_VT + j]
+        slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
+        rate = max(rate, mu * fn * slope * inv_t)
+    return rate
+
+
+@njit(cache=True)
+def store_contact(dg, j, cres):
+    """Copy one joint's contact state into the diagnostics vector."""
+    force = cres[0]
+    fn = cres[3]
+    dg[D_FN + j] = fn
+    ft_vec = add(force, scale(fn, cres[9]))
+    dg[D_FT + j] = math.sqrt(dot(ft_vec, ft_vec))
+    dg[D_DELTA + j] = cres[6]
+    dg[D_DDOT + j] = cres[7]
+    dg[D_ECC + j] = cres[8]
+    for i in range(3):
+        dg[D_OFFSET + 3 * j + i] = cres[10][i]
+        dg[D_NORMAL + 3 * j + i] = cres[11][i]
+    dg[D_VT + j] = cres[12]
+    dg[D_CEFF + j] = cres[13]
+    dg[D_HWEAR + j] = cres[14]
+    dg[D_UEL + j] = cres[15]
+    dg[D_DFD + j] = cres[4]
+    dg[D_DFDD + j] = cres[5]
+    for i in range(3):
+        dg[D_NGLOBAL + 3 * j + i] = cres[9][i]

@@ -1,0 +1,108 @@
+"""Named indices of the kernel's flat vectors, and status codes.
+
+Plain integers: Numba folds them into the compiled code as constants.
+"""
+
+# --- global parameter vector p (float64) -----------------------------------
+P_L2 = 0            # crank length l2 [m]
+P_L3 = 1            # rod length l3 [m]
+P_ZS = 2            # slider guide height z_s [m]
+P_M2 = 3            # crank mass [kg]
+P_M3 = 4            # rod mass [kg]
+P_M4 = 5            # slider mass [kg]
+P_J2 = 6            # crank principal inertia, 3 values [kg m^2]
+P_J3 = 9            # rod principal inertia, 3 values [kg m^2]
+P_J4 = 12           # slider principal inertia, 3 values [kg m^2]
+P_G = 15            # gravity vector, 3 values [m/s^2]
+P_OMEGA = 18        # crank speed [rad/s]
+P_THETA0 = 19       # initial crank angle [rad]
+P_BAUM_A = 20       # Baumgarte alpha [1/s]
+P_BAUM_B = 21       # Baumgarte beta [1/s]
+P_CR = 22           # restitution coefficient [-]
+P_DV0_MIN = 23      # floor of the impact velocity [m/s]
+P_FRICTION = 24     # 1.0 = friction on
+P_V0 = 25           # friction ramp start [m/s]
+P_V1 = 26           # friction ramp end [m/s]
+P_WEAR = 27         # 1.0 = wear on
+P_SLIP = 28         # 0.0 sliding |v_t| dt, 1.0 paper R_i |d beta|
+P_AMPL = 29         # wear amplification [-]
+P_PEN_FRAC = 30     # penetration stop, fraction of c [-]
+P_CONS_TOL = 31     # constraint violation stop [m]
+P_ENERGY_TOL = 32   # energy residual stop, fraction of the throughput [-]
+P_STAB = 33         # largest accepted rate * h [-]
+P_DT = 34           # output-grid step h [s]
+P_MAX_LEVEL = 35    # largest sub-step level k (2**k sub-steps)
+N_P = 36
+
+# --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
+J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
+J_C = 1             # radial clearance c [m]
+J_RI = 2            # socket radius R_i [m]
+J_RJ = 3            # ball radius R_j [m]
+J_EW = 4            # equivalent modulus E_w [Pa]
+J_MU = 5            # friction coefficient of the socket surface [-]
+J_K = 6             # wear coefficient of the socket surface [m^2/N]
+N_JP = 7
+
+# --- state vector y ---------------------------------------------------------
+# q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
+N_Q = 18
+Y_QD = 18
+Y_WORK = 36         # work done by the drive [J]
+Y_DISS = 37         # energy dissipated by contact damping and friction [J]
+N_Y = 38
+
+# --- discrete contact state s[j, :] -----------------------------------------
+S_DV0 = 0           # impact velocity of the current contact, 0 = none [m/s]
+S_BETA = 1          # contact angle beta at the last accepted step [rad]
+N_S = 2
+
+# --- diagnostics vector d (one evaluation of the right-hand side) ----------
+D_SLIDER_ACC = 0
+D_TORQUE = 1
+D_REACTION_O = 2    # 3 values
+D_JOINT_FORCE = 5   # 2 x 3 values, joint-major
+D_FN = 11           # 2
+D_FT = 13           # 2
+D_DELTA = 15        # 2
+D_ECC = 17          # 2
+D_OFFSET = 19       # 2 x 3, ball-centre offset in the socket frame
+D_NORMAL = 25       # 2 x 3, contact normal in the socket frame
+D_DDOT = 31         # 2, normal approach rate
+D_VT = 33           # 2, tangential slip speed
+D_CEFF = 35         # 2, local clearance c_eff
+D_HWEAR = 37        # 2, wear depth under the contact point
+D_UEL = 39          # 2, contact elastic energy
+D_RATE = 41         # largest stiff rate of the system [1/s]
+D_KE = 42
+D_PE_GRAV = 43
+D_CONS = 44         # largest position-constraint violation [m]
+D_PDRIVE = 45
+D_PDISS = 46
+D_NGLOBAL = 47     # 2 x 3, contact normal in the global frame
+D_DFD = 53         # 2, dF_N/d delta [N/m]
+D_DFDD = 55        # 2, dF_N/d delta_dot [N s/m]
+N_D = 57
+
+# --- status codes -----------------------------------------------------------
+ST_OK = 0
+ST_UNSTABLE_STEP = 1
+ST_PENETRATION = 2
+ST_CONSTRAINT = 3
+ST_ENERGY = 4
+ST_NONFINITE = 5
+ST_EULER = 6
+ST_SINGULAR = 7
+
+STATUS_NAMES = {
+    ST_OK: "ok",
+    ST_UNSTABLE_STEP: "unstable_step",
+    ST_PENETRATION: "penetration_exceeded",
+    ST_CONSTRAINT: "constraint_violation",
+    ST_ENERGY: "energy_residual",
+    ST_NONFINITE: "non_finite",
+    ST_EULER: "euler_singularity",
+    ST_SINGULAR: "singular_constraints",
+}
+
+N_ANGLE_BINS = 360  # one-degree projection bins (DESIGN 5)

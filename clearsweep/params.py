@@ -1,0 +1,192 @@
+"""Presets, equivalent contact moduli and packing of a resolved config into kernel vectors.
+
+Geometry, masses and inertias: Jing & Liu 2023 (Lubricants 11, 310), Table 2, and
+DESIGN 1-1.1 (the `realistic` preset replaces the rod's printed inertia by a slender rod's).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .core import layout as L
+
+
+@dataclass(frozen=True)
+class Preset:
+    """Mechanism data in SI units."""
+
+    crank_length_m: float
+    rod_length_m: float
+    slider_height_m: float
+    crank_mass_kg: float
+    rod_mass_kg: float
+    slider_mass_kg: float
+    crank_inertia_kgm2: tuple[float, float, float]
+    rod_inertia_kgm2: tuple[float, float, float]
+    slider_inertia_kgm2: tuple[float, float, float]
+    source: str
+
+
+_COMMON = dict(crank_length_m=0.14, rod_length_m=0.38, slider_height_m=-0.12,
+               crank_mass_kg=1.3, rod_mass_kg=1.2, slider_mass_kg=2.2,
+               crank_inertia_kgm2=(1e-4, 1e-4, 1e-4), slider_inertia_kgm2=(1e-3, 1e-3, 1e-3))
+
+PRESETS: dict[str, Preset] = {
+    # Slender rod: m l^2 / 12 = 1.2 * 0.38^2 / 12 = 1.444e-2 kg m^2 about the transverse axes.
+    "realistic": Preset(**_COMMON, rod_inertia_kgm2=(1e-4, 1.444e-2, 1.444e-2),
+                        source="Jing & Liu 2023 Table 2; rod inertia m l^2/12 (DESIGN 1.1)"),
+    "paper": Preset(**_COMMON, rod_inertia_kgm2=(1e-5, 1e-5, 1e-5),
+                    source="Jing & Liu 2023 Table 2 as published"),
+}
+
+BASE_MATERIAL = "steel"  # socket base and ball (DESIGN 6)
+
+
+def oedometric_modulus(youngs_modulus_Pa: float, poisson_ratio: float) -> float:
+    """E* = E (1 - nu) / ((1 + nu)(1 - 2 nu)) [Pa] (DESIGN 3.2)."""
+    nu = poisson_ratio
+    return youngs_modulus_Pa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+def layer_modulus(surface, base, coating_thickness_m: float, base_thickness_m: float,
+                  coated: bool, rule: str = "series") -> tuple[float, float]:
+    """Modulus E_x [Pa] and Poisson ratio of one side of the double elastic layer (DESIGN 3.2).
+
+    ``series``: thickness fractions f = l / (l_c + l_s); ``paper_mm``: the paper's literal
+    thicknesses in millimetres (an uncoated side then has f_c = 0, f_s = l_s [mm]).
+    """
+    es = oedometric_modulus(base.youngs_modulus_Pa, base.poisson_ratio)
+    ec = oedometric_modulus(surface.youngs_modulus_Pa, surface.poisson_ratio) if coated else es
+    lc = coating_thickness_m if coated else 0.0
+    if rule == "series":
+        fc = lc / (lc + base_thickness_m)
+        fs = base_thickness_m / (lc + base_thickness_m)
+    elif rule == "paper_mm":
+        fc = lc * 1e3
+        fs = base_thickness_m * 1e3
+    else:
+        raise ValueError(f"unknown layer rule {rule!r}")
+    ex = ec * es / (es * fc + ec * fs)
+    return ex, (surface.poisson_ratio if coated else base.poisson_ratio)
+
+
+def equivalent_modulus(joint: dict, materials: dict, rule: str) -> float:
+    """E_w [Pa]: 1/E_w = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j, socket i (maybe coated), ball j."""
+    base = materials[BASE_MATERIAL]
+    coated = joint["coating"] != "none"
+    surface = materials[joint["coating"]] if coated else base
+    ei, nui = layer_modulus(surface, base, joint["coating_thickness"], joint["base_thickness"],
+                            coated, rule)
+    ej, nuj = layer_modulus(base, base, joint["coating_thickness"], joint["base_thickness"],
+                            False, rule)
+    return 1.0 / ((1.0 - nui ** 2) / ei + (1.0 - nuj ** 2) / ej)
+
+
+def surface_material(joint: dict, materials: dict):
+    """The socket surface's material: the coating where coated, else the base."""
+    return materials[BASE_MATERIAL if joint["coating"] == "none" else joint["coating"]]
+
+
+def ideal_slider_x(theta, l2: float, l3: float, zs: float):
+    """Closed-form slider position x_B(theta) [m] of DESIGN 1 (ideal joints)."""
+    return np.sqrt(l3 ** 2 - (l2 * np.sin(theta)) ** 2 - (zs + l2 * np.cos(theta)) ** 2)
+
+
+def initial_state(preset: Preset, theta0: float, omega: float) -> np.ndarray:
+    """State from ideal kinematics at theta0, every ball centred (DESIGN 1.1)."""
+    l2, l3, zs = preset.crank_length_m, preset.rod_length_m, preset.slider_height_m
+    st, ct = math.sin(theta0), math.cos(theta0)
+    y = np.zeros(L.N_Y)
+    # crank: centroid at -R2 (0, 0, l2/2), gamma2 = theta0
+    y[0:3] = (0.0, 0.5 * l2 * st, -0.5 * l2 * ct)
+    y[5] = theta0
+    y[L.Y_QD + 0: L.Y_QD + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
+    y[L.Y_QD + 5] = omega
+    a = np.array([0.0, l2 * st, -l2 * ct])
+    va = np.array([0.0, l2 * ct, l2 * st]) * omega
+    xb = float(ideal_slider_x(theta0, l2, l3, zs))
+    b = np.array([xb, 0.0, zs])
+    vb = np.array([omega * zs * l2 * st / xb, 0.0, 0.0])
+    d = (b - a) / l3
+    dd = (vb - va) / l3
+    y[6:9] = 0.5 * (a + b)
+    y[L.Y_QD + 6: L.Y_QD + 9] = 0.5 * (va + vb)
+    y[9] = math.atan2(d[1], d[0])
+    y[10] = -math.asin(d[2])
+    y[L.Y_QD + 9] = (d[0] * dd[1] - d[1] * dd[0]) / (d[0] ** 2 + d[1] ** 2)
+    y[L.Y_QD + 10] = -dd[2] / math.cos(y[10])
+    y[12:15] = b
+    y[L.Y_QD + 12] = vb[0]
+    return y
+
+
+@dataclass
+class Packed:
+    """Kernel inputs of one case."""
+
+    p: np.ndarray
+    jp: np.ndarray
+    y0: np.ndarray
+    n_steps: int
+    save_every: int
+    map_shape: tuple[int, int]
+
+
+def pack(cfg: dict, materials: dict) -> Packed:
+    """Resolved config (config.load_config) + materials -> kernel vectors (SI)."""
+    preset = PRESETS[cfg["mechanism"]["preset"]]
+    solver = cfg["solver"]
+    p = np.zeros(L.N_P)
+    p[L.P_L2] = preset.crank_length_m
+    p[L.P_L3] = preset.rod_length_m
+    p[L.P_ZS] = preset.slider_height_m
+    p[L.P_M2] = preset.crank_mass_kg
+    p[L.P_M3] = preset.rod_mass_kg
+    p[L.P_M4] = preset.slider_mass_kg
+    p[L.P_J2:L.P_J2 + 3] = preset.crank_inertia_kgm2
+    p[L.P_J3:L.P_J3 + 3] = preset.rod_inertia_kgm2
+    p[L.P_J4:L.P_J4 + 3] = preset.slider_inertia_kgm2
+    p[L.P_G:L.P_G + 3] = cfg["mechanism"]["gravity"]
+    omega = cfg["mechanism"]["speed_rpm"] * 2.0 * math.pi / 60.0
+    p[L.P_OMEGA] = omega
+    p[L.P_THETA0] = cfg["mechanism"]["theta0"]
+    p[L.P_BAUM_A], p[L.P_BAUM_B] = solver["baumgarte"]
+    contact = cfg["contact"]
+    p[L.P_CR] = contact["restitution"]
+    p[L.P_DV0_MIN] = contact["min_impact_velocity"]
+    p[L.P_PEN_FRAC] = contact["max_penetration_fraction"]
+    friction = cfg["friction"]
+    p[L.P_FRICTION] = 1.0 if friction["enabled"] else 0.0
+    p[L.P_V0] = friction["v0"]
+    p[L.P_V1] = friction["v1"]
+    wear = cfg["wear"]
+    p[L.P_WEAR] = 1.0 if wear["enabled"] else 0.0
+    p[L.P_SLIP] = 0.0 if wear["slip"] == "sliding" else 1.0
+    p[L.P_AMPL] = wear["amplification"]
+    p[L.P_CONS_TOL] = solver["constraint_tolerance"]
+    p[L.P_ENERGY_TOL] = solver["energy_tolerance"]
+    p[L.P_STAB] = solver["stability_limit"]
+    p[L.P_DT] = solver["dt"]
+    p[L.P_MAX_LEVEL] = solver["max_substep_level"]
+    jp = np.zeros((2, L.N_JP))
+    for j, name in enumerate(("A", "B")):
+        joint = cfg["joints"][name]
+        surface = surface_material(joint, materials)
+        c = joint["clearance"]
+        jp[j, L.J_CLEARANCE] = 1.0 if c > 0.0 else 0.0
+        jp[j, L.J_C] = c
+        jp[j, L.J_RI] = joint["socket_radius"]
+        jp[j, L.J_RJ] = joint["socket_radius"] - c
+        jp[j, L.J_EW] = equivalent_modulus(joint, materials, contact["layer_rule"])
+        jp[j, L.J_MU] = surface.friction_coefficient
+        k = joint["wear_coefficient"]
+        jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
+    n_steps = int(round(solver["duration"] / solver["dt"]))
+    save_every = int(solver["save_every"])
+    n_steps = max(save_every, (n_steps // save_every) * save_every)
+    y0 = initial_state(preset, cfg["mechanism"]["theta0"], omega)
+    return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
+                  map_shape=(int(wear["map"][0]), int(wear["map"][1])))
