@@ -1,0 +1,353 @@
+"""Configuration: defaults, normalisation, overrides, round trips and error messages."""
+
+import copy
+import pickle
+import re
+from pathlib import Path
+
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from clearsweep.config import (DEFAULTS, SCHEMA, ConfigError, apply_override, dump_config, get_path,
+                               load_config, resolve_materials, set_path)
+
+
+def leaf_keys(schema, prefix=""):
+    for name, spec in schema.items():
+        key = f"{prefix}{name}"
+        if isinstance(spec, dict):
+            yield from leaf_keys(spec, key + ".")
+        else:
+            yield key
+
+
+def write(tmp_path, text, name="case.yaml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+# ----------------------------------------------------------------------------- defaults
+
+def test_empty_mapping_gives_every_key_with_defaults():
+    cfg = load_config({})
+    assert cfg == DEFAULTS
+    for key in leaf_keys(SCHEMA):
+        get_path(cfg, key)  # present
+    assert cfg["mechanism"]["preset"] == "realistic"
+    assert cfg["joints"]["A"]["socket_radius"] == 0.015
+    assert cfg["solver"]["baumgarte"] == [5.0, 5.0]
+    assert cfg["wear"]["map"] == [36, 72]
+
+
+def test_defaults_are_the_documented_contract():
+    doc = Path(__file__).parents[1] / "docs" / "architecture.md"
+    if not doc.exists():
+        pytest.skip("docs/architecture.md is not beside the tests")
+    block = yaml.safe_load(re.search(r"```yaml\n(.*?)```", doc.read_text(), re.S).group(1))
+    block["joints"]["B"] = block["joints"]["A"]  # "same keys for B"
+    assert block == DEFAULTS
+    assert load_config(block) == DEFAULTS
+
+
+def test_result_is_new_and_inputs_are_untouched():
+    source = {"solver": {"dt": 1e-6}}
+    before = copy.deepcopy(source)
+    cfg = load_config(source)
+    cfg["solver"]["baumgarte"].append(1.0)
+    cfg["joints"]["A"]["clearance"] = 9.0
+    assert source == before
+    assert DEFAULTS["solver"]["baumgarte"] == [5.0, 5.0]
+    assert load_config({})["joints"]["B"]["clearance"] == 0.0
+    assert copy.deepcopy(DEFAULTS) == DEFAULTS
+
+
+def test_numbers_are_normalised(tmp_path):
+    path = write(tmp_path, """
+joints:
+  A: {clearance: 0, socket_radius: 1}
+mechanism: {gravity: [0, 0, -10], speed_rpm: 30}
+wear: {map: [18, 36]}
+solver: {baumgarte: [50, 50], dt: 1e-6, duration: 2}
+""")
+    cfg = load_config(path)
+    assert cfg["joints"]["A"]["clearance"] == 0.0 and type(cfg["joints"]["A"]["clearance"]) is float
+    assert type(cfg["joints"]["A"]["socket_radius"]) is float
+    assert [type(g) for g in cfg["mechanism"]["gravity"]] == [float] * 3
+    assert cfg["mechanism"]["gravity"] == [0.0, 0.0, -10.0]
+    assert [type(v) for v in cfg["wear"]["map"]] == [int, int]
+    assert [type(v) for v in cfg["solver"]["baumgarte"]] == [float, float]
+    assert cfg["solver"]["dt"] == 1e-6  # written without a dot, still a number
+    assert type(cfg["solver"]["duration"]) is float and type(cfg["solver"]["save_every"]) is int
+
+
+def test_tuples_become_lists():
+    cfg = load_config({"mechanism": {"gravity": (0, 0, 0)}})
+    assert cfg["mechanism"]["gravity"] == [0.0, 0.0, 0.0]
+
+
+def test_empty_section_means_defaults(tmp_path):
+    assert load_config(write(tmp_path, "wear:\nsolver:\n")) == DEFAULTS
+
+
+# ----------------------------------------------------------------------------- overrides
+
+@pytest.mark.parametrize("override, key, expected", [
+    ("solver.dt=2e-6", "solver.dt", 2e-6),
+    ("solver.duration=3", "solver.duration", 3.0),
+    ("solver.save_every=5", "solver.save_every", 5),
+    ("solver.baumgarte=[50,50]", "solver.baumgarte", [50.0, 50.0]),
+    ("wear.map=[10, 20]", "wear.map", [10, 20]),
+    ("friction.enabled=false", "friction.enabled", False),
+    ("joints.B.coating=PTFE", "joints.B.coating", "PTFE"),
+    ("joints.A.wear_coefficient=1.0e-13", "joints.A.wear_coefficient", 1e-13),
+    ("joints.A.wear_coefficient=null", "joints.A.wear_coefficient", None),
+    ("mechanism.preset=paper", "mechanism.preset", "paper"),
+    ("name=my run", "name", "my run"),
+    ("joints.B={clearance: 2.5e-4}", "joints.B.clearance", 2.5e-4),
+])
+def test_override_types(override, key, expected):
+    cfg = load_config({}, [override])
+    assert get_path(cfg, key) == expected
+    assert type(get_path(cfg, key)) is type(expected)
+
+
+def test_overrides_apply_in_order_over_the_file(tmp_path):
+    path = write(tmp_path, "solver: {dt: 1.0e-5}\n")
+    cfg = load_config(path, ["solver.dt=1e-6", "solver.dt=3e-6"])
+    assert cfg["solver"]["dt"] == 3e-6
+
+
+def test_a_single_string_is_one_override():
+    assert load_config({}, "solver.dt=2e-6")["solver"]["dt"] == 2e-6
+
+
+def test_apply_override_set_path_get_path():
+    cfg = copy.deepcopy(DEFAULTS)
+    assert apply_override(cfg, "joints.A.clearance=2.5e-4") is cfg
+    assert get_path(cfg, "joints.A.clearance") == 2.5e-4
+    set_path(cfg, "contact.restitution", 0.5)
+    assert cfg["contact"]["restitution"] == 0.5
+    new = {}
+    set_path(new, "a.b.c", 1)
+    assert new == {"a": {"b": {"c": 1}}}
+
+
+@pytest.mark.parametrize("override", ["solver.dt", "=1", "solver..dt=1", ""])
+def test_malformed_override(override):
+    with pytest.raises(ConfigError, match="KEY=VALUE"):
+        load_config({}, [override])
+
+
+def test_get_path_unknown_key_suggests():
+    with pytest.raises(ConfigError, match=r"did you mean 'solver\.dt'\?") as info:
+        get_path(DEFAULTS, "solver.dtt")
+    assert info.value.key == "solver.dtt"
+
+
+def test_set_path_through_a_value_is_an_error():
+    with pytest.raises(ConfigError, match="solver.dt is a value"):
+        set_path(copy.deepcopy(DEFAULTS), "solver.dt.x", 1)
+
+
+def test_error_from_override_is_marked(tmp_path):
+    path = write(tmp_path, "solver: {dt: 1.0e-5}\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path, ["solver.dt=-1"])
+    assert str(info.value) == f"{path}: solver.dt: got -1 (from --set); expected a number > 0"
+
+
+def test_override_value_that_is_bad_yaml():
+    with pytest.raises(ConfigError, match=r"solver\.baumgarte: got '\[50,50'; expected valid YAML"):
+        load_config({}, ["solver.baumgarte=[50,50"])
+
+
+# ----------------------------------------------------------------------------- round trips
+
+def test_dump_load_round_trip(tmp_path):
+    cfg = load_config({"name": "rt", "joints": {"B": {"clearance": 2.5e-4, "coating": "PTFE"}},
+                       "solver": {"dt": 1e-6, "baumgarte": [50, 50]}})
+    text = dump_config(cfg)
+    assert list(yaml.safe_load(text)) == list(SCHEMA)
+    assert load_config(write(tmp_path, text)) == cfg
+    assert load_config(cfg) == cfg
+
+
+def _field_values(spec):
+    """Hypothesis strategy for valid values of one schema field."""
+    if isinstance(spec.kind, tuple):
+        return st.sampled_from(spec.kind)
+    if spec.kind is bool:
+        return st.booleans()
+    if spec.kind is str:
+        text = st.text(st.characters(codec="utf-8", exclude_categories=("Cs", "Cc")), max_size=12)
+        return st.one_of(st.none(), text) if spec.nullable else text
+    if spec.kind is int:
+        one = st.integers(min_value=int(spec.lo), max_value=int(spec.hi) if spec.hi is not None else 10**6)
+    else:
+        lo = spec.lo if spec.lo is not None else -1e6
+        hi = spec.hi if spec.hi is not None else 1e6
+        one = st.floats(lo, hi, exclude_min=spec.lo_open, exclude_max=spec.hi_open,
+                        allow_nan=False, allow_infinity=False)
+    if spec.size:
+        return st.lists(one, min_size=spec.size, max_size=spec.size)
+    return st.one_of(st.none(), one) if spec.nullable else one
+
+
+def _configs(schema=SCHEMA):
+    return st.fixed_dictionaries({name: _configs(spec) if isinstance(spec, dict) else _field_values(spec)
+                                  for name, spec in schema.items() if name != "materials_file"})
+
+
+def _consistent(raw):
+    """Make the drawn values satisfy the relations between fields."""
+    for joint in raw["joints"].values():
+        joint["socket_radius"] = 2.0 * joint["clearance"] + joint["socket_radius"]
+        joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
+    raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
+    raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
+    return raw
+
+
+@settings(max_examples=60, deadline=None)
+@given(_configs().map(_consistent))
+def test_round_trip_property(raw):
+    cfg = load_config(raw)
+    assert load_config(yaml.safe_load(dump_config(cfg))) == cfg
+    assert dump_config(load_config(yaml.safe_load(dump_config(cfg)))) == dump_config(cfg)
+
+
+# ----------------------------------------------------------------------------- errors
+
+BAD = [
+    # (yaml text, key, value received, words expected in the message)
+    ("joints:\n  A:\n    clearence: 0.001\n", "joints.A.clearence", 0.001,
+     "did you mean 'joints.A.clearance'?"),
+    ("mechanim: {}\n", "mechanim", {}, "did you mean 'mechanism'?"),
+    ("joints:\n  B:\n    coating: ptfe\n", "joints.B.coating", "ptfe", "did you mean 'PTFE'?"),
+    ("joints:\n  B:\n    coating: teflon\n", "joints.B.coating", "teflon", "a known material"),
+    ("joints:\n  A:\n    clearance: -0.001\n", "joints.A.clearance", -0.001, "a number >= 0"),
+    ("joints:\n  A:\n    clearance: 0.02\n", "joints.A.clearance", 0.02,
+     "< joints.A.socket_radius (0.015)"),
+    ("joints:\n  B:\n    socket_radius: 1.0e-4\n    clearance: 2.0e-4\n", "joints.B.clearance", 2e-4,
+     "< joints.B.socket_radius"),
+    ("solver:\n  dt: 0\n", "solver.dt", 0, "a number > 0"),
+    ("solver:\n  dt: -1.0e-5\n", "solver.dt", -1e-5, "a number > 0"),
+    ("solver:\n  dt: 2.0\n", "solver.dt", 2.0, "<= solver.duration (1.0)"),
+    ("solver:\n  dt: fast\n", "solver.dt", "fast", "a number > 0"),
+    ("solver:\n  dt: '1.0e-5'\n", "solver.dt", "1.0e-5", "a number > 0"),
+    ("mechanism:\n  speed_rpm: true\n", "mechanism.speed_rpm", True, "a number > 0"),
+    ("mechanism:\n  speed_rpm: .nan\n", "mechanism.speed_rpm", float("nan"), "a number > 0"),
+    ("mechanism:\n  gravity: [0, -9.81]\n", "mechanism.gravity", [0, -9.81], "a list of 3 numbers"),
+    ("mechanism:\n  preset: papr\n", "mechanism.preset", "papr", "did you mean 'paper'?"),
+    ("contact:\n  restitution: 0\n", "contact.restitution", 0, "0 < x <= 1"),
+    ("contact:\n  restitution: 1.5\n", "contact.restitution", 1.5, "0 < x <= 1"),
+    ("contact:\n  layer_rule: paper\n", "contact.layer_rule", "paper", "'series', 'paper_mm'"),
+    ("friction:\n  v0: 1.0e-3\n  v1: 1.0e-4\n", "friction.v1", 1e-4, "> friction.v0"),
+    ("friction:\n  enabled: 1\n", "friction.enabled", 1, "true or false"),
+    ("wear:\n  slip: slide\n", "wear.slip", "slide", "did you mean 'sliding'?"),
+    ("wear:\n  map: [0, 72]\n", "wear.map", [0, 72], "a list of 2 integers >= 1"),
+    ("wear:\n  map: [36.0, 72]\n", "wear.map", [36.0, 72], "integers"),
+    ("wear:\n  amplification: -1\n", "wear.amplification", -1, ">= 0"),
+    ("solver:\n  save_every: 0\n", "solver.save_every", 0, "an integer >= 1"),
+    ("solver:\n  save_every: 2.5\n", "solver.save_every", 2.5, "an integer >= 1"),
+    ("solver:\n  max_substep_level: 17\n", "solver.max_substep_level", 17, "0 <= x <= 16"),
+    ("solver:\n  stability_limit: 2.8\n", "solver.stability_limit", 2.8, "0 < x < 2.8"),
+    ("solver:\n  baumgarte: [5, -1]\n", "solver.baumgarte", [5, -1], "2 numbers >= 0"),
+    ("solver: 5\n", "solver", 5, "a mapping with keys dt, duration"),
+    ("name: 12\n", "name", 12, "a string"),
+    ("sweep:\n  grid: {}\n", "sweep", {"grid": {}}, "clearsweep sweep"),
+    ("base: {}\n", "base", {}, "clearsweep sweep"),
+]
+
+
+@pytest.mark.parametrize("text, key, value, words", BAD, ids=[b[1] + ":" + repr(b[2]) for b in BAD])
+def test_bad_values_name_file_key_and_value(tmp_path, text, key, value, words):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    err = info.value
+    assert err.key == key and err.source == str(path)
+    assert str(err).startswith(f"{path}: {key}: got {value!r}; expected ")
+    assert words in str(err)
+
+
+def test_message_format_exactly():
+    with pytest.raises(ConfigError) as info:
+        load_config({"joints": {"A": {"clearence": 0.001}}}, source_name="my.yaml")
+    assert str(info.value) == (
+        "my.yaml: joints.A.clearence: got 0.001; expected one of the keys of joints.A (clearance, "
+        "socket_radius, coating, coating_thickness, base_thickness, wear_coefficient); "
+        "did you mean 'joints.A.clearance'?")
+    assert info.value.value == 0.001 and info.value.suggestion == "joints.A.clearance"
+    assert isinstance(info.value, ValueError)
+
+
+def test_dict_source_is_named_config():
+    with pytest.raises(ConfigError, match=r"^<config>: solver\.dt: got -1;"):
+        load_config({"solver": {"dt": -1}})
+
+
+def test_malformed_yaml_names_file_and_line(tmp_path):
+    path = write(tmp_path, "name: x\nsolver:\n  dt: [1.0e-5\n  duration: 1\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value).startswith(f"{path}: line ")
+    assert info.value.line in (3, 4) and "expected valid YAML" in str(info.value)
+
+
+@pytest.mark.parametrize("text, got", [("", "an empty file"), ("# only a comment\n", "an empty file"),
+                                       ("- a\n- b\n", "['a', 'b']"), ("just text\n", "'just text'")])
+def test_top_level_must_be_a_mapping(tmp_path, text, got):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError, match="expected a mapping with keys name, materials_file") as info:
+        load_config(path)
+    assert str(info.value).startswith(f"{path}: got {got}; ")
+
+
+def test_missing_file():
+    with pytest.raises(ConfigError, match=r"no/such\.yaml: got 'no/such\.yaml' \(No such file"):
+        load_config("no/such.yaml")
+
+
+def test_errors_survive_pickling():
+    with pytest.raises(ConfigError) as info:
+        load_config({"joints": {"B": {"coating": "ptfe"}}}, source_name="c.yaml")
+    again = pickle.loads(pickle.dumps(info.value))
+    assert str(again) == str(info.value) and again.key == "joints.B.coating"
+
+
+# ----------------------------------------------------------------------------- materials file
+
+USER_MATERIALS = """
+bronze:
+  youngs_modulus_Pa: {value: 1.1e+11, source: "handbook"}
+  poisson_ratio: {value: 0.34, source: "handbook"}
+  friction_coefficient: {value: 0.1, source: "handbook"}
+  wear_coefficient_m2_per_N: {value: 1.0e-13, source: "handbook"}
+"""
+
+
+def test_materials_file_is_relative_to_the_config(tmp_path, monkeypatch):
+    (tmp_path / "cfg").mkdir()
+    write(tmp_path / "cfg", USER_MATERIALS, "mine.yaml")
+    path = write(tmp_path / "cfg", "materials_file: mine.yaml\njoints: {B: {coating: bronze}}\n")
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config("cfg/case.yaml")
+    assert cfg["materials_file"] == str(tmp_path / "cfg" / "mine.yaml")
+    assert resolve_materials(cfg)["bronze"].friction_coefficient == 0.1
+    assert load_config(write(tmp_path, dump_config(cfg), "elsewhere.yaml")) == cfg
+    assert load_config(path, ["joints.A.coating=bronze"])["joints"]["A"]["coating"] == "bronze"
+
+
+def test_missing_materials_file(tmp_path):
+    path = write(tmp_path, "materials_file: nope.yaml\n")
+    with pytest.raises(ConfigError, match=r"materials_file: got 'nope\.yaml'; expected an existing"):
+        load_config(path)
+
+
+def test_user_material_unknown_without_its_file():
+    with pytest.raises(ConfigError, match="joints.B.coating: got 'bronze'"):
+        load_config({"joints": {"B": {"coating": "bronze"}}})
