@@ -198,6 +198,7 @@ def test_version_and_help_without_optional_modules(monkeypatch):
 @pytest.mark.slow
 def test_run_end_to_end(tmp_path):
     pytest.importorskip("clearsweep.simulation")
+    pytest.importorskip("clearsweep.analysis")  # the run summary
     path = tmp_path / "short.yaml"
     path.write_text("joints:\n  B: {clearance: 2.5e-4, coating: PTFE}\n"
                     "solver: {duration: 2.0e-3, save_every: 10}\n")
