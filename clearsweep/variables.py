@@ -79,11 +79,59 @@ COORDINATES: dict[str, VariableSpec] = {
 
 
 def attrs_for(name: str) -> dict[str, str]:
-    """CF attributes (units, long_name, description) of a registered variable."""
-    spec = CASE_VARIABLES.get(name) or COORDINATES[name]
+    """CF attributes (units, long_name, description) of a registered variable.
+
+    Looks ``name`` up in ``CASE_VARIABLES``, then ``SUMMARY_VARIABLES``, then
+    ``COORDINATES``; an unregistered name raises ``KeyError``.
+    """
+    spec = CASE_VARIABLES.get(name) or SUMMARY_VARIABLES.get(name) or COORDINATES[name]
     out = {"long_name": spec.long_name}
     if spec.units:
         out["units"] = spec.units
     if spec.description:
         out["description"] = spec.description
     return out
+
+
+#: Per-case summaries derived from the variables above (``analysis.case_summary``,
+#: ``analysis.wear_table``, ``analysis.reduction_table``); DESIGN.md sections 5, 7 and 9.
+SUMMARY_VARIABLES: dict[str, VariableSpec] = {
+    "slider_acceleration_peak": VariableSpec((), "m s-2", "peak absolute slider acceleration",
+                                             "max |slider_acceleration| over the whole run"),
+    "slider_acceleration_rms": VariableSpec((), "m s-2", "RMS slider acceleration",
+                                            "root mean square over the whole run"),
+    "slider_acceleration_peak_settled": VariableSpec(
+        (), "m s-2", "peak absolute slider acceleration after start-up",
+        "max |slider_acceleration| over time >= the settle_time_s attribute [s]"),
+    "slider_acceleration_rms_settled": VariableSpec(
+        (), "m s-2", "RMS slider acceleration after start-up",
+        "root mean square over time >= the settle_time_s attribute [s]"),
+    "normal_force_peak": VariableSpec(("joint",), "N", "peak normal contact force"),
+    "wear_depth_max_final": VariableSpec(("joint",), "m", "maximum wear depth at the end of the run",
+                                         "largest bin of the final socket wear map"),
+    "wear_depth_axis_max": VariableSpec(("joint", "axis"), "m", "maximum projected wear depth",
+                                        "max of wear_projection over angle (paper Tables 4-5)"),
+    "wear_angle_of_max": VariableSpec(("joint", "axis"), "degree", "angle of the maximum projected wear",
+                                      "centre of the first bin holding the maximum"),
+    "wear_angle_min": VariableSpec(("joint", "axis"), "degree", "minimum wear angle",
+                                   "smallest bin centre whose depth exceeds wear_threshold_fraction "
+                                   "of the axis maximum (paper Tables 4-5, DESIGN.md 5)"),
+    "wear_angle_max": VariableSpec(("joint", "axis"), "degree", "maximum wear angle",
+                                   "largest bin centre whose depth exceeds wear_threshold_fraction "
+                                   "of the axis maximum (paper Tables 4-5, DESIGN.md 5)"),
+    "wear_range": VariableSpec(("joint", "axis"), "degree", "wear range",
+                               "wear_angle_max - wear_angle_min (paper Tables 4-5)"),
+    "wear_depth_reduction": VariableSpec(("joint", "axis"), "m", "reduction of the maximum wear depth",
+                                         "reference minus case (paper Table 6)"),
+    "wear_depth_reduction_percent": VariableSpec(
+        ("joint", "axis"), "%", "reduction of the maximum wear depth in percent",
+        "100 (reference - case) / reference (paper Table 6)"),
+    "wear_range_reduction": VariableSpec(("joint", "axis"), "degree", "reduction of the wear range",
+                                         "reference minus case; negative where the range grew "
+                                         "(paper Table 6)"),
+    "wear_range_reduction_percent": VariableSpec(
+        ("joint", "axis"), "%", "reduction of the wear range in percent",
+        "100 (reference - case) / reference (paper Table 6)"),
+    "is_reference": VariableSpec((), "", "reference case of the comparison",
+                                 "true for the cases the reduction table compares against"),
+}
