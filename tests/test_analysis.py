@@ -1,0 +1,342 @@
+"""Wear tables (paper Tables 4-6), summaries and the report command, on synthetic data.
+
+Expected numbers are recomputed by hand from the constants of ``synthetic``.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+
+import synthetic as syn
+from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures)
+from clearsweep.analysis import (REPORT_FORMATS, SETTLE_TIME_S, SelectionError, case_summary,
+                                 format_metric_table, format_reduction_table, format_wear_table,
+                                 metric_table, parse_selection, reduction_table, report_command,
+                                 run_summary_text, wear_table)
+from clearsweep.dataset import write_netcdf_atomic
+from clearsweep.variables import SUMMARY_VARIABLES
+
+# (joint, axis) -> (max depth [m], angle of max, min angle, max angle, range [degree]) by hand
+# from synthetic.WEAR_PROFILES: bins on [lo, hi], peak at peak_angle.
+EXPECTED_WEAR = {
+    ("A", "x"): (7.5e-11, -150.5, -179.5, 179.5, 359.0),
+    ("A", "y"): (7.0e-12, 44.5, -4.5, 44.5, 49.0),
+    ("B", "x"): (8.0e-11, 20.5, -10.5, 40.5, 51.0),
+    ("B", "y"): (2.7e-11, 10.5, -5.5, 46.5, 52.0),
+    ("B", "z"): (1.2e-10, 27.5, -22.5, 27.5, 50.0),
+}
+
+
+@pytest.fixture(scope="module")
+def case_file(tmp_path_factory, case) -> str:
+    return str(write_netcdf_atomic(case, tmp_path_factory.mktemp("case") / "case.nc"))
+
+
+def invoke(*args: str):
+    return CliRunner().invoke(report_command, list(args))
+
+
+# --------------------------------------------------------------------------- wear table
+
+def test_wear_table_matches_hand_computed_bins(case):
+    table = wear_table(case)
+    assert table["wear_depth_axis_max"].dims == ("joint", "axis")
+    for (joint, axis), (depth, at_max, lo, hi, width) in EXPECTED_WEAR.items():
+        row = table.sel(joint=joint, axis=axis)
+        assert float(row["wear_depth_axis_max"]) == pytest.approx(depth, rel=1e-12)
+        assert float(row["wear_angle_of_max"]) == at_max
+        assert float(row["wear_angle_min"]) == lo
+        assert float(row["wear_angle_max"]) == hi
+        assert float(row["wear_range"]) == width
+
+
+def test_sub_threshold_bins_are_not_worn(case):
+    # Every bin outside [lo, hi] holds 1e-15 m > 0 but < 1e-3 of the peak: the
+    # angles must come from [lo, hi] only (B x would otherwise span -179.5..179.5).
+    table = wear_table(case).sel(joint="B", axis="x")
+    assert float(table["wear_angle_min"]) == -10.5
+
+
+def test_no_wear_gives_zero_depth_and_nan_angles(case):
+    row = wear_table(case).sel(joint="A", axis="z")
+    assert float(row["wear_depth_axis_max"]) == 0.0
+    for name in ("wear_angle_of_max", "wear_angle_min", "wear_angle_max", "wear_range"):
+        assert np.isnan(float(row[name]))
+
+
+def test_all_nan_projection_gives_nan_not_error(case):
+    failed = case.copy()
+    failed["wear_projection"] = case["wear_projection"] * np.nan
+    table = wear_table(failed)
+    assert np.isnan(table["wear_depth_axis_max"]).all()
+    assert np.isnan(table["wear_range"]).all()
+
+
+def test_wear_table_units_come_from_registry(case):
+    table = wear_table(case)
+    for name in table.data_vars:
+        assert table[name].attrs["units"] == SUMMARY_VARIABLES[name].units
+        assert table[name].attrs["long_name"] == SUMMARY_VARIABLES[name].long_name
+
+
+def test_wear_table_broadcasts_over_sweep_dims(sweep_ds):
+    table = wear_table(sweep_ds)
+    assert table["wear_depth_axis_max"].dims == ("B_coating", "B_clearance", "joint", "axis")
+    for (coating, clearance), (lo, hi, peak) in syn.SWEEP_B_X.items():
+        row = table.sel(B_coating=coating, B_clearance=clearance, joint="B", axis="x")
+        assert float(row["wear_depth_axis_max"]) == pytest.approx(peak, rel=1e-12)
+        assert float(row["wear_angle_min"]) == lo
+        assert float(row["wear_range"]) == hi - lo
+
+
+# --------------------------------------------------------------------------- summaries
+
+def test_case_summary_numbers(case):
+    s = case_summary(case)
+    n = case.sizes["time"]
+    # Square wave +-3 everywhere but one spike of 50 (before 0.05 s).
+    assert float(s["slider_acceleration_peak"]) == syn.ACC_SPIKE
+    expected_rms = np.sqrt(((n - 1) * syn.ACC_LEVEL ** 2 + syn.ACC_SPIKE ** 2) / n)
+    assert float(s["slider_acceleration_rms"]) == pytest.approx(expected_rms, rel=1e-12)
+    assert float(s["slider_acceleration_peak_settled"]) == syn.ACC_LEVEL
+    assert float(s["slider_acceleration_rms_settled"]) == pytest.approx(syn.ACC_LEVEL, rel=1e-12)
+    assert s["slider_acceleration_rms_settled"].attrs["settle_time_s"] == SETTLE_TIME_S
+    for joint in ("A", "B"):
+        assert float(s["normal_force_peak"].sel(joint=joint)) == syn.NORMAL_FORCE_PEAK[joint]
+        assert float(s["wear_depth_max_final"].sel(joint=joint)) == pytest.approx(
+            syn.WEAR_MAP_PEAK[joint], rel=1e-12)
+    assert str(s["status"].values) == "ok"
+    assert int(s["substeps_used"]) == 4 and int(s["rk4_steps"]) == 80_000
+    assert float(s["wall_time"]) == 2.0
+    assert set(s.dims) <= {"joint", "axis"}
+    assert s.attrs["config"] == case.attrs["config"]
+
+
+def test_settled_metrics_are_nan_for_short_runs(case):
+    short = case.sel(time=slice(0.0, SETTLE_TIME_S / 2))
+    s = case_summary(short)
+    assert np.isnan(float(s["slider_acceleration_peak_settled"]))
+    assert float(s["slider_acceleration_peak"]) == syn.ACC_SPIKE
+
+
+def test_case_summary_of_a_summary_is_the_summary(sweep_ds):
+    summary = case_summary(sweep_ds)
+    again = case_summary(summary)
+    xr.testing.assert_identical(summary, again)
+    xr.testing.assert_identical(wear_table(summary), wear_table(sweep_ds))
+
+
+def test_run_summary_text(case):
+    text = run_summary_text(case)
+    assert "status: ok" in text
+    assert "peak 50 m s-2" in text and "after 0.05 s: peak 3 m s-2, RMS 3 m s-2" in text
+    assert "peak normal force: A 40 N, B 120 N" in text
+    assert "sub-steps used: 4" in text
+    assert "energy residual (relative): 2.50e-06" in text
+    assert "40,000 RK4 steps/s" in text          # 80 000 steps in 2 s
+
+
+def test_run_summary_text_reports_a_failed_case():
+    text = run_summary_text(syn.one_case(status="unstable_step"))
+    assert text.startswith("status: unstable_step")
+
+
+# --------------------------------------------------------------------------- Table 6 and metrics
+
+def test_reduction_table_recomputed_by_hand(sweep_ds):
+    red = reduction_table(sweep_ds, {"B_coating": "none"})
+    b_x = red.sel(joint="B", axis="x")
+    for clearance in syn.SWEEP_CLEARANCES:
+        ref_lo, ref_hi, ref_peak = syn.SWEEP_B_X[("none", clearance)]
+        lo, hi, peak = syn.SWEEP_B_X[("PTFE", clearance)]
+        row = b_x.sel(B_coating="PTFE", B_clearance=clearance)
+        assert float(row["wear_depth_reduction"]) == pytest.approx(ref_peak - peak, rel=1e-12)
+        assert float(row["wear_depth_reduction_percent"]) == pytest.approx(75.0, rel=1e-12)
+        # Range 51 -> 61 degree: a reduction of -10 degree, -19.608 %.
+        assert float(row["wear_range_reduction"]) == pytest.approx(-10.0, abs=1e-12)
+        assert float(row["wear_range_reduction_percent"]) == pytest.approx(-1000.0 / 51.0, rel=1e-12)
+        reference = b_x.sel(B_coating="none", B_clearance=clearance)
+        assert float(reference["wear_depth_reduction"]) == 0.0
+    assert red["is_reference"].sel(B_coating="none").all()
+    assert not red["is_reference"].sel(B_coating="PTFE").any()
+    # No wear in the reference (A z): percentages are NaN, not inf.
+    assert np.isnan(red["wear_depth_reduction_percent"].sel(joint="A", axis="z")).all()
+
+
+def test_reduction_table_reproduces_paper_table_6():
+    """Paper Tables 5 and 4 (two clearances) give Table 6's first row: 6.25e-11 m, 75.32 %,
+    -24.38 degree, -18.10 %."""
+    none = {("B", "x"): (0.0, 134.5, 134.5, 8.3004e-11)}       # Table 4: range 134.66
+    coated = {("B", "x"): (0.5, 159.5, 159.5, 2.0485e-11)}     # Table 5: range 159.04
+    ds = xr.concat([syn.one_case(profiles=none), syn.one_case(profiles=coated)], dim="B_coating")
+    ds = ds.assign_coords(B_coating=["none", "PTFE"])
+    row = reduction_table(ds, ["B_coating=none"]).sel(B_coating="PTFE", joint="B", axis="x")
+    assert float(row["wear_depth_reduction"]) == pytest.approx(6.2519e-11, rel=1e-12)
+    assert float(row["wear_depth_reduction_percent"]) == pytest.approx(75.32, abs=0.01)
+    # Bin centres: ranges 134.0 and 159.0 -> -25 degree, -18.66 %.
+    assert float(row["wear_range_reduction"]) == pytest.approx(-25.0)
+    assert float(row["wear_range_reduction_percent"]) == pytest.approx(-2500 / 134.0)
+
+
+def test_reference_errors_name_the_choices(sweep_ds):
+    with pytest.raises(SelectionError, match="B_coating"):
+        reduction_table(sweep_ds, ["coating=none"])
+    with pytest.raises(SelectionError, match="choose from: none, PTFE"):
+        reduction_table(sweep_ds, ["B_coating=MoS2"])
+    with pytest.raises(SelectionError, match="DIM=VALUE"):
+        reduction_table(sweep_ds, ["B_coating"])
+
+
+def test_selection_matches_numbers_by_value(sweep_ds):
+    assert parse_selection(sweep_ds, ["B_clearance=2.5e-4"]) == {"B_clearance": 2.5e-4}
+    assert parse_selection(sweep_ds, {"B_clearance": 0.00025, "B_coating": "PTFE"}) == {
+        "B_clearance": 2.5e-4, "B_coating": "PTFE"}
+    with pytest.raises(SelectionError, match="0.0001, 0.00025"):
+        parse_selection(sweep_ds, ["B_clearance=3e-4"])
+
+
+def test_metric_table(sweep_ds):
+    values = metric_table(sweep_ds, "slider_acceleration_peak_settled")
+    assert values.dims == ("B_coating", "B_clearance")
+    for coating, level in syn.SWEEP_ACC_LEVEL.items():
+        np.testing.assert_array_equal(values.sel(B_coating=coating).values, level)
+    assert values.attrs["units"] == "m s-2"
+    with pytest.raises(SelectionError, match="slider_acceleration_peak"):
+        metric_table(sweep_ds, "slider_acceleration_peek")
+
+
+def test_metric_table_text_has_a_row_per_case(sweep_ds):
+    text = format_metric_table(sweep_ds, "normal_force_peak")
+    lines = [ln for ln in text.splitlines() if ln.startswith(("none", "PTFE"))]
+    assert len(lines) == 4 * 2                           # cases x joints
+    assert "[N]" in text
+
+
+# --------------------------------------------------------------------------- formats
+
+def test_wear_table_text_layout(case):
+    text = format_wear_table(case)
+    header = next(ln for ln in text.splitlines() if ln.startswith("Joint"))
+    for heading in ("Max wear depth [m]", "Max wear angle [degree]", "Min wear angle [degree]",
+                    "Wear range [degree]"):
+        assert heading in header
+    b_x = next(ln for ln in text.splitlines() if ln.split()[:2] == ["B", "x"])
+    assert b_x.split()[2:6] == ["8.0000e-11", "40.5", "-10.5", "51.0"]
+    a_z = next(ln for ln in text.splitlines() if ln.split()[:2] == ["A", "z"])
+    assert a_z.split()[2:] == ["0.0000e+00", "n/a", "n/a", "n/a", "n/a"]
+
+
+def test_wear_table_sweep_blocks(sweep_ds):
+    text = format_wear_table(sweep_ds, "markdown")
+    assert text.count("### B_coating=") == 4
+    assert "### B_coating=PTFE, B_clearance=0.00025 (status: ok)" in text
+    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 |" in text
+
+
+def test_reduction_text_leaves_out_the_reference(sweep_ds):
+    text = format_reduction_table(sweep_ds, ["B_coating=none"])
+    assert "B_coating=none, B_clearance" not in text
+    assert text.count("B_coating=PTFE") == 2
+    b_x = [ln.split() for ln in text.splitlines() if ln.split()[:2] == ["B", "x"]]
+    assert b_x[0][2:] == ["3.000e-11", "75.00", "-10.00", "-19.61"]
+    assert b_x[1][2:] == ["6.000e-11", "75.00", "-10.00", "-19.61"]
+
+
+@pytest.mark.parametrize("fmt", REPORT_FORMATS)
+def test_report_cli_every_format(sweep_file, fmt):
+    result = invoke(sweep_file, "--format", fmt)
+    assert result.exit_code == 0, result.output
+    out = result.output
+    if fmt == "json":
+        doc = json.loads(out)
+        rows = doc["rows"]
+        assert len(rows) == 4 * 2 * 3
+        assert doc["columns"]["wear_depth_axis_max"]["units"] == "m"
+        row = next(r for r in rows if (r["B_coating"], r["B_clearance"], r["joint"], r["axis"])
+                   == ("PTFE", 1e-4, "B", "x"))
+        assert row["wear_depth_axis_max"] == pytest.approx(1e-11) and row["wear_range"] == 61.0
+        assert next(r for r in rows if r["joint"] == "A" and r["axis"] == "z")["wear_range"] is None
+    elif fmt == "csv":
+        rows = list(csv.reader(io.StringIO(out)))
+        assert rows[0][:5] == ["B_coating", "B_clearance", "status", "joint", "axis"]
+        assert rows[0][5] == "Max wear depth [m]"
+        assert len(rows) == 1 + 4 * 2 * 3
+    elif fmt == "markdown":
+        assert out.startswith("## Wear prediction")
+        assert "| Joint | Wear direction | Max wear depth [m] |" in out
+    else:
+        assert out.startswith("Wear prediction")
+
+
+@pytest.mark.parametrize("fmt", REPORT_FORMATS)
+def test_report_cli_reference_every_format(sweep_file, fmt):
+    result = invoke(sweep_file, "--reference", "B_coating=none", "--format", fmt)
+    assert result.exit_code == 0, result.output
+    if fmt == "json":
+        rows = json.loads(result.output)["rows"]
+        assert {r["B_coating"] for r in rows} == {"PTFE"}
+        row = next(r for r in rows if r["joint"] == "B" and r["axis"] == "x")
+        assert row["wear_depth_reduction_percent"] == pytest.approx(75.0)
+    elif fmt == "csv":
+        header = next(csv.reader(io.StringIO(result.output)))
+        assert "Percentage of reduction [%]" in header
+    else:
+        assert "Table 6" in result.output
+
+
+def test_report_cli_metric(sweep_file):
+    result = invoke(sweep_file, "--metric", "slider_acceleration_peak_settled", "--format", "csv")
+    assert result.exit_code == 0, result.output
+    rows = list(csv.reader(io.StringIO(result.output)))
+    assert rows[0][:2] == ["B_coating", "B_clearance"] and rows[0][2].endswith("[m s-2]")
+    assert [float(r[2]) for r in rows[1:]] == [3.0, 3.0, 1.5, 1.5]
+
+
+def test_report_cli_one_case(case_file):
+    result = invoke(case_file)
+    assert result.exit_code == 0, result.output
+    assert "status" not in result.output            # one case, status ok: no heading
+    assert "8.0000e-11" in result.output
+
+
+@pytest.mark.parametrize("args, names", [
+    (["--reference", "B_coatin=none"], ["B_coating", "B_clearance"]),
+    (["--reference", "B_coating=teflon"], ["none", "PTFE"]),
+    (["--metric", "peak_acceleration"], ["slider_acceleration_peak"]),
+    (["--metric", "x", "--reference", "B_coating=none"], ["--reference", "--metric"]),
+])
+def test_report_cli_bad_input_exit_2(sweep_file, args, names):
+    result = invoke(sweep_file, *args)
+    assert result.exit_code == 2
+    for name in names:
+        assert name in result.output
+
+
+def test_report_cli_summary_only_file(tmp_path, sweep_ds):
+    path = write_netcdf_atomic(case_summary(sweep_ds), tmp_path / "summary.nc")
+    full = CliRunner().invoke(report_command, [str(path), "--reference", "B_coating=none"])
+    assert full.exit_code == 0, full.output
+    assert "6.000e-11" in full.output
+
+
+def test_case_dimension_with_zip_coordinates_and_without_coordinates():
+    cases = [syn.one_case(profiles=syn.sweep_case_profiles(c, 2.5e-4)) for c in syn.SWEEP_COATINGS]
+    bare = xr.concat(cases, dim="case")
+    text = format_wear_table(bare)
+    assert "\ncase=0 (status: ok)\n" in text and "\ncase=1 (status: ok)\n" in text
+    zipped = bare.assign_coords(B_coating=("case", list(syn.SWEEP_COATINGS)),
+                                B_clearance=("case", [2.5e-4, 2.5e-4]))
+    rows = json.loads(format_wear_table(zipped, "json"))["rows"]
+    assert {(r["case"], r["B_coating"], r["B_clearance"]) for r in rows} == {
+        (0, "none", 2.5e-4), (1, "PTFE", 2.5e-4)}
+    assert metric_table(bare, "wear_depth_max_final").dims == ("case", "joint")
+    csv_lines = format_metric_table(bare, "wear_depth_max_final", "csv").splitlines()
+    assert csv_lines[0] == "case,joint,maximum wear depth at the end of the run [m]"
+    assert csv_lines[1] == f"0,A,{syn.WEAR_MAP_PEAK['A']!r}"
