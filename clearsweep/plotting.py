@@ -1,0 +1,487 @@
+"""Figures from results datasets (the paper's Figures 9-16), headless.
+
+Figures are built on ``matplotlib.figure.Figure`` directly (no pyplot, no
+global state, no display needed) and saved in the format the output
+file's suffix names. Every axis and colour-bar label carries the units of the
+variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
+or categorical quantity.
+
+Kinds (``KINDS``):
+
+``slider``
+    slider position, velocity and acceleration against the crank angle or
+    time, sweep cases overlaid (Figures 9, 12, 13).
+``forces``
+    reaction at O and the force on the ball of each joint: magnitude and
+    x, y, z components, cases overlaid (Figures 10, 14, 15).
+``wear-map``
+    per joint, the socket wear map (polar x azimuth) and the same map on a
+    sphere (Figures 11, 16); one case.
+``wear-polar``
+    per joint and axis, the projected wear depth as a worn profile on the
+    unit circle, exaggerated (Figures 11, 16); cases overlaid.
+``orbit``
+    ball-centre offset in the socket frame on the xy, xz and yz planes,
+    inside the clearance circle; cases overlaid.
+``sweep``
+    one summary metric (``analysis.case_summary``) over one sweep dimension
+    (lines) or two (heat maps).
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import click
+import numpy as np
+import xarray as xr
+import yaml
+from matplotlib import colormaps
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+
+from .analysis import (CASE_DIMS, SelectionError, choice_message, iter_cases, label_text,
+                       metric_table, select, sweep_dims, value_text)
+
+KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep")
+X_AXES = ("angle", "time")
+OUTPUT_SUFFIXES = (".png", ".pdf", ".svg")
+
+#: Metric of ``--kind sweep`` when none is given.
+DEFAULT_SWEEP_METRIC = "slider_acceleration_peak"
+
+#: On ``wear-polar`` the largest depth of a joint is drawn as this fraction of the unit radius.
+WEAR_POLAR_EXAGGERATION = 0.3
+
+#: Resolution of raster output [dots per inch].
+FIGURE_DPI = 120
+
+#: Overlaid cases beyond this many take colours from a continuous colour map.
+MAX_CYCLE_COLOURS = 10
+
+#: Heat-map cells are annotated with their values up to this many cells.
+MAX_ANNOTATED_CELLS = 64
+
+#: Size of one heat-map panel of ``--kind sweep`` (width, height) [inch].
+HEATMAP_PANEL_INCHES = (4.2, 3.4)
+
+#: Heat-map annotations turn dark on cells brighter than this (normalised colour value).
+ANNOTATION_DARK_TEXT_ABOVE = 0.6
+
+#: Unit text of dimensionless and categorical quantities.
+DIMENSIONLESS = "-"
+
+_AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
+_SINGLE_CASE_COLOUR = "tab:red"
+
+
+class PlotError(ValueError):
+    """The dataset cannot give the figure asked for (missing variables, too many cases)."""
+
+
+def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = None) -> str:
+    """``"text [units]"`` from a variable's attributes.
+
+    Parameters
+    ----------
+    obj
+        Variable or coordinate; its ``long_name`` (or name) and ``units``.
+    text, units
+        Override the attribute values.
+    """
+    name = text or obj.attrs.get("long_name") or str(obj.name)
+    unit = obj.attrs.get("units", "") if units is None else units
+    return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
+
+
+def _require(ds: xr.Dataset, names: tuple[str, ...], kind: str) -> None:
+    missing = [n for n in names if n not in ds]
+    if missing:
+        raise PlotError(f"--kind {kind} needs {', '.join(missing)}, which this dataset lacks "
+                        "(a summary-only sweep holds no time series or wear maps)")
+
+
+def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
+    dims = sweep_dims(ds)
+    if not dims:
+        return ds
+    offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
+                      if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in dims)
+    raise PlotError(f"--kind {kind} draws one case; choose it with --select DIM=VALUE ({offer})")
+
+
+def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
+    """``(legend text, case, colour)`` of every case of ``ds``."""
+    cases = list(iter_cases(ds))
+    if len(cases) == 1:
+        colours = [_SINGLE_CASE_COLOUR]
+    elif len(cases) <= MAX_CYCLE_COLOURS:
+        colours = [f"C{i}" for i in range(len(cases))]
+    else:
+        colours = list(colormaps["viridis"](np.linspace(0.0, 0.95, len(cases))))
+    return [(label_text(label), case, colour) for (label, case), colour in zip(cases, colours)]
+
+
+def _legend(ax, cases) -> None:
+    if len(cases) > 1:
+        ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
+
+
+def _abscissa(ds: xr.Dataset, case: xr.Dataset, x: str) -> tuple[np.ndarray, str]:
+    """Crank angle [degree] or time [s] of a case, and its label."""
+    if x == "time":
+        return case["time"].values, axis_label(ds["time"])
+    _require(ds, ("crank_angle",), "... --x angle")
+    return np.degrees(case["crank_angle"].values), axis_label(ds["crank_angle"], units="degree")
+
+
+def _edges(centres: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Edges of equal bins with these centres; one bin spans [lo, hi]."""
+    if len(centres) == 1:
+        return np.array([lo, hi])
+    step = centres[1] - centres[0]
+    return np.append(centres - step / 2, centres[-1] + step / 2)
+
+
+# --------------------------------------------------------------------------- kinds
+
+def _draw_slider(fig: Figure, ds: xr.Dataset, x: str) -> None:
+    names = ("slider_position", "slider_velocity", "slider_acceleration")
+    _require(ds, names, "slider")
+    cases = _cases(ds)
+    axes = fig.subplots(len(names), 1, sharex=True)
+    for ax, name in zip(axes, names):
+        for text, case, colour in cases:
+            xs, xlabel = _abscissa(ds, case, x)
+            ax.plot(xs, case[name].values, color=colour, lw=0.8, label=text)
+        ax.set_ylabel(axis_label(ds[name]))
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel(xlabel)
+    _legend(axes[0], cases)
+    fig.suptitle("Slider dynamics")
+
+
+def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
+    _require(ds, ("reaction_O", "joint_force"), "forces")
+    rows = [("reaction at O (ground on crank)", ds["reaction_O"])]
+    rows += [(f"joint {value_text(j)} (on the ball)", ds["joint_force"].sel(joint=j))
+             for j in ds["joint"].values]
+    components = ("magnitude", *(str(a) for a in ds["axis"].values))
+    cases = _cases(ds)
+    axes = fig.subplots(len(rows), len(components), sharex=True, squeeze=False)
+    for r, (title, force) in enumerate(rows):
+        for text, case, colour in cases:
+            xs, xlabel = _abscissa(ds, case, x)
+            vector = force.sel({d: case[d].values[()] for d in sweep_dims(force)}) \
+                if sweep_dims(force) else force
+            series = [np.sqrt((vector ** 2).sum("axis"))] + [vector.sel(axis=a) for a in components[1:]]
+            for ax, values, component in zip(axes[r], series, components):
+                ax.plot(xs, values.values, lw=0.7, label=text,
+                        color=colour if len(cases) > 1 else _AXIS_COLOURS.get(component, colour))
+        for ax, component in zip(axes[r], components):
+            symbol = "|F|" if component == "magnitude" else f"F_{component}"
+            ax.set_title(f"{title}: {symbol}", fontsize="small")
+            ax.set_ylabel(axis_label(force, symbol))
+            ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel(xlabel)
+    _legend(axes[0, 0], cases)
+    fig.suptitle("Joint forces (global frame)")
+
+
+def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("wear_map",), "wear-map")
+    ds = _one_case(ds, "wear-map")
+    wear = ds["wear_map"]
+    polar = np.radians(_edges(wear["polar"].values, 0.0, 180.0))
+    azimuth = np.radians(_edges(wear["azimuth"].values, -180.0, 180.0))
+    grid_p, grid_a = np.meshgrid(polar, azimuth, indexing="ij")
+    sphere = (np.sin(grid_p) * np.cos(grid_a), np.sin(grid_p) * np.sin(grid_a), np.cos(grid_p))
+    cmap = colormaps["viridis"]
+    joints = wear["joint"].values
+    for j, joint in enumerate(joints):
+        depth = wear.sel(joint=joint)
+        peak = float(depth.max())
+        norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
+        ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
+        mesh = ax.pcolormesh(np.degrees(azimuth), np.degrees(polar), depth.values, cmap=cmap,
+                             norm=norm, shading="flat")
+        ax.set_ylim(180.0, 0.0)
+        ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"))
+        ax.set_ylabel(axis_label(ds["polar"], "polar angle from +z"))
+        ax.set_title(f"joint {value_text(joint)}: socket wear map (max {peak:.3g} m)", fontsize="small")
+        fig.colorbar(mesh, ax=ax).set_label(axis_label(wear, "wear depth"))
+        ax3 = fig.add_subplot(len(joints), 2, 2 * j + 2, projection="3d")
+        ax3.plot_surface(*sphere, facecolors=cmap(norm(depth.values)), rstride=1, cstride=1,
+                         shade=False, linewidth=0, antialiased=False)
+        ax3.set_box_aspect((1, 1, 1))
+        if peak > 0:
+            # Look at the most worn bin.
+            ip, ia = np.unravel_index(int(np.nanargmax(depth.values)), depth.shape)
+            ax3.view_init(elev=90.0 - float(depth["polar"][ip]), azim=float(depth["azimuth"][ia]))
+        ax3.set_xlabel(f"x [{DIMENSIONLESS}]")
+        ax3.set_ylabel(f"y [{DIMENSIONLESS}]")
+        ax3.set_zlabel(f"z [{DIMENSIONLESS}]")
+        ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small")
+        fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(
+            axis_label(wear, "wear depth"))
+    fig.suptitle("Socket wear depth")
+
+
+def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("wear_projection",), "wear-polar")
+    projection = ds["wear_projection"]
+    theta = np.radians(projection["angle"].values)
+    closed = np.append(theta, theta[0])
+    cases = _cases(ds)
+    joints, axes_names = projection["joint"].values, projection["axis"].values
+    scales = []
+    for j, joint in enumerate(joints):
+        peak = float(projection.sel(joint=joint).max())
+        scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
+        scales.append(f"joint {value_text(joint)}: {peak:.3g} m" if scale else
+                      f"joint {value_text(joint)}: no wear")
+        for k, axis in enumerate(axes_names):
+            ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
+                                 projection="polar")
+            ax.plot(closed, np.ones_like(closed), ls="--", lw=0.8, color="0.5", label="unworn")
+            for text, case, colour in cases:
+                depth = np.nan_to_num(case["wear_projection"].sel(joint=joint, axis=axis).values)
+                radius = 1.0 + scale * depth
+                ax.plot(closed, np.append(radius, radius[0]), lw=1.0, color=colour,
+                        label=text or "worn profile")
+            ax.set_thetalim(-np.pi, np.pi)
+            ax.set_rlim(0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
+            ax.set_yticks([])
+            ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
+            ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
+    handles, labels = fig.axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
+               fontsize="small")
+    fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
+                 f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})", fontsize="medium")
+
+
+def _clearance(ds: xr.Dataset, case: xr.Dataset, joint: str) -> tuple[float, str] | None:
+    """Radial clearance of ``joint`` [m] and where it came from; None for an ideal joint.
+
+    A swept clearance (sweep coordinate ``{joint}_clearance``, or
+    ``joints_{joint}_clearance`` where the short name was taken) wins over the
+    configuration text, which holds the sweep's base case; without either,
+    the largest eccentricity stands in.
+    """
+    for name in (f"{joint}_clearance", f"joints_{joint}_clearance"):
+        if name in case.coords and case[name].ndim == 0:
+            return float(case[name]), "swept"
+    try:
+        config = yaml.safe_load(ds.attrs.get("config") or "") or {}
+        value = float(config["joints"][joint]["clearance"])
+    except (yaml.YAMLError, KeyError, TypeError, ValueError):
+        value = None
+    if value is not None:
+        return (value, "config") if value > 0 else None
+    if "eccentricity" in case:
+        largest = float(case["eccentricity"].sel(joint=joint).max())
+        if np.isfinite(largest) and largest > 0:
+            return largest, "max eccentricity"
+    return None
+
+
+def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("ball_offset",), "orbit")
+    offset = ds["ball_offset"]
+    planes = (("x", "y"), ("x", "z"), ("y", "z"))
+    cases = _cases(ds)
+    circle = np.linspace(0.0, 2.0 * np.pi, 361)
+    joints = offset["joint"].values
+    for j, joint in enumerate(joints):
+        clearances = {}
+        for _, case, _ in cases:
+            found = _clearance(ds, case, str(joint))
+            if found is not None:
+                clearances.setdefault(found[0], found[1])
+        for p, (a, b) in enumerate(planes):
+            ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
+            for text, case, colour in cases:
+                d = case["ball_offset"].sel(joint=joint)
+                ax.plot(d.sel(axis=a).values, d.sel(axis=b).values, lw=0.6, color=colour,
+                        label=text or "ball centre")
+            for radius, source in sorted(clearances.items()):
+                ax.plot(radius * np.cos(circle), radius * np.sin(circle), ls="--", lw=0.8,
+                        color="0.3", label=f"clearance {radius:.3g} m ({source})")
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_xlabel(axis_label(offset, f"d_{a}"))
+            ax.set_ylabel(axis_label(offset, f"d_{b}"))
+            ax.ticklabel_format(style="sci", scilimits=(-3, 3))
+            ideal = "" if clearances else " (ideal joint)"
+            ax.set_title(f"joint {value_text(joint)}{ideal}: {a}{b} plane", fontsize="small")
+            ax.grid(alpha=0.3)
+            if p == 0:
+                ax.legend(fontsize="x-small", loc="upper right")
+    fig.suptitle("Ball-centre orbit in the socket frame")
+
+
+def _category_positions(coord: xr.DataArray) -> tuple[np.ndarray, list[str] | None]:
+    """Numeric coordinates as they are; others at 0, 1, ... with their text as tick labels."""
+    if coord.dtype.kind in "fiu":
+        return coord.values, None
+    return np.arange(coord.size), [value_text(v) for v in coord.values]
+
+
+def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
+    metric = metric or DEFAULT_SWEEP_METRIC
+    values = metric_table(ds, metric)
+    if values.dtype.kind not in "fiub":
+        raise PlotError(f"metric {metric!r} is not numeric; --kind sweep plots numbers")
+    dims = sweep_dims(values)
+    inner = [d for d in values.dims if d in CASE_DIMS]
+    if not dims or len(dims) > 2:
+        raise PlotError(f"--kind sweep draws a metric over one or two sweep dimensions; this "
+                        f"dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the others "
+                        "with --select DIM=VALUE")
+    panels = []
+    for index in itertools.product(*(range(values.sizes[d]) for d in inner)):
+        panel = values.isel(dict(zip(inner, index)))
+        panels.append((", ".join(f"{d} {value_text(panel[d].values[()])}" for d in inner), panel))
+    label = axis_label(values)
+    if len(dims) == 1:
+        ax = fig.add_subplot()
+        xs, ticks = _category_positions(values[dims[0]])
+        for text, panel in panels:
+            ax.plot(xs, panel.transpose(dims[0]).values, marker="o", label=text or metric)
+        if ticks is not None:
+            ax.set_xticks(xs, ticks)
+        ax.set_xlabel(axis_label(values[dims[0]]))
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        if inner:
+            ax.legend(fontsize="x-small")
+        fig.suptitle(f"{metric} over {dims[0]}")
+        return
+    ncols = min(3, len(panels))
+    nrows = -(-len(panels) // ncols)
+    fig.set_size_inches(HEATMAP_PANEL_INCHES[0] * ncols, HEATMAP_PANEL_INCHES[1] * nrows + 0.6)
+    for i, (text, panel) in enumerate(panels):
+        ax = fig.add_subplot(nrows, ncols, i + 1)
+        grid = panel.transpose(*dims).values.astype(float)
+        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+        for axis_dim, set_ticks in zip(dims, (ax.set_yticks, ax.set_xticks)):
+            coord = values[axis_dim]
+            set_ticks(np.arange(coord.size), [value_text(v) for v in coord.values])
+        ax.tick_params(axis="x", labelrotation=30)
+        ax.set_ylabel(axis_label(values[dims[0]]))
+        ax.set_xlabel(axis_label(values[dims[1]]))
+        if grid.size <= MAX_ANNOTATED_CELLS:
+            for (r, c), v in np.ndenumerate(grid):
+                bright = image.norm(v) > ANNOTATION_DARK_TEXT_ABOVE
+                ax.text(c, r, format(v, ".3g"), ha="center", va="center", fontsize="x-small",
+                        color="black" if bright else "white")
+        if text:
+            ax.set_title(text, fontsize="small")
+        fig.colorbar(image, ax=ax).set_label(label)
+    fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}")
+
+
+_SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 8),
+          "orbit": (12, 8), "sweep": (8, 5)}
+
+
+def figure(ds: xr.Dataset, kind: str, select_cases=None, *, x: str = "angle",
+           metric: str | None = None) -> Figure:
+    """Build the figure of ``kind`` from ``ds`` (see the module docstring).
+
+    Parameters
+    ----------
+    ds
+        One-case or sweep dataset.
+    kind
+        One of ``KINDS``.
+    select_cases
+        ``["DIM=VALUE", ...]`` or ``{dim: value}``: the cases to draw.
+    x
+        Abscissa of time series: ``"angle"`` (crank angle [degree]) or ``"time"`` [s].
+    metric
+        Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
+
+    Raises
+    ------
+    SelectionError
+        Unknown kind, abscissa, sweep dimension, value or metric.
+    PlotError
+        The dataset lacks what the kind draws, or holds several cases where
+        the kind draws one.
+    """
+    if kind not in KINDS:
+        raise SelectionError(choice_message("plot kind", kind, list(KINDS)), name="kind",
+                             value=kind, choices=KINDS)
+    if x not in X_AXES:
+        raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
+                             choices=X_AXES)
+    if metric is not None and kind != "sweep":
+        raise PlotError("a metric applies to --kind sweep only")
+    ds = select(ds, select_cases)
+    fig = Figure(figsize=_SIZES[kind], layout="constrained")
+    if kind == "slider":
+        _draw_slider(fig, ds, x)
+    elif kind == "forces":
+        _draw_forces(fig, ds, x)
+    elif kind == "wear-map":
+        _draw_wear_map(fig, ds)
+    elif kind == "wear-polar":
+        _draw_wear_polar(fig, ds)
+    elif kind == "orbit":
+        _draw_orbit(fig, ds)
+    else:
+        _draw_sweep(fig, ds, metric)
+    return fig
+
+
+def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
+         metric: str | None = None, dpi: int = FIGURE_DPI) -> Figure:
+    """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
+
+    Parameters and errors as ``figure``; ``dpi`` sets the raster resolution.
+    Missing parent folders are created.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The saved figure.
+    """
+    out_path = Path(out_path)
+    if out_path.suffix.lower() not in OUTPUT_SUFFIXES:
+        raise SelectionError(choice_message("output suffix", out_path.suffix, list(OUTPUT_SUFFIXES)),
+                             name="output", value=out_path.suffix, choices=OUTPUT_SUFFIXES)
+    fig = figure(ds, kind, select, x=x, metric=metric)
+    out_path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out_path, dpi=dpi)
+    return fig
+
+
+@click.command("plot")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+              help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
+@click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
+              help="Draw only the sweep cases with this coordinate value (repeatable).")
+@click.option("--x", "x_axis", type=click.Choice(X_AXES), default="angle", show_default=True,
+              help="Abscissa of time series: crank angle [degree] or time [s].")
+@click.option("--metric", default=None, metavar="NAME",
+              help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
+@click.option("--dpi", type=click.IntRange(min=10), default=FIGURE_DPI, show_default=True,
+              help="Resolution of raster output.")
+def plot_command(path: str, kind: str, output: str, select_items: tuple[str, ...], x_axis: str,
+                 metric: str | None, dpi: int) -> None:
+    """Draw a figure from the results file PATH."""
+    if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise click.BadParameter(f"{output!r}: the suffix must be one of "
+                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
+    with xr.open_dataset(path) as ds:
+        try:
+            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi)
+        except (SelectionError, PlotError) as exc:
+            raise click.UsageError(str(exc)) from exc
+    click.echo(f"wrote {output}")

@@ -1,0 +1,188 @@
+"""Every figure kind renders headless from synthetic datasets, with units on every axis."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+from matplotlib.image import imread
+
+import synthetic as syn
+from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures)
+from clearsweep.analysis import SelectionError, case_summary, report_command, run_summary_text
+from clearsweep.dataset import write_netcdf_atomic
+from clearsweep.plotting import KINDS, PlotError, plot, plot_command
+
+TEST_DPI = 40
+UNITS = re.compile(r"\[[^\]]+\]")
+
+# kind -> selection that leaves the cases the kind can draw from the sweep
+SWEEP_SELECTION = {
+    "slider": None,
+    "forces": ["B_clearance=2.5e-4"],
+    "wear-map": ["B_coating=PTFE", "B_clearance=1e-4"],
+    "wear-polar": None,
+    "orbit": ["B_coating=none"],
+    "sweep": None,
+}
+
+
+def labels(fig) -> list[str]:
+    """Every non-empty axis label of the figure (colour bars and 3-D axes included)."""
+    found = []
+    for ax in fig.axes:
+        getters = [ax.get_xlabel, ax.get_ylabel] + ([ax.get_zlabel] if hasattr(ax, "get_zlabel") else [])
+        found += [text for text in (g() for g in getters) if text]
+    return found
+
+
+def assert_rendered(path, fig) -> None:
+    image = imread(path)
+    pixels = image[..., :3].reshape(-1, 3)
+    assert image.std() > 0
+    assert len(np.unique(pixels, axis=0)) > 1
+    found = labels(fig)
+    assert found, "the figure has no axis labels"
+    for text in found:
+        assert UNITS.search(text), f"axis label without units in brackets: {text!r}"
+
+
+@pytest.mark.parametrize("kind", [k for k in KINDS if k != "sweep"])
+def test_every_kind_renders_one_case(tmp_path, case, kind):
+    path = tmp_path / f"{kind}.png"
+    fig = plot(case, kind, path, dpi=TEST_DPI)
+    assert_rendered(path, fig)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_every_kind_renders_from_a_sweep(tmp_path, sweep_ds, kind):
+    path = tmp_path / f"{kind}.png"
+    fig = plot(sweep_ds, kind, path, SWEEP_SELECTION[kind], dpi=TEST_DPI)
+    assert_rendered(path, fig)
+
+
+def test_slider_overlays_cases_with_coordinate_legends(tmp_path, sweep_ds):
+    fig = plot(sweep_ds, "slider", tmp_path / "s.png", x="time", dpi=TEST_DPI)
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert legend == ["B_coating=none, B_clearance=0.0001", "B_coating=none, B_clearance=0.00025",
+                      "B_coating=PTFE, B_clearance=0.0001", "B_coating=PTFE, B_clearance=0.00025"]
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+    assert fig.axes[0].get_ylabel() == "slider position x_B [m]"
+
+
+def test_slider_angle_axis_in_degrees(tmp_path, case):
+    fig = plot(case, "slider", tmp_path / "s.png", dpi=TEST_DPI)
+    assert fig.axes[-1].get_xlabel() == "crank angle theta [degree]"
+    line = fig.axes[-1].get_lines()[0]
+    assert line.get_xdata()[-1] == pytest.approx(np.degrees(syn.OMEGA_RAD_S * syn.DURATION_S))
+
+
+def test_sweep_heatmap_and_lines(tmp_path, sweep_ds):
+    heat = plot(sweep_ds, "sweep", tmp_path / "h.png", metric="wear_depth_axis_max", dpi=TEST_DPI)
+    assert len([ax for ax in heat.axes if ax.images]) == 6          # joint x axis panels
+    line = plot(sweep_ds, "sweep", tmp_path / "l.png", ["B_coating=PTFE"], dpi=TEST_DPI)
+    ax = line.axes[0]
+    assert ax.get_xlabel() == "radial clearance of B [m]"
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), [syn.ACC_SPIKE, syn.ACC_SPIKE])
+
+
+def test_sweep_plot_from_summary_only_dataset(tmp_path, sweep_ds):
+    path = tmp_path / "summary.png"
+    fig = plot(case_summary(sweep_ds), "sweep", path, metric="normal_force_peak", dpi=TEST_DPI)
+    assert_rendered(path, fig)
+    with pytest.raises(PlotError, match="summary-only"):
+        plot(case_summary(sweep_ds), "slider", tmp_path / "x.png")
+
+
+def test_orbit_circle_uses_the_swept_clearance(tmp_path, sweep_ds):
+    fig = plot(sweep_ds, "orbit", tmp_path / "o.png", ["B_coating=none"], dpi=TEST_DPI)
+    joint_b_legend = [t.get_text() for t in fig.axes[3].get_legend().get_texts()]
+    assert "clearance 0.0001 m (swept)" in joint_b_legend
+    assert "clearance 0.00025 m (swept)" in joint_b_legend
+
+
+def test_one_case_kinds_refuse_several_cases(tmp_path, sweep_ds):
+    with pytest.raises(PlotError, match="--select"):
+        plot(sweep_ds, "wear-map", tmp_path / "w.png")
+
+
+@pytest.mark.parametrize("suffix", [".pdf", ".svg"])
+def test_vector_outputs(tmp_path, case, suffix):
+    path = tmp_path / f"slider{suffix}"
+    plot(case, "slider", path)
+    assert path.stat().st_size > 1000
+
+
+def test_bad_arguments(tmp_path, case, sweep_ds):
+    with pytest.raises(SelectionError, match="output suffix"):
+        plot(case, "slider", tmp_path / "x.jpg")
+    with pytest.raises(SelectionError, match="wear-map"):
+        plot(case, "wearmap", tmp_path / "x.png")
+    with pytest.raises(SelectionError, match="B_coating"):
+        plot(sweep_ds, "slider", tmp_path / "x.png", ["coating=PTFE"])
+
+
+def test_cli_writes_the_file(tmp_path, sweep_file):
+    out = tmp_path / "figs" / "wear.png"
+    result = CliRunner().invoke(plot_command, [sweep_file, "--kind", "wear-polar", "-o", str(out),
+                                               "--select", "B_clearance=0.00025", "--dpi", "40"])
+    assert result.exit_code == 0, result.output
+    assert out.stat().st_size > 0
+    assert imread(out).std() > 0
+
+
+@pytest.mark.parametrize("args, names", [
+    (["--kind", "slider", "--select", "B_coat=PTFE"], ["B_coating", "B_clearance"]),
+    (["--kind", "slider", "--select", "B_coating=teflon"], ["none", "PTFE"]),
+    (["--kind", "wear-map"], ["--select", "B_coating: none, PTFE"]),
+    (["--kind", "sweep", "--metric", "acceleration"], ["slider_acceleration_peak"]),
+    (["--kind", "slider", "--metric", "wall_time"], ["--kind sweep"]),
+    (["--kind", "blob"], ["blob"]),
+])
+def test_cli_bad_selection_exit_2(tmp_path, sweep_file, args, names):
+    out = tmp_path / "x.png"
+    result = CliRunner().invoke(plot_command, [sweep_file, "-o", str(out), *args])
+    assert result.exit_code == 2
+    for name in names:
+        assert name in result.output
+    assert not out.exists()
+
+
+def test_cli_bad_suffix_exit_2(tmp_path, sweep_file):
+    result = CliRunner().invoke(plot_command, [sweep_file, "--kind", "slider", "-o",
+                                               str(tmp_path / "x.gif")])
+    assert result.exit_code == 2
+    assert ".png" in result.output
+
+
+def test_short_simulation_renders_every_kind_and_reports(tmp_path):
+    """0.02 s of the real simulator, two coatings at B: every figure, the reports, the summary."""
+    simulation = pytest.importorskip("clearsweep.simulation")
+    base = {"solver": {"duration": 0.02},
+            "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}}
+    cases = [simulation.simulate({**base, "joints": {**base["joints"],
+                                                     "B": {"clearance": 2.5e-4, "coating": c}}})
+             for c in ("none", "PTFE")]
+    for ds in cases:
+        assert str(ds["status"].values) == "ok"
+    assert "status: ok" in run_summary_text(cases[0])
+    sweep = xr.concat(cases, dim="B_coating", combine_attrs="override").assign_coords(
+        B_coating=["none", "PTFE"])
+    path = write_netcdf_atomic(sweep, tmp_path / "real.nc")
+    for kind in KINDS:
+        select = ["B_coating=PTFE"] if kind == "wear-map" else None
+        fig = plot(sweep, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
+        assert_rendered(tmp_path / f"{kind}.png", fig)
+    out = tmp_path / "cli.png"
+    result = CliRunner().invoke(plot_command, [str(path), "--kind", "wear-polar", "-o", str(out),
+                                               "--dpi", str(TEST_DPI)])
+    assert result.exit_code == 0, result.output
+    assert imread(out).std() > 0
+    for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
+        result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])
+        assert result.exit_code == 0, result.output
+        assert json.loads(result.output)["rows"]
