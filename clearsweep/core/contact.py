@@ -75,25 +75,27 @@ def friction_factor(vt, v0, v1):
 
 
 @njit(cache=True)
-def cap_height(e, ri, rj):
+def cap_height(pen, e, ri, rj):
     """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
 
-    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e), e the eccentricity.
+    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e); the first factor is the
+    penetration against the unworn radii, ``pen`` = delta + h, passed in rather than
+    formed as a difference of radii (which would lose all digits for small delta).
     """
-    return (e - ri + rj) * (e + rj + ri) / (2.0 * e)
+    return pen * (e + rj + ri) / (2.0 * e)
 
 
 @njit(cache=True)
-def contact_area(e, ri, rj):
+def contact_area(pen, e, ri, rj):
     """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
-    return 2.0 * math.pi * rj * cap_height(e, ri, rj)
+    return 2.0 * math.pi * rj * cap_height(pen, e, ri, rj)
 
 
 @njit(cache=True)
-def contact_angle(e, ri, rj):
-    """Angle beta of Eq. 11 [rad], from the cancellation-free 1 + cos beta."""
-    opc = cap_height(e, ri, rj) / rj
-    return math.acos(max(-1.0, min(1.0, opc - 1.0)))
+def contact_angle(pen, e, ri, rj):
+    """Angle beta of Eq. 11 [rad]: pi - 2 asin(sqrt((1 + cos beta) / 2)), accurate near pi."""
+    half = 0.5 * cap_height(pen, e, ri, rj) / rj
+    return math.pi - 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
 
 
 @njit(cache=True)

@@ -27,7 +27,7 @@ from .layout import (D_CEFF, D_CONS, D_DDOT, D_DELTA, D_DFD, D_DFDD, D_NGLOBAL, 
                      D_KE, D_NORMAL, D_OFFSET, D_PDISS, D_PDRIVE, D_PE_GRAV, D_RATE, D_REACTION_O,
                      D_SLIDER_ACC, D_TORQUE, D_UEL, D_VT, J_C, J_CLEARANCE, J_EW, J_MU, J_RI,
                      J_RJ, P_BAUM_A, P_BAUM_B, P_CR, P_DV0_MIN, P_FRICTION, P_G, P_J2, P_J3, P_J4,
-                     P_L2, P_L3, P_M2, P_M3, P_M4, P_OMEGA, P_THETA0, P_V0, P_V1, P_WEAR, P_ZS,
+                     P_L2, P_L3, P_M2, P_M3, P_M4, P_DT, P_OMEGA, P_THETA0, P_V0, P_V1, P_WEAR, P_ZS,
                      S_DV0, ST_OK, ST_SINGULAR, Y_DISS, Y_QD, Y_WORK)
 from .wear import map_bin
 
@@ -64,12 +64,12 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     qj = add(pb, scale(rj, n))
     qi = add(ps, scale(ri, n))
     zero = (0.0, 0.0, 0.0)
-    if delta <= 0.0:
-        return (zero, qj, qi, 0.0, 0.0, 0.0, delta, 0.0, e, n, d_s, n_s, 0.0, c_eff, h, 0.0, 0.0)
     vqj = add(vb, mv(Rb, cross(wb, mtv(Rb, sub(qj, rb)))))
     vqi = add(vs, mv(Rs, cross(ws_, mtv(Rs, sub(qi, rs)))))
     v = sub(vqj, vqi)
     ddot = dot(n, v)
+    if delta <= 0.0:
+        return (zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff, h, 0.0, 0.0)
     vt = sub(v, scale(ddot, n))
     vtn = math.sqrt(dot(vt, vt))
     dv0 = s_j[S_DV0]
@@ -480,18 +480,26 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         dg[D_CONS] = cons
         rate = 0.0
         for j in range(2):
-            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-                rate = max(rate, joint_rate(j, jp[j], p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz))
+            if jp[j, J_CLEARANCE] == 0.0:
+                continue
+            delta = dg[D_DELTA + j]
+            if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
+                rate = max(rate, joint_rate(j, jp[j], s[j], p, dg, R3, G3, r3, C, L, nc, minv,
+                                            mr_inv, vz))
         dg[D_RATE] = rate
     return ST_OK
 
 
 @njit(cache=True)
-def joint_rate(j, jp_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
+def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (DESIGN 4).
 
     The effective masses are those of the relative contact motion with every constraint in
-    place (the crank is driven, hence of infinite mass).
+    place (the crank is driven, hence of infinite mass). Besides the rates at the current
+    state, an approaching joint (delta_dot > 0) whose gap closes within one output step
+    is also rated at the penetration its kinetic energy can reach,
+    delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from U ~ 2 K delta^3 / (3 c)),
+    so that an impact that begins and ends inside one step still sets the sub-step.
     """
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
     if j == 0:
@@ -504,7 +512,20 @@ def joint_rate(j, jp_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     inv_m = contact_rate(j, n, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv, vz[2], vz[3], vz[4])
     if not inv_m > 0.0:
         return 0.0
-    rate = stiff_rate(1.0 / inv_m, dg[D_DFD + j], dg[D_DFDD + j])
+    m_eff = 1.0 / inv_m
+    rate = stiff_rate(m_eff, dg[D_DFD + j], dg[D_DFDD + j])
+    ddot = dg[D_DDOT + j]
+    if ddot > 0.0:
+        c_eff = dg[D_CEFF + j]
+        kk = 4.0 * math.pi * jp_j[J_EW] * jp_j[J_RI] / 5.0
+        delta = max(dg[D_DELTA + j], 0.0)
+        dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
+        dv0 = s_j[S_DV0]
+        if dv0 <= 0.0:
+            dv0 = max(ddot, p[P_DV0_MIN])
+        kappa = damping_factor(p[P_CR], dv0)
+        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, jp_j[J_EW], jp_j[J_RI], kappa)
+        rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
     mu = jp_j[J_MU]
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:

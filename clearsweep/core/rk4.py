@@ -165,14 +165,15 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                         ri = jp[j, J_RI]
                         rj = jp[j, J_RJ]
                         e = dg[D_ECC + j]
-                        beta = contact_angle(e, ri, rj)
+                        pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
+                        beta = contact_angle(pen, e, ri, rj)
                         if wear_on and fn > 0.0:
                             if p[P_SLIP] == 0.0:
                                 ds = dg[D_VT + j] * hs
                             else:
                                 ds = ri * abs(beta - s[j, S_BETA])
                             vol = ampl * jp[j, J_K] * fn * ds
-                            area = contact_area(e, ri, rj)
+                            area = contact_area(pen, e, ri, rj)
                             nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
                                    dg[D_NORMAL + 3 * j + 2])
                             ip, ia = map_bin(nrm, npolar, nazim)
