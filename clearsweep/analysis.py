@@ -15,6 +15,9 @@ Conventions (DESIGN.md section 5, paper Tables 4-6):
   that axis's maximum, and the wear range is their difference, as in the
   paper: a worn region that straddles +-180 degrees is not unwrapped and
   reads as a range close to 360 degrees (Table 4, one clearance, x).
+  ``wear_arc`` is the circular alternative: the shortest arc holding every
+  worn bin, equal to ``wear_range`` unless the worn region straddles +-180
+  degrees (then a few degrees rather than nearly 360).
 - A (joint, axis) without any wear has depth 0 and NaN angles and range.
 - Table 6 "reduction" is reference minus case; a negative wear-range
   reduction means that the range grew. Percentages are relative to the
@@ -53,7 +56,7 @@ REPORT_FORMATS = ("text", "markdown", "csv", "json")
 #: Variables of the wear table, in the column order of the paper's Tables 4-5
 #: (the angle of the maximum, which the paper does not print, last).
 WEAR_TABLE_VARIABLES = ("wear_depth_axis_max", "wear_angle_max", "wear_angle_min", "wear_range",
-                        "wear_angle_of_max")
+                        "wear_angle_of_max", "wear_arc")
 
 #: Variables of the reduction table, in the column order of the paper's Table 6.
 REDUCTION_VARIABLES = ("wear_depth_reduction", "wear_depth_reduction_percent",
@@ -240,6 +243,32 @@ def _with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
     return da
 
 
+def worn_arc_deg(worn: np.ndarray) -> float:
+    """Shortest arc [degree] between bin centres that holds every worn bin of a full circle.
+
+    Parameters
+    ----------
+    worn
+        One flag per equal angle bin spanning 360 degrees.
+
+    Returns
+    -------
+    float
+        360 minus the widest circular run of unworn bins and one bin width:
+        ``hi - lo`` for worn bins on [lo, hi] that do not wrap, 360 when
+        every bin is worn, NaN when none is.
+    """
+    n = worn.size
+    index = np.flatnonzero(worn)
+    if index.size == 0:
+        return math.nan
+    width = 360.0 / n
+    if index.size == n:
+        return 360.0
+    gaps = np.append(np.diff(index) - 1, index[0] + n - index[-1] - 1)
+    return (n - 1 - int(gaps.max())) * width
+
+
 def wear_table(ds: xr.Dataset) -> xr.Dataset:
     """Paper Tables 4-5: maximum projected wear depth and the angles with wear.
 
@@ -258,8 +287,10 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
         holding the maximum), ``wear_angle_min`` and ``wear_angle_max``
         [degree] (smallest and largest bin centre with depth above
         ``WEAR_THRESHOLD_FRACTION`` of the maximum), ``wear_range`` [degree]
-        (max - min). Without any wear on a (joint, axis): depth 0, angles
-        and range NaN. Cases whose projection is all NaN give NaN depth.
+        (max - min); ``wear_arc`` [degree] (shortest arc between bin centres
+        that holds every worn bin, see ``worn_arc_deg``). Without any wear on
+        a (joint, axis): depth 0, angles, range and arc NaN. Cases whose
+        projection is all NaN give NaN depth.
     """
     if "wear_projection" not in ds:
         missing = [v for v in WEAR_TABLE_VARIABLES if v not in ds]
@@ -271,21 +302,23 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
     projection = ds["wear_projection"]
     angle = projection["angle"]
     depth = projection.max("angle")
-    worn = depth > 0
     first_max = projection.fillna(-np.inf).argmax("angle")
-    angle_of_max = angle.isel(angle=first_max).drop_vars("angle").where(worn)
-    worn_angle = angle.where(projection > WEAR_THRESHOLD_FRACTION * depth)
+    angle_of_max = angle.isel(angle=first_max).drop_vars("angle").where(depth > 0)
+    worn = projection > WEAR_THRESHOLD_FRACTION * depth
+    worn_angle = angle.where(worn)
     angle_min = worn_angle.min("angle")
     angle_max = worn_angle.max("angle")
+    arc = xr.apply_ufunc(worn_arc_deg, worn, input_core_dims=[["angle"]], vectorize=True,
+                         output_dtypes=[float])
     threshold = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
-    table = xr.Dataset({
+    return xr.Dataset({
         "wear_depth_axis_max": _with_attrs(depth, "wear_depth_axis_max"),
         "wear_angle_max": _with_attrs(angle_max, "wear_angle_max", **threshold),
         "wear_angle_min": _with_attrs(angle_min, "wear_angle_min", **threshold),
         "wear_range": _with_attrs(angle_max - angle_min, "wear_range", **threshold),
         "wear_angle_of_max": _with_attrs(angle_of_max, "wear_angle_of_max"),
+        "wear_arc": _with_attrs(arc, "wear_arc", **threshold),
     })
-    return table
 
 
 def case_summary(ds: xr.Dataset) -> xr.Dataset:
@@ -485,6 +518,7 @@ _WEAR_COLUMNS = (
     _Column("wear_angle_min", "Min wear angle", ".1f"),
     _Column("wear_range", "Wear range", ".1f"),
     _Column("wear_angle_of_max", "Angle of max depth", ".1f"),
+    _Column("wear_arc", "Worn arc", ".1f"),
 )
 _REDUCTION_COLUMNS = (
     _Column("wear_depth_reduction", "Reduction of max wear depth", ".3e"),
@@ -633,14 +667,20 @@ def format_reduction_table(ds: xr.Dataset, reference, fmt: str = "text") -> str:
 
 
 def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
-    """One summary metric (``metric_table``) as a flat table: a row per case (and joint / axis)."""
+    """One summary metric (``metric_table``) as a flat table.
+
+    A row per case (and joint / axis where the metric has them), keyed by the
+    case's sweep coordinates (``iter_cases`` labels, zip-group keys included).
+    """
     values = metric_table(ds, metric)
     column = _Column(metric, values.attrs.get("long_name", metric),
                      ".6g" if values.dtype.kind == "f" else "")
-    keys = (*sweep_dims(values), *(d for d in values.dims if d in CASE_DIMS))
+    inner = tuple(d for d in values.dims if d in CASE_DIMS)
     table = values.to_dataset(name=metric)
-    group = _Group("", {}, _rows(table, keys, [metric]))
-    return _render(f"{metric} ({column.heading})", [group], keys, (column,), _units(table, (column,)), fmt)
+    rows = [{**label, **row} for label, case in iter_cases(table) for row in _rows(case, inner, [metric])]
+    keys = tuple(k for k in rows[0] if k != metric)
+    return _render(f"{metric} ({column.heading})", [_Group("", {}, rows)], keys, (column,),
+                   _units(table, (column,)), fmt)
 
 
 # --------------------------------------------------------------------------- command line

@@ -121,6 +121,10 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
                                    "of the axis maximum (paper Tables 4-5, DESIGN.md 5)"),
     "wear_range": VariableSpec(("joint", "axis"), "degree", "wear range",
                                "wear_angle_max - wear_angle_min (paper Tables 4-5)"),
+    "wear_arc": VariableSpec(("joint", "axis"), "degree", "worn arc",
+                             "shortest arc between bin centres holding every bin whose depth "
+                             "exceeds wear_threshold_fraction of the axis maximum; equals "
+                             "wear_range unless the worn region straddles +-180 degree"),
     "wear_depth_reduction": VariableSpec(("joint", "axis"), "m", "reduction of the maximum wear depth",
                                          "reference minus case (paper Table 6)"),
     "wear_depth_reduction_percent": VariableSpec(

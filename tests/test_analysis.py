@@ -19,18 +19,19 @@ from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures
 from clearsweep.analysis import (REPORT_FORMATS, SETTLE_TIME_S, SelectionError, case_summary,
                                  format_metric_table, format_reduction_table, format_wear_table,
                                  metric_table, parse_selection, reduction_table, report_command,
-                                 run_summary_text, wear_table)
+                                 run_summary_text, wear_table, worn_arc_deg)
 from clearsweep.dataset import write_netcdf_atomic
 from clearsweep.variables import SUMMARY_VARIABLES
 
-# (joint, axis) -> (max depth [m], angle of max, min angle, max angle, range [degree]) by hand
-# from synthetic.WEAR_PROFILES: bins on [lo, hi], peak at peak_angle.
+# (joint, axis) -> (max depth [m], angle of max, min angle, max angle, range, arc [degree]) by
+# hand from synthetic.WEAR_PROFILES: bins on [lo, hi], peak at peak_angle. A x wears every bin:
+# range 179.5 - (-179.5) = 359, arc a full 360.
 EXPECTED_WEAR = {
-    ("A", "x"): (7.5e-11, -150.5, -179.5, 179.5, 359.0),
-    ("A", "y"): (7.0e-12, 44.5, -4.5, 44.5, 49.0),
-    ("B", "x"): (8.0e-11, 20.5, -10.5, 40.5, 51.0),
-    ("B", "y"): (2.7e-11, 10.5, -5.5, 46.5, 52.0),
-    ("B", "z"): (1.2e-10, 27.5, -22.5, 27.5, 50.0),
+    ("A", "x"): (7.5e-11, -150.5, -179.5, 179.5, 359.0, 360.0),
+    ("A", "y"): (7.0e-12, 44.5, -4.5, 44.5, 49.0, 49.0),
+    ("B", "x"): (8.0e-11, 20.5, -10.5, 40.5, 51.0, 51.0),
+    ("B", "y"): (2.7e-11, 10.5, -5.5, 46.5, 52.0, 52.0),
+    ("B", "z"): (1.2e-10, 27.5, -22.5, 27.5, 50.0, 50.0),
 }
 
 
@@ -48,13 +49,14 @@ def invoke(*args: str):
 def test_wear_table_matches_hand_computed_bins(case):
     table = wear_table(case)
     assert table["wear_depth_axis_max"].dims == ("joint", "axis")
-    for (joint, axis), (depth, at_max, lo, hi, width) in EXPECTED_WEAR.items():
+    for (joint, axis), (depth, at_max, lo, hi, width, arc) in EXPECTED_WEAR.items():
         row = table.sel(joint=joint, axis=axis)
         assert float(row["wear_depth_axis_max"]) == pytest.approx(depth, rel=1e-12)
         assert float(row["wear_angle_of_max"]) == at_max
         assert float(row["wear_angle_min"]) == lo
         assert float(row["wear_angle_max"]) == hi
         assert float(row["wear_range"]) == width
+        assert float(row["wear_arc"]) == arc
 
 
 def test_sub_threshold_bins_are_not_worn(case):
@@ -67,8 +69,29 @@ def test_sub_threshold_bins_are_not_worn(case):
 def test_no_wear_gives_zero_depth_and_nan_angles(case):
     row = wear_table(case).sel(joint="A", axis="z")
     assert float(row["wear_depth_axis_max"]) == 0.0
-    for name in ("wear_angle_of_max", "wear_angle_min", "wear_angle_max", "wear_range"):
+    for name in ("wear_angle_of_max", "wear_angle_min", "wear_angle_max", "wear_range", "wear_arc"):
         assert np.isnan(float(row[name]))
+
+
+def test_wear_straddling_180_degree(case):
+    # Worn bin centres 173.5..179.5 and -179.5..-174.5: the paper's min/max reading
+    # spans the circle (359 degree); the worn arc goes the short way through 180, from the
+    # centre 173.5 to the centre -174.5 = 185.5 (12 degree).
+    straddling = case.copy(deep=True)
+    centres = straddling["angle"].values
+    worn = (centres >= 173.5) | (centres <= -174.5)
+    straddling["wear_projection"].loc[dict(joint="A", axis="z")] = np.where(worn, 1e-11, 0.0)
+    row = wear_table(straddling).sel(joint="A", axis="z")
+    assert float(row["wear_range"]) == 359.0
+    assert float(row["wear_arc"]) == 12.0
+
+
+@pytest.mark.parametrize("flags, arc", [
+    ([0, 0, 0, 0], np.nan), ([1, 1, 1, 1], 360.0), ([0, 1, 0, 0], 0.0), ([0, 1, 1, 0], 90.0),
+    ([1, 0, 0, 1], 90.0), ([1, 0, 1, 0], 180.0), ([1, 1, 0, 1], 180.0),
+])
+def test_worn_arc_on_four_bins(flags, arc):
+    np.testing.assert_equal(worn_arc_deg(np.array(flags, dtype=bool)), arc)
 
 
 def test_all_nan_projection_gives_nan_not_error(case):
@@ -230,14 +253,14 @@ def test_wear_table_text_layout(case):
     b_x = next(ln for ln in text.splitlines() if ln.split()[:2] == ["B", "x"])
     assert b_x.split()[2:6] == ["8.0000e-11", "40.5", "-10.5", "51.0"]
     a_z = next(ln for ln in text.splitlines() if ln.split()[:2] == ["A", "z"])
-    assert a_z.split()[2:] == ["0.0000e+00", "n/a", "n/a", "n/a", "n/a"]
+    assert a_z.split()[2:] == ["0.0000e+00"] + ["n/a"] * 5
 
 
 def test_wear_table_sweep_blocks(sweep_ds):
     text = format_wear_table(sweep_ds, "markdown")
     assert text.count("### B_coating=") == 4
     assert "### B_coating=PTFE, B_clearance=0.00025 (status: ok)" in text
-    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 |" in text
+    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 | 61.0 |" in text
 
 
 def test_reduction_text_leaves_out_the_reference(sweep_ds):
@@ -337,6 +360,9 @@ def test_case_dimension_with_zip_coordinates_and_without_coordinates():
     assert {(r["case"], r["B_coating"], r["B_clearance"]) for r in rows} == {
         (0, "none", 2.5e-4), (1, "PTFE", 2.5e-4)}
     assert metric_table(bare, "wear_depth_max_final").dims == ("case", "joint")
+    zipped_csv = format_metric_table(zipped, "wall_time", "csv").splitlines()
+    assert zipped_csv[0] == "case,B_coating,B_clearance,wall-clock time of the simulation [s]"
+    assert zipped_csv[2] == "1,PTFE,0.00025,2.0"
     csv_lines = format_metric_table(bare, "wear_depth_max_final", "csv").splitlines()
     assert csv_lines[0] == "case,joint,maximum wear depth at the end of the run [m]"
     assert csv_lines[1] == f"0,A,{syn.WEAR_MAP_PEAK['A']!r}"
