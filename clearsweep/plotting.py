@@ -67,6 +67,9 @@ MAX_ANNOTATED_CELLS = 64
 #: Size of one heat-map panel of ``--kind sweep`` (width, height) [inch].
 HEATMAP_PANEL_INCHES = (4.2, 3.4)
 
+#: Narrowest figure of ``--kind sweep``, so that its title fits [inch].
+MIN_FIGURE_WIDTH_INCHES = 7.0
+
 #: Heat-map annotations turn dark on cells brighter than this (normalised colour value).
 ANNOTATION_DARK_TEXT_ABOVE = 0.6
 
@@ -269,17 +272,25 @@ def _clearance(ds: xr.Dataset, case: xr.Dataset, joint: str) -> tuple[float, str
 
     A swept clearance (sweep coordinate ``{joint}_clearance``, or
     ``joints_{joint}_clearance`` where the short name was taken) wins over the
-    configuration text, which holds the sweep's base case; without either,
-    the largest eccentricity stands in.
+    configuration text (a case's ``config`` attribute, or the base case of a
+    sweep's ``sweep_config``); without either, the largest eccentricity
+    stands in.
     """
     for name in (f"{joint}_clearance", f"joints_{joint}_clearance"):
         if name in case.coords and case[name].ndim == 0:
-            return float(case[name]), "swept"
-    try:
-        config = yaml.safe_load(ds.attrs.get("config") or "") or {}
-        value = float(config["joints"][joint]["clearance"])
-    except (yaml.YAMLError, KeyError, TypeError, ValueError):
-        value = None
+            swept = float(case[name])
+            return (swept, "swept") if swept > 0 else None
+    value = None
+    # A case file holds its resolved config in ``config``; a sweep file its base case
+    # under ``base`` of ``sweep_config``.
+    for attr, section in (("config", None), ("sweep_config", "base")):
+        try:
+            config = yaml.safe_load(ds.attrs.get(attr) or "") or {}
+            config = config[section] if section else config
+            value = float(config["joints"][joint]["clearance"])
+            break
+        except (yaml.YAMLError, KeyError, TypeError, ValueError):
+            continue
     if value is not None:
         return (value, "config") if value > 0 else None
     if "eccentricity" in case:
@@ -362,7 +373,8 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         return
     ncols = min(3, len(panels))
     nrows = -(-len(panels) // ncols)
-    fig.set_size_inches(HEATMAP_PANEL_INCHES[0] * ncols, HEATMAP_PANEL_INCHES[1] * nrows + 0.6)
+    fig.set_size_inches(max(HEATMAP_PANEL_INCHES[0] * ncols, MIN_FIGURE_WIDTH_INCHES),
+                        HEATMAP_PANEL_INCHES[1] * nrows + 0.6)
     for i, (text, panel) in enumerate(panels):
         ax = fig.add_subplot(nrows, ncols, i + 1)
         grid = panel.transpose(*dims).values.astype(float)

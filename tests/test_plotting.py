@@ -14,7 +14,6 @@ from matplotlib.image import imread
 import synthetic as syn
 from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures)
 from clearsweep.analysis import SelectionError, case_summary, report_command, run_summary_text
-from clearsweep.dataset import write_netcdf_atomic
 from clearsweep.plotting import KINDS, PlotError, plot, plot_command
 
 TEST_DPI = 40
@@ -160,29 +159,34 @@ def test_cli_bad_suffix_exit_2(tmp_path, sweep_file):
 
 
 def test_short_simulation_renders_every_kind_and_reports(tmp_path):
-    """0.02 s of the real simulator, two coatings at B: every figure, the reports, the summary."""
-    simulation = pytest.importorskip("clearsweep.simulation")
-    base = {"solver": {"duration": 0.02},
-            "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}}
-    cases = [simulation.simulate({**base, "joints": {**base["joints"],
-                                                     "B": {"clearance": 2.5e-4, "coating": c}}})
-             for c in ("none", "PTFE")]
-    for ds in cases:
-        assert str(ds["status"].values) == "ok"
-    assert "status: ok" in run_summary_text(cases[0])
-    sweep = xr.concat(cases, dim="B_coating", combine_attrs="override").assign_coords(
-        B_coating=["none", "PTFE"])
-    path = write_netcdf_atomic(sweep, tmp_path / "real.nc")
-    for kind in KINDS:
-        select = ["B_coating=PTFE"] if kind == "wear-map" else None
-        fig = plot(sweep, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
-        assert_rendered(tmp_path / f"{kind}.png", fig)
+    """0.02 s of the real simulator through the real sweep driver: two coatings at B, stored
+    in full and as summaries; every figure, the three reports and the run summary."""
+    sweeps = pytest.importorskip("clearsweep.sweeps")
+    spec = {"base": {"solver": {"duration": 0.02},
+                     "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}},
+            "sweep": {"grid": {"joints.B.coating": ["none", "PTFE"]}}}
+    paths = {}
+    for store in ("full", "summary"):
+        paths[store] = tmp_path / f"{store}.nc"
+        sweeps.run_sweep({**spec, "store": store}, paths[store], workers=1, progress=False).close()
+    with xr.open_dataset(paths["full"]) as full:
+        assert list(full["status"].values) == ["ok", "ok"]
+        assert "status: ok" in run_summary_text(full.sel(B_coating="none"))
+        for kind in KINDS:
+            select = ["B_coating=PTFE"] if kind == "wear-map" else None
+            fig = plot(full, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
+            assert_rendered(tmp_path / f"{kind}.png", fig)
+        orbit = plot(full, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
+        legend = [t.get_text() for t in orbit.axes[0].get_legend().get_texts()]
+        assert "clearance 0.00025 m (config)" in legend       # the base case of sweep_config
+    for path in paths.values():
+        for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
+            result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])
+            assert result.exit_code == 0, result.output
+            assert json.loads(result.output)["rows"]
     out = tmp_path / "cli.png"
-    result = CliRunner().invoke(plot_command, [str(path), "--kind", "wear-polar", "-o", str(out),
+    result = CliRunner().invoke(plot_command, [str(paths["summary"]), "--kind", "sweep", "-o",
+                                               str(out), "--metric", "wear_depth_max_final",
                                                "--dpi", str(TEST_DPI)])
     assert result.exit_code == 0, result.output
     assert imread(out).std() > 0
-    for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
-        result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])
-        assert result.exit_code == 0, result.output
-        assert json.loads(result.output)["rows"]
