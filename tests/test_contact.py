@@ -80,7 +80,7 @@ def test_contact_area_is_two_pi_rj_hc():
     rj = RI - C
     e = C + 1e-6
     hc = rj * (1 + (e ** 2 + rj ** 2 - RI ** 2) / (2 * rj * e))
-    assert contact_area(e, RI, rj) == pytest.approx(2 * math.pi * rj * hc, rel=1e-6)
+    assert contact_area(1e-6, e, RI, rj) == pytest.approx(2 * math.pi * rj * hc, rel=1e-6)
 
 
 def impact_restitution(cr, v_in, m_eff=1.0, ew=1.1e11, steps=4000):

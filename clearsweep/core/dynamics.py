@@ -22,7 +22,8 @@ from numba import njit
 from .contact import (damping_factor, elastic_energy, friction_factor, normal_force,
                       stiff_rate)
 from .kinematics import (add, cross, dot, gdot_phidot, gmat, mtv, mv, point_accel_quadratic,
-                         point_jacobian_rot, point_state, rot_mass, rotation, scale, sub)
+                         point_jacobian_rot, point_state, rot_mass, rotation, scale, sub,
+                         trig)
 from .layout import (D_CEFF, D_CONS, D_DDOT, D_DELTA, D_DFD, D_DFDD, D_NGLOBAL, D_ECC, D_FN, D_FT, D_HWEAR, D_JOINT_FORCE,
                      D_KE, D_NORMAL, D_OFFSET, D_PDISS, D_PDRIVE, D_PE_GRAV, D_RATE, D_REACTION_O,
                      D_SLIDER_ACC, D_TORQUE, D_UEL, D_VT, J_C, J_CLEARANCE, J_EW, J_MU, J_RI,
@@ -138,51 +139,80 @@ def minv_apply(minv, mr_inv, v, out):
 
 
 @njit(cache=True)
-def mobility(g, C, L, nc, minv, mr_inv, w1, w2, lam):
-    """g^T W g, W the constrained inverse mass of the free coordinates (DESIGN 4 m_eff)."""
+def constrained_apply(g, C, L, nc, minv, mr_inv, w1, w2, lam):
+    """w1 = W g, W the constrained inverse mass of the free coordinates (Schur form)."""
     minv_apply(minv, mr_inv, g, w1)
+    if nc == 0:
+        return
     for i in range(nc):
         acc = 0.0
         for k in range(NZ):
             acc += C[i, k] * w1[k]
         lam[i] = acc
-    if nc > 0:
-        chol_solve(L, lam, nc)
+    chol_solve(L, lam, nc)
     for k in range(NZ):
         acc = g[k]
         for i in range(nc):
             acc -= C[i, k] * lam[i]
         w2[k] = acc
     minv_apply(minv, mr_inv, w2, w1)
-    acc = 0.0
-    for k in range(NZ):
-        acc += g[k] * w1[k]
-    return acc
 
 
 @njit(cache=True)
-def rod_point_row(g, Jr, vec, sign):
-    """Add sign * (d r_P/d z)^T vec for a rod point with rotation block Jr."""
-    g[0] += sign * vec[0]
-    g[1] += sign * vec[1]
-    g[2] += sign * vec[2]
-    g[3] += sign * (Jr[0] * vec[0] + Jr[3] * vec[1] + Jr[6] * vec[2])
-    g[4] += sign * (Jr[1] * vec[0] + Jr[4] * vec[1] + Jr[7] * vec[2])
+def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
+    """Mobility W_p of joint j's relative contact motion, a_rel = W_p F for the force pair
+    (F on the ball, -F on the socket); symmetric 3x3 as (xx, xy, xz, yy, yz, zz) [1/kg].
+
+    The rod carries one side (A's socket, B's ball; Jr its rotation Jacobian block); the
+    crank is driven (immobile); B's socket moves with the slider along X only. With no
+    ideal joint left (nc = 0) W_p = I/m3 + A Mr^-1 A^T (+ e_x e_x^T / m4 at B) in closed form.
+    """
+    xs = minv[1] if j == 1 else 0.0
+    if nc == 0:
+        im = minv[0]
+        a0 = (Jr[0], Jr[3], Jr[6])
+        a1 = (Jr[1], Jr[4], Jr[7])
+        b0 = (mr_inv[0] * a0[0] + mr_inv[1] * a1[0], mr_inv[0] * a0[1] + mr_inv[1] * a1[1],
+              mr_inv[0] * a0[2] + mr_inv[1] * a1[2])
+        b1 = (mr_inv[2] * a0[0] + mr_inv[3] * a1[0], mr_inv[2] * a0[1] + mr_inv[3] * a1[1],
+              mr_inv[2] * a0[2] + mr_inv[3] * a1[2])
+        return (im + xs + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
+                a0[0] * b0[2] + a1[0] * b1[2], im + a0[1] * b0[1] + a1[1] * b1[1],
+                a0[1] * b0[2] + a1[1] * b1[2], im + a0[2] * b0[2] + a1[2] * b1[2])
+    # general case: g_k = J^T e_k, W_p[a, b] = g_a . (W g_b)
+    for k in range(3):
+        g = vz[k]
+        g[0] = 1.0 if k == 0 else 0.0
+        g[1] = 1.0 if k == 1 else 0.0
+        g[2] = 1.0 if k == 2 else 0.0
+        g[3] = Jr[3 * k]
+        g[4] = Jr[3 * k + 1]
+        g[5] = -1.0 if (j == 1 and k == 0) else 0.0
+    wg = vz[6]
+    res = vz[5]  # res[0..5] <- xx, xy, xz, yy, yz, zz
+    idx = 0
+    for b in range(3):
+        constrained_apply(vz[b], C, L, nc, minv, mr_inv, wg, vz[3], vz[4])
+        for a in range(b + 1):
+            acc = 0.0
+            for k in range(NZ):
+                acc += vz[a][k] * wg[k]
+            # (a, b) with a <= b -> packed index
+            if a == 0:
+                res[b] = acc
+            elif a == 1:
+                res[2 + b] = acc
+            else:
+                res[5] = acc
+    return (res[0], res[1], res[2], res[3], res[4], res[5])
 
 
 @njit(cache=True)
-def contact_rate(j, vec, g, R3, G3, qi_or_qj_rod, r3, C, L, nc, minv, mr_inv, w1, w2, lam):
-    """Inverse effective mass 1/m_eff of joint j's relative contact motion along vec."""
-    for k in range(NZ):
-        g[k] = 0.0
-    # Rod point: the socket of A (sign -1: relative motion is ball - socket) or the ball of B.
-    Jr = point_jacobian_rot(R3, mtv(R3, sub(qi_or_qj_rod, r3)), G3)
-    if j == 0:
-        rod_point_row(g, Jr, vec, -1.0)
-    else:
-        rod_point_row(g, Jr, vec, 1.0)
-        g[5] -= vec[0]  # slider socket moves along X only
-    return mobility(g, C, L, nc, minv, mr_inv, w1, w2, lam)
+def quad_form(w, u, v):
+    """u^T W v for the packed symmetric W."""
+    return (u[0] * (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])
+            + u[1] * (w[1] * v[0] + w[3] * v[1] + w[4] * v[2])
+            + u[2] * (w[2] * v[0] + w[4] * v[1] + w[5] * v[2]))
 
 
 @njit(cache=True)
@@ -249,17 +279,20 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     pd2 = (y[qd + 3], y[qd + 4], y[qd + 5])
     pd3 = (y[qd + 9], y[qd + 10], y[qd + 11])
     pd4 = (y[qd + 15], y[qd + 16], y[qd + 17])
-    R2 = rotation(y[3], y[4], y[5])
-    R3 = rotation(y[9], y[10], y[11])
-    R4 = rotation(y[15], y[16], y[17])
-    G2 = gmat(y[4], y[5])
-    G3 = gmat(y[10], y[11])
-    G4 = gmat(y[16], y[17])
+    t2 = trig(y[3], y[4], y[5])
+    t3 = trig(y[9], y[10], y[11])
+    t4 = trig(y[15], y[16], y[17])
+    R2 = rotation(t2)
+    R3 = rotation(t3)
+    R4 = rotation(t4)
+    G2 = gmat(t2)
+    G3 = gmat(t3)
+    G4 = gmat(t4)
     w2 = mv(G2, pd2)
     w3 = mv(G3, pd3)
     w4 = mv(G4, pd4)
-    gq2 = gdot_phidot(y[4], y[5], pd2[0], pd2[1], pd2[2])
-    gq3 = gdot_phidot(y[10], y[11], pd3[0], pd3[1], pd3[2])
+    gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
+    gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
 
     uO = (0.0, 0.0, 0.5 * l2)
     uA2 = (0.0, 0.0, -0.5 * l2)
@@ -508,8 +541,9 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     else:
         # the ball point Q_j on the rod
         qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp_j[J_RJ], n))
-    g = vz[7]
-    inv_m = contact_rate(j, n, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv, vz[2], vz[3], vz[4])
+    Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
+    wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
+    inv_m = quad_form(wp, n, n)
     if not inv_m > 0.0:
         return 0.0
     m_eff = 1.0 / inv_m
@@ -529,11 +563,12 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     mu = jp_j[J_MU]
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+        # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
         t1, t2 = tangent_basis(n)
-        inv_t = max(contact_rate(j, t1, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv,
-                                 vz[2], vz[3], vz[4]),
-                    contact_rate(j, t2, g, R3, G3, qrod, r3, C, L, nc, minv, mr_inv,
-                                 vz[2], vz[3], vz[4]))
+        a = quad_form(wp, t1, t1)
+        b = quad_form(wp, t1, t2)
+        d = quad_form(wp, t2, t2)
+        inv_t = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b)
         vt = dg[D_VT + j]
         slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
         rate = max(rate, mu * fn * slope * inv_t)

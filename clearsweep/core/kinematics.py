@@ -10,31 +10,33 @@ from numba import njit
 
 
 @njit(cache=True)
-def rotation(a, b, g):
-    """R = Rz(a) Ry(b) Rx(g) as a row-major 9-tuple."""
-    ca, sa = math.cos(a), math.sin(a)
-    cb, sb = math.cos(b), math.sin(b)
-    cg, sg = math.cos(g), math.sin(g)
+def trig(a, b, g):
+    """(cos a, sin a, cos b, sin b, cos g, sin g): computed once per body and evaluation."""
+    return (math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g))
+
+
+@njit(cache=True)
+def rotation(tr):
+    """R = Rz(a) Ry(b) Rx(g) as a row-major 9-tuple, from trig(a, b, g)."""
+    ca, sa, cb, sb, cg, sg = tr
     return (ca * cb, -sa * cg + ca * sb * sg, sa * sg + ca * sb * cg,
             sa * cb, ca * cg + sa * sb * sg, -ca * sg + sa * sb * cg,
             -sb, cb * sg, cb * cg)
 
 
 @njit(cache=True)
-def gmat(b, g):
-    """G(phi) with w' = G phi_dot (body frame), row-major 9-tuple."""
-    cb, sb = math.cos(b), math.sin(b)
-    cg, sg = math.cos(g), math.sin(g)
+def gmat(tr):
+    """G(phi) with w' = G phi_dot (body frame), row-major 9-tuple, from trig(a, b, g)."""
+    cb, sb, cg, sg = tr[2], tr[3], tr[4], tr[5]
     return (-sb, 0.0, 1.0,
             cb * sg, cg, 0.0,
             cb * cg, -sg, 0.0)
 
 
 @njit(cache=True)
-def gdot_phidot(b, g, ad, bd, gd):
+def gdot_phidot(tr, ad, bd, gd):
     """The velocity-quadratic part of w'_dot: G_dot(phi, phi_dot) phi_dot."""
-    cb, sb = math.cos(b), math.sin(b)
-    cg, sg = math.cos(g), math.sin(g)
+    cb, sb, cg, sg = tr[2], tr[3], tr[4], tr[5]
     return (-cb * bd * ad,
             (-sb * sg * bd + cb * cg * gd) * ad - sg * gd * bd,
             (-sb * cg * bd - cb * sg * gd) * ad - cg * gd * bd)
@@ -83,27 +85,26 @@ def scale(s, a):
 
 @njit(cache=True)
 def rot_mass(j, gm):
-    """Rotational mass block G^T J G (symmetric, as a row-major 9-tuple) for diagonal J."""
-    out = [0.0] * 9
-    for r in range(3):
-        for c in range(3):
-            out[3 * r + c] = (gm[r] * j[0] * gm[c] + gm[3 + r] * j[1] * gm[3 + c]
-                              + gm[6 + r] * j[2] * gm[6 + c])
-    return (out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8])
+    """Rotational mass block G^T J G (symmetric, row-major 9-tuple) for diagonal J."""
+    m00 = gm[0] * j[0] * gm[0] + gm[3] * j[1] * gm[3] + gm[6] * j[2] * gm[6]
+    m01 = gm[0] * j[0] * gm[1] + gm[3] * j[1] * gm[4] + gm[6] * j[2] * gm[7]
+    m02 = gm[0] * j[0] * gm[2] + gm[3] * j[1] * gm[5] + gm[6] * j[2] * gm[8]
+    m11 = gm[1] * j[0] * gm[1] + gm[4] * j[1] * gm[4] + gm[7] * j[2] * gm[7]
+    m12 = gm[1] * j[0] * gm[2] + gm[4] * j[1] * gm[5] + gm[7] * j[2] * gm[8]
+    m22 = gm[2] * j[0] * gm[2] + gm[5] * j[1] * gm[5] + gm[8] * j[2] * gm[8]
+    return (m00, m01, m02, m01, m11, m12, m02, m12, m22)
 
 
 @njit(cache=True)
 def point_jacobian_rot(rm, u, gm):
-    """-R u~ G: the 3x3 block d r_P / d phi of a body point at body offset u (row-major)."""
-    # column c of G is (gm[c], gm[3+c], gm[6+c]); -R (u x g_c) = R (g_c x u)
-    out = [0.0] * 9
-    for c in range(3):
-        gc = (gm[c], gm[3 + c], gm[6 + c])
-        col = mv(rm, cross(gc, u))
-        out[c] = col[0]
-        out[3 + c] = col[1]
-        out[6 + c] = col[2]
-    return (out[0], out[1], out[2], out[3], out[4], out[5], out[6], out[7], out[8])
+    """-R u~ G: the 3x3 block d r_P / d phi of a body point at body offset u (row-major).
+
+    Column c is R (g_c x u), g_c the c-th column of G.
+    """
+    c0 = mv(rm, cross((gm[0], gm[3], gm[6]), u))
+    c1 = mv(rm, cross((gm[1], gm[4], gm[7]), u))
+    c2 = mv(rm, cross((gm[2], gm[5], gm[8]), u))
+    return (c0[0], c1[0], c2[0], c0[1], c1[1], c2[1], c0[2], c1[2], c2[2])
 
 
 @njit(cache=True)
