@@ -4,8 +4,8 @@ Every function here takes a dataset as written by ``dataset.build_dataset``
 (one case) or by the sweep driver (the same variables with extra sweep
 dimensions in front, or only the summary variables for ``store: summary``)
 and reduces over the case dimensions (``time``, ``angle``, ``polar``,
-``azimuth``), so sweeps are handled by broadcasting, never by a loop over
-cases. Units and long names come from ``variables.SUMMARY_VARIABLES``.
+``azimuth``), so any sweep dimensions simply stay in the results. Units and
+long names come from ``variables.SUMMARY_VARIABLES``.
 
 Conventions (DESIGN.md section 5, paper Tables 4-6):
 
@@ -57,10 +57,6 @@ REPORT_FORMATS = ("text", "markdown", "csv", "json")
 #: (the angle of the maximum, which the paper does not print, last).
 WEAR_TABLE_VARIABLES = ("wear_depth_axis_max", "wear_angle_max", "wear_angle_min", "wear_range",
                         "wear_angle_of_max", "wear_arc")
-
-#: Variables of the reduction table, in the column order of the paper's Table 6.
-REDUCTION_VARIABLES = ("wear_depth_reduction", "wear_depth_reduction_percent",
-                       "wear_range_reduction", "wear_range_reduction_percent")
 
 #: Scalars copied from the case dataset into its summary.
 PASS_THROUGH_VARIABLES = ("energy_residual_relative", "substeps_used", "rk4_steps", "wall_time")
@@ -124,7 +120,7 @@ def label_text(label: Mapping[str, object]) -> str:
     return ", ".join(f"{k}={value_text(v)}" for k, v in label.items())
 
 
-def _points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, object]]:
+def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, object]]:
     """Yield ``({dim: value}, obj at that point)`` over ``dims``.
 
     The value is the dimension's coordinate value, or the position along a
@@ -147,7 +143,7 @@ def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, objec
     dims = sweep_dims(obj)
     extra = [str(n) for n, c in obj.coords.items()
              if n not in dims and c.dims and set(c.dims) <= set(dims)]
-    for label, case in _points(obj, dims):
+    for label, case in iter_points(obj, dims):
         yield {**label, **{n: case[n].values[()] for n in extra}}, case
 
 
@@ -229,7 +225,7 @@ def parse_selection(obj: xr.Dataset | xr.DataArray,
     return out
 
 
-def select(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataArray:
+def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataArray:
     """``obj.sel`` of the cases named by ``items`` (see ``parse_selection``)."""
     selection = parse_selection(obj, items)
     return obj.sel(selection) if selection else obj
@@ -417,14 +413,13 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
     is_reference = xr.DataArray(True)
     for dim, value in chosen.items():
         is_reference = is_reference & (table[dim] == value)
-    result = xr.Dataset({
+    return xr.Dataset({
         "wear_depth_reduction": _with_attrs(depth, "wear_depth_reduction"),
         "wear_depth_reduction_percent": _with_attrs(depth_percent, "wear_depth_reduction_percent"),
         "wear_range_reduction": _with_attrs(width, "wear_range_reduction"),
         "wear_range_reduction_percent": _with_attrs(width_percent, "wear_range_reduction_percent"),
         "is_reference": _with_attrs(is_reference, "is_reference"),
     }, attrs={"reference": label_text(chosen)})
-    return result
 
 
 def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
@@ -462,25 +457,27 @@ def run_summary_text(ds: xr.Dataset) -> str:
     Example::
 
         status: ok
-        slider acceleration: peak 51.2 m s-2, RMS 4.61 m s-2; after 0.05 s: peak 3.2 m s-2, RMS 3.01 m s-2
+        slider acceleration: peak 50 m s-2, RMS 4.625 m s-2; after 0.05 s: peak 3 m s-2, RMS 3 m s-2
         peak normal force: A 40 N, B 120 N
         sub-steps used: 4
-        energy residual (relative): 2.1e-06
-        wall time: 1.52 s (65,790 RK4 steps/s, 100,000 steps)
+        energy residual (relative): 2.50e-06
+        wall time: 2 s (40,000 RK4 steps/s, 80,000 steps)
     """
     summary = case_summary(ds)
     blocks = []
     for label, case in iter_cases(summary):
         lines = [f"case {label_text(label)}"] if label else []
-        lines.append(f"status: {value_text(case['status'].values[()]) if 'status' in case else _MISSING_TEXT}")
+        status = value_text(case["status"].values[()]) if "status" in case else _MISSING_TEXT
+        lines.append(f"status: {status}")
         lines.append(
             f"slider acceleration: peak {_number(case, 'slider_acceleration_peak', '.4g')}, "
             f"RMS {_number(case, 'slider_acceleration_rms', '.4g')}; after {SETTLE_TIME_S:g} s: "
             f"peak {_number(case, 'slider_acceleration_peak_settled', '.4g')}, "
             f"RMS {_number(case, 'slider_acceleration_rms_settled', '.4g')}")
         if "normal_force_peak" in case:
-            forces = ", ".join(f"{value_text(j)} {_number(case.sel(joint=j), 'normal_force_peak', '.4g')}"
-                               for j in case["joint"].values)
+            forces = ", ".join(
+                f"{value_text(j)} {_number(case.sel(joint=j), 'normal_force_peak', '.4g')}"
+                for j in case["joint"].values)
             lines.append(f"peak normal force: {forces}")
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
@@ -551,7 +548,8 @@ def _cell(value, spec: str) -> str:
 
 def _rows(obj: xr.Dataset, dims: tuple[str, ...], names: list[str]) -> list[dict[str, object]]:
     """One dict per point of ``dims``: the coordinates of ``dims``, then the variables ``names``."""
-    return [{**keys, **{n: point[n].values[()] for n in names}} for keys, point in _points(obj, dims)]
+    return [{**keys, **{n: point[n].values[()] for n in names}}
+            for keys, point in iter_points(obj, dims)]
 
 
 def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tuple[str, ...],
@@ -677,7 +675,8 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
                      ".6g" if values.dtype.kind == "f" else "")
     inner = tuple(d for d in values.dims if d in CASE_DIMS)
     table = values.to_dataset(name=metric)
-    rows = [{**label, **row} for label, case in iter_cases(table) for row in _rows(case, inner, [metric])]
+    rows = [{**label, **row}
+            for label, case in iter_cases(table) for row in _rows(case, inner, [metric])]
     keys = tuple(k for k in rows[0] if k != metric)
     return _render(f"{metric} ({column.heading})", [_Group("", {}, rows)], keys, (column,),
                    _units(table, (column,)), fmt)

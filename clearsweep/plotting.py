@@ -30,7 +30,6 @@ Kinds (``KINDS``):
 
 from __future__ import annotations
 
-import itertools
 from pathlib import Path
 
 import click
@@ -42,8 +41,8 @@ from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
-from .analysis import (CASE_DIMS, SelectionError, choice_message, iter_cases, label_text,
-                       metric_table, select, sweep_dims, value_text)
+from .analysis import (CASE_DIMS, SelectionError, choice_message, iter_cases, iter_points,
+                       label_text, metric_table, select_cases, sweep_dims, value_text)
 
 KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep")
 X_AXES = ("angle", "time")
@@ -99,10 +98,11 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
 
 
-def _require(ds: xr.Dataset, names: tuple[str, ...], kind: str) -> None:
+def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
+    """Raise ``PlotError`` unless ``ds`` holds ``names``; ``what`` asked for them (``--kind slider``)."""
     missing = [n for n in names if n not in ds]
     if missing:
-        raise PlotError(f"--kind {kind} needs {', '.join(missing)}, which this dataset lacks "
+        raise PlotError(f"{what} needs {', '.join(missing)}, which this dataset lacks "
                         "(a summary-only sweep holds no time series or wear maps)")
 
 
@@ -136,7 +136,7 @@ def _abscissa(ds: xr.Dataset, case: xr.Dataset, x: str) -> tuple[np.ndarray, str
     """Crank angle [degree] or time [s] of a case, and its label."""
     if x == "time":
         return case["time"].values, axis_label(ds["time"])
-    _require(ds, ("crank_angle",), "... --x angle")
+    _require(ds, ("crank_angle",), "--x angle")
     return np.degrees(case["crank_angle"].values), axis_label(ds["crank_angle"], units="degree")
 
 
@@ -152,7 +152,7 @@ def _edges(centres: np.ndarray, lo: float, hi: float) -> np.ndarray:
 
 def _draw_slider(fig: Figure, ds: xr.Dataset, x: str) -> None:
     names = ("slider_position", "slider_velocity", "slider_acceleration")
-    _require(ds, names, "slider")
+    _require(ds, names, "--kind slider")
     cases = _cases(ds)
     axes = fig.subplots(len(names), 1, sharex=True)
     for ax, name in zip(axes, names):
@@ -167,18 +167,17 @@ def _draw_slider(fig: Figure, ds: xr.Dataset, x: str) -> None:
 
 
 def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
-    _require(ds, ("reaction_O", "joint_force"), "forces")
-    rows = [("reaction at O (ground on crank)", ds["reaction_O"])]
-    rows += [(f"joint {value_text(j)} (on the ball)", ds["joint_force"].sel(joint=j))
-             for j in ds["joint"].values]
+    _require(ds, ("reaction_O", "joint_force"), "--kind forces")
+    # (panel title, variable, joint or None)
+    rows = [("reaction at O (ground on crank)", "reaction_O", None)]
+    rows += [(f"joint {value_text(j)} (on the ball)", "joint_force", j) for j in ds["joint"].values]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)
     axes = fig.subplots(len(rows), len(components), sharex=True, squeeze=False)
-    for r, (title, force) in enumerate(rows):
+    for r, (title, name, joint) in enumerate(rows):
         for text, case, colour in cases:
             xs, xlabel = _abscissa(ds, case, x)
-            vector = force.sel({d: case[d].values[()] for d in sweep_dims(force)}) \
-                if sweep_dims(force) else force
+            vector = case[name] if joint is None else case[name].sel(joint=joint)
             series = [np.sqrt((vector ** 2).sum("axis"))] + [vector.sel(axis=a) for a in components[1:]]
             for ax, values, component in zip(axes[r], series, components):
                 ax.plot(xs, values.values, lw=0.7, label=text,
@@ -186,7 +185,7 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
         for ax, component in zip(axes[r], components):
             symbol = "|F|" if component == "magnitude" else f"F_{component}"
             ax.set_title(f"{title}: {symbol}", fontsize="small")
-            ax.set_ylabel(axis_label(force, symbol))
+            ax.set_ylabel(axis_label(ds[name], symbol))
             ax.grid(alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel(xlabel)
@@ -195,7 +194,7 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
 
 
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
-    _require(ds, ("wear_map",), "wear-map")
+    _require(ds, ("wear_map",), "--kind wear-map")
     ds = _one_case(ds, "wear-map")
     wear = ds["wear_map"]
     polar = np.radians(_edges(wear["polar"].values, 0.0, 180.0))
@@ -234,7 +233,7 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
 
 
 def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
-    _require(ds, ("wear_projection",), "wear-polar")
+    _require(ds, ("wear_projection",), "--kind wear-polar")
     projection = ds["wear_projection"]
     theta = np.radians(projection["angle"].values)
     closed = np.append(theta, theta[0])
@@ -267,32 +266,35 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
                  f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})", fontsize="medium")
 
 
-def _clearance(ds: xr.Dataset, case: xr.Dataset, joint: str) -> tuple[float, str] | None:
-    """Radial clearance of ``joint`` [m] and where it came from; None for an ideal joint.
+def _configured_clearances(ds: xr.Dataset) -> dict[str, float]:
+    """Radial clearance [m] of each joint in the configuration text; empty when there is none.
+
+    A case file holds its resolved config in the ``config`` attribute, a sweep
+    file its base case under ``base`` of ``sweep_config``.
+    """
+    for attr, section in (("config", None), ("sweep_config", "base")):
+        try:
+            config = yaml.safe_load(ds.attrs.get(attr) or "") or {}
+            joints = (config[section] if section else config)["joints"]
+            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
+        except (yaml.YAMLError, KeyError, TypeError, ValueError, AttributeError):
+            continue
+    return {}
+
+
+def _clearance(case: xr.Dataset, joint: str, configured: dict[str, float]) -> tuple[float, str] | None:
+    """Radial clearance of ``joint`` in ``case`` [m] and where it came from; None for an ideal joint.
 
     A swept clearance (sweep coordinate ``{joint}_clearance``, or
     ``joints_{joint}_clearance`` where the short name was taken) wins over the
-    configuration text (a case's ``config`` attribute, or the base case of a
-    sweep's ``sweep_config``); without either, the largest eccentricity
-    stands in.
+    ``configured`` one; without either, the largest eccentricity stands in.
     """
     for name in (f"{joint}_clearance", f"joints_{joint}_clearance"):
         if name in case.coords and case[name].ndim == 0:
             swept = float(case[name])
             return (swept, "swept") if swept > 0 else None
-    value = None
-    # A case file holds its resolved config in ``config``; a sweep file its base case
-    # under ``base`` of ``sweep_config``.
-    for attr, section in (("config", None), ("sweep_config", "base")):
-        try:
-            config = yaml.safe_load(ds.attrs.get(attr) or "") or {}
-            config = config[section] if section else config
-            value = float(config["joints"][joint]["clearance"])
-            break
-        except (yaml.YAMLError, KeyError, TypeError, ValueError):
-            continue
-    if value is not None:
-        return (value, "config") if value > 0 else None
+    if joint in configured:
+        return (configured[joint], "config") if configured[joint] > 0 else None
     if "eccentricity" in case:
         largest = float(case["eccentricity"].sel(joint=joint).max())
         if np.isfinite(largest) and largest > 0:
@@ -301,16 +303,17 @@ def _clearance(ds: xr.Dataset, case: xr.Dataset, joint: str) -> tuple[float, str
 
 
 def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
-    _require(ds, ("ball_offset",), "orbit")
+    _require(ds, ("ball_offset",), "--kind orbit")
     offset = ds["ball_offset"]
     planes = (("x", "y"), ("x", "z"), ("y", "z"))
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     joints = offset["joint"].values
+    configured = _configured_clearances(ds)
     for j, joint in enumerate(joints):
         clearances = {}
         for _, case, _ in cases:
-            found = _clearance(ds, case, str(joint))
+            found = _clearance(case, str(joint), configured)
             if found is not None:
                 clearances.setdefault(found[0], found[1])
         for p, (a, b) in enumerate(planes):
@@ -347,15 +350,13 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     if values.dtype.kind not in "fiub":
         raise PlotError(f"metric {metric!r} is not numeric; --kind sweep plots numbers")
     dims = sweep_dims(values)
-    inner = [d for d in values.dims if d in CASE_DIMS]
+    inner = tuple(d for d in values.dims if d in CASE_DIMS)
     if not dims or len(dims) > 2:
         raise PlotError(f"--kind sweep draws a metric over one or two sweep dimensions; this "
                         f"dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the others "
                         "with --select DIM=VALUE")
-    panels = []
-    for index in itertools.product(*(range(values.sizes[d]) for d in inner)):
-        panel = values.isel(dict(zip(inner, index)))
-        panels.append((", ".join(f"{d} {value_text(panel[d].values[()])}" for d in inner), panel))
+    panels = [(", ".join(f"{d} {value_text(v)}" for d, v in keys.items()), panel)
+              for keys, panel in iter_points(values, inner)]
     label = axis_label(values)
     if len(dims) == 1:
         ax = fig.add_subplot()
@@ -400,7 +401,7 @@ _SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar"
           "orbit": (12, 8), "sweep": (8, 5)}
 
 
-def figure(ds: xr.Dataset, kind: str, select_cases=None, *, x: str = "angle",
+def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
            metric: str | None = None) -> Figure:
     """Build the figure of ``kind`` from ``ds`` (see the module docstring).
 
@@ -410,7 +411,7 @@ def figure(ds: xr.Dataset, kind: str, select_cases=None, *, x: str = "angle",
         One-case or sweep dataset.
     kind
         One of ``KINDS``.
-    select_cases
+    select
         ``["DIM=VALUE", ...]`` or ``{dim: value}``: the cases to draw.
     x
         Abscissa of time series: ``"angle"`` (crank angle [degree]) or ``"time"`` [s].
@@ -433,7 +434,7 @@ def figure(ds: xr.Dataset, kind: str, select_cases=None, *, x: str = "angle",
                              choices=X_AXES)
     if metric is not None and kind != "sweep":
         raise PlotError("a metric applies to --kind sweep only")
-    ds = select(ds, select_cases)
+    ds = select_cases(ds, select)
     fig = Figure(figsize=_SIZES[kind], layout="constrained")
     if kind == "slider":
         _draw_slider(fig, ds, x)

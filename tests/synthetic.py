@@ -118,7 +118,8 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
     for j, joint in enumerate(JOINTS):
         normal[spike, j] = NORMAL_FORCE_PEAK[joint]
     swing = np.stack([np.cos(theta), np.sin(theta), 0.2 * np.cos(2 * theta)], axis=-1)
-    force = np.stack([50.0 * swing, 80.0 * swing], axis=1) * acc_level / ACC_LEVEL   # (time, joint, axis)
+    # (time, joint, axis), scaled with the acceleration level so that sweep cases differ
+    force = np.stack([50.0 * swing, 80.0 * swing], axis=1) * acc_level / ACC_LEVEL
     radius = ORBIT_FRACTION * np.array([CLEARANCE_M, clearance_b])
     offset = np.stack([np.cos(3 * theta), np.sin(3 * theta), 0.3 * np.sin(5 * theta)], axis=-1)
     offset = offset / np.linalg.norm(offset, axis=-1, keepdims=True)
