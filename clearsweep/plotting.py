@@ -397,7 +397,7 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}")
 
 
-_SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 8),
+_SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
           "orbit": (12, 8), "sweep": (8, 5)}
 
 
