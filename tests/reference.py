@@ -1,0 +1,436 @@
+"""Slow, plain-numpy reference right-hand side of the RSSP mechanism (DESIGN 1-3, 8).
+
+Everything is built the obvious way, independently of the kernel's structured solver:
+
+- one function ``constraints(q, t)`` straight from the table of DESIGN 2;
+- its Jacobian ``Cq``, ``C_t`` and the velocity-quadratic acceleration term ``h`` by
+  finite differences (``C_ddot = Cq qdd + h``);
+- the mass matrix from the kinetic energy with the body angular velocity taken from
+  ``w~ = R^T R_dot`` (derivatives of the elementary rotations), and the velocity-quadratic
+  generalised force from Lagrange's equations by finite differences;
+- gravity and the contact law of DESIGN 3, applied at the contact points through
+  finite-difference point Jacobians;
+- the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
+
+Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
+Only the index constants of ``clearsweep.core.layout`` are used from the kernel package.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from clearsweep.core import layout as L
+
+#: Step of the first-derivative stencils in q (m and rad). Five-point stencil: truncation
+#: ~ STEP^4 / 30 * |f^(5)| ~ 1e-12 / 30 * 0.2 m, round-off ~ eps * |f| / STEP ~ 2e-17 / 1e-3,
+#: i.e. ~1e-13 relative for the constraint Jacobian and the point Jacobians.
+STEP_Q = 1e-3
+#: Largest coordinate change of the second-derivative stencil along (qd, 1): the step in the
+#: path parameter is STEP_PATH / max|qd|. Truncation ~ STEP_PATH^4 w^2 |C| / 90 ~ 5e-11 and
+#: round-off ~ 5 eps |C| / (STEP_PATH / w)^2 ~ 2e-10 m/s^2 in float64 (w ~ 2 pi rad/s,
+#: |C terms| ~ 0.2 m), against |h| ~ 5 m/s^2; acceleration_terms works in extended precision
+#: where available, which removes the round-off part.
+STEP_PATH = 5e-3
+
+# body blocks of q: crank 0:6, rod 6:12, slider 12:18; each [r (3), phi (3)]
+CRANK, ROD, SLIDER = 0, 1, 2
+
+
+# ---------------------------------------------------------------------------
+# rotations (R = Rz(alpha) Ry(beta) Rx(gamma)) and their derivatives
+# ---------------------------------------------------------------------------
+
+def rx(g):
+    c, s = np.cos(g), np.sin(g)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def ry(b):
+    c, s = np.cos(b), np.sin(b)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def rz(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def drx(g):
+    c, s = np.cos(g), np.sin(g)
+    return np.array([[0.0, 0.0, 0.0], [0.0, -s, -c], [0.0, c, -s]])
+
+
+def dry(b):
+    c, s = np.cos(b), np.sin(b)
+    return np.array([[-s, 0.0, c], [0.0, 0.0, 0.0], [-c, 0.0, -s]])
+
+
+def drz(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[-s, -c, 0.0], [c, -s, 0.0], [0.0, 0.0, 0.0]])
+
+
+def rotation(phi):
+    a, b, g = phi
+    return rz(a) @ ry(b) @ rx(g)
+
+
+def rotation_derivatives(phi):
+    """dR/d alpha, dR/d beta, dR/d gamma."""
+    a, b, g = phi
+    return (drz(a) @ ry(b) @ rx(g), rz(a) @ dry(b) @ rx(g), rz(a) @ ry(b) @ drx(g))
+
+
+def vee(s):
+    """Axial vector of a skew-symmetric matrix."""
+    return np.array([s[2, 1], s[0, 2], s[1, 0]])
+
+
+def body_rate_matrix(phi):
+    """G with w' = G phi_dot, from w'~ = R^T R_dot = sum_k R^T (dR/d phi_k) phi_dot_k."""
+    r = rotation(phi)
+    return np.column_stack([vee(r.T @ d) for d in rotation_derivatives(phi)])
+
+
+# ---------------------------------------------------------------------------
+# finite differences
+# ---------------------------------------------------------------------------
+
+def d1(f, x, h):
+    """Five-point central first derivative of f at scalar x."""
+    return (8.0 * (f(x + h) - f(x - h)) - (f(x + 2 * h) - f(x - 2 * h))) / (12.0 * h)
+
+
+def d2(f, x, h):
+    """Five-point central second derivative of f at scalar x."""
+    return (-f(x + 2 * h) + 16.0 * f(x + h) - 30.0 * f(x) + 16.0 * f(x - h)
+            - f(x - 2 * h)) / (12.0 * h * h)
+
+
+def jacobian(f, x, h=STEP_Q):
+    """df/dx (rows: outputs) by five-point differences in every coordinate."""
+    x = np.array(x)
+    h = x.dtype.type(h)
+    cols = []
+    for k in range(x.size):
+        def fk(s, k=k):
+            xs = x.copy()
+            xs[k] += s
+            return np.atleast_1d(f(xs))
+        cols.append(d1(fk, 0.0, h))
+    return np.column_stack(cols)
+
+
+# ---------------------------------------------------------------------------
+# the mechanism
+# ---------------------------------------------------------------------------
+
+@dataclass
+class Mechanism:
+    """Parameters read from the packed vectors p, jp (layout index constants)."""
+
+    p: np.ndarray
+    jp: np.ndarray
+    l2: float = field(init=False)
+    l3: float = field(init=False)
+    zs: float = field(init=False)
+
+    def __post_init__(self):
+        p = self.p
+        self.l2, self.l3, self.zs = p[L.P_L2], p[L.P_L3], p[L.P_ZS]
+        self.mass = np.array([p[L.P_M2], p[L.P_M3], p[L.P_M4]])
+        self.inertia = [np.array(p[k:k + 3]) for k in (L.P_J2, L.P_J3, L.P_J4)]
+        self.gravity = np.array(p[L.P_G:L.P_G + 3])
+        self.omega, self.theta0 = p[L.P_OMEGA], p[L.P_THETA0]
+        self.a, self.b = p[L.P_BAUM_A], p[L.P_BAUM_B]
+        self.u_O = np.array([0.0, 0.0, 0.5 * self.l2])     # crank point at O
+        self.u_A2 = np.array([0.0, 0.0, -0.5 * self.l2])   # crank pin (ball of A)
+        self.u_A3 = np.array([-0.5 * self.l3, 0.0, 0.0])   # rod socket of A
+        self.u_B3 = np.array([0.5 * self.l3, 0.0, 0.0])    # rod ball of B
+        self.u_B4 = np.zeros(3)                             # slider socket of B (centroid)
+        self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 for j in range(2)]
+
+    # joint j: (ball body, ball offset, socket body, socket offset)
+    def joint_bodies(self, j):
+        if j == 0:
+            return CRANK, self.u_A2, ROD, self.u_A3
+        return ROD, self.u_B3, SLIDER, self.u_B4
+
+    def rows(self):
+        """Row ranges of constraints(): dict name -> slice."""
+        out = {"O": slice(0, 3), "angles2": slice(3, 5), "driver": slice(5, 6)}
+        k = 6
+        for j, name in enumerate("AB"):
+            if self.ideal[j]:
+                out[name] = slice(k, k + 3)
+                k += 3
+        out["spin3"] = slice(k, k + 1)
+        out["prismatic"] = slice(k + 1, k + 6)
+        out["m"] = k + 6
+        return out
+
+    def constraints(self, q, t):
+        """C(q, t), DESIGN 2's table (in q's precision)."""
+        c = []
+        c.extend(point(q, CRANK, self.u_O))                       # revolute O at the origin
+        c.extend([q[3], q[4]])                                   # alpha2 = beta2 = 0
+        c.append(q[5] - (self.theta0 + self.omega * t))          # driver
+        if self.ideal[0]:                                        # spherical A: rod - crank pin
+            c.extend(point(q, ROD, self.u_A3) - point(q, CRANK, self.u_A2))
+        if self.ideal[1]:                                        # spherical B: slider - rod end
+            c.extend(point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3))
+        c.append(q[11])                                          # rod spin gamma3 = 0
+        c.extend([q[13], q[14] - self.zs, q[15], q[16], q[17]])  # prismatic
+        return np.array(c)
+
+    def mass_matrix(self, q):
+        """M from T = 1/2 sum(m |r_dot|^2 + w'^T J w'), w' = G(phi) phi_dot."""
+        m = np.zeros((18, 18))
+        for b in range(3):
+            i = 6 * b
+            m[i:i + 3, i:i + 3] = self.mass[b] * np.eye(3)
+            g = body_rate_matrix(q[i + 3:i + 6])
+            m[i + 3:i + 6, i + 3:i + 6] = g.T @ np.diag(self.inertia[b]) @ g
+        return m
+
+    def kinetic_energy(self, q, qd):
+        return 0.5 * qd @ self.mass_matrix(q) @ qd
+
+    def quadratic_force(self, q, qd):
+        """Q_v = dT/dq - d/dt(dT/dq_dot) at qdd = 0, by finite differences."""
+        dtdq = jacobian(lambda x: self.kinetic_energy(x, qd), q)[0]
+        hs = STEP_Q / max(1.0, np.max(np.abs(qd)))
+        mdot = d1(lambda s: self.mass_matrix(q + s * qd), 0.0, hs)
+        return dtdq - mdot @ qd
+
+    def gravity_force(self):
+        qg = np.zeros(18)
+        for b in range(3):
+            qg[6 * b:6 * b + 3] = self.mass[b] * self.gravity
+        return qg
+
+
+def point(q, body, u):
+    """Global position of the point at body offset u."""
+    i = 6 * body
+    return q[i:i + 3] + rotation(q[i + 3:i + 6]) @ u
+
+
+def point_jacobian(q, body, u):
+    """d r_P / dq (3 x 18) of a body-fixed point, by finite differences."""
+    return jacobian(lambda x: point(x, body, u), q)
+
+
+def body_offset(q, body, x):
+    """Body-frame offset of the global point x."""
+    i = 6 * body
+    return rotation(q[i + 3:i + 6]).T @ (x - q[i:i + 3])
+
+
+# ---------------------------------------------------------------------------
+# contact (DESIGN 3), unworn socket
+# ---------------------------------------------------------------------------
+
+def normal_force(delta, ddot, c, ew, ri, kappa):
+    """F_N = k_N(delta) delta (1 + kappa delta_dot), clamped >= 0; and F_el = k_N delta."""
+    if delta <= 0.0:
+        return 0.0, 0.0
+    kn = (4.0 * np.pi * ew * ri / 5.0) * (2.0 * delta * c + delta ** 2) / (c + delta) ** 2
+    fel = kn * delta
+    return max(0.0, fel * (1.0 + kappa * ddot)), fel
+
+
+def friction_factor(vt, v0, v1):
+    if vt < v0:
+        return 0.0
+    if vt > v1:
+        return 1.0
+    return (vt - v0) / (v1 - v0)
+
+
+@dataclass
+class ContactResult:
+    force: np.ndarray           # on the ball, global [N]
+    generalized: np.ndarray     # generalised force of the pair (18)
+    n: np.ndarray
+    delta: float
+    ddot: float
+    ecc: float
+    vt: np.ndarray
+    fn: float
+    fel: float
+    ft: float
+    kappa: float
+    dfn_ddelta: float
+    dfn_dddot: float
+    pdiss: float
+    j_rel: np.ndarray           # d(Q_j on ball)/dq - d(Q_i on socket)/dq (3 x 18)
+    q_ball: np.ndarray
+    q_socket: np.ndarray
+
+
+def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
+    """Contact state and forces of clearance joint j (0: A, 1: B)."""
+    p, jp = mech.p, mech.jp[j]
+    c, ri, rj, ew, mu = jp[L.J_C], jp[L.J_RI], jp[L.J_RJ], jp[L.J_EW], jp[L.J_MU]
+    bb, ub, sb, us = mech.joint_bodies(j)
+    pb = point(q, bb, ub)
+    ps = point(q, sb, us)
+    d = pb - ps
+    e = np.linalg.norm(d)
+    n = d / e if e > 0.0 else np.array([1.0, 0.0, 0.0])  # centred: no contact, any n
+    delta = e - c
+    qj = pb + rj * n
+    qi = ps + ri * n
+    jj = point_jacobian(q, bb, body_offset(q, bb, qj))
+    ji = point_jacobian(q, sb, body_offset(q, sb, qi))
+    j_rel = jj - ji
+    v = j_rel @ qd
+    ddot = float(n @ v)
+    vt = v - ddot * n
+    vtn = float(np.linalg.norm(vt))
+    dv0 = dv0_stored if dv0_stored > 0.0 else max(ddot, p[L.P_DV0_MIN])
+    cr = p[L.P_CR]
+    kappa = 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
+    fn, fel = normal_force(delta, ddot, c, ew, ri, kappa)
+    force = -fn * n
+    ft = 0.0
+    if delta > 0.0 and p[L.P_FRICTION] != 0.0 and vtn > 0.0:
+        ft = mu * friction_factor(vtn, p[L.P_V0], p[L.P_V1]) * fn
+        force = force - ft * vt / vtn
+    # slopes of F_N (kappa held fixed), by differences
+    hd = 1e-3 * max(delta, 1e-9)
+    dfd = 0.0
+    if delta > 3.0 * hd:
+        dfd = d1(lambda x: normal_force(x, ddot, c, ew, ri, kappa)[0], delta, hd)
+    hv = 1e-3 * max(abs(ddot), 1e-6)
+    dfdd = d1(lambda x: normal_force(delta, x, c, ew, ri, kappa)[0], ddot, hv) if fn > 0.0 else 0.0
+    # dissipated power: -(power of the contact forces) - dU/dt
+    pdiss = -(force @ v) - fel * ddot if delta > 0.0 else 0.0
+    gen = jj.T @ force - ji.T @ force
+    return ContactResult(force=force, generalized=gen, n=n, delta=delta, ddot=ddot, ecc=e,
+                         vt=vt, fn=fn, fel=fel, ft=ft, kappa=kappa, dfn_ddelta=dfd,
+                         dfn_dddot=dfdd, pdiss=pdiss, j_rel=j_rel, q_ball=qj, q_socket=qi)
+
+
+# ---------------------------------------------------------------------------
+# the augmented system
+# ---------------------------------------------------------------------------
+
+@dataclass
+class Reference:
+    qdd: np.ndarray
+    lam: np.ndarray
+    torque: float
+    reaction_O: np.ndarray
+    joint_force: np.ndarray     # (2, 3), on the balls
+    contacts: dict
+    mass: np.ndarray
+    cq: np.ndarray
+    rhs: np.ndarray
+    force: np.ndarray           # total applied generalised force
+    mobility: np.ndarray        # constrained inverse mass W (18 x 18)
+    drive_power: float
+    dissipation: float
+    rows: dict
+
+
+def acceleration_terms(mech: Mechanism, q, qd, t):
+    """Cq, C_t, C and h with C_ddot = Cq qdd + h (h by a second difference along (qd, 1)).
+
+    Evaluated in numpy's extended precision where the platform has one (round-off of the
+    second difference ~1e-13 instead of ~1e-10 m/s^2), returned as float64.
+    """
+    x = np.longdouble
+    q, qd, t = q.astype(x), qd.astype(x), x(t)
+    cfun = lambda z: mech.constraints(z, t)  # noqa: E731
+    cq = jacobian(cfun, q)
+    ct = d1(lambda s: mech.constraints(q, t + s), x(0.0), x(STEP_Q))
+    hs = x(STEP_PATH) / max(x(1.0), np.max(np.abs(qd)))
+    h = d2(lambda s: mech.constraints(q + s * qd, t + s), x(0.0), hs)
+    return (cq.astype(float), ct.astype(float), cfun(q).astype(float), h.astype(float))
+
+
+def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
+    """Solve the full KKT system of DESIGN 2 at state y (layout.Y_*) and time t."""
+    mech = Mechanism(np.asarray(p, float), np.asarray(jp, float))
+    q = np.array(y[:L.N_Q], float)
+    qd = np.array(y[L.Y_QD:L.Y_QD + L.N_Q], float)
+    rows = mech.rows()
+    m = rows["m"]
+
+    mass = mech.mass_matrix(q)
+    force = mech.gravity_force() + mech.quadratic_force(q, qd)
+    contacts = {}
+    for j in range(2):
+        if not mech.ideal[j]:
+            contacts[j] = contact(mech, j, q, qd, dv0_stored[j])
+            force = force + contacts[j].generalized
+
+    cq, ct, cval, h = acceleration_terms(mech, q, qd, t)
+    cdot = cq @ qd + ct
+    rhs = -h - 2.0 * mech.a * cdot - mech.b ** 2 * cval
+
+    kkt = np.zeros((18 + m, 18 + m))
+    kkt[:18, :18] = mass
+    kkt[:18, 18:] = cq.T
+    kkt[18:, :18] = cq
+    sol = np.linalg.solve(kkt, np.concatenate([force, rhs]))
+    qdd, lam = sol[:18], sol[18:]
+
+    def constraint_force(name):
+        """Generalised force -Cq^T lambda of one group of rows."""
+        sl = rows[name]
+        return -cq[sl].T @ lam[sl]
+
+    # driver: its generalised force is -lambda e_gamma2; power = torque * gamma2_dot
+    q_drive = constraint_force("driver")
+    torque = q_drive[5]
+    drive_power = float(q_drive @ qd)
+    reaction_O = constraint_force("O")[0:3]          # on the crank's centroid coordinates
+    joint_force = np.zeros((2, 3))
+    for j, name in enumerate("AB"):
+        if mech.ideal[j]:
+            ball = mech.joint_bodies(j)[0]
+            joint_force[j] = constraint_force(name)[6 * ball:6 * ball + 3]
+        else:
+            joint_force[j] = contacts[j].force
+
+    minv = np.linalg.inv(mass)
+    s = cq @ minv @ cq.T
+    mobility = minv - minv @ cq.T @ np.linalg.solve(s, cq @ minv)
+    dissipation = sum(c.pdiss for c in contacts.values())
+    return Reference(qdd=qdd, lam=lam, torque=float(torque), reaction_O=reaction_O,
+                     joint_force=joint_force, contacts=contacts, mass=mass, cq=cq, rhs=rhs,
+                     force=force, mobility=mobility, drive_power=drive_power,
+                     dissipation=float(dissipation), rows=rows)
+
+
+def point_mobility(ref: Reference, j):
+    """W_p = J_rel W J_rel^T of clearance joint j: a_rel = W_p F for F on the ball."""
+    jr = ref.contacts[j].j_rel
+    return jr @ ref.mobility @ jr.T
+
+
+def stiff_rates(ref: Reference, j, p, jp):
+    """DESIGN 4 rates of clearance joint j at its current state: (elastic/damping, friction, m_eff).
+
+    elastic/damping: the largest root magnitude of m_eff s^2 + (dF/d delta_dot) s + dF/d delta;
+    friction: mu c_d' F_N times the largest inverse mass across the tangent plane, c_d' the
+    ramp slope 1/(v1 - v0) (meaningful for v0 <= |v_t| <= v1 only).
+    """
+    cres = ref.contacts[j]
+    wp = point_mobility(ref, j)
+    n = cres.n
+    m_eff = 1.0 / float(n @ wp @ n)
+    roots = np.roots([m_eff, cres.dfn_dddot, cres.dfn_ddelta])
+    elastic = float(np.max(np.abs(roots)))
+    proj = np.eye(3) - np.outer(n, n)
+    inv_t = float(np.max(np.linalg.eigvalsh(proj @ wp @ proj)))
+    friction = 0.0
+    if p[L.P_FRICTION] != 0.0 and cres.fn > 0.0:
+        friction = jp[j, L.J_MU] * cres.fn / (p[L.P_V1] - p[L.P_V0]) * inv_t
+    return elastic, friction, m_eff
