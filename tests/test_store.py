@@ -1,0 +1,206 @@
+"""Parts folder, atomic writes and the one-case-at-a-time sweep writer (clearsweep.store)."""
+
+from __future__ import annotations
+
+import netCDF4
+import numpy as np
+import pytest
+import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from clearsweep import store as S
+
+
+def _part(status="ok", n_time=5, dt=0.1, offset=0.0, with_series=True) -> xr.Dataset:
+    """A small part: time series, a joint array, an int and a bool scalar."""
+    ds = xr.Dataset(
+        {
+            "status": ((), status, S.STATUS_ATTRS),
+            "message": ((), "" if status == "ok" else f"stopped: {status}", S.MESSAGE_ATTRS),
+            "peak": (("joint",), np.array([1.0, 2.0]) + offset, {"units": "N", "long_name": "peak"}),
+            "steps": ((), np.int64(7 + offset), {"long_name": "steps"}),
+            "contact": ((), True, {"long_name": "contact seen"}),
+            "wall_time": ((), 0.5, {"units": "s", "long_name": "wall time"}),
+        },
+        coords={"joint": ("joint", ["A", "B"], {"long_name": "joint"})},
+    )
+    if with_series:
+        t = np.arange(n_time) * dt
+        ds["x"] = (("time", "joint"), np.stack([t, -t], axis=1) + offset, {"units": "m", "long_name": "x"})
+        ds = ds.assign_coords(time=("time", t, {"units": "s", "long_name": "time"}))
+    return ds
+
+
+@pytest.fixture
+def parts(tmp_path):
+    with S.PartStore(tmp_path / "out.nc.parts") as store:
+        store.open()
+        yield store
+
+
+def test_case_hash_is_canonical():
+    a = {"solver": {"dt": 1e-5, "duration": 1.0}, "name": "x"}
+    b = {"name": "x", "solver": {"duration": 1.0, "dt": 1e-5}}
+    assert S.case_hash(a) == S.case_hash(b)
+    assert len(S.case_hash(a)) == S.HASH_LENGTH and int(S.case_hash(a), 16) >= 0
+    assert S.case_hash(a) != S.case_hash({**a, "name": "y"})
+
+
+def test_parts_dir_beside_output(tmp_path):
+    assert S.parts_dir_for(tmp_path / "r.nc") == tmp_path / "r.nc.parts"
+
+
+def test_refuses_earlier_parts_unless_resume_or_overwrite(tmp_path):
+    d = tmp_path / "o.nc.parts"
+    with S.PartStore(d) as store:
+        store.open()
+        store.write("aaaa", _part())
+    with pytest.raises(S.StoreError, match="--resume"):
+        S.PartStore(d).open()
+    with S.PartStore(d) as store:
+        assert store.open(resume=True) == {"aaaa"}
+    with S.PartStore(d) as store:
+        assert store.open(overwrite=True) == set()
+        assert store.finished() == set()
+    with pytest.raises(S.StoreError, match="exclude"):
+        S.PartStore(d).open(resume=True, overwrite=True)
+
+
+def test_lock_keeps_a_second_sweep_out(parts):
+    with pytest.raises(S.StoreError, match="in use"):
+        S.PartStore(parts.directory).open(resume=True)
+
+
+def test_part_write_is_atomic(parts, monkeypatch):
+    """A write that fails half-way leaves neither the part nor its temporary file."""
+    real = xr.Dataset.to_netcdf
+
+    def crash(self, path, *args, **kwargs):
+        real(self, path, *args, **kwargs)       # the bytes are on disk, under the temporary name
+        raise OSError("disk full")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", crash)
+    with pytest.raises(OSError, match="disk full"):
+        parts.write("bbbb", _part())
+    assert sorted(p.name for p in parts.directory.iterdir()) == [".lock", S.LOG_NAME]
+
+
+def test_open_removes_temporaries_of_a_killed_run(tmp_path):
+    d = tmp_path / "o.nc.parts"
+    d.mkdir()
+    (d / ".cccc.nc.x1y2.tmp").write_bytes(b"half a file")
+    with S.PartStore(d) as store:
+        assert store.open() == set()
+    assert not list(d.glob("*.tmp"))
+
+
+def test_log_records_events_with_run_id(parts):
+    parts.log("done", hash="aaaa", status="ok")
+    parts.log("done", hash="bbbb", status="error")
+    (parts.directory / S.LOG_NAME).open("a").write('{"event": "done", "cut sh')   # a killed write
+    done = parts.events("done")
+    assert [r["hash"] for r in done] == ["aaaa", "bbbb"]
+    assert {r["run"] for r in done} == {parts.run_id}
+
+
+def _assemble(tmp_path, parts, slots, dims, coords):
+    out = tmp_path / "sweep.nc"
+    counts = S.write_sweep_netcdf(out, sweep_dims=dims, sweep_coords=coords, slots=slots,
+                                  store=parts, attrs={"title": "t"})
+    return out, counts
+
+
+def test_assembly_layout_fill_and_outer_join(tmp_path, parts):
+    parts.write("a", _part())
+    parts.write("b", _part(n_time=3, offset=10.0))       # a shorter run: time is a prefix
+    parts.write("c", xr.Dataset({"status": ((), "unstable_step"), "message": ((), "too stiff"),
+                                 "wall_time": ((), 0.1)}))
+    slots = [S.SweepSlot("a"), S.SweepSlot("b"), S.SweepSlot("c"),
+             S.SweepSlot(None, "excluded by sweep.skip[0]")]
+    dims = {"coating": 2, "clearance": 2}
+    coords = {"coating": ("coating", np.array(["none", "PTFE"], dtype=object), {}),
+              "clearance": ("clearance", np.array([1e-4, 2e-4]), {"units": "m"}),
+              "label": ("clearance", np.array(["small", "large"], dtype=object), {})}
+    out, counts = _assemble(tmp_path, parts, slots, dims, coords)
+    assert counts == {"cases": 4, "failed": 1, "skipped": 1}
+
+    for engine in ("netcdf4", "h5netcdf"):
+        with S.open_results(out, engine=engine) as ds:
+            assert ds.attrs["sweep_failed"] == 1 and ds.attrs["title"] == "t"
+            assert "label" in ds.coords and ds["label"].dims == ("clearance",)
+            assert ds["status"].values.tolist() == [["ok", "ok"], ["unstable_step", "skipped"]]
+            assert ds["message"].values[1, 1] == "excluded by sweep.skip[0]"
+            x = ds["x"].sel(coating="none", clearance=2e-4, joint="A").values
+            np.testing.assert_allclose(x[:3], 10.0 + np.arange(3) * 0.1)
+            assert np.isnan(x[3:]).all()
+            assert np.isnan(ds["peak"].sel(coating="PTFE")).all()
+            # Integers with missing cases decode as floats with NaN; booleans as flags.
+            np.testing.assert_array_equal(ds["steps"].values, [[7.0, 17.0], [np.nan, np.nan]])
+            assert ds["contact"].attrs["flag_meanings"] == "false true"
+            assert ds["time"].dtype == np.float64 and ds["time"].attrs["units"] == "s"
+            assert ds["coating"].values.tolist() == ["none", "PTFE"]
+
+    with netCDF4.Dataset(out) as nc:
+        x = nc["x"]
+        assert x.chunking() == [1, 1, 5, 2]            # one case per chunk
+        assert x.filters()["zlib"]
+        assert nc["peak"].chunking() == [1, 1, 2]
+
+
+def test_assembly_refuses_missing_part(tmp_path, parts):
+    with pytest.raises(S.StoreError, match="--resume"):
+        _assemble(tmp_path, parts, [S.SweepSlot("nope")], {"k": 1},
+                  {"k": ("k", np.array([1]), {})})
+    assert not (tmp_path / "sweep.nc").exists()
+    assert not list(tmp_path.glob(".sweep.nc*"))
+
+
+def test_assembly_interrupted_leaves_no_file(tmp_path, parts):
+    parts.write("a", _part())
+    calls = []
+
+    def check():
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        S.write_sweep_netcdf(tmp_path / "s.nc", sweep_dims={"k": 2},
+                             sweep_coords={"k": ("k", np.array([0, 1]), {})},
+                             slots=[S.SweepSlot("a"), S.SweepSlot("a")], store=parts, check=check)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.nc.parts"]
+
+
+def test_assembly_reorders_label_coordinates(tmp_path, parts):
+    """A part whose labels come in another order lands in the right places."""
+    parts.write("a", _part())
+    parts.write("b", _part().isel(joint=[1, 0]))
+    out, _ = _assemble(tmp_path, parts, [S.SweepSlot("a"), S.SweepSlot("b")], {"k": 2},
+                       {"k": ("k", np.array([0, 1]), {})})
+    with S.open_results(out) as ds:
+        xr.testing.assert_equal(ds["peak"].isel(k=0, drop=True), ds["peak"].isel(k=1, drop=True))
+        assert ds["joint"].values.tolist() == ["A", "B"]
+
+
+@settings(max_examples=15, deadline=None)
+@given(labels=st.lists(st.text(st.characters(min_codepoint=33, max_codepoint=0x2FF), min_size=1,
+                               max_size=8), min_size=1, max_size=4, unique=True),
+       numbers=st.lists(st.floats(-1e9, 1e9, allow_nan=False, width=64), min_size=1, max_size=3,
+                        unique=True))
+def test_sweep_coordinates_round_trip(tmp_path_factory, labels, numbers):
+    tmp = tmp_path_factory.mktemp("rt")
+    with S.PartStore(tmp / "o.nc.parts") as store:
+        store.open()
+        store.write("a", _part(with_series=False))
+        slots = [S.SweepSlot("a")] * (len(labels) * len(numbers))
+        out = tmp / "o.nc"
+        S.write_sweep_netcdf(out, sweep_dims={"m": len(labels), "v": len(numbers)},
+                             sweep_coords={"m": ("m", np.array(labels, dtype=object), {}),
+                                           "v": ("v", np.array(numbers), {})},
+                             slots=slots, store=store)
+    for engine in ("netcdf4", "h5netcdf"):
+        with S.open_results(out, engine=engine) as ds:
+            assert ds["m"].values.tolist() == labels
+            assert ds["v"].values.tolist() == numbers
+            assert ds.sel(m=labels[-1], v=numbers[0])["status"].item() == "ok"
