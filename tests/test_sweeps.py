@@ -1,0 +1,363 @@
+"""Sweeps: expansion and naming, backends, failed cases, resume after a kill, the CLI.
+
+The running tests use the real simulation with short cases (10 ms of motion
+unless a test needs the cases to last).
+"""
+
+from __future__ import annotations
+
+import collections
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+from click.testing import CliRunner
+
+from clearsweep import sweeps
+from clearsweep.config import ConfigError
+from clearsweep.store import PartStore, parts_dir_for
+from clearsweep.sweeps import drop_timing, expand, run_sweep, sweep_command
+
+ROOT = Path(__file__).resolve().parents[1]
+BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.01}}
+#: Two coatings x {clearance at B only, at A and B}: four short, well-behaved cases.
+SMALL = {"grid": {"joints.B.coating": ["none", "PTFE"]},
+         "zip": [{"name": "clearance_joints", "labels": ["B", "AB"],
+                  "joints.A.clearance": [0.0, 2.5e-4]}]}
+
+
+def write_sweep(tmp_path: Path, sweep: dict, base=BASE, name: str = "s", **top) -> Path:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump({"name": name, "base": base, "sweep": sweep, **top},
+                                   sort_keys=False))
+    return path
+
+
+def cli(*args: str):
+    return CliRunner().invoke(sweep_command, [str(a) for a in args], catch_exceptions=False)
+
+
+# ---------------------------------------------------------------------------- expansion
+
+def test_dimension_names():
+    assert sweeps.dimension_name("joints.B.coating") == "B_coating"
+    assert sweeps.dimension_name("joints.B.clearance") == "B_clearance"
+    assert sweeps.dimension_name("mechanism.speed_rpm") == "speed_rpm"
+    assert sweeps.dimension_name("wear.amplification") == "amplification"
+    assert sweeps.dimension_name("materials_file") == "materials_file"
+
+
+def test_grid_is_a_cartesian_product_in_file_order():
+    plan = expand({"base": BASE, "sweep": {"grid": {
+        "joints.B.coating": ["none", "MoS2", "PTFE"], "mechanism.speed_rpm": [30, 60]}}})
+    assert plan.dims == {"B_coating": 3, "speed_rpm": 2}
+    assert [c.index for c in plan.cases] == [(i, j) for i in range(3) for j in range(2)]
+    case = plan.cases[3]                                    # (MoS2, 60)
+    assert plan.label(case) == {"B_coating": "MoS2", "speed_rpm": 60}
+    assert case.config["joints"]["B"]["coating"] == "MoS2"
+    assert case.config["mechanism"]["speed_rpm"] == 60.0
+    assert len({c.hash for c in plan.cases}) == 6
+    coords = plan.to_dataset()
+    assert coords["B_coating"].values.tolist() == ["none", "MoS2", "PTFE"]   # strings as given
+    assert coords["speed_rpm"].dtype == np.int64                              # ints as given
+    assert coords.sel(B_coating="PTFE")["B_coating"].item() == "PTFE"
+
+
+def test_zip_group_is_one_dimension():
+    plan = expand({"base": BASE, "sweep": {"zip": [
+        {"joints.A.clearance": [0.0, 1e-4, 2e-4], "joints.B.coating": ["none", "lead", "PTFE"]}]}})
+    assert plan.dims == {"A_clearance_zip": 3}
+    ds = plan.to_dataset()
+    assert set(ds.coords) == {"A_clearance", "B_coating"}
+    assert ds["B_coating"].dims == ("A_clearance_zip",) and not ds.indexes
+    assert [(c.config["joints"]["A"]["clearance"], c.config["joints"]["B"]["coating"])
+            for c in plan.cases] == [(0.0, "none"), (1e-4, "lead"), (2e-4, "PTFE")]
+
+    named = expand({"base": BASE, "sweep": SMALL}).to_dataset()
+    assert named.sizes == {"B_coating": 2, "clearance_joints": 2}
+    assert named.sel(clearance_joints="AB")["A_clearance"].item() == 2.5e-4
+
+
+def test_colliding_names_take_the_full_path():
+    plan = expand({"base": BASE, "sweep": {"grid": {
+        "friction.enabled": [True, False], "wear.enabled": [True, False], "solver.dt": [1e-5]}}})
+    assert list(plan.dims) == ["friction_enabled", "wear_enabled", "dt"]
+    assert plan.to_dataset()["wear_enabled"].dtype == bool
+
+
+def test_values_that_are_lists_become_json_text():
+    plan = expand({"base": BASE, "sweep": {"grid": {"solver.baumgarte": [[5.0, 5.0], [50.0, 50.0]]}}})
+    assert plan.to_dataset()["baumgarte"].values.tolist() == ["[5.0, 5.0]", "[50.0, 50.0]"]
+    assert plan.cases[1].config["solver"]["baumgarte"] == [50.0, 50.0]
+
+
+@pytest.mark.parametrize("sweep, key, fragment", [
+    ({"grid": {"joints.B.clearance": [1e-4, 0.02]}}, "joints.B.clearance", "B_clearance=0.02"),
+    ({"grid": {"joints.B.socket_radius": [0.015, 1e-4]}}, "joints.B.socket_radius",
+     "B_socket_radius=0.0001"),
+    ({"zip": [{"joints.B.coating": ["none", "PTFX"], "joints.A.clearance": [0.0, 1e-4]}]},
+     "joints.B.coating", "'PTFE'"),
+])
+def test_invalid_combination_names_the_sweep_key_and_value(sweep, key, fragment):
+    with pytest.raises(ConfigError) as info:
+        expand({"base": BASE, "sweep": sweep})
+    assert info.value.key == key
+    assert fragment in str(info.value) and "sweep case" in str(info.value)
+
+
+@pytest.mark.parametrize("doc, match", [
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coatng": ["none"]}}}, "did you mean 'joints.B.coating'"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B": ["none"]}}}, "a section"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coating": "PTFE"}}}, "non-empty list"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["PTFE", "PTFE"]}}}, "distinct"),
+    ({"base": BASE, "sweep": {"zip": [{"joints.B.coating": ["none", "PTFE"],
+                                       "joints.A.clearance": [0.0]}]}}, "zip group"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["none"]},
+                              "zip": [{"joints.B.coating": ["PTFE"]}]}}, "swept twice"),
+    ({"base": BASE, "sweeps": {}}, "did you mean 'sweep'"),
+    ({"base": BASE, "store": "summaries"}, "did you mean 'summary'"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["none", "PTFE"]},
+                              "skip": [{"B_coatin": "none"}]}}, "did you mean 'B_coating'"),
+    ({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["none", "PTFE"]},
+                              "skip": [{"B_coating": "lead"}]}}, "swept values"),
+    ({"base": {"solver": {"dt": -1.0}}}, "solver.dt"),
+])
+def test_malformed_sweeps_are_config_errors(doc, match):
+    with pytest.raises(ConfigError, match=match):
+        expand(doc)
+
+
+def test_overrides_apply_to_the_base_but_not_to_swept_keys():
+    plan = expand({"base": BASE, "sweep": SMALL}, overrides=["solver.duration=0.02"])
+    assert all(c.config["solver"]["duration"] == 0.02 for c in plan.cases)
+    with pytest.raises(ConfigError, match="does not vary"):
+        expand({"base": BASE, "sweep": SMALL}, overrides=["joints.B.coating=lead"])
+
+
+def test_base_path_is_relative_to_the_sweep_file(tmp_path):
+    (tmp_path / "cases").mkdir()
+    (tmp_path / "cases" / "base.yaml").write_text(yaml.safe_dump(BASE))
+    (tmp_path / "cases" / "sweep.yaml").write_text(yaml.safe_dump({"base": "base.yaml", "sweep": SMALL}))
+    plan = expand(tmp_path / "cases" / "sweep.yaml")
+    assert plan.name == "sweep" and plan.cases[0].config["solver"]["duration"] == 0.01
+
+
+def test_skip_rules_and_shipped_configs():
+    paper = expand(ROOT / "configs" / "paper.yaml")
+    assert paper.dims == {"clearance_joints": 3, "coating_joints": 4}
+    assert len(paper.runnable()) == 7
+    skipped = [paper.label(c) for c in paper.cases if c.hash is None]
+    assert {(s["clearance_joints"], s["coating_joints"]) for s in skipped} == {
+        ("none", "B"), ("none", "A"), ("none", "AB"), ("B", "A"), ("B", "AB")}
+    main = expand(ROOT / "configs" / "coating_clearance.yaml")
+    assert main.dims == {"B_coating": 4, "B_clearance": 6, "clearance_joints": 2}
+    assert len(main.runnable()) == 48
+    assert all(c.config["solver"]["duration"] == 1.0 for c in main.cases)
+
+
+# ---------------------------------------------------------------------------- running
+
+def test_serial_processes_and_dask_give_identical_results(tmp_path):
+    from distributed import Client, LocalCluster
+
+    cfg = write_sweep(tmp_path, SMALL)
+    serial = run_sweep(cfg, tmp_path / "serial.nc", workers=1, progress=False)
+    pool = run_sweep(cfg, tmp_path / "pool.nc", workers=2, progress=False)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
+    with serial, pool, dask:
+        assert (serial["status"] == "ok").all()
+        assert serial.attrs["sweep_dims"] == "B_coating clearance_joints"
+        reference = drop_timing(serial.load())
+        for other in (pool, dask):
+            xr.testing.assert_identical(reference, drop_timing(other.load()))
+    assert not parts_dir_for(tmp_path / "pool.nc").exists()
+
+
+def test_results_open_with_both_engines_and_select_by_material(tmp_path):
+    out = tmp_path / "r.nc"
+    run_sweep(write_sweep(tmp_path, SMALL), out, workers=1, progress=False).close()
+    for engine in ("netcdf4", "h5netcdf"):
+        with xr.open_dataset(out, engine=engine) as ds:
+            ptfe = ds.sel(B_coating="PTFE", clearance_joints="AB")
+            assert ptfe["status"].item() == "ok"
+            assert ptfe["slider_acceleration"].dims == ("time",)
+            assert ptfe["normal_force_peak"].sel(joint="A") > 0
+            assert ds["B_coating"].values.tolist() == ["none", "PTFE"]
+            assert ds.attrs["sweep_name"] == "s" and "joints.B.coating" in ds.attrs["sweep_config"]
+            assert {"numba_version", "numpy_version", "history"} <= set(ds.attrs)
+
+
+def test_failed_cases_are_recorded_and_the_others_run(tmp_path):
+    """Paper inertia + PTFE at h = 1e-5 s stops unstable; a 10 ms step is refused at run time."""
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE"],
+                                          "solver.dt": [1e-5, 0.01]}},
+                      base={"mechanism": {"preset": "paper"}, "solver": {"duration": 0.01},
+                            "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}})
+    out = tmp_path / "f.nc"
+    result = cli(cfg, "-o", out, "--workers", "1")
+    assert result.exit_code == 1
+    assert "3 of 4 cases failed" in result.stderr
+    assert "failed=3" in result.stderr                    # progress bar postfix
+    with sweeps.open_results(out) as ds:
+        status = ds["status"]
+        assert status.sel(B_coating="none", dt=1e-5).item() == "ok"
+        assert status.sel(B_coating="PTFE", dt=1e-5).item() == "unstable_step"
+        assert (status.sel(dt=0.01) == "error").all()
+        assert "ConfigError" in ds["message"].sel(B_coating="none", dt=0.01).item()
+        assert ds["message"].sel(B_coating="none", dt=1e-5).item() == ""
+        assert ds.attrs["sweep_failed"] == 3
+        ok = ds.sel(B_coating="none", dt=1e-5)
+        assert np.isfinite(ok["slider_acceleration"]).all()
+        failed = ds.sel(B_coating="PTFE", dt=1e-5)
+        assert np.isnan(failed["slider_acceleration"]).all()
+        assert np.isnan(failed["wear_depth_max_final"]).all()
+
+
+def test_summary_store_keeps_summaries_only(tmp_path):
+    with run_sweep(write_sweep(tmp_path, SMALL, store="summary"), tmp_path / "s.nc", workers=1,
+                   progress=False) as ds:
+        assert "time" not in ds.dims and "slider_acceleration" not in ds
+        assert ds["slider_acceleration_peak"].dims == ("B_coating", "clearance_joints")
+        assert ds["wear_depth_axis_max"].dims == ("B_coating", "clearance_joints", "joint", "axis")
+
+
+def test_without_out_the_result_is_in_memory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    ds = run_sweep({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["none", "lead"]}}},
+                   workers=1, progress=False)
+    assert ds["status"].values.tolist() == ["ok", "ok"]
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---------------------------------------------------------------------------- command line
+
+def test_cli_invalid_combination_exits_2_without_output(tmp_path):
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.clearance": [1e-4, 0.02]}})
+    out = tmp_path / "o.nc"
+    result = cli(cfg, "-o", out)
+    assert result.exit_code == 2
+    assert result.stderr.startswith("clearsweep: error: ")
+    assert "joints.B.clearance: got 0.02" in result.stderr
+    assert not out.exists() and not parts_dir_for(out).exists()
+
+
+def test_cli_refuses_parts_of_an_earlier_run(tmp_path):
+    cfg = write_sweep(tmp_path, SMALL)
+    out = tmp_path / "o.nc"
+    with PartStore(parts_dir_for(out)) as store:
+        store.open()
+        store.write("0123456789abcdef", xr.Dataset({"status": ((), "ok")}))
+    result = cli(cfg, "-o", out, "--workers", "1", "--no-progress")
+    assert result.exit_code == 2 and "--resume" in result.stderr and "--overwrite" in result.stderr
+    assert not out.exists()
+    assert cli(cfg, "-o", out, "--resume", "--overwrite").exit_code == 2
+    result = cli(cfg, "-o", out, "--workers", "1", "--no-progress", "--overwrite")
+    assert result.exit_code == 0, result.stderr
+    assert out.exists() and not parts_dir_for(out).exists()
+
+
+def _start_cli(cfg: Path, out: Path, *args: str) -> subprocess.Popen:
+    command = [sys.executable, "-c", "from clearsweep.sweeps import sweep_command; sweep_command()",
+               str(cfg), "-o", str(out), "--no-progress", *args]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=cfg.parent)
+
+
+def _wait_for_parts(parts: Path, n: int, process: subprocess.Popen, timeout: float = 120.0) -> None:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if parts.is_dir() and len(list(parts.glob("*.nc"))) >= n:
+            return
+        if process.poll() is not None:
+            pytest.fail(f"the sweep ended before {n} parts were written: {process.stderr.read()}")
+        time.sleep(0.005)
+    pytest.fail(f"no {n} parts within {timeout} s")
+
+
+#: Six cases of 0.4 s of motion each, so that a kill lands in the middle of the sweep.
+SLOW = {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]},
+        "zip": [{"name": "clearance_joints", "labels": ["B", "AB"],
+                 "joints.A.clearance": [0.0, 2.5e-4]}]}
+SLOW_BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.4}}
+
+
+def test_resume_after_sigkill_runs_every_case_once(tmp_path):
+    cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
+    out = tmp_path / "k.nc"
+    parts = parts_dir_for(out)
+    process = _start_cli(cfg, out, "--workers", "1")
+    _wait_for_parts(parts, 2, process)
+    process.kill()
+    process.communicate()
+    assert not out.exists()
+    kept = {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in parts.glob("*.nc")}
+    assert 2 <= len(kept) < 6
+    for name in kept:                    # every visible part is complete
+        with xr.open_dataset(parts / name) as part:
+            assert part["status"].item() == "ok"
+
+    refused = _start_cli(cfg, out, "--workers", "1")
+    assert refused.wait(60) == 2 and "--resume" in refused.stderr.read()
+
+    resumed = _start_cli(cfg, out, "--workers", "1", "--resume", "--keep-parts")
+    _, err = resumed.communicate(timeout=300)
+    assert resumed.returncode == 0, err
+    for name, stamp in kept.items():     # finished cases were not run again
+        assert ((parts / name).stat().st_ino, (parts / name).stat().st_mtime_ns) == stamp
+    with PartStore(parts) as store:
+        runs = [r["run"] for r in store.events("run")]
+        done = store.events("done")
+    assert len(runs) == 2
+    second = collections.Counter(r["hash"] for r in done if r["run"] == runs[1])
+    all_hashes = set(expand(cfg).runnable())
+    assert set(second) == all_hashes - {n[:-3] for n in kept}
+    assert set(second.values()) == {1}
+    assert {r["hash"] for r in done if r["run"] == runs[0]} <= {n[:-3] for n in kept}
+
+    with sweeps.open_results(out) as resumed_ds, \
+            run_sweep(cfg, tmp_path / "reference.nc", workers=1, progress=False) as reference:
+        xr.testing.assert_identical(drop_timing(reference.load()), drop_timing(resumed_ds.load()))
+
+
+def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
+    cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
+    out = tmp_path / "c.nc"
+    process = _start_cli(cfg, out, "--workers", "2")
+    _wait_for_parts(parts_dir_for(out), 1, process)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert "--resume" in err and "interrupted" in err
+    assert not out.exists()
+    with PartStore(parts_dir_for(out)) as store:
+        assert store.events("interrupted")
+        assert len(store.finished()) >= 1
+    resumed = _start_cli(cfg, out, "--workers", "2", "--resume")
+    _, err = resumed.communicate(timeout=300)
+    assert resumed.returncode == 0, err
+    with sweeps.open_results(out) as ds:
+        assert (ds["status"] == "ok").all()
+
+
+def test_drop_timing():
+    ds = xr.Dataset({"wall_time": ((), 1.0), "x": ((), 2.0)}, attrs={"history": "now", "title": "t"})
+    out = drop_timing(ds)
+    assert list(out.data_vars) == ["x"] and out.attrs == {"title": "t"}
+    assert "wall_time" in ds and "history" in ds.attrs
+
+
+def test_public_names():
+    import clearsweep
+
+    assert clearsweep.sweep is run_sweep is sweeps.sweep
+    assert clearsweep.open_results is sweeps.open_results
+    assert os.fspath(ROOT / "configs" / "paper.yaml")
