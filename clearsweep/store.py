@@ -18,7 +18,10 @@ A sweep writing ``OUT.nc`` keeps its finished cases in the folder
 :func:`write_sweep_netcdf` assembles the parts into the final file one case
 at a time: it creates the netCDF4 file with every variable chunked one case
 per chunk, copies each part into its slice, and renames the file into place.
-Memory holds one case and the coordinates, never the sweep.
+A part stores each whole-case array as one chunk with the sweep file's
+filters, so those chunks are copied as compressed bytes: the workers do the
+compression, in parallel, and the driver only moves bytes. Memory holds one
+case and the coordinates, never the sweep.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import hashlib
 import json
 import os
 import shutil
+import sys
 import tempfile
 import uuid
 from collections.abc import Callable, Mapping, Sequence
@@ -44,7 +48,7 @@ import xarray as xr
 from .dataset import write_netcdf_atomic
 
 __all__ = ["StoreError", "PartStore", "SweepSlot", "canonical_json", "case_hash", "parts_dir_for",
-           "write_sweep_netcdf", "open_results", "history_line", "PART_SUFFIX", "LOG_NAME"]
+           "write_part", "write_sweep_netcdf", "open_results", "history_line", "PART_SUFFIX", "LOG_NAME"]
 
 PART_SUFFIX = ".nc"
 LOG_NAME = "sweep.log"
@@ -52,7 +56,7 @@ LOCK_NAME = ".lock"
 #: Hex digits of the SHA-256 kept in a part's name.
 HASH_LENGTH = 16
 #: Compression of numeric variables, in parts and in the assembled file.
-COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
+COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.
 NOT_FAILED = ("ok", "skipped")
 
@@ -112,9 +116,21 @@ def _now() -> str:
 
 
 def _encoding(ds: xr.Dataset) -> dict[str, dict]:
-    """Compression for every numeric array variable of ``ds`` (strings and scalars as they are)."""
-    return {name: dict(COMPRESSION) for name, var in ds.variables.items()
-            if var.ndim and var.dtype.kind in "biuf"}
+    """Every numeric array of a part compressed as one chunk, exactly as a case of the sweep file.
+
+    Strings and scalars are stored as they are.
+    """
+    return {name: {**COMPRESSION, "chunksizes": var.shape} for name, var in ds.variables.items()
+            if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
+
+
+def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
+    """Write the part of case ``h`` into ``directory`` atomically (temporary file, then rename).
+
+    Used by :meth:`PartStore.write` and by pool workers, which write their
+    cases themselves.
+    """
+    return write_netcdf_atomic(part, Path(directory) / f"{h}{PART_SUFFIX}", encoding=_encoding(part))
 
 
 class PartStore:
@@ -231,7 +247,7 @@ class PartStore:
 
     def write(self, h: str, part: xr.Dataset) -> Path:
         """Write one finished case atomically (temporary file, then rename)."""
-        return write_netcdf_atomic(part, self.path(h), encoding=_encoding(part))
+        return write_part(self.directory, h, part)
 
     def read(self, h: str) -> xr.Dataset:
         """The part of case ``h``, loaded into memory."""
@@ -296,8 +312,47 @@ class _Template:
     statuses: dict[str, str] = field(default_factory=dict)
 
 
+# Parts are read through netCDF4 without xarray: the writer needs the raw arrays (and the
+# chunk layout), and xarray's decoding per part costs more than the copy. The decoding that
+# write_part's output needs is small: strings, booleans (int8 + dtype="bool"), coordinates.
+_HIDDEN_ATTRS = ("_FillValue", "coordinates", "dtype")
+
+
+@contextmanager
+def _open_part(path: Path):
+    with netCDF4.Dataset(path) as nc:
+        nc.set_auto_maskandscale(False)
+        yield nc
+
+
 def _is_text(dtype: np.dtype) -> bool:
     return dtype.kind in "OUS"
+
+
+def _dtype(var) -> np.dtype:
+    """The dtype xarray would give a part's variable: object for strings, bool where marked."""
+    if var.dtype is str:
+        return np.dtype(object)
+    if "dtype" in var.ncattrs() and var.getncattr("dtype") == "bool":
+        return np.dtype(bool)
+    return np.dtype(var.dtype)
+
+
+def _values(var) -> np.ndarray:
+    values = var[...]
+    return np.asarray(values, dtype=object) if var.dtype is str else np.asarray(values)
+
+
+def _attrs(var) -> dict:
+    return {k: var.getncattr(k) for k in var.ncattrs() if k not in _HIDDEN_ATTRS}
+
+
+def _coord_names(nc) -> set[str]:
+    names = set(str(getattr(nc, "coordinates", "")).split())
+    for var in nc.variables.values():
+        if "coordinates" in var.ncattrs():
+            names.update(str(var.getncattr("coordinates")).split())
+    return names
 
 
 def _union(old: np.ndarray | None, new: np.ndarray) -> np.ndarray:
@@ -308,8 +363,7 @@ def _union(old: np.ndarray | None, new: np.ndarray) -> np.ndarray:
         return np.union1d(old, new)
     seen = dict.fromkeys(old.tolist())
     seen.update(dict.fromkeys(new.tolist()))
-    seen = list(seen)
-    return np.array(seen, dtype=object if _is_text(old.dtype) else None)
+    return np.array(list(seen), dtype=object if _is_text(old.dtype) else None)
 
 
 def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
@@ -319,27 +373,28 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
         if not store.path(h).exists():
             raise StoreError(f"case {h} has no part in {store.directory}; run the sweep with "
                              "--resume to compute it")
-        with open_results(store.path(h)) as ds:
-            tpl.statuses[h] = str(ds["status"].values)
-            for dim in ds.dims:
-                if dim in ds.indexes:
-                    tpl.dim_values[dim] = _union(tpl.dim_values.get(dim), ds[dim].values)
-                    tpl.dim_attrs.setdefault(dim, dict(ds[dim].attrs))
+        with _open_part(store.path(h)) as nc:
+            tpl.statuses[h] = str(_values(nc["status"]).ravel()[0])
+            for dim, d in nc.dimensions.items():
+                if dim in nc.variables:
+                    tpl.dim_values[dim] = _union(tpl.dim_values.get(dim), _values(nc[dim]))
+                    tpl.dim_attrs.setdefault(dim, _attrs(nc[dim]))
                 else:
-                    tpl.dim_sizes[dim] = max(tpl.dim_sizes.get(dim, 0), ds.sizes[dim])
-            for name, var in ds.variables.items():
-                if name in ds.dims:
+                    tpl.dim_sizes[dim] = max(tpl.dim_sizes.get(dim, 0), d.size)
+            coords = _coord_names(nc)
+            for name, var in nc.variables.items():
+                if name in nc.dimensions:
                     continue
                 info = tpl.variables.get(name)
                 if info is None:
-                    tpl.variables[name] = _VarInfo(var.dims, var.dtype, dict(var.attrs),
-                                                   name in ds.coords)
+                    tpl.variables[name] = _VarInfo(var.dimensions, _dtype(var), _attrs(var),
+                                                   name in coords)
                     continue
-                if info.dims != var.dims:
-                    raise StoreError(f"variable {name} has dims {var.dims} in part {h} but "
+                if info.dims != var.dimensions:
+                    raise StoreError(f"variable {name} has dims {var.dimensions} in part {h} but "
                                      f"{info.dims} in an earlier part")
-                if not (_is_text(info.dtype) and _is_text(var.dtype)):
-                    info.dtype = np.result_type(info.dtype, var.dtype)
+                if not (_is_text(info.dtype) and _is_text(_dtype(var))):
+                    info.dtype = np.result_type(info.dtype, _dtype(var))
     for dim, values in tpl.dim_values.items():
         tpl.dim_sizes[dim] = len(values)
     return tpl
@@ -386,8 +441,8 @@ def _create_variable(nc, name: str, dims: tuple[str, ...], dtype: np.dtype, attr
         nbytes = int(np.prod(chunks)) * np.dtype(nctype).itemsize
         var.set_var_chunk_cache(size=max(nbytes, 1 << 16), nelems=1, preemption=1.0)
     clean = {k: v for k, v in attrs.items() if isinstance(v, (str, int, float, np.generic, list))
-             and k not in ("_FillValue", "coordinates")}
-    if dtype.kind == "b" and not _is_text(dtype):
+             and k not in _HIDDEN_ATTRS}
+    if dtype.kind == "b":
         clean.setdefault("flag_values", [0, 1])
         clean.setdefault("flag_meanings", "false true")
     var.setncatts(clean)
@@ -399,16 +454,16 @@ def _positions(part_values: np.ndarray, union: np.ndarray) -> np.ndarray:
     return np.array([lookup[v] for v in part_values.tolist()], dtype=np.intp)
 
 
-def _case_index(part: xr.Dataset, dims: tuple[str, ...], tpl: _Template):
-    """Per case dimension: a slice into the union coordinate, and a reordering of the part."""
+def _case_index(coords: Mapping[str, np.ndarray], dims: tuple[str, ...], sizes: tuple[int, ...],
+                tpl: _Template):
+    """Per case dimension: where the part's values go in the union, and their reordering."""
     index, order = [], []
-    for dim in dims:
-        n = part.sizes[dim]
-        if dim not in tpl.dim_values or np.array_equal(part[dim].values, tpl.dim_values[dim]):
+    for dim, n in zip(dims, sizes):
+        if dim not in tpl.dim_values or np.array_equal(coords[dim], tpl.dim_values[dim]):
             index.append(slice(0, n))
             order.append(None)
             continue
-        pos = _positions(part[dim].values, tpl.dim_values[dim])
+        pos = _positions(coords[dim], tpl.dim_values[dim])
         perm = np.argsort(pos, kind="stable")
         pos = pos[perm]
         if n and pos[-1] - pos[0] + 1 == n:
@@ -454,19 +509,73 @@ def _define(nc, sweep_dims: Mapping[str, int], sweep_coords: Mapping, tpl: _Temp
     return variables
 
 
-def _copy_case(part: xr.Dataset, where: tuple[int, ...], variables: Mapping, tpl: _Template) -> None:
-    """Write every variable of one part into its slice of the sweep file."""
-    for name, var in part.variables.items():
-        if name in part.dims:
+def _byte_order(var) -> str:
+    order = var.endian()
+    return sys.byteorder if order == "native" else order
+
+
+def _chunk_copyable(src, dst, index: tuple, order: list) -> bool:
+    """Whether ``src`` (a part's variable) is one chunk encoded exactly as ``dst``'s chunks.
+
+    Then its compressed bytes can be copied as they are (:func:`_copy_chunks`).
+    """
+    shape = tuple(src.shape)
+    return (bool(shape) and src.dtype is not str and src.dtype == dst.dtype
+            and _byte_order(src) == _byte_order(dst) and src.chunking() == list(shape)
+            and tuple(dst.chunking()[-len(shape):]) == shape
+            and all(c == 1 for c in dst.chunking()[:-len(shape)])
+            and all(o is None for o in order)
+            and all(isinstance(i, slice) and i.start == 0 for i in index)
+            and src.filters() == dst.filters())
+
+
+def _copy_case(nc_part, where: tuple[int, ...], variables: Mapping, tpl: _Template) -> list[str]:
+    """Write one part's variables into its slice; return those left for :func:`_copy_chunks`."""
+    coords = {d: _values(nc_part[d]) for d in nc_part.dimensions if d in nc_part.variables}
+    raw = []
+    for name, var in nc_part.variables.items():
+        if name in nc_part.dimensions:
             continue
-        index, order = _case_index(part, var.dims, tpl)
-        values = var.values
+        dst = variables[name]
+        index, order = _case_index(coords, var.dimensions, var.shape, tpl)
+        if _chunk_copyable(var, dst, index, order):
+            raw.append(name)
+            continue
+        values = _values(var)
         for axis, perm in enumerate(order):
             if perm is not None:
                 values = np.take(values, perm, axis=axis)
-        if values.dtype.kind == "b":
-            values = values.astype("i1")
-        _write_values(variables[name], where + index, values, _is_text(var.dtype))
+        _write_values(dst, where + index, values, var.dtype is str)
+    return raw
+
+
+def _filters(dataset) -> list[tuple]:
+    plist = dataset.id.get_create_plist()
+    return [plist.get_filter(i)[:3:2] for i in range(plist.get_nfilters())]
+
+
+def _copy_chunks(path: Path, raw: Sequence[tuple[tuple[int, ...], Path, list[str]]],
+                 check: Callable[[], None] | None) -> None:
+    """Second pass: copy the compressed chunks of whole-case variables without re-encoding.
+
+    Parts and the sweep file use the same chunk layout (one case) and the
+    same filters, so each chunk is read and written as bytes: the driver
+    neither inflates nor deflates the bulk of the data.
+    """
+    import h5py
+
+    with h5py.File(path, "r+") as out:
+        pipelines: dict[str, list] = {}
+        for where, part, names in raw:
+            if check is not None:
+                check()
+            with h5py.File(part, "r") as src:
+                for name in names:
+                    s, d = src[name], out[name]
+                    if _filters(s) != pipelines.setdefault(name, _filters(d)):
+                        raise StoreError(f"{part}: {name} is encoded unlike the sweep file")
+                    mask, chunk = s.id.read_direct_chunk((0,) * s.ndim)
+                    d.id.write_direct_chunk(where + (0,) * s.ndim, chunk, mask)
 
 
 @contextmanager
@@ -528,6 +637,11 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     (e.g. a swept duration) are outer-joined and the missing values filled
     (NaN for floats). Cases without a variable (failed or skipped ones) read
     as fill values.
+
+    Three passes over the parts, each holding one case at most: the headers
+    (variables, dtypes, case coordinates), then netCDF4 writes of everything
+    but whole-case arrays stored as one chunk, then an h5py copy of those
+    arrays' compressed chunks as bytes (:func:`_copy_chunks`).
     """
     shape = tuple(sweep_dims.values())
     if int(np.prod(shape)) != len(slots):
@@ -538,17 +652,23 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                             and tpl.statuses[s.hash] not in NOT_FAILED),
               "skipped": sum(1 for s in slots if s.hash is None)}
     attrs = {**(attrs or {}), **{f"sweep_{k}": v for k, v in counts.items()}}
-    with _replaced_on_success(path) as tmp, netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
-        variables = _define(nc, sweep_dims, sweep_coords, tpl, attrs)
-        for i, slot in enumerate(slots):
-            if check is not None:
-                check()
-            where = tuple(int(k) for k in np.unravel_index(i, shape)) if shape else ()
-            if slot.hash is None:
-                _write_values(variables["status"], where, "skipped", True)
-                _write_values(variables["message"], where, slot.message, True)
-            else:
-                _copy_case(store.read(slot.hash), where, variables, tpl)
+    raw = []
+    with _replaced_on_success(path) as tmp:
+        with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
+            variables = _define(nc, sweep_dims, sweep_coords, tpl, attrs)
+            for i, slot in enumerate(slots):
+                if check is not None:
+                    check()
+                where = tuple(int(k) for k in np.unravel_index(i, shape)) if shape else ()
+                if slot.hash is None:
+                    _write_values(variables["status"], where, "skipped", True)
+                    _write_values(variables["message"], where, slot.message, True)
+                    continue
+                with _open_part(store.path(slot.hash)) as part:
+                    names = _copy_case(part, where, variables, tpl)
+                if names:
+                    raw.append((where, store.path(slot.hash), names))
+        _copy_chunks(Path(tmp), raw, check)
     return counts
 
 

@@ -148,6 +148,27 @@ def test_assembly_layout_fill_and_outer_join(tmp_path, parts):
         assert nc["peak"].chunking() == [1, 1, 2]
 
 
+def test_chunk_copy_equals_decoded_copy(tmp_path, parts, monkeypatch):
+    """Whole-case arrays copied as compressed bytes read back as the values written."""
+    parts.write("a", _part(offset=1.0))
+    parts.write("b", _part(offset=2.0))
+    slots, dims = [S.SweepSlot("a"), S.SweepSlot("b")], {"k": 2}
+    coords = {"k": ("k", np.array([0, 1]), {})}
+    copied = []
+    real = S._copy_chunks
+    monkeypatch.setattr(S, "_copy_chunks", lambda path, raw, check: (copied.extend(raw),
+                                                                       real(path, raw, check)))
+    fast, _ = _assemble(tmp_path, parts, slots, dims, coords)
+    assert {n for _, _, names in copied for n in names} == {"x", "peak"}
+    monkeypatch.setattr(S, "_chunk_copyable", lambda *args: False)
+    slow = tmp_path / "slow.nc"
+    S.write_sweep_netcdf(slow, sweep_dims=dims, sweep_coords=coords, slots=slots, store=parts,
+                         attrs={"title": "t"})
+    with S.open_results(fast) as a, S.open_results(slow) as b:
+        xr.testing.assert_identical(a.load(), b.load())
+        np.testing.assert_array_equal(a["x"].isel(k=1).values, parts.read("b")["x"].values)
+
+
 def test_assembly_refuses_missing_part(tmp_path, parts):
     with pytest.raises(S.StoreError, match="--resume"):
         _assemble(tmp_path, parts, [S.SweepSlot("nope")], {"k": 1},
