@@ -55,9 +55,10 @@ that have no part yet, serially (one worker), on a process pool
 ``distributed`` client given by the caller (the library never starts a
 cluster; ``clearsweep sweep --dask-local N`` does, and closes it). Each
 finished case is written at once to ``OUT.parts/<hash>.nc``
-(:mod:`clearsweep.store`); the final file is assembled from the parts in sweep
-order, one case at a time, so results do not depend on the backend, the
-number of workers or the completion order.
+(:mod:`clearsweep.store`): by the pool worker that ran it, or by the driver
+for Dask workers, which may not share its disk. The final file is assembled
+from the parts in sweep order, one case at a time, so results do not depend
+on the backend, the number of workers or the completion order.
 
 A case whose simulation does not end with status ``ok``, or raises, is
 stored with its status, a ``message`` and fill values (NaN), and the sweep
@@ -93,10 +94,11 @@ from .config import ConfigError, close_match, dump_config, get_path, load_config
 from .dataset import versions
 from .store import (MESSAGE_ATTRS, NOT_FAILED, STATUS_ATTRS, PartStore, StoreError, SweepSlot,
                     canonical_json, case_hash, history_line, open_results, parts_dir_for,
-                    write_sweep_netcdf)
+                    write_part, write_sweep_netcdf)
 
 __all__ = ["Axis", "SweepPlan", "SweepInterrupted", "SweepFailed", "StoreError", "expand",
-           "run_sweep", "sweep", "open_results", "drop_timing", "dimension_name", "sweep_command",
+           "run_sweep", "sweep", "open_results", "drop_timing", "dimension_name", "process_pool",
+           "sweep_command",
            "STORE_MODES", "TIMING_VARIABLES"]
 
 #: First components of a dotted key that the dimension name leaves out.
@@ -622,6 +624,23 @@ def _run_case(payload: tuple) -> xr.Dataset:
         return _failed_part("error", f"{type(exc).__name__}: {exc}", time.perf_counter() - start)
 
 
+def _receipt(part: xr.Dataset) -> dict[str, Any]:
+    """What the driver logs of a finished case."""
+    wall = float(part["wall_time"].values) if "wall_time" in part else None
+    return {"status": _text(part["status"].values), "wall_time": wall}
+
+
+def _run_and_store(payload: tuple, parts_dir: str, h: str) -> dict[str, Any]:
+    """Run one case and write its part here, in the worker; return its receipt.
+
+    Writing in the worker keeps the driver (which shares the cores) idle
+    while the cases run.
+    """
+    part = _run_case(payload)
+    write_part(parts_dir, h, part)
+    return _receipt(part)
+
+
 # ---------------------------------------------------------------------------- backends
 
 class _InterruptGuard:
@@ -681,7 +700,7 @@ class _Serial:
     def __init__(self, guard: _InterruptGuard):
         self.guard = guard
 
-    def submit(self, payload) -> cf.Future:
+    def submit(self, h: str, payload) -> cf.Future:
         future = cf.Future()
         with self.guard.interruptible():
             part = _run_case(payload)
@@ -730,23 +749,44 @@ def _mp_context():
     return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
+def process_pool(workers: int | None = None) -> cf.ProcessPoolExecutor:
+    """A process pool set up as :func:`run_sweep` sets up its own.
+
+    Pass it as ``client=`` to run several sweeps on the same warm workers
+    (each worker loads the Numba kernel once); shut it down when done.
+
+    Parameters
+    ----------
+    workers
+        Worker processes (default: ``os.cpu_count()``).
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        ``forkserver`` (or ``spawn``) workers that ignore Ctrl-C (the driver
+        handles it) and exit by themselves when the driver process is gone.
+    """
+    return cf.ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
+                                  mp_context=_mp_context(), initializer=_worker_init,
+                                  initargs=(os.getpid(),))
+
+
 class _Futures:
     """A ``concurrent.futures`` executor: our own process pool, or one the caller passes."""
 
-    def __init__(self, executor: cf.Executor, own: bool, guard: _InterruptGuard):
+    def __init__(self, executor: cf.Executor, own: bool, guard: _InterruptGuard, parts_dir: Path):
         self.executor, self.own, self.guard = executor, own, guard
+        self.parts_dir = str(parts_dir)
         workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
         self.window = IN_FLIGHT_PER_WORKER * workers
         self.label = f"{type(executor).__name__}({workers})"
 
     @classmethod
-    def processes(cls, workers: int, guard: _InterruptGuard) -> _Futures:
-        executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=_mp_context(),
-                                          initializer=_worker_init, initargs=(os.getpid(),))
-        return cls(executor, own=True, guard=guard)
+    def processes(cls, workers: int, guard: _InterruptGuard, parts_dir: Path) -> _Futures:
+        return cls(process_pool(workers), own=True, guard=guard, parts_dir=parts_dir)
 
-    def submit(self, payload) -> cf.Future:
-        return self.executor.submit(_run_case, payload)
+    def submit(self, h: str, payload) -> cf.Future:
+        return self.executor.submit(_run_and_store, payload, self.parts_dir, h)
 
     def wait(self, futures):
         with self.guard.interruptible():
@@ -773,7 +813,11 @@ class _Futures:
 
 
 class _Dask:
-    """A ``distributed.Client`` (given, or connected here to a scheduler address)."""
+    """A ``distributed.Client`` (given, or connected here to a scheduler address).
+
+    Workers may run on other machines: they send each finished case back and
+    the driver writes its part.
+    """
 
     def __init__(self, client, own: bool, guard: _InterruptGuard):
         self.client, self.own, self.guard = client, own, guard
@@ -781,7 +825,7 @@ class _Dask:
         self.window = IN_FLIGHT_PER_WORKER * threads
         self.label = f"dask({client.scheduler.address}, {threads} threads)"
 
-    def submit(self, payload):
+    def submit(self, h: str, payload):
         return self.client.submit(_run_case, payload, pure=False)
 
     def wait(self, futures):
@@ -799,10 +843,10 @@ class _Dask:
             self.client.close()
 
 
-def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard):
+def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, parts_dir: Path):
     if client is not None:
         if isinstance(client, cf.Executor):
-            return _Futures(client, own=False, guard=guard)
+            return _Futures(client, own=False, guard=guard, parts_dir=parts_dir)
         if isinstance(client, str):
             from distributed import Client
 
@@ -812,22 +856,23 @@ def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard):
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     workers = min(workers, n_cases)
-    return _Serial(guard) if workers <= 1 else _Futures.processes(workers, guard)
+    return _Serial(guard) if workers <= 1 else _Futures.processes(workers, guard, parts_dir)
 
 
-def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str, xr.Dataset], None],
+def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str, Any], None],
            guard: _InterruptGuard) -> None:
-    """Keep ``backend.window`` cases in flight; hand each finished one to ``on_result``.
+    """Keep ``backend.window`` cases in flight; hand each result to ``on_result``.
 
-    Only the finished case being handled is held, so memory does not grow
-    with the sweep.
+    A result is the case's part (a dataset) or, where the worker wrote the
+    part itself, its receipt. Only the result being handled is held, so
+    memory does not grow with the sweep.
     """
     tasks = iter(tasks)
     pending: dict[Any, str] = {}
 
     def refill() -> None:
         for h, payload in itertools.islice(tasks, backend.window - len(pending)):
-            pending[backend.submit(payload)] = h
+            pending[backend.submit(h, payload)] = h
 
     try:
         refill()
@@ -889,7 +934,8 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping, out: str | os.PathLik
     client
         A ``distributed.Client``, a scheduler address (connected to here and
         disconnected after), or a ``concurrent.futures.Executor`` owned by
-        the caller. The library never starts a cluster.
+        the caller (e.g. :func:`process_pool`, to reuse warm workers across
+        sweeps). The library never starts a cluster.
     resume
         Keep the finished cases of an interrupted run (``OUT.parts``) and run
         only the others; no case runs twice.
@@ -967,7 +1013,8 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     runnable = plan.runnable()
     failed = sum(1 for r in store.events("done") if r.get("status") not in NOT_FAILED
                  and r.get("hash") in runnable) if kept else 0
-    backend = _backend(workers, client, len(todo), guard) if todo else _Serial(guard)
+    backend = (_backend(workers, client, len(todo), guard, store.directory) if todo
+               else _Serial(guard))
     store.log("run", name=plan.name, cases=len(plan.cases), to_run=len(todo), kept=kept,
               backend=backend.label)
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
@@ -975,13 +1022,13 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     bar.set_postfix(failed=failed)
     done = kept
 
-    def on_result(h: str, part: xr.Dataset) -> None:
+    def on_result(h: str, result) -> None:
         nonlocal failed, done
-        store.write(h, part)
-        status = _text(part["status"].values)
-        wall = float(part["wall_time"].values) if "wall_time" in part else None
-        store.log("done", hash=h, status=status, wall_time=wall)
-        failed += status not in NOT_FAILED
+        if isinstance(result, xr.Dataset):
+            store.write(h, result)
+            result = _receipt(result)
+        store.log("done", hash=h, **result)
+        failed += result["status"] not in NOT_FAILED
         done += 1
         bar.set_postfix(failed=failed, refresh=False)
         bar.update()
