@@ -171,13 +171,16 @@ def test_serial_processes_and_dask_give_identical_results(tmp_path):
     serial = run_sweep(cfg, tmp_path / "serial.nc", workers=1, progress=False)
     pool = run_sweep(cfg, tmp_path / "pool.nc", workers=2, progress=False)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster) as client:
-        dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
-    with serial, pool, dask:
+                      dashboard_address=None) as cluster:
+        with Client(cluster) as client:
+            dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
+        by_address = run_sweep(cfg, tmp_path / "address.nc", client=cluster.scheduler_address,
+                               progress=False)
+    with serial, pool, dask, by_address:
         assert (serial["status"] == "ok").all()
         assert serial.attrs["sweep_dims"] == "B_coating clearance_joints"
         reference = drop_timing(serial.load())
-        for other in (pool, dask):
+        for other in (pool, dask, by_address):
             xr.testing.assert_identical(reference, drop_timing(other.load()))
     assert not parts_dir_for(tmp_path / "pool.nc").exists()
 
@@ -263,6 +266,52 @@ def test_cli_refuses_parts_of_an_earlier_run(tmp_path):
     result = cli(cfg, "-o", out, "--workers", "1", "--no-progress", "--overwrite")
     assert result.exit_code == 0, result.stderr
     assert out.exists() and not parts_dir_for(out).exists()
+
+
+def test_cli_dask_local_cluster(tmp_path):
+    out = tmp_path / "d.nc"
+    result = cli(write_sweep(tmp_path, SMALL), "-o", out, "--dask-local", "2", "--no-progress")
+    assert result.exit_code == 0, result.stderr
+    assert "wrote" in result.stderr and "4 cases" in result.stderr
+    with sweeps.open_results(out) as ds:
+        assert (ds["status"] == "ok").all()
+
+
+def test_cli_usage_errors(tmp_path):
+    cfg = write_sweep(tmp_path, SMALL)
+    result = cli(cfg, "-o", tmp_path / "o.nc", "--scheduler", "tcp://127.0.0.1:1", "--dask-local", "2")
+    assert result.exit_code == 2 and "give one" in result.stderr
+
+
+def test_registered_as_clearsweep_sweep(tmp_path):
+    from clearsweep.cli import main
+
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFX"]}})
+    result = CliRunner().invoke(main, ["sweep", str(cfg), "-o", str(tmp_path / "o.nc")])
+    assert result.exit_code == 2
+    assert "clearsweep: error:" in result.stderr and "did you mean 'PTFE'" in result.stderr
+
+
+def die_on_ptfe(cfg):
+    """A simulation whose worker process dies on PTFE cases (a crash, not a failed case)."""
+    from clearsweep.simulation import simulate
+
+    if cfg["joints"]["B"]["coating"] == "PTFE":
+        os._exit(3)
+    return simulate(cfg)
+
+
+def test_a_dying_worker_stops_the_sweep_and_keeps_finished_cases(tmp_path):
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]}})
+    out = tmp_path / "w.nc"
+    with pytest.raises(sweeps.SweepFailed, match="--resume"):
+        run_sweep(cfg, out, workers=2, progress=False, _simulate=die_on_ptfe)
+    assert not out.exists()
+    with PartStore(parts_dir_for(out)) as store:
+        assert store.events("failed")
+    # The same sweep without the crash resumes from what was kept.
+    with run_sweep(cfg, out, workers=1, resume=True, progress=False) as ds:
+        assert (ds["status"] == "ok").all()
 
 
 def _start_cli(cfg: Path, out: Path, *args: str) -> subprocess.Popen:
