@@ -1,0 +1,224 @@
+"""Sweep benchmarks: worker scaling, memory of a 500-case summary sweep, the shipped sweeps.
+
+Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped]``; prints markdown.
+
+- **Scaling.** One list of cases (16 cases, 1 s of motion each, full store)
+  run serially in this process and on two warm worker processes, alternately,
+  ``--repeats`` times; the ratio is serial time / two-worker time, best of
+  each. Warm means that the Numba kernel is loaded in every process before the
+  clock starts (a warm-up sweep on the same pool); the cold two-worker time
+  (pool start and kernel load included) is reported beside it.
+- **Memory.** A 500-case ``store: summary`` sweep of short cases (5 ms of
+  motion) with two workers, in a fresh interpreter; the peak of the summed
+  resident memory of the driver and all its descendants (sampled every 20
+  ms with psutil; RSS counts shared library pages once per process, so this
+  is an upper bound), and each process's own peak.
+- **Shipped sweeps** (``--shipped``): ``configs/coating_clearance.yaml`` and
+  ``configs/paper.yaml`` through the CLI with two workers: wall time, peak
+  memory, cases and file size.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import psutil
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: 4 coatings x 2 clearances x {B, AB}: 16 cases of 1 s of motion, as in the main sweep.
+SCALING_SWEEP = {
+    "name": "scaling",
+    "base": {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 1.0}},
+    "sweep": {"grid": {"joints.B.coating": ["none", "MoS2", "lead", "PTFE"],
+                       "joints.B.clearance": [1.0e-4, 5.0e-4]},
+              "zip": [{"name": "clearance_joints", "labels": ["B", "AB"],
+                       "joints.A.clearance": [0.0, 2.5e-4]}]},
+}
+WARMUP_SWEEP = {"name": "warmup", "base": {"solver": {"duration": 0.002}},
+                "sweep": {"grid": {"mechanism.speed_rpm": [30, 40, 50, 60]}}}
+
+#: 4 coatings x 25 clearances x 5 speeds = 500 cases of 5 ms of motion, summaries only.
+MEMORY_SWEEP = {
+    "name": "memory",
+    "store": "summary",
+    "base": {"joints": {"A": {"clearance": 2.5e-4}}, "solver": {"duration": 0.005}},
+    "sweep": {"grid": {"joints.B.coating": ["none", "MoS2", "lead", "PTFE"],
+                       "joints.B.clearance": [round(5e-5 + 4e-5 * i, 10) for i in range(25)],
+                       "mechanism.speed_rpm": [30, 45, 60, 75, 90]}},
+}
+
+RUN_SNIPPET = """
+import json, sys, time
+from clearsweep.sweeps import run_sweep
+t0 = time.perf_counter()
+with run_sweep(json.loads(sys.argv[1]), sys.argv[2], workers=2, progress=False) as ds:
+    cases, failed = int(ds.attrs["sweep_cases"]), int(ds.attrs["sweep_failed"])
+print(json.dumps({"wall_s": time.perf_counter() - t0, "cases": cases, "failed": failed}))
+"""
+
+
+def timed_sweep(doc: dict, **kwargs) -> float:
+    """Seconds to run ``doc`` to a temporary file (assembly included)."""
+    from clearsweep.sweeps import run_sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        run_sweep(doc, Path(tmp) / "s.nc", progress=False, **kwargs).close()
+        return time.perf_counter() - t0
+
+
+def scaling(repeats: int) -> dict:
+    """Serial vs two warm workers on the same cases, alternately; cold two-worker run beside."""
+    from clearsweep.sweeps import expand, process_pool
+
+    n = len(expand(SCALING_SWEEP).runnable())
+    cold = timed_sweep(SCALING_SWEEP, workers=2)
+    timed_sweep(WARMUP_SWEEP, workers=1)                   # kernel loaded in this process
+    serial, pooled = [], []
+    with process_pool(2) as pool:
+        timed_sweep(WARMUP_SWEEP, client=pool)             # ... and in both workers
+        for _ in range(repeats):
+            serial.append(timed_sweep(SCALING_SWEEP, workers=1))
+            pooled.append(timed_sweep(SCALING_SWEEP, client=pool))
+    return {"cases": n, "serial": serial, "pooled": pooled, "cold": cold,
+            "ratio": min(serial) / min(pooled)}
+
+
+class TreeMemory:
+    """Peak of the summed RSS of a process and its descendants, sampled in a thread."""
+
+    def __init__(self, pid: int, period: float = 0.02):
+        self.root, self.period = psutil.Process(pid), period
+        self.peak_total = 0
+        self.peak_each: dict[int, tuple[str, int]] = {}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                procs = [self.root, *self.root.children(recursive=True)]
+            except psutil.Error:
+                return
+            total = 0
+            for p in procs:
+                try:
+                    rss = p.memory_info().rss
+                    role = "driver" if p.pid == self.root.pid else _role(p)
+                except psutil.Error:
+                    continue
+                total += rss
+                if rss > self.peak_each.get(p.pid, ("", 0))[1]:
+                    self.peak_each[p.pid] = (role, rss)
+            self.peak_total = max(self.peak_total, total)
+            self._stop.wait(self.period)
+
+    def stop(self) -> dict:
+        self._stop.set()
+        self._thread.join()
+        by_role: dict[str, int] = {}
+        for role, rss in self.peak_each.values():
+            by_role[role] = max(by_role.get(role, 0), rss)
+        return {"total_mb": self.peak_total / 2**20,
+                "largest_mb": {r: v / 2**20 for r, v in sorted(by_role.items())}}
+
+
+def _role(p: psutil.Process) -> str:
+    cmd = " ".join(p.cmdline())
+    if "forkserver" in cmd:
+        return "pool worker" if p.parent() and "forkserver" in " ".join(p.parent().cmdline()) \
+            else "forkserver"
+    if "resource_tracker" in cmd:
+        return "resource tracker"
+    return "other child"
+
+
+def measured_run(command: list[str]) -> dict:
+    """Run ``command``; its wall time, output and the peak memory of its process tree."""
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=ROOT)
+    memory = TreeMemory(proc.pid)
+    out, err = proc.communicate()
+    wall = time.perf_counter() - t0
+    result = {"wall_s": wall, "returncode": proc.returncode, "stdout": out, "stderr": err,
+              **memory.stop()}
+    return result
+
+
+def memory_sweep() -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "memory.nc"
+        run = measured_run([sys.executable, "-c", RUN_SNIPPET, json.dumps(MEMORY_SWEEP), str(out)])
+        if run["returncode"]:
+            raise RuntimeError(run["stderr"])
+        run.update(json.loads(run["stdout"].strip().splitlines()[-1]))
+        run["file_mb"] = out.stat().st_size / 2**20
+    return run
+
+
+def shipped(name: str) -> dict:
+    from clearsweep.sweeps import open_results
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / f"{name}.nc"
+        run = measured_run([sys.executable, "-m", "clearsweep.cli", "sweep", f"configs/{name}.yaml",
+                            "-o", str(out), "--workers", "2", "--no-progress"])
+        if run["returncode"] not in (0, 1):
+            raise RuntimeError(run["stderr"])
+        with open_results(out) as ds:
+            run.update(cases=int(ds.attrs["sweep_cases"]), failed=int(ds.attrs["sweep_failed"]),
+                       skipped=int(ds.attrs["sweep_skipped"]),
+                       case_wall_s=float(ds["wall_time"].sum()),
+                       statuses=sorted(set(ds["status"].values.ravel().tolist())))
+        run["file_mb"] = out.stat().st_size / 2**20
+    return run
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=2, help="alternating timing rounds")
+    parser.add_argument("--shipped", action="store_true", help="also run the shipped sweeps")
+    args = parser.parse_args()
+
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    s = scaling(args.repeats)
+    print("\n## Scaling: serial vs 2 workers, same cases\n")
+    print("| cases | serial [s] | 2 workers, warm [s] | speed-up (best/best) | 2 workers, cold [s] |")
+    print("|---|---|---|---|---|")
+    print(f"| {s['cases']} | {', '.join(f'{t:.2f}' for t in s['serial'])} | "
+          f"{', '.join(f'{t:.2f}' for t in s['pooled'])} | {s['ratio']:.2f}x | {s['cold']:.2f} |")
+
+    m = memory_sweep()
+    print("\n## 500-case summary sweep, 2 workers\n")
+    print("| cases | wall [s] | cases/s | peak RSS, driver + descendants [MB] | largest per process [MB] | file [MB] |")
+    print("|---|---|---|---|---|---|")
+    each = ", ".join(f"{r} {v:.0f}" for r, v in m["largest_mb"].items())
+    print(f"| {m['cases']} | {m['wall_s']:.1f} | {m['cases'] / m['wall_s']:.1f} | {m['total_mb']:.0f} | "
+          f"{each} | {m['file_mb']:.2f} |")
+
+    if args.shipped:
+        print("\n## Shipped sweeps, 2 workers (CLI)\n")
+        print("| config | cases (run / skipped) | failed | wall [s] | sum of case wall times [s] | "
+              "peak RSS, all processes [MB] | file [MB] |")
+        print("|---|---|---|---|---|---|---|")
+        for name in ("coating_clearance", "paper"):
+            r = shipped(name)
+            print(f"| {name} | {r['cases'] - r['skipped']} / {r['skipped']} | {r['failed']} | "
+                  f"{r['wall_s']:.1f} | {r['case_wall_s']:.1f} | {r['total_mb']:.0f} | "
+                  f"{r['file_mb']:.1f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
