@@ -489,9 +489,10 @@ def _case_error(exc: ConfigError, assignment: Mapping[str, Any], label: Mapping[
     if key is None:     # a relation between two keys (clearance < socket_radius)
         key = next((k for k in assignment if k in (exc.expected or "")), next(iter(assignment)))
     case = ", ".join(f"{n}={v!r}" for n, v in label.items())
-    detail = "" if exc.key == key else f" for {exc.key} = {exc.value!r}"
-    return ConfigError(key, assignment[key], f"{exc.expected}{detail} (in the sweep case {case})",
-                       source, exc.suggestion)
+    expected = exc.expected if exc.key == key else (
+        f"a value with which {exc.key} = {exc.value!r} is {exc.expected}")
+    return ConfigError(key, assignment[key], f"{expected} (in the sweep case {case})", source,
+                       exc.suggestion)
 
 
 def _check_overrides(overrides: Iterable[str], axes: Sequence[Axis], source: str) -> None:
@@ -616,8 +617,9 @@ def _run_case(payload: tuple) -> xr.Dataset:
         if "message" in ds:
             message = _text(ds["message"].values)
         else:
-            message = str(ds["status"].attrs.get("message") or ds.attrs.get("status_message")
-                          or f"the simulation stopped with status {status!r}")
+            when = ds.attrs.get("status_time_s")
+            message = f"the simulation stopped with status {status!r}" + (
+                f" at t = {float(when):g} s" if when is not None else "")
         wall = float(ds["wall_time"].values) if "wall_time" in ds else time.perf_counter() - start
         return _failed_part(status, message, wall)
     except Exception as exc:    # a failed case, not a failed sweep

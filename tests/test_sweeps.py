@@ -216,6 +216,7 @@ def test_failed_cases_are_recorded_and_the_others_run(tmp_path):
         assert status.sel(B_coating="PTFE", dt=1e-5).item() == "unstable_step"
         assert (status.sel(dt=0.01) == "error").all()
         assert "ConfigError" in ds["message"].sel(B_coating="none", dt=0.01).item()
+        assert "'unstable_step' at t = " in ds["message"].sel(B_coating="PTFE", dt=1e-5).item()
         assert ds["message"].sel(B_coating="none", dt=1e-5).item() == ""
         assert ds.attrs["sweep_failed"] == 3
         ok = ds.sel(B_coating="none", dt=1e-5)
