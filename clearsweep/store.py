@@ -420,10 +420,7 @@ def _write_values(var, index: tuple, values, text: bool) -> None:
         values = np.asarray(values, dtype=object)
         if values.ndim == 0:
             values = str(values[()])
-    if var.ndim == 0:
-        var.assignValue(values)
-    else:
-        var[index] = values
+    var[index if var.ndim else ...] = values
 
 
 def _create_variable(nc, name: str, dims: tuple[str, ...], dtype: np.dtype, attrs: Mapping,

@@ -1015,8 +1015,12 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     runnable = plan.runnable()
     failed = sum(1 for r in store.events("done") if r.get("status") not in NOT_FAILED
                  and r.get("hash") in runnable) if kept else 0
-    backend = (_backend(workers, client, len(todo), guard, store.directory) if todo
-               else _Serial(guard))
+    try:
+        backend = (_backend(workers, client, len(todo), guard, store.directory) if todo
+                   else _Serial(guard))
+    except (OSError, TimeoutError) as exc:
+        raise SweepFailed(f"cannot start the backend for {client or workers!r}: "
+                          f"{type(exc).__name__}: {exc}") from exc
     store.log("run", name=plan.name, cases=len(plan.cases), to_run=len(todo), kept=kept,
               backend=backend.label)
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,

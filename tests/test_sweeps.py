@@ -398,6 +398,12 @@ def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
         assert (ds["status"] == "ok").all()
 
 
+def test_a_sweep_without_axes_is_one_case(tmp_path):
+    with run_sweep({"base": BASE}, tmp_path / "one.nc", progress=False) as ds:
+        assert ds["status"].item() == "ok" and ds["slider_acceleration"].dims == ("time",)
+        assert ds.attrs["sweep_dims"] == "" and ds.attrs["sweep_cases"] == 1
+
+
 def test_drop_timing():
     ds = xr.Dataset({"wall_time": ((), 1.0), "x": ((), 2.0)}, attrs={"history": "now", "title": "t"})
     out = drop_timing(ds)
