@@ -50,6 +50,17 @@ def check_step(cfg: dict, packed: Packed) -> None:
                           f" sub-steps at most, solver.max_substep_level)")
 
 
+def preflight(cfg: dict) -> Packed:
+    """Everything that can be checked before a run: materials, packing and the step bound.
+
+    ``cfg`` is a resolved config; raises ConfigError. Sweeps call it on every case before
+    anything runs.
+    """
+    packed = pack(cfg, resolve_materials(cfg))
+    check_step(cfg, packed)
+    return packed
+
+
 def run_kernel(packed: Packed) -> dict[str, Any]:
     """Run the Numba kernel on packed inputs; raw arrays and counters."""
     from .core.rk4 import integrate
@@ -97,9 +108,7 @@ def simulate(config, overrides=()) -> "xr.Dataset":  # noqa: F821
     from .dataset import build_dataset
 
     cfg = load_config(config, overrides)
-    materials = resolve_materials(cfg)
-    packed = pack(cfg, materials)
-    check_step(cfg, packed)
+    packed = preflight(cfg)
     raw = run_kernel(packed)
     arrays = arrays_from_raw(raw, packed)
     attrs = {

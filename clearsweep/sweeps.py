@@ -91,6 +91,7 @@ import xarray as xr
 
 from . import variables
 from .config import ConfigError, close_match, dump_config, get_path, load_config, read_yaml, set_path
+from .simulation import preflight
 from .dataset import versions
 from .store import (MESSAGE_ATTRS, NOT_FAILED, STATUS_ATTRS, PartStore, StoreError, SweepSlot,
                     canonical_json, case_hash, history_line, open_results, parts_dir_for,
@@ -557,6 +558,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             set_path(cfg, key, value)
         try:
             resolved = load_config(cfg, source_name=source)
+            preflight(resolved)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_hash(resolved), canonical_json(resolved)))

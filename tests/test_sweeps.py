@@ -417,3 +417,11 @@ def test_public_names():
     assert clearsweep.sweep is run_sweep is sweeps.sweep
     assert clearsweep.open_results is sweeps.open_results
     assert os.fspath(ROOT / "configs" / "paper.yaml")
+
+
+def test_step_too_large_for_a_case_is_caught_before_anything_runs():
+    """A swept solver.dt that no sub-step level can stabilise is a ConfigError at expansion."""
+    doc = {"base": {"joints": {"B": {"clearance": 2.5e-4}}},
+           "sweep": {"grid": {"solver.dt": [1e-5, 0.01]}}}
+    with pytest.raises(ConfigError, match=r"solver\.dt.*0\.01"):
+        expand(doc)
