@@ -200,9 +200,10 @@ def test_results_open_with_both_engines_and_select_by_material(tmp_path):
 
 
 def test_failed_cases_are_recorded_and_the_others_run(tmp_path):
-    """Paper inertia + PTFE at h = 1e-5 s stops unstable; a 10 ms step is refused at run time."""
+    """Paper inertia + PTFE at h = 1e-5 s stops unstable (~6 ms); a penetration limit of
+    1e-4 c stops at the first contact (~5.8 ms); steel alone runs the 10 ms."""
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE"],
-                                          "solver.dt": [1e-5, 0.01]}},
+                                          "contact.max_penetration_fraction": [0.5, 1e-4]}},
                       base={"mechanism": {"preset": "paper"}, "solver": {"duration": 0.01},
                             "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}})
     out = tmp_path / "f.nc"
@@ -212,16 +213,16 @@ def test_failed_cases_are_recorded_and_the_others_run(tmp_path):
     assert "failed=3" in result.stderr                    # progress bar postfix
     with sweeps.open_results(out) as ds:
         status = ds["status"]
-        assert status.sel(B_coating="none", dt=1e-5).item() == "ok"
-        assert status.sel(B_coating="PTFE", dt=1e-5).item() == "unstable_step"
-        assert (status.sel(dt=0.01) == "error").all()
-        assert "ConfigError" in ds["message"].sel(B_coating="none", dt=0.01).item()
-        assert "'unstable_step' at t = " in ds["message"].sel(B_coating="PTFE", dt=1e-5).item()
-        assert ds["message"].sel(B_coating="none", dt=1e-5).item() == ""
+        frac = "max_penetration_fraction"
+        assert status.sel(B_coating="none", **{frac: 0.5}).item() == "ok"
+        assert status.sel(B_coating="PTFE", **{frac: 0.5}).item() == "unstable_step"
+        assert status.sel(B_coating="none", **{frac: 1e-4}).item() == "penetration_exceeded"
+        assert "'unstable_step' at t = " in ds["message"].sel(B_coating="PTFE", **{frac: 0.5}).item()
+        assert ds["message"].sel(B_coating="none", **{frac: 0.5}).item() == ""
         assert ds.attrs["sweep_failed"] == 3
-        ok = ds.sel(B_coating="none", dt=1e-5)
+        ok = ds.sel(B_coating="none", **{frac: 0.5})
         assert np.isfinite(ok["slider_acceleration"]).all()
-        failed = ds.sel(B_coating="PTFE", dt=1e-5)
+        failed = ds.sel(B_coating="PTFE", **{frac: 0.5})
         assert np.isnan(failed["slider_acceleration"]).all()
         assert np.isnan(failed["wear_depth_max_final"]).all()
 
