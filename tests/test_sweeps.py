@@ -426,3 +426,20 @@ def test_step_too_large_for_a_case_is_caught_before_anything_runs():
            "sweep": {"grid": {"solver.dt": [1e-5, 0.01]}}}
     with pytest.raises(ConfigError, match=r"solver\.dt.*0\.01"):
         expand(doc)
+
+
+def _raise_for_ptfe(cfg):
+    """Stand-in simulate: an unexpected exception in one case (module level: picklable)."""
+    if cfg["joints"]["B"]["coating"] == "PTFE":
+        raise RuntimeError("boom")
+    from clearsweep.simulation import simulate
+
+    return simulate(cfg)
+
+
+def test_exception_inside_a_case_is_an_error_status_not_a_crash(tmp_path):
+    with run_sweep(write_sweep(tmp_path, SMALL), tmp_path / "e.nc", workers=1, progress=False,
+                   _simulate=_raise_for_ptfe) as ds:
+        assert (ds["status"].sel(B_coating="PTFE") == "error").all()
+        assert "RuntimeError: boom" in ds["message"].sel(B_coating="PTFE").values.ravel()[0]
+        assert (ds["status"].sel(B_coating="none") == "ok").all()
