@@ -399,7 +399,10 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
     if not chosen:
         raise SelectionError("a reference case needs at least one DIM=VALUE",
                              choices=sweep_dims(table))
-    ref = table.sel(chosen).drop_vars(list(chosen))
+    # drop the chosen dims' coordinates, zip-group companions (e.g. A_coating along
+    # coating_joints) included, so that the reference broadcasts against every case
+    along = [c for c in table.coords if set(table[c].dims) & set(chosen)]
+    ref = table.sel(chosen).drop_vars(along)
     order = table["wear_depth_axis_max"].dims
 
     def reduction(name: str) -> tuple[xr.DataArray, xr.DataArray]:
@@ -554,10 +557,15 @@ def _rows(obj: xr.Dataset, dims: tuple[str, ...], names: list[str]) -> list[dict
 
 def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tuple[str, ...],
                  keep=None) -> list[_Group]:
-    """A group per sweep case, headed by its coordinates (and status where not ``ok``)."""
+    """A group per sweep case, headed by its coordinates (and status where not ``ok``).
+
+    Points that a sweep's ``skip:`` rules left out (status ``skipped``) are not listed.
+    """
     groups = []
     for label, case in iter_cases(table):
         if keep is not None and not keep(case):
+            continue
+        if "status" in case and value_text(case["status"].values[()]) == "skipped":
             continue
         keys = dict(label)
         heading = label_text(label)

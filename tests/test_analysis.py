@@ -366,3 +366,32 @@ def test_case_dimension_with_zip_coordinates_and_without_coordinates():
     csv_lines = format_metric_table(bare, "wear_depth_max_final", "csv").splitlines()
     assert csv_lines[0] == "case,joint,maximum wear depth at the end of the run [m]"
     assert csv_lines[1] == f"0,A,{syn.WEAR_MAP_PEAK['A']!r}"
+
+
+def test_reference_on_a_zip_group_and_skipped_points(tmp_path):
+    """Table 6 against a zip-group dimension (whose keys are non-index coordinates), from a
+    real sweep with a skip rule; skipped points are not reported."""
+    import yaml
+
+    from clearsweep.analysis import format_reduction_table, format_wear_table, reduction_table
+    from clearsweep.sweeps import run_sweep
+
+    doc = {"base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
+                    "solver": {"duration": 0.02}},
+           "sweep": {"zip": [{"name": "coating_joints", "labels": ["none", "B", "AB"],
+                              "joints.A.coating": ["none", "none", "PTFE"],
+                              "joints.B.coating": ["none", "PTFE", "PTFE"]}],
+                     "grid": {"mechanism.speed_rpm": [60.0, 90.0]},
+                     "skip": [{"coating_joints": "AB", "speed_rpm": 90.0}]}}
+    path = tmp_path / "z.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    with run_sweep(path, tmp_path / "z.nc", workers=1, progress=False) as ds:
+        table = reduction_table(ds, {"coating_joints": "none"})
+        by_hand = (wear_table(ds.sel(coating_joints="none", drop=True))["wear_depth_axis_max"]
+                   - wear_table(ds.sel(coating_joints="B", drop=True))["wear_depth_axis_max"])
+        got = table["wear_depth_reduction"].sel(coating_joints="B", drop=True)
+        np.testing.assert_allclose(got.transpose(*by_hand.dims).values, by_hand.values)
+        for text in (format_wear_table(ds, "markdown"),
+                     format_reduction_table(ds, {"coating_joints": "none"}, "markdown")):
+            assert "skipped" not in text
+            assert text.count("coating_joints=AB") == 1
