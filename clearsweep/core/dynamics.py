@@ -150,12 +150,18 @@ def constrained_apply(g, C, L, nc, minv, mr_inv, w1, w2, lam):
             acc += C[i, k] * w1[k]
         lam[i] = acc
     chol_solve(L, lam, nc)
+    back_substitute(g, C, lam, nc, minv, mr_inv, w2, w1)
+
+
+@njit(cache=True)
+def back_substitute(f, C, lam, nc, minv, mr_inv, tmp, out):
+    """out = M_zz^-1 (f - C^T lam): free accelerations from the multipliers."""
     for k in range(NZ):
-        acc = g[k]
+        acc = f[k]
         for i in range(nc):
             acc -= C[i, k] * lam[i]
-        w2[k] = acc
-    minv_apply(minv, mr_inv, w2, w1)
+        tmp[k] = acc
+    minv_apply(minv, mr_inv, tmp, out)
 
 
 @njit(cache=True)
@@ -440,12 +446,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
                 S[jj, i] = acc
         if not solve_spd(S, lam, nc, L):
             return ST_SINGULAR
-        for k in range(NZ):
-            acc = f[k]
-            for i in range(nc):
-                acc -= C[i, k] * lam[i]
-            mcol[k] = acc
-        minv_apply(minv, mr_inv, mcol, zdd)
+        back_substitute(f, C, lam, nc, minv, mr_inv, mcol, zdd)
     else:
         for k in range(NZ):
             zdd[k] = mf[k]
