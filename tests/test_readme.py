@@ -57,3 +57,19 @@ def test_reproduction_commands_run_as_written(tmp_path):
     figures = sorted(p.name for p in (tmp_path / "docs" / "figures").iterdir())
     committed = sorted(p.name for p in (ROOT / "docs" / "figures").glob("*.png"))
     assert figures == committed
+
+
+def test_run_writes_a_labelled_file_with_units(tmp_path):
+    """`clearsweep run configs/two_clearances.yaml -o out.nc` (shortened), then xr.open_dataset."""
+    res = run(["run", "configs/two_clearances.yaml", "-o", "out.nc"], tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "status: ok" in res.stdout and "steps/s" in res.stdout
+    with xr.open_dataset(tmp_path / "out.nc") as ds:
+        assert str(ds["status"].values) == "ok"
+        for name, var in ds.variables.items():
+            assert "long_name" in var.attrs, name
+            if var.dtype.kind in "fi" and name not in ("joint", "axis"):
+                assert "units" in var.attrs, name
+        assert ds["normal_force"].attrs["units"] == "N"
+        assert ds["joint_force"].dims == ("time", "joint", "axis")
+        assert "joints:" in ds.attrs["config"] and ds.attrs["numba_version"]
