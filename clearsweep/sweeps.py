@@ -485,6 +485,8 @@ def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[st
 def _case_error(exc: ConfigError, assignment: Mapping[str, Any], label: Mapping[str, Any],
                 source: str) -> ConfigError:
     """Re-raise a case's ConfigError naming the sweep key and value that caused it."""
+    if not assignment:  # a sweep without axes: its one case is the base
+        return ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion, exc.got)
     key = next((k for k in assignment if exc.key and (exc.key == k or exc.key.startswith(k + "."))),
                None)
     if key is None:     # a relation between two keys (clearance < socket_radius)

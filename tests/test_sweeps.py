@@ -428,6 +428,13 @@ def test_step_too_large_for_a_case_is_caught_before_anything_runs():
         expand(doc)
 
 
+def test_step_too_large_for_a_sweep_without_axes_names_the_key():
+    """The one case of a sweep without axes is its base: the error names the base's key."""
+    doc = {"base": {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"dt": 0.01}}}
+    with pytest.raises(ConfigError, match=r"<sweep>: solver\.dt: got 0\.01; expected a step"):
+        expand(doc)
+
+
 def _raise_for_ptfe(cfg):
     """Stand-in simulate: an unexpected exception in one case (module level: picklable)."""
     if cfg["joints"]["B"]["coating"] == "PTFE":
