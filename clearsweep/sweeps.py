@@ -73,6 +73,7 @@ import itertools
 import json
 import multiprocessing
 import os
+import shlex
 import shutil
 import signal
 import sys
@@ -1104,7 +1105,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         raise click.UsageError("--resume keeps the finished cases and --overwrite deletes them; "
                                "give one")
     out = out or f"{Path(config).stem}.nc"
-    cluster = None
+    cluster = local_client = None
     try:
         client = scheduler
         if dask_local:
@@ -1112,7 +1113,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
 
             cluster = LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address=None)
-            client = Client(cluster)
+            client = local_client = Client(cluster)
         ds = run_sweep(config, out, workers=workers, client=client, resume=resume,
                        overrides=overrides, progress=not no_progress, overwrite=overwrite,
                        keep_parts=keep_parts)
@@ -1122,7 +1123,9 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     except (ConfigError, StoreError) as exc:
         _fail(f"error: {exc}", 2)
     except SweepInterrupted as exc:
-        cmd = f"clearsweep sweep {config} -o {out} --resume"
+        # The same cases only: the overrides are part of every case's hash.
+        cmd = shlex.join(["clearsweep", "sweep", config, "-o", out, "--resume",
+                          *(a for o in overrides for a in ("--set", o))])
         _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
               f"{exc.parts_dir}; continue with: {cmd}", 130)
     except KeyboardInterrupt:
@@ -1130,8 +1133,9 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     except SweepFailed as exc:
         _fail(f"error: {exc}", 1)
     finally:
+        if local_client is not None:
+            local_client.close()
         if cluster is not None:
-            client.close()
             cluster.close()
     note = f" ({skipped} skipped)" if skipped else ""
     if failed:

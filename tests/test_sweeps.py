@@ -399,6 +399,20 @@ def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
         assert (ds["status"] == "ok").all()
 
 
+def test_interrupted_sweep_suggests_a_resume_with_the_same_overrides(tmp_path, monkeypatch):
+    """The printed command must rebuild the same cases: --set values change every case's hash."""
+    def interrupted(*args, **kwargs):
+        raise sweeps.SweepInterrupted(1, 4, tmp_path / "my out.nc.parts")
+
+    monkeypatch.setattr(sweeps, "run_sweep", interrupted)
+    cfg = write_sweep(tmp_path, SMALL)
+    result = CliRunner().invoke(sweep_command, [str(cfg), "-o", str(tmp_path / "my out.nc"),
+                                                "--set", "solver.duration=0.3"])
+    assert result.exit_code == 130
+    assert (f"continue with: clearsweep sweep {cfg} -o '{tmp_path / 'my out.nc'}' --resume "
+            "--set solver.duration=0.3") in result.stderr
+
+
 def test_a_sweep_without_axes_is_one_case(tmp_path):
     with run_sweep({"base": BASE}, tmp_path / "one.nc", progress=False) as ds:
         assert ds["status"].item() == "ok" and ds["slider_acceleration"].dims == ("time",)
