@@ -6,6 +6,7 @@ import datetime as _dt
 import os
 import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +93,37 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
     return ds
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+#: Permissions of a new file: what ``open(path, "w")`` would give (0666 less the umask).
+_FILE_MODE = 0o666 & ~_umask()
+
+
+@contextmanager
+def replaced_on_success(path: str | os.PathLike):
+    """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
+
+    On any failure (``KeyboardInterrupt`` included) the temporary file is removed
+    and ``path`` is left as it was. The file gets the permissions of an ordinary
+    new file (``tempfile.mkstemp`` creates it readable by its owner only).
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        os.chmod(tmp, _FILE_MODE)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    os.replace(tmp, path)
+
+
 def write_netcdf_atomic(ds: xr.Dataset, path: str | os.PathLike, *, encoding: dict | None = None,
                         engine: str = "netcdf4") -> Path:
     """Write ``ds`` to ``path`` via a temporary file in the same folder and an atomic rename.
@@ -99,16 +131,6 @@ def write_netcdf_atomic(ds: xr.Dataset, path: str | os.PathLike, *, encoding: di
     A failure at any point leaves no file at ``path`` (and no temporary file).
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with replaced_on_success(path) as tmp:
         ds.to_netcdf(tmp, engine=engine, encoding=encoding)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
     return path

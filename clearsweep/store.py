@@ -34,7 +34,6 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 import uuid
 from collections.abc import Callable, Mapping, Sequence
 from contextlib import contextmanager
@@ -45,7 +44,7 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from .dataset import write_netcdf_atomic
+from .dataset import replaced_on_success, write_netcdf_atomic
 
 __all__ = ["StoreError", "PartStore", "SweepSlot", "canonical_json", "case_hash", "parts_dir_for",
            "write_part", "write_sweep_netcdf", "open_results", "history_line", "PART_SUFFIX", "LOG_NAME"]
@@ -575,25 +574,6 @@ def _copy_chunks(path: Path, raw: Sequence[tuple[tuple[int, ...], Path, list[str
                     d.id.write_direct_chunk(where + (0,) * s.ndim, chunk, mask)
 
 
-@contextmanager
-def _replaced_on_success(path: Path):
-    """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
-
-    On any failure (``KeyboardInterrupt`` included) the temporary file is
-    removed and ``path`` is left as it was.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        yield tmp
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    os.replace(tmp, path)
-
-
 def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int],
                        sweep_coords: Mapping[str, tuple[str, np.ndarray, Mapping]],
                        slots: Sequence[SweepSlot], store: PartStore,
@@ -650,7 +630,7 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
               "skipped": sum(1 for s in slots if s.hash is None)}
     attrs = {**(attrs or {}), **{f"sweep_{k}": v for k, v in counts.items()}}
     raw = []
-    with _replaced_on_success(path) as tmp:
+    with replaced_on_success(path) as tmp:
         with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
             variables = _define(nc, sweep_dims, sweep_coords, tpl, attrs)
             for i, slot in enumerate(slots):

@@ -86,6 +86,19 @@ def test_part_write_is_atomic(parts, monkeypatch):
     assert sorted(p.name for p in parts.directory.iterdir()) == [".lock", S.LOG_NAME]
 
 
+def test_written_files_have_ordinary_permissions(tmp_path, parts):
+    """Parts and the sweep file are readable as any new file is (umask), not owner-only."""
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    parts.write("a", _part())
+    out, _ = _assemble(tmp_path, parts, [S.SweepSlot("a")], {"coating": 1},
+                       {"coating": ("coating", np.array(["none"], dtype=object), {})})
+    for path in (parts.path("a"), out):
+        assert path.stat().st_mode & 0o777 == 0o666 & ~mask
+
+
 def test_open_removes_temporaries_of_a_killed_run(tmp_path):
     d = tmp_path / "o.nc.parts"
     d.mkdir()
