@@ -3,7 +3,8 @@
 Every :class:`~clearsweep.config.ConfigError`, whichever subcommand raises it,
 is reported on stderr as ``clearsweep: error: <message>`` with exit code 2,
 and no output file is written. A run whose status is not ``ok`` writes its
-results, reports the status on stderr and exits with 1.
+results, reports the status on stderr and exits with 1; so does a run whose
+output file cannot be written (nothing is left at its path).
 """
 
 from __future__ import annotations
@@ -72,8 +73,20 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
-    ds = simulate(cfg)
-    path = write_netcdf_atomic(ds, Path(out) if out else Path(Path(config).stem + ".nc"))
+    try:
+        ds = simulate(cfg)
+    except ConfigError as exc:
+        if exc.source != "<config>":
+            raise
+        # A check on the resolved config (the step bound): name the file it came from.
+        raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
+                          exc.got) from None
+    path = Path(out) if out else Path(Path(config).stem + ".nc")
+    try:
+        write_netcdf_atomic(ds, path)
+    except OSError as exc:
+        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        ctx.exit(1)
     if not quiet:
         from .analysis import run_summary_text
 

@@ -136,8 +136,17 @@ def test_run_status_not_ok_keeps_file_exits_1(tmp_path, fake_run):
 def test_config_error_from_simulation_exit_2_no_file(tmp_path, fake_run):
     result, path, _ = run_case(tmp_path, "name: unstable\nsolver: {dt: 1.0e-3}\n")
     assert result.exit_code == 2
-    assert result.stderr.startswith("clearsweep: error: <config>: solver.dt: got 0.001; expected a step")
+    assert result.stderr.startswith(f"clearsweep: error: {path}: solver.dt: got 0.001; expected a step")
     assert list(tmp_path.iterdir()) == [path]
+
+
+def test_unwritable_output_exit_1_without_traceback(tmp_path, fake_run):
+    result, path, _ = run_case(tmp_path, "name: ok\n")
+    out = path / "r.nc"                         # its folder is a file
+    result = invoke(["run", path, "-o", out], tmp_path)
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr.startswith(f"clearsweep: error: cannot write {out}: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml", "r.nc"]
 
 
 def test_config_error_in_any_subcommand_exit_2(monkeypatch):
