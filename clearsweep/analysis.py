@@ -692,6 +692,17 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
 
 # --------------------------------------------------------------------------- command line
 
+def open_input(path: str) -> xr.Dataset:
+    """Open the results file of a ``report`` or ``plot`` command; a file xarray cannot read
+    is a usage error (exit 2), not a traceback."""
+    try:
+        return xr.open_dataset(path)
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or "no netCDF reader can open it"
+        raise click.BadParameter(f"{path!r} is not a results file ({reason})",
+                                 param_hint="'PATH'") from None
+
+
 @click.command("report")
 @click.argument("path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(REPORT_FORMATS), default="text", show_default=True,
@@ -711,7 +722,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     """
     if reference and metric:
         raise click.UsageError("--reference and --metric print different tables; give one of them")
-    with xr.open_dataset(path) as ds:
+    with open_input(path) as ds:
         try:
             if metric:
                 text = format_metric_table(ds, metric, fmt)

@@ -42,7 +42,7 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from .analysis import (CASE_DIMS, SelectionError, choice_message, iter_cases, iter_points,
-                       label_text, metric_table, select_cases, sweep_dims, value_text)
+                       label_text, metric_table, open_input, select_cases, sweep_dims, value_text)
 
 KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep")
 X_AXES = ("angle", "time")
@@ -492,7 +492,7 @@ def plot_command(path: str, kind: str, output: str, select_items: tuple[str, ...
     if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
         raise click.BadParameter(f"{output!r}: the suffix must be one of "
                                  f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
-    with xr.open_dataset(path) as ds:
+    with open_input(path) as ds:
         try:
             plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi)
         except (SelectionError, PlotError) as exc:

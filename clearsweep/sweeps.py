@@ -1096,7 +1096,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     """Run the parameter sweep described by CONFIG (YAML) and write one netCDF file.
 
     Exit status: 0 all cases ok (or skipped), 1 some cases failed (their
-    status and message are in the file), 2 invalid config or options,
+    status and message are in the file) or the output cannot be written,
+    2 invalid config or options,
     130 interrupted (finished cases kept; rerun with --resume).
     """
     if scheduler and dask_local:
@@ -1132,6 +1133,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         _fail("interrupted before any case ran", 130)
     except SweepFailed as exc:
         _fail(f"error: {exc}", 1)
+    except OSError as exc:
+        _fail(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}", 1)
     finally:
         if local_client is not None:
             local_client.close()

@@ -342,6 +342,14 @@ def test_report_cli_bad_input_exit_2(sweep_file, args, names):
         assert name in result.output
 
 
+def test_report_cli_file_that_is_not_netcdf_exit_2(tmp_path):
+    path = tmp_path / "sweep.yaml"
+    path.write_text("name: s\n")
+    result = CliRunner().invoke(report_command, [str(path)])
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit)
+    assert "is not a results file" in result.output
+
+
 def test_report_cli_summary_only_file(tmp_path, sweep_ds):
     path = write_netcdf_atomic(case_summary(sweep_ds), tmp_path / "summary.nc")
     full = CliRunner().invoke(report_command, [str(path), "--reference", "B_coating=none"])

@@ -151,6 +151,15 @@ def test_cli_bad_selection_exit_2(tmp_path, sweep_file, args, names):
     assert not out.exists()
 
 
+def test_cli_file_that_is_not_netcdf_exit_2(tmp_path):
+    path, out = tmp_path / "empty.nc", tmp_path / "x.png"
+    path.write_bytes(b"")
+    result = CliRunner().invoke(plot_command, [str(path), "--kind", "slider", "-o", str(out)])
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit)
+    assert "is not a results file" in result.output
+    assert not out.exists()
+
+
 def test_cli_bad_suffix_exit_2(tmp_path, sweep_file):
     result = CliRunner().invoke(plot_command, [sweep_file, "--kind", "slider", "-o",
                                                str(tmp_path / "x.gif")])

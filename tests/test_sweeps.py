@@ -285,6 +285,13 @@ def test_cli_usage_errors(tmp_path):
     assert result.exit_code == 2 and "give one" in result.stderr
 
 
+def test_cli_unwritable_output_exits_1(tmp_path):
+    cfg = write_sweep(tmp_path, SMALL)
+    result = cli(cfg, "-o", cfg / "o.nc", "--no-progress")      # its folder is a file
+    assert result.exit_code == 1
+    assert result.stderr.startswith(f"clearsweep: error: cannot write {cfg}/o.nc.parts: ")
+
+
 def test_registered_as_clearsweep_sweep(tmp_path):
     from clearsweep.cli import main
 
