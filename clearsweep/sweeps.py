@@ -144,8 +144,8 @@ class SweepFailed(RuntimeError):
 # ---------------------------------------------------------------------------- naming
 
 def _reserved_names() -> set[str]:
-    summary = getattr(variables, "SUMMARY_VARIABLES", {})
-    return {*variables.CASE_VARIABLES, *variables.COORDINATES, *summary, "status", "message"}
+    return {*variables.CASE_VARIABLES, *variables.COORDINATES, *variables.SUMMARY_VARIABLES,
+            "status", "message"}
 
 
 def dimension_name(key: str) -> str:
