@@ -184,9 +184,10 @@ def pack(cfg: dict, materials: dict) -> Packed:
         jp[j, L.J_MU] = surface.friction_coefficient
         k = joint["wear_coefficient"]
         jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
-    n_steps = int(round(solver["duration"] / solver["dt"]))
+    # whole output samples, rounded up: the run covers at least `duration`
     save_every = int(solver["save_every"])
-    n_steps = max(save_every, (n_steps // save_every) * save_every)
+    n_raw = int(math.ceil(solver["duration"] / solver["dt"] - 1e-9))
+    n_steps = max(1, -(-n_raw // save_every)) * save_every
     y0 = initial_state(preset, cfg["mechanism"]["theta0"], omega)
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
                   map_shape=(int(wear["map"][0]), int(wear["map"][1])))

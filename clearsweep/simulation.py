@@ -73,7 +73,7 @@ def run_kernel(packed: Packed) -> dict[str, Any]:
     out_y = np.full((n_save, L.N_Y), np.nan)
     out_d = np.full((n_save, L.N_D), np.nan)
     out_wmax = np.zeros((n_save, 2))
-    info = np.zeros(4, dtype=np.int64)
+    info = np.zeros(5, dtype=np.int64)
     t0 = time.perf_counter()
     res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
                     wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info)
@@ -84,6 +84,7 @@ def run_kernel(packed: Packed) -> dict[str, Any]:
     out_t = np.arange(n_save) * h * packed.save_every
     return dict(t=out_t, y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
                 status=L.STATUS_NAMES[int(info[0])], n_saved=n_ok, deepest=int(info[2]),
+                t_end=float(info[4]) * h,
                 rk4_steps=int(info[3]), residual_max=float(res[0]), ke_peak=float(res[1]),
                 wall_time=wall)
 
@@ -127,7 +128,11 @@ def simulate(config, overrides=()) -> "xr.Dataset":  # noqa: F821
         "friction_coefficient_B": float(packed.jp[1, L.J_MU]),
         "wear_coefficient_A_m2_per_N": float(packed.jp[0, L.J_K]),
         "wear_coefficient_B_m2_per_N": float(packed.jp[1, L.J_K]),
-        "status_time_s": float(raw["t"][raw["n_saved"] - 1]) if raw["n_saved"] else 0.0,
+        # where the run ended (the stop, for a failed case: rows after the last saved
+        # one are NaN, while wear_map, wear_projection and wear_volume hold the wear up
+        # to this time)
+        "status_time_s": raw["t_end"],
+        "simulated_duration_s": float(packed.n_steps * packed.p[L.P_DT]),
     }
     return build_dataset(arrays, raw["t"], config_text=dump_config(cfg), attrs=attrs)
 

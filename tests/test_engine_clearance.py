@@ -190,3 +190,19 @@ def test_map_bin_of_known_directions():
     assert ip in (17, 18) and ia in (17, 18)
     total = sum(bin_area(i, 36, 72, 1.0) for i in range(36)) * 72
     assert total == pytest.approx(4 * math.pi, rel=1e-12)
+
+
+def test_stop_time_is_the_failing_step_not_the_last_saved_row():
+    ds = simulate(dict(ONE, contact={"max_penetration_fraction": 1e-3}, solver={"duration": 0.3}))
+    assert str(ds.status.values) == "penetration_exceeded"
+    finite = ds.time.values[np.isfinite(ds.slider_position.values)]
+    stop = ds.attrs["status_time_s"]
+    assert finite[-1] < stop <= finite[-1] + 10 * 1e-5 + 1e-12
+    assert np.isnan(ds.slider_position.values[-1])
+
+
+@pytest.mark.parametrize("duration, simulated", [(2e-5, 1e-4), (1.5e-4, 2e-4), (1e-3, 1e-3)])
+def test_duration_rounds_up_to_whole_output_samples(duration, simulated):
+    ds = simulate({"solver": {"duration": duration}})
+    assert ds.attrs["simulated_duration_s"] == pytest.approx(simulated, rel=1e-12)
+    assert float(ds.time[-1]) == pytest.approx(simulated, rel=1e-12)

@@ -75,7 +75,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     proj : float64[2, 3, 360]          paper projections, updated in place [m].
     wvol : float64[2]                  worn volume, updated in place [m^3].
     out_t, out_y, out_d, out_wmax : output rows (n_save = n_steps // save_every + 1).
-    info : int64[4] -> (status, saved rows, deepest level, RK4 sub-steps taken).
+    info : int64[5] -> (status, saved rows, deepest level, RK4 sub-steps taken,
+        output-grid steps completed, the stopping step included).
 
     Returns
     -------
@@ -130,8 +131,10 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     deepest = 0
     total = 0
 
+    steps_done = 0
     for step in range(n_steps):
         t = t0 + step * h
+        steps_done = step + 1
         level = level_for(dg[D_RATE], h, stab)
         ysave[:] = y
         k1save[:] = k1
@@ -264,6 +267,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     info[1] = n_saved
     info[2] = deepest
     info[3] = total
+    info[4] = steps_done
     out = np.empty(2)
     out[0] = res_max
     out[1] = ke_peak
