@@ -683,8 +683,13 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
                      ".6g" if values.dtype.kind == "f" else "")
     inner = tuple(d for d in values.dims if d in CASE_DIMS)
     table = values.to_dataset(name=metric)
+    if "status" in ds and metric != "status":
+        table["status"] = ds["status"]
+    # like the wear tables: points a sweep's skip rules left out are not listed
     rows = [{**label, **row}
-            for label, case in iter_cases(table) for row in _rows(case, inner, [metric])]
+            for label, case in iter_cases(table)
+            if "status" not in case or value_text(case["status"].values[()]) != "skipped"
+            for row in _rows(case, inner, [metric])]
     keys = tuple(k for k in rows[0] if k != metric)
     return _render(f"{metric} ({column.heading})", [_Group("", {}, rows)], keys, (column,),
                    _units(table, (column,)), fmt)

@@ -381,7 +381,8 @@ def test_reference_on_a_zip_group_and_skipped_points(tmp_path):
     real sweep with a skip rule; skipped points are not reported."""
     import yaml
 
-    from clearsweep.analysis import format_reduction_table, format_wear_table, reduction_table
+    from clearsweep.analysis import (format_metric_table, format_reduction_table,
+                                     format_wear_table, reduction_table)
     from clearsweep.sweeps import run_sweep
 
     doc = {"base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
@@ -403,3 +404,6 @@ def test_reference_on_a_zip_group_and_skipped_points(tmp_path):
                      format_reduction_table(ds, {"coating_joints": "none"}, "markdown")):
             assert "skipped" not in text
             assert text.count("coating_joints=AB") == 1
+        rows = [r for r in format_metric_table(ds, "slider_acceleration_peak", "csv").splitlines()[1:]
+                if r.strip()]
+        assert len(rows) == 5  # 3 x 2 points, one skipped
