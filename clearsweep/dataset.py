@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .variables import AXES, CASE_VARIABLES, COORDINATES, JOINTS, attrs_for
+from .variables import AXES, CASE_VARIABLES, JOINTS, attrs_for
 
 
 def versions() -> dict[str, str]:

@@ -36,7 +36,6 @@ def main() -> None:
         config = ROOT / "configs" / f"{name}.yaml"
         none_map, none_proj = max_depth(config, "none")
         ptfe_map, ptfe_proj = max_depth(config, "PTFE", K_STEEL)
-        lo, hi = 0.0, K_STEEL
         k = K_STEEL * none_map / ptfe_map
         lo, hi = 0.9 * k, 1.1 * k
         below = max_depth(config, "PTFE", lo)[0] < none_map

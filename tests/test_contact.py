@@ -4,7 +4,6 @@ import ast
 import math
 import pathlib
 
-import numpy as np
 import pytest
 
 from clearsweep.core.contact import (contact_area, damping_factor, elastic_energy, elastic_force,

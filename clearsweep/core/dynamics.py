@@ -196,7 +196,6 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
         g[5] = -1.0 if (j == 1 and k == 0) else 0.0
     wg = vz[6]
     res = vz[5]  # res[0..5] <- xx, xy, xz, yy, yz, zz
-    idx = 0
     for b in range(3):
         constrained_apply(vz[b], C, L, nc, minv, mr_inv, wg, vz[3], vz[4])
         for a in range(b + 1):
@@ -384,11 +383,11 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     # ---- ideal spherical joints: rows of C (free coordinates) and right-hand sides ----
     nc = 0
     rhs = vz[1]
-    a2A = add(add(rdd2, mv(R2, cross(wd2, uA2))), mv(R2, cross(w2, cross(w2, uA2))))
-    JrA = point_jacobian_rot(R3, uA3, G3)
-    JrB = point_jacobian_rot(R3, uB3, G3)
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
+        # crank pin acceleration (fully known: the crank is driven)
+        a2A = add(rdd2, mv(R2, add(cross(wd2, uA2), cross(w2, cross(w2, uA2)))))
+        JrA = point_jacobian_rot(R3, uA3, G3)
         p3A, v3A = point_state(r3, v3, R3, w3, uA3)
         p2A, v2A = point_state(r2, v2, R2, w2, uA2)
         cpos = sub(p3A, p2A)
@@ -405,6 +404,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             cons = max(cons, abs(cpos[i]))
         nc += 3
     if jp[1, J_CLEARANCE] == 0.0:
+        JrB = point_jacobian_rot(R3, uB3, G3)
         p3B, v3B = point_state(r3, v3, R3, w3, uB3)
         cpos = sub(r4, p3B)
         cvel = sub(v4, v3B)
