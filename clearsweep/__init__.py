@@ -1,6 +1,6 @@
 """clearsweep: dynamics and wear of the RSSP mechanism with clearance and coated spherical joints."""
 
-__version__ = "0.1.0"
+from .version import __version__
 
 __all__ = ["__version__", "simulate", "sweep", "open_results", "load_config"]
 
@@ -11,14 +11,15 @@ def __getattr__(name):
         from .simulation import simulate
         return simulate
     if name == "sweep":
-        from .sweeps import sweep
-        return sweep
+        from .sweeping.run import run_sweep
+        return run_sweep
     if name == "open_results":
-        from .sweeps import open_results
+        from .dataset import open_results
         return open_results
     if name == "load_config":
         from .config import load_config
         return load_config
-    # Module names differ from the function names so that importing a submodule
-    # never shadows the public function on the package.
+    # Module names differ from the function names (simulation / simulate, the package
+    # sweeping / sweep) so that importing a submodule never shadows the public function
+    # on the package: `import clearsweep.sweep` would bind the module over the function.
     raise AttributeError(f"module 'clearsweep' has no attribute {name!r}")

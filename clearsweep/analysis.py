@@ -7,7 +7,7 @@ and reduces over the case dimensions (``time``, ``angle``, ``polar``,
 ``azimuth``), so any sweep dimensions simply stay in the results. Units and
 long names come from ``variables.SUMMARY_VARIABLES``.
 
-Conventions (DESIGN.md section 5, paper Tables 4-6):
+Conventions (docs/physics.md section 5, paper Tables 4-6):
 
 - Projection angles are the bin centres of ``wear_projection`` on
   (-180, 180] degrees. The minimum and maximum wear angles are the smallest
@@ -27,45 +27,34 @@ Conventions (DESIGN.md section 5, paper Tables 4-6):
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 import itertools
 import json
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from typing import Any
 
-import click
 import numpy as np
 import xarray as xr
 
-from .variables import attrs_for
+from .choices import REPORT_FORMATS
+from .schema import close_matches
+from .summary import (  # noqa: F401
+    PASS_THROUGH_VARIABLES,
+    STATISTIC_VARIABLES,
+    SUMMARY_ORDER,
+    WEAR_TABLE_VARIABLES,
+    WEAR_THRESHOLD_FRACTION,
+    case_summary,
+    wear_table,
+    with_attrs,
+    worn_arc_deg,
+)
 
 #: Dimensions of one case; every other dimension of a dataset is a sweep dimension.
 CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle")
 
-#: A projection bin counts as worn above this fraction of its axis's maximum (DESIGN.md 5).
-WEAR_THRESHOLD_FRACTION = 1.0e-3
-
-#: Start-up transient left out of the ``*_settled`` acceleration metrics [s].
-SETTLE_TIME_S = 0.05
-
-#: Output formats of the reports.
-REPORT_FORMATS = ("text", "markdown", "csv", "json")
-
-#: Variables of the wear table, in the column order of the paper's Tables 4-5
-#: (the angle of the maximum, which the paper does not print, last).
-WEAR_TABLE_VARIABLES = ("wear_depth_axis_max", "wear_angle_max", "wear_angle_min", "wear_range",
-                        "wear_angle_of_max", "wear_arc")
-
-#: Scalars copied from the case dataset into its summary.
-PASS_THROUGH_VARIABLES = ("energy_residual_relative", "substeps_used", "rk4_steps", "wall_time")
-
-#: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", "slider_acceleration_peak", "slider_acceleration_rms",
-                 "slider_acceleration_peak_settled", "slider_acceleration_rms_settled",
-                 "normal_force_peak", "wear_depth_max_final", *WEAR_TABLE_VARIABLES,
-                 *PASS_THROUGH_VARIABLES)
 
 _MISSING_TEXT = "n/a"
 
@@ -120,7 +109,7 @@ def label_text(label: Mapping[str, object]) -> str:
     return ", ".join(f"{k}={value_text(v)}" for k, v in label.items())
 
 
-def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, object]]:
+def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, Any]]:
     """Yield ``({dim: value}, obj at that point)`` over ``dims``.
 
     The value is the dimension's coordinate value, or the position along a
@@ -131,7 +120,7 @@ def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterat
         yield {d: point[d].values[()] if d in obj.coords else i for d, i in zip(dims, index)}, point
 
 
-def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, object], object]]:
+def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, object], Any]]:
     """Yield ``(label, case)`` for every combination of the sweep dimensions.
 
     ``label`` maps each sweep dimension to the case's coordinate value (its
@@ -149,7 +138,7 @@ def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, objec
 
 def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
     """``unknown KIND 'x' (did you mean ...?); choose from: ...``"""
-    close = difflib.get_close_matches(wanted, choices, n=3)
+    close = close_matches(wanted, choices, n=3)
     hint = f" (did you mean {', '.join(close)}?)" if close else ""
     offer = ", ".join(choices) if choices else "none"
     return f"unknown {kind} {wanted!r}{hint}; choose from: {offer}"
@@ -233,139 +222,6 @@ def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataA
 
 # --------------------------------------------------------------------------- tables and summaries
 
-def _with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
-    da = da.rename(name)
-    da.attrs = {**attrs_for(name), **extra}
-    return da
-
-
-def worn_arc_deg(worn: np.ndarray) -> float:
-    """Shortest arc [degree] between bin centres that holds every worn bin of a full circle.
-
-    Parameters
-    ----------
-    worn
-        One flag per equal angle bin spanning 360 degrees.
-
-    Returns
-    -------
-    float
-        360 minus the widest circular run of unworn bins and one bin width:
-        ``hi - lo`` for worn bins on [lo, hi] that do not wrap, 360 when
-        every bin is worn, NaN when none is.
-    """
-    n = worn.size
-    index = np.flatnonzero(worn)
-    if index.size == 0:
-        return math.nan
-    width = 360.0 / n
-    if index.size == n:
-        return 360.0
-    gaps = np.append(np.diff(index) - 1, index[0] + n - index[-1] - 1)
-    return (n - 1 - int(gaps.max())) * width
-
-
-def wear_table(ds: xr.Dataset) -> xr.Dataset:
-    """Paper Tables 4-5: maximum projected wear depth and the angles with wear.
-
-    Parameters
-    ----------
-    ds
-        One-case or sweep dataset holding ``wear_projection(joint, axis,
-        angle)`` [m], or already holding the wear-table variables (a summary
-        sweep).
-
-    Returns
-    -------
-    xr.Dataset
-        Over (sweep dims..., joint, axis): ``wear_depth_axis_max`` [m] (max
-        over angle), ``wear_angle_of_max`` [degree] (centre of the first bin
-        holding the maximum), ``wear_angle_min`` and ``wear_angle_max``
-        [degree] (smallest and largest bin centre with depth above
-        ``WEAR_THRESHOLD_FRACTION`` of the maximum), ``wear_range`` [degree]
-        (max - min); ``wear_arc`` [degree] (shortest arc between bin centres
-        that holds every worn bin, see ``worn_arc_deg``). Without any wear on
-        a (joint, axis): depth 0, angles, range and arc NaN. Cases whose
-        projection is all NaN give NaN depth.
-    """
-    if "wear_projection" not in ds:
-        missing = [v for v in WEAR_TABLE_VARIABLES if v not in ds]
-        if missing:
-            raise ValueError("a wear table needs wear_projection (a full dataset) or the "
-                             f"summary variables {', '.join(WEAR_TABLE_VARIABLES)}; "
-                             f"missing: {', '.join(missing)}")
-        return xr.Dataset({name: ds[name] for name in WEAR_TABLE_VARIABLES})
-    projection = ds["wear_projection"]
-    angle = projection["angle"]
-    depth = projection.max("angle")
-    first_max = projection.fillna(-np.inf).argmax("angle")
-    angle_of_max = angle.isel(angle=first_max).drop_vars("angle").where(depth > 0)
-    worn = projection > WEAR_THRESHOLD_FRACTION * depth
-    worn_angle = angle.where(worn)
-    angle_min = worn_angle.min("angle")
-    angle_max = worn_angle.max("angle")
-    arc = xr.apply_ufunc(worn_arc_deg, worn, input_core_dims=[["angle"]], vectorize=True,
-                         output_dtypes=[float])
-    threshold = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
-    return xr.Dataset({
-        "wear_depth_axis_max": _with_attrs(depth, "wear_depth_axis_max"),
-        "wear_angle_max": _with_attrs(angle_max, "wear_angle_max", **threshold),
-        "wear_angle_min": _with_attrs(angle_min, "wear_angle_min", **threshold),
-        "wear_range": _with_attrs(angle_max - angle_min, "wear_range", **threshold),
-        "wear_angle_of_max": _with_attrs(angle_of_max, "wear_angle_of_max"),
-        "wear_arc": _with_attrs(arc, "wear_arc", **threshold),
-    })
-
-
-def case_summary(ds: xr.Dataset) -> xr.Dataset:
-    """Per-case scalars (and joint / axis arrays) of a one-case or sweep dataset.
-
-    Parameters
-    ----------
-    ds
-        Full dataset, or one that already holds some summaries (a summary
-        sweep): a summary whose source variable is absent is copied when
-        present.
-
-    Returns
-    -------
-    xr.Dataset
-        ``status``; ``slider_acceleration_peak`` (max |a|) and
-        ``slider_acceleration_rms`` [m s-2], the same two over time >=
-        ``SETTLE_TIME_S`` (``*_settled``, attribute ``settle_time_s``; NaN for
-        runs no longer than that); ``normal_force_peak(joint)`` [N];
-        ``wear_depth_max_final(joint)`` [m] (max of ``wear_map``); the
-        ``wear_table`` variables; ``energy_residual_relative``,
-        ``substeps_used``, ``rk4_steps``, ``wall_time`` [s]. Dataset
-        attributes (provenance) are kept.
-    """
-    out: dict[str, xr.DataArray] = {}
-    if "slider_acceleration" in ds:
-        acc = ds["slider_acceleration"]
-        settled = acc.where(acc["time"] >= SETTLE_TIME_S)
-        settle = {"settle_time_s": SETTLE_TIME_S}
-        out["slider_acceleration_peak"] = _with_attrs(abs(acc).max("time"), "slider_acceleration_peak")
-        out["slider_acceleration_rms"] = _with_attrs(np.sqrt((acc ** 2).mean("time")),
-                                                     "slider_acceleration_rms")
-        out["slider_acceleration_peak_settled"] = _with_attrs(
-            abs(settled).max("time"), "slider_acceleration_peak_settled", **settle)
-        out["slider_acceleration_rms_settled"] = _with_attrs(
-            np.sqrt((settled ** 2).mean("time")), "slider_acceleration_rms_settled", **settle)
-    if "normal_force" in ds:
-        out["normal_force_peak"] = _with_attrs(ds["normal_force"].max("time"), "normal_force_peak")
-    if "wear_map" in ds:
-        out["wear_depth_max_final"] = _with_attrs(ds["wear_map"].max(("polar", "azimuth")),
-                                                  "wear_depth_max_final")
-    if "wear_projection" in ds:
-        out.update(wear_table(ds).data_vars)
-    for name in SUMMARY_ORDER:
-        if name not in out and name in ds:
-            out[name] = ds[name]
-    summary = xr.Dataset({name: out[name] for name in SUMMARY_ORDER if name in out})
-    summary.attrs = dict(ds.attrs)
-    return summary
-
-
 def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[str]) -> xr.Dataset:
     """Paper Table 6: change of maximum wear depth and wear range against a reference case.
 
@@ -417,11 +273,11 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
     for dim, value in chosen.items():
         is_reference = is_reference & (table[dim] == value)
     return xr.Dataset({
-        "wear_depth_reduction": _with_attrs(depth, "wear_depth_reduction"),
-        "wear_depth_reduction_percent": _with_attrs(depth_percent, "wear_depth_reduction_percent"),
-        "wear_range_reduction": _with_attrs(width, "wear_range_reduction"),
-        "wear_range_reduction_percent": _with_attrs(width_percent, "wear_range_reduction_percent"),
-        "is_reference": _with_attrs(is_reference, "is_reference"),
+        "wear_depth_reduction": with_attrs(depth, "wear_depth_reduction"),
+        "wear_depth_reduction_percent": with_attrs(depth_percent, "wear_depth_reduction_percent"),
+        "wear_range_reduction": with_attrs(width, "wear_range_reduction"),
+        "wear_range_reduction_percent": with_attrs(width_percent, "wear_range_reduction_percent"),
+        "is_reference": with_attrs(is_reference, "is_reference"),
     }, attrs={"reference": label_text(chosen)})
 
 
@@ -454,14 +310,23 @@ def _number(case: xr.Dataset, name: str, spec: str) -> str:
     return f"{text} {units}" if units and units != "1" else text
 
 
+def _pair(case: xr.Dataset, name: str, spec: str = ".4g") -> str:
+    """``"settled (whole run)"`` of a statistic and its ``_settled`` twin."""
+    return f"{_number(case, name + '_settled', spec)} ({_number(case, name, spec)})"
+
+
 def run_summary_text(ds: xr.Dataset) -> str:
     """A few lines on a finished run (one block per case for a sweep).
 
     Example::
 
         status: ok
-        slider acceleration: peak 50 m s-2, RMS 4.625 m s-2; after 0.05 s: peak 3 m s-2, RMS 3 m s-2
-        peak normal force: A 40 N, B 120 N
+        every-step statistics, settled (t >= 0.05 s), whole run in brackets:
+          slider acceleration: peak 3 m s-2 (50 m s-2), RMS 3 m s-2 (4.625 m s-2)
+          crank torque: peak 2 N m (2.5 N m)
+          peak normal force: A 40 N (45 N), B 120 N (130 N)
+          impacts: A 3 (4), B 0 (0)
+          contact fraction: A 0.9 (0.91), B 1 (1)
         sub-steps used: 4
         energy residual (relative): 2.50e-06
         wall time: 2 s (40,000 RK4 steps/s, 80,000 steps)
@@ -472,16 +337,22 @@ def run_summary_text(ds: xr.Dataset) -> str:
         lines = [f"case {label_text(label)}"] if label else []
         status = value_text(case["status"].values[()]) if "status" in case else _MISSING_TEXT
         lines.append(f"status: {status}")
+        settle = ds.attrs.get("settle_time_s")
+        window = f"t >= {float(settle):g} s" if settle is not None else "settled"
+        lines.append(f"every-step statistics, settled ({window}), whole run in brackets:")
         lines.append(
-            f"slider acceleration: peak {_number(case, 'slider_acceleration_peak', '.4g')}, "
-            f"RMS {_number(case, 'slider_acceleration_rms', '.4g')}; after {SETTLE_TIME_S:g} s: "
-            f"peak {_number(case, 'slider_acceleration_peak_settled', '.4g')}, "
-            f"RMS {_number(case, 'slider_acceleration_rms_settled', '.4g')}")
+            f"  slider acceleration: peak {_pair(case, 'slider_acceleration_peak')}, "
+            f"RMS {_pair(case, 'slider_acceleration_rms')}")
+        lines.append(f"  crank torque: peak {_pair(case, 'crank_torque_peak')}")
         if "normal_force_peak" in case:
-            forces = ", ".join(
-                f"{value_text(j)} {_number(case.sel(joint=j), 'normal_force_peak', '.4g')}"
-                for j in case["joint"].values)
-            lines.append(f"peak normal force: {forces}")
+            for heading, name, spec in (("peak normal force", "normal_force_peak", ".4g"),
+                                      ("impacts", "impact_count", ".0f"),
+                                      ("contact fraction", "contact_fraction", ".3f")):
+                if name not in case:
+                    continue
+                values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
+                                   for j in case["joint"].values)
+                lines.append(f"  {heading}: {values}")
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
         wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
@@ -661,6 +532,61 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
     return _render(title, groups, ("joint", "axis"), _WEAR_COLUMNS, _units(table, _WEAR_COLUMNS), fmt)
 
 
+_MOTION_COLUMNS = (
+    _Column("slider_acceleration_peak_settled", "Peak slider acc., settled", ".4g"),
+    _Column("slider_acceleration_peak", "whole run", ".4g"),
+    _Column("slider_acceleration_rms_settled", "RMS slider acc., settled", ".4g"),
+    _Column("slider_acceleration_rms", "whole run", ".4g"),
+    _Column("crank_torque_peak_settled", "Peak crank torque, settled", ".4g"),
+    _Column("crank_torque_peak", "whole run", ".4g"),
+)
+_CONTACT_COLUMNS = (
+    _Column("normal_force_peak_settled", "Peak normal force, settled", ".4g"),
+    _Column("normal_force_peak", "whole run", ".4g"),
+    _Column("impact_count_settled", "Impacts, settled", ""),
+    _Column("impact_count", "whole run", ""),
+    _Column("impact_velocity_max_settled", "Largest impact velocity, settled", ".3g"),
+    _Column("contact_fraction_settled", "Contact fraction, settled", ".3f"),
+)
+
+
+def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
+    """The kernel's every-step statistics: settled window first, whole run beside it.
+
+    Two tables: slider and crank (one row per case), contacts (one row per case and joint).
+    A file without the statistics gives an empty string.
+    """
+    summary = case_summary(ds)
+    settle = ds.attrs.get("settle_time_s")
+    window = f"settled = t >= {float(settle):g} s" if settle is not None else "settled window"
+    blocks = []
+    specs: tuple[tuple[str, tuple[_Column, ...], tuple[str, ...]], ...] = (
+        ("Slider and crank", _MOTION_COLUMNS, ()), ("Contacts", _CONTACT_COLUMNS, ("joint",)))
+    for title, wanted, dims in specs:
+        columns = tuple(c for c in wanted if c.name in summary)
+        if not columns:
+            continue
+        table = _with_status(ds, summary[[c.name for c in columns]])
+        heading = f"{title} (every-step statistics; {window})"
+        keys: tuple[str, ...]
+        if dims:
+            groups = _case_groups(table, columns, dims)
+            keys = dims
+        else:
+            # one row per case, keyed by its sweep coordinates
+            rows = [{**label, "status": value_text(case["status"].values[()]),
+                     **{c.name: case[c.name].values[()] for c in columns}}
+                    for label, case in iter_cases(table)
+                    if value_text(case["status"].values[()]) != "skipped"]
+            groups = [_Group("", {}, rows)]
+            if all(r["status"] == "ok" for r in rows):
+                for r in rows:
+                    del r["status"]
+            keys = tuple(k for k in (rows[0] if rows else {}) if k not in {c.name for c in columns})
+        blocks.append(_render(heading, groups, keys, columns, _units(table, columns), fmt))
+    return "\n\n".join(blocks)
+
+
 def format_reduction_table(ds: xr.Dataset, reference, fmt: str = "text") -> str:
     """Paper Table 6 (``reduction_table``) for every case except the reference ones."""
     table = _with_status(ds, reduction_table(ds, reference))
@@ -696,47 +622,3 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
 
 
 # --------------------------------------------------------------------------- command line
-
-def open_input(path: str) -> xr.Dataset:
-    """Open the results file of a ``report`` or ``plot`` command; a file xarray cannot read
-    is a usage error (exit 2), not a traceback."""
-    try:
-        return xr.open_dataset(path)
-    except (OSError, ValueError) as exc:
-        reason = getattr(exc, "strerror", None) or "no netCDF reader can open it"
-        raise click.BadParameter(f"{path!r} is not a results file ({reason})",
-                                 param_hint="'PATH'") from None
-
-
-@click.command("report")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False))
-@click.option("--format", "fmt", type=click.Choice(REPORT_FORMATS), default="text", show_default=True,
-              help="Output format.")
-@click.option("--reference", multiple=True, metavar="DIM=VALUE",
-              help="Reference case of a sweep (repeatable): print the change of every other case "
-                   "against it (paper Table 6).")
-@click.option("--metric", default=None, metavar="NAME",
-              help="Print this summary metric over the sweep dimensions instead "
-                   "(e.g. slider_acceleration_peak).")
-def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None) -> None:
-    """Print the wear table (paper Tables 4-5) of a results file PATH.
-
-    With --reference, the reduction of the maximum wear depth and the change
-    of the wear range against that case (Table 6); with --metric, one summary
-    metric over the sweep dimensions.
-    """
-    if reference and metric:
-        raise click.UsageError("--reference and --metric print different tables; give one of them")
-    with open_input(path) as ds:
-        try:
-            if metric:
-                text = format_metric_table(ds, metric, fmt)
-            elif reference:
-                text = format_reduction_table(ds, reference, fmt)
-            else:
-                text = format_wear_table(ds, fmt)
-        except SelectionError as exc:
-            raise click.UsageError(str(exc)) from exc
-        except ValueError as exc:
-            raise click.ClickException(f"{path}: {exc}") from exc
-    click.echo(text)

@@ -1,44 +1,49 @@
-"""Command-line interface (``clearsweep``).
+"""Command-line interface (``clearsweep``): every click command is defined here.
+
+Each command imports the modules it runs when it runs, so ``clearsweep --help``
+or ``clearsweep validate`` does not load Numba, xarray or matplotlib; an import
+that fails (a broken matplotlib) is reported by the command that needs it, as
+an error, not hidden as an unknown command.
 
 Every :class:`~clearsweep.config.ConfigError`, whichever subcommand raises it,
 is reported on stderr as ``clearsweep: error: <message>`` with exit code 2,
 and no output file is written. A run whose status is not ``ok`` writes its
-results, reports the status on stderr and exits with 1; so does a run whose
-output file cannot be written (nothing is left at its path).
+results, reports the status on stderr and exits with 1; so does a run, a sweep
+or a plot whose output file cannot be written (a full disk, a read-only
+folder: one ``clearsweep: error: cannot write ...`` line, nothing left at its
+path).
 """
 
 from __future__ import annotations
 
-import importlib
+import os
+import shlex
+import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import click
 
-from . import __version__
-from .config import ConfigError, dump_config, load_config
+if TYPE_CHECKING:
+    import xarray as xr
 
-#: Subcommands defined in other modules, loaded when first asked for.
-_EXTERNAL = {
-    "sweep": ("clearsweep.sweeps", "sweep_command"),
-    "report": ("clearsweep.analysis", "report_command"),
-    "plot": ("clearsweep.plotting", "plot_command"),
-}
+from .budget import check_budget
+from .choices import (
+    DEFAULT_SWEEP_METRIC,
+    DPI_RANGE,
+    FIGURE_DPI,
+    KINDS,
+    MAX_CASES,
+    OUTPUT_SUFFIXES,
+    REPORT_FORMATS,
+    X_AXES,
+)
+from .config import ConfigError, dump_config, load_config
+from .version import __version__
 
 
 class _Group(click.Group):
-    """Group that loads the external subcommands lazily and reports ``ConfigError`` with exit 2."""
-
-    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
-        if name in _EXTERNAL and name not in self.commands:
-            module, attr = _EXTERNAL[name]
-            try:
-                self.add_command(getattr(importlib.import_module(module), attr), name)
-            except (ImportError, AttributeError):
-                return None
-        return super().get_command(ctx, name)
-
-    def list_commands(self, ctx: click.Context) -> list[str]:
-        return sorted({*self.commands, *(n for n in _EXTERNAL if self.get_command(ctx, n))})
+    """Group that reports ``ConfigError``, whichever command raises it, with exit 2."""
 
     def invoke(self, ctx: click.Context):
         try:
@@ -46,6 +51,27 @@ class _Group(click.Group):
         except ConfigError as exc:
             click.echo(f"clearsweep: error: {exc}", err=True)
             ctx.exit(2)
+
+
+_allow_large = click.option(
+    "--allow-large", is_flag=True,
+    help="Run a case beyond the bounds on its work and memory (4 GiB of arrays, 1e9 RK4 steps).")
+
+#: Cold compile of the kernel on this project's 2-core reference machine
+#: (benchmarks/bench_engine.py measures it).
+COMPILE_ESTIMATE_S = 40
+
+
+def announce_compile(quiet: bool = False) -> None:
+    """Compile the kernel now, saying so, if neither this process nor the cache has it."""
+    from .simulation import kernel_needs_compiling, prepare_kernel
+
+    if kernel_needs_compiling():
+        if not quiet:
+            click.echo(f"compiling the kernel (once, about {COMPILE_ESTIMATE_S} s) ...", err=True)
+        seconds = prepare_kernel()
+        if not quiet:
+            click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
 
 
 _overrides = click.option(
@@ -65,16 +91,20 @@ def main() -> None:
 @click.option("-o", "--out", type=click.Path(dir_okay=False),
               help="Output netCDF file [default: <config stem>.nc in the current folder].")
 @_overrides
+@_allow_large
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.pass_context
-def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...], quiet: bool) -> None:
+def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
+        allow_large: bool, quiet: bool) -> None:
     """Simulate one case described by CONFIG (YAML) and write its results."""
     cfg = load_config(config, overrides)
+    check_budget(cfg, allow_large=allow_large, source=config)
     from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
+    announce_compile(quiet)
     try:
-        ds = simulate(cfg)
+        ds = simulate(cfg, allow_large=allow_large)
     except ConfigError as exc:
         if exc.source != "<config>":
             raise
@@ -94,16 +124,21 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         click.echo(f"wrote {path}")
     status = str(ds["status"].values)
     if status != "ok":
-        click.echo(f"clearsweep: run stopped: {status} (results so far in {path})", err=True)
+        hint = ds.attrs.get("status_hint")
+        click.echo(f"clearsweep: run stopped: {status} (results so far in {path})"
+                   + (f"; {hint}" if hint else ""), err=True)
         ctx.exit(1)
 
 
 @main.command()
 @click.argument("config", type=click.Path(dir_okay=False))
 @_overrides
-def validate(config: str, overrides: tuple[str, ...]) -> None:
-    """Check CONFIG and print it resolved (every key, defaults filled) as YAML."""
-    click.echo(dump_config(load_config(config, overrides)), nl=False)
+@_allow_large
+def validate(config: str, overrides: tuple[str, ...], allow_large: bool) -> None:
+    """Check CONFIG, and the work and memory it implies, and print it resolved as YAML."""
+    cfg = load_config(config, overrides)
+    check_budget(cfg, allow_large=allow_large, source=config)
+    click.echo(dump_config(cfg), nl=False)
 
 
 @main.command()
@@ -114,6 +149,205 @@ def materials(materials_file: str | None) -> None:
     from .materials import format_materials, load_materials
 
     click.echo(format_materials(load_materials(materials_file)))
+
+
+def open_input(path: str) -> xr.Dataset:
+    """Open the results file of a ``report`` or ``plot`` command; a file xarray cannot read
+    is a usage error (exit 2), not a traceback."""
+    import xarray as xr
+
+    try:
+        return xr.open_dataset(path)
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or "no netCDF reader can open it"
+        raise click.BadParameter(f"{path!r} is not a results file ({reason})",
+                                 param_hint="'PATH'") from None
+
+
+@main.command("report")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--format", "fmt", type=click.Choice(REPORT_FORMATS), default="text", show_default=True,
+              help="Output format.")
+@click.option("--reference", multiple=True, metavar="DIM=VALUE",
+              help="Reference case of a sweep (repeatable): print the change of every other case "
+                   "against it (paper Table 6).")
+@click.option("--metric", default=None, metavar="NAME",
+              help="Print this summary metric over the sweep dimensions instead "
+                   "(e.g. slider_acceleration_peak).")
+def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None) -> None:
+    """Print the every-step statistics (settled first) and the wear table (paper Tables
+    4-5) of a results file PATH (csv and json: the wear table alone).
+
+    With --reference, the reduction of the maximum wear depth and the change
+    of the wear range against that case (Table 6); with --metric, one summary
+    metric over the sweep dimensions.
+    """
+    from .analysis import (
+        SelectionError,
+        format_metric_table,
+        format_reduction_table,
+        format_statistics_table,
+        format_wear_table,
+    )
+
+    if reference and metric:
+        raise click.UsageError("--reference and --metric print different tables; give one of them")
+    with open_input(path) as ds:
+        try:
+            if metric:
+                text = format_metric_table(ds, metric, fmt)
+            elif reference:
+                text = format_reduction_table(ds, reference, fmt)
+            else:
+                statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
+                text = "\n\n".join(t for t in (statistics, format_wear_table(ds, fmt)) if t)
+        except SelectionError as exc:
+            raise click.UsageError(str(exc)) from exc
+        except ValueError as exc:
+            raise click.ClickException(f"{path}: {exc}") from exc
+    click.echo(text)
+
+
+@main.command("plot")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+              help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
+@click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
+              help="Draw only the sweep cases with this coordinate value (repeatable).")
+@click.option("--x", "x_axis", type=click.Choice(X_AXES), default="angle", show_default=True,
+              help="Abscissa of time series: crank angle [degree] or time [s].")
+@click.option("--metric", default=None, metavar="NAME",
+              help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
+@click.option("--dpi", type=click.IntRange(*DPI_RANGE), default=FIGURE_DPI, show_default=True,
+              help=f"Resolution of raster output, {DPI_RANGE[0]} to {DPI_RANGE[1]}.")
+@click.pass_context
+def plot_command(ctx: click.Context, path: str, kind: str, output: str,
+                 select_items: tuple[str, ...], x_axis: str, metric: str | None, dpi: int) -> None:
+    """Draw a figure from the results file PATH."""
+    from .analysis import SelectionError
+    from .plotting import PlotError, plot
+
+    if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise click.BadParameter(f"{output!r}: the suffix must be one of "
+                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
+    with open_input(path) as ds:
+        try:
+            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi)
+        except (SelectionError, PlotError) as exc:
+            raise click.UsageError(str(exc)) from exc
+        except OSError as exc:      # as `run`: an output that cannot be written exits 1
+            click.echo(f"clearsweep: error: cannot write {output}: {exc.strerror or exc}", err=True)
+            ctx.exit(1)
+    click.echo(f"wrote {output}")
+
+
+def _fail(message: str, code: int):
+    click.echo(f"clearsweep: {message}", err=True)
+    sys.exit(code)
+
+
+@main.command("sweep")
+@click.argument("config", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", type=click.Path(dir_okay=False),
+              help="Output netCDF file [default: <config stem>.nc in the current folder]; "
+                   "finished cases are kept in OUT.parts/ until it is written.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes [default: all cores]; 1 runs the cases in this process.")
+@click.option("--resume", is_flag=True,
+              help="Continue an interrupted sweep: keep the cases in OUT.parts/, run the others.")
+@click.option("--overwrite", is_flag=True, help="Delete the parts of an earlier sweep in OUT.parts/.")
+@click.option("--discard-parts", is_flag=True,
+              help="Delete the parts in OUT.parts/ that belong to another sweep (another sweep "
+                   "file or other --set values); without it such parts make the sweep refuse.")
+@click.option("--scheduler", metavar="ADDRESS", help="Run on this Dask distributed scheduler.")
+@click.option("--dask-local", type=click.IntRange(min=1), metavar="N",
+              help="Start a local Dask cluster of N single-thread worker processes for this sweep.")
+@click.option("--set", "overrides", multiple=True, metavar="KEY=VALUE",
+              help="Override a value of the base config (VALUE in YAML); repeatable.")
+@click.option("--keep-parts", is_flag=True, help="Keep OUT.parts/ after writing OUT.")
+@click.option("--allow-large", is_flag=True,
+              help="Run cases beyond the bounds on one case's work and memory (4 GiB of arrays, "
+                   "1e9 RK4 steps).")
+@click.option("--no-progress", is_flag=True, help="Do not show the progress bar.")
+@click.option("-y", "--yes", is_flag=True,
+              help=f"Run a sweep of more than {MAX_CASES:,} cases (refused without it).")
+def sweep_command(config: str, out: str | None, workers: int | None, resume: bool, overwrite: bool,
+                  discard_parts: bool, scheduler: str | None, dask_local: int | None, overrides: tuple[str, ...],
+                  keep_parts: bool, allow_large: bool, no_progress: bool, yes: bool) -> None:
+    """Run the parameter sweep described by CONFIG (YAML) and write one netCDF file.
+
+    Exit status: 0 all cases ok (or skipped), 1 some cases failed (their
+    status and message are in the file) or the output cannot be written,
+    2 invalid config or options,
+    130 interrupted (finished cases kept; rerun with --resume).
+    """
+    from .sweeping import (
+        PartStore,
+        StoreError,
+        SweepFailed,
+        SweepInterrupted,
+        expand,
+        parts_dir_for,
+        run_sweep,
+    )
+
+    if scheduler and dask_local:
+        raise click.UsageError("--scheduler and --dask-local both choose the Dask cluster; give one")
+    if resume and overwrite:
+        raise click.UsageError("--resume keeps the finished cases and --overwrite deletes them; "
+                               "give one")
+    out = out or f"{Path(config).stem}.nc"
+    cluster = local_client = None
+    try:
+        plan = expand(config, overrides, allow_large=allow_large,
+                      max_cases=None if yes else MAX_CASES)
+        cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
+                                                          max(len(plan.runnable()), 1)))
+        click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
+        if not scheduler:
+            # compile once here so that the workers load the cached kernel
+            announce_compile()
+        client: Any = scheduler
+        if dask_local:
+            from distributed import Client, LocalCluster
+
+            cluster = LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
+                                   host="127.0.0.1", dashboard_address=None)
+            client = local_client = Client(cluster)
+        ds = run_sweep(plan, out, workers=workers, client=client, resume=resume,
+                       overrides=overrides, progress=not no_progress, overwrite=overwrite,
+                       keep_parts=keep_parts, discard_parts=discard_parts, allow_large=allow_large)
+        with ds:
+            n, failed = ds.attrs["sweep_cases"], ds.attrs["sweep_failed"]
+            skipped = ds.attrs["sweep_skipped"]
+    except (ConfigError, StoreError) as exc:
+        _fail(f"error: {exc}", 2)
+    except SweepInterrupted as exc:
+        # The same cases only: the overrides are part of every case's hash.
+        cmd = shlex.join(["clearsweep", "sweep", config, "-o", out, "--resume",
+                          *(a for o in overrides for a in ("--set", o))])
+        _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
+              f"{exc.parts_dir}; continue with: {cmd}", 130)
+    except KeyboardInterrupt:
+        _fail("interrupted before any case ran", 130)
+    except SweepFailed as exc:
+        _fail(f"error: {exc}", 1)
+    except OSError as exc:
+        parts = parts_dir_for(out)
+        kept = PartStore(parts).finished() if parts.is_dir() else set()
+        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
+                "with --resume" if kept else "")
+        _fail(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}{note}", 1)
+    finally:
+        if local_client is not None:
+            local_client.close()
+        if cluster is not None:
+            cluster.close()
+    note = f" ({skipped} skipped)" if skipped else ""
+    if failed:
+        _fail(f"{failed} of {n} cases failed{note}; see the status and message variables in {out}", 1)
+    click.echo(f"clearsweep: wrote {out}: {n} cases{note}", err=True)
 
 
 if __name__ == "__main__":

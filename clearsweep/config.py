@@ -8,200 +8,36 @@ raises :class:`ConfigError` with a message of the form::
 
     <file>: <dotted.key>: got <value>; expected <what is allowed>[; did you mean '<match>'?]
 
-YAML is read with PyYAML's safe loader, extended so that a float written
-without a dot (``1e-5``) is a number, as in YAML 1.2, and not a string.
+YAML reading, errors and :class:`Field` live in :mod:`clearsweep.schema`.
 """
 
 from __future__ import annotations
 
 import copy
-import difflib
-import math
-import numbers
 import operator
 import os
-import re
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-import yaml
+from .schema import (  # noqa: F401
+    MAX_YAML_ALIASES,
+    MAX_YAML_BYTES,
+    MAX_YAML_DEPTH,
+    MAX_YAML_VALUES,
+    ConfigError,
+    Field,
+    close_match,
+    dump_yaml,
+    parse_yaml,
+    read_yaml,
+    short_repr,
+)
 
 __all__ = [
     "ConfigError", "Field", "SCHEMA", "DEFAULTS", "load_config", "apply_override", "dump_config",
     "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
+    "field_info", "FIELD_INFO",
 ]
-
-
-def short_repr(value: Any, limit: int = 80) -> str:
-    """``repr(value)``, cut to ``limit`` characters."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-class ConfigError(ValueError):
-    """A configuration or materials value that is not allowed.
-
-    Parameters
-    ----------
-    key
-        Dotted key of the offending value (``"joints.A.clearance"``), or
-        ``None`` for the file as a whole.
-    value
-        The value received.
-    expected
-        What is allowed, in words.
-    source
-        The file as given by the caller, or ``"<config>"`` for a dict.
-    suggestion
-        A close match for a misspelt key or name.
-    got
-        Text shown in place of ``repr(value)``.
-    line
-        Line number [1-based] in ``source``, for YAML syntax errors.
-    """
-
-    def __init__(self, key: str | None, value: Any, expected: str, source: str = "<config>",
-                 suggestion: str | None = None, got: str | None = None, line: int | None = None):
-        self.key, self.value, self.expected = key, value, expected
-        self.source, self.suggestion, self.got, self.line = str(source), suggestion, got, line
-        where = self.source + (f": line {line}" if line else "") + (f": {key}" if key else "")
-        text = f"{where}: got {got if got is not None else short_repr(value)}; expected {expected}"
-        if suggestion is not None:
-            text += f"; did you mean {suggestion!r}?"
-        super().__init__(text)
-
-    def __str__(self) -> str:
-        return self.args[0]
-
-    def __reduce__(self):
-        # Survive pickling (process pools): rebuild from the fields, not from the message.
-        return (type(self), (self.key, self.value, self.expected, self.source, self.suggestion,
-                             self.got, self.line))
-
-
-def close_match(word: Any, options: Iterable[Any]) -> str | None:
-    """The option closest to ``word`` (case-insensitive, :mod:`difflib`), or ``None``."""
-    by_lower = {str(o).lower(): str(o) for o in options}
-    word = str(word).lower()
-    if word in by_lower:
-        return by_lower[word]
-    hits = difflib.get_close_matches(word, list(by_lower), n=1, cutoff=0.6)
-    return by_lower[hits[0]] if hits else None
-
-
-# ---------------------------------------------------------------------------- YAML
-
-class _Loader(yaml.SafeLoader):
-    """Safe loader that also reads ``1e-5`` (no dot) as a float."""
-
-
-class _Dumper(yaml.SafeDumper):
-    """Safe dumper: sections in block style, lists inline, strings quoted where ``_Loader`` needs."""
-
-
-_Dumper.add_representer(list, lambda dumper, value: dumper.represent_sequence(
-    "tag:yaml.org,2002:seq", value, flow_style=True))
-_FLOAT_WITHOUT_DOT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$")
-_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_WITHOUT_DOT, list("-+0123456789."))
-_Dumper.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_WITHOUT_DOT, list("-+0123456789."))
-
-
-def parse_yaml(text: str, source: str = "<config>") -> Any:
-    """Parse YAML ``text``; a syntax error becomes a :class:`ConfigError` naming the line."""
-    try:
-        return yaml.load(text, Loader=_Loader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        lines = text.splitlines()
-        line = mark.line if mark is not None and mark.line < len(lines) else len(lines) - 1
-        raise ConfigError(None, lines[line].strip() if lines else text,
-                          f"valid YAML ({exc.problem or exc.context})", source, line=line + 1) from None
-    except yaml.YAMLError as exc:
-        raise ConfigError(None, text, f"valid YAML ({exc})", source) from None
-
-
-def read_yaml(path: Any, source: str | None = None) -> Any:
-    """Read and parse a YAML file; errors name ``source`` (default: the path as given)."""
-    source = str(path) if source is None else source
-    try:
-        text = (path if hasattr(path, "read_text") else Path(path)).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = getattr(exc, "strerror", None) or exc
-        raise ConfigError(None, str(path), "a readable YAML file", source,
-                          got=f"{str(path)!r} ({reason})") from None
-    return parse_yaml(text, source)
-
-
-# ---------------------------------------------------------------------------- schema
-
-@dataclass(frozen=True)
-class Field:
-    """One leaf of a schema: its default and the values it admits.
-
-    ``kind`` is ``float``, ``int``, ``bool``, ``str`` or a tuple of allowed
-    strings; numbers must be finite and satisfy ``lo``/``hi`` (excluded when
-    ``lo_open``/``hi_open``); ``size`` makes it a list of that many;
-    ``nullable`` admits ``None``.
-    """
-
-    default: Any
-    kind: Any = float
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    hi_open: bool = False
-    size: int | None = None
-    nullable: bool = False
-
-    def describe(self) -> str:
-        """What the field admits, in words (the ``expected`` part of an error)."""
-        if isinstance(self.kind, tuple):
-            text = "one of " + ", ".join(repr(k) for k in self.kind)
-        elif self.kind is bool:
-            text = "true or false"
-        elif self.kind is str:
-            text = "a string"
-        else:
-            noun = "number" if self.kind is float else "integer"
-            article = "a" if self.kind is float else "an"
-            text = f"a list of {self.size} {noun}s" if self.size else f"{article} {noun}"
-            text += self._bounds()
-        return f"null or {text}" if self.nullable else text
-
-    def _bounds(self) -> str:
-        lo_op, hi_op = ("<" if self.lo_open else "<="), ("<" if self.hi_open else "<=")
-        if self.lo is not None and self.hi is not None:
-            return f" with {self.lo:g} {lo_op} x {hi_op} {self.hi:g}"
-        if self.lo is not None:
-            return f" {'>' if self.lo_open else '>='} {self.lo:g}"
-        return f" {hi_op} {self.hi:g}" if self.hi is not None else ""
-
-    def _admits(self, v: Any) -> bool:
-        if isinstance(self.kind, tuple):
-            return isinstance(v, str) and v in self.kind
-        if self.kind in (bool, str):
-            return isinstance(v, self.kind)
-        number = isinstance(v, numbers.Integral if self.kind is int else numbers.Real)
-        if not number or isinstance(v, bool) or not math.isfinite(v):
-            return False
-        below = self.lo is not None and (v <= self.lo if self.lo_open else v < self.lo)
-        above = self.hi is not None and (v >= self.hi if self.hi_open else v > self.hi)
-        return not (below or above)
-
-    def check(self, value: Any, key: str, source: str = "<config>") -> Any:
-        """``value`` normalised (``float`` or ``int``, lists as lists); else raise :class:`ConfigError`."""
-        if value is None and self.nullable:
-            return None
-        items = value if self.size else [value]
-        if self.size and not (isinstance(value, (list, tuple)) and len(value) == self.size):
-            items = None
-        if items is None or not all(self._admits(v) for v in items):
-            suggestion = close_match(value, self.kind) if isinstance(self.kind, tuple) else None
-            raise ConfigError(key, value, self.describe(), source, suggestion)
-        cast = self.kind if self.kind in (float, int) else (lambda v: v)
-        return [cast(v) for v in items] if self.size else cast(value)
 
 
 def _positive(default: float) -> Field:
@@ -227,6 +63,11 @@ SCHEMA: dict[str, Any] = {
         "gravity": Field([0.0, 0.0, -9.81], size=3),      # [m/s^2]
         "theta0": Field(0.0),                             # [rad]
     },
+    "initial": {
+        # seated: each clearance joint starts with its ball resting on the socket wall,
+        # along the ideal joint's reaction at t = 0; centred: ball in the socket centre
+        "joints": Field("seated", ("seated", "centred")),
+    },
     "joints": {"A": _JOINT, "B": _JOINT},
     "contact": {
         "restitution": Field(0.7, lo=0.0, lo_open=True, hi=1.0),
@@ -242,8 +83,12 @@ SCHEMA: dict[str, Any] = {
     "wear": {
         "enabled": Field(True, bool),
         "slip": Field("sliding", ("sliding", "paper")),
-        "map": Field([36, 72], int, lo=1, size=2),        # polar x azimuth bins
+        "map": Field([144, 288], int, lo=1, size=2),      # polar x azimuth bins
         "amplification": Field(1.0, lo=0.0),
+        "feedback": Field(True, bool),                    # worn depth enlarges c_eff
+    },
+    "metrics": {
+        "settle_time": Field(0.05, lo=0.0),               # start of the settled window [s]
     },
     "solver": {
         "dt": _positive(1.0e-5),                          # [s]
@@ -257,9 +102,66 @@ SCHEMA: dict[str, Any] = {
     },
 }
 
+#: Units (UDUNITS text; None for text and switches) and long name of each leaf key;
+#: ``joints.X`` stands for both joints. Sweep coordinates carry them.
+FIELD_INFO: dict[str, tuple[str | None, str]] = {
+    "name": (None, "case name"),
+    "materials_file": (None, "user materials file"),
+    "mechanism.preset": (None, "mechanism data preset"),
+    "mechanism.speed_rpm": ("min-1", "crank speed in revolutions per minute"),
+    "mechanism.gravity": ("m s-2", "gravity vector"),
+    "mechanism.theta0": ("rad", "initial crank angle"),
+    "initial.joints": (None, "initial ball position in the clearance joints"),
+    "joints.X.clearance": ("m", "radial clearance of joint X"),
+    "joints.X.socket_radius": ("m", "socket radius of joint X"),
+    "joints.X.coating": (None, "socket coating of joint X"),
+    "joints.X.coating_thickness": ("m", "coating thickness of joint X"),
+    "joints.X.base_thickness": ("m", "socket base thickness of joint X"),
+    "joints.X.wear_coefficient": ("m2 N-1", "Archard wear coefficient of joint X's socket"),
+    "contact.restitution": ("1", "coefficient of restitution"),
+    "contact.min_impact_velocity": ("m s-1", "floor of the impact velocity"),
+    "contact.layer_rule": (None, "double elastic layer rule"),
+    "contact.max_penetration_fraction": ("1", "largest penetration accepted, fraction of the clearance"),
+    "friction.enabled": (None, "friction on"),
+    "friction.v0": ("m s-1", "friction ramp start velocity"),
+    "friction.v1": ("m s-1", "friction ramp end velocity"),
+    "wear.enabled": (None, "wear on"),
+    "wear.slip": (None, "wear slip rule"),
+    "wear.map": ("1", "wear map bins (polar, azimuth)"),
+    "wear.amplification": ("1", "wear amplification"),
+    "wear.feedback": (None, "wear enlarges the clearance"),
+    "metrics.settle_time": ("s", "start of the settled window"),
+    "solver.dt": ("s", "output-grid time step"),
+    "solver.duration": ("s", "simulated duration"),
+    "solver.save_every": ("1", "steps per output sample"),
+    "solver.baumgarte": ("s-1", "Baumgarte coefficients (alpha, beta)"),
+    "solver.max_substep_level": ("1", "deepest sub-step level"),
+    "solver.stability_limit": ("1", "largest stiff rate times step"),
+    "solver.constraint_tolerance": ("m", "constraint violation stop"),
+    "solver.energy_tolerance": ("1", "energy residual stop, fraction of the throughput"),
+}
+
+
+def field_info(key: str) -> tuple[str | None, str] | None:
+    """Units (None for text and switches) and long name of dotted leaf ``key``; None if unknown.
+
+    >>> field_info("joints.B.clearance")
+    ('m', 'radial clearance of joint B')
+    """
+    parts = key.split(".")
+    if len(parts) == 3 and parts[0] == "joints":
+        info = FIELD_INFO.get(f"joints.X.{parts[2]}")
+        return None if info is None else (info[0], info[1].replace("joint X", f"joint {parts[1]}"))
+    return FIELD_INFO.get(key)
+
+
+#: Smallest ball radius R_j = socket_radius - clearance, as a fraction of the socket radius.
+#: A ball shrunk towards a point meets the socket with a contact radius the elastic model
+#: does not describe: such a case ran "ok" with a penetration hundreds of times its radius.
+MIN_BALL_RADIUS_FRACTION = 0.5
+
 #: Relations between fields, checked after each field on its own: (key, op, other).
 _RELATIONS = [
-    *((f"joints.{j}.clearance", "<", f"joints.{j}.socket_radius") for j in ("A", "B")),
     ("friction.v1", ">", "friction.v0"),
     ("solver.dt", "<=", "solver.duration"),
 ]
@@ -311,6 +213,14 @@ def _validate(raw: Any, source: str, base_dir: str) -> dict[str, Any]:
         value, bound = get_path(cfg, key), get_path(cfg, other)
         if not _OPS[op](value, bound):
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
+    for joint, spec in cfg["joints"].items():
+        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
+        if spec["clearance"] > most:
+            raise ConfigError(
+                f"joints.{joint}.clearance", spec["clearance"],
+                f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.socket_radius "
+                f"({most:.6g}), so that the ball radius R_j = socket_radius - clearance is at "
+                f"least {MIN_BALL_RADIUS_FRACTION:g} * socket_radius", source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):
@@ -440,7 +350,7 @@ def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterab
 
 def dump_config(cfg: Mapping[str, Any]) -> str:
     """YAML text of ``cfg`` in schema order; ``load_config`` of it gives ``cfg`` back."""
-    return yaml.dump(dict(cfg), Dumper=_Dumper, sort_keys=False, default_flow_style=False)
+    return dump_yaml(dict(cfg))
 
 
 def resolve_materials(cfg: Mapping[str, Any]) -> dict[str, Any]:
@@ -450,6 +360,6 @@ def resolve_materials(cfg: Mapping[str, Any]) -> dict[str, Any]:
     -------
     dict[str, clearsweep.materials.Material]
     """
-    from .materials import load_materials  # materials imports this module
+    from .materials import load_materials
 
     return load_materials(cfg.get("materials_file"))

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import os
+import re
+import shutil
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -13,13 +16,12 @@ import numpy as np
 import xarray as xr
 
 from .variables import AXES, CASE_VARIABLES, JOINTS, attrs_for
+from .version import __version__
 
 
 def versions() -> dict[str, str]:
     """Versions of the package and of the libraries that shape its numbers."""
     import numba
-
-    from . import __version__
 
     return {
         "clearsweep_version": __version__,
@@ -103,17 +105,67 @@ def _umask() -> int:
 _FILE_MODE = 0o666 & ~_umask()
 
 
+def _temporary_pattern(path: Path) -> re.Pattern:
+    """Names of :func:`replaced_on_success`'s temporary files for ``path``: ``.NAME.PID.XXXX.tmp``."""
+    return re.compile(rf"\.{re.escape(path.name)}\.(\d+)\.[A-Za-z0-9_]+\.tmp")
+
+
+def _process_gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:     # another user's live process
+        return False
+    try:        # killed but not yet reaped
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            return f.read().rpartition(")")[2].split()[0] in ("Z", "X")
+    except (OSError, IndexError):
+        return False
+
+
+def remove_stale_temporaries(path: str | os.PathLike) -> list[Path]:
+    """Delete the temporary files that killed writers of ``path`` left beside it.
+
+    Only files named as :func:`replaced_on_success` names them for this
+    ``path`` (``.NAME.PID.XXXX.tmp``) whose writer process no longer exists
+    are removed; a write in progress, or any other file, is left alone.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files removed.
+    """
+    path = Path(path)
+    pattern = _temporary_pattern(path)
+    removed: list[Path] = []
+    try:
+        candidates = list(path.parent.iterdir())
+    except OSError:
+        return removed
+    for tmp in candidates:
+        match = pattern.fullmatch(tmp.name)
+        if match and int(match.group(1)) != os.getpid() and _process_gone(int(match.group(1))):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
 @contextmanager
 def replaced_on_success(path: str | os.PathLike):
     """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
 
     On any failure (``KeyboardInterrupt`` included) the temporary file is removed
     and ``path`` is left as it was. The file gets the permissions of an ordinary
-    new file (``tempfile.mkstemp`` creates it readable by its owner only).
+    new file (``tempfile.mkstemp`` creates it readable by its owner only). Its
+    name, ``.NAME.PID.XXXX.tmp``, carries the writer's process id, so that the
+    temporary file of a killed writer is recognised and removed by the next
+    write of ``path`` (:func:`remove_stale_temporaries`).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    remove_stale_temporaries(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
         yield tmp
@@ -124,13 +176,66 @@ def replaced_on_success(path: str | os.PathLike):
     os.replace(tmp, path)
 
 
+#: Free space below which a failed write is reported as a full disk [bytes].
+NEARLY_FULL_BYTES = 16 * 2 ** 20
+
+
+@contextmanager
+def write_errors_as_oserror(path: str | os.PathLike):
+    """Turn the netCDF library's errors of a write into ``OSError`` naming ``path``.
+
+    netCDF-C reports a full disk, or a file it cannot write, as
+    ``RuntimeError("NetCDF: HDF error")``; callers (the CLI) catch ``OSError``
+    for every output failure. The message adds the free space on the disk.
+    """
+    try:
+        yield
+    except RuntimeError as exc:
+        if not str(exc).startswith("NetCDF:"):
+            raise
+        try:
+            free = shutil.disk_usage(Path(path).parent).free
+        except OSError:
+            free = None
+        full = free is not None and free < NEARLY_FULL_BYTES
+        reason = str(exc) + (f" (the disk is full: {free} bytes free)" if full else "")
+        raise OSError(errno.ENOSPC if full else errno.EIO, reason, str(path)) from exc
+
+
 def write_netcdf_atomic(ds: xr.Dataset, path: str | os.PathLike, *, encoding: dict | None = None,
                         engine: str = "netcdf4") -> Path:
     """Write ``ds`` to ``path`` via a temporary file in the same folder and an atomic rename.
 
-    A failure at any point leaves no file at ``path`` (and no temporary file).
+    A failure at any point leaves no file at ``path`` (and no temporary file);
+    a failure of the netCDF library (a full disk) is raised as ``OSError``.
     """
     path = Path(path)
-    with replaced_on_success(path) as tmp:
-        ds.to_netcdf(tmp, engine=engine, encoding=encoding)
+    # coordinates hold no missing values: no _FillValue on them (CF 2.5.1)
+    encoding = {**{str(name): {"_FillValue": None} for name in ds.coords}, **(encoding or {})}
+    with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
+        ds.to_netcdf(tmp, engine=engine, encoding=encoding)  # type: ignore[call-overload]  # engine: str, not xarray's Literal
     return path
+
+
+def open_results(path: str | os.PathLike, **kwargs) -> xr.Dataset:
+    """Open a sweep (or one-case) results file.
+
+    Seconds stay floats (``decode_timedelta=False``: ``time`` and
+    ``wall_time`` carry ``units: s``), and variable-length strings (material
+    names, ``status``, ``message``) come back as strings; sweep coordinates
+    keep their values, so ``ds.sel(B_coating="PTFE")`` works.
+
+    Parameters
+    ----------
+    path
+        netCDF file written by :func:`clearsweep.sweeping.run.run_sweep` or ``clearsweep run``.
+    **kwargs
+        Passed to :func:`xarray.open_dataset` (e.g. ``engine="h5netcdf"``, ``chunks={}``).
+
+    Returns
+    -------
+    xr.Dataset
+        Lazily loaded; close it (or use it as a context manager) when done.
+    """
+    kwargs.setdefault("decode_timedelta", False)
+    return xr.open_dataset(path, **kwargs)

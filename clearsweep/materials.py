@@ -1,4 +1,4 @@
-"""Joint materials (DESIGN.md 6): the shipped data file and user files.
+"""Joint materials (docs/physics.md section 6): the shipped data file and user files.
 
 ``data/materials.yaml`` holds the steel base and the coatings of the paper's
 Table 3, every value with its source. A user file has the same format::
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from importlib.resources import files
 from typing import Any
 
-from .config import ConfigError, Field, close_match, read_yaml
+from .schema import ConfigError, Field, close_match, read_yaml
 
 __all__ = ["Material", "Materials", "UnknownMaterialError", "FIELDS", "load_materials",
            "format_materials"]
@@ -124,7 +124,9 @@ def _merge(table: Materials, data: Any, source: str) -> Materials:
         if missing:
             raise ConfigError(f"{name}.{missing[0]}", None, f"a value for every field of a new material "
                               f"(missing: {', '.join(missing)})", source, got="nothing")
-        out[name] = Material(name, *(entries[f]["value"] for f in FIELDS), entries[_WEAR]["assumed"],
+        # the dataclass fields follow FIELDS in order; mypy cannot count a starred generator
+        out[name] = Material(name, *(entries[f]["value"] for f in FIELDS),  # type: ignore[call-arg]
+                             entries[_WEAR]["assumed"],
                              {f: entries[f]["source"] for f in FIELDS})
     return out
 
@@ -149,7 +151,7 @@ def load_materials(extra_file: str | os.PathLike | None = None) -> Materials:
     ConfigError
         Naming the file, the material and the field of any bad value.
     """
-    table = _merge(Materials(), read_yaml(files("clearsweep").joinpath("data", "materials.yaml"),
+    table = _merge(Materials(), read_yaml(files("clearsweep").joinpath("data").joinpath("materials.yaml"),
                                           _SHIPPED), _SHIPPED)
     if extra_file is not None:
         table = _merge(table, read_yaml(extra_file), str(extra_file))

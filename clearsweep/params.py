@@ -1,13 +1,14 @@
 """Presets, equivalent contact moduli and packing of a resolved config into kernel vectors.
 
 Geometry, masses and inertias: Jing & Liu 2023 (Lubricants 11, 310), Table 2, and
-DESIGN 1-1.1 (the `realistic` preset replaces the rod's printed inertia by a slender rod's).
+docs/physics.md section 1.1 (the `realistic` preset replaces the rod's printed inertia by a slender rod's).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -30,30 +31,30 @@ class Preset:
     source: str
 
 
-_COMMON = dict(crank_length_m=0.14, rod_length_m=0.38, slider_height_m=-0.12,
+_COMMON: dict[str, Any] = dict(crank_length_m=0.14, rod_length_m=0.38, slider_height_m=-0.12,
                crank_mass_kg=1.3, rod_mass_kg=1.2, slider_mass_kg=2.2,
                crank_inertia_kgm2=(1e-4, 1e-4, 1e-4), slider_inertia_kgm2=(1e-3, 1e-3, 1e-3))
 
 PRESETS: dict[str, Preset] = {
     # Slender rod: m l^2 / 12 = 1.2 * 0.38^2 / 12 = 1.444e-2 kg m^2 about the transverse axes.
     "realistic": Preset(**_COMMON, rod_inertia_kgm2=(1e-4, 1.444e-2, 1.444e-2),
-                        source="Jing & Liu 2023 Table 2; rod inertia m l^2/12 (DESIGN 1.1)"),
+                        source="Jing & Liu 2023 Table 2; rod inertia m l^2/12 (docs/physics.md section 1.1)"),
     "paper": Preset(**_COMMON, rod_inertia_kgm2=(1e-5, 1e-5, 1e-5),
                     source="Jing & Liu 2023 Table 2 as published"),
 }
 
-BASE_MATERIAL = "steel"  # socket base and ball (DESIGN 6)
+BASE_MATERIAL = "steel"  # socket base and ball (docs/physics.md section 6)
 
 
 def oedometric_modulus(youngs_modulus_Pa: float, poisson_ratio: float) -> float:
-    """E* = E (1 - nu) / ((1 + nu)(1 - 2 nu)) [Pa] (DESIGN 3.2)."""
+    """E* = E (1 - nu) / ((1 + nu)(1 - 2 nu)) [Pa] (docs/physics.md section 3.2)."""
     nu = poisson_ratio
     return youngs_modulus_Pa * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
 
 def layer_modulus(surface, base, coating_thickness_m: float, base_thickness_m: float,
                   coated: bool, rule: str = "series") -> tuple[float, float]:
-    """Modulus E_x [Pa] and Poisson ratio of one side of the double elastic layer (DESIGN 3.2).
+    """Modulus E_x [Pa] and Poisson ratio of one side of the double elastic layer (docs/physics.md section 3.2).
 
     ``series``: thickness fractions f = l / (l_c + l_s); ``paper_mm``: the paper's literal
     thicknesses in millimetres (an uncoated side then has f_c = 0, f_s = l_s [mm]).
@@ -91,36 +92,107 @@ def surface_material(joint: dict, materials: dict):
 
 
 def ideal_slider_x(theta, l2: float, l3: float, zs: float):
-    """Closed-form slider position x_B(theta) [m] of DESIGN 1 (ideal joints)."""
+    """Closed-form slider position x_B(theta) [m] of docs/physics.md section 1 (ideal joints)."""
     return np.sqrt(l3 ** 2 - (l2 * np.sin(theta)) ** 2 - (zs + l2 * np.cos(theta)) ** 2)
 
 
-def initial_state(preset: Preset, theta0: float, omega: float) -> np.ndarray:
-    """State from ideal kinematics at theta0, every ball centred (DESIGN 1.1)."""
+def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
+                  offset_B=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray, float]:
+    """Rod end points a, b [m] and slider position x4 [m] at crank angle theta [rad], with
+    ball-centre offsets d = ball centre - socket centre (global frame [m]) held at A (ball:
+    crank pin, socket: rod end) and B (ball: rod end, socket: slider centre)."""
     l2, l3, zs = preset.crank_length_m, preset.rod_length_m, preset.slider_height_m
+    d_a = np.asarray(offset_A, float)
+    d_b = np.asarray(offset_B, float)
+    a = np.array([0.0, l2 * math.sin(theta), -l2 * math.cos(theta)]) - d_a
+    # b = (x4, 0, z_s) + d_b with |b - a| = l3, the root with the slider beyond the crank
+    dy = d_b[1] - a[1]
+    dz = zs + d_b[2] - a[2]
+    x4 = a[0] - d_b[0] + math.sqrt(l3 ** 2 - dy ** 2 - dz ** 2)
+    b = np.array([x4, 0.0, zs]) + d_b
+    return a, b, x4
+
+
+def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.0, 0.0),
+                  offset_B=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """State at crank angle theta0 moving at omega [rad/s], the ball-centre offsets (global
+    frame [m], zero = centred ball) held fixed; velocities from the kinematics with the
+    offsets held, so that no ball moves relative to its socket at the start."""
+    l2, l3 = preset.crank_length_m, preset.rod_length_m
     st, ct = math.sin(theta0), math.cos(theta0)
     y = np.zeros(L.N_Y)
     # crank: centroid at -R2 (0, 0, l2/2), gamma2 = theta0
-    y[0:3] = (0.0, 0.5 * l2 * st, -0.5 * l2 * ct)
-    y[5] = theta0
-    y[L.Y_QD + 0: L.Y_QD + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
-    y[L.Y_QD + 5] = omega
-    a = np.array([0.0, l2 * st, -l2 * ct])
+    r2, g2, r3, ph3, r4 = L.Y_R2, L.Y_CRANK_ANGLE, L.Y_R3, L.Y_PHI3, L.Y_R4
+    qd = L.Y_QD
+    y[r2:r2 + 3] = (0.0, 0.5 * l2 * st, -0.5 * l2 * ct)
+    y[g2] = theta0
+    y[qd + r2:qd + r2 + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
+    y[qd + g2] = omega
+    a, b, x4 = rod_endpoints(preset, theta0, offset_A, offset_B)
     va = np.array([0.0, l2 * ct, l2 * st]) * omega
-    xb = float(ideal_slider_x(theta0, l2, l3, zs))
-    b = np.array([xb, 0.0, zs])
-    vb = np.array([omega * zs * l2 * st / xb, 0.0, 0.0])
+    # |b - a| = l3 with b moving along X only: (b - a) . (vb - va) = 0
+    vb = np.array([(b - a) @ va / (b - a)[0], 0.0, 0.0])
     d = (b - a) / l3
     dd = (vb - va) / l3
-    y[6:9] = 0.5 * (a + b)
-    y[L.Y_QD + 6: L.Y_QD + 9] = 0.5 * (va + vb)
-    y[9] = math.atan2(d[1], d[0])
-    y[10] = -math.asin(d[2])
-    y[L.Y_QD + 9] = (d[0] * dd[1] - d[1] * dd[0]) / (d[0] ** 2 + d[1] ** 2)
-    y[L.Y_QD + 10] = -dd[2] / math.cos(y[10])
-    y[12:15] = b
-    y[L.Y_QD + 12] = vb[0]
+    y[r3:r3 + 3] = 0.5 * (a + b)
+    y[qd + r3:qd + r3 + 3] = 0.5 * (va + vb)
+    y[ph3] = math.atan2(d[1], d[0])                          # alpha3
+    y[ph3 + 1] = -math.asin(d[2])                            # beta3
+    y[qd + ph3] = (d[0] * dd[1] - d[1] * dd[0]) / (d[0] ** 2 + d[1] ** 2)
+    y[qd + ph3 + 1] = -dd[2] / math.cos(y[ph3 + 1])
+    y[r4] = x4
+    y[r4 + 1] = 0.0
+    y[r4 + 2] = preset.slider_height_m
+    y[qd + r4] = vb[0]
     return y
+
+
+def static_penetration(force_N: float, c: float, ew: float, ri: float) -> float:
+    """Penetration delta [m] at which the contact's elastic force equals force_N [N].
+
+    Newton on F_el(delta) = force_N from the small-penetration estimate
+    F_el ~ (2 K / c) delta^2, K = 4 pi E_w R_i / 5; F_el is convex and increasing, so the
+    iteration converges monotonically from above.
+    """
+    from .core.contact import elastic_force, stiffness_factor
+
+    if force_N <= 0.0:
+        return 0.0
+    delta = math.sqrt(force_N * c / (2.0 * stiffness_factor(ew, ri)))
+    delta *= 1.5  # start above the root
+    for _ in range(60):
+        f, df = elastic_force(delta, c, ew, ri)
+        step = (f - force_N) / df
+        delta -= step
+        if abs(step) <= 1e-15 * delta:
+            break
+    return delta
+
+
+def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
+                   omega: float) -> tuple[np.ndarray, np.ndarray]:
+    """Ball-centre offsets [m] (global frame, A and B) of a seated start.
+
+    Each clearance joint's ball rests on the socket wall along the ideal mechanism's joint
+    reaction at t = 0: the force F on the ball is carried by a contact whose normal n points
+    along -F, at the eccentricity c + delta_s where the elastic force equals |F|.
+    """
+    from .core.dynamics import ideal_joint_forces
+
+    y_ideal = initial_state(preset, theta0, omega)
+    forces = ideal_joint_forces(0.0, y_ideal, p, jp)
+    offsets = np.zeros((2, 3))
+    for j in range(2):
+        if jp[j, L.J_CLEARANCE] == 0.0:
+            continue
+        f = forces[j]
+        size = float(np.linalg.norm(f))
+        if not (math.isfinite(size) and size > 0.0):
+            continue  # no load to lean on: the ball stays centred
+        c = jp[j, L.J_C]
+        delta = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI])
+        offsets[j] = -(c + delta) * f / size
+    return offsets[0], offsets[1]
 
 
 @dataclass
@@ -171,6 +243,8 @@ def pack(cfg: dict, materials: dict) -> Packed:
     p[L.P_STAB] = solver["stability_limit"]
     p[L.P_DT] = solver["dt"]
     p[L.P_MAX_LEVEL] = solver["max_substep_level"]
+    p[L.P_SETTLE] = cfg["metrics"]["settle_time"]
+    p[L.P_FEEDBACK] = 1.0 if (wear["enabled"] and wear["feedback"]) else 0.0
     jp = np.zeros((2, L.N_JP))
     for j, name in enumerate(("A", "B")):
         joint = cfg["joints"][name]
@@ -188,6 +262,11 @@ def pack(cfg: dict, materials: dict) -> Packed:
     save_every = int(solver["save_every"])
     n_raw = int(math.ceil(solver["duration"] / solver["dt"] - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
-    y0 = initial_state(preset, cfg["mechanism"]["theta0"], omega)
+    theta0 = cfg["mechanism"]["theta0"]
+    if cfg["initial"]["joints"] == "seated":
+        offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega)
+        y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
+    else:
+        y0 = initial_state(preset, theta0, omega)
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
                   map_shape=(int(wear["map"][0]), int(wear["map"][1])))

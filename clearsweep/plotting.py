@@ -31,8 +31,8 @@ Kinds (``KINDS``):
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
-import click
 import numpy as np
 import xarray as xr
 import yaml
@@ -40,25 +40,39 @@ from matplotlib import colormaps
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
-from .analysis import (CASE_DIMS, SelectionError, choice_message, iter_cases, iter_points,
-                       label_text, metric_table, open_input, select_cases, sweep_dims, value_text)
-
-KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep")
-X_AXES = ("angle", "time")
-OUTPUT_SUFFIXES = (".png", ".pdf", ".svg")
-
-#: Metric of ``--kind sweep`` when none is given.
-DEFAULT_SWEEP_METRIC = "slider_acceleration_peak"
+from .analysis import (
+    CASE_DIMS,
+    SelectionError,
+    choice_message,
+    iter_cases,
+    iter_points,
+    label_text,
+    metric_table,
+    select_cases,
+    sweep_dims,
+    value_text,
+)
+from .choices import (  # noqa: F401
+    DEFAULT_SWEEP_METRIC,
+    DPI_RANGE,
+    FIGURE_DPI,
+    KINDS,
+    OUTPUT_SUFFIXES,
+    X_AXES,
+)
+from .dataset import replaced_on_success
 
 #: On ``wear-polar`` the largest depth of a joint is drawn as this fraction of the unit radius.
 WEAR_POLAR_EXAGGERATION = 0.3
 
-#: Resolution of raster output [dots per inch].
-FIGURE_DPI = 120
-
 #: Overlaid cases beyond this many take colours from a continuous colour map.
 MAX_CYCLE_COLOURS = 10
+
+#: Overlaid lines beyond this many get no per-line legend (it would hide the plot); the
+#: title says so and points to --select.
+MAX_LEGEND_ENTRIES = 12
 
 #: Heat-map cells are annotated with their values up to this many cells.
 MAX_ANNOTATED_CELLS = 64
@@ -128,8 +142,21 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
 
 
 def _legend(ax, cases) -> None:
-    if len(cases) > 1:
+    if 1 < len(cases) <= MAX_LEGEND_ENTRIES:
         ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
+
+
+def _legend_note(n: int) -> str:
+    """Title line saying that ``n`` overlaid lines have no legend ("" when they have one)."""
+    if n <= MAX_LEGEND_ENTRIES:
+        return ""
+    return (f"\n{n} cases overlaid, no legend above {MAX_LEGEND_ENTRIES}: choose cases with "
+            "--select DIM=VALUE")
+
+
+def _case_label(text: str, n: int, default: str) -> str:
+    """A line's legend label; hidden (``_nolegend_``) when ``n`` cases are too many to list."""
+    return "_nolegend_" if n > MAX_LEGEND_ENTRIES else (text or default)
 
 
 def _abscissa(ds: xr.Dataset, case: xr.Dataset, x: str) -> tuple[np.ndarray, str]:
@@ -163,7 +190,7 @@ def _draw_slider(fig: Figure, ds: xr.Dataset, x: str) -> None:
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel(xlabel)
     _legend(axes[0], cases)
-    fig.suptitle("Slider dynamics")
+    fig.suptitle("Slider dynamics" + _legend_note(len(cases)))
 
 
 def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
@@ -190,7 +217,7 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     for ax in axes[-1]:
         ax.set_xlabel(xlabel)
     _legend(axes[0, 0], cases)
-    fig.suptitle("Joint forces (global frame)")
+    fig.suptitle("Joint forces (global frame)" + _legend_note(len(cases)))
 
 
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
@@ -253,9 +280,11 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
                 depth = np.nan_to_num(case["wear_projection"].sel(joint=joint, axis=axis).values)
                 radius = 1.0 + scale * depth
                 ax.plot(closed, np.append(radius, radius[0]), lw=1.0, color=colour,
-                        label=text or "worn profile")
-            ax.set_thetalim(-np.pi, np.pi)
-            ax.set_rlim(0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
+                        label=_case_label(text, len(cases), "worn profile"))
+            # a PolarAxes (projection="polar"); matplotlib's stubs type add_subplot as Axes
+            ax.set_thetalim(-np.pi, np.pi)  # type: ignore[attr-defined]
+            ax.set_rlim(  # type: ignore[attr-defined]
+                0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
             ax.set_yticks([])
             ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
@@ -263,7 +292,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
                fontsize="small")
     fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
-                 f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})", fontsize="medium")
+                 f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})"
+                 + _legend_note(len(cases)), fontsize="medium")
 
 
 def _configured_clearances(ds: xr.Dataset) -> dict[str, float]:
@@ -311,7 +341,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     joints = offset["joint"].values
     configured = _configured_clearances(ds)
     for j, joint in enumerate(joints):
-        clearances = {}
+        clearances: dict[float, str] = {}   # clearance [m] -> where it was read
         for _, case, _ in cases:
             found = _clearance(case, str(joint), configured)
             if found is not None:
@@ -321,7 +351,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
                 ax.plot(d.sel(axis=a).values, d.sel(axis=b).values, lw=0.6, color=colour,
-                        label=text or "ball centre")
+                        label=_case_label(text, len(cases), "ball centre"))
             for radius, source in sorted(clearances.items()):
                 ax.plot(radius * np.cos(circle), radius * np.sin(circle), ls="--", lw=0.8,
                         color="0.3", label=f"clearance {radius:.3g} m ({source})")
@@ -334,7 +364,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax.grid(alpha=0.3)
             if p == 0:
                 ax.legend(fontsize="x-small", loc="upper right")
-    fig.suptitle("Ball-centre orbit in the socket frame")
+    fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)))
 
 
 def _category_positions(coord: xr.DataArray) -> tuple[np.ndarray, list[str] | None]:
@@ -362,16 +392,18 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         ax = fig.add_subplot()
         xs, ticks = _category_positions(values[dims[0]])
         for text, panel in panels:
-            ax.plot(xs, panel.transpose(dims[0]).values, marker="o", label=text or metric)
+            ax.plot(xs, panel.transpose(dims[0]).values, marker="o",
+                    label=_case_label(text, len(panels), metric))
         if ticks is not None:
             ax.set_xticks(xs, ticks)
         ax.set_xlabel(axis_label(values[dims[0]]))
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-        if inner:
+        if inner and len(panels) <= MAX_LEGEND_ENTRIES:
             ax.legend(fontsize="x-small")
-        fig.suptitle(f"{metric} over {dims[0]}")
+        fig.suptitle(f"{metric} over {dims[0]}" + (_legend_note(len(panels)) if inner else ""))
         return
+    failed = _failed_cells(ds, values, dims)
     ncols = min(3, len(panels))
     nrows = -(-len(panels) // ncols)
     fig.set_size_inches(max(HEATMAP_PANEL_INCHES[0] * ncols, MIN_FIGURE_WIDTH_INCHES),
@@ -388,13 +420,42 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         ax.set_xlabel(axis_label(values[dims[1]]))
         if grid.size <= MAX_ANNOTATED_CELLS:
             for (r, c), v in np.ndenumerate(grid):
-                bright = image.norm(v) > ANNOTATION_DARK_TEXT_ABOVE
+                if failed is not None and failed[r, c]:
+                    continue
+                bright = float(image.norm(v)) > ANNOTATION_DARK_TEXT_ABOVE  # type: ignore[arg-type]  # a scalar in, a scalar out
                 ax.text(c, r, format(v, ".3g"), ha="center", va="center", fontsize="x-small",
                         color="black" if bright else "white")
+        if failed is not None:
+            for r, c in zip(*np.nonzero(failed)):
+                ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, hatch="xx",
+                                       edgecolor="0.4", lw=0.0))
+                ax.text(c, r, "failed", ha="center", va="center", fontsize="x-small", color="0.2")
         if text:
             ax.set_title(text, fontsize="small")
         fig.colorbar(image, ax=ax).set_label(label)
-    fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}")
+    note = ""
+    if failed is not None and failed.any():
+        note = (f"\nhatched: {int(failed.sum())} case(s) that failed, no value (see the status "
+                "and message variables)")
+    fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}{note}")
+
+
+def _failed_cells(ds: xr.Dataset, values: xr.DataArray, dims: tuple) -> np.ndarray | None:
+    """Cells of a heat map over ``dims`` whose case failed (status neither ok nor skipped).
+
+    ``None`` when ``ds`` has no per-case status over exactly these dimensions.
+    """
+    if "status" not in ds or set(ds["status"].dims) != set(dims):
+        return None
+    status = ds["status"]
+    try:
+        status = status.sel({d: values[d].values for d in dims if d in status.indexes})
+    except (KeyError, ValueError):
+        pass
+    status = status.transpose(*dims)
+    if status.shape != tuple(values.sizes[d] for d in dims):
+        return None
+    return ~np.isin(status.values.astype(str), ["ok", "skipped"])
 
 
 _SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
@@ -434,7 +495,7 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
                              choices=X_AXES)
     if metric is not None and kind != "sweep":
         raise PlotError("a metric applies to --kind sweep only")
-    ds = select_cases(ds, select)
+    ds = cast(xr.Dataset, select_cases(ds, select))   # a dataset in, a dataset out
     fig = Figure(figsize=_SIZES[kind], layout="constrained")
     if kind == "slider":
         _draw_slider(fig, ds, x)
@@ -456,7 +517,8 @@ def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
     """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
 
     Parameters and errors as ``figure``; ``dpi`` sets the raster resolution.
-    Missing parent folders are created.
+    Missing parent folders are created. The file appears only once complete
+    (temporary file, then rename); a failed write raises ``OSError``.
 
     Returns
     -------
@@ -468,33 +530,7 @@ def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
         raise SelectionError(choice_message("output suffix", out_path.suffix, list(OUTPUT_SUFFIXES)),
                              name="output", value=out_path.suffix, choices=OUTPUT_SUFFIXES)
     fig = figure(ds, kind, select, x=x, metric=metric)
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out_path, dpi=dpi)
+    # a temporary file renamed into place: a full disk or a kill leaves no partial figure
+    with replaced_on_success(out_path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:])
     return fig
-
-
-@click.command("plot")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False))
-@click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
-@click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
-              help="Draw only the sweep cases with this coordinate value (repeatable).")
-@click.option("--x", "x_axis", type=click.Choice(X_AXES), default="angle", show_default=True,
-              help="Abscissa of time series: crank angle [degree] or time [s].")
-@click.option("--metric", default=None, metavar="NAME",
-              help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
-@click.option("--dpi", type=click.IntRange(min=10), default=FIGURE_DPI, show_default=True,
-              help="Resolution of raster output.")
-def plot_command(path: str, kind: str, output: str, select_items: tuple[str, ...], x_axis: str,
-                 metric: str | None, dpi: int) -> None:
-    """Draw a figure from the results file PATH."""
-    if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
-        raise click.BadParameter(f"{output!r}: the suffix must be one of "
-                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
-    with open_input(path) as ds:
-        try:
-            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi)
-        except (SelectionError, PlotError) as exc:
-            raise click.UsageError(str(exc)) from exc
-    click.echo(f"wrote {output}")

@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import math
+import os
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+if TYPE_CHECKING:
+    import xarray as xr
+
+from .budget import check_budget
 from .config import ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
@@ -19,7 +24,7 @@ MAX_ROTATION_PER_STEP_RAD = 0.05
 
 
 def check_step(cfg: dict, packed: Packed) -> None:
-    """Reject a step that no permitted sub-step level can make stable (DESIGN 4).
+    """Reject a step that no permitted sub-step level can make stable (docs/physics.md section 4).
 
     Two bounds: the crank may turn at most MAX_ROTATION_PER_STEP_RAD per step, and the
     deepest sub-step h / 2^k_max must resolve the elastic contact rate at the largest
@@ -50,19 +55,57 @@ def check_step(cfg: dict, packed: Packed) -> None:
                           f" sub-steps at most, solver.max_substep_level)")
 
 
-def preflight(cfg: dict) -> Packed:
-    """Everything that can be checked before a run: materials, packing and the step bound.
+def preflight(cfg: dict, *, allow_large: bool = False) -> Packed:
+    """Everything that can be checked before a run: work and memory, materials, packing and
+    the step bound.
 
     ``cfg`` is a resolved config; raises ConfigError. Sweeps call it on every case before
-    anything runs.
+    anything runs. ``allow_large`` lifts the bounds of :func:`clearsweep.budget.check_budget`.
     """
+    check_budget(cfg, allow_large=allow_large)
     packed = pack(cfg, resolve_materials(cfg))
     check_step(cfg, packed)
     return packed
 
 
+def kernel_needs_compiling() -> bool:
+    """True when neither this process nor the on-disk cache holds the compiled kernel."""
+    from .core.rk4 import integrate
+
+    if integrate.signatures:
+        return False
+    index = getattr(getattr(getattr(integrate, "_cache", None), "_cache_file", None),
+                    "_index_path", None)
+    return not (index and os.path.exists(index))
+
+
+def prepare_kernel() -> float:
+    """Compile (or load from the cache) the kernel with a run of no steps; seconds taken.
+
+    Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
+    """
+    from .config import DEFAULTS
+    from .core.rk4 import integrate
+    from .materials import load_materials
+
+    start = time.perf_counter()
+    if integrate.signatures:
+        return 0.0
+    cfg = {**DEFAULTS, "joints": {j: {**DEFAULTS["joints"][j], "clearance": 2.5e-4}
+                                  for j in ("A", "B")}}
+    packed = pack(cfg, load_materials(None))
+    packed.n_steps = 0
+    packed.map_shape = (1, 1)
+    run_kernel(packed)
+    return time.perf_counter() - start
+
+
 def run_kernel(packed: Packed) -> dict[str, Any]:
-    """Run the Numba kernel on packed inputs; raw arrays and counters."""
+    """Run the Numba kernel on packed inputs; raw arrays and counters.
+
+    ``wall_time`` times the integration call alone (compiling included when the kernel has
+    not been compiled yet: ``simulate`` calls ``prepare_kernel`` first).
+    """
     from .core.rk4 import integrate
 
     n_save = packed.n_steps // packed.save_every + 1
@@ -74,22 +117,24 @@ def run_kernel(packed: Packed) -> dict[str, Any]:
     out_d = np.full((n_save, L.N_D), np.nan)
     out_wmax = np.zeros((n_save, 2))
     info = np.zeros(5, dtype=np.int64)
+    stats = np.zeros((2, L.N_M))
     t0 = time.perf_counter()
     res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
-                    wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info)
+                    wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info, stats)
     wall = time.perf_counter() - t0
     n_ok = int(info[1])
     out_wmax[n_ok:] = np.nan
     h = packed.p[L.P_DT]
     out_t = np.arange(n_save) * h * packed.save_every
     return dict(t=out_t, y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
+                stats=stats,
                 status=L.STATUS_NAMES[int(info[0])], n_saved=n_ok, deepest=int(info[2]),
                 t_end=float(info[4]) * h,
                 rk4_steps=int(info[3]), residual_max=float(res[0]), ke_peak=float(res[1]),
                 wall_time=wall)
 
 
-def simulate(config, overrides=()) -> "xr.Dataset":  # noqa: F821
+def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     """Simulate one case.
 
     Parameters
@@ -99,25 +144,34 @@ def simulate(config, overrides=()) -> "xr.Dataset":  # noqa: F821
         ``config.load_config``.
     overrides
         ``"dotted.key=VALUE"`` strings.
+    allow_large
+        Run a case beyond the work and memory bounds of ``budget.check_budget``.
 
     Returns
     -------
     xr.Dataset
-        DESIGN 8 variables with CF attributes; ``status`` is ``"ok"`` or the reason the
+        docs/physics.md section 8 variables with CF attributes; ``status`` is ``"ok"`` or the reason the
         case stopped (rows after the stop are NaN).
     """
     from .dataset import build_dataset
 
     cfg = load_config(config, overrides)
-    packed = preflight(cfg)
+    packed = preflight(cfg, allow_large=allow_large)
+    prepare_kernel()
     raw = run_kernel(packed)
     arrays = arrays_from_raw(raw, packed)
     attrs = {
         "slip_rule": cfg["wear"]["slip"],
         "slip_description": ("dS = |v_t| dt (sliding distance)" if cfg["wear"]["slip"] == "sliding"
                              else "dS = R_i |d beta| (paper Eq. 14)"),
-        "wear_map_rule": "bin-averaged depth: worn volume / bin area into the bin under the "
-                         "contact point; read back by nearest bin",
+        "wear_map_rule": "contact-area rule: each step's worn volume k F_N dS spread over the "
+                         "bins the contact cap (area A) overlaps, in proportion to the overlap; "
+                         "depth = volume / bin area; c_eff read from the bin holding the "
+                         "contact direction",
+        "wear_feedback": int(bool(cfg["wear"]["feedback"] and cfg["wear"]["enabled"])),
+        "initial_joints": cfg["initial"]["joints"],
+        "settle_time_s": cfg["metrics"]["settle_time"],
+        "rod_inertia_kgm2": list(PRESETS[cfg["mechanism"]["preset"]].rod_inertia_kgm2),
         "wear_amplification": cfg["wear"]["amplification"],
         "rod_spin_constraint": "gamma3 = 0 (paper Eq. 24)",
         "preset": cfg["mechanism"]["preset"],
@@ -134,7 +188,81 @@ def simulate(config, overrides=()) -> "xr.Dataset":  # noqa: F821
         "status_time_s": raw["t_end"],
         "simulated_duration_s": float(packed.n_steps * packed.p[L.P_DT]),
     }
+    if raw["status"] == L.STATUS_NAMES[L.ST_ENERGY]:
+        attrs["status_hint"] = energy_residual_hint(arrays, raw["t"], cfg)
     return build_dataset(arrays, raw["t"], config_text=dump_config(cfg), attrs=attrs)
+
+
+def statistics_from_raw(stats: np.ndarray, clearance: np.ndarray) -> dict[str, np.ndarray]:
+    """Kernel running statistics (layout.M_*, whole run and settled window) -> variables.
+
+    Float statistics of an ideal joint, and every statistic of an empty window (a run that
+    ends before the settle time), are NaN; counts are then 0.
+    """
+    out: dict[str, Any] = {}
+    for w, suffix in ((L.W_WHOLE, ""), (L.W_SETTLED, "_settled")):
+        m = stats[w]
+        empty = not m[L.M_SAMPLES] > 0
+        duration = m[L.M_TIME]
+
+        def joint(i: int) -> np.ndarray:
+            v = m[i:i + 2].astype(float).copy()
+            v[~clearance] = np.nan
+            return np.full(2, np.nan) if empty else v
+
+        def scalar(v: float) -> np.float64:
+            return np.float64(np.nan if empty else v)
+
+        rms = math.sqrt(m[L.M_ACC_SQ] / duration) if duration > 0 else np.nan
+        out["slider_acceleration_peak" + suffix] = scalar(m[L.M_ACC_PEAK])
+        out["slider_acceleration_rms" + suffix] = scalar(rms)
+        out["crank_torque_peak" + suffix] = scalar(m[L.M_TORQUE_PEAK])
+        out["normal_force_peak" + suffix] = joint(L.M_FN_PEAK)
+        out["penetration_peak" + suffix] = joint(L.M_PEN_PEAK)
+        out["impact_velocity_max" + suffix] = joint(L.M_VIMP_MAX)
+        fraction = joint(L.M_CONTACT_T) / duration if duration > 0 else np.full(2, np.nan)
+        out["contact_fraction" + suffix] = fraction
+        out["impact_count" + suffix] = m[L.M_IMPACTS:L.M_IMPACTS + 2].astype(np.int32)
+    return out
+
+
+#: Terms of the energy balance, as energy_residual_hint names them.
+_ENERGY_TERMS = (("energy_kinetic", "kinetic energy"),
+                 ("energy_potential", "potential energy (gravity + contact elastic)"),
+                 ("work_drive", "drive work"), ("energy_dissipated", "dissipated energy"))
+
+
+def energy_residual_hint(arrays: dict[str, np.ndarray], t: np.ndarray, cfg: dict) -> str:
+    """A hint at what drove an ``energy_residual`` stop, from the saved rows (post-processing).
+
+    Compares the change since t = 0 of each term of the balance (kinetic and potential
+    energy, drive work, dissipated energy) at the last saved row before the stop and names
+    the largest; with ``wear.feedback`` on, adds the worn depth against each joint's
+    clearance (wear enlarges the clearance the contact sees). Only a hint: the kernel
+    stops between saved rows, on the residual it integrates itself.
+    """
+    finite = np.flatnonzero(np.isfinite(arrays["energy_residual"]))
+    if finite.size < 2:
+        return "hint: no saved rows before the stop to compare"
+    k = int(finite[-1])
+    changes = {label: float(arrays[name][k] - arrays[name][0]) for name, label in _ENERGY_TERMS}
+    largest = max(changes, key=lambda label: abs(changes[label]))
+    others = ", ".join(f"{label.split(' (')[0]} {value:+.3g} J" for label, value in changes.items()
+                       if label != largest)
+    text = (f"hint (saved rows up to t = {float(t[k]):.4g} s): the largest change since t = 0 is "
+            f"the {largest}, {changes[largest]:+.3g} J ({others}; residual "
+            f"{float(arrays['energy_residual'][k]):+.3g} J)")
+    if cfg["wear"]["enabled"] and cfg["wear"]["feedback"]:
+        worn = []
+        for j, name in enumerate(("A", "B")):
+            c = cfg["joints"][name]["clearance"]
+            depth = float(arrays["wear_depth_max"][k, j])
+            if c > 0 and np.isfinite(depth) and depth > 0:
+                worn.append(f"{name} {depth:.3g} m = {100 * depth / c:.3g} % of its clearance")
+        if worn:
+            text += ("; with wear.feedback on, the worn depth enlarges the clearance the contact "
+                     f"sees: {'; '.join(worn)}")
+    return text
 
 
 def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
@@ -157,9 +285,9 @@ def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
     ke_peak = raw["ke_peak"]
     return {
         "status": raw["status"],
-        "crank_angle": y[:, 5],
-        "slider_position": y[:, 12],
-        "slider_velocity": y[:, qd + 12],
+        "crank_angle": y[:, L.Y_CRANK_ANGLE],
+        "slider_position": y[:, L.Y_SLIDER_X],
+        "slider_velocity": y[:, qd + L.Y_SLIDER_X],
         "slider_acceleration": d[:, L.D_SLIDER_ACC],
         "crank_torque": d[:, L.D_TORQUE],
         "reaction_O": d[:, L.D_REACTION_O:L.D_REACTION_O + 3],
@@ -179,9 +307,12 @@ def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
         "wear_map": raw["wmap"],
         "wear_projection": raw["proj"],
         "wear_volume": raw["wvol"],
-        "substeps_used": np.int64(1 << raw["deepest"]),
+        # counters: int32 where the value fits (2**16 sub-steps at most); rk4_steps can pass
+        # 2**31 with --allow-large, so it stays int64
+        "substeps_used": np.int32(1 << raw["deepest"]),
         "rk4_steps": np.int64(raw["rk4_steps"]),
         "energy_residual_max": raw["residual_max"],
         "energy_residual_relative": raw["residual_max"] / ke_peak if ke_peak > 0 else np.nan,
         "wall_time": raw["wall_time"],
+        **statistics_from_raw(raw["stats"], clearance),
     }

@@ -1,7 +1,7 @@
 """Registry of output variables: one place for dims, units and long names.
 
 Every dataset builder (one case, sweep summaries) reads this table and never
-repeats a unit or a long name (DESIGN.md section 8).
+repeats a unit or a long name (docs/physics.md section 8).
 """
 
 from __future__ import annotations
@@ -15,12 +15,13 @@ class VariableSpec:
     units: str
     long_name: str
     description: str = ""
+    cell_methods: str = ""
 
 
 JOINTS = ("A", "B")
 AXES = ("x", "y", "z")
 
-#: Per-case variables (DESIGN.md section 8), plus the diagnostics the kernel keeps.
+#: Per-case variables (docs/physics.md section 8), plus the diagnostics the kernel keeps.
 CASE_VARIABLES: dict[str, VariableSpec] = {
     "crank_angle": VariableSpec(("time",), "rad", "crank angle theta",
                                 "driven crank angle theta0 + omega t"),
@@ -59,10 +60,51 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
     "substeps_used": VariableSpec((), "1", "largest number of RK4 sub-steps in one output step",
                                   "2**k of the deepest sub-step level used (1 = never split)"),
     "rk4_steps": VariableSpec((), "1", "RK4 steps taken, sub-steps included"),
-    "energy_residual_max": VariableSpec((), "J", "largest absolute energy residual"),
+    "energy_residual_max": VariableSpec((), "J", "largest absolute energy residual", "",
+                                        "time: maximum"),
     "energy_residual_relative": VariableSpec((), "1", "largest energy residual / peak kinetic energy"),
     "wall_time": VariableSpec((), "s", "wall-clock time of the simulation"),
 }
+
+#: Running statistics accumulated by the kernel at every accepted RK4 (sub-)step
+#: (``core.layout.M_*``), never from the saved rows: identical whatever ``save_every``.
+#: Each has a ``_settled`` twin over time >= the ``settle_time_s`` attribute.
+_EVERY_STEP = ("over every accepted RK4 (sub-)step end, not the saved rows")
+_IDEAL = "; NaN for an ideal joint (no contact law)"
+STATISTICS: dict[str, VariableSpec] = {
+    "slider_acceleration_peak": VariableSpec(
+        (), "m s-2", "peak absolute slider acceleration", "max |a| " + _EVERY_STEP,
+        "time: maximum"),
+    "slider_acceleration_rms": VariableSpec(
+        (), "m s-2", "RMS slider acceleration",
+        "sqrt(integral a^2 dt / duration), right-end value over each (sub-)step", "time: root_mean_square"),
+    "crank_torque_peak": VariableSpec(
+        (), "N m", "peak absolute crank torque", "max |torque| " + _EVERY_STEP, "time: maximum"),
+    "normal_force_peak": VariableSpec(
+        ("joint",), "N", "peak normal contact force", "max F_N " + _EVERY_STEP + _IDEAL,
+        "time: maximum"),
+    "penetration_peak": VariableSpec(
+        ("joint",), "m", "peak penetration depth",
+        "max(0, max delta) " + _EVERY_STEP + _IDEAL, "time: maximum"),
+    "impact_count": VariableSpec(
+        ("joint",), "1", "number of impacts",
+        "contact episodes begun (a ball resting on its socket at the start is not one); "
+        "0 for an ideal joint", "time: sum"),
+    "impact_velocity_max": VariableSpec(
+        ("joint",), "m s-1", "largest impact velocity",
+        "largest normal approach velocity at the onset of a contact episode, taken from the "
+        "(sub-)step ends on either side of the onset; 0 without impacts" + _IDEAL, "time: maximum"),
+    "contact_fraction": VariableSpec(
+        ("joint",), "1", "fraction of time in contact",
+        "time with delta > 0 / duration, right-end value over each (sub-)step" + _IDEAL,
+        "time: mean"),
+}
+for _name, _spec in list(STATISTICS.items()):
+    STATISTICS[_name + "_settled"] = VariableSpec(
+        _spec.dims, _spec.units, _spec.long_name + " after start-up",
+        _spec.description + "; over time >= the settle_time_s attribute [s] "
+        "(NaN, or 0 for a count, for a run that ends before it)", _spec.cell_methods)
+CASE_VARIABLES.update(STATISTICS)
 
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
@@ -90,35 +132,28 @@ def attrs_for(name: str) -> dict[str, str]:
         out["units"] = spec.units
     if spec.description:
         out["description"] = spec.description
+    if spec.cell_methods:
+        out["cell_methods"] = spec.cell_methods
     return out
 
 
 #: Per-case summaries derived from the variables above (``analysis.case_summary``,
-#: ``analysis.wear_table``, ``analysis.reduction_table``); DESIGN.md sections 5, 7 and 9.
+#: ``analysis.wear_table``, ``analysis.reduction_table``); docs/physics.md sections 5, 7 and 9.
 SUMMARY_VARIABLES: dict[str, VariableSpec] = {
-    "slider_acceleration_peak": VariableSpec((), "m s-2", "peak absolute slider acceleration",
-                                             "max |slider_acceleration| over the whole run"),
-    "slider_acceleration_rms": VariableSpec((), "m s-2", "RMS slider acceleration",
-                                            "root mean square over the whole run"),
-    "slider_acceleration_peak_settled": VariableSpec(
-        (), "m s-2", "peak absolute slider acceleration after start-up",
-        "max |slider_acceleration| over time >= the settle_time_s attribute [s]"),
-    "slider_acceleration_rms_settled": VariableSpec(
-        (), "m s-2", "RMS slider acceleration after start-up",
-        "root mean square over time >= the settle_time_s attribute [s]"),
-    "normal_force_peak": VariableSpec(("joint",), "N", "peak normal contact force"),
     "wear_depth_max_final": VariableSpec(("joint",), "m", "maximum wear depth at the end of the run",
-                                         "largest bin of the final socket wear map"),
+                                         "largest bin of the final socket wear map",
+                                         "polar: azimuth: maximum"),
     "wear_depth_axis_max": VariableSpec(("joint", "axis"), "m", "maximum projected wear depth",
-                                        "max of wear_projection over angle (paper Tables 4-5)"),
+                                        "max of wear_projection over angle (paper Tables 4-5)",
+                                        "angle: maximum"),
     "wear_angle_of_max": VariableSpec(("joint", "axis"), "degree", "angle of the maximum projected wear",
                                       "centre of the first bin holding the maximum"),
     "wear_angle_min": VariableSpec(("joint", "axis"), "degree", "minimum wear angle",
                                    "smallest bin centre whose depth exceeds wear_threshold_fraction "
-                                   "of the axis maximum (paper Tables 4-5, DESIGN.md 5)"),
+                                   "of the axis maximum (paper Tables 4-5, docs/physics.md section 5)"),
     "wear_angle_max": VariableSpec(("joint", "axis"), "degree", "maximum wear angle",
                                    "largest bin centre whose depth exceeds wear_threshold_fraction "
-                                   "of the axis maximum (paper Tables 4-5, DESIGN.md 5)"),
+                                   "of the axis maximum (paper Tables 4-5, docs/physics.md section 5)"),
     "wear_range": VariableSpec(("joint", "axis"), "degree", "wear range",
                                "wear_angle_max - wear_angle_min (paper Tables 4-5)"),
     "wear_arc": VariableSpec(("joint", "axis"), "degree", "worn arc",

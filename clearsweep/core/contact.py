@@ -1,4 +1,4 @@
-"""Coated spherical contact law, friction, contact area (DESIGN 3, 5; paper Table 1, Eq. 11-13).
+"""Coated spherical contact law, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
 
 Pure functions of floats in SI units.
 """
@@ -9,12 +9,19 @@ from numba import njit
 
 
 @njit(cache=True)
+def stiffness_factor(ew, ri):
+    """K = 4 pi E_w R_i / 5 [N/m], the factor of every coated contact stiffness (Table 1)."""
+    return 4.0 * math.pi * ew * ri / 5.0
+
+
+@njit(cache=True)
 def elastic_force(delta, c, ew, ri):
     """Elastic part F_el = k_N(delta) delta [N] and its slope dF_el/d delta [N/m].
 
-    k_N = (4 pi E_w R_i / 5) (2 delta c + delta^2) / (c + delta)^2 (Table 1, exponent n = 1).
+    k_N = K (2 delta c + delta^2) / (c + delta)^2, K = :func:`stiffness_factor`
+    (Table 1, exponent n = 1).
     """
-    kk = 4.0 * math.pi * ew * ri / 5.0
+    kk = stiffness_factor(ew, ri)
     cd = c + delta
     f = kk * delta * delta * (2.0 * c + delta) / (cd * cd)
     df = kk * delta * (4.0 * c * c + 3.0 * c * delta + delta * delta) / (cd * cd * cd)
@@ -23,7 +30,7 @@ def elastic_force(delta, c, ew, ri):
 
 @njit(cache=True)
 def elastic_energy(delta, c, ew, ri):
-    """Elastic energy U [J] whose derivative is F_el (DESIGN 8).
+    """Elastic energy U [J] whose derivative is F_el (docs/physics.md section 8).
 
     U = K [delta^2/2 - c^2 ln(1 + delta/c) + c^2 delta/(c + delta)] = K c^2 u(x), x = delta/c,
     u(x) = x^2/2 - log1p(x) + x/(1+x). The leading terms cancel (u ~ 2 x^3 / 3), so small x
@@ -31,7 +38,7 @@ def elastic_energy(delta, c, ew, ri):
     """
     if delta <= 0.0:
         return 0.0
-    kk = 4.0 * math.pi * ew * ri / 5.0
+    kk = stiffness_factor(ew, ri)
     x = delta / c
     if x < 1e-2:
         u = 0.0
@@ -51,6 +58,21 @@ def damping_factor(cr, dv0):
 
 
 @njit(cache=True)
+def episode_impact_velocity(dv0, ddot, floor):
+    """Impact velocity delta_dot0 [m/s] of a contact episode after an accepted step in contact.
+
+    ``dv0`` is the episode's value so far (0 at its onset), ``ddot`` the normal approach rate
+    at the step's end. At the onset: max(ddot, floor); then the fastest approach seen in the
+    episode. With delta_dot <= delta_dot0 the damping term stays below
+    20 (1 - c_r) / (13 c_r) F_el whatever the floor, so the floor only keeps delta_dot0
+    positive; on an isolated impact (approach slowing from the onset) it is the onset value.
+    """
+    if dv0 == 0.0:
+        return max(ddot, floor)
+    return max(dv0, ddot)
+
+
+@njit(cache=True)
 def normal_force(delta, ddot, c, ew, ri, kappa):
     """Normal force F_N = k_N delta (1 + kappa delta_dot), clamped at 0 [N].
 
@@ -66,7 +88,7 @@ def normal_force(delta, ddot, c, ew, ri, kappa):
 
 @njit(cache=True)
 def friction_factor(vt, v0, v1):
-    """Dynamic correction c_d of the improved Coulomb law (DESIGN 3.3)."""
+    """Dynamic correction c_d of the improved Coulomb law (docs/physics.md section 3.3)."""
     if vt < v0:
         return 0.0
     if vt > v1:
@@ -100,7 +122,7 @@ def contact_angle(pen, e, ri, rj):
 
 @njit(cache=True)
 def stiff_rate(m_eff, k, c):
-    """Largest root magnitude |s| of m s^2 + c s + k = 0 [1/s] (DESIGN 4)."""
+    """Largest root magnitude |s| of m s^2 + c s + k = 0 [1/s] (docs/physics.md section 4)."""
     if m_eff <= 0.0:
         return 0.0
     disc = c * c - 4.0 * m_eff * k

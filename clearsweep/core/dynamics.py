@@ -1,4 +1,4 @@
-"""Equations of motion of the RSSP mechanism (DESIGN 2-3; paper Eq. 5, 29).
+"""Equations of motion of the RSSP mechanism (docs/physics.md sections 2-3; paper Eq. 5, 29).
 
 The Baumgarte-stabilised augmented system
 
@@ -16,32 +16,138 @@ Eq. 24).
 """
 
 import math
+from collections import namedtuple
 
+import numpy as np
 from numba import njit
 
-from .contact import (damping_factor, elastic_energy, friction_factor, normal_force,
-                      stiff_rate)
-from .kinematics import (add, cross, dot, gdot_phidot, gmat, mtv, mv, point_accel_quadratic,
-                         point_jacobian_rot, point_state, rot_mass, rotation, scale, sub,
-                         trig)
-from .layout import (D_CEFF, D_CONS, D_DDOT, D_DELTA, D_DFD, D_DFDD, D_NGLOBAL, D_ECC, D_FN, D_FT, D_HWEAR, D_JOINT_FORCE,
-                     D_KE, D_NORMAL, D_OFFSET, D_PDISS, D_PDRIVE, D_PE_GRAV, D_RATE, D_REACTION_O,
-                     D_SLIDER_ACC, D_TORQUE, D_UEL, D_VT, J_C, J_CLEARANCE, J_EW, J_MU, J_RI,
-                     J_RJ, P_BAUM_A, P_BAUM_B, P_CR, P_DV0_MIN, P_FRICTION, P_G, P_J2, P_J3, P_J4,
-                     P_L2, P_L3, P_M2, P_M3, P_M4, P_DT, P_OMEGA, P_THETA0, P_V0, P_V1, P_WEAR, P_ZS,
-                     S_DV0, ST_OK, ST_SINGULAR, Y_DISS, Y_QD, Y_WORK)
+from .contact import (
+    damping_factor,
+    elastic_energy,
+    friction_factor,
+    normal_force,
+    stiff_rate,
+    stiffness_factor,
+)
+from .kinematics import (
+    add,
+    cross,
+    dot,
+    gdot_phidot,
+    gmat,
+    mtv,
+    mv,
+    point_accel_quadratic,
+    point_jacobian_rot,
+    point_state,
+    rot_mass,
+    rotation,
+    scale,
+    sub,
+    trig,
+)
+from .layout import (
+    D_CEFF,
+    D_CONS,
+    D_DDOT,
+    D_DELTA,
+    D_DFD,
+    D_DFDD,
+    D_ECC,
+    D_FN,
+    D_FT,
+    D_HWEAR,
+    D_JOINT_FORCE,
+    D_KE,
+    D_NGLOBAL,
+    D_NORMAL,
+    D_OFFSET,
+    D_PDISS,
+    D_PDRIVE,
+    D_PE_GRAV,
+    D_RATE,
+    D_REACTION_O,
+    D_SLIDER_ACC,
+    D_TORQUE,
+    D_UEL,
+    D_VT,
+    J_C,
+    J_CLEARANCE,
+    J_EW,
+    J_MU,
+    J_RI,
+    J_RJ,
+    N_D,
+    N_Q,
+    N_S,
+    P_BAUM_A,
+    P_BAUM_B,
+    P_CR,
+    P_DT,
+    P_DV0_MIN,
+    P_FEEDBACK,
+    P_FRICTION,
+    P_G,
+    P_J2,
+    P_J3,
+    P_J4,
+    P_L2,
+    P_L3,
+    P_M2,
+    P_M3,
+    P_M4,
+    P_OMEGA,
+    P_THETA0,
+    P_V0,
+    P_V1,
+    P_ZS,
+    S_DV0,
+    ST_OK,
+    ST_SINGULAR,
+    Y_DISS,
+    Y_PHI2,
+    Y_PHI3,
+    Y_PHI4,
+    Y_QD,
+    Y_R2,
+    Y_R3,
+    Y_R4,
+    Y_WORK,
+)
 from .wear import map_bin
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
 
+#: What :func:`contact` returns for one clearance joint (Numba compiles a namedtuple as a
+#: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
+#: named ``_socket``.
+ContactState = namedtuple("ContactState", (
+    "force",            # force on the ball [N]
+    "q_ball",           # contact point Q_j on the ball
+    "q_socket",         # contact point Q_i on the socket
+    "fn",               # normal force F_N [N]
+    "dfn_ddelta",       # dF_N / d delta [N/m]
+    "dfn_dddot",        # dF_N / d delta_dot [N s/m]
+    "delta",            # penetration delta = e - c_eff [m] (negative: a gap)
+    "ddot",             # normal approach rate delta_dot [m/s]
+    "ecc",              # eccentricity e [m]
+    "normal",           # contact normal n
+    "offset_socket",    # ball-centre offset d in the socket frame [m]
+    "normal_socket",    # n in the socket frame
+    "slip_speed",       # tangential slip speed |v_t| [m/s]
+    "c_eff",            # local clearance c + h [m]
+    "wear_depth",       # wear depth h under the contact point [m]
+    "elastic_energy",   # elastic energy U_el [J]
+    "diss_power",       # power dissipated by damping and friction [W]
+))
+
 
 @njit(cache=True)
 def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
-    """Contact state and force of one clearance joint (DESIGN 3).
+    """Contact state and force of one clearance joint (docs/physics.md section 3).
 
     Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    Returns (F on the ball [N], Q_j, Q_i, F_N, dF/d delta, dF/d delta_dot, delta, delta_dot,
-    e, n, d_socket, n_socket, |v_t|, c_eff, h, U_el, P_diss).
+    Returns a :data:`ContactState`.
     """
     c = jp_j[J_C]
     ri = jp_j[J_RI]
@@ -57,7 +163,7 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     d_s = mtv(Rs, d)
     n_s = mtv(Rs, n)
     h = 0.0
-    if p[P_WEAR] != 0.0:
+    if p[P_FEEDBACK] != 0.0:
         ip, ia = map_bin(n_s, wmap_j.shape[0], wmap_j.shape[1])
         h = wmap_j[ip, ia]
     c_eff = c + h
@@ -70,7 +176,8 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     v = sub(vqj, vqi)
     ddot = dot(n, v)
     if delta <= 0.0:
-        return (zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff, h, 0.0, 0.0)
+        return ContactState(zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff,
+                            h, 0.0, 0.0)
     vt = sub(v, scale(ddot, n))
     vtn = math.sqrt(dot(vt, vt))
     dv0 = s_j[S_DV0]
@@ -85,7 +192,8 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
         force = add(force, scale(-ft / vtn, vt))
         pdiss += ft * vtn
     uel = elastic_energy(delta, c_eff, jp_j[J_EW], ri)
-    return (force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h, uel, pdiss)
+    return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
+                        uel, pdiss)
 
 
 @njit(cache=True)
@@ -252,7 +360,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         Output derivative.
     dg : float64[N_D]
         Output diagnostics (forces, contact state; with ``full`` also energies, constraint
-        violation and the stiff rate of DESIGN 4).
+        violation and the stiff rate of docs/physics.md section 4).
     full : bool
         Compute the energies, constraint violation and stiff rates too.
     C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, 8x6).
@@ -275,18 +383,18 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     qd = Y_QD
 
     # ---- bodies ----
-    r2 = (y[0], y[1], y[2])
-    r3 = (y[6], y[7], y[8])
-    r4 = (y[12], y[13], y[14])
-    v2 = (y[qd + 0], y[qd + 1], y[qd + 2])
-    v3 = (y[qd + 6], y[qd + 7], y[qd + 8])
-    v4 = (y[qd + 12], y[qd + 13], y[qd + 14])
-    pd2 = (y[qd + 3], y[qd + 4], y[qd + 5])
-    pd3 = (y[qd + 9], y[qd + 10], y[qd + 11])
-    pd4 = (y[qd + 15], y[qd + 16], y[qd + 17])
-    t2 = trig(y[3], y[4], y[5])
-    t3 = trig(y[9], y[10], y[11])
-    t4 = trig(y[15], y[16], y[17])
+    r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
+    r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
+    r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
+    v2 = (y[qd + Y_R2], y[qd + Y_R2 + 1], y[qd + Y_R2 + 2])
+    v3 = (y[qd + Y_R3], y[qd + Y_R3 + 1], y[qd + Y_R3 + 2])
+    v4 = (y[qd + Y_R4], y[qd + Y_R4 + 1], y[qd + Y_R4 + 2])
+    pd2 = (y[qd + Y_PHI2], y[qd + Y_PHI2 + 1], y[qd + Y_PHI2 + 2])
+    pd3 = (y[qd + Y_PHI3], y[qd + Y_PHI3 + 1], y[qd + Y_PHI3 + 2])
+    pd4 = (y[qd + Y_PHI4], y[qd + Y_PHI4 + 1], y[qd + Y_PHI4 + 2])
+    t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
+    t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
+    t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
     R2 = rotation(t2)
     R3 = rotation(t3)
     R4 = rotation(t4)
@@ -307,18 +415,18 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
 
     # ---- accelerations fixed by single-body constraints (Baumgarte rows) ----
     theta = p[P_THETA0] + p[P_OMEGA] * t
-    pdd2 = (-2.0 * a_b * pd2[0] - b_b * b_b * y[3],
-            -2.0 * a_b * pd2[1] - b_b * b_b * y[4],
-            -2.0 * a_b * (pd2[2] - p[P_OMEGA]) - b_b * b_b * (y[5] - theta))
+    pdd2 = (-2.0 * a_b * pd2[0] - b_b * b_b * y[Y_PHI2],
+            -2.0 * a_b * pd2[1] - b_b * b_b * y[Y_PHI2 + 1],
+            -2.0 * a_b * (pd2[2] - p[P_OMEGA]) - b_b * b_b * (y[Y_PHI2 + 2] - theta))
     wd2 = add(mv(G2, pdd2), gq2)
     pO, vO = point_state(r2, v2, R2, w2, uO)
     rdd2 = sub(sub(scale(-2.0 * a_b, vO), scale(b_b * b_b, pO)),
                mv(R2, add(cross(wd2, uO), cross(w2, cross(w2, uO)))))
-    gdd3 = -2.0 * a_b * pd3[2] - b_b * b_b * y[11]
-    ydd4 = -2.0 * a_b * v4[1] - b_b * b_b * y[13]
-    zdd4 = -2.0 * a_b * v4[2] - b_b * b_b * (y[14] - p[P_ZS])
+    gdd3 = -2.0 * a_b * pd3[2] - b_b * b_b * y[Y_PHI3 + 2]
+    ydd4 = -2.0 * a_b * v4[1] - b_b * b_b * y[Y_R4 + 1]
+    zdd4 = -2.0 * a_b * v4[2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
     for k in range(3):
-        dy[qd + 15 + k] = -2.0 * a_b * y[qd + 15 + k] - b_b * b_b * y[15 + k]
+        dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
 
     # ---- applied forces: gravity, contact ----
     F2 = scale(m2, grav)
@@ -344,21 +452,21 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
     if jp[0, J_CLEARANCE] != 0.0:
         cA = contact(jp[0], s[0], wmap[0], p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3)
-        fA = cA[0]
+        fA = cA.force
         F2 = add(F2, fA)
-        N2 = add(N2, body_moment(R2, r2, cA[1], fA))
+        N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
         F3 = sub(F3, fA)
-        N3 = sub(N3, body_moment(R3, r3, cA[2], fA))
-        pdiss += cA[16]
+        N3 = sub(N3, body_moment(R3, r3, cA.q_socket, fA))
+        pdiss += cA.diss_power
         store_contact(dg, 0, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
     if jp[1, J_CLEARANCE] != 0.0:
         cB = contact(jp[1], s[1], wmap[1], p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero)
-        fB = cB[0]
+        fB = cB.force
         F3 = add(F3, fB)
-        N3 = add(N3, body_moment(R3, r3, cB[1], fB))
+        N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
         F4x -= fB[0]
-        pdiss += cB[16]
+        pdiss += cB.diss_power
         store_contact(dg, 1, cB)
 
     # ---- rod generalised forces ----
@@ -452,23 +560,23 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             zdd[k] = mf[k]
 
     # ---- assemble qdd ----
-    for k in range(18):
+    for k in range(N_Q):
         dy[k] = y[qd + k]
-    dy[qd + 0] = rdd2[0]
-    dy[qd + 1] = rdd2[1]
-    dy[qd + 2] = rdd2[2]
-    dy[qd + 3] = pdd2[0]
-    dy[qd + 4] = pdd2[1]
-    dy[qd + 5] = pdd2[2]
-    dy[qd + 6] = zdd[0]
-    dy[qd + 7] = zdd[1]
-    dy[qd + 8] = zdd[2]
-    dy[qd + 9] = zdd[3]
-    dy[qd + 10] = zdd[4]
-    dy[qd + 11] = gdd3
-    dy[qd + 12] = zdd[5]
-    dy[qd + 13] = ydd4
-    dy[qd + 14] = zdd4
+    dy[qd + Y_R2] = rdd2[0]
+    dy[qd + Y_R2 + 1] = rdd2[1]
+    dy[qd + Y_R2 + 2] = rdd2[2]
+    dy[qd + Y_PHI2] = pdd2[0]
+    dy[qd + Y_PHI2 + 1] = pdd2[1]
+    dy[qd + Y_PHI2 + 2] = pdd2[2]
+    dy[qd + Y_R3] = zdd[0]
+    dy[qd + Y_R3 + 1] = zdd[1]
+    dy[qd + Y_R3 + 2] = zdd[2]
+    dy[qd + Y_PHI3] = zdd[3]
+    dy[qd + Y_PHI3 + 1] = zdd[4]
+    dy[qd + Y_PHI3 + 2] = gdd3
+    dy[qd + Y_R4] = zdd[5]
+    dy[qd + Y_R4 + 1] = ydd4
+    dy[qd + Y_R4 + 2] = zdd4
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
@@ -510,7 +618,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         dg[D_KE] = ke
         dg[D_PE_GRAV] = -(m2 * dot(grav, r2) + m3 * dot(grav, r3) + m4 * dot(grav, r4))
         cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
-        cons = max(cons, max(abs(y[13]), abs(y[14] - p[P_ZS])))
+        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
         dg[D_CONS] = cons
         rate = 0.0
         for j in range(2):
@@ -526,7 +634,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
 
 @njit(cache=True)
 def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
-    """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (DESIGN 4).
+    """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
     place (the crank is driven, hence of infinite mass). Besides the rates at the current
@@ -552,7 +660,7 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     ddot = dg[D_DDOT + j]
     if ddot > 0.0:
         c_eff = dg[D_CEFF + j]
-        kk = 4.0 * math.pi * jp_j[J_EW] * jp_j[J_RI] / 5.0
+        kk = stiffness_factor(jp_j[J_EW], jp_j[J_RI])
         delta = max(dg[D_DELTA + j], 0.0)
         dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
         dv0 = s_j[S_DV0]
@@ -578,23 +686,47 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
 
 @njit(cache=True)
 def store_contact(dg, j, cres):
-    """Copy one joint's contact state into the diagnostics vector."""
-    force = cres[0]
-    fn = cres[3]
+    """Copy one joint's contact state (a :data:`ContactState`) into the diagnostics vector."""
+    force = cres.force
+    fn = cres.fn
     dg[D_FN + j] = fn
-    ft_vec = add(force, scale(fn, cres[9]))
+    ft_vec = add(force, scale(fn, cres.normal))
     dg[D_FT + j] = math.sqrt(dot(ft_vec, ft_vec))
-    dg[D_DELTA + j] = cres[6]
-    dg[D_DDOT + j] = cres[7]
-    dg[D_ECC + j] = cres[8]
+    dg[D_DELTA + j] = cres.delta
+    dg[D_DDOT + j] = cres.ddot
+    dg[D_ECC + j] = cres.ecc
     for i in range(3):
-        dg[D_OFFSET + 3 * j + i] = cres[10][i]
-        dg[D_NORMAL + 3 * j + i] = cres[11][i]
-    dg[D_VT + j] = cres[12]
-    dg[D_CEFF + j] = cres[13]
-    dg[D_HWEAR + j] = cres[14]
-    dg[D_UEL + j] = cres[15]
-    dg[D_DFD + j] = cres[4]
-    dg[D_DFDD + j] = cres[5]
+        dg[D_OFFSET + 3 * j + i] = cres.offset_socket[i]
+        dg[D_NORMAL + 3 * j + i] = cres.normal_socket[i]
+    dg[D_VT + j] = cres.slip_speed
+    dg[D_CEFF + j] = cres.c_eff
+    dg[D_HWEAR + j] = cres.wear_depth
+    dg[D_UEL + j] = cres.elastic_energy
+    dg[D_DFD + j] = cres.dfn_ddelta
+    dg[D_DFDD + j] = cres.dfn_dddot
     for i in range(3):
-        dg[D_NGLOBAL + 3 * j + i] = cres[9][i]
+        dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
+
+
+@njit(cache=True)
+def ideal_joint_forces(t, y, p, jp):
+    """Forces on the balls [N] (2 x 3, global frame) of the mechanism with both spherical
+    joints ideal, at state y and time t: the reactions a seated start leans the balls on."""
+    jp_ideal = jp.copy()
+    jp_ideal[0, J_CLEARANCE] = 0.0
+    jp_ideal[1, J_CLEARANCE] = 0.0
+    s = np.zeros((2, N_S))
+    wmap = np.zeros((2, 1, 1))
+    dy = np.zeros(y.shape[0])
+    dg = np.zeros(N_D)
+    C = np.zeros((6, 6))
+    S = np.zeros((6, 6))
+    L = np.zeros((6, 6))
+    vz = np.zeros((8, 6))
+    out = np.full((2, 3), np.nan)
+    if evaluate(t, y, p, jp_ideal, s, wmap, dy, dg, False, C, S, L, vz) != ST_OK:
+        return out
+    for j in range(2):
+        for i in range(3):
+            out[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
+    return out

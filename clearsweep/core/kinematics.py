@@ -1,4 +1,4 @@
-"""Rigid-body kinematics with ZYX Euler angles (paper Eq. 19; DESIGN 1-2).
+"""Rigid-body kinematics with ZYX Euler angles (paper Eq. 19; docs/physics.md sections 1-2).
 
 R = Rz(alpha) Ry(beta) Rx(gamma); body angular velocity w' = G(phi) phi_dot.
 3-vectors are tuples, 3x3 matrices 9-tuples in row-major order.

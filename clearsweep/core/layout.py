@@ -32,7 +32,9 @@ P_ENERGY_TOL = 32   # energy residual stop, fraction of the throughput [-]
 P_STAB = 33         # largest accepted rate * h [-]
 P_DT = 34           # output-grid step h [s]
 P_MAX_LEVEL = 35    # largest sub-step level k (2**k sub-steps)
-N_P = 36
+P_SETTLE = 36       # start of the settled statistics window [s]
+P_FEEDBACK = 37     # 1.0 = the worn depth enlarges the local clearance c_eff
+N_P = 38
 
 # --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
@@ -46,6 +48,17 @@ N_JP = 7
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
+# r: body origin, 3 values [m]; phi: Euler angles (alpha, beta, gamma) [rad]. The
+# velocity of coordinate Y_x is at Y_QD + Y_x.
+Y_R2 = 0            # crank centre of mass, 3
+Y_PHI2 = 3          # crank angles, 3
+Y_R3 = 6            # rod centre of mass, 3
+Y_PHI3 = 9          # rod angles, 3
+Y_R4 = 12           # slider centre of mass, 3
+Y_PHI4 = 15         # slider angles, 3
+Y_CRANK_ANGLE = Y_PHI2 + 2   # gamma2, the crank rotation theta [rad]
+Y_ROD_BETA = Y_PHI3 + 1      # beta3, the rod's Euler angle that must stay off +-90 deg
+Y_SLIDER_X = Y_R4            # slider position along the guide [m]
 N_Q = 18
 Y_QD = 18
 Y_WORK = 36         # work done by the drive [J]
@@ -84,6 +97,22 @@ D_DFD = 53         # 2, dF_N/d delta [N/m]
 D_DFDD = 55        # 2, dF_N/d delta_dot [N s/m]
 N_D = 57
 
+# --- running statistics m[w, :] (w = 0: whole run, 1: settled window) ---------
+# Updated at every accepted RK4 (sub-)step end, never from the saved output rows.
+W_WHOLE = 0
+W_SETTLED = 1
+M_FN_PEAK = 0       # 2, peak normal force [N]
+M_PEN_PEAK = 2      # 2, peak penetration [m]
+M_IMPACTS = 4       # 2, contact episodes begun (impacts) [-]
+M_VIMP_MAX = 6      # 2, largest approach velocity at an impact [m/s]
+M_CONTACT_T = 8     # 2, time in contact [s]
+M_ACC_PEAK = 10     # peak |slider acceleration| [m/s^2]
+M_ACC_SQ = 11       # integral of slider acceleration^2 dt [m^2/s^3]
+M_TORQUE_PEAK = 12  # peak |crank torque| [N m]
+M_TIME = 13         # duration the window covers [s]
+M_SAMPLES = 14      # step-end samples in the window [-]
+N_M = 15
+
 # --- status codes -----------------------------------------------------------
 ST_OK = 0
 ST_UNSTABLE_STEP = 1
@@ -105,4 +134,4 @@ STATUS_NAMES = {
     ST_SINGULAR: "singular_constraints",
 }
 
-N_ANGLE_BINS = 360  # one-degree projection bins (DESIGN 5)
+N_ANGLE_BINS = 360  # one-degree projection bins (docs/physics.md section 5)

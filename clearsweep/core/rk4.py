@@ -1,7 +1,7 @@
-"""Fixed-step classical RK4 with deterministic 2^k sub-stepping, wear, status (DESIGN 4-5).
+"""Fixed-step classical RK4 with deterministic 2^k sub-stepping, wear, status (docs/physics.md sections 4-5).
 
 Each output-grid step h is split into 2^k equal RK4 sub-steps, k the smallest level for
-which the stiff rate of DESIGN 4 (estimated at every sub-step's end) times h / 2^k stays
+which the stiff rate of docs/physics.md section 4 (estimated at every sub-step's end) times h / 2^k stays
 within the stability limit. A step whose rate grows past the limit during the step is
 rejected and redone at a deeper level, wear and contact state restored; past the level
 cap the case stops with ST_UNSTABLE_STEP. Wear, the contact's impact velocity and the
@@ -13,16 +13,72 @@ import math
 import numpy as np
 from numba import njit
 
-from .contact import contact_angle, contact_area
+from .contact import contact_angle, contact_area, episode_impact_velocity
 from .dynamics import evaluate
-from .layout import (D_CONS, D_DDOT, D_DELTA, D_ECC, D_FN, D_HWEAR, D_KE, D_NORMAL, D_PE_GRAV,
-                     D_RATE, D_UEL, D_VT, J_C, J_CLEARANCE, J_K, J_RI, J_RJ, N_ANGLE_BINS, N_D,
-                     N_S, N_Y, P_AMPL, P_CONS_TOL, P_DT, P_DV0_MIN, P_ENERGY_TOL, P_MAX_LEVEL,
-                     P_PEN_FRAC, P_SLIP, P_STAB, P_WEAR, S_BETA, S_DV0, ST_CONSTRAINT, ST_ENERGY,
-                     ST_EULER, ST_NONFINITE, ST_OK, ST_PENETRATION, ST_UNSTABLE_STEP)
-from .wear import bin_area, map_bin, projection_bins
+from .layout import (
+    D_CONS,
+    D_DDOT,
+    D_DELTA,
+    D_ECC,
+    D_FN,
+    D_HWEAR,
+    D_KE,
+    D_NORMAL,
+    D_PE_GRAV,
+    D_RATE,
+    D_SLIDER_ACC,
+    D_TORQUE,
+    D_UEL,
+    D_VT,
+    J_C,
+    J_CLEARANCE,
+    J_K,
+    J_RI,
+    J_RJ,
+    M_ACC_PEAK,
+    M_ACC_SQ,
+    M_CONTACT_T,
+    M_FN_PEAK,
+    M_IMPACTS,
+    M_PEN_PEAK,
+    M_SAMPLES,
+    M_TIME,
+    M_TORQUE_PEAK,
+    M_VIMP_MAX,
+    N_ANGLE_BINS,
+    N_D,
+    N_M,
+    N_S,
+    N_Y,
+    P_AMPL,
+    P_CONS_TOL,
+    P_DT,
+    P_DV0_MIN,
+    P_ENERGY_TOL,
+    P_MAX_LEVEL,
+    P_PEN_FRAC,
+    P_SETTLE,
+    P_SLIP,
+    P_STAB,
+    P_WEAR,
+    S_BETA,
+    S_DV0,
+    ST_CONSTRAINT,
+    ST_ENERGY,
+    ST_EULER,
+    ST_NONFINITE,
+    ST_OK,
+    ST_PENETRATION,
+    ST_UNSTABLE_STEP,
+    W_SETTLED,
+    W_WHOLE,
+    Y_DISS,
+    Y_ROD_BETA,
+    Y_WORK,
+)
+from .wear import deposit, projection_bins
 
-EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of DESIGN 1 [rad]
+EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of docs/physics.md section 1 [rad]
 
 
 @njit(cache=True)
@@ -63,9 +119,68 @@ def rk4_substep(t, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz):
     return ST_OK
 
 
+#: Wear of consecutive steps is spread on the map as one cap while the contact direction
+#: stays within this fraction of the cap's angular radius of the waiting wear's mean
+#: direction and the cap area within WEAR_MERGE_AREA of its mean.
+WEAR_MERGE_ANGLE = 0.05
+WEAR_MERGE_AREA = 0.05
+
+
+@njit(cache=True)
+def wear_mergeable(pend, cur):
+    """Whether the step's wear ``cur`` may join the waiting wear ``pend`` (rows as in
+    integrate: sum V n, sum V, sum V A, R_i) without moving the cap noticeably."""
+    ap = pend[4] / pend[3]
+    ac = cur[4] / cur[3]
+    if abs(ac - ap) > WEAR_MERGE_AREA * ap:
+        return False
+    np_ = math.sqrt(pend[0] * pend[0] + pend[1] * pend[1] + pend[2] * pend[2])
+    nc = math.sqrt(cur[0] * cur[0] + cur[1] * cur[1] + cur[2] * cur[2])
+    d2 = 0.0
+    for i in range(3):
+        d = pend[i] / np_ - cur[i] / nc
+        d2 += d * d
+    # cap angular radius^2 ~ A / (pi R^2) for small caps
+    return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[5] * pend[5])
+
+
+@njit(cache=True)
+def flush_wear(wmap_j, pend, scratch):
+    """Spread the waiting wear on the map (volume-weighted mean direction and cap area);
+    clear it; return the largest depth written [m]."""
+    size = math.sqrt(pend[0] * pend[0] + pend[1] * pend[1] + pend[2] * pend[2])
+    n = (pend[0] / size, pend[1] / size, pend[2] / size)
+    top = deposit(wmap_j, n, pend[3], pend[4] / pend[3], pend[5], scratch)
+    for i in range(6):
+        pend[i] = 0.0
+    return top
+
+
+@njit(cache=True)
+def record_sample(m, w, dg, jp, weight):
+    """Fold one accepted (sub-)step end into window w of the running statistics m.
+
+    ``weight`` is the (sub-)step length [s] that the sample closes (0 for the initial state):
+    time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
+    """
+    acc = dg[D_SLIDER_ACC]
+    m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], abs(acc))
+    m[w, M_ACC_SQ] += acc * acc * weight
+    m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], abs(dg[D_TORQUE]))
+    m[w, M_TIME] += weight
+    m[w, M_SAMPLES] += 1.0
+    for j in range(2):
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], dg[D_FN + j])
+        m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], dg[D_DELTA + j])
+        if dg[D_DELTA + j] > 0.0:
+            m[w, M_CONTACT_T + j] += weight
+
+
 @njit(cache=True)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-              out_wmax, info):
+              out_wmax, info, stats):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
 
     Parameters
@@ -77,6 +192,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     out_t, out_y, out_d, out_wmax : output rows (n_save = n_steps // save_every + 1).
     info : int64[5] -> (status, saved rows, deepest level, RK4 sub-steps taken,
         output-grid steps completed, the stopping step included).
+    stats : float64[2, N_M]            running statistics (layout.M_*), whole run and
+        settled window (time >= p[P_SETTLE]), accumulated at every accepted (sub-)step.
 
     Returns
     -------
@@ -84,11 +201,10 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     """
     h = p[P_DT]
     stab = p[P_STAB]
+    settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
     wear_on = p[P_WEAR] != 0.0
     ampl = p[P_AMPL]
-    npolar = wmap.shape[1]
-    nazim = wmap.shape[2]
     ny = N_Y
     y = y0.copy()
     ysave = np.empty(ny)
@@ -102,6 +218,9 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     dgsave = np.zeros(N_D)
     s = np.zeros((2, N_S))
     ssave = np.zeros((2, N_S))
+    msave = np.zeros((2, N_M))
+    ddot_prev = np.zeros(2)
+    ddot_prev_save = np.zeros(2)
     for j in range(2):
         s[j, S_BETA] = math.pi
     C = np.zeros((6, 6))
@@ -109,9 +228,17 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     L = np.zeros((6, 6))
     vz = np.zeros((8, 6))
     nbuf_max = 2 * (1 << max_level)
-    buf_i = np.zeros((nbuf_max, 6), dtype=np.int64)   # joint, ip, ia, bx, by, bz
-    buf_v = np.zeros((nbuf_max, 5))                   # map depth, proj x, y, z, volume
+    buf_i = np.zeros((nbuf_max, 4), dtype=np.int64)   # joint, bx, by, bz
+    buf_v = np.zeros((nbuf_max, 4))   # volume, proj x, y, z (undone if the step is rejected)
     wmax = np.zeros(2)
+    # wear waiting to be spread on the map (per joint): sum of V n (3), sum V, sum V A, R_i;
+    # ``cur`` holds the step being taken, ``pend`` the accepted steps not yet spread
+    cur = np.zeros((2, 6))
+    pend = np.zeros((2, 6))
+    scratch = np.zeros((4 * wmap.shape[1], 3))
+    for w in range(2):
+        for i in range(N_M):
+            stats[w, i] = 0.0
 
     status = ST_OK
     st = evaluate(t0, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
@@ -119,6 +246,24 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
         info[0] = st
         info[1] = 0
         return np.zeros(2)
+    # a ball that starts on the socket wall (seated start) is in contact, not an impact
+    seated = False
+    for j in range(2):
+        ddot_prev[j] = dg[D_DDOT + j]
+        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+            s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
+            s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
+                                         jp[j, J_RI], jp[j, J_RJ])
+            seated = True
+    if seated:
+        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
+        if st != ST_OK:
+            info[0] = st
+            info[1] = 0
+            return np.zeros(2)
+    record_sample(stats, W_WHOLE, dg, jp, 0.0)
+    if t0 >= settle:
+        record_sample(stats, W_SETTLED, dg, jp, 0.0)
     e0 = energy_total(dg)
     ke_peak = dg[D_KE]
     res_max = 0.0
@@ -140,6 +285,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
         k1save[:] = k1
         dgsave[:] = dg
         ssave[:, :] = s
+        msave[:, :] = stats
+        ddot_prev_save[:] = ddot_prev
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
@@ -148,6 +295,9 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             hs = h / nsub
             nbuf = 0
             need = -1
+            for j in range(2):
+                for i in range(6):
+                    cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
                 st = rk4_substep(ts, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz)
@@ -160,9 +310,11 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                     need = level_for(dg[D_RATE], h, stab)
                     break
                 changed = False
+                in_settled = ts + hs >= settle
                 for j in range(2):
                     if jp[j, J_CLEARANCE] == 0.0:
                         continue
+                    ddot = dg[D_DDOT + j]
                     if dg[D_DELTA + j] > 0.0:
                         fn = dg[D_FN + j]
                         ri = jp[j, J_RI]
@@ -179,79 +331,111 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                             area = contact_area(pen, e, ri, rj)
                             nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
                                    dg[D_NORMAL + 3 * j + 2])
-                            ip, ia = map_bin(nrm, npolar, nazim)
                             bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
-                            dmap = vol / bin_area(ip, npolar, nazim, ri)
                             buf_i[nbuf, 0] = j
-                            buf_i[nbuf, 1] = ip
-                            buf_i[nbuf, 2] = ia
-                            buf_i[nbuf, 3] = bx
-                            buf_i[nbuf, 4] = by
-                            buf_i[nbuf, 5] = bz
-                            buf_v[nbuf, 0] = dmap
+                            buf_i[nbuf, 1] = bx
+                            buf_i[nbuf, 2] = by
+                            buf_i[nbuf, 3] = bz
+                            buf_v[nbuf, 0] = vol
                             buf_v[nbuf, 1] = vol * abs(nrm[0]) / area
                             buf_v[nbuf, 2] = vol * abs(nrm[1]) / area
                             buf_v[nbuf, 3] = vol * abs(nrm[2]) / area
-                            buf_v[nbuf, 4] = vol
-                            wmap[j, ip, ia] += dmap
+                            for i in range(3):
+                                cur[j, i] += vol * nrm[i]
+                            cur[j, 3] += vol
+                            cur[j, 4] += vol * area
+                            cur[j, 5] = ri
                             proj[j, 0, bx] += buf_v[nbuf, 1]
                             proj[j, 1, by] += buf_v[nbuf, 2]
                             proj[j, 2, bz] += buf_v[nbuf, 3]
                             wvol[j] += vol
                             nbuf += 1
                         s[j, S_BETA] = beta
+                        dv0 = episode_impact_velocity(s[j, S_DV0], ddot, p[P_DV0_MIN])
                         if s[j, S_DV0] == 0.0:
-                            s[j, S_DV0] = max(dg[D_DDOT + j], p[P_DV0_MIN])
+                            # onset of a contact episode: an impact
+                            s[j, S_DV0] = dv0
+                            changed = True
+                            vimp = max(ddot, ddot_prev[j])
+                            stats[W_WHOLE, M_IMPACTS + j] += 1.0
+                            stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j],
+                                                                 vimp)
+                            if in_settled:
+                                stats[W_SETTLED, M_IMPACTS + j] += 1.0
+                                stats[W_SETTLED, M_VIMP_MAX + j] = max(
+                                    stats[W_SETTLED, M_VIMP_MAX + j], vimp)
+                        elif dv0 != s[j, S_DV0]:
+                            s[j, S_DV0] = dv0
                             changed = True
                     elif s[j, S_DV0] != 0.0:
                         s[j, S_DV0] = 0.0
                         s[j, S_BETA] = math.pi
                         changed = True
+                    ddot_prev[j] = ddot
                 if changed:
                     st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
                     if st != ST_OK:
                         status = st
                         break
+                record_sample(stats, W_WHOLE, dg, jp, hs)
+                if in_settled:
+                    record_sample(stats, W_SETTLED, dg, jp, hs)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
             for b in range(nbuf - 1, -1, -1):
                 j = buf_i[b, 0]
-                wmap[j, buf_i[b, 1], buf_i[b, 2]] -= buf_v[b, 0]
-                proj[j, 0, buf_i[b, 3]] -= buf_v[b, 1]
-                proj[j, 1, buf_i[b, 4]] -= buf_v[b, 2]
-                proj[j, 2, buf_i[b, 5]] -= buf_v[b, 3]
-                wvol[j] -= buf_v[b, 4]
+                proj[j, 0, buf_i[b, 1]] -= buf_v[b, 1]
+                proj[j, 1, buf_i[b, 2]] -= buf_v[b, 2]
+                proj[j, 2, buf_i[b, 3]] -= buf_v[b, 3]
+                wvol[j] -= buf_v[b, 0]
             y[:] = ysave
             k1[:] = k1save
             dg[:] = dgsave
             s[:, :] = ssave
+            stats[:, :] = msave
+            ddot_prev[:] = ddot_prev_save
             level = max(level + 1, need)
         if status != ST_OK:
+            if status != ST_UNSTABLE_STEP:
+                # the stopping attempt's wear stays in the projections and the worn
+                # volume: keep the map holding the same volume (an unstable step's last
+                # attempt was rejected and undone)
+                for j in range(2):
+                    for i in range(5):
+                        pend[j, i] += cur[j, i]
+                    if cur[j, 3] > 0.0:
+                        pend[j, 5] = cur[j, 5]
             break
         total += 1 << level
         deepest = max(deepest, level)
-        for b in range(nbuf):
-            j = buf_i[b, 0]
-            wmax[j] = max(wmax[j], wmap[j, buf_i[b, 1], buf_i[b, 2]])
+        for j in range(2):
+            if cur[j, 3] > 0.0:
+                if pend[j, 3] > 0.0 and not wear_mergeable(pend[j], cur[j]):
+                    wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
+                for i in range(6):
+                    pend[j, i] += cur[j, i]
+                pend[j, 5] = cur[j, 5]
+            elif pend[j, 3] > 0.0:
+                wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
 
         # ---- checks ----
         for i in range(ny):
             if not math.isfinite(y[i]):
                 status = ST_NONFINITE
-        if status == ST_OK and abs(y[10]) > EULER_LIMIT:
+        if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
             status = ST_EULER
         for j in range(2):
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
                 status = ST_PENETRATION
         ke_peak = max(ke_peak, dg[D_KE])
-        work_abs = max(work_abs, abs(y[36]))
-        res = energy_total(dg) - y[36] + y[37] - e0
+        work_abs = max(work_abs, abs(y[Y_WORK]))
+        res = energy_total(dg) - y[Y_WORK] + y[Y_DISS] - e0
         res_max = max(res_max, abs(res))
         if status == ST_OK and not (dg[D_CONS] <= p[P_CONS_TOL]):
             status = ST_CONSTRAINT
         if status == ST_OK:
-            throughput = max(ke_peak, max(work_abs, y[37]))
+            throughput = max(ke_peak, max(work_abs, y[Y_DISS]))
             if not (abs(res) <= p[P_ENERGY_TOL] * throughput):
                 status = ST_ENERGY
         if (step + 1) % save_every == 0:
@@ -263,6 +447,12 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             n_saved += 1
         if status != ST_OK:
             break
+    for j in range(2):
+        if pend[j, 3] > 0.0:
+            wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
+    if status == ST_OK and n_saved > 0:
+        out_wmax[n_saved - 1, 0] = wmax[0]
+        out_wmax[n_saved - 1, 1] = wmax[1]
     info[0] = status
     info[1] = n_saved
     info[2] = deepest

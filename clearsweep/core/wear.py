@@ -1,14 +1,21 @@
-"""Wear map over the socket sphere and the paper's per-axis projections (DESIGN 5).
+"""Wear map over the socket sphere and the paper's per-axis projections (docs/physics.md 5).
 
-The map stores the bin-averaged wear depth: a step's worn volume V = k F_N dS goes into the
-bin under the contact point as V / (bin area), so that sum(depth * bin area) = sum(V) exactly.
-The same bin is read back as h(n) for c_eff(n) = c + h(n) (nearest bin, no interpolation:
-a worn direction sees exactly the depth it received).
+The map stores the bin-averaged wear depth. A step's worn volume V = k F_N dS is spread over
+the bins that the contact cap (area A, centred on the contact direction) overlaps, in
+proportion to the overlap: a bin inside the cap deepens by V / A, the Archard depth
+increment, whatever the bin's size; sum(depth * bin area) = sum(V) to rounding. The bin
+containing a direction n is read back as h(n) for c_eff(n) = c + h(n).
 """
 
 import math
 
 from numba import njit
+
+# 4-point Gauss-Legendre rule on [-1, 1]: nodes and weights
+_GX0 = 0.3399810435848563
+_GX1 = 0.8611363115940526
+_GW0 = 0.6521451548625461
+_GW1 = 0.3478548451374538
 
 
 @njit(cache=True)
@@ -49,3 +56,106 @@ def angle_bin(y, x, nbins):
 def projection_bins(n, nbins):
     """Projection bins about x, y, z: atan2(n_z, n_y), atan2(n_x, n_z), atan2(n_y, n_x)."""
     return (angle_bin(n[2], n[1], nbins), angle_bin(n[0], n[2], nbins), angle_bin(n[1], n[0], nbins))
+
+
+@njit(cache=True)
+def cap_half_width(theta, cos_tc, sin_tc, cos_psi):
+    """Azimuthal half-width [rad] of a cap (centre polar angle tc, angular radius psi) at polar
+    angle theta: the cap holds the directions with cos(angle to the centre) >= cos psi."""
+    st = math.sin(theta)
+    ct = math.cos(theta)
+    den = st * sin_tc
+    num = cos_psi - ct * cos_tc
+    if den <= 0.0:
+        return math.pi if num <= 0.0 else 0.0
+    x = num / den
+    if x <= -1.0:
+        return math.pi
+    if x >= 1.0:
+        return 0.0
+    return math.acos(x)
+
+
+@njit(cache=True)
+def _arc_to_bins(wmap_j, ip, phi_c, half, weight, nazim, dmax):
+    """Add weight * (overlap of the arc [phi_c - half, phi_c + half] with each azimuth bin,
+    in bin widths) to row ip; returns the largest value written (and dmax)."""
+    dphi = 2.0 * math.pi / nazim
+    u0 = (phi_c - half + math.pi) / dphi
+    u1 = (phi_c + half + math.pi) / dphi
+    k = int(math.floor(u0))
+    kend = int(math.floor(u1))
+    while k <= kend:
+        lo = max(float(k), u0)
+        hi = min(float(k + 1), u1)
+        if hi > lo:
+            ia = k % nazim
+            wmap_j[ip, ia] += weight * (hi - lo)
+            dmax = max(dmax, wmap_j[ip, ia])
+        k += 1
+    return dmax
+
+
+@njit(cache=True)
+def deposit(wmap_j, n, vol, area, radius, scratch):
+    """Spread the worn volume ``vol`` [m^3] over the bins overlapped by the contact cap of
+    area ``area`` [m^2] centred on the unit direction n (socket frame), on a sphere of the
+    given radius; each bin's depth grows by its share of the volume over its area.
+
+    The overlap is integrated over polar angle with a 4-point Gauss rule per bin row and
+    exactly in azimuth; the weights are normalised by their sum, so the volume is kept to
+    rounding whatever the grid. A cap smaller than the quadrature resolves falls into the bin
+    under its centre. A negative ``vol`` undoes an earlier deposit of the same cap.
+    ``scratch`` is a float64[4 * npolar, 3] work array.
+
+    Returns the largest depth of a bin written [m].
+    """
+    npolar = wmap_j.shape[0]
+    nazim = wmap_j.shape[1]
+    cz = max(-1.0, min(1.0, n[2]))
+    tc = math.acos(cz)
+    phi_c = math.atan2(n[1], n[0])
+    cos_tc = math.cos(tc)
+    sin_tc = math.sin(tc)
+    # 1 - cos psi = A / (2 pi r^2); psi = 2 asin(sqrt(A / (4 pi r^2))) without cancellation
+    frac = min(1.0, max(0.0, area / (4.0 * math.pi * radius * radius)))
+    psi = 2.0 * math.asin(math.sqrt(frac))
+    cos_psi = 1.0 - 2.0 * frac
+    dtheta = math.pi / npolar
+    ip0 = max(0, int(math.floor((tc - psi) / dtheta)))
+    ip1 = min(npolar - 1, int(math.floor((tc + psi) / dtheta)))
+    # pass 1: Gauss nodes (row, azimuthal half-width, weight) and their total, the cap's
+    # area over r^2 as the quadrature sees it
+    total = 0.0
+    nn = 0
+    for ip in range(ip0, ip1 + 1):
+        a = max(ip * dtheta, tc - psi)
+        b = min((ip + 1) * dtheta, tc + psi)
+        if b <= a:
+            continue
+        mid = 0.5 * (a + b)
+        hw = 0.5 * (b - a)
+        for g in range(4):
+            x = _GX0 if g < 2 else _GX1
+            w = _GW0 if g < 2 else _GW1
+            th = mid + (x if g % 2 == 0 else -x) * hw
+            half = cap_half_width(th, cos_tc, sin_tc, cos_psi)
+            if half > 0.0:
+                wt = w * hw * math.sin(th)
+                scratch[nn, 0] = ip
+                scratch[nn, 1] = half
+                scratch[nn, 2] = wt
+                nn += 1
+                total += wt * 2.0 * half
+    if not total > 0.0:
+        ip, ia = map_bin(n, npolar, nazim)
+        wmap_j[ip, ia] += vol / bin_area(ip, npolar, nazim, radius)
+        return wmap_j[ip, ia]
+    # pass 2: each node's arc, in bin widths, times its share of the volume over bin area
+    dmax = 0.0
+    scale = vol * (2.0 * math.pi / nazim) / total
+    for k in range(nn):
+        ip = int(scratch[k, 0])
+        weight = scale * scratch[k, 2] / bin_area(ip, npolar, nazim, radius)
+        dmax = _arc_to_bins(wmap_j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
+    return dmax

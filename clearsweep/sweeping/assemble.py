@@ -1,19 +1,4 @@
-"""Per-case parts, resume bookkeeping and the bounded-memory sweep writer.
-
-A sweep writing ``OUT.nc`` keeps its finished cases in the folder
-``OUT.nc.parts/`` (:func:`parts_dir_for`):
-
-- ``<hash>.nc``: one finished case (:func:`case_hash` of its resolved
-  configuration), written to a temporary file in the same folder and renamed
-  into place (:func:`clearsweep.dataset.write_netcdf_atomic`), so a part that
-  is visible is complete. A killed sweep leaves at most a temporary
-  ``.<hash>.nc.*.tmp`` file, which the next run removes.
-- ``sweep.log``: one JSON line per event (``run``, ``done``, ``interrupted``,
-  ``assembled``), appended by the driver; ``done`` lines carry the case hash,
-  its status and the run id, so a log tells which run computed which case.
-- ``.lock``: an exclusive ``flock`` held while a sweep uses the folder, so
-  two sweeps cannot write the same parts; the kernel drops it when the
-  process ends, however it ends.
+"""Parts -> one labelled sweep netCDF, case by case, in bounded memory.
 
 :func:`write_sweep_netcdf` assembles the parts into the final file one case
 at a time: it creates the netCDF4 file with every variable chunked one case
@@ -26,259 +11,28 @@ case and the coordinates, never the sweep.
 
 from __future__ import annotations
 
-import datetime as _dt
-import errno
-import fcntl
-import hashlib
-import json
 import os
-import shutil
 import sys
-import uuid
 from collections.abc import Callable, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import netCDF4
 import numpy as np
-import xarray as xr
 
-from .dataset import replaced_on_success, write_netcdf_atomic
+from ..dataset import replaced_on_success, write_errors_as_oserror
+from .parts import (
+    COMPRESSION,
+    MESSAGE_ATTRS,
+    NOT_FAILED,
+    STATUS_ATTRS,
+    PartStore,
+    StoreError,
+    _now,
+)
 
-__all__ = ["StoreError", "PartStore", "SweepSlot", "canonical_json", "case_hash", "parts_dir_for",
-           "write_part", "write_sweep_netcdf", "open_results", "history_line", "PART_SUFFIX", "LOG_NAME"]
-
-PART_SUFFIX = ".nc"
-LOG_NAME = "sweep.log"
-LOCK_NAME = ".lock"
-#: Hex digits of the SHA-256 kept in a part's name.
-HASH_LENGTH = 16
-#: Compression of numeric variables, in parts and in the assembled file.
-COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
-#: Statuses that do not count as failures.
-NOT_FAILED = ("ok", "skipped")
-
-#: Attributes of the two per-case string variables every sweep holds.
-STATUS_ATTRS = {"long_name": "simulation status",
-                "description": "ok, skipped, or the reason the case stopped"}
-MESSAGE_ATTRS = {"long_name": "status message",
-                 "description": "empty for a case that ran to the end; otherwise why it did not"}
-
-
-class StoreError(RuntimeError):
-    """A parts folder that cannot be used as asked (earlier parts, another sweep in it)."""
-
-
-def canonical_json(cfg: Mapping) -> str:
-    """Canonical JSON text of a resolved configuration (sorted keys, no spaces)."""
-    return json.dumps(cfg, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
-
-
-def case_hash(cfg: Mapping) -> str:
-    """Name of a case's part: the first 16 hex digits of the SHA-256 of :func:`canonical_json`."""
-    return hashlib.sha256(canonical_json(cfg).encode("ascii")).hexdigest()[:HASH_LENGTH]
-
-
-def parts_dir_for(out: str | os.PathLike) -> Path:
-    """The parts folder of the sweep output ``out``: ``OUT.parts`` beside it."""
-    out = Path(out)
-    return out.with_name(out.name + ".parts")
-
-
-def open_results(path: str | os.PathLike, **kwargs) -> xr.Dataset:
-    """Open a sweep (or one-case) results file.
-
-    Seconds stay floats (``decode_timedelta=False``: ``time`` and
-    ``wall_time`` carry ``units: s``), and variable-length strings (material
-    names, ``status``, ``message``) come back as strings; sweep coordinates
-    keep their values, so ``ds.sel(B_coating="PTFE")`` works.
-
-    Parameters
-    ----------
-    path
-        netCDF file written by :func:`clearsweep.sweeps.run_sweep` or ``clearsweep run``.
-    **kwargs
-        Passed to :func:`xarray.open_dataset` (e.g. ``engine="h5netcdf"``, ``chunks={}``).
-
-    Returns
-    -------
-    xr.Dataset
-        Lazily loaded; close it (or use it as a context manager) when done.
-    """
-    kwargs.setdefault("decode_timedelta", False)
-    return xr.open_dataset(path, **kwargs)
-
-
-def _now() -> str:
-    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def _encoding(ds: xr.Dataset) -> dict[str, dict]:
-    """Every numeric array of a part compressed as one chunk, exactly as a case of the sweep file.
-
-    Strings and scalars are stored as they are.
-    """
-    return {name: {**COMPRESSION, "chunksizes": var.shape} for name, var in ds.variables.items()
-            if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
-
-
-def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
-    """Write the part of case ``h`` into ``directory`` atomically (temporary file, then rename).
-
-    Used by :meth:`PartStore.write` and by pool workers, which write their
-    cases themselves.
-    """
-    return write_netcdf_atomic(part, Path(directory) / f"{h}{PART_SUFFIX}", encoding=_encoding(part))
-
-
-class PartStore:
-    """The parts folder of one sweep: atomic parts, the event log and the lock.
-
-    Parameters
-    ----------
-    directory
-        The folder (``OUT.parts``); created by :meth:`open`.
-
-    Examples
-    --------
-    >>> store = PartStore("results.nc.parts")           # doctest: +SKIP
-    >>> finished = store.open(resume=True)               # hashes of earlier parts
-    >>> store.write(h, part); store.close()
-    """
-
-    def __init__(self, directory: str | os.PathLike):
-        self.directory = Path(directory)
-        self.run_id = uuid.uuid4().hex[:12]
-        self._lock_fd: int | None = None
-        self._log = None
-
-    # ------------------------------------------------------------------ life cycle
-    def open(self, *, resume: bool = False, overwrite: bool = False) -> set[str]:
-        """Take the folder for this sweep.
-
-        Parameters
-        ----------
-        resume
-            Keep the parts of an earlier run (they are not run again).
-        overwrite
-            Delete the parts and log of an earlier run.
-
-        Returns
-        -------
-        set of str
-            Hashes of the parts kept (empty unless ``resume``).
-
-        Raises
-        ------
-        StoreError
-            Another sweep holds the folder, or it holds parts and neither
-            ``resume`` nor ``overwrite`` was given.
-        """
-        if resume and overwrite:
-            raise StoreError("resume and overwrite exclude each other: resume keeps the finished "
-                             "cases, overwrite deletes them")
-        self.directory.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
-            os.close(fd)
-            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                raise StoreError(f"{self.directory} is in use by another sweep; wait for it to "
-                                 "finish or write to another output file") from None
-            raise
-        self._lock_fd = fd
-        try:
-            self._remove_temporaries()
-            finished = self.finished()
-            if finished and not resume:
-                if not overwrite:
-                    raise StoreError(
-                        f"{self.directory} holds {len(finished)} finished case(s) of an earlier "
-                        "sweep; pass --resume to continue that sweep (resume=True), or "
-                        "--overwrite to delete them and start again (overwrite=True)")
-                for h in finished:
-                    self.path(h).unlink()
-                (self.directory / LOG_NAME).unlink(missing_ok=True)
-                finished = set()
-        except BaseException:
-            self.close()
-            raise
-        self._log = open(self.directory / LOG_NAME, "a", encoding="utf-8")
-        return finished
-
-    def close(self) -> None:
-        """Close the log and release the lock (the parts stay)."""
-        if self._log is not None:
-            self._log.close()
-            self._log = None
-        if self._lock_fd is not None:
-            os.close(self._lock_fd)
-            self._lock_fd = None
-
-    def remove(self) -> None:
-        """Delete the folder with everything in it (after a successful assembly)."""
-        self.close()
-        shutil.rmtree(self.directory, ignore_errors=True)
-
-    def __enter__(self) -> PartStore:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
-    def _remove_temporaries(self) -> None:
-        for tmp in self.directory.glob(".*.tmp"):
-            tmp.unlink(missing_ok=True)
-
-    # ------------------------------------------------------------------ parts
-    def path(self, h: str) -> Path:
-        """Path of the part of the case with hash ``h``."""
-        return self.directory / f"{h}{PART_SUFFIX}"
-
-    def finished(self) -> set[str]:
-        """Hashes of the parts in the folder."""
-        if not self.directory.is_dir():
-            return set()
-        return {p.name[: -len(PART_SUFFIX)] for p in self.directory.glob(f"*{PART_SUFFIX}")
-                if not p.name.startswith(".")}
-
-    def write(self, h: str, part: xr.Dataset) -> Path:
-        """Write one finished case atomically (temporary file, then rename)."""
-        return write_part(self.directory, h, part)
-
-    def read(self, h: str) -> xr.Dataset:
-        """The part of case ``h``, loaded into memory."""
-        with open_results(self.path(h)) as ds:
-            return ds.load()
-
-    # ------------------------------------------------------------------ log
-    def log(self, event: str, **fields) -> None:
-        """Append one event to ``sweep.log`` (flushed at once)."""
-        if self._log is None:
-            raise StoreError(f"{self.directory} is not open")
-        record = {"event": event, "time": _now(), "run": self.run_id, "pid": os.getpid(), **fields}
-        self._log.write(json.dumps(record, sort_keys=True) + "\n")
-        self._log.flush()
-
-    def events(self, event: str | None = None) -> list[dict]:
-        """The log's records (of one kind of event, if given), oldest first."""
-        path = self.directory / LOG_NAME
-        if not path.exists():
-            return []
-        out = []
-        for line in path.read_text(encoding="utf-8").splitlines():
-            try:
-                record = json.loads(line)
-            except json.JSONDecodeError:    # a line cut short by a kill
-                continue
-            if event is None or record.get("event") == event:
-                out.append(record)
-        return out
-
-
-# ---------------------------------------------------------------------------- assembly
 
 @dataclass(frozen=True)
 class SweepSlot:
@@ -414,7 +168,7 @@ def _fill_value(dtype: np.dtype):
     return netCDF4.default_fillvals[f"{dtype.kind}{dtype.itemsize}"]
 
 
-def _write_values(var, index: tuple, values, text: bool) -> None:
+def _write_values(var, index: tuple | slice, values, text: bool) -> None:
     if text:
         values = np.asarray(values, dtype=object)
         if values.ndim == 0:
@@ -423,18 +177,19 @@ def _write_values(var, index: tuple, values, text: bool) -> None:
 
 
 def _create_variable(nc, name: str, dims: tuple[str, ...], dtype: np.dtype, attrs: Mapping,
-                     chunks: tuple[int, ...] | None):
-    """A netCDF variable, compressed and chunked when numeric and not scalar."""
+                     chunks: tuple[int, ...] | None, coordinate: bool = False):
+    """A netCDF variable, compressed and chunked when numeric and not scalar; a
+    ``coordinate`` gets no ``_FillValue``."""
     nctype = _nc_type(dtype)
-    kwargs = {}
-    if nctype is not str:
+    kwargs: dict[str, Any] = {}
+    if nctype is not str and not coordinate:    # a coordinate has no missing values
         kwargs["fill_value"] = _fill_value(dtype)
         if dims and chunks and all(chunks):
             kwargs.update(COMPRESSION, chunksizes=chunks)
     var = nc.createVariable(name, nctype, dims, **kwargs)
     if kwargs.get("chunksizes"):
         # One chunk of cache: every write fills whole chunks, no need to keep them around.
-        nbytes = int(np.prod(chunks)) * np.dtype(nctype).itemsize
+        nbytes = int(np.prod(kwargs["chunksizes"])) * np.dtype(nctype).itemsize
         var.set_var_chunk_cache(size=max(nbytes, 1 << 16), nelems=1, preemption=1.0)
     clean = {k: v for k, v in attrs.items() if isinstance(v, (str, int, float, np.generic, list))
              and k not in _HIDDEN_ATTRS}
@@ -453,7 +208,8 @@ def _positions(part_values: np.ndarray, union: np.ndarray) -> np.ndarray:
 def _case_index(coords: Mapping[str, np.ndarray], dims: tuple[str, ...], sizes: tuple[int, ...],
                 tpl: _Template):
     """Per case dimension: where the part's values go in the union, and their reordering."""
-    index, order = [], []
+    index: list = []
+    order: list = []
     for dim, n in zip(dims, sizes):
         if dim not in tpl.dim_values or np.array_equal(coords[dim], tpl.dim_values[dim]):
             index.append(slice(0, n))
@@ -486,7 +242,7 @@ def _define(nc, sweep_dims: Mapping[str, int], sweep_coords: Mapping, tpl: _Temp
         if name != dim:
             coord_names.append(name)
     for dim, values in tpl.dim_values.items():
-        var = _create_variable(nc, dim, (dim,), values.dtype, tpl.dim_attrs[dim], None)
+        var = _create_variable(nc, dim, (dim,), values.dtype, tpl.dim_attrs[dim], None, coordinate=True)
         _write_values(var, slice(None), values, _is_text(values.dtype))
     sdims = tuple(sweep_dims)
     variables = {name: _create_variable(nc, name, sdims, np.dtype(object), text_attrs, None)
@@ -630,7 +386,7 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
               "skipped": sum(1 for s in slots if s.hash is None)}
     attrs = {**(attrs or {}), **{f"sweep_{k}": v for k, v in counts.items()}}
     raw = []
-    with replaced_on_success(path) as tmp:
+    with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
         with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
             variables = _define(nc, sweep_dims, sweep_coords, tpl, attrs)
             for i, slot in enumerate(slots):
@@ -652,4 +408,3 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
 def history_line(text: str) -> str:
     """A CF ``history`` line: UTC time stamp and ``text``."""
     return f"{_now()}: {text}"
-

@@ -1,0 +1,174 @@
+"""Work and memory a resolved configuration implies, bounded before anything runs.
+
+A config can be valid field by field and still ask for a run that cannot
+finish: ``solver.duration: 1e6`` means a 75 GiB output array,
+``solver.dt: 1e-300`` more RK4 steps than the age of the universe allows,
+``wear.map: [100000, 100000]`` two 80 GB wear maps. :func:`estimate` counts
+the output-grid RK4 steps and the bytes of the arrays a case holds (the
+kernel's saved rows, the per-row output variables and the wear maps);
+:func:`check_budget` refuses, quoting the estimate, above
+:data:`MAX_OUTPUT_BYTES` or :data:`MAX_STEPS` unless ``allow_large``
+(``--allow-large``). Both ``clearsweep run`` (through
+:func:`clearsweep.simulation.preflight`) and sweep expansion call it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from typing import Any
+
+from .config import DEFAULTS, ConfigError
+
+__all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS"]
+
+#: Largest memory for one case's arrays [bytes] without ``allow_large``.
+MAX_OUTPUT_BYTES = 4 * 2 ** 30
+#: Most output-grid RK4 steps of one case without ``allow_large`` (sub-steps come on top).
+MAX_STEPS = 10 ** 9
+#: float64 per saved row that the kernel keeps besides N_Y + N_D: time, wear_depth_max (2).
+_KERNEL_EXTRA_PER_ROW = 3
+_FLOAT = 8
+
+
+def format_bytes(n: float) -> str:
+    """``n`` bytes in binary units (``74.5 GiB``)."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if abs(n) < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024
+    return f"{n:.3g} PiB"      # pragma: no cover
+
+
+def _per_row_output_values() -> int:
+    """float64 per saved row in the output variables (every variable with a time dimension)."""
+    from .variables import AXES, CASE_VARIABLES, JOINTS
+
+    sizes = {"joint": len(JOINTS), "axis": len(AXES)}
+    return 1 + sum(math.prod(sizes.get(d, 1) for d in spec.dims if d != "time")
+                   for spec in CASE_VARIABLES.values() if "time" in spec.dims)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What one case costs, before it runs.
+
+    Attributes
+    ----------
+    steps_asked : int
+        ``ceil(solver.duration / solver.dt)``.
+    steps : int
+        Output-grid RK4 steps: ``steps_asked`` rounded up to whole output
+        samples (sub-steps, where contacts need them, come on top).
+    rows : int
+        Saved rows: ``steps / solver.save_every + 1``.
+    values_per_row : int
+        float64 per row: the kernel's N_Y + N_D + time and wear maximum,
+        plus the output variables.
+    map_values : int
+        float64 of the two wear maps (2 x polar x azimuth), the
+        projections and the output copy's.
+    """
+
+    steps_asked: int
+    steps: int
+    rows: int
+    values_per_row: int
+    map_values: int
+
+    @property
+    def row_bytes(self) -> int:
+        return self.rows * self.values_per_row * _FLOAT
+
+    @property
+    def map_bytes(self) -> int:
+        return self.map_values * _FLOAT
+
+    @property
+    def output_bytes(self) -> int:
+        """Bytes of one case's arrays in memory (an upper bound of its netCDF output)."""
+        return self.row_bytes + self.map_bytes
+
+    def describe(self) -> str:
+        return (f"{format_bytes(self.output_bytes)}: {self.rows:,} rows x {self.values_per_row} "
+                f"float64 = {format_bytes(self.row_bytes)}, and wear maps "
+                f"{format_bytes(self.map_bytes)}")
+
+
+def _steps_asked(cfg: dict[str, Any]) -> int:
+    ratio = cfg["solver"]["duration"] / cfg["solver"]["dt"]
+    if not math.isfinite(ratio):
+        return int(sys.float_info.max)      # beyond any limit
+    return max(1, int(math.ceil(ratio - 1e-9)))
+
+
+def estimate(cfg: dict[str, Any]) -> Estimate:
+    """Steps and bytes of one resolved case (:func:`clearsweep.config.load_config`).
+
+    Mirrors :func:`clearsweep.params.pack` (whole output samples, rounded up)
+    and :func:`clearsweep.simulation.run_kernel` (the arrays it allocates).
+    """
+    from .core import layout as L  # imports Numba: only when a case is checked
+
+    solver = cfg["solver"]
+    save_every = int(solver["save_every"])
+    asked = _steps_asked(cfg)
+    steps = max(1, -(-asked // save_every)) * save_every
+    rows = steps // save_every + 1
+    per_row = L.N_Y + L.N_D + _KERNEL_EXTRA_PER_ROW + _per_row_output_values()
+    polar, azimuth = (int(n) for n in cfg["wear"]["map"])
+    map_values = 2 * polar * azimuth + 2 * 3 * L.N_ANGLE_BINS
+    return Estimate(asked, steps, rows, per_row, map_values)
+
+
+def check_budget(cfg: dict[str, Any], *, allow_large: bool = False,
+                 source: str = "<config>") -> Estimate:
+    """Refuse a case whose estimate is out of bounds; return the estimate.
+
+    Parameters
+    ----------
+    cfg
+        A resolved configuration.
+    allow_large
+        Accept more than :data:`MAX_OUTPUT_BYTES` or :data:`MAX_STEPS`
+        (``--allow-large``). A ``solver.save_every`` larger than the run is
+        refused regardless: it would stretch the run to one whole sample.
+    source
+        Name of the config in the message.
+
+    Raises
+    ------
+    ConfigError
+        Naming the key that drives the cost and quoting the estimate.
+    """
+    solver = cfg["solver"]
+    est = estimate(cfg)
+    if solver["save_every"] > est.steps_asked:
+        raise ConfigError(
+            "solver.save_every", solver["save_every"],
+            f"an integer <= {est.steps_asked} (the steps in solver.duration / solver.dt; a larger "
+            f"one stretches the run to one whole output sample, {est.steps} steps)", source)
+    if allow_large:
+        return est
+    hint = "or pass --allow-large (allow_large=True) if the machine can take it"
+    if est.steps > MAX_STEPS:
+        steps = solver["duration"] / solver["dt"]
+        # name the one of the two that left its usual range
+        key = ("solver.duration" if solver["duration"] > DEFAULTS["solver"]["duration"]
+               else "solver.dt")
+        got = (f"{solver[key.split('.')[1]]!r} (solver.duration / solver.dt = {solver['duration']!r}"
+               f" s / {solver['dt']!r} s = {steps:.3g} steps)")
+        raise ConfigError(key, solver[key.split(".")[1]],
+                          f"a run of at most {MAX_STEPS:.3g} RK4 steps; raise solver.dt, shorten "
+                          f"solver.duration, {hint}", source, got=got)
+    if est.output_bytes > MAX_OUTPUT_BYTES:
+        if est.map_bytes > est.row_bytes:
+            key, value, fix = "wear.map", cfg["wear"]["map"], "use fewer wear-map bins"
+        else:
+            key, value, fix = ("solver.duration", solver["duration"],
+                               "shorten solver.duration, raise solver.save_every")
+        raise ConfigError(key, value, f"a case whose arrays fit in {format_bytes(MAX_OUTPUT_BYTES)}; "
+                          f"{fix}, {hint}", source,
+                          got=f"{value!r} (estimated {est.describe()})")
+    return est

@@ -1,0 +1,26 @@
+"""Choices and limits that the command line declares, free of heavy imports.
+
+Kept apart from the modules that use them (numpy, xarray, matplotlib, Numba)
+so that ``cli.py`` can declare every command and its options without loading
+any of those: each command imports what it runs when it runs.
+"""
+
+#: Output formats of ``clearsweep report`` (:mod:`clearsweep.analysis`).
+REPORT_FORMATS = ("text", "markdown", "csv", "json")
+
+#: Figure kinds of ``clearsweep plot`` (:mod:`clearsweep.plotting`).
+KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep")
+#: Abscissae of time-series figures.
+X_AXES = ("angle", "time")
+#: Output file suffixes of figures (the suffix sets the format).
+OUTPUT_SUFFIXES = (".png", ".pdf", ".svg")
+#: Metric of ``--kind sweep`` when none is given.
+DEFAULT_SWEEP_METRIC = "slider_acceleration_peak_settled"
+#: Resolution of raster output [dots per inch].
+FIGURE_DPI = 120
+#: Resolutions ``--dpi`` accepts: beyond 1200 an 8 x 5 inch figure is 10^8 pixels.
+DPI_RANGE = (10, 1200)
+
+#: Most sweep points expanded without ``--yes`` (``max_cases``): every case is validated
+#: before anything runs, so a grid of 10^7 points would spend hours just being checked.
+MAX_CASES = 10_000

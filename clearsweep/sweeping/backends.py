@@ -1,0 +1,235 @@
+"""Where cases run: in this process, on a process pool, or on a Dask client."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+import signal
+import threading
+from contextlib import contextmanager
+from pathlib import Path
+
+from .worker import _run_and_store, _run_case, _worker_init
+
+#: Futures kept in flight per worker, so that no worker waits for the driver.
+IN_FLIGHT_PER_WORKER = 2
+
+
+class _InterruptGuard:
+    """Ctrl-C that never lands inside a file write.
+
+    While active (main thread only), SIGINT raises ``KeyboardInterrupt``
+    only inside :meth:`interruptible` blocks (waiting for workers, running a
+    case in this process); anywhere else it is noted and raised by the next
+    :meth:`check`. An interrupt inside netCDF/HDF5 or xarray's file locks can
+    leave a lock held and hang the cleanup; this keeps it out of them.
+    """
+
+    def __init__(self):
+        self.requested = False
+        self._depth = 0
+        self._previous = None
+
+    def __enter__(self) -> _InterruptGuard:
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+    def _handler(self, signum, frame) -> None:
+        first = not self.requested
+        self.requested = True
+        if first and self._depth:
+            self._depth = 0
+            raise KeyboardInterrupt
+
+    @contextmanager
+    def interruptible(self):
+        """A block that Ctrl-C may interrupt at once."""
+        self.check()
+        self._depth += 1
+        try:
+            yield
+        finally:
+            self._depth = max(self._depth - 1, 0)
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if Ctrl-C was pressed since the guard started."""
+        if self.requested:
+            raise KeyboardInterrupt
+
+
+class _Serial:
+    """Runs each case in this process when it is submitted."""
+
+    label = "serial"
+    window = 1
+
+    def __init__(self, guard: _InterruptGuard):
+        self.guard = guard
+
+    def submit(self, h: str, payload) -> cf.Future:
+        future: cf.Future = cf.Future()
+        with self.guard.interruptible():
+            part = _run_case(payload)
+        future.set_result(part)
+        return future
+
+    def wait(self, futures):
+        return futures
+
+    def restart(self) -> str | None:
+        return None
+
+    def cancel(self, futures) -> None:
+        pass
+
+    def close(self, interrupted: bool = False) -> None:
+        pass
+
+
+def _mp_context():
+    methods = multiprocessing.get_all_start_methods()
+    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+
+
+def process_pool(workers: int | None = None) -> cf.ProcessPoolExecutor:
+    """A process pool set up as :func:`run_sweep` sets up its own.
+
+    Pass it as ``client=`` to run several sweeps on the same warm workers
+    (each worker loads the Numba kernel once); shut it down when done.
+
+    Parameters
+    ----------
+    workers
+        Worker processes (default: ``os.cpu_count()``).
+
+    Returns
+    -------
+    concurrent.futures.ProcessPoolExecutor
+        ``forkserver`` (or ``spawn``) workers that ignore Ctrl-C (the driver
+        handles it) and exit by themselves when the driver process is gone.
+    """
+    return cf.ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
+                                  mp_context=_mp_context(), initializer=_worker_init,
+                                  initargs=(os.getpid(),))
+
+
+class _Futures:
+    """A ``concurrent.futures`` executor: our own process pool, or one the caller passes."""
+
+    def __init__(self, executor: cf.Executor, own: bool, guard: _InterruptGuard, parts_dir: Path):
+        self.executor, self.own, self.guard = executor, own, guard
+        self.parts_dir = str(parts_dir)
+        workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
+        self.window = IN_FLIGHT_PER_WORKER * workers
+        self.label = f"{type(executor).__name__}({workers})"
+
+    @classmethod
+    def processes(cls, workers: int, guard: _InterruptGuard, parts_dir: Path) -> _Futures:
+        return cls(process_pool(workers), own=True, guard=guard, parts_dir=parts_dir)
+
+    def submit(self, h: str, payload) -> cf.Future:
+        return self.executor.submit(_run_and_store, payload, self.parts_dir, h)
+
+    def restart(self) -> str | None:
+        """Replace a broken pool of our own by a fresh one; how its workers ended.
+
+        ``None`` where the pool is the caller's: it cannot be replaced here.
+        """
+        if not self.own:
+            return None
+        processes = list((getattr(self.executor, "_processes", None) or {}).values())
+        ends = sorted({_exit_text(p.exitcode) for p in processes
+                       if p.exitcode is not None and p.exitcode != 0})
+        self.executor.shutdown(wait=False, cancel_futures=True)
+        workers = getattr(self.executor, "_max_workers", None)
+        self.executor = process_pool(workers)
+        return ", ".join(ends) or "ended abruptly"
+
+    def wait(self, futures):
+        with self.guard.interruptible():
+            return cf.wait(futures, return_when=cf.FIRST_COMPLETED).done
+
+    def cancel(self, futures) -> None:
+        for future in futures:
+            future.cancel()
+
+    def close(self, interrupted: bool = False) -> None:
+        if not self.own:
+            return
+        if not interrupted:
+            self.executor.shutdown(wait=True)
+            return
+        # Cases still running are lost anyway: stop their processes instead of waiting for them.
+        processes = list((getattr(self.executor, "_processes", None) or {}).values())
+        self.executor.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            if process.is_alive():
+                process.terminate()
+        for process in processes:
+            process.join(timeout=5)
+
+
+class _Dask:
+    """A ``distributed.Client`` (given, or connected here to a scheduler address).
+
+    Workers may run on other machines: they send each finished case back and
+    the driver writes its part.
+    """
+
+    def __init__(self, client, own: bool, guard: _InterruptGuard):
+        self.client, self.own, self.guard = client, own, guard
+        threads = sum(client.nthreads().values()) or 1
+        self.window = IN_FLIGHT_PER_WORKER * threads
+        self.label = f"dask({client.scheduler.address}, {threads} threads)"
+
+    def submit(self, h: str, payload):
+        return self.client.submit(_run_case, payload, pure=False)
+
+    def wait(self, futures):
+        from distributed import wait
+
+        with self.guard.interruptible():
+            return wait(futures, return_when="FIRST_COMPLETED").done
+
+    def cancel(self, futures) -> None:
+        if futures:
+            self.client.cancel(list(futures))
+
+    def restart(self) -> str | None:
+        return None     # the scheduler retries on other workers itself
+
+    def close(self, interrupted: bool = False) -> None:
+        if self.own:
+            self.client.close()
+
+
+def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, parts_dir: Path):
+    if client is not None:
+        if isinstance(client, cf.Executor):
+            return _Futures(client, own=False, guard=guard, parts_dir=parts_dir)
+        if isinstance(client, str):
+            from distributed import Client
+
+            return _Dask(Client(client), own=True, guard=guard)
+        return _Dask(client, own=False, guard=guard)
+    workers = (os.cpu_count() or 1) if workers is None else int(workers)
+    if workers < 1:
+        raise ValueError(f"workers must be >= 1, got {workers}")
+    workers = min(workers, n_cases)
+    return _Serial(guard) if workers <= 1 else _Futures.processes(workers, guard, parts_dir)
+
+
+def _exit_text(exitcode: int) -> str:
+    if exitcode < 0:
+        try:
+            return f"killed by {signal.Signals(-exitcode).name}"
+        except ValueError:
+            return f"killed by signal {-exitcode}"
+    return f"exit code {exitcode}"

@@ -1,0 +1,522 @@
+"""Sweep files -> a plan of cases (grid, zip and skip axes), every case validated before any runs.
+
+The sweep file format and the naming of dimensions are described in
+:mod:`clearsweep.sweeping` (package docstring).
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import json
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .. import variables
+from ..budget import estimate, format_bytes
+from ..choices import MAX_CASES
+from ..config import (
+    ConfigError,
+    close_match,
+    dump_config,
+    field_info,
+    get_path,
+    load_config,
+    read_yaml,
+    set_path,
+)
+from ..simulation import preflight
+from .assemble import SweepSlot
+from .parts import canonical_json, case_hash
+
+#: First components of a dotted key that the dimension name leaves out.
+DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver")
+#: What a sweep stores per case.
+STORE_MODES = ("full", "summary")
+#: Top-level keys of a sweep file.
+SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
+SWEEP_KEYS = ("grid", "zip", "skip")
+#: Keys of a zip group that are not config keys.
+ZIP_META_KEYS = ("name", "labels")
+#: Rough cost of one RK4 step of the kernel on one warm core [s] (README: 1e5 steps in 0.3 s),
+#: for the estimate printed before a sweep starts; contacts that need sub-steps cost more.
+SECONDS_PER_STEP = 3e-6
+
+
+def _reserved_names() -> set[str]:
+    return {*variables.CASE_VARIABLES, *variables.COORDINATES, *variables.SUMMARY_VARIABLES,
+            "status", "message"}
+
+
+def dimension_name(key: str) -> str:
+    """Short name of a swept dotted key (see the module docstring, "Naming").
+
+    >>> dimension_name("joints.B.coating"), dimension_name("mechanism.speed_rpm")
+    ('B_coating', 'speed_rpm')
+    """
+    parts = key.split(".")
+    if len(parts) > 1 and parts[0] in DROPPED_SECTIONS:
+        parts = parts[1:]
+    return "_".join(parts)
+
+
+def _full_name(key: str) -> str:
+    return key.replace(".", "_")
+
+
+def _coord_values(values: Sequence) -> np.ndarray:
+    """Coordinate array of swept values as given: numbers, booleans, strings, else JSON text."""
+    vals = list(values)
+    if all(isinstance(v, bool) for v in vals):
+        return np.array(vals, dtype=bool)
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in vals):
+        return np.array(vals, dtype=np.int64)
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
+        return np.array(vals, dtype=np.float64)
+    if all(isinstance(v, str) for v in vals):
+        return np.array(vals, dtype=object)
+    return np.array([json.dumps(v) for v in vals], dtype=object)
+
+
+@dataclass(frozen=True)
+class Axis:
+    """One sweep dimension: a grid key, or a zip group of keys that vary together.
+
+    Attributes
+    ----------
+    dim : str
+        Dimension name.
+    kind : str
+        ``"grid"`` or ``"zip"``.
+    keys : tuple of str
+        Dotted config keys set along this dimension.
+    names : tuple of str
+        Coordinate name of each key (for a grid axis, ``names[0] == dim``).
+    values : tuple of tuple
+        Values of each key, as given in the sweep file.
+    labels : tuple or None
+        Index values of a zip group's dimension (its ``labels:``).
+    """
+
+    dim: str
+    kind: str
+    keys: tuple[str, ...]
+    names: tuple[str, ...]
+    values: tuple[tuple, ...]
+    labels: tuple | None = None
+
+    @property
+    def size(self) -> int:
+        return len(self.values[0])
+
+    def assignment(self, i: int) -> dict[str, Any]:
+        """Config key -> value at position ``i``."""
+        return {k: v[i] for k, v in zip(self.keys, self.values)}
+
+    def label(self, i: int) -> dict[str, Any]:
+        """Coordinate name -> value at position ``i``."""
+        out = {self.dim: self.labels[i]} if self.labels is not None else {}
+        out.update({n: v[i] for n, v in zip(self.names, self.values)})
+        return out
+
+    def coords(self) -> dict[str, tuple[str, np.ndarray, dict]]:
+        """Coordinates of this dimension: ``name -> (dim, values, attrs)``."""
+        out = {}
+        if self.labels is not None:
+            out[self.dim] = (self.dim, _coord_values(self.labels),
+                             {"long_name": f"sweep zip group {self.dim}",
+                              "config_keys": " ".join(self.keys)})
+        for key, name, vals in zip(self.keys, self.names, self.values):
+            info = field_info(key)
+            attrs = {"long_name": info[1] if info else f"swept config value {key}",
+                     "config_key": key}
+            array = _coord_values(vals)
+            if array.dtype == object and not all(isinstance(v, str) for v in vals):
+                attrs["comment"] = "values stored as JSON text"
+            elif info and info[0] is not None and array.dtype.kind in "iuf":
+                attrs["units"] = info[0]
+            out[name] = (self.dim, array, attrs)
+        return out
+
+
+@dataclass(frozen=True)
+class Case:
+    """One sweep point: its position, and its resolved config (``None`` when skipped)."""
+
+    index: tuple[int, ...]
+    hash: str | None
+    config_json: str | None
+    skip_message: str = ""
+
+    @property
+    def config(self) -> dict | None:
+        """The resolved case configuration."""
+        return None if self.config_json is None else json.loads(self.config_json)
+
+
+@dataclass
+class SweepPlan:
+    """A validated, expanded sweep: its axes and one :class:`Case` per point, in C order.
+
+    Holds the resolved configuration (as JSON text) of every case, never results.
+    """
+
+    name: str
+    store: str
+    source: str
+    text: str
+    base: dict
+    axes: tuple[Axis, ...]
+    cases: list[Case]
+
+    @property
+    def dims(self) -> dict[str, int]:
+        """Sweep dimensions and sizes, in order."""
+        return {a.dim: a.size for a in self.axes}
+
+    @property
+    def coords(self) -> dict[str, tuple[str, np.ndarray, dict]]:
+        """All sweep coordinates: ``name -> (dim, values, attrs)``."""
+        out = {}
+        for axis in self.axes:
+            out.update(axis.coords())
+        return out
+
+    def label(self, case: Case) -> dict[str, Any]:
+        """Coordinate values of ``case``."""
+        out = {}
+        for axis, i in zip(self.axes, case.index):
+            out.update(axis.label(i))
+        return out
+
+    def runnable(self) -> dict[str, str]:
+        """Hash -> resolved config JSON of each distinct case to run, in sweep order."""
+        # a case has a hash exactly when it has a config (a skipped point has neither)
+        return {c.hash: c.config_json for c in self.cases
+                if c.hash is not None and c.config_json is not None}
+
+    def slots(self) -> list[SweepSlot]:
+        """The sweep points for :func:`clearsweep.sweeping.assemble.write_sweep_netcdf`."""
+        return [SweepSlot(c.hash, c.skip_message) for c in self.cases]
+
+    def to_dataset(self) -> xr.Dataset:
+        """The sweep coordinates alone (no data), e.g. to look at a plan before running it."""
+        return xr.Dataset(coords={n: (d, v, a) for n, (d, v, a) in self.coords.items()})
+
+    def describe(self, workers: int | None = None) -> str:
+        """One line: cases, RK4 steps, a rough time and the output size, before the sweep runs.
+
+        Parameters
+        ----------
+        workers
+            Cores the cases share; ``None``: the time is given for one core.
+        """
+        runnable = self.runnable()
+        estimates = [estimate(json.loads(cfg)) for cfg in runnable.values()]
+        steps = sum(e.steps for e in estimates)
+        seconds = steps * SECONDS_PER_STEP / (workers or 1)
+        per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes for e in estimates)
+        skipped = sum(1 for c in self.cases if c.hash is None)
+        counts = f"{len(self.cases):,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
+        where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
+        return (f"sweep {self.name!r}: {counts}, {len(runnable):,} to simulate, {steps:.3g} RK4 "
+                f"steps: about {_duration_text(seconds)} {where} (at {SECONDS_PER_STEP * 1e6:g} us "
+                f"per step; contacts that need sub-steps take longer); results up to "
+                f"{format_bytes(per_case)} before compression")
+
+
+def _duration_text(seconds: float) -> str:
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.2g} s"
+
+
+def _read_sweep(config_or_path) -> tuple[dict, str, Path, str]:
+    """(document, source name, folder for relative paths, default name)."""
+    if isinstance(config_or_path, Mapping):
+        return copy.deepcopy(dict(config_or_path)), "<sweep>", Path.cwd(), "sweep"
+    path = Path(config_or_path)
+    doc = read_yaml(path, str(config_or_path))
+    if not isinstance(doc, dict):
+        raise ConfigError(None, doc, f"a sweep mapping with keys {', '.join(SWEEP_FILE_KEYS)}",
+                          str(config_or_path))
+    return doc, str(config_or_path), path.resolve().parent, path.stem
+
+
+def _check_keys(mapping: Mapping, allowed: Sequence[str], where: str | None, source: str) -> None:
+    for key in mapping:
+        if key not in allowed:
+            full = f"{where}.{key}" if where else str(key)
+            suggestion = close_match(key, allowed)
+            raise ConfigError(full, mapping[key], f"one of the keys {', '.join(allowed)}", source,
+                              f"{where}.{suggestion}" if where and suggestion else suggestion,
+                              got="an unknown key")
+
+
+def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> dict:
+    if base is None:
+        base = {}
+    if isinstance(base, str):
+        path = base_dir / base
+        if not path.is_file():
+            raise ConfigError("base", base, "an inline case config or the path of a case YAML file "
+                              f"(relative to the sweep file; looked for {path})", source)
+        return load_config(path, overrides, source_name=f"{source}: base {base}")
+    if not isinstance(base, Mapping):
+        raise ConfigError("base", base, "an inline case config (a mapping) or the path of a case "
+                          "YAML file", source)
+    base = copy.deepcopy(dict(base))
+    materials = base.get("materials_file")
+    if isinstance(materials, str) and not os.path.isabs(os.path.expanduser(materials)):
+        base["materials_file"] = str(base_dir / materials)
+    return load_config(base, overrides, source_name=f"{source}: base")
+
+
+def _check_swept_key(key, base: dict, where: str, source: str) -> str:
+    if not isinstance(key, str) or not key:
+        raise ConfigError(where, key, "a dotted config key such as joints.B.coating", source)
+    try:
+        value = get_path(base, key)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}.{key}", None, exc.expected, source, exc.suggestion,
+                          got="no such config key") from None
+    if isinstance(value, Mapping):
+        raise ConfigError(f"{where}.{key}", None, f"a key of a value, not of the section {key} "
+                          f"(e.g. {key}.{next(iter(value))})", source, got="a section")
+    return key
+
+
+def _check_values(values, where: str, source: str, length: int | None = None) -> tuple:
+    if not isinstance(values, list) or not values:
+        raise ConfigError(where, values, "a non-empty list of values", source)
+    if length is not None and len(values) != length:
+        raise ConfigError(where, values, f"a list of {length} values (as long as the group's "
+                          "first list: the keys of a zip group vary together)", source,
+                          got=f"{len(values)} values")
+    return tuple(values)
+
+
+def _check_unique(values: tuple, where: str, source: str) -> None:
+    array = _coord_values(values)
+    seen = set()
+    for v in array.tolist():
+        if v in seen:
+            raise ConfigError(where, list(values), "distinct values (they label a dimension)",
+                              source, got=f"{v!r} twice")
+        seen.add(v)
+
+
+def _parse_axes(spec, base: dict, source: str) -> list[Axis]:
+    if spec is None:
+        spec = {}
+    if not isinstance(spec, Mapping):
+        raise ConfigError("sweep", spec, "a mapping with keys grid, zip and skip", source)
+    _check_keys(spec, SWEEP_KEYS, "sweep", source)
+    grid = spec.get("grid") or {}
+    if not isinstance(grid, Mapping):
+        raise ConfigError("sweep.grid", grid, "a mapping of dotted config keys to lists of values",
+                          source)
+    groups = spec.get("zip") or []
+    if not isinstance(groups, list):
+        raise ConfigError("sweep.zip", groups, "a list of groups (mappings of dotted keys to "
+                          "equal-length lists)", source)
+
+    raw: list[tuple] = []   # (kind, keys, values, name, labels)
+    for key, values in grid.items():
+        where = f"sweep.grid.{key}"
+        _check_swept_key(key, base, "sweep.grid", source)
+        values = _check_values(values, where, source)
+        _check_unique(values, where, source)
+        raw.append(("grid", (key,), (values,), None, None))
+    for g, group in enumerate(groups):
+        where = f"sweep.zip[{g}]"
+        if not isinstance(group, Mapping):
+            raise ConfigError(where, group, "a mapping of dotted keys to equal-length lists", source)
+        keys = [k for k in group if k not in ZIP_META_KEYS]
+        if not keys:
+            raise ConfigError(where, dict(group), "at least one dotted config key with a list of "
+                              "values", source)
+        length = len(group[keys[0]]) if isinstance(group[keys[0]], list) else None
+        values = []
+        for key in keys:
+            _check_swept_key(key, base, where, source)
+            values.append(_check_values(group[key], f"{where}.{key}", source, length))
+        name = group.get("name")
+        if name is not None and (not isinstance(name, str) or not name.isidentifier()):
+            raise ConfigError(f"{where}.name", name, "a dimension name (letters, digits, _)", source)
+        labels = group.get("labels")
+        if labels is not None:
+            labels = _check_values(labels, f"{where}.labels", source, length)
+            _check_unique(labels, f"{where}.labels", source)
+        raw.append(("zip", tuple(keys), tuple(values), name, labels))
+
+    all_keys = [k for _, keys, *_ in raw for k in keys]
+    for key in all_keys:
+        if all_keys.count(key) > 1:
+            raise ConfigError(f"sweep.{key}", None, "each key in one grid entry or zip group only",
+                              source, got="a key swept twice")
+    short = {k: dimension_name(k) for k in all_keys}
+    reserved = _reserved_names()
+    names = {k: (_full_name(k) if list(short.values()).count(s) > 1 or s in reserved else s)
+             for k, s in short.items()}
+
+    axes: list[Axis] = []
+    taken = set(names.values())
+    if len(taken) != len(all_keys):
+        raise ConfigError("sweep", all_keys, "keys with distinct coordinate names", source)
+    for kind, keys, values, name, labels in raw:
+        if kind == "grid":
+            axes.append(Axis(names[keys[0]], kind, keys, (names[keys[0]],), values))
+            continue
+        dim = name or names[keys[0]] + "_zip"
+        if dim in taken or dim in reserved:
+            raise ConfigError(f"sweep.zip.{dim}", dim, "a dimension name used by no other sweep "
+                              "coordinate or case variable", source, got=f"{dim!r} again")
+        taken.add(dim)
+        axes.append(Axis(dim, kind, keys, tuple(names[k] for k in keys), values, labels))
+    return axes
+
+
+def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
+    """Skip rules as lists of (coordinate name, allowed values)."""
+    if rules is None:
+        return []
+    if not isinstance(rules, list):
+        raise ConfigError("sweep.skip", rules, "a list of rules (mappings of coordinate names to "
+                          "a value or a list of values)", source)
+    coord_values: dict[str, list] = {}
+    by_key: dict[str, str] = {}
+    for axis in axes:
+        if axis.labels is not None:
+            coord_values[axis.dim] = list(axis.labels)
+        for key, name, vals in zip(axis.keys, axis.names, axis.values):
+            coord_values[name] = list(vals)
+            by_key[key] = name
+    parsed = []
+    for r, rule in enumerate(rules):
+        where = f"sweep.skip[{r}]"
+        if not isinstance(rule, Mapping) or not rule:
+            raise ConfigError(where, rule, "a mapping of coordinate names to a value or a list of "
+                              "values", source)
+        conditions = []
+        for given, wanted in rule.items():
+            name = by_key.get(given) or given
+            if name not in coord_values:
+                raise ConfigError(f"{where}.{name}", wanted, "a sweep coordinate "
+                                  f"({', '.join(coord_values)})", source,
+                                  close_match(name, coord_values), got="an unknown coordinate")
+            wanted = wanted if isinstance(wanted, list) else [wanted]
+            for value in wanted:
+                if value not in coord_values[name]:
+                    raise ConfigError(f"{where}.{name}", value, "one of the swept values "
+                                      f"{coord_values[name]!r}", source)
+            conditions.append((name, wanted))
+        parsed.append(conditions)
+    return parsed
+
+
+def _case_error(exc: ConfigError, assignment: Mapping[str, Any], label: Mapping[str, Any],
+                source: str) -> ConfigError:
+    """Re-raise a case's ConfigError naming the sweep key and value that caused it."""
+    if not assignment:  # a sweep without axes: its one case is the base
+        return ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion, exc.got)
+    key = next((k for k in assignment if exc.key and (exc.key == k or exc.key.startswith(k + "."))),
+               None)
+    if key is None:     # a relation between two keys (clearance < socket_radius)
+        key = next((k for k in assignment if k in (exc.expected or "")), next(iter(assignment)))
+    case = ", ".join(f"{n}={v!r}" for n, v in label.items())
+    expected = exc.expected if exc.key == key else (
+        f"a value with which {exc.key} = {exc.value!r} is {exc.expected}")
+    return ConfigError(key, assignment[key], f"{expected} (in the sweep case {case})", source,
+                       exc.suggestion)
+
+
+def _check_overrides(overrides: Iterable[str], axes: Sequence[Axis], source: str) -> None:
+    swept = [k for a in axes for k in a.keys]
+    for text in overrides:
+        key = str(text).partition("=")[0].strip()
+        for k in swept:
+            if key == k or k.startswith(key + ".") or key.startswith(k + "."):
+                raise ConfigError(key, text, "a key that the sweep does not vary; change the "
+                                  f"values of {k} in the sweep file", "--set")
+
+
+def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str] = (), *,
+           allow_large: bool = False, max_cases: int | None = MAX_CASES) -> SweepPlan:
+    """Read a sweep, validate every case and return the plan; nothing runs.
+
+    Parameters
+    ----------
+    config_or_path
+        Sweep YAML file, or the same as a mapping (a ``base:`` path is then
+        relative to the current folder).
+    overrides
+        ``"dotted.key=VALUE"`` strings applied to the base (``--set``).
+    allow_large
+        Admit cases beyond the work and memory bounds of
+        :func:`clearsweep.budget.check_budget`.
+    max_cases
+        Refuse a sweep of more points than this (checked before any case is
+        validated); ``None``: no limit (``--yes``).
+
+    Returns
+    -------
+    SweepPlan
+
+    Raises
+    ------
+    ConfigError
+        Malformed sweep file, unknown key, or a case that the config does not
+        admit (the error names the sweep key, its value and the case).
+    """
+    overrides = [overrides] if isinstance(overrides, str) else list(overrides)
+    doc, source, base_dir, stem = _read_sweep(config_or_path)
+    _check_keys(doc, SWEEP_FILE_KEYS, None, source)
+    name = doc.get("name", stem)
+    if not isinstance(name, str) or not name:
+        raise ConfigError("name", name, "a non-empty string", source)
+    store = doc.get("store", "full")
+    if store not in STORE_MODES:
+        raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
+    base = _load_base(doc.get("base"), base_dir, source, overrides)
+    spec = doc.get("sweep")
+    axes = _parse_axes(spec, base, source)
+    _check_overrides(overrides, axes, source)
+    skips = _parse_skips((spec or {}).get("skip"), axes, source)
+    n_points = math.prod(a.size for a in axes)
+    if max_cases is not None and n_points > max_cases:
+        shape = " x ".join(f"{a.size} {a.dim}" for a in axes)
+        raise ConfigError("sweep", None, f"at most {max_cases:,} cases; pass --yes (max_cases=None) "
+                          "to run them all", source, got=f"{n_points:,} cases ({shape})")
+
+    cases = []
+    for index in itertools.product(*(range(a.size) for a in axes)):
+        assignment, label = {}, {}
+        for axis, i in zip(axes, index):
+            assignment.update(axis.assignment(i))
+            label.update(axis.label(i))
+        rule = next((r for r, conds in enumerate(skips)
+                     if all(label[n] in wanted for n, wanted in conds)), None)
+        if rule is not None:
+            cases.append(Case(index, None, None, f"excluded by sweep.skip[{rule}]"))
+            continue
+        cfg = copy.deepcopy(base)
+        for key, value in assignment.items():
+            set_path(cfg, key, value)
+        try:
+            resolved = load_config(cfg, source_name=source)
+            preflight(resolved, allow_large=allow_large)
+        except ConfigError as exc:
+            raise _case_error(exc, assignment, label, source) from None
+        cases.append(Case(index, case_hash(resolved), canonical_json(resolved)))
+
+    text = dump_config({"name": name, "store": store, "base": base, "sweep": spec or {}})
+    return SweepPlan(name, store, source, text, base, tuple(axes), cases)

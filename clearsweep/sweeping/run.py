@@ -1,0 +1,302 @@
+"""Drives a plan through a backend: progress, interrupts, resume, and the final file.
+
+:func:`run_sweep` is the public ``clearsweep.sweep``.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import os
+import shutil
+import sys
+import tempfile
+from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
+from typing import Any
+
+import xarray as xr
+
+from ..dataset import open_results, remove_stale_temporaries, versions
+from .assemble import history_line, write_sweep_netcdf
+from .backends import _backend, _InterruptGuard, _Serial
+from .parts import NOT_FAILED, PartStore, parts_dir_for
+from .plan import MAX_CASES, SweepPlan, expand
+from .worker import _receipt, _worker_died
+
+#: Variables (and dataset attributes) that change from run to run of the same sweep.
+TIMING_VARIABLES = ("wall_time",)
+TIMING_ATTRS = ("history",)
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """The sweep was stopped (Ctrl-C) before it finished; its finished cases are kept.
+
+    Attributes
+    ----------
+    finished, total : int
+        Cases with a part, and cases to run, in the sweep.
+    parts_dir : pathlib.Path
+        Where the finished cases are.
+    """
+
+    def __init__(self, finished: int, total: int, parts_dir: Path):
+        super().__init__(f"sweep interrupted: {finished} of {total} cases finished (kept in {parts_dir})")
+        self.finished, self.total, self.parts_dir = finished, total, parts_dir
+
+
+class SweepFailed(RuntimeError):
+    """The backend failed (a worker died, the scheduler went away); finished cases are kept."""
+
+
+def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str, Any], None],
+           guard: _InterruptGuard) -> None:
+    """Keep ``backend.window`` cases in flight; hand each result to ``on_result``.
+
+    A result is the case's part (a dataset) or, where the worker wrote the
+    part itself, its receipt. Only the result being handled is held, so
+    memory does not grow with the sweep.
+
+    A worker process that dies breaks a process pool of our own and every
+    case in flight with it: the pool is replaced and those cases are run
+    again one at a time, so that the one that kills its worker alone is
+    found; it is recorded as failed (status ``error``, with the reason)
+    and the sweep goes on.
+    """
+    tasks = iter(tasks)
+    pending: dict[Any, tuple[str, Any]] = {}
+    suspects: collections.deque = collections.deque()   # (hash, payload) to run again, alone
+    solo: tuple[str, Any] | None = None                  # the suspect running alone
+
+    def refill() -> None:
+        nonlocal solo
+        if solo is not None:
+            return
+        if suspects:
+            solo = suspects.popleft()
+            pending[backend.submit(*solo)] = solo
+            return
+        for h, payload in itertools.islice(tasks, backend.window - len(pending)):
+            pending[backend.submit(h, payload)] = (h, payload)
+
+    def finished_well(future) -> bool:
+        return future.done() and not future.cancelled() and future.exception() is None
+
+    try:
+        refill()
+        while pending:
+            broken = False
+            for future in backend.wait(list(pending)):
+                if not finished_well(future) and isinstance(future.exception(), BrokenProcessPool):
+                    broken = True
+                    continue
+                h, _ = pending.pop(future)
+                on_result(h, future.result())
+                if solo is not None and solo[0] == h:
+                    solo = None
+            if broken:
+                done = [f for f in pending if finished_well(f)]
+                for future in done:
+                    h, _ = pending.pop(future)
+                    on_result(h, future.result())
+                lost = list(pending.values())
+                how = backend.restart()
+                if how is None:
+                    raise BrokenProcessPool("a worker process died")
+                pending.clear()
+                if solo is not None:        # it killed its worker again, alone: a failed case
+                    on_result(solo[0], _worker_died(solo[0], how))
+                    solo = None
+                else:
+                    suspects.extend(lost)
+            guard.check()
+            refill()
+    except BaseException:
+        backend.cancel(list(pending))
+        raise
+
+
+def drop_timing(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` without what changes from run to run (``wall_time``, ``history``).
+
+    Two runs of one sweep, on any backend and any number of workers, are
+    identical after this (``xr.testing.assert_identical``).
+    """
+    out = ds.drop_vars([v for v in TIMING_VARIABLES if v in ds.variables])
+    out.attrs = {k: v for k, v in ds.attrs.items() if k not in TIMING_ATTRS}
+    return out
+
+
+def _attrs(plan: SweepPlan) -> dict[str, Any]:
+    return {
+        "title": "clearsweep RSSP mechanism parameter sweep",
+        "Conventions": "CF-1.8",
+        "source": "clearsweep",
+        "history": history_line(f"clearsweep sweep {plan.name!r} from {plan.source}"),
+        "sweep_name": plan.name,
+        "sweep_store": plan.store,
+        "sweep_dims": " ".join(plan.dims),
+        "sweep_config": plan.text,
+        **versions(),
+    }
+
+
+def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str | os.PathLike | None = None,
+              workers: int | None = None, client=None, resume: bool = False,
+              overrides: Iterable[str] = (), progress: bool = True, *, overwrite: bool = False,
+              keep_parts: bool = False, discard_parts: bool = False, allow_large: bool = False,
+              max_cases: int | None = MAX_CASES, _simulate: Callable | None = None,
+              _summarize: Callable | None = None) -> xr.Dataset:
+    """Run a parameter sweep and return its results as one labelled dataset.
+
+    Parameters
+    ----------
+    config_or_path
+        Sweep YAML file or mapping (module docstring), or a :class:`SweepPlan`
+        from :func:`expand` (then ``overrides``, ``allow_large`` and
+        ``max_cases`` were applied by it and are ignored here).
+    out
+        netCDF file to write. ``None``: work in a temporary folder and
+        return the dataset loaded into memory (small sweeps only).
+    workers
+        Worker processes (default: ``os.cpu_count()``); 1 runs the cases in
+        this process. Ignored when ``client`` is given.
+    client
+        A ``distributed.Client``, a scheduler address (connected to here and
+        disconnected after), or a ``concurrent.futures.Executor`` owned by
+        the caller (e.g. :func:`process_pool`, to reuse warm workers across
+        sweeps). The library never starts a cluster.
+    resume
+        Keep the finished cases of an interrupted run (``OUT.parts``) and run
+        only the others; no case runs twice.
+    overrides
+        ``"dotted.key=VALUE"`` applied to the base configuration.
+    progress
+        Show a progress bar (tqdm, on stderr) with the number of failed cases.
+    overwrite
+        Delete the parts of an earlier run instead of refusing to start.
+    keep_parts
+        Keep ``OUT.parts`` after the final file is written.
+    discard_parts
+        Delete the parts in ``OUT.parts`` that are not cases of this sweep
+        (left by another sweep file or other overrides); without it such
+        parts make the sweep refuse to start, resumed or not.
+    allow_large
+        Admit cases beyond the work and memory bounds of
+        :func:`clearsweep.budget.check_budget`.
+    max_cases
+        Refuse a sweep of more points (:func:`expand`); ``None``: no limit.
+
+    Returns
+    -------
+    xr.Dataset
+        Sweep dimensions first, then the case dimensions; ``status`` and
+        ``message`` per case; attributes ``sweep_config``, ``sweep_dims``,
+        ``sweep_failed``, versions and ``history``. Opened lazily from
+        ``out`` when given (close it when done).
+
+    Raises
+    ------
+    ConfigError
+        Invalid sweep or case (before anything runs; no file is written).
+    StoreError
+        ``OUT.parts`` holds earlier parts and neither ``resume`` nor
+        ``overwrite`` was given, holds parts of another sweep (without
+        ``discard_parts`` or ``overwrite``), or another sweep is using it.
+    SweepInterrupted
+        Ctrl-C: pending cases cancelled, finished ones kept for ``resume``.
+    SweepFailed
+        The backend failed; finished cases are kept for ``resume``.
+    """
+    plan = (config_or_path if isinstance(config_or_path, SweepPlan)
+            else expand(config_or_path, overrides, allow_large=allow_large, max_cases=max_cases))
+    tmpdir = None
+    if out is None:
+        tmpdir = tempfile.mkdtemp(prefix="clearsweep-")
+        out = Path(tmpdir) / f"{plan.name}.nc"
+    out = Path(out)
+    store = PartStore(parts_dir_for(out))
+    try:
+        with _InterruptGuard() as guard:
+            runnable = plan.runnable()
+            finished = store.open(resume=resume, overwrite=overwrite, expected=set(runnable),
+                                  discard_foreign=discard_parts,
+                                  sweep={"name": plan.name, "source": plan.source,
+                                         "cases": len(plan.cases)})
+            # OUT is ours while we hold the lock: drop what a killed assembly left beside it
+            remove_stale_temporaries(out)
+            try:
+                todo = [(h, (cfg, plan.store, _simulate, _summarize))
+                        for h, cfg in runnable.items() if h not in finished]
+                _execute(plan, store, todo, len(runnable), workers, client, progress, guard)
+                try:
+                    counts = write_sweep_netcdf(out, sweep_dims=plan.dims, sweep_coords=plan.coords,
+                                                slots=plan.slots(), store=store, attrs=_attrs(plan),
+                                                check=guard.check)
+                except KeyboardInterrupt:
+                    store.log("interrupted", finished=len(runnable), total=len(runnable))
+                    raise SweepInterrupted(len(runnable), len(runnable), store.directory) from None
+                store.log("assembled", path=str(out), **counts)
+            finally:
+                store.close()
+        if not keep_parts:
+            store.remove()
+        if tmpdir is None:
+            return open_results(out)
+        with open_results(out) as ds:
+            return ds.load()
+    finally:
+        if tmpdir is not None:
+            shutil.rmtree(tmpdir, ignore_errors=True)
+
+
+def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers, client,
+             progress: bool, guard: _InterruptGuard) -> None:
+    """Run ``todo`` on the chosen backend, writing each finished case at once."""
+    from tqdm.auto import tqdm
+
+    kept = total - len(todo)
+    runnable = plan.runnable()
+    failed = sum(1 for r in store.events("done") if r.get("status") not in NOT_FAILED
+                 and r.get("hash") in runnable) if kept else 0
+    try:
+        backend = (_backend(workers, client, len(todo), guard, store.directory) if todo
+                   else _Serial(guard))
+    except (OSError, TimeoutError) as exc:
+        raise SweepFailed(f"cannot start the backend for {client or workers!r}: "
+                          f"{type(exc).__name__}: {exc}") from exc
+    store.log("run", name=plan.name, source=plan.source, cases=len(plan.cases), to_run=len(todo), kept=kept,
+              backend=backend.label)
+    bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
+               file=sys.stderr, dynamic_ncols=True)
+    bar.set_postfix(failed=failed)
+    done = kept
+
+    def on_result(h: str, result) -> None:
+        nonlocal failed, done
+        if isinstance(result, xr.Dataset):
+            store.write(h, result)
+            result = _receipt(result)
+        store.log("done", hash=h, **result)
+        failed += result["status"] not in NOT_FAILED
+        done += 1
+        bar.set_postfix(failed=failed, refresh=False)
+        bar.update()
+
+    interrupted = False
+    try:
+        _drive(backend, todo, on_result, guard)
+    except KeyboardInterrupt:
+        interrupted = True
+        store.log("interrupted", finished=done, total=total)
+        raise SweepInterrupted(done, total, store.directory) from None
+    except Exception as exc:
+        interrupted = True
+        store.log("failed", error=f"{type(exc).__name__}: {exc}")
+        raise SweepFailed(f"the {backend.label} backend failed ({type(exc).__name__}: {exc}); "
+                          f"{done} of {total} cases are kept in {store.directory}; run again "
+                          "with --resume to finish the sweep") from exc
+    finally:
+        bar.close()
+        backend.close(interrupted=interrupted)

@@ -1,0 +1,135 @@
+"""Runs one case in a worker (pool process, Dask worker or this process) and writes its part."""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import signal
+import threading
+import time
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from .. import variables
+from ..summary import case_summary
+from .parts import MESSAGE_ATTRS, STATUS_ATTRS, write_part
+
+#: How often a pool worker checks that the driver process still exists [s].
+WATCHDOG_PERIOD_S = 1.0
+
+
+def _text(value) -> str:
+    value = np.asarray(value)
+    return str(value[()] if value.ndim == 0 else value.ravel()[0])
+
+
+def _failed_part(status: str, message: str, wall_time: float) -> xr.Dataset:
+    return xr.Dataset({
+        "status": ((), status, STATUS_ATTRS),
+        "message": ((), message, MESSAGE_ATTRS),
+        "wall_time": ((), float(wall_time), variables.attrs_for("wall_time")),
+    })
+
+
+def _run_case(payload: tuple) -> xr.Dataset:
+    """Simulate one case and build its part (runs in a worker).
+
+    Parameters
+    ----------
+    payload
+        ``(config_json, store_mode, simulate, summarize)``; ``None`` for the
+        last two means :func:`clearsweep.simulation.simulate` and
+        :func:`clearsweep.summary.case_summary`.
+
+    Returns
+    -------
+    xr.Dataset
+        Summaries, ``status`` and ``message``, and the time series unless
+        ``store_mode == "summary"``. A case that raises, or stops with a
+        status other than ``ok``, gives only ``status``, ``message`` and
+        ``wall_time``.
+    """
+    config_json, store_mode, simulate, summarize = payload
+    if simulate is None:
+        from ..simulation import simulate as simulate_case
+
+        # expand() checked every case's budget, with the sweep's --allow-large
+        simulate = functools.partial(simulate_case, allow_large=True)
+    if summarize is None:
+        summarize = case_summary
+    start = time.perf_counter()
+    try:
+        ds = simulate(json.loads(config_json))
+        status = _text(ds["status"].values)
+        if status == "ok":
+            summary = summarize(ds)
+            part = summary.copy() if store_mode == "summary" else ds.copy()
+            for name, var in summary.data_vars.items():
+                part[name] = var
+            part["message"] = ((), "", MESSAGE_ATTRS)
+            return part
+        if "message" in ds:
+            message = _text(ds["message"].values)
+        else:
+            when = ds.attrs.get("status_time_s")
+            message = f"the simulation stopped with status {status!r}" + (
+                f" at t = {float(when):g} s" if when is not None else "")
+        if ds.attrs.get("status_hint"):
+            message += f"; {ds.attrs['status_hint']}"
+        wall = float(ds["wall_time"].values) if "wall_time" in ds else time.perf_counter() - start
+        return _failed_part(status, message, wall)
+    except Exception as exc:    # a failed case, not a failed sweep
+        return _failed_part("error", f"{type(exc).__name__}: {exc}", time.perf_counter() - start)
+
+
+def _receipt(part: xr.Dataset) -> dict[str, Any]:
+    """What the driver logs of a finished case."""
+    wall = float(part["wall_time"].values) if "wall_time" in part else None
+    return {"status": _text(part["status"].values), "wall_time": wall}
+
+
+def _run_and_store(payload: tuple, parts_dir: str, h: str) -> dict[str, Any]:
+    """Run one case and write its part here, in the worker; return its receipt.
+
+    Writing in the worker keeps the driver (which shares the cores) idle
+    while the cases run.
+    """
+    part = _run_case(payload)
+    write_part(parts_dir, h, part)
+    return _receipt(part)
+
+
+def _driver_gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:
+        return False
+    try:        # killed but not yet reaped by its parent
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            return f.read().rpartition(")")[2].split()[0] in ("Z", "X")
+    except (OSError, IndexError):
+        return False
+
+
+def _worker_init(driver_pid: int) -> None:
+    """Pool worker set-up: leave Ctrl-C to the driver, and end when the driver is gone."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    def watch() -> None:
+        # A killed driver cannot stop its pool; without this its workers would wait forever.
+        while not _driver_gone(driver_pid):
+            time.sleep(WATCHDOG_PERIOD_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="clearsweep-driver-watch", daemon=True).start()
+
+
+def _worker_died(h: str, how: str) -> xr.Dataset:
+    return _failed_part("error", f"the worker process running this case died twice ({how}), the "
+                        "second time running it alone on a fresh worker: killed, out of memory, or "
+                        "a crash in compiled code", 0.0)
