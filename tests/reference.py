@@ -1,14 +1,14 @@
-"""Slow, plain-numpy reference right-hand side of the RSSP mechanism (DESIGN 1-3, 8).
+"""Slow, plain-numpy reference right-hand side of the RSSP mechanism (docs/physics.md sections 1-3, 8).
 
 Everything is built the obvious way, independently of the kernel's structured solver:
 
-- one function ``constraints(q, t)`` straight from the table of DESIGN 2;
+- one function ``constraints(q, t)`` straight from the table of docs/physics.md section 2;
 - its Jacobian ``Cq``, ``C_t`` and the velocity-quadratic acceleration term ``h`` by
   finite differences (``C_ddot = Cq qdd + h``);
 - the mass matrix from the kinetic energy with the body angular velocity taken from
   ``w~ = R^T R_dot`` (derivatives of the elementary rotations), and the velocity-quadratic
   generalised force from Lagrange's equations by finite differences;
-- gravity and the contact law of DESIGN 3, applied at the contact points through
+- gravity and the contact law of docs/physics.md section 3, applied at the contact points through
   finite-difference point Jacobians;
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
@@ -173,7 +173,7 @@ class Mechanism:
         return out
 
     def constraints(self, q, t):
-        """C(q, t), DESIGN 2's table (in q's precision)."""
+        """C(q, t), docs/physics.md section 2's table (in q's precision)."""
         c = []
         c.extend(point(q, CRANK, self.u_O))                       # revolute O at the origin
         c.extend([q[3], q[4]])                                   # alpha2 = beta2 = 0
@@ -231,7 +231,7 @@ def body_offset(q, body, x):
 
 
 # ---------------------------------------------------------------------------
-# contact (DESIGN 3), unworn socket
+# contact (docs/physics.md section 3), unworn socket
 # ---------------------------------------------------------------------------
 
 def normal_force(delta, ddot, c, ew, ri, kappa):
@@ -355,7 +355,7 @@ def acceleration_terms(mech: Mechanism, q, qd, t):
 
 
 def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
-    """Solve the full KKT system of DESIGN 2 at state y (layout.Y_*) and time t."""
+    """Solve the full KKT system of docs/physics.md section 2 at state y (layout.Y_*) and time t."""
     mech = Mechanism(np.asarray(p, float), np.asarray(jp, float))
     q = np.array(y[:L.N_Q], float)
     qd = np.array(y[L.Y_QD:L.Y_QD + L.N_Q], float)
@@ -416,7 +416,7 @@ def point_mobility(ref: Reference, j):
 
 
 def stiff_rates(ref: Reference, j, p, jp):
-    """DESIGN 4 rates of clearance joint j at its current state: (elastic/damping, friction, m_eff).
+    """docs/physics.md section 4 rates of clearance joint j at its current state: (elastic/damping, friction, m_eff).
 
     elastic/damping: the largest root magnitude of m_eff s^2 + (dF/d delta_dot) s + dF/d delta;
     friction: mu c_d' F_N times the largest inverse mass across the tangent plane, c_d' the

@@ -11,6 +11,9 @@ What the tests may rely on (all set by the constants below):
   ``ACC_SPIKE_TIME_S`` (inside the first 0.05 s): peak = ``ACC_SPIKE``,
   settled peak = settled RMS = ``acc_level``.
 - ``normal_force`` is zero but for one sample of ``NORMAL_FORCE_PEAK[joint]``.
+- The every-step statistics (``variables.STATISTICS``) are stored as a kernel would store
+  them, from these rows (right-end rule over each row interval, settled window
+  t >= ``SETTLE_TIME_S``): settled peak = settled RMS = ``acc_level``.
 - ``wear_map`` holds a blob whose largest bin is exactly ``WEAR_MAP_PEAK[joint]``.
 - ``wear_projection`` follows ``WEAR_PROFILES``: on every bin centre in
   [lo, hi] the depth falls linearly from ``peak`` at ``peak_angle`` to half
@@ -32,7 +35,7 @@ from clearsweep.variables import AXES, JOINTS
 DURATION_S = 0.2
 SAMPLE_DT_S = 1.0e-3
 OMEGA_RAD_S = 2.0 * np.pi            # 60 r/min
-CRANK_M, ROD_M, SLIDER_Z_M = 0.14, 0.38, -0.12   # DESIGN.md 1
+CRANK_M, ROD_M, SLIDER_Z_M = 0.14, 0.38, -0.12   # docs/physics.md section 1
 CLEARANCE_M = 2.5e-4
 ORBIT_FRACTION = 0.8                 # ball-centre orbit radius / clearance
 
@@ -40,6 +43,7 @@ ACC_LEVEL = 3.0                      # [m s-2]
 ACC_HALF_PERIOD_S = 0.02
 ACC_SPIKE = 50.0                     # [m s-2]
 ACC_SPIKE_TIME_S = 0.01
+SETTLE_TIME_S = 0.05
 NORMAL_FORCE_PEAK = {"A": 40.0, "B": 120.0}          # [N]
 NORMAL_FORCE_PEAK_TIME_S = 0.1
 WEAR_MAP_SHAPE = (36, 72)
@@ -86,7 +90,7 @@ def projection_profile(lo: float, hi: float, peak_angle: float, peak: float) -> 
 
 
 def ideal_slider_position(theta: np.ndarray) -> np.ndarray:
-    """x_B(theta) of the ideal mechanism [m] (DESIGN.md 1)."""
+    """x_B(theta) of the ideal mechanism [m] (docs/physics.md section 1)."""
     return np.sqrt(ROD_M ** 2 - (CRANK_M * np.sin(theta)) ** 2
                    - (SLIDER_Z_M + CRANK_M * np.cos(theta)) ** 2)
 
@@ -99,6 +103,26 @@ def config_text(clearance_b: float = CLEARANCE_M, coating_b: str = "none") -> st
         "joints": {"A": dict(joint), "B": {**joint, "clearance": clearance_b, "coating": coating_b}},
         "solver": {"dt": 1.0e-5, "duration": DURATION_S, "save_every": 100},
     }, sort_keys=False)
+
+
+def statistics(t: np.ndarray, acceleration: np.ndarray, torque: np.ndarray,
+               normal: np.ndarray, penetration: np.ndarray) -> dict[str, np.ndarray]:
+    """The kernel's statistics of these rows, treated as every step (right-end rule)."""
+    out = {}
+    dt = np.diff(t, prepend=t[0])
+    for suffix, keep in (("", t >= 0.0), ("_settled", t >= SETTLE_TIME_S)):
+        w = dt[keep]
+        a = acceleration[keep]
+        out["slider_acceleration_peak" + suffix] = np.abs(a).max()
+        out["slider_acceleration_rms" + suffix] = np.sqrt((a ** 2 * w).sum() / w.sum())
+        out["crank_torque_peak" + suffix] = np.abs(torque[keep]).max()
+        out["normal_force_peak" + suffix] = normal[keep].max(axis=0)
+        out["penetration_peak" + suffix] = np.maximum(penetration[keep].max(axis=0), 0.0)
+        touching = normal[keep] > 0
+        out["impact_count" + suffix] = touching.sum(axis=0).astype(np.int32)
+        out["impact_velocity_max" + suffix] = np.where(touching.any(axis=0), 0.01, 0.0)
+        out["contact_fraction" + suffix] = (touching * w[:, None]).sum(axis=0) / w.sum()
+    return out
 
 
 def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
@@ -169,7 +193,10 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         "wall_time": 2.0,
         "status": status,
     }
-    return build_dataset(arrays, t, config_text=config_text(clearance_b, coating_b))
+    arrays.update(statistics(t, acceleration, arrays["crank_torque"], normal,
+                             arrays["penetration"]))
+    return build_dataset(arrays, t, config_text=config_text(clearance_b, coating_b),
+                         attrs={"settle_time_s": SETTLE_TIME_S})
 
 
 def sweep_case_profiles(coating: str, clearance: float) -> dict:

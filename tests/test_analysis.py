@@ -11,17 +11,28 @@ import json
 
 import numpy as np
 import pytest
+import synthetic as syn
 import xarray as xr
 from click.testing import CliRunner
-
-import synthetic as syn
 from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures)
-from clearsweep.analysis import (REPORT_FORMATS, SETTLE_TIME_S, SelectionError, case_summary,
-                                 format_metric_table, format_reduction_table, format_wear_table,
-                                 metric_table, parse_selection, reduction_table, report_command,
-                                 run_summary_text, wear_table, worn_arc_deg)
+
+from clearsweep.analysis import (
+    REPORT_FORMATS,
+    SelectionError,
+    case_summary,
+    format_metric_table,
+    format_reduction_table,
+    format_wear_table,
+    metric_table,
+    parse_selection,
+    reduction_table,
+    run_summary_text,
+    wear_table,
+    worn_arc_deg,
+)
+from clearsweep.cli import report_command
 from clearsweep.dataset import write_netcdf_atomic
-from clearsweep.variables import SUMMARY_VARIABLES
+from clearsweep.variables import STATISTICS, SUMMARY_VARIABLES
 
 # (joint, axis) -> (max depth [m], angle of max, min angle, max angle, range, arc [degree]) by
 # hand from synthetic.WEAR_PROFILES: bins on [lo, hi], peak at peak_angle. A x wears every bin:
@@ -123,14 +134,13 @@ def test_wear_table_broadcasts_over_sweep_dims(sweep_ds):
 
 def test_case_summary_numbers(case):
     s = case_summary(case)
-    n = case.sizes["time"]
-    # Square wave +-3 everywhere but one spike of 50 (before 0.05 s).
+    # Square wave +-3 everywhere but one spike of 50 (before 0.05 s); the summary copies
+    # the stored every-step statistics, it does not recompute them from the rows.
     assert float(s["slider_acceleration_peak"]) == syn.ACC_SPIKE
-    expected_rms = np.sqrt(((n - 1) * syn.ACC_LEVEL ** 2 + syn.ACC_SPIKE ** 2) / n)
-    assert float(s["slider_acceleration_rms"]) == pytest.approx(expected_rms, rel=1e-12)
     assert float(s["slider_acceleration_peak_settled"]) == syn.ACC_LEVEL
     assert float(s["slider_acceleration_rms_settled"]) == pytest.approx(syn.ACC_LEVEL, rel=1e-12)
-    assert s["slider_acceleration_rms_settled"].attrs["settle_time_s"] == SETTLE_TIME_S
+    for name in STATISTICS:
+        xr.testing.assert_identical(s[name], case[name])
     for joint in ("A", "B"):
         assert float(s["normal_force_peak"].sel(joint=joint)) == syn.NORMAL_FORCE_PEAK[joint]
         assert float(s["wear_depth_max_final"].sel(joint=joint)) == pytest.approx(
@@ -142,11 +152,17 @@ def test_case_summary_numbers(case):
     assert s.attrs["config"] == case.attrs["config"]
 
 
-def test_settled_metrics_are_nan_for_short_runs(case):
-    short = case.sel(time=slice(0.0, SETTLE_TIME_S / 2))
-    s = case_summary(short)
-    assert np.isnan(float(s["slider_acceleration_peak_settled"]))
-    assert float(s["slider_acceleration_peak"]) == syn.ACC_SPIKE
+def test_case_summary_lists_settled_statistics_first(case):
+    names = [n for n in case_summary(case).data_vars if n in STATISTICS]
+    settled = [n.endswith("_settled") for n in names]
+    assert settled == sorted(settled, reverse=True) and any(settled) and not all(settled)
+
+
+def test_case_summary_does_not_recompute_from_the_rows(case):
+    """Thinning the rows (as save_every does) leaves the summary statistics as stored."""
+    thinned = case.isel(time=slice(None, None, 7))
+    assert float(abs(thinned["slider_acceleration"]).max()) != syn.ACC_SPIKE
+    assert float(case_summary(thinned)["slider_acceleration_peak"]) == syn.ACC_SPIKE
 
 
 def test_case_summary_of_a_summary_is_the_summary(sweep_ds):
@@ -159,8 +175,9 @@ def test_case_summary_of_a_summary_is_the_summary(sweep_ds):
 def test_run_summary_text(case):
     text = run_summary_text(case)
     assert "status: ok" in text
-    assert "peak 50 m s-2" in text and "after 0.05 s: peak 3 m s-2, RMS 3 m s-2" in text
-    assert "peak normal force: A 40 N, B 120 N" in text
+    assert "settled (t >= 0.05 s), whole run in brackets" in text
+    assert "slider acceleration: peak 3 m s-2 (50 m s-2), RMS 3 m s-2" in text
+    assert "peak normal force: A 40 N (40 N), B 120 N (120 N)" in text
     assert "sub-steps used: 4" in text
     assert "energy residual (relative): 2.50e-06" in text
     assert "40,000 RK4 steps/s" in text          # 80 000 steps in 2 s
@@ -292,10 +309,12 @@ def test_report_cli_every_format(sweep_file, fmt):
         assert rows[0][5] == "Max wear depth [m]"
         assert len(rows) == 1 + 4 * 2 * 3
     elif fmt == "markdown":
-        assert out.startswith("## Wear prediction")
+        assert out.startswith("## Slider and crank (every-step statistics")
+        assert "\n## Wear prediction" in out
         assert "| Joint | Wear direction | Max wear depth [m] |" in out
     else:
-        assert out.startswith("Wear prediction")
+        assert out.startswith("Slider and crank (every-step statistics")
+        assert "\nWear prediction" in out
 
 
 @pytest.mark.parametrize("fmt", REPORT_FORMATS)
@@ -381,9 +400,13 @@ def test_reference_on_a_zip_group_and_skipped_points(tmp_path):
     real sweep with a skip rule; skipped points are not reported."""
     import yaml
 
-    from clearsweep.analysis import (format_metric_table, format_reduction_table,
-                                     format_wear_table, reduction_table)
-    from clearsweep.sweeps import run_sweep
+    from clearsweep.analysis import (
+        format_metric_table,
+        format_reduction_table,
+        format_wear_table,
+        reduction_table,
+    )
+    from clearsweep.sweeping import run_sweep
 
     doc = {"base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
                     "solver": {"duration": 0.02}},
@@ -407,3 +430,23 @@ def test_reference_on_a_zip_group_and_skipped_points(tmp_path):
         rows = [r for r in format_metric_table(ds, "slider_acceleration_peak", "csv").splitlines()[1:]
                 if r.strip()]
         assert len(rows) == 5  # 3 x 2 points, one skipped
+
+
+def test_statistics_table_puts_settled_first_with_whole_run_beside(sweep_ds):
+    from clearsweep.analysis import format_statistics_table
+
+    text = format_statistics_table(sweep_ds)
+    header = next(line for line in text.splitlines() if line.startswith("B_coating"))
+    assert header.index("Peak slider acc., settled") < header.index("whole run")
+    assert "settled = t >= 0.05 s" in text
+    rows = [line.split() for line in text.splitlines() if line.startswith(("none ", "PTFE "))]
+    # settled peak = the coating's acceleration level, whole-run peak = the start-up spike
+    assert {(r[0], float(r[2]), float(r[3])) for r in rows[:4]} == {
+        ("none", syn.SWEEP_ACC_LEVEL["none"], syn.ACC_SPIKE),
+        ("PTFE", syn.SWEEP_ACC_LEVEL["PTFE"], syn.ACC_SPIKE)}
+
+
+def test_report_prints_the_statistics_before_the_wear_table(case_file):
+    result = invoke(case_file)
+    assert result.exit_code == 0, result.output
+    assert result.output.index("every-step statistics") < result.output.index("Wear prediction")

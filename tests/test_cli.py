@@ -38,7 +38,7 @@ def fake_run(monkeypatch):
     """Stand-ins for the simulation and the summary, recording what they were given."""
     calls = []
 
-    def simulate(cfg):
+    def simulate(cfg, allow_large=False):
         calls.append(cfg)
         if cfg["name"] == "unstable":
             raise ConfigError("solver.dt", cfg["solver"]["dt"], "a step below the stability limit")
@@ -46,7 +46,8 @@ def fake_run(monkeypatch):
         return xr.Dataset({"slider_position": ("time", [0.3, 0.31]), "status": ((), status)},
                           coords={"time": [0.0, 0.1]})
 
-    monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(simulate=simulate))
+    monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
+        simulate=simulate, kernel_needs_compiling=lambda: False, prepare_kernel=lambda: 0.0))
     monkeypatch.setitem(sys.modules, "clearsweep.analysis", types.SimpleNamespace(
         run_summary_text=lambda ds: f"summary: status {ds['status'].item()}"))
     return calls
@@ -162,10 +163,11 @@ def test_config_error_in_any_subcommand_exit_2(monkeypatch):
 
 
 def test_other_exceptions_propagate(tmp_path, monkeypatch):
-    def simulate(cfg):
+    def simulate(cfg, allow_large=False):
         raise RuntimeError("kernel exploded")
 
-    monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(simulate=simulate))
+    monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
+        simulate=simulate, kernel_needs_compiling=lambda: False, prepare_kernel=lambda: 0.0))
     result, _, out = run_case(tmp_path, "name: x\n")
     assert result.exit_code != 0 and isinstance(result.exception, RuntimeError)
     assert not out.exists()
@@ -195,19 +197,30 @@ def test_materials_lists_sources(tmp_path):
     assert result.stderr.startswith(f"clearsweep: error: {user}: lead.friction_coefficient.value: got -0.2")
 
 
-def test_version_and_help_without_optional_modules(monkeypatch):
+def test_version_and_help_list_every_command():
     assert CliRunner().invoke(main, ["--version"]).stdout.strip() == f"clearsweep, version {__version__}"
-    for module in ("clearsweep.sweeps", "clearsweep.plotting"):
-        monkeypatch.setitem(sys.modules, module, None)  # as if not written yet
     result = CliRunner().invoke(main, ["--help"])
     assert result.exit_code == 0
-    assert all(c in result.stdout for c in ("run", "validate", "materials"))
+    assert all(c in result.stdout for c in ("run", "validate", "materials", "sweep", "report", "plot"))
+
+
+def test_a_broken_module_is_an_error_not_an_unknown_command(tmp_path, monkeypatch):
+    """A plotting module that cannot be imported (a broken matplotlib) fails the command
+    that needs it with its ImportError; it is not hidden as "No such command 'plot'"."""
+    path = tmp_path / "r.nc"
+    path.write_bytes(b"")
+    monkeypatch.setitem(sys.modules, "clearsweep.plotting", None)   # import fails
+    result = CliRunner().invoke(main, ["plot", str(path), "--kind", "slider", "-o",
+                                       str(tmp_path / "f.png")])
+    assert result.exit_code != 0
+    assert "No such command" not in result.output
+    assert isinstance(result.exception, ImportError)
+    # the commands that do not need it still run
+    assert CliRunner().invoke(main, ["materials"]).exit_code == 0
 
 
 @pytest.mark.slow
 def test_run_end_to_end(tmp_path):
-    pytest.importorskip("clearsweep.simulation")
-    pytest.importorskip("clearsweep.analysis")  # the run summary
     path = tmp_path / "short.yaml"
     path.write_text("joints:\n  B: {clearance: 2.5e-4, coating: PTFE}\n"
                     "solver: {duration: 2.0e-3, save_every: 10}\n")
@@ -217,3 +230,53 @@ def test_run_end_to_end(tmp_path):
     with xr.open_dataset(tmp_path / "short.nc") as ds:
         assert ds["status"].item() == "ok"
         assert yaml.safe_load(ds.attrs["config"])["joints"]["B"]["coating"] == "PTFE"
+
+
+@pytest.mark.parametrize("text, words", [
+    ("solver: {dt: 1.0e-5}\nsolver: {dt: 2.0e-5}\n", "got the key 'solver' a second time"),
+    ("x: " + "[" * 20000 + "]" * 20000 + "\n", "levels of nesting"),
+], ids=["duplicate_key", "deep_nesting"])
+@pytest.mark.parametrize("command", ["run", "validate"])
+def test_hostile_yaml_is_one_error_line_exit_2(tmp_path, fake_run, command, text, words):
+    path = tmp_path / "c.yaml"
+    path.write_text(text)
+    result = invoke([command, path, *(["-o", tmp_path / "o.nc"] if command == "run" else [])], tmp_path)
+    assert result.exit_code == 2, result.output
+    assert result.stderr.startswith(f"clearsweep: error: {path}: line ") and words in result.stderr
+    assert result.stderr.count("\n") == 1 and fake_run == []
+
+
+def test_full_disk_during_the_write_is_one_error_line_and_no_file(tmp_path, fake_run, monkeypatch):
+    """netCDF-C reports a full disk as RuntimeError("NetCDF: HDF error"), after writing part of it."""
+    real = xr.Dataset.to_netcdf
+
+    def full(self, path, *args, **kwargs):
+        real(self, path, *args, **kwargs)
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
+    result, path, out = run_case(tmp_path, "name: ok\n")
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr.startswith(f"clearsweep: error: cannot write {out}: NetCDF: HDF error")
+    assert result.stderr.count("\n") == 1
+    assert list(tmp_path.iterdir()) == [path]
+
+
+def test_run_says_when_it_compiles_and_times_stepping_only(tmp_path, monkeypatch):
+    """A cold kernel is announced on stderr and compiled before the timed run, so that the
+    run's wall time (and steps/s) counts stepping only."""
+    import clearsweep.simulation as simulation
+
+    calls = []
+    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda: True)
+    real = simulation.prepare_kernel
+    monkeypatch.setattr(simulation, "prepare_kernel", lambda: calls.append(1) or real())
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("joints: {A: {clearance: 2.5e-4}, B: {clearance: 2.5e-4}}\n"
+                   "solver: {duration: 0.01}\n")
+    result = CliRunner().invoke(main, ["run", str(cfg), "-o", str(tmp_path / "o.nc")])
+    assert result.exit_code == 0, result.output
+    assert "compiling the kernel (once, about" in result.stderr
+    assert calls  # compiled before the run
+    quiet = CliRunner().invoke(main, ["run", str(cfg), "-q", "-o", str(tmp_path / "q.nc")])
+    assert quiet.exit_code == 0 and "compiling" not in quiet.stderr

@@ -10,8 +10,20 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from clearsweep.config import (DEFAULTS, SCHEMA, ConfigError, apply_override, dump_config, get_path,
-                               load_config, resolve_materials, set_path)
+from clearsweep.config import (
+    DEFAULTS,
+    MAX_YAML_ALIASES,
+    MAX_YAML_BYTES,
+    SCHEMA,
+    ConfigError,
+    apply_override,
+    dump_config,
+    get_path,
+    load_config,
+    parse_yaml,
+    resolve_materials,
+    set_path,
+)
 
 
 def leaf_keys(schema, prefix=""):
@@ -39,7 +51,7 @@ def test_empty_mapping_gives_every_key_with_defaults():
     assert cfg["mechanism"]["preset"] == "realistic"
     assert cfg["joints"]["A"]["socket_radius"] == 0.015
     assert cfg["solver"]["baumgarte"] == [5.0, 5.0]
-    assert cfg["wear"]["map"] == [36, 72]
+    assert cfg["wear"]["map"] == [144, 288]
 
 
 def test_defaults_are_the_documented_contract():
@@ -230,9 +242,12 @@ BAD = [
     ("joints:\n  B:\n    coating: teflon\n", "joints.B.coating", "teflon", "a known material"),
     ("joints:\n  A:\n    clearance: -0.001\n", "joints.A.clearance", -0.001, "a number >= 0"),
     ("joints:\n  A:\n    clearance: 0.02\n", "joints.A.clearance", 0.02,
-     "< joints.A.socket_radius (0.015)"),
+     "<= 0.5 * joints.A.socket_radius (0.0075)"),
     ("joints:\n  B:\n    socket_radius: 1.0e-4\n    clearance: 2.0e-4\n", "joints.B.clearance", 2e-4,
-     "< joints.B.socket_radius"),
+     "<= 0.5 * joints.B.socket_radius"),
+    # a ball of 0.1 mm in a 15 mm socket used to run "ok" while penetrating 590 radii deep
+    ("joints:\n  B:\n    clearance: 0.0149\n", "joints.B.clearance", 0.0149,
+     "the ball radius R_j = socket_radius - clearance is at least 0.5 * socket_radius"),
     ("solver:\n  dt: 0\n", "solver.dt", 0, "a number > 0"),
     ("solver:\n  dt: -1.0e-5\n", "solver.dt", -1e-5, "a number > 0"),
     ("solver:\n  dt: 2.0\n", "solver.dt", 2.0, "<= solver.duration (1.0)"),
@@ -351,3 +366,63 @@ def test_missing_materials_file(tmp_path):
 def test_user_material_unknown_without_its_file():
     with pytest.raises(ConfigError, match="joints.B.coating: got 'bronze'"):
         load_config({"joints": {"B": {"coating": "bronze"}}})
+
+
+# ----------------------------------------------------------------------------- hostile YAML
+
+def alias_bomb(levels: int = 9) -> str:
+    """A "billion laughs" document: a few hundred bytes that stand for 9**levels strings."""
+    text = "a0: &a0 [" + ", ".join(["lol"] * 9) + "]\n"
+    for i in range(1, levels):
+        text += f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]\n"
+    return text
+
+
+def test_alias_bomb_is_refused_before_it_expands(tmp_path):
+    path = write(tmp_path, alias_bomb())
+    assert path.stat().st_size < 1024
+    with pytest.raises(ConfigError, match="values once its aliases are expanded") as info:
+        parse_yaml(path.read_text(), str(path))
+    assert str(info.value).startswith(f"{path}: line ")
+    with pytest.raises(ConfigError, match="values once its aliases are expanded"):
+        load_config(path)
+
+
+def test_a_few_aliases_are_still_fine():
+    assert parse_yaml("a: &x [1, 2]\nb: *x\n") == {"a": [1, 2], "b": [1, 2]}
+
+
+def test_too_many_aliases_are_refused():
+    text = "a: &x 1\nb: [" + ", ".join(["*x"] * (MAX_YAML_ALIASES + 1)) + "]\n"
+    with pytest.raises(ConfigError, match=f"more than {MAX_YAML_ALIASES} aliases"):
+        parse_yaml(text)
+
+
+@pytest.mark.parametrize("text", ["x: " + "[" * 20000 + "]" * 20000 + "\n",
+                                  "".join("  " * i + f"k{i}:\n" for i in range(200))],
+                         ids=["flow", "block"])
+def test_deep_nesting_is_a_config_error(tmp_path, text):
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError, match="levels of nesting") as info:
+        load_config(path)
+    assert str(info.value).startswith(f"{path}: line ")
+
+
+def test_oversized_file_is_refused_unread(tmp_path):
+    path = write(tmp_path, "name: x\n" + "# padding\n" * (MAX_YAML_BYTES // 10 + 1))
+    with pytest.raises(ConfigError, match=f"at most {MAX_YAML_BYTES} bytes"):
+        load_config(path)
+
+
+def test_duplicate_key_names_the_key_and_both_lines(tmp_path):
+    path = write(tmp_path, "solver:\n  dt: 1.0e-5\n  duration: 0.1\n  dt: 2.0e-5\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value) == (f"{path}: line 4: got the key 'dt' a second time (first on line 2); "
+                               "expected each key once in a mapping")
+
+
+def test_same_key_in_different_mappings_is_fine():
+    assert load_config({})["joints"]["A"]["clearance"] == 0.0
+    assert parse_yaml("A: {clearance: 1}\nB: {clearance: 2}\n") == {"A": {"clearance": 1},
+                                                                      "B": {"clearance": 2}}

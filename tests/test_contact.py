@@ -1,4 +1,4 @@
-"""Contact law (DESIGN 3.2, paper Table 1) and the double-elastic-layer modulus."""
+"""Contact law (docs/physics.md section 3.2, paper Table 1) and the double-elastic-layer modulus."""
 
 import ast
 import math
@@ -6,8 +6,14 @@ import pathlib
 
 import pytest
 
-from clearsweep.core.contact import (contact_area, damping_factor, elastic_energy, elastic_force,
-                                     normal_force)
+from clearsweep.core.contact import (
+    contact_area,
+    damping_factor,
+    elastic_energy,
+    elastic_force,
+    episode_impact_velocity,
+    normal_force,
+)
 from clearsweep.materials import load_materials
 from clearsweep.params import equivalent_modulus, oedometric_modulus
 
@@ -82,18 +88,24 @@ def test_contact_area_is_two_pi_rj_hc():
     assert contact_area(1e-6, e, RI, rj) == pytest.approx(2 * math.pi * rj * hc, rel=1e-6)
 
 
-def impact_restitution(cr, v_in, m_eff=1.0, ew=1.1e11, steps=4000):
-    """Velocity ratio out/in of one ball-in-socket impact (1-DOF, RK4, delta_dot0 = v_in)."""
-    kappa = damping_factor(cr, v_in)
-    # contact duration ~ pi / omega at the peak penetration
+def impact_restitution(cr, v_in, m_eff=1.0, ew=1.1e11, steps=4000, latch_floor=None):
+    """Velocity ratio out/in of one ball-in-socket impact (1-DOF, RK4).
+
+    Without ``latch_floor``: delta_dot0 = v_in throughout. With it: the kernel's discrete
+    latch (``episode_impact_velocity`` after every step in contact; before the first such
+    step each stage uses its own approach rate, as ``dynamics.contact`` does), starting half
+    a step before touching.
+    """
     dmax = (0.75 * m_eff * v_in ** 2 * C / (4 * math.pi * ew * RI / 5)) ** (1 / 3)
     omega = math.sqrt(elastic_force(dmax, C, ew, RI)[1] / m_eff)
     h = 4 * math.pi / omega / steps
-    x, v = 0.0, v_in
+    x, v = (0.0, v_in) if latch_floor is None else (-0.5 * h * v_in, v_in)
+    dv0 = v_in if latch_floor is None else 0.0
 
     def acc(x, v):
         if x <= 0:
             return 0.0
+        kappa = damping_factor(cr, dv0 if dv0 > 0.0 else max(v, latch_floor))
         return -normal_force(x, v, C, ew, RI, kappa)[0] / m_eff
 
     for _ in range(20 * steps):
@@ -103,6 +115,8 @@ def impact_restitution(cr, v_in, m_eff=1.0, ew=1.1e11, steps=4000):
         k4x, k4v = v + h * k3v, acc(x + h * k3x, v + h * k3v)
         x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x)
         v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
+        if latch_floor is not None:
+            dv0 = episode_impact_velocity(dv0, v, latch_floor) if x > 0 else 0.0
         if x < 0 and v < 0:
             return -v / v_in
     raise AssertionError("ball did not leave the contact")
@@ -142,3 +156,21 @@ def test_core_imports_no_io_or_framework_layer():
             else:
                 continue
             assert set(names) <= allowed, (path.name, names)
+
+
+@pytest.mark.parametrize("cr, measured", [(0.5, 0.481), (0.7, 0.692), (0.9, 0.898)])
+def test_episode_latch_keeps_delivered_restitution(cr, measured):
+    """The kernel's latch (fastest approach of the episode) delivers the restitution of the
+    law with delta_dot0 = the impact speed: 0.481 / 0.692 / 0.898 for c_r = 0.5 / 0.7 / 0.9,
+    from the floor up to 100x the floor."""
+    for v_in in (0.01, 0.1):
+        assert impact_restitution(cr, v_in, latch_floor=1e-3) == pytest.approx(measured, abs=3e-3)
+        assert impact_restitution(cr, v_in, latch_floor=1e-3) == pytest.approx(impact_restitution(cr, v_in),
+                                                              abs=2e-3)
+
+
+def test_episode_latch_rule():
+    assert episode_impact_velocity(0.0, 0.5, 1e-3) == 0.5        # onset: the approach rate
+    assert episode_impact_velocity(0.0, -0.2, 1e-3) == 1e-3      # grazing onset: the floor
+    assert episode_impact_velocity(0.3, 0.1, 1e-3) == 0.3        # slowing: kept
+    assert episode_impact_velocity(0.3, 0.4, 1e-3) == 0.4        # faster approach: raised

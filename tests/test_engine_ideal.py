@@ -1,4 +1,4 @@
-"""Ideal joints: closed-form kinematics (DESIGN 1), energy/torque balance, RK4 order."""
+"""Ideal joints: closed-form kinematics (docs/physics.md section 1), energy/torque balance, RK4 order."""
 
 import numpy as np
 import pytest
@@ -11,7 +11,7 @@ L2, L3, ZS = P.crank_length_m, P.rod_length_m, P.slider_height_m
 
 
 def closed_form_acceleration(theta, omega):
-    """Second time derivative of x_B(theta(t)) at constant omega (DESIGN 1)."""
+    """Second time derivative of x_B(theta(t)) at constant omega (docs/physics.md section 1)."""
     x = ideal_slider_x(theta, L2, L3, ZS)
     s, c = np.sin(theta), np.cos(theta)
     d2x = ZS * L2 * c / x - (ZS * L2 * s) ** 2 / x ** 3
@@ -29,7 +29,7 @@ def test_ideal_runs_ok(ideal_1s):
 
 
 def test_closed_form_endpoints():
-    # DESIGN 1: x_B(0) = 0.37947 m, x_B(pi) = 0.27713 m
+    # docs/physics.md section 1: x_B(0) = 0.37947 m, x_B(pi) = 0.27713 m
     assert ideal_slider_x(0.0, L2, L3, ZS) == pytest.approx(0.37947, abs=1e-5)
     assert ideal_slider_x(np.pi, L2, L3, ZS) == pytest.approx(0.27713, abs=1e-5)
 

@@ -1,4 +1,4 @@
-"""Materials: shipped values (DESIGN.md 6) with sources, user files, error messages."""
+"""Materials: shipped values (docs/physics.md section 6) with sources, user files, error messages."""
 
 import dataclasses
 
@@ -7,7 +7,7 @@ import pytest
 from clearsweep.config import ConfigError
 from clearsweep.materials import FIELDS, Material, format_materials, load_materials
 
-# DESIGN.md 6 (Jing & Liu 2023, Table 3): E [Pa], nu, mu, k [m^2/N], k assumed
+# docs/physics.md section 6 (Jing & Liu 2023, Table 3): E [Pa], nu, mu, k [m^2/N], k assumed
 TABLE_3 = {
     "steel": (207e9, 0.30, 0.01, 8e-14, False),
     "MoS2": (110e9, 0.29, 0.05, 8e-14, True),
@@ -133,3 +133,14 @@ def test_format_lists_values_and_sources():
     assert "PTFE" in text and "2.86" in text and "8e-14 (assumed)" in text
     assert "steel.wear_coefficient_m2_per_N: Jing & Liu 2023" in text
     assert text.count("\n  ") == len(TABLE_3) * len(FIELDS)
+
+
+def test_materials_file_is_read_with_the_yaml_limits(tmp_path):
+    user = tmp_path / "m.yaml"
+    user.write_text("lead:\n  friction_coefficient: {value: 0.2, source: lab}\n"
+                    "lead:\n  friction_coefficient: {value: 0.3, source: lab}\n")
+    with pytest.raises(ConfigError, match=r"line 3: got the key 'lead' a second time \(first on line 1\)"):
+        load_materials(user)
+    user.write_text("x: " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ConfigError, match="levels of nesting"):
+        load_materials(user)

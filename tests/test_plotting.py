@@ -2,19 +2,23 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import os
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
+import synthetic as syn
 import xarray as xr
 from click.testing import CliRunner
 from matplotlib.image import imread
-
-import synthetic as syn
 from synthetic import case, sweep_ds, sweep_file  # noqa: F401  (pytest fixtures)
-from clearsweep.analysis import SelectionError, case_summary, report_command, run_summary_text
-from clearsweep.plotting import KINDS, PlotError, plot, plot_command
+
+from clearsweep.analysis import SelectionError, case_summary, run_summary_text
+from clearsweep.cli import main, plot_command, report_command
+from clearsweep.plotting import KINDS, PlotError, plot
 
 TEST_DPI = 40
 UNITS = re.compile(r"\[[^\]]+\]")
@@ -86,7 +90,7 @@ def test_sweep_heatmap_and_lines(tmp_path, sweep_ds):
     line = plot(sweep_ds, "sweep", tmp_path / "l.png", ["B_coating=PTFE"], dpi=TEST_DPI)
     ax = line.axes[0]
     assert ax.get_xlabel() == "radial clearance of B [m]"
-    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), [syn.ACC_SPIKE, syn.ACC_SPIKE])
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), [syn.SWEEP_ACC_LEVEL["PTFE"]] * 2)
 
 
 def test_sweep_plot_from_summary_only_dataset(tmp_path, sweep_ds):
@@ -170,7 +174,7 @@ def test_cli_bad_suffix_exit_2(tmp_path, sweep_file):
 def test_short_simulation_renders_every_kind_and_reports(tmp_path):
     """0.02 s of the real simulator through the real sweep driver: two coatings at B, stored
     in full and as summaries; every figure, the three reports and the run summary."""
-    sweeps = pytest.importorskip("clearsweep.sweeps")
+    from clearsweep import sweeping as sweeps
     spec = {"base": {"solver": {"duration": 0.02},
                      "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}},
             "sweep": {"grid": {"joints.B.coating": ["none", "PTFE"]}}}
@@ -199,3 +203,55 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
                                                "--dpi", str(TEST_DPI)])
     assert result.exit_code == 0, result.output
     assert imread(out).std() > 0
+
+
+@pytest.mark.parametrize("error", [errno.ENOSPC, errno.EACCES], ids=["disk_full", "read_only"])
+def test_cli_unwritable_figure_is_one_error_line_and_no_partial_file(tmp_path, sweep_file,
+                                                                     monkeypatch, error):
+    """A full disk (or a folder we may not write: tests may run as root) half-way through."""
+    from matplotlib.figure import Figure
+
+    def fail(self, fname, *args, **kwargs):
+        Path(fname).write_bytes(b"\x89PNG half a figure")
+        raise OSError(error, os.strerror(error))
+
+    monkeypatch.setattr(Figure, "savefig", fail)
+    out = tmp_path / "figs" / "s.png"
+    result = CliRunner().invoke(main, ["plot", sweep_file, "--kind", "sweep", "-o", str(out)])
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr == f"clearsweep: error: cannot write {out}: {os.strerror(error)}\n"
+    assert list(out.parent.iterdir()) == []
+
+
+@pytest.mark.parametrize("dpi", ["100000", "5"])
+def test_cli_dpi_out_of_range_exit_2(tmp_path, sweep_file, dpi):
+    out = tmp_path / "s.png"
+    result = CliRunner().invoke(plot_command, [sweep_file, "--kind", "sweep", "-o", str(out),
+                                               "--dpi", dpi])
+    assert result.exit_code == 2 and "--dpi" in result.output and "1200" in result.output
+    assert not out.exists()
+
+
+def test_many_overlaid_cases_get_a_note_instead_of_a_legend(tmp_path, case):
+    many = xr.concat([case] * 13, dim="rep").assign_coords(rep=np.arange(13))
+    for kind in ("slider", "forces", "orbit", "wear-polar"):
+        fig = plot(many, kind, tmp_path / f"{kind}.png", dpi=TEST_DPI)
+        entries = [t.get_text() for leg in [*fig.legends, *(ax.get_legend() for ax in fig.axes)]
+                   if leg is not None for t in leg.get_texts()]
+        assert not any(e.startswith("rep=") for e in entries), (kind, entries)
+        assert "13 cases overlaid" in fig.get_suptitle() and "--select" in fig.get_suptitle()
+    few = plot(many.isel(rep=slice(0, 3)), "slider", tmp_path / "few.png", dpi=TEST_DPI)
+    assert len(few.axes[0].get_legend().get_texts()) == 3 and "overlaid" not in few.get_suptitle()
+
+
+def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):
+    ds = sweep_ds.copy(deep=True)
+    where = {"B_coating": "PTFE", "B_clearance": ds["B_clearance"].values[0]}
+    ds["status"].loc[where] = "penetration_exceeded"
+    ds["slider_acceleration"].loc[where] = np.nan
+    fig = plot(ds, "sweep", tmp_path / "h.png", dpi=TEST_DPI)
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert texts.count("failed") == 1 and any(p.get_hatch() for p in fig.axes[0].patches)
+    assert "hatched: 1 case(s) that failed" in fig.get_suptitle()
+    clean = plot(sweep_ds, "sweep", tmp_path / "c.png", dpi=TEST_DPI)
+    assert "failed" not in [t.get_text() for t in clean.axes[0].texts]

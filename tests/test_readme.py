@@ -73,3 +73,18 @@ def test_run_writes_a_labelled_file_with_units(tmp_path):
         assert ds["normal_force"].attrs["units"] == "N"
         assert ds["joint_force"].dims == ("time", "joint", "axis")
         assert "joints:" in ds.attrs["config"] and ds.attrs["numba_version"]
+
+
+def test_every_status_code_is_documented():
+    from clearsweep.core.layout import STATUS_NAMES
+
+    missing = [name for name in STATUS_NAMES.values() if f"`{name}`" not in README]
+    assert not missing, f"README does not list the status(es) {missing}"
+
+
+def test_benchmarks_are_run_with_the_project_interpreter():
+    section = README.split("## Benchmarks", 1)[1].split("\n## ", 1)[0]
+    commands = re.findall(r"`([^`]*benchmarks/[^`]*\.py)`", section)
+    assert commands and all(c.startswith(".venv/bin/python benchmarks/") for c in commands), commands
+    for command in commands:
+        assert (ROOT / command.split()[-1]).is_file()

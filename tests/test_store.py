@@ -1,4 +1,4 @@
-"""Parts folder, atomic writes and the one-case-at-a-time sweep writer (clearsweep.store)."""
+"""Parts folder, atomic writes and the one-case-at-a-time sweep writer (clearsweep.sweeping.parts and .assemble)."""
 
 from __future__ import annotations
 
@@ -9,15 +9,17 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from clearsweep import store as S
+from clearsweep.dataset import open_results
+from clearsweep.sweeping import assemble as A
+from clearsweep.sweeping import parts as P
 
 
 def _part(status="ok", n_time=5, dt=0.1, offset=0.0, with_series=True) -> xr.Dataset:
     """A small part: time series, a joint array, an int and a bool scalar."""
     ds = xr.Dataset(
         {
-            "status": ((), status, S.STATUS_ATTRS),
-            "message": ((), "" if status == "ok" else f"stopped: {status}", S.MESSAGE_ATTRS),
+            "status": ((), status, P.STATUS_ATTRS),
+            "message": ((), "" if status == "ok" else f"stopped: {status}", P.MESSAGE_ATTRS),
             "peak": (("joint",), np.array([1.0, 2.0]) + offset, {"units": "N", "long_name": "peak"}),
             "steps": ((), np.int64(7 + offset), {"long_name": "steps"}),
             "contact": ((), True, {"long_name": "contact seen"}),
@@ -34,7 +36,7 @@ def _part(status="ok", n_time=5, dt=0.1, offset=0.0, with_series=True) -> xr.Dat
 
 @pytest.fixture
 def parts(tmp_path):
-    with S.PartStore(tmp_path / "out.nc.parts") as store:
+    with P.PartStore(tmp_path / "out.nc.parts") as store:
         store.open()
         yield store
 
@@ -42,34 +44,34 @@ def parts(tmp_path):
 def test_case_hash_is_canonical():
     a = {"solver": {"dt": 1e-5, "duration": 1.0}, "name": "x"}
     b = {"name": "x", "solver": {"duration": 1.0, "dt": 1e-5}}
-    assert S.case_hash(a) == S.case_hash(b)
-    assert len(S.case_hash(a)) == S.HASH_LENGTH and int(S.case_hash(a), 16) >= 0
-    assert S.case_hash(a) != S.case_hash({**a, "name": "y"})
+    assert P.case_hash(a) == P.case_hash(b)
+    assert len(P.case_hash(a)) == P.HASH_LENGTH and int(P.case_hash(a), 16) >= 0
+    assert P.case_hash(a) != P.case_hash({**a, "name": "y"})
 
 
 def test_parts_dir_beside_output(tmp_path):
-    assert S.parts_dir_for(tmp_path / "r.nc") == tmp_path / "r.nc.parts"
+    assert P.parts_dir_for(tmp_path / "r.nc") == tmp_path / "r.nc.parts"
 
 
 def test_refuses_earlier_parts_unless_resume_or_overwrite(tmp_path):
     d = tmp_path / "o.nc.parts"
-    with S.PartStore(d) as store:
+    with P.PartStore(d) as store:
         store.open()
         store.write("aaaa", _part())
-    with pytest.raises(S.StoreError, match="--resume"):
-        S.PartStore(d).open()
-    with S.PartStore(d) as store:
+    with pytest.raises(P.StoreError, match="--resume"):
+        P.PartStore(d).open()
+    with P.PartStore(d) as store:
         assert store.open(resume=True) == {"aaaa"}
-    with S.PartStore(d) as store:
+    with P.PartStore(d) as store:
         assert store.open(overwrite=True) == set()
         assert store.finished() == set()
-    with pytest.raises(S.StoreError, match="exclude"):
-        S.PartStore(d).open(resume=True, overwrite=True)
+    with pytest.raises(P.StoreError, match="exclude"):
+        P.PartStore(d).open(resume=True, overwrite=True)
 
 
 def test_lock_keeps_a_second_sweep_out(parts):
-    with pytest.raises(S.StoreError, match="in use"):
-        S.PartStore(parts.directory).open(resume=True)
+    with pytest.raises(P.StoreError, match="in use"):
+        P.PartStore(parts.directory).open(resume=True)
 
 
 def test_part_write_is_atomic(parts, monkeypatch):
@@ -83,7 +85,7 @@ def test_part_write_is_atomic(parts, monkeypatch):
     monkeypatch.setattr(xr.Dataset, "to_netcdf", crash)
     with pytest.raises(OSError, match="disk full"):
         parts.write("bbbb", _part())
-    assert sorted(p.name for p in parts.directory.iterdir()) == [".lock", S.LOG_NAME]
+    assert sorted(p.name for p in parts.directory.iterdir()) == [".lock", P.LOG_NAME]
 
 
 def test_written_files_have_ordinary_permissions(tmp_path, parts):
@@ -93,7 +95,7 @@ def test_written_files_have_ordinary_permissions(tmp_path, parts):
     mask = os.umask(0)
     os.umask(mask)
     parts.write("a", _part())
-    out, _ = _assemble(tmp_path, parts, [S.SweepSlot("a")], {"coating": 1},
+    out, _ = _assemble(tmp_path, parts, [A.SweepSlot("a")], {"coating": 1},
                        {"coating": ("coating", np.array(["none"], dtype=object), {})})
     for path in (parts.path("a"), out):
         assert path.stat().st_mode & 0o777 == 0o666 & ~mask
@@ -103,7 +105,7 @@ def test_open_removes_temporaries_of_a_killed_run(tmp_path):
     d = tmp_path / "o.nc.parts"
     d.mkdir()
     (d / ".cccc.nc.x1y2.tmp").write_bytes(b"half a file")
-    with S.PartStore(d) as store:
+    with P.PartStore(d) as store:
         assert store.open() == set()
     assert not list(d.glob("*.tmp"))
 
@@ -111,7 +113,7 @@ def test_open_removes_temporaries_of_a_killed_run(tmp_path):
 def test_log_records_events_with_run_id(parts):
     parts.log("done", hash="aaaa", status="ok")
     parts.log("done", hash="bbbb", status="error")
-    (parts.directory / S.LOG_NAME).open("a").write('{"event": "done", "cut sh')   # a killed write
+    (parts.directory / P.LOG_NAME).open("a").write('{"event": "done", "cut sh')   # a killed write
     done = parts.events("done")
     assert [r["hash"] for r in done] == ["aaaa", "bbbb"]
     assert {r["run"] for r in done} == {parts.run_id}
@@ -119,7 +121,7 @@ def test_log_records_events_with_run_id(parts):
 
 def _assemble(tmp_path, parts, slots, dims, coords):
     out = tmp_path / "sweep.nc"
-    counts = S.write_sweep_netcdf(out, sweep_dims=dims, sweep_coords=coords, slots=slots,
+    counts = A.write_sweep_netcdf(out, sweep_dims=dims, sweep_coords=coords, slots=slots,
                                   store=parts, attrs={"title": "t"})
     return out, counts
 
@@ -129,8 +131,8 @@ def test_assembly_layout_fill_and_outer_join(tmp_path, parts):
     parts.write("b", _part(n_time=3, offset=10.0))       # a shorter run: time is a prefix
     parts.write("c", xr.Dataset({"status": ((), "unstable_step"), "message": ((), "too stiff"),
                                  "wall_time": ((), 0.1)}))
-    slots = [S.SweepSlot("a"), S.SweepSlot("b"), S.SweepSlot("c"),
-             S.SweepSlot(None, "excluded by sweep.skip[0]")]
+    slots = [A.SweepSlot("a"), A.SweepSlot("b"), A.SweepSlot("c"),
+             A.SweepSlot(None, "excluded by sweep.skip[0]")]
     dims = {"coating": 2, "clearance": 2}
     coords = {"coating": ("coating", np.array(["none", "PTFE"], dtype=object), {}),
               "clearance": ("clearance", np.array([1e-4, 2e-4]), {"units": "m"}),
@@ -139,7 +141,7 @@ def test_assembly_layout_fill_and_outer_join(tmp_path, parts):
     assert counts == {"cases": 4, "failed": 1, "skipped": 1}
 
     for engine in ("netcdf4", "h5netcdf"):
-        with S.open_results(out, engine=engine) as ds:
+        with open_results(out, engine=engine) as ds:
             assert ds.attrs["sweep_failed"] == 1 and ds.attrs["title"] == "t"
             assert "label" in ds.coords and ds["label"].dims == ("clearance",)
             assert ds["status"].values.tolist() == [["ok", "ok"], ["unstable_step", "skipped"]]
@@ -165,26 +167,26 @@ def test_chunk_copy_equals_decoded_copy(tmp_path, parts, monkeypatch):
     """Whole-case arrays copied as compressed bytes read back as the values written."""
     parts.write("a", _part(offset=1.0))
     parts.write("b", _part(offset=2.0))
-    slots, dims = [S.SweepSlot("a"), S.SweepSlot("b")], {"k": 2}
+    slots, dims = [A.SweepSlot("a"), A.SweepSlot("b")], {"k": 2}
     coords = {"k": ("k", np.array([0, 1]), {})}
     copied = []
-    real = S._copy_chunks
-    monkeypatch.setattr(S, "_copy_chunks", lambda path, raw, check: (copied.extend(raw),
+    real = A._copy_chunks
+    monkeypatch.setattr(A, "_copy_chunks", lambda path, raw, check: (copied.extend(raw),
                                                                        real(path, raw, check)))
     fast, _ = _assemble(tmp_path, parts, slots, dims, coords)
     assert {n for _, _, names in copied for n in names} == {"x", "peak"}
-    monkeypatch.setattr(S, "_chunk_copyable", lambda *args: False)
+    monkeypatch.setattr(A, "_chunk_copyable", lambda *args: False)
     slow = tmp_path / "slow.nc"
-    S.write_sweep_netcdf(slow, sweep_dims=dims, sweep_coords=coords, slots=slots, store=parts,
+    A.write_sweep_netcdf(slow, sweep_dims=dims, sweep_coords=coords, slots=slots, store=parts,
                          attrs={"title": "t"})
-    with S.open_results(fast) as a, S.open_results(slow) as b:
+    with open_results(fast) as a, open_results(slow) as b:
         xr.testing.assert_identical(a.load(), b.load())
         np.testing.assert_array_equal(a["x"].isel(k=1).values, parts.read("b")["x"].values)
 
 
 def test_assembly_refuses_missing_part(tmp_path, parts):
-    with pytest.raises(S.StoreError, match="--resume"):
-        _assemble(tmp_path, parts, [S.SweepSlot("nope")], {"k": 1},
+    with pytest.raises(P.StoreError, match="--resume"):
+        _assemble(tmp_path, parts, [A.SweepSlot("nope")], {"k": 1},
                   {"k": ("k", np.array([1]), {})})
     assert not (tmp_path / "sweep.nc").exists()
     assert not list(tmp_path.glob(".sweep.nc*"))
@@ -200,9 +202,9 @@ def test_assembly_interrupted_leaves_no_file(tmp_path, parts):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        S.write_sweep_netcdf(tmp_path / "s.nc", sweep_dims={"k": 2},
+        A.write_sweep_netcdf(tmp_path / "s.nc", sweep_dims={"k": 2},
                              sweep_coords={"k": ("k", np.array([0, 1]), {})},
-                             slots=[S.SweepSlot("a"), S.SweepSlot("a")], store=parts, check=check)
+                             slots=[A.SweepSlot("a"), A.SweepSlot("a")], store=parts, check=check)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.nc.parts"]
 
 
@@ -210,9 +212,9 @@ def test_assembly_reorders_label_coordinates(tmp_path, parts):
     """A part whose labels come in another order lands in the right places."""
     parts.write("a", _part())
     parts.write("b", _part().isel(joint=[1, 0]))
-    out, _ = _assemble(tmp_path, parts, [S.SweepSlot("a"), S.SweepSlot("b")], {"k": 2},
+    out, _ = _assemble(tmp_path, parts, [A.SweepSlot("a"), A.SweepSlot("b")], {"k": 2},
                        {"k": ("k", np.array([0, 1]), {})})
-    with S.open_results(out) as ds:
+    with open_results(out) as ds:
         xr.testing.assert_equal(ds["peak"].isel(k=0, drop=True), ds["peak"].isel(k=1, drop=True))
         assert ds["joint"].values.tolist() == ["A", "B"]
 
@@ -224,17 +226,17 @@ def test_assembly_reorders_label_coordinates(tmp_path, parts):
                         unique=True))
 def test_sweep_coordinates_round_trip(tmp_path_factory, labels, numbers):
     tmp = tmp_path_factory.mktemp("rt")
-    with S.PartStore(tmp / "o.nc.parts") as store:
+    with P.PartStore(tmp / "o.nc.parts") as store:
         store.open()
         store.write("a", _part(with_series=False))
-        slots = [S.SweepSlot("a")] * (len(labels) * len(numbers))
+        slots = [A.SweepSlot("a")] * (len(labels) * len(numbers))
         out = tmp / "o.nc"
-        S.write_sweep_netcdf(out, sweep_dims={"m": len(labels), "v": len(numbers)},
+        A.write_sweep_netcdf(out, sweep_dims={"m": len(labels), "v": len(numbers)},
                              sweep_coords={"m": ("m", np.array(labels, dtype=object), {}),
                                            "v": ("v", np.array(numbers), {})},
                              slots=slots, store=store)
     for engine in ("netcdf4", "h5netcdf"):
-        with S.open_results(out, engine=engine) as ds:
+        with open_results(out, engine=engine) as ds:
             assert ds["m"].values.tolist() == labels
             assert ds["v"].values.tolist() == numbers
             assert ds.sel(m=labels[-1], v=numbers[0])["status"].item() == "ok"

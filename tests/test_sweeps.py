@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import collections
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -20,10 +21,16 @@ import xarray as xr
 import yaml
 from click.testing import CliRunner
 
-from clearsweep import sweeps
+from clearsweep import cli as cli_module
+from clearsweep import sweeping
+from clearsweep.cli import sweep_command
 from clearsweep.config import ConfigError
-from clearsweep.store import PartStore, parts_dir_for
-from clearsweep.sweeps import drop_timing, expand, run_sweep, sweep_command
+from clearsweep.dataset import open_results
+from clearsweep.sweeping import backends as sweep_backends
+from clearsweep.sweeping import drop_timing, expand, run_sweep
+from clearsweep.sweeping import plan as sweep_plan
+from clearsweep.sweeping import run as sweep_run
+from clearsweep.sweeping.parts import PartStore, parts_dir_for
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.01}}
@@ -47,11 +54,11 @@ def cli(*args: str):
 # ---------------------------------------------------------------------------- expansion
 
 def test_dimension_names():
-    assert sweeps.dimension_name("joints.B.coating") == "B_coating"
-    assert sweeps.dimension_name("joints.B.clearance") == "B_clearance"
-    assert sweeps.dimension_name("mechanism.speed_rpm") == "speed_rpm"
-    assert sweeps.dimension_name("wear.amplification") == "amplification"
-    assert sweeps.dimension_name("materials_file") == "materials_file"
+    assert sweep_plan.dimension_name("joints.B.coating") == "B_coating"
+    assert sweep_plan.dimension_name("joints.B.clearance") == "B_clearance"
+    assert sweep_plan.dimension_name("mechanism.speed_rpm") == "speed_rpm"
+    assert sweep_plan.dimension_name("wear.amplification") == "amplification"
+    assert sweep_plan.dimension_name("materials_file") == "materials_file"
 
 
 def test_grid_is_a_cartesian_product_in_file_order():
@@ -200,18 +207,20 @@ def test_results_open_with_both_engines_and_select_by_material(tmp_path):
 
 
 def test_failed_cases_are_recorded_and_the_others_run(tmp_path):
-    """Paper inertia + PTFE at h = 1e-5 s stops unstable (~6 ms); a penetration limit of
-    1e-4 c stops at the first contact (~5.8 ms); steel alone runs the 10 ms."""
+    """From the centred start: paper inertia + PTFE at h = 1e-5 s stops unstable (~6 ms); a
+    penetration limit of 1e-4 c stops at the first contact (~5.8 ms); steel alone runs the
+    10 ms."""
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE"],
                                           "contact.max_penetration_fraction": [0.5, 1e-4]}},
                       base={"mechanism": {"preset": "paper"}, "solver": {"duration": 0.01},
+                            "initial": {"joints": "centred"},
                             "joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}})
     out = tmp_path / "f.nc"
     result = cli(cfg, "-o", out, "--workers", "1")
     assert result.exit_code == 1
     assert "3 of 4 cases failed" in result.stderr
     assert "failed=3" in result.stderr                    # progress bar postfix
-    with sweeps.open_results(out) as ds:
+    with open_results(out) as ds:
         status = ds["status"]
         frac = "max_penetration_fraction"
         assert status.sel(B_coating="none", **{frac: 0.5}).item() == "ok"
@@ -262,7 +271,7 @@ def test_cli_refuses_parts_of_an_earlier_run(tmp_path):
         store.open()
         store.write("0123456789abcdef", xr.Dataset({"status": ((), "ok")}))
     result = cli(cfg, "-o", out, "--workers", "1", "--no-progress")
-    assert result.exit_code == 2 and "--resume" in result.stderr and "--overwrite" in result.stderr
+    assert result.exit_code == 2 and "--discard-parts" in result.stderr and "--overwrite" in result.stderr
     assert not out.exists()
     assert cli(cfg, "-o", out, "--resume", "--overwrite").exit_code == 2
     result = cli(cfg, "-o", out, "--workers", "1", "--no-progress", "--overwrite")
@@ -270,12 +279,64 @@ def test_cli_refuses_parts_of_an_earlier_run(tmp_path):
     assert out.exists() and not parts_dir_for(out).exists()
 
 
+def test_parts_of_another_sweep_are_never_deleted_silently(tmp_path):
+    """Resuming (or starting) a sweep over another sweep's parts refuses and keeps them."""
+    first = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE"]}}, name="first")
+    other = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["lead"]}}, name="other")
+    out = tmp_path / "o.nc"
+    parts = parts_dir_for(out)
+    run_sweep(first, out, workers=1, progress=False, keep_parts=True).close()
+    out.unlink()
+    kept = sorted(p.name for p in parts.glob("*.nc"))
+    assert len(kept) == 2
+
+    for options in (["--resume"], []):
+        result = cli(other, "-o", out, "--workers", "1", "--no-progress", *options)
+        assert result.exit_code == 2, result.stderr
+        assert result.stderr.splitlines()[-1].startswith("clearsweep: error: ")
+        assert "'first'" in result.stderr and str(first) in result.stderr
+        assert "2 cases" in result.stderr and "--discard-parts" in result.stderr
+        assert sorted(p.name for p in parts.glob("*.nc")) == kept and not out.exists()
+
+    result = cli(other, "-o", out, "--workers", "1", "--no-progress", "--resume", "--discard-parts")
+    assert result.exit_code == 0, result.stderr
+    with open_results(out) as ds:
+        assert ds["B_coating"].values.tolist() == ["lead"] and (ds["status"] == "ok").all()
+
+
+def test_a_huge_grid_is_refused_before_any_case_is_validated(monkeypatch):
+    def validated(cfg, **kwargs):
+        raise AssertionError("a case was validated before the size of the sweep was checked")
+
+    monkeypatch.setattr(sweep_plan, "preflight", validated)
+    grid = {f"{key}": [1e-4 * (i + 1) for i in range(10)] for key in
+            ("joints.A.clearance", "joints.B.clearance", "friction.v0", "contact.min_impact_velocity",
+             "wear.amplification", "solver.energy_tolerance", "solver.constraint_tolerance")}
+    with pytest.raises(ConfigError, match=r"sweep: got 10,000,000 cases \(10 A_clearance x 10 "
+                                          r"B_clearance x .*expected at most 10,000 cases; pass --yes"):
+        expand({"base": BASE, "sweep": {"grid": grid}})
+
+
+def test_cli_prints_the_size_first_and_needs_yes_above_the_limit(tmp_path, monkeypatch):
+    cfg = write_sweep(tmp_path, SMALL)
+    out = tmp_path / "o.nc"
+    monkeypatch.setattr(cli_module, "MAX_CASES", 3)
+    result = cli(cfg, "-o", out, "--workers", "1", "--no-progress")
+    assert result.exit_code == 2 and "got 4 cases" in result.stderr and "--yes" in result.stderr
+    assert not out.exists() and not parts_dir_for(out).exists()
+    result = cli(cfg, "-o", out, "--workers", "1", "--no-progress", "--yes")
+    assert result.exit_code == 0, result.stderr
+    first = result.stderr.splitlines()[0]
+    assert first.startswith("clearsweep: sweep 's': 4 cases, 4 to simulate, 4e+03 RK4 steps: about ")
+    assert "on 1 worker " in first and "results up to " in first
+
+
 def test_cli_dask_local_cluster(tmp_path):
     out = tmp_path / "d.nc"
     result = cli(write_sweep(tmp_path, SMALL), "-o", out, "--dask-local", "2", "--no-progress")
     assert result.exit_code == 0, result.stderr
     assert "wrote" in result.stderr and "4 cases" in result.stderr
-    with sweeps.open_results(out) as ds:
+    with open_results(out) as ds:
         assert (ds["status"] == "ok").all()
 
 
@@ -289,7 +350,52 @@ def test_cli_unwritable_output_exits_1(tmp_path):
     cfg = write_sweep(tmp_path, SMALL)
     result = cli(cfg, "-o", cfg / "o.nc", "--no-progress")      # its folder is a file
     assert result.exit_code == 1
-    assert result.stderr.startswith(f"clearsweep: error: cannot write {cfg}/o.nc.parts: ")
+    assert result.stderr.splitlines()[-1].startswith(f"clearsweep: error: cannot write {cfg}/o.nc.parts: ")
+
+
+def test_full_disk_during_assembly_keeps_the_parts_and_leaves_no_file(tmp_path, monkeypatch):
+    from clearsweep.sweeping import assemble as store
+
+    def full(*args, **kwargs):
+        raise RuntimeError("NetCDF: HDF error")          # what netCDF-C says on a full disk
+
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE"]}})
+    out = tmp_path / "o.nc"
+    monkeypatch.setattr(store, "_define", full)
+    result = cli(cfg, "-o", out, "--workers", "1", "--no-progress")
+    assert result.exit_code == 1, result.stderr
+    last = result.stderr.splitlines()[-1]
+    assert last.startswith(f"clearsweep: error: cannot write {out}: NetCDF: HDF error")
+    assert "2 finished case(s) are kept" in last and "--resume" in last
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o.nc.parts", "s.yaml"]
+    monkeypatch.undo()
+    assert cli(cfg, "-o", out, "--workers", "1", "--no-progress", "--resume").exit_code == 0
+
+
+def test_temporary_file_of_a_killed_assembly_is_removed_by_the_next_run(tmp_path):
+    out = tmp_path / "o.nc"
+    killed = subprocess.run([sys.executable, "-c", (
+        "import os, signal, sys\n"
+        "from clearsweep.dataset import replaced_on_success\n"
+        "with replaced_on_success(sys.argv[1]) as tmp:\n"
+        "    open(tmp, 'wb').write(b'half a sweep file')\n"
+        "    os.kill(os.getpid(), signal.SIGKILL)\n"), str(out)])
+    assert killed.returncode == -signal.SIGKILL
+    stale = list(tmp_path.glob(".o.nc.*.tmp"))
+    assert len(stale) == 1
+    writer = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        alive = tmp_path / f".o.nc.{writer.pid}.abcd1234.tmp"      # a write in progress
+        other_output = tmp_path / ".p.nc.999999999.abcd1234.tmp"
+        others = [alive, tmp_path / ".o.nc.backup.tmp", other_output]
+        for path in others:
+            path.write_bytes(b"not ours to delete")
+        cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none"]}})
+        run_sweep(cfg, out, workers=1, progress=False).close()
+        assert not any(p.exists() for p in stale) and all(p.exists() for p in others)
+    finally:
+        writer.kill()
+        writer.wait()
 
 
 def test_registered_as_clearsweep_sweep(tmp_path):
@@ -310,11 +416,55 @@ def die_on_ptfe(cfg):
     return simulate(cfg)
 
 
-def test_a_dying_worker_stops_the_sweep_and_keeps_finished_cases(tmp_path):
+def die_once_on_ptfe(cfg):
+    """A worker that dies on the first PTFE case it meets, and runs it the second time."""
+    from clearsweep.simulation import simulate
+
+    marker = Path(cfg["name"] + ".died")
+    if cfg["joints"]["B"]["coating"] == "PTFE":
+        first = not marker.exists()
+        with marker.open("a") as f:       # one line per PTFE attempt: the worker's pid
+            f.write(f"{os.getpid()}\n")
+        if first:
+            os._exit(3)
+    return simulate(cfg)
+
+
+def test_a_worker_that_dies_every_time_fails_its_case_and_the_sweep_goes_on(tmp_path):
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE", "MoS2"]}})
+    out = tmp_path / "w.nc"
+    with run_sweep(cfg, out, workers=2, progress=False, _simulate=die_on_ptfe) as ds:
+        status = dict(zip(ds["B_coating"].values.tolist(), ds["status"].values.tolist()))
+        assert status == {"none": "ok", "lead": "ok", "PTFE": "error", "MoS2": "ok"}
+        message = ds["message"].sel(B_coating="PTFE").item()
+        # The exit status itself is what the OS reports: 3 here, but a forkserver that has
+        # already lost the process reports 255, so only its form is checked.
+        assert re.search(r"died twice \((exit code \d+|killed by [\w ]+)", message), message
+        assert "alone on a fresh worker" in message
+        assert ds.attrs["sweep_failed"] == 1
+
+
+def test_a_worker_that_dies_once_is_retried_on_a_fresh_one(tmp_path):
+    base = {**BASE, "name": str(tmp_path / "case")}
+    cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE", "lead"]}}, base=base)
+    with run_sweep(cfg, tmp_path / "w.nc", workers=2, progress=False,
+                   _simulate=die_once_on_ptfe) as ds:
+        assert (ds["status"] == "ok").all()
+    # The marker used to be only checked to exist, which it does whether or not the case was
+    # retried; the retry is two attempts, the second in another (fresh) worker process.
+    attempts = (tmp_path / "case.died").read_text().split()
+    assert len(attempts) == 2 and attempts[0] != attempts[1]
+
+
+def test_a_dying_worker_of_the_callers_pool_stops_the_sweep_and_keeps_finished_cases(tmp_path):
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]}})
     out = tmp_path / "w.nc"
-    with pytest.raises(sweeps.SweepFailed, match="--resume"):
-        run_sweep(cfg, out, workers=2, progress=False, _simulate=die_on_ptfe)
+    pool = sweep_backends.process_pool(2)
+    try:
+        with pytest.raises(sweep_run.SweepFailed, match="--resume"):
+            run_sweep(cfg, out, client=pool, progress=False, _simulate=die_on_ptfe)
+    finally:
+        pool.shutdown(wait=False, cancel_futures=True)
     assert not out.exists()
     with PartStore(parts_dir_for(out)) as store:
         assert store.events("failed")
@@ -324,7 +474,7 @@ def test_a_dying_worker_stops_the_sweep_and_keeps_finished_cases(tmp_path):
 
 
 def _start_cli(cfg: Path, out: Path, *args: str) -> subprocess.Popen:
-    command = [sys.executable, "-c", "from clearsweep.sweeps import sweep_command; sweep_command()",
+    command = [sys.executable, "-c", "from clearsweep.cli import sweep_command; sweep_command()",
                str(cfg), "-o", str(out), "--no-progress", *args]
     return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=cfg.parent)
@@ -381,7 +531,7 @@ def test_resume_after_sigkill_runs_every_case_once(tmp_path):
     assert set(second.values()) == {1}
     assert {r["hash"] for r in done if r["run"] == runs[0]} <= {n[:-3] for n in kept}
 
-    with sweeps.open_results(out) as resumed_ds, \
+    with open_results(out) as resumed_ds, \
             run_sweep(cfg, tmp_path / "reference.nc", workers=1, progress=False) as reference:
         xr.testing.assert_identical(drop_timing(reference.load()), drop_timing(resumed_ds.load()))
 
@@ -402,16 +552,16 @@ def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
     resumed = _start_cli(cfg, out, "--workers", "2", "--resume")
     _, err = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, err
-    with sweeps.open_results(out) as ds:
+    with open_results(out) as ds:
         assert (ds["status"] == "ok").all()
 
 
 def test_interrupted_sweep_suggests_a_resume_with_the_same_overrides(tmp_path, monkeypatch):
     """The printed command must rebuild the same cases: --set values change every case's hash."""
     def interrupted(*args, **kwargs):
-        raise sweeps.SweepInterrupted(1, 4, tmp_path / "my out.nc.parts")
+        raise sweep_run.SweepInterrupted(1, 4, tmp_path / "my out.nc.parts")
 
-    monkeypatch.setattr(sweeps, "run_sweep", interrupted)
+    monkeypatch.setattr(sweeping, "run_sweep", interrupted)  # what sweep_command calls
     cfg = write_sweep(tmp_path, SMALL)
     result = CliRunner().invoke(sweep_command, [str(cfg), "-o", str(tmp_path / "my out.nc"),
                                                 "--set", "solver.duration=0.3"])
@@ -436,8 +586,8 @@ def test_drop_timing():
 def test_public_names():
     import clearsweep
 
-    assert clearsweep.sweep is run_sweep is sweeps.sweep
-    assert clearsweep.open_results is sweeps.open_results
+    assert clearsweep.sweep is run_sweep is sweep_run.run_sweep
+    assert clearsweep.open_results is open_results
     assert os.fspath(ROOT / "configs" / "paper.yaml")
 
 
@@ -471,3 +621,16 @@ def test_exception_inside_a_case_is_an_error_status_not_a_crash(tmp_path):
         assert (ds["status"].sel(B_coating="PTFE") == "error").all()
         assert "RuntimeError: boom" in ds["message"].sel(B_coating="PTFE").values.ravel()[0]
         assert (ds["status"].sel(B_coating="none") == "ok").all()
+
+
+def test_sweep_coordinates_carry_units_and_long_names(tmp_path):
+    plan = expand({"base": BASE, "sweep": {"grid": {
+        "joints.B.clearance": [1e-4, 2.5e-4], "mechanism.speed_rpm": [30, 60],
+        "joints.B.coating": ["none", "PTFE"]}}})
+    coords = plan.to_dataset()
+    assert coords["B_clearance"].attrs["units"] == "m"
+    assert coords["B_clearance"].attrs["long_name"] == "radial clearance of joint B"
+    assert coords["speed_rpm"].attrs["units"] == "min-1"
+    assert "units" not in coords["B_coating"].attrs
+    assert coords["B_coating"].attrs["long_name"] == "socket coating of joint B"
+    assert all(c.attrs["config_key"] for c in coords.coords.values())

@@ -1,0 +1,57 @@
+"""Bit-identity reference of the kernel: tests/data/two_clearances_0p2s.npz.
+
+The file was made on commit 46eb77c, before the kernel's named contact record and
+state-layout constants replaced tuple positions and literal indices, with
+
+    PYTHONPATH=. python tests/regression.py tests/data/two_clearances_0p2s.npz
+
+from configs/two_clearances.yaml with solver.duration=0.2. It holds every
+statistic without a time dimension, a few rows of the time series and a sha256 of
+the bytes of every float variable (wall_time excepted). tests/test_regression.py
+asserts that the kernel still reproduces it bit for bit; regenerate it only for a
+deliberate change of results, and say so in the commit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import sys
+from pathlib import Path
+
+import numpy as np
+
+CONFIG = str(Path(__file__).resolve().parent.parent / "configs" / "two_clearances.yaml")
+OVERRIDES = ("solver.duration=0.2",)
+ROWS = np.array([1, 50, 500, 1000, 1500, 2000])
+SERIES = ("slider_acceleration", "crank_torque", "normal_force", "penetration",
+          "slider_position", "energy_residual", "wear_depth_max", "joint_force")
+
+
+def digest(values: np.ndarray) -> str:
+    return hashlib.sha256(np.ascontiguousarray(values, dtype="<f8").tobytes()).hexdigest()
+
+
+def snapshot(ds) -> dict[str, np.ndarray]:
+    """The values the reference file keeps of a simulated dataset."""
+    out: dict[str, np.ndarray] = {}
+    for name, v in ds.data_vars.items():
+        if v.dtype.kind in "fiu" and "time" not in v.dims and name not in ("wall_time", "wear_map"):
+            out["stat__" + name] = v.values
+    out["series_index"] = ROWS
+    for name in SERIES:
+        out["series__" + name] = ds[name].values[ROWS]
+    out["wear_map_sum"] = np.array(ds["wear_map"].values.sum())
+    for name, v in ds.data_vars.items():
+        if v.dtype.kind == "f" and name != "wall_time":
+            out["sha256__" + name] = np.array(digest(v.values))
+    return out
+
+
+def simulate_reference():
+    from clearsweep.simulation import simulate
+
+    return simulate(CONFIG, list(OVERRIDES))
+
+
+if __name__ == "__main__":
+    np.savez(sys.argv[1], **snapshot(simulate_reference()))
