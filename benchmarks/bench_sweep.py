@@ -59,7 +59,7 @@ MEMORY_SWEEP = {
 
 RUN_SNIPPET = """
 import json, sys, time
-from clearsweep.sweeps import run_sweep
+from clearsweep.sweeping import run_sweep
 t0 = time.perf_counter()
 with run_sweep(json.loads(sys.argv[1]), sys.argv[2], workers=2, progress=False) as ds:
     cases, failed = int(ds.attrs["sweep_cases"]), int(ds.attrs["sweep_failed"])
@@ -69,7 +69,7 @@ print(json.dumps({"wall_s": time.perf_counter() - t0, "cases": cases, "failed": 
 
 def timed_sweep(doc: dict, **kwargs) -> float:
     """Seconds to run ``doc`` to a temporary file (assembly included)."""
-    from clearsweep.sweeps import run_sweep
+    from clearsweep.sweeping import run_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
@@ -79,7 +79,7 @@ def timed_sweep(doc: dict, **kwargs) -> float:
 
 def scaling(repeats: int) -> dict:
     """Serial vs two warm workers on the same cases, alternately; cold two-worker run beside."""
-    from clearsweep.sweeps import expand, process_pool
+    from clearsweep.sweeping import expand, process_pool
 
     n = len(expand(SCALING_SWEEP).runnable())
     cold = timed_sweep(SCALING_SWEEP, workers=2)
@@ -169,7 +169,7 @@ def memory_sweep() -> dict:
 
 
 def shipped(name: str) -> dict:
-    from clearsweep.sweeps import open_results
+    from clearsweep.dataset import open_results
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / f"{name}.nc"
