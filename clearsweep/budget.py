@@ -17,9 +17,8 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any
 
-from .config import DEFAULTS, ConfigError
+from .config import DEFAULTS, Config, ConfigError
 
 __all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS"]
 
@@ -96,14 +95,14 @@ class Estimate:
                 f"{format_bytes(self.map_bytes)}")
 
 
-def _steps_asked(cfg: dict[str, Any]) -> int:
-    ratio = cfg["solver"]["duration"] / cfg["solver"]["dt"]
+def _steps_asked(cfg: Config) -> int:
+    ratio = cfg.solver.duration / cfg.solver.dt
     if not math.isfinite(ratio):
         return int(sys.float_info.max)      # beyond any limit
     return max(1, int(math.ceil(ratio - 1e-9)))
 
 
-def estimate(cfg: dict[str, Any]) -> Estimate:
+def estimate(cfg: Config) -> Estimate:
     """Steps and bytes of one resolved case (:func:`clearsweep.config.load_config`).
 
     Mirrors :func:`clearsweep.params.pack` (whole output samples, rounded up)
@@ -111,18 +110,17 @@ def estimate(cfg: dict[str, Any]) -> Estimate:
     """
     from .core import layout as L  # imports Numba: only when a case is checked
 
-    solver = cfg["solver"]
-    save_every = int(solver["save_every"])
+    save_every = cfg.solver.save_every
     asked = _steps_asked(cfg)
     steps = max(1, -(-asked // save_every)) * save_every
     rows = steps // save_every + 1
     per_row = L.N_Y + L.N_D + _KERNEL_EXTRA_PER_ROW + _per_row_output_values()
-    polar, azimuth = (int(n) for n in cfg["wear"]["map"])
+    polar, azimuth = cfg.wear.map
     map_values = 2 * polar * azimuth + 2 * 3 * L.N_ANGLE_BINS
     return Estimate(asked, steps, rows, per_row, map_values)
 
 
-def check_budget(cfg: dict[str, Any], *, allow_large: bool = False,
+def check_budget(cfg: Config, *, allow_large: bool = False,
                  source: str = "<config>") -> Estimate:
     """Refuse a case whose estimate is out of bounds; return the estimate.
 
@@ -142,31 +140,31 @@ def check_budget(cfg: dict[str, Any], *, allow_large: bool = False,
     ConfigError
         Naming the key that drives the cost and quoting the estimate.
     """
-    solver = cfg["solver"]
+    solver = cfg.solver
     est = estimate(cfg)
-    if solver["save_every"] > est.steps_asked:
+    if solver.save_every > est.steps_asked:
         raise ConfigError(
-            "solver.save_every", solver["save_every"],
+            "solver.save_every", solver.save_every,
             f"an integer <= {est.steps_asked} (the steps in solver.duration / solver.dt; a larger "
             f"one stretches the run to one whole output sample, {est.steps} steps)", source)
     if allow_large:
         return est
     hint = "or pass --allow-large (allow_large=True) if the machine can take it"
     if est.steps > MAX_STEPS:
-        steps = solver["duration"] / solver["dt"]
+        steps = solver.duration / solver.dt
         # name the one of the two that left its usual range
-        key = ("solver.duration" if solver["duration"] > DEFAULTS["solver"]["duration"]
-               else "solver.dt")
-        got = (f"{solver[key.split('.')[1]]!r} (solver.duration / solver.dt = {solver['duration']!r}"
-               f" s / {solver['dt']!r} s = {steps:.3g} steps)")
-        raise ConfigError(key, solver[key.split(".")[1]],
+        key = ("solver.duration" if solver.duration > DEFAULTS.solver.duration else "solver.dt")
+        value = cfg.get(key)
+        got = (f"{value!r} (solver.duration / solver.dt = {solver.duration!r}"
+               f" s / {solver.dt!r} s = {steps:.3g} steps)")
+        raise ConfigError(key, value,
                           f"a run of at most {MAX_STEPS:.3g} RK4 steps; raise solver.dt, shorten "
                           f"solver.duration, {hint}", source, got=got)
     if est.output_bytes > MAX_OUTPUT_BYTES:
         if est.map_bytes > est.row_bytes:
-            key, value, fix = "wear.map", cfg["wear"]["map"], "use fewer wear-map bins"
+            key, value, fix = "wear.map", list(cfg.wear.map), "use fewer wear-map bins"
         else:
-            key, value, fix = ("solver.duration", solver["duration"],
+            key, value, fix = ("solver.duration", solver.duration,
                                "shorten solver.duration, raise solver.save_every")
         raise ConfigError(key, value, f"a case whose arrays fit in {format_bytes(MAX_OUTPUT_BYTES)}; "
                           f"{fix}, {hint}", source,

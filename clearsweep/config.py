@@ -1,10 +1,11 @@
 """Configuration: schema, defaults, validation, ``--set`` overrides.
 
 The resolved configuration is the contract between modules
-(docs/architecture.md): a plain nested dict with every key of :data:`SCHEMA`
-present, numbers normalised (``float`` or ``int`` as the schema says, lists
-as lists). Everything is checked here, before any computation; a wrong value
-raises :class:`ConfigError` with a message of the form::
+(docs/architecture.md): a frozen :class:`Config` of typed sections, every leaf
+present, numbers normalised (``float`` or ``int`` as the schema says, vectors
+as tuples), each leaf's units and long name in its dataclass metadata. It is
+validated once, here, before any computation, and passed down as it is; a wrong
+value raises :class:`ConfigError` with a message of the form::
 
     <file>: <dotted.key>: got <value>; expected <what is allowed>[; did you mean '<match>'?]
 
@@ -14,9 +15,11 @@ YAML reading, errors and :class:`Field` live in :mod:`clearsweep.schema`.
 from __future__ import annotations
 
 import copy
+import math
 import operator
 import os
 from collections.abc import Iterable, Mapping
+from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
 from .schema import (  # noqa: F401
@@ -34,112 +37,213 @@ from .schema import (  # noqa: F401
 )
 
 __all__ = [
-    "ConfigError", "Field", "SCHEMA", "DEFAULTS", "load_config", "apply_override", "dump_config",
+    "ConfigError", "Field", "Config", "JointConfig", "SCHEMA", "DEFAULTS", "load_config",
+    "apply_override", "dump_config",
     "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
     "field_info", "FIELD_INFO",
 ]
+
+
+def _setting(spec: Field, units: str | None, long_name: str) -> Any:
+    """A dataclass field: its rule (:class:`Field`), default, units (UDUNITS) and long name."""
+    default = tuple(spec.default) if isinstance(spec.default, list) else spec.default
+    return field(default=default, metadata={"field": spec, "units": units, "long_name": long_name})
+
+
+def _section(cls: type) -> Any:
+    return field(default_factory=cls)
 
 
 def _positive(default: float) -> Field:
     return Field(default, lo=0.0, lo_open=True)
 
 
-_JOINT = {
-    "clearance": Field(0.0, lo=0.0),               # c = R_i - R_j [m]; 0 = ideal joint
-    "socket_radius": _positive(0.015),             # R_i [m]
-    "coating": Field("none", str),                 # material name or "none"
-    "coating_thickness": _positive(1.0e-4),        # l_c [m]
-    "base_thickness": _positive(4.9e-3),           # l_s [m]
-    "wear_coefficient": Field(None, lo=0.0, nullable=True),  # k [m^2/N]; None = the material's
-}
+class _Section:
+    """Shared behaviour of the frozen configuration sections."""
 
-#: The configuration schema (docs/architecture.md): nested sections of :class:`Field`.
-SCHEMA: dict[str, Any] = {
-    "name": Field("case", str),
-    "materials_file": Field(None, str, nullable=True),
-    "mechanism": {
-        "preset": Field("realistic", ("realistic", "paper")),
-        "speed_rpm": _positive(60.0),                     # [r/min]
-        "gravity": Field([0.0, 0.0, -9.81], size=3),      # [m/s^2]
-        "theta0": Field(0.0),                             # [rad]
-    },
-    "initial": {
-        # seated: each clearance joint starts with its ball resting on the socket wall,
-        # along the ideal joint's reaction at t = 0; centred: ball in the socket centre
-        "joints": Field("seated", ("seated", "centred")),
-    },
-    "joints": {"A": _JOINT, "B": _JOINT},
-    "contact": {
-        "restitution": Field(0.7, lo=0.0, lo_open=True, hi=1.0),
-        "min_impact_velocity": _positive(1.0e-2),         # [m/s]
-        "layer_rule": Field("series", ("series", "paper_mm")),
-        "max_penetration_fraction": _positive(0.5),
-    },
-    "friction": {
-        "enabled": Field(True, bool),
-        "v0": _positive(1.0e-4),                          # [m/s]
-        "v1": _positive(1.0e-3),                          # [m/s]
-    },
-    "wear": {
-        "enabled": Field(True, bool),
-        "slip": Field("sliding", ("sliding", "paper")),
-        "map": Field([144, 288], int, lo=1, size=2),      # polar x azimuth bins
-        "amplification": Field(1.0, lo=0.0),
-        "feedback": Field(True, bool),                    # worn depth enlarges c_eff
-    },
-    "metrics": {
-        "settle_time": Field(0.05, lo=0.0),               # start of the settled window [s]
-    },
-    "solver": {
-        "dt": _positive(1.0e-5),                          # [s]
-        "duration": _positive(1.0),                       # [s]
-        "save_every": Field(10, int, lo=1),
-        "baumgarte": Field([5.0, 5.0], lo=0.0, size=2),   # [alpha, beta]
-        "max_substep_level": Field(8, int, lo=0, hi=16),
-        "stability_limit": Field(1.0, lo=0.0, lo_open=True, hi=2.8, hi_open=True),
-        "constraint_tolerance": _positive(1.0e-6),        # [m]
-        "energy_tolerance": _positive(1.0e-3),
-    },
-}
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (lists for vectors): YAML, JSON and hashing use it."""
+        out: dict[str, Any] = {}
+        for f in fields(self):  # type: ignore[arg-type]
+            value = getattr(self, f.name)
+            out[f.name] = (value.to_dict() if isinstance(value, _Section)
+                           else list(value) if isinstance(value, tuple) else value)
+        return out
+
+    def get(self, key: str) -> Any:
+        """Value at dotted ``key`` (``"joints.B.clearance"``); see :func:`get_path`."""
+        return get_path(self, key)
+
+
+@dataclass(frozen=True)
+class JointConfig(_Section):
+    """One spherical joint; ``clearance == 0`` makes it ideal."""
+
+    clearance: float = _setting(Field(0.0, lo=0.0), "m", "radial clearance of joint X")
+    socket_radius: float = _setting(_positive(0.015), "m", "socket radius of joint X")
+    coating: str = _setting(Field("none", str), None, "socket coating of joint X")
+    coating_thickness: float = _setting(_positive(1.0e-4), "m", "coating thickness of joint X")
+    base_thickness: float = _setting(_positive(4.9e-3), "m", "socket base thickness of joint X")
+    #: None: the surface material's own coefficient
+    wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
+                                              "Archard wear coefficient of joint X's socket")
+
+    @property
+    def ball_radius_m(self) -> float:
+        """R_j = socket_radius - clearance [m]."""
+        return self.socket_radius - self.clearance
+
+
+@dataclass(frozen=True)
+class JointsConfig(_Section):
+    A: JointConfig = _section(JointConfig)
+    B: JointConfig = _section(JointConfig)
+
+    def items(self) -> tuple[tuple[str, JointConfig], ...]:
+        """``(("A", joint A), ("B", joint B))``, in kernel order."""
+        return (("A", self.A), ("B", self.B))
+
+
+@dataclass(frozen=True)
+class MechanismConfig(_Section):
+    preset: str = _setting(Field("realistic", ("realistic", "paper")), None, "mechanism data preset")
+    speed_rpm: float = _setting(_positive(60.0), "min-1", "crank speed in revolutions per minute")
+    gravity: tuple[float, float, float] = _setting(Field([0.0, 0.0, -9.81], size=3), "m s-2",
+                                                   "gravity vector")
+    theta0: float = _setting(Field(0.0), "rad", "initial crank angle")
+
+    @property
+    def omega_rad_s(self) -> float:
+        """Crank angular speed [rad/s]."""
+        return self.speed_rpm * 2.0 * math.pi / 60.0
+
+
+@dataclass(frozen=True)
+class InitialConfig(_Section):
+    #: seated: each clearance joint starts with its ball resting on the socket wall, along the
+    #: ideal joint's reaction at t = 0; centred: ball in the socket centre
+    joints: str = _setting(Field("seated", ("seated", "centred")), None,
+                           "initial ball position in the clearance joints")
+
+
+@dataclass(frozen=True)
+class ContactConfig(_Section):
+    restitution: float = _setting(Field(0.7, lo=0.0, lo_open=True, hi=1.0), "1",
+                                  "coefficient of restitution")
+    min_impact_velocity: float = _setting(_positive(1.0e-2), "m s-1", "floor of the impact velocity")
+    layer_rule: str = _setting(Field("series", ("series", "paper_mm")), None,
+                               "double elastic layer rule")
+    max_penetration_fraction: float = _setting(
+        _positive(0.5), "1", "largest penetration accepted, fraction of the clearance")
+
+
+@dataclass(frozen=True)
+class FrictionConfig(_Section):
+    enabled: bool = _setting(Field(True, bool), None, "friction on")
+    v0: float = _setting(_positive(1.0e-4), "m s-1", "friction ramp start velocity")
+    v1: float = _setting(_positive(1.0e-3), "m s-1", "friction ramp end velocity")
+
+
+@dataclass(frozen=True)
+class WearConfig(_Section):
+    enabled: bool = _setting(Field(True, bool), None, "wear on")
+    slip: str = _setting(Field("sliding", ("sliding", "paper")), None, "wear slip rule")
+    map: tuple[int, int] = _setting(Field([144, 288], int, lo=1, size=2), "1",
+                                    "wear map bins (polar, azimuth)")
+    amplification: float = _setting(Field(1.0, lo=0.0), "1", "wear amplification")
+    feedback: bool = _setting(Field(True, bool), None, "wear enlarges the clearance")
+
+    @property
+    def feeds_back(self) -> bool:
+        """Worn depth enlarges the clearance the contact sees (wear on and feedback on)."""
+        return self.enabled and self.feedback
+
+
+@dataclass(frozen=True)
+class MetricsConfig(_Section):
+    settle_time: float = _setting(Field(0.05, lo=0.0), "s", "start of the settled window")
+
+
+@dataclass(frozen=True)
+class SolverConfig(_Section):
+    dt: float = _setting(_positive(1.0e-5), "s", "output-grid time step")
+    duration: float = _setting(_positive(1.0), "s", "simulated duration")
+    save_every: int = _setting(Field(10, int, lo=1), "1", "steps per output sample")
+    baumgarte: tuple[float, float] = _setting(Field([5.0, 5.0], lo=0.0, size=2), "s-1",
+                                              "Baumgarte coefficients (alpha, beta)")
+    max_substep_level: int = _setting(Field(8, int, lo=0, hi=16), "1", "deepest sub-step level")
+    stability_limit: float = _setting(Field(1.0, lo=0.0, lo_open=True, hi=2.8, hi_open=True), "1",
+                                      "largest stiff rate times step")
+    constraint_tolerance: float = _setting(_positive(1.0e-6), "m", "constraint violation stop")
+    energy_tolerance: float = _setting(_positive(1.0e-3), "1",
+                                       "energy residual stop, fraction of the throughput")
+
+
+@dataclass(frozen=True)
+class Config(_Section):
+    """A resolved case configuration: validated once by :func:`load_config`, then passed
+    down as it is. Frozen: change a value with :func:`load_config` and an override, or
+    :meth:`replace`, which validates again. SI units throughout except ``speed_rpm``
+    (r/min); each leaf's units are in its dataclass metadata (:func:`field_info`)."""
+
+    name: str = _setting(Field("case", str), None, "case name")
+    #: absolute path once resolved
+    materials_file: str | None = _setting(Field(None, str, nullable=True), None,
+                                          "user materials file")
+    mechanism: MechanismConfig = _section(MechanismConfig)
+    initial: InitialConfig = _section(InitialConfig)
+    joints: JointsConfig = _section(JointsConfig)
+    contact: ContactConfig = _section(ContactConfig)
+    friction: FrictionConfig = _section(FrictionConfig)
+    wear: WearConfig = _section(WearConfig)
+    metrics: MetricsConfig = _section(MetricsConfig)
+    solver: SolverConfig = _section(SolverConfig)
+
+    def replace(self, *overrides: str, **values: Any) -> Config:
+        """A validated copy with ``"dotted.key=VALUE"`` overrides and/or ``dotted__key=value``
+        keywords (``joints__B__clearance=1e-4``) applied."""
+        raw = self.to_dict()
+        for key, value in values.items():
+            set_path(raw, key.replace("__", "."), value)
+        return load_config(raw, overrides, source_name="<config>")
+
+
+def _schema_of(cls: type) -> dict[str, Any]:
+    return {f.name: (_schema_of(f.default_factory) if f.default_factory is not MISSING  # type: ignore[arg-type]
+                     else f.metadata["field"])
+            for f in fields(cls)}
+
+
+def _info_of(cls: type, prefix: str = "") -> dict[str, tuple[str | None, str]]:
+    out: dict[str, tuple[str | None, str]] = {}
+    for f in fields(cls):
+        if f.default_factory is not MISSING:
+            sub = f.default_factory
+            out.update(_info_of(sub, "joints.X." if sub is JointConfig else f"{prefix}{f.name}."))  # type: ignore[arg-type]
+        else:
+            out[prefix + f.name] = (f.metadata["units"], f.metadata["long_name"])
+    return out
+
+
+def _build(cls: type, values: Mapping[str, Any]) -> Any:
+    kwargs = {}
+    for f in fields(cls):
+        value = values[f.name]
+        if f.default_factory is not MISSING:
+            value = _build(f.default_factory, value)  # type: ignore[arg-type]
+        elif isinstance(value, list):
+            value = tuple(value)
+        kwargs[f.name] = value
+    return cls(**kwargs)
+
+
+#: The configuration schema (docs/architecture.md): nested sections of :class:`Field`,
+#: read from the :class:`Config` dataclasses.
+SCHEMA: dict[str, Any] = _schema_of(Config)
 
 #: Units (UDUNITS text; None for text and switches) and long name of each leaf key;
 #: ``joints.X`` stands for both joints. Sweep coordinates carry them.
-FIELD_INFO: dict[str, tuple[str | None, str]] = {
-    "name": (None, "case name"),
-    "materials_file": (None, "user materials file"),
-    "mechanism.preset": (None, "mechanism data preset"),
-    "mechanism.speed_rpm": ("min-1", "crank speed in revolutions per minute"),
-    "mechanism.gravity": ("m s-2", "gravity vector"),
-    "mechanism.theta0": ("rad", "initial crank angle"),
-    "initial.joints": (None, "initial ball position in the clearance joints"),
-    "joints.X.clearance": ("m", "radial clearance of joint X"),
-    "joints.X.socket_radius": ("m", "socket radius of joint X"),
-    "joints.X.coating": (None, "socket coating of joint X"),
-    "joints.X.coating_thickness": ("m", "coating thickness of joint X"),
-    "joints.X.base_thickness": ("m", "socket base thickness of joint X"),
-    "joints.X.wear_coefficient": ("m2 N-1", "Archard wear coefficient of joint X's socket"),
-    "contact.restitution": ("1", "coefficient of restitution"),
-    "contact.min_impact_velocity": ("m s-1", "floor of the impact velocity"),
-    "contact.layer_rule": (None, "double elastic layer rule"),
-    "contact.max_penetration_fraction": ("1", "largest penetration accepted, fraction of the clearance"),
-    "friction.enabled": (None, "friction on"),
-    "friction.v0": ("m s-1", "friction ramp start velocity"),
-    "friction.v1": ("m s-1", "friction ramp end velocity"),
-    "wear.enabled": (None, "wear on"),
-    "wear.slip": (None, "wear slip rule"),
-    "wear.map": ("1", "wear map bins (polar, azimuth)"),
-    "wear.amplification": ("1", "wear amplification"),
-    "wear.feedback": (None, "wear enlarges the clearance"),
-    "metrics.settle_time": ("s", "start of the settled window"),
-    "solver.dt": ("s", "output-grid time step"),
-    "solver.duration": ("s", "simulated duration"),
-    "solver.save_every": ("1", "steps per output sample"),
-    "solver.baumgarte": ("s-1", "Baumgarte coefficients (alpha, beta)"),
-    "solver.max_substep_level": ("1", "deepest sub-step level"),
-    "solver.stability_limit": ("1", "largest stiff rate times step"),
-    "solver.constraint_tolerance": ("m", "constraint violation stop"),
-    "solver.energy_tolerance": ("1", "energy residual stop, fraction of the throughput"),
-}
+FIELD_INFO: dict[str, tuple[str | None, str]] = _info_of(Config)
 
 
 def field_info(key: str) -> tuple[str | None, str] | None:
@@ -170,13 +274,8 @@ _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt}
 _SWEEP_HINT = " (sweep files are run with `clearsweep sweep`)"
 
 
-def _defaults(schema: Mapping[str, Any]) -> dict[str, Any]:
-    return {k: _defaults(v) if isinstance(v, Mapping) else copy.deepcopy(v.default)
-            for k, v in schema.items()}
-
-
-#: The resolved default configuration (copy it before changing it).
-DEFAULTS: dict[str, Any] = _defaults(SCHEMA)
+#: The resolved default configuration.
+DEFAULTS: Config = Config()
 
 
 def _unknown_key(key: str, value: Any, options: Iterable[str], source: str, got: str | None = None):
@@ -207,7 +306,7 @@ def _resolve(raw: Any, schema: Mapping[str, Any], prefix: str, source: str) -> d
     return out
 
 
-def _validate(raw: Any, source: str, base_dir: str) -> dict[str, Any]:
+def _validate(raw: Any, source: str, base_dir: str) -> Config:
     cfg = _resolve(raw, SCHEMA, "", source)
     for key, op, other in _RELATIONS:
         value, bound = get_path(cfg, key), get_path(cfg, other)
@@ -227,19 +326,21 @@ def _validate(raw: Any, source: str, base_dir: str) -> dict[str, Any]:
             raise ConfigError("materials_file", cfg["materials_file"],
                               f"an existing YAML file (looked for {path})", source)
         cfg["materials_file"] = path
-    materials = resolve_materials(cfg)
+    from .materials import load_materials
+
+    materials = load_materials(cfg["materials_file"])
     for joint in cfg["joints"]:
         coating = cfg["joints"][joint]["coating"]
         if coating != "none" and coating not in materials:
             raise ConfigError(f"joints.{joint}.coating", coating,
                               f"'none' or a known material ({', '.join(materials)})", source,
                               close_match(coating, ["none", *materials]))
-    return cfg
+    return _build(Config, cfg)
 
 
 # ---------------------------------------------------------------------------- public API
 
-def get_path(cfg: Mapping[str, Any], key: str) -> Any:
+def get_path(cfg: Mapping[str, Any] | _Section, key: str) -> Any:
     """Value at dotted ``key`` (``"joints.A.clearance"``) of a nested mapping.
 
     Raises
@@ -247,7 +348,7 @@ def get_path(cfg: Mapping[str, Any], key: str) -> Any:
     ConfigError
         If the key does not exist (with the closest existing key).
     """
-    node: Any = cfg
+    node: Any = cfg.to_dict() if isinstance(cfg, _Section) else cfg
     parts = key.split(".")
     for i, part in enumerate(parts):
         if not isinstance(node, Mapping) or part not in node:
@@ -299,14 +400,16 @@ def apply_override(cfg: dict[str, Any], text: str, *, source: str = "--set") -> 
     return cfg
 
 
-def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterable[str] = (), *,
-                source_name: str | None = None) -> dict[str, Any]:
+def load_config(source: str | os.PathLike | Mapping[str, Any] | Config, overrides: Iterable[str] = (),
+                *, source_name: str | None = None) -> Config:
     """Read, override, validate and resolve a configuration.
 
     Parameters
     ----------
     source
-        Path of a YAML file, or a mapping (left unchanged). YAML text is not accepted.
+        Path of a YAML file, a mapping (left unchanged), or a :class:`Config` (returned as
+        it is when there are no overrides: it was validated when it was made). YAML text is
+        not accepted.
     overrides
         Strings ``"dotted.key=VALUE"`` applied in order before validation.
     source_name
@@ -314,8 +417,8 @@ def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterab
 
     Returns
     -------
-    dict
-        A new, fully resolved nested dict with every key of :data:`SCHEMA`;
+    Config
+        Frozen and fully resolved, every key of :data:`SCHEMA` present;
         ``materials_file`` made absolute (relative paths are taken from the
         config file's folder, or the current folder for a mapping).
 
@@ -324,6 +427,11 @@ def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterab
     ConfigError
         For any unreadable, malformed, unknown, mistyped or out-of-range input.
     """
+    overrides = [overrides] if isinstance(overrides, str) else list(overrides)
+    if isinstance(source, Config):
+        if not overrides:
+            return source
+        source = source.to_dict()
     if isinstance(source, Mapping):
         label, raw, base_dir = source_name or "<config>", copy.deepcopy(dict(source)), os.getcwd()
     else:
@@ -336,7 +444,7 @@ def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterab
         raise ConfigError(None, raw, f"a mapping with keys {', '.join(SCHEMA)}", label)
     overridden: list[str] = []
     try:
-        for text in [overrides] if isinstance(overrides, str) else overrides:
+        for text in overrides:
             key, value = _split_override(text, label)
             overridden.append(key)
             set_path(raw, key, value)
@@ -348,12 +456,12 @@ def load_config(source: str | os.PathLike | Mapping[str, Any], overrides: Iterab
         raise
 
 
-def dump_config(cfg: Mapping[str, Any]) -> str:
+def dump_config(cfg: Mapping[str, Any] | Config) -> str:
     """YAML text of ``cfg`` in schema order; ``load_config`` of it gives ``cfg`` back."""
-    return dump_yaml(dict(cfg))
+    return dump_yaml(cfg.to_dict() if isinstance(cfg, _Section) else dict(cfg))
 
 
-def resolve_materials(cfg: Mapping[str, Any]) -> dict[str, Any]:
+def resolve_materials(cfg: Config) -> dict[str, Any]:
     """Materials available to ``cfg``: the shipped ones and its ``materials_file``.
 
     Returns
@@ -362,4 +470,4 @@ def resolve_materials(cfg: Mapping[str, Any]) -> dict[str, Any]:
     """
     from .materials import load_materials
 
-    return load_materials(cfg.get("materials_file"))
+    return load_materials(cfg.materials_file)

@@ -14,6 +14,7 @@ A wear coefficient with no published value carries ``assumed: true``.
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass
 from importlib.resources import files
@@ -151,10 +152,24 @@ def load_materials(extra_file: str | os.PathLike | None = None) -> Materials:
     ConfigError
         Naming the file, the material and the field of any bad value.
     """
+    if extra_file is None:
+        return _load(None, None)
+    try:
+        stat = os.stat(extra_file)
+        stamp = (stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        stamp = None        # read_yaml says what is wrong with the file
+    return _load(str(extra_file), stamp)
+
+
+@functools.lru_cache(maxsize=16)
+def _load(extra_file: str | None, stamp: tuple[int, int] | None) -> Materials:
+    # Read once per process and file version (a sweep validates every case against the
+    # same files); callers do not change the table they get.
     table = _merge(Materials(), read_yaml(files("clearsweep").joinpath("data").joinpath("materials.yaml"),
                                           _SHIPPED), _SHIPPED)
     if extra_file is not None:
-        table = _merge(table, read_yaml(extra_file), str(extra_file))
+        table = _merge(table, read_yaml(extra_file), extra_file)
     return table
 
 

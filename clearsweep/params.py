@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .config import Config, JointConfig
 from .core import layout as L
 
 
@@ -74,21 +75,21 @@ def layer_modulus(surface, base, coating_thickness_m: float, base_thickness_m: f
     return ex, (surface.poisson_ratio if coated else base.poisson_ratio)
 
 
-def equivalent_modulus(joint: dict, materials: dict, rule: str) -> float:
+def equivalent_modulus(joint: JointConfig, materials: dict, rule: str) -> float:
     """E_w [Pa]: 1/E_w = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j, socket i (maybe coated), ball j."""
     base = materials[BASE_MATERIAL]
-    coated = joint["coating"] != "none"
-    surface = materials[joint["coating"]] if coated else base
-    ei, nui = layer_modulus(surface, base, joint["coating_thickness"], joint["base_thickness"],
+    coated = joint.coating != "none"
+    surface = materials[joint.coating] if coated else base
+    ei, nui = layer_modulus(surface, base, joint.coating_thickness, joint.base_thickness,
                             coated, rule)
-    ej, nuj = layer_modulus(base, base, joint["coating_thickness"], joint["base_thickness"],
+    ej, nuj = layer_modulus(base, base, joint.coating_thickness, joint.base_thickness,
                             False, rule)
     return 1.0 / ((1.0 - nui ** 2) / ei + (1.0 - nuj ** 2) / ej)
 
 
-def surface_material(joint: dict, materials: dict):
+def surface_material(joint: JointConfig, materials: dict):
     """The socket surface's material: the coating where coated, else the base."""
-    return materials[BASE_MATERIAL if joint["coating"] == "none" else joint["coating"]]
+    return materials[BASE_MATERIAL if joint.coating == "none" else joint.coating]
 
 
 def ideal_slider_x(theta, l2: float, l3: float, zs: float):
@@ -207,10 +208,10 @@ class Packed:
     map_shape: tuple[int, int]
 
 
-def pack(cfg: dict, materials: dict) -> Packed:
+def pack(cfg: Config, materials: dict) -> Packed:
     """Resolved config (config.load_config) + materials -> kernel vectors (SI)."""
-    preset = PRESETS[cfg["mechanism"]["preset"]]
-    solver = cfg["solver"]
+    preset = PRESETS[cfg.mechanism.preset]
+    solver = cfg.solver
     p = np.zeros(L.N_P)
     p[L.P_L2] = preset.crank_length_m
     p[L.P_L3] = preset.rod_length_m
@@ -221,52 +222,51 @@ def pack(cfg: dict, materials: dict) -> Packed:
     p[L.P_J2:L.P_J2 + 3] = preset.crank_inertia_kgm2
     p[L.P_J3:L.P_J3 + 3] = preset.rod_inertia_kgm2
     p[L.P_J4:L.P_J4 + 3] = preset.slider_inertia_kgm2
-    p[L.P_G:L.P_G + 3] = cfg["mechanism"]["gravity"]
-    omega = cfg["mechanism"]["speed_rpm"] * 2.0 * math.pi / 60.0
+    p[L.P_G:L.P_G + 3] = cfg.mechanism.gravity
+    omega = cfg.mechanism.omega_rad_s
     p[L.P_OMEGA] = omega
-    p[L.P_THETA0] = cfg["mechanism"]["theta0"]
-    p[L.P_BAUM_A], p[L.P_BAUM_B] = solver["baumgarte"]
-    contact = cfg["contact"]
-    p[L.P_CR] = contact["restitution"]
-    p[L.P_DV0_MIN] = contact["min_impact_velocity"]
-    p[L.P_PEN_FRAC] = contact["max_penetration_fraction"]
-    friction = cfg["friction"]
-    p[L.P_FRICTION] = 1.0 if friction["enabled"] else 0.0
-    p[L.P_V0] = friction["v0"]
-    p[L.P_V1] = friction["v1"]
-    wear = cfg["wear"]
-    p[L.P_WEAR] = 1.0 if wear["enabled"] else 0.0
-    p[L.P_SLIP] = 0.0 if wear["slip"] == "sliding" else 1.0
-    p[L.P_AMPL] = wear["amplification"]
-    p[L.P_CONS_TOL] = solver["constraint_tolerance"]
-    p[L.P_ENERGY_TOL] = solver["energy_tolerance"]
-    p[L.P_STAB] = solver["stability_limit"]
-    p[L.P_DT] = solver["dt"]
-    p[L.P_MAX_LEVEL] = solver["max_substep_level"]
-    p[L.P_SETTLE] = cfg["metrics"]["settle_time"]
-    p[L.P_FEEDBACK] = 1.0 if (wear["enabled"] and wear["feedback"]) else 0.0
+    p[L.P_THETA0] = cfg.mechanism.theta0
+    p[L.P_BAUM_A], p[L.P_BAUM_B] = solver.baumgarte
+    contact = cfg.contact
+    p[L.P_CR] = contact.restitution
+    p[L.P_DV0_MIN] = contact.min_impact_velocity
+    p[L.P_PEN_FRAC] = contact.max_penetration_fraction
+    friction = cfg.friction
+    p[L.P_FRICTION] = 1.0 if friction.enabled else 0.0
+    p[L.P_V0] = friction.v0
+    p[L.P_V1] = friction.v1
+    wear = cfg.wear
+    p[L.P_WEAR] = 1.0 if wear.enabled else 0.0
+    p[L.P_SLIP] = 0.0 if wear.slip == "sliding" else 1.0
+    p[L.P_AMPL] = wear.amplification
+    p[L.P_CONS_TOL] = solver.constraint_tolerance
+    p[L.P_ENERGY_TOL] = solver.energy_tolerance
+    p[L.P_STAB] = solver.stability_limit
+    p[L.P_DT] = solver.dt
+    p[L.P_MAX_LEVEL] = solver.max_substep_level
+    p[L.P_SETTLE] = cfg.metrics.settle_time
+    p[L.P_FEEDBACK] = 1.0 if wear.feeds_back else 0.0
     jp = np.zeros((2, L.N_JP))
-    for j, name in enumerate(("A", "B")):
-        joint = cfg["joints"][name]
+    for j, (_, joint) in enumerate(cfg.joints.items()):
         surface = surface_material(joint, materials)
-        c = joint["clearance"]
+        c = joint.clearance
         jp[j, L.J_CLEARANCE] = 1.0 if c > 0.0 else 0.0
         jp[j, L.J_C] = c
-        jp[j, L.J_RI] = joint["socket_radius"]
-        jp[j, L.J_RJ] = joint["socket_radius"] - c
-        jp[j, L.J_EW] = equivalent_modulus(joint, materials, contact["layer_rule"])
+        jp[j, L.J_RI] = joint.socket_radius
+        jp[j, L.J_RJ] = joint.socket_radius - c
+        jp[j, L.J_EW] = equivalent_modulus(joint, materials, contact.layer_rule)
         jp[j, L.J_MU] = surface.friction_coefficient
-        k = joint["wear_coefficient"]
+        k = joint.wear_coefficient
         jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
     # whole output samples, rounded up: the run covers at least `duration`
-    save_every = int(solver["save_every"])
-    n_raw = int(math.ceil(solver["duration"] / solver["dt"] - 1e-9))
+    save_every = solver.save_every
+    n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
-    theta0 = cfg["mechanism"]["theta0"]
-    if cfg["initial"]["joints"] == "seated":
+    theta0 = cfg.mechanism.theta0
+    if cfg.initial.joints == "seated":
         offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega)
         y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
     else:
         y0 = initial_state(preset, theta0, omega)
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
-                  map_shape=(int(wear["map"][0]), int(wear["map"][1])))
+                  map_shape=(wear.map[0], wear.map[1]))

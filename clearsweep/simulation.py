@@ -13,7 +13,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
 from .budget import check_budget
-from .config import ConfigError, dump_config, load_config, resolve_materials
+from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
 from .params import PRESETS, Packed, pack
@@ -23,7 +23,7 @@ from .params import PRESETS, Packed, pack
 MAX_ROTATION_PER_STEP_RAD = 0.05
 
 
-def check_step(cfg: dict, packed: Packed) -> None:
+def check_step(cfg: Config, packed: Packed) -> None:
     """Reject a step that no permitted sub-step level can make stable (docs/physics.md section 4).
 
     Two bounds: the crank may turn at most MAX_ROTATION_PER_STEP_RAD per step, and the
@@ -31,11 +31,11 @@ def check_step(cfg: dict, packed: Packed) -> None:
     penetration the run accepts (contact.max_penetration_fraction * c), with the lightest
     mass a contact can meet (rod, slider, or the rod's end-point rotational mass).
     """
-    solver = cfg["solver"]
-    dt = solver["dt"]
+    solver = cfg.solver
+    dt = solver.dt
     omega = packed.p[L.P_OMEGA]
     bounds = [MAX_ROTATION_PER_STEP_RAD / omega]
-    preset = PRESETS[cfg["mechanism"]["preset"]]
+    preset = PRESETS[cfg.mechanism.preset]
     half = 0.5 * preset.rod_length_m
     m_ref = min(preset.rod_mass_kg, preset.slider_mass_kg,
                 min(preset.rod_inertia_kgm2[1:]) / half ** 2)
@@ -46,16 +46,16 @@ def check_step(cfg: dict, packed: Packed) -> None:
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
         _, stiffness = elastic_force(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI])
         rate = math.sqrt(stiffness / m_ref)
-        bounds.append(solver["stability_limit"] * 2 ** solver["max_substep_level"] / rate)
+        bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
     if dt > limit:
         raise ConfigError("solver.dt", dt,
                           f"a step <= {limit:.3g} s (larger steps cannot be made stable: crank "
-                          f"rotation per step and contact rate with {2 ** solver['max_substep_level']}"
+                          f"rotation per step and contact rate with {2 ** solver.max_substep_level}"
                           f" sub-steps at most, solver.max_substep_level)")
 
 
-def preflight(cfg: dict, *, allow_large: bool = False) -> Packed:
+def preflight(cfg: Config, *, allow_large: bool = False) -> Packed:
     """Everything that can be checked before a run: work and memory, materials, packing and
     the step bound.
 
@@ -84,16 +84,13 @@ def prepare_kernel() -> float:
 
     Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
     """
-    from .config import DEFAULTS
     from .core.rk4 import integrate
-    from .materials import load_materials
 
     start = time.perf_counter()
     if integrate.signatures:
         return 0.0
-    cfg = {**DEFAULTS, "joints": {j: {**DEFAULTS["joints"][j], "clearance": 2.5e-4}
-                                  for j in ("A", "B")}}
-    packed = pack(cfg, load_materials(None))
+    cfg = DEFAULTS.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4)
+    packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
     run_kernel(packed)
@@ -140,7 +137,8 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     Parameters
     ----------
     config
-        Path to a YAML case file, or a (possibly partial) config dict; validated by
+        A :class:`clearsweep.config.Config` (used as it is), the path of a YAML case
+        file, or a (possibly partial) config dict; the last two are validated by
         ``config.load_config``.
     overrides
         ``"dotted.key=VALUE"`` strings.
@@ -161,21 +159,21 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     raw = run_kernel(packed)
     arrays = arrays_from_raw(raw, packed)
     attrs = {
-        "slip_rule": cfg["wear"]["slip"],
-        "slip_description": ("dS = |v_t| dt (sliding distance)" if cfg["wear"]["slip"] == "sliding"
+        "slip_rule": cfg.wear.slip,
+        "slip_description": ("dS = |v_t| dt (sliding distance)" if cfg.wear.slip == "sliding"
                              else "dS = R_i |d beta| (paper Eq. 14)"),
         "wear_map_rule": "contact-area rule: each step's worn volume k F_N dS spread over the "
                          "bins the contact cap (area A) overlaps, in proportion to the overlap; "
                          "depth = volume / bin area; c_eff read from the bin holding the "
                          "contact direction",
-        "wear_feedback": int(bool(cfg["wear"]["feedback"] and cfg["wear"]["enabled"])),
-        "initial_joints": cfg["initial"]["joints"],
-        "settle_time_s": cfg["metrics"]["settle_time"],
-        "rod_inertia_kgm2": list(PRESETS[cfg["mechanism"]["preset"]].rod_inertia_kgm2),
-        "wear_amplification": cfg["wear"]["amplification"],
+        "wear_feedback": int(cfg.wear.feeds_back),
+        "initial_joints": cfg.initial.joints,
+        "settle_time_s": cfg.metrics.settle_time,
+        "rod_inertia_kgm2": list(PRESETS[cfg.mechanism.preset].rod_inertia_kgm2),
+        "wear_amplification": cfg.wear.amplification,
         "rod_spin_constraint": "gamma3 = 0 (paper Eq. 24)",
-        "preset": cfg["mechanism"]["preset"],
-        "preset_source": PRESETS[cfg["mechanism"]["preset"]].source,
+        "preset": cfg.mechanism.preset,
+        "preset_source": PRESETS[cfg.mechanism.preset].source,
         "equivalent_modulus_A_Pa": float(packed.jp[0, L.J_EW]),
         "equivalent_modulus_B_Pa": float(packed.jp[1, L.J_EW]),
         "friction_coefficient_A": float(packed.jp[0, L.J_MU]),
@@ -232,7 +230,7 @@ _ENERGY_TERMS = (("energy_kinetic", "kinetic energy"),
                  ("work_drive", "drive work"), ("energy_dissipated", "dissipated energy"))
 
 
-def energy_residual_hint(arrays: dict[str, np.ndarray], t: np.ndarray, cfg: dict) -> str:
+def energy_residual_hint(arrays: dict[str, np.ndarray], t: np.ndarray, cfg: Config) -> str:
     """A hint at what drove an ``energy_residual`` stop, from the saved rows (post-processing).
 
     Compares the change since t = 0 of each term of the balance (kinetic and potential
@@ -252,10 +250,10 @@ def energy_residual_hint(arrays: dict[str, np.ndarray], t: np.ndarray, cfg: dict
     text = (f"hint (saved rows up to t = {float(t[k]):.4g} s): the largest change since t = 0 is "
             f"the {largest}, {changes[largest]:+.3g} J ({others}; residual "
             f"{float(arrays['energy_residual'][k]):+.3g} J)")
-    if cfg["wear"]["enabled"] and cfg["wear"]["feedback"]:
+    if cfg.wear.feeds_back:
         worn = []
-        for j, name in enumerate(("A", "B")):
-            c = cfg["joints"][name]["clearance"]
+        for j, (name, joint) in enumerate(cfg.joints.items()):
+            c = joint.clearance
             depth = float(arrays["wear_depth_max"][k, j])
             if c > 0 and np.isfinite(depth) and depth > 0:
                 worn.append(f"{name} {depth:.3g} m = {100 * depth / c:.3g} % of its clearance")

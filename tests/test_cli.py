@@ -40,9 +40,9 @@ def fake_run(monkeypatch):
 
     def simulate(cfg, allow_large=False):
         calls.append(cfg)
-        if cfg["name"] == "unstable":
-            raise ConfigError("solver.dt", cfg["solver"]["dt"], "a step below the stability limit")
-        status = "ok" if cfg["name"] != "diverges" else "diverged at t = 0.01 s"
+        if cfg.name == "unstable":
+            raise ConfigError("solver.dt", cfg.solver.dt, "a step below the stability limit")
+        status = "ok" if cfg.name != "diverges" else "diverged at t = 0.01 s"
         return xr.Dataset({"slider_position": ("time", [0.3, 0.31]), "status": ((), status)},
                           coords={"time": [0.0, 0.1]})
 
@@ -179,7 +179,7 @@ def test_validate_prints_resolved_yaml(tmp_path):
     result = invoke(["validate", path, "--set", "joints.B.coating=PTFE"], tmp_path)
     assert result.exit_code == 0, result.stderr
     printed = yaml.safe_load(result.stdout)
-    assert printed == load_config(path, ["joints.B.coating=PTFE"])
+    assert load_config(printed) == load_config(path, ["joints.B.coating=PTFE"])
     assert printed["joints"]["B"]["coating"] == "PTFE" and printed["solver"]["dt"] == 1e-5
 
 

@@ -1,6 +1,7 @@
 """Configuration: defaults, normalisation, overrides, round trips and error messages."""
 
 import copy
+import dataclasses
 import pickle
 import re
 from pathlib import Path
@@ -15,6 +16,7 @@ from clearsweep.config import (
     MAX_YAML_ALIASES,
     MAX_YAML_BYTES,
     SCHEMA,
+    Config,
     ConfigError,
     apply_override,
     dump_config,
@@ -48,10 +50,10 @@ def test_empty_mapping_gives_every_key_with_defaults():
     assert cfg == DEFAULTS
     for key in leaf_keys(SCHEMA):
         get_path(cfg, key)  # present
-    assert cfg["mechanism"]["preset"] == "realistic"
-    assert cfg["joints"]["A"]["socket_radius"] == 0.015
-    assert cfg["solver"]["baumgarte"] == [5.0, 5.0]
-    assert cfg["wear"]["map"] == [144, 288]
+    assert cfg.mechanism.preset == "realistic"
+    assert cfg.joints.A.socket_radius == 0.015
+    assert cfg.solver.baumgarte == (5.0, 5.0)
+    assert cfg.wear.map == (144, 288)
 
 
 def test_defaults_are_the_documented_contract():
@@ -60,20 +62,46 @@ def test_defaults_are_the_documented_contract():
         pytest.skip("docs/architecture.md is not beside the tests")
     block = yaml.safe_load(re.search(r"```yaml\n(.*?)```", doc.read_text(), re.S).group(1))
     block["joints"]["B"] = block["joints"]["A"]  # "same keys for B"
-    assert block == DEFAULTS
+    assert block == DEFAULTS.to_dict()
     assert load_config(block) == DEFAULTS
 
 
-def test_result_is_new_and_inputs_are_untouched():
+def test_result_is_frozen_and_inputs_are_untouched():
     source = {"solver": {"dt": 1e-6}}
     before = copy.deepcopy(source)
     cfg = load_config(source)
-    cfg["solver"]["baumgarte"].append(1.0)
-    cfg["joints"]["A"]["clearance"] = 9.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.joints.A.clearance = 9.0   # type: ignore[misc]
+    assert isinstance(cfg.solver.baumgarte, tuple)   # no list to change in place either
     assert source == before
-    assert DEFAULTS["solver"]["baumgarte"] == [5.0, 5.0]
-    assert load_config({})["joints"]["B"]["clearance"] == 0.0
-    assert copy.deepcopy(DEFAULTS) == DEFAULTS
+    assert load_config({}).joints.B.clearance == 0.0
+    assert DEFAULTS == Config() and hash(DEFAULTS) == hash(Config())
+
+
+def test_a_config_is_passed_on_as_it_is_and_changed_only_through_validation():
+    cfg = load_config({"joints": {"B": {"clearance": 2.5e-4}}})
+    assert load_config(cfg) is cfg                       # validated once, not again
+    changed = cfg.replace("joints.B.coating=PTFE", joints__A__clearance=1e-4)
+    assert (changed.joints.A.clearance, changed.joints.B.coating) == (1e-4, "PTFE")
+    assert cfg.joints.B.coating == "none"
+    with pytest.raises(ConfigError, match="joints.A.clearance"):
+        cfg.replace(joints__A__clearance=-1.0)
+    assert load_config(cfg.to_dict()) == cfg              # the plain dict round-trips
+
+
+def test_every_leaf_carries_units_and_a_long_name_in_its_metadata():
+    def leaves(cls, prefix=""):
+        for f in dataclasses.fields(cls):
+            if f.default_factory is not dataclasses.MISSING:
+                yield from leaves(f.default_factory, f"{prefix}{f.name}.")
+            else:
+                yield prefix + f.name, f
+    keys = dict(leaves(Config))
+    assert set(keys) == set(leaf_keys(SCHEMA))
+    for key, f in keys.items():
+        assert {"units", "long_name", "field"} <= set(f.metadata), key
+    assert keys["joints.B.clearance"].metadata["units"] == "m"
+    assert keys["mechanism.speed_rpm"].metadata["units"] == "min-1"
 
 
 def test_numbers_are_normalised(tmp_path):
@@ -85,19 +113,19 @@ wear: {map: [18, 36]}
 solver: {baumgarte: [50, 50], dt: 1e-6, duration: 2}
 """)
     cfg = load_config(path)
-    assert cfg["joints"]["A"]["clearance"] == 0.0 and type(cfg["joints"]["A"]["clearance"]) is float
-    assert type(cfg["joints"]["A"]["socket_radius"]) is float
-    assert [type(g) for g in cfg["mechanism"]["gravity"]] == [float] * 3
-    assert cfg["mechanism"]["gravity"] == [0.0, 0.0, -10.0]
-    assert [type(v) for v in cfg["wear"]["map"]] == [int, int]
-    assert [type(v) for v in cfg["solver"]["baumgarte"]] == [float, float]
-    assert cfg["solver"]["dt"] == 1e-6  # written without a dot, still a number
-    assert type(cfg["solver"]["duration"]) is float and type(cfg["solver"]["save_every"]) is int
+    assert cfg.joints.A.clearance == 0.0 and type(cfg.joints.A.clearance) is float
+    assert type(cfg.joints.A.socket_radius) is float
+    assert [type(g) for g in cfg.mechanism.gravity] == [float] * 3
+    assert cfg.mechanism.gravity == (0.0, 0.0, -10.0)
+    assert [type(v) for v in cfg.wear.map] == [int, int]
+    assert [type(v) for v in cfg.solver.baumgarte] == [float, float]
+    assert cfg.solver.dt == 1e-6  # written without a dot, still a number
+    assert type(cfg.solver.duration) is float and type(cfg.solver.save_every) is int
 
 
 def test_tuples_become_lists():
     cfg = load_config({"mechanism": {"gravity": (0, 0, 0)}})
-    assert cfg["mechanism"]["gravity"] == [0.0, 0.0, 0.0]
+    assert cfg.mechanism.gravity == (0.0, 0.0, 0.0)
 
 
 def test_empty_section_means_defaults(tmp_path):
@@ -129,15 +157,15 @@ def test_override_types(override, key, expected):
 def test_overrides_apply_in_order_over_the_file(tmp_path):
     path = write(tmp_path, "solver: {dt: 1.0e-5}\n")
     cfg = load_config(path, ["solver.dt=1e-6", "solver.dt=3e-6"])
-    assert cfg["solver"]["dt"] == 3e-6
+    assert cfg.solver.dt == 3e-6
 
 
 def test_a_single_string_is_one_override():
-    assert load_config({}, "solver.dt=2e-6")["solver"]["dt"] == 2e-6
+    assert load_config({}, "solver.dt=2e-6").solver.dt == 2e-6
 
 
 def test_apply_override_set_path_get_path():
-    cfg = copy.deepcopy(DEFAULTS)
+    cfg = DEFAULTS.to_dict()
     assert apply_override(cfg, "joints.A.clearance=2.5e-4") is cfg
     assert get_path(cfg, "joints.A.clearance") == 2.5e-4
     set_path(cfg, "contact.restitution", 0.5)
@@ -161,7 +189,7 @@ def test_get_path_unknown_key_suggests():
 
 def test_set_path_through_a_value_is_an_error():
     with pytest.raises(ConfigError, match="solver.dt is a value"):
-        set_path(copy.deepcopy(DEFAULTS), "solver.dt.x", 1)
+        set_path(DEFAULTS.to_dict(), "solver.dt.x", 1)
 
 
 def test_error_from_override_is_marked(tmp_path):
@@ -351,10 +379,10 @@ def test_materials_file_is_relative_to_the_config(tmp_path, monkeypatch):
     path = write(tmp_path / "cfg", "materials_file: mine.yaml\njoints: {B: {coating: bronze}}\n")
     monkeypatch.chdir(tmp_path)
     cfg = load_config("cfg/case.yaml")
-    assert cfg["materials_file"] == str(tmp_path / "cfg" / "mine.yaml")
+    assert cfg.materials_file == str(tmp_path / "cfg" / "mine.yaml")
     assert resolve_materials(cfg)["bronze"].friction_coefficient == 0.1
     assert load_config(write(tmp_path, dump_config(cfg), "elsewhere.yaml")) == cfg
-    assert load_config(path, ["joints.A.coating=bronze"])["joints"]["A"]["coating"] == "bronze"
+    assert load_config(path, ["joints.A.coating=bronze"]).joints.A.coating == "bronze"
 
 
 def test_missing_materials_file(tmp_path):
@@ -423,6 +451,6 @@ def test_duplicate_key_names_the_key_and_both_lines(tmp_path):
 
 
 def test_same_key_in_different_mappings_is_fine():
-    assert load_config({})["joints"]["A"]["clearance"] == 0.0
+    assert load_config({}).joints.A.clearance == 0.0
     assert parse_yaml("A: {clearance: 1}\nB: {clearance: 2}\n") == {"A": {"clearance": 1},
                                                                       "B": {"clearance": 2}}

@@ -6,6 +6,7 @@ import pathlib
 
 import pytest
 
+from clearsweep.config import JointConfig
 from clearsweep.core.contact import (
     contact_area,
     damping_factor,
@@ -22,8 +23,8 @@ C = 2.5e-4      # radial clearance [m]
 RI = 0.015      # socket radius [m]
 
 
-def joint(coating="none"):
-    return {"coating": coating, "coating_thickness": 1e-4, "base_thickness": 4.9e-3}
+def joint(coating="none", coating_thickness=1e-4):
+    return JointConfig(coating=coating, coating_thickness=coating_thickness, base_thickness=4.9e-3)
 
 
 def test_uncoated_modulus_is_steels():
@@ -44,7 +45,7 @@ def test_softer_coating_lowers_modulus(coating):
     soft = equivalent_modulus(joint(coating), MATERIALS, "series")
     assert soft < equivalent_modulus(joint(), MATERIALS, "series")
     # a vanishing coating thickness recovers the uncoated value
-    thin = dict(joint(coating), coating_thickness=1e-15)
+    thin = joint(coating, coating_thickness=1e-15)
     m = MATERIALS[coating]
     steel = MATERIALS["steel"]
     # (only the surface Poisson ratio differs then)

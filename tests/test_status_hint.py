@@ -22,7 +22,7 @@ def test_hint_names_the_largest_term_and_the_wear_against_the_clearance():
     assert hint.startswith("hint (saved rows up to t = 0.3 s): the largest change since t = 0 is "
                            "the dissipated energy, +2.25 J")
     assert "drive work +1.5 J" in hint and "B 5e-05 m = 20 % of its clearance" in hint
-    cfg["wear"]["feedback"] = False
+    cfg = cfg.replace(wear__feedback=False)
     assert "clearance" not in energy_residual_hint(arrays, np.arange(n) * 0.1, cfg)
 
 

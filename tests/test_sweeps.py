@@ -68,8 +68,8 @@ def test_grid_is_a_cartesian_product_in_file_order():
     assert [c.index for c in plan.cases] == [(i, j) for i in range(3) for j in range(2)]
     case = plan.cases[3]                                    # (MoS2, 60)
     assert plan.label(case) == {"B_coating": "MoS2", "speed_rpm": 60}
-    assert case.config["joints"]["B"]["coating"] == "MoS2"
-    assert case.config["mechanism"]["speed_rpm"] == 60.0
+    assert case.config.joints.B.coating == "MoS2"
+    assert case.config.mechanism.speed_rpm == 60.0
     assert len({c.hash for c in plan.cases}) == 6
     coords = plan.to_dataset()
     assert coords["B_coating"].values.tolist() == ["none", "MoS2", "PTFE"]   # strings as given
@@ -84,7 +84,7 @@ def test_zip_group_is_one_dimension():
     ds = plan.to_dataset()
     assert set(ds.coords) == {"A_clearance", "B_coating"}
     assert ds["B_coating"].dims == ("A_clearance_zip",) and not ds.indexes
-    assert [(c.config["joints"]["A"]["clearance"], c.config["joints"]["B"]["coating"])
+    assert [(c.config.joints.A.clearance, c.config.joints.B.coating)
             for c in plan.cases] == [(0.0, "none"), (1e-4, "lead"), (2e-4, "PTFE")]
 
     named = expand({"base": BASE, "sweep": SMALL}).to_dataset()
@@ -102,7 +102,7 @@ def test_colliding_names_take_the_full_path():
 def test_values_that_are_lists_become_json_text():
     plan = expand({"base": BASE, "sweep": {"grid": {"solver.baumgarte": [[5.0, 5.0], [50.0, 50.0]]}}})
     assert plan.to_dataset()["baumgarte"].values.tolist() == ["[5.0, 5.0]", "[50.0, 50.0]"]
-    assert plan.cases[1].config["solver"]["baumgarte"] == [50.0, 50.0]
+    assert plan.cases[1].config.solver.baumgarte == (50.0, 50.0)
 
 
 @pytest.mark.parametrize("sweep, key, fragment", [
@@ -143,7 +143,7 @@ def test_malformed_sweeps_are_config_errors(doc, match):
 
 def test_overrides_apply_to_the_base_but_not_to_swept_keys():
     plan = expand({"base": BASE, "sweep": SMALL}, overrides=["solver.duration=0.02"])
-    assert all(c.config["solver"]["duration"] == 0.02 for c in plan.cases)
+    assert all(c.config.solver.duration == 0.02 for c in plan.cases)
     with pytest.raises(ConfigError, match="does not vary"):
         expand({"base": BASE, "sweep": SMALL}, overrides=["joints.B.coating=lead"])
 
@@ -153,7 +153,7 @@ def test_base_path_is_relative_to_the_sweep_file(tmp_path):
     (tmp_path / "cases" / "base.yaml").write_text(yaml.safe_dump(BASE))
     (tmp_path / "cases" / "sweep.yaml").write_text(yaml.safe_dump({"base": "base.yaml", "sweep": SMALL}))
     plan = expand(tmp_path / "cases" / "sweep.yaml")
-    assert plan.name == "sweep" and plan.cases[0].config["solver"]["duration"] == 0.01
+    assert plan.name == "sweep" and plan.cases[0].config.solver.duration == 0.01
 
 
 def test_skip_rules_and_shipped_configs():
@@ -166,7 +166,7 @@ def test_skip_rules_and_shipped_configs():
     main = expand(ROOT / "configs" / "coating_clearance.yaml")
     assert main.dims == {"B_coating": 4, "B_clearance": 6, "clearance_joints": 2}
     assert len(main.runnable()) == 48
-    assert all(c.config["solver"]["duration"] == 1.0 for c in main.cases)
+    assert all(c.config.solver.duration == 1.0 for c in main.cases)
 
 
 # ---------------------------------------------------------------------------- running
@@ -411,7 +411,7 @@ def die_on_ptfe(cfg):
     """A simulation whose worker process dies on PTFE cases (a crash, not a failed case)."""
     from clearsweep.simulation import simulate
 
-    if cfg["joints"]["B"]["coating"] == "PTFE":
+    if cfg.joints.B.coating == "PTFE":
         os._exit(3)
     return simulate(cfg)
 
@@ -420,8 +420,8 @@ def die_once_on_ptfe(cfg):
     """A worker that dies on the first PTFE case it meets, and runs it the second time."""
     from clearsweep.simulation import simulate
 
-    marker = Path(cfg["name"] + ".died")
-    if cfg["joints"]["B"]["coating"] == "PTFE":
+    marker = Path(cfg.name + ".died")
+    if cfg.joints.B.coating == "PTFE":
         first = not marker.exists()
         with marker.open("a") as f:       # one line per PTFE attempt: the worker's pid
             f.write(f"{os.getpid()}\n")
@@ -608,7 +608,7 @@ def test_step_too_large_for_a_sweep_without_axes_names_the_key():
 
 def _raise_for_ptfe(cfg):
     """Stand-in simulate: an unexpected exception in one case (module level: picklable)."""
-    if cfg["joints"]["B"]["coating"] == "PTFE":
+    if cfg.joints.B.coating == "PTFE":
         raise RuntimeError("boom")
     from clearsweep.simulation import simulate
 

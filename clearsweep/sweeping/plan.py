@@ -23,6 +23,7 @@ from .. import variables
 from ..budget import estimate, format_bytes
 from ..choices import MAX_CASES
 from ..config import (
+    Config,
     ConfigError,
     close_match,
     dump_config,
@@ -152,27 +153,27 @@ class Case:
 
     index: tuple[int, ...]
     hash: str | None
-    config_json: str | None
+    config: Config | None
     skip_message: str = ""
 
     @property
-    def config(self) -> dict | None:
-        """The resolved case configuration."""
-        return None if self.config_json is None else json.loads(self.config_json)
+    def config_json(self) -> str | None:
+        """The resolved configuration as canonical JSON (what :attr:`hash` is taken of)."""
+        return None if self.config is None else canonical_json(self.config.to_dict())
 
 
 @dataclass
 class SweepPlan:
     """A validated, expanded sweep: its axes and one :class:`Case` per point, in C order.
 
-    Holds the resolved configuration (as JSON text) of every case, never results.
+    Holds the resolved configuration of every case, never results.
     """
 
     name: str
     store: str
     source: str
     text: str
-    base: dict
+    base: Config
     axes: tuple[Axis, ...]
     cases: list[Case]
 
@@ -196,11 +197,10 @@ class SweepPlan:
             out.update(axis.label(i))
         return out
 
-    def runnable(self) -> dict[str, str]:
-        """Hash -> resolved config JSON of each distinct case to run, in sweep order."""
+    def runnable(self) -> dict[str, Config]:
+        """Hash -> resolved config of each distinct case to run, in sweep order."""
         # a case has a hash exactly when it has a config (a skipped point has neither)
-        return {c.hash: c.config_json for c in self.cases
-                if c.hash is not None and c.config_json is not None}
+        return {c.hash: c.config for c in self.cases if c.hash is not None and c.config is not None}
 
     def slots(self) -> list[SweepSlot]:
         """The sweep points for :func:`clearsweep.sweeping.assemble.write_sweep_netcdf`."""
@@ -219,7 +219,7 @@ class SweepPlan:
             Cores the cases share; ``None``: the time is given for one core.
         """
         runnable = self.runnable()
-        estimates = [estimate(json.loads(cfg)) for cfg in runnable.values()]
+        estimates = [estimate(cfg) for cfg in runnable.values()]
         steps = sum(e.steps for e in estimates)
         seconds = steps * SECONDS_PER_STEP / (workers or 1)
         per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes for e in estimates)
@@ -261,7 +261,7 @@ def _check_keys(mapping: Mapping, allowed: Sequence[str], where: str | None, sou
                               got="an unknown key")
 
 
-def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> dict:
+def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> Config:
     if base is None:
         base = {}
     if isinstance(base, str):
@@ -280,7 +280,7 @@ def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> d
     return load_config(base, overrides, source_name=f"{source}: base")
 
 
-def _check_swept_key(key, base: dict, where: str, source: str) -> str:
+def _check_swept_key(key, base: Config, where: str, source: str) -> str:
     if not isinstance(key, str) or not key:
         raise ConfigError(where, key, "a dotted config key such as joints.B.coating", source)
     try:
@@ -314,7 +314,7 @@ def _check_unique(values: tuple, where: str, source: str) -> None:
         seen.add(v)
 
 
-def _parse_axes(spec, base: dict, source: str) -> list[Axis]:
+def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
     if spec is None:
         spec = {}
     if not isinstance(spec, Mapping):
@@ -508,7 +508,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         if rule is not None:
             cases.append(Case(index, None, None, f"excluded by sweep.skip[{rule}]"))
             continue
-        cfg = copy.deepcopy(base)
+        cfg = base.to_dict()
         for key, value in assignment.items():
             set_path(cfg, key, value)
         try:
@@ -516,7 +516,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             preflight(resolved, allow_large=allow_large)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
-        cases.append(Case(index, case_hash(resolved), canonical_json(resolved)))
+        cases.append(Case(index, case_hash(resolved.to_dict()), resolved))
 
-    text = dump_config({"name": name, "store": store, "base": base, "sweep": spec or {}})
+    text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
     return SweepPlan(name, store, source, text, base, tuple(axes), cases)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import functools
-import json
 import os
 import signal
 import threading
@@ -40,7 +39,8 @@ def _run_case(payload: tuple) -> xr.Dataset:
     Parameters
     ----------
     payload
-        ``(config_json, store_mode, simulate, summarize)``; ``None`` for the
+        ``(config, store_mode, simulate, summarize)``, ``config`` a resolved
+        :class:`clearsweep.config.Config` (run as it is); ``None`` for the
         last two means :func:`clearsweep.simulation.simulate` and
         :func:`clearsweep.summary.case_summary`.
 
@@ -52,7 +52,7 @@ def _run_case(payload: tuple) -> xr.Dataset:
         status other than ``ok``, gives only ``status``, ``message`` and
         ``wall_time``.
     """
-    config_json, store_mode, simulate, summarize = payload
+    config, store_mode, simulate, summarize = payload
     if simulate is None:
         from ..simulation import simulate as simulate_case
 
@@ -62,7 +62,7 @@ def _run_case(payload: tuple) -> xr.Dataset:
         summarize = case_summary
     start = time.perf_counter()
     try:
-        ds = simulate(json.loads(config_json))
+        ds = simulate(config)
         status = _text(ds["status"].values)
         if status == "ok":
             summary = summarize(ds)
