@@ -450,3 +450,44 @@ def test_report_prints_the_statistics_before_the_wear_table(case_file):
     result = invoke(case_file)
     assert result.exit_code == 0, result.output
     assert result.output.index("every-step statistics") < result.output.index("Wear prediction")
+
+
+def _wear_table_by_xarray(ds):
+    """The wear table written with xarray reductions: the oracle of the numpy version."""
+    from clearsweep.summary import WEAR_THRESHOLD_FRACTION, with_attrs, worn_arc_deg
+
+    projection = ds["wear_projection"]
+    angle = projection["angle"]
+    depth = projection.max("angle")
+    first_max = projection.fillna(-np.inf).argmax("angle")
+    angle_of_max = angle.isel(angle=first_max).drop_vars("angle").where(depth > 0)
+    worn = projection > WEAR_THRESHOLD_FRACTION * depth
+    worn_angle = angle.where(worn)
+    angle_min, angle_max = worn_angle.min("angle"), worn_angle.max("angle")
+    arc = xr.apply_ufunc(worn_arc_deg, worn, input_core_dims=[["angle"]], vectorize=True,
+                         output_dtypes=[float])
+    thr = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
+    return xr.Dataset({
+        "wear_depth_axis_max": with_attrs(depth, "wear_depth_axis_max"),
+        "wear_angle_max": with_attrs(angle_max, "wear_angle_max", **thr),
+        "wear_angle_min": with_attrs(angle_min, "wear_angle_min", **thr),
+        "wear_range": with_attrs(angle_max - angle_min, "wear_range", **thr),
+        "wear_angle_of_max": with_attrs(angle_of_max, "wear_angle_of_max"),
+        "wear_arc": with_attrs(arc, "wear_arc", **thr),
+    })
+
+
+def test_wear_table_matches_its_xarray_definition_on_a_sweep_with_empty_nan_and_wrapping_rows():
+    rng = np.random.default_rng(0)
+    p = rng.random((3, 2, 3, 36)) ** 8
+    p[0, 0] = 0.0                        # no wear on a joint
+    p[1, 1] = np.nan                     # a failed case's projection
+    p[2, 0, 1, 5:30] = 0.0               # one worn stretch
+    p[2, 1, 0, :] = 0.0
+    p[2, 1, 0, [3, 35]] = 1.0            # worn bins either side of 0 degrees
+    ds = xr.Dataset({"wear_projection": (("B_coating", "joint", "axis", "angle"), p)},
+                    coords={"B_coating": ["a", "b", "c"], "joint": ["A", "B"],
+                            "axis": ["x", "y", "z"], "angle": np.arange(36) * 10 + 5.0})
+    xr.testing.assert_identical(wear_table(ds), _wear_table_by_xarray(ds))
+    # the angle axis need not be last
+    xr.testing.assert_identical(wear_table(ds.transpose("angle", ...)), _wear_table_by_xarray(ds))
