@@ -1,19 +1,26 @@
-"""Engine benchmark: RK4 steps/s, ns per right-hand side, JIT compile time, and the same
-right-hand side driven by scipy.integrate.solve_ivp, measured side by side in one run.
+"""Engine benchmark, measured side by side in one run: this tree's kernel against a previous
+revision's (steps/s, median of alternating runs in separate processes, and the ratio; cold
+compile of both), each shipped case config's throughput, ns per right-hand side, and the
+same right-hand side driven by scipy.integrate.solve_ivp.
 
-Run: ``python benchmarks/bench_engine.py [--duration 1.0] [--out FILE]``.
-Writes a markdown table to stdout (and to ``--out`` if given).
+Run: ``python benchmarks/bench_engine.py [--baseline REV] [--repeats 5] [--duration 1.0]
+[--out FILE]``. The baseline defaults to the merge-base of HEAD with ``main``; it is
+exported with ``git archive`` into a temporary folder. Writes markdown to stdout (and to
+``--out`` if given).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -33,16 +40,93 @@ print(time.perf_counter() - t0)
 """
 
 
-def compile_times() -> tuple[float, float]:
+ROOT = Path(__file__).resolve().parent.parent
+
+#: Times every case of CASES once with the kernel of the tree it runs in (argv[1]: the
+#: simulated duration); prints {case: [RK4 grid steps, wall seconds]} as JSON.
+RATE_SNIPPET = """
+import json, sys
+from clearsweep.config import load_config
+from clearsweep.simulation import preflight, prepare_kernel, run_kernel
+cases = json.loads(sys.argv[2])
+prepare_kernel()
+out = {}
+for name, overrides in cases.items():
+    packed = preflight(load_config({"solver": {"duration": float(sys.argv[1])}}, overrides))
+    run_kernel(packed)
+    out[name] = [packed.n_steps, run_kernel(packed)["wall_time"]]
+print(json.dumps(out))
+"""
+
+
+def in_tree(tree: Path, code: str, *args: str, cache: str | None = None) -> str:
+    """Run ``code`` in a fresh interpreter on the clearsweep of ``tree``; its stdout."""
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    if cache:
+        env["NUMBA_CACHE_DIR"] = cache
+    res = subprocess.run([sys.executable, "-c", code, *args], env=env, cwd=tree, check=True,
+                         capture_output=True, text=True)
+    return res.stdout
+
+
+def compile_times(tree: Path = ROOT) -> tuple[float, float]:
     """(cold, cached) seconds to import and run a 10-step case in a fresh interpreter."""
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        out = []
-        for _ in range(2):
-            res = subprocess.run([sys.executable, "-c", COMPILE_SNIPPET], env=env, check=True,
-                                 capture_output=True, text=True)
-            out.append(float(res.stdout.strip().splitlines()[-1]))
+        out = [float(in_tree(tree, COMPILE_SNIPPET, cache=cache).strip().splitlines()[-1])
+               for _ in range(2)]
     return out[0], out[1]
+
+
+def export_revision(rev: str, dest: Path) -> str:
+    """Write the tree of git revision ``rev`` into ``dest``; its short commit id."""
+    commit = subprocess.run(["git", "rev-parse", "--short", rev], cwd=ROOT, check=True,
+                            capture_output=True, text=True).stdout.strip()
+    archive = subprocess.run(["git", "archive", commit], cwd=ROOT, check=True,
+                             capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    return commit
+
+
+def default_baseline() -> str:
+    """The merge-base of HEAD with main: the release this branch started from."""
+    res = subprocess.run(["git", "merge-base", "HEAD", "main"], cwd=ROOT, capture_output=True,
+                         text=True)
+    return res.stdout.strip() if res.returncode == 0 else "HEAD"
+
+
+def side_by_side(trees: dict[str, Path], duration: float, repeats: int) -> dict:
+    """{tree label: {case: median steps/s}}: the trees' kernels timed alternately, each
+    repeat in a fresh process per tree."""
+    rates: dict[str, dict[str, list[float]]] = {label: {c: [] for c in CASES} for label in trees}
+    for label, tree in trees.items():  # warm the on-disk caches
+        in_tree(tree, RATE_SNIPPET, "1e-3", json.dumps(CASES))
+    for _ in range(repeats):
+        for label, tree in trees.items():
+            res = json.loads(in_tree(tree, RATE_SNIPPET, str(duration), json.dumps(CASES)))
+            for case, (steps, wall) in res.items():
+                rates[label][case].append(steps / wall)
+    return {label: {c: statistics.median(v) for c, v in r.items()} for label, r in rates.items()}
+
+
+def shipped_case_configs() -> list[Path]:
+    """configs/*.yaml that are single cases (sweep files have a ``sweep:`` section)."""
+    import yaml
+
+    return [path for path in sorted((ROOT / "configs").glob("*.yaml"))
+            if "sweep" not in (yaml.safe_load(path.read_text()) or {})]
+
+
+def config_rate(path: Path, duration: float) -> tuple[float, float, float]:
+    """(grid steps/s, RK4 sub-steps/s, simulated s per wall s) of a shipped config, warm."""
+    from clearsweep.config import load_config
+    from clearsweep.simulation import preflight, prepare_kernel, run_kernel
+
+    prepare_kernel()
+    packed = preflight(load_config(str(path), [f"solver.duration={duration}"]))
+    run_kernel(packed)
+    raw = run_kernel(packed)
+    wall = raw["wall_time"]
+    return packed.n_steps / wall, raw["rk4_steps"] / wall, raw["t_end"] / wall
 
 
 def packed_case(overrides, duration):
@@ -126,15 +210,48 @@ def main(argv=None) -> str:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--duration", type=float, default=1.0, help="simulated time per case [s]")
     ap.add_argument("--out", help="also write the markdown here")
+    ap.add_argument("--baseline", default=None,
+                    help="git revision to compare with (default: merge-base of HEAD and main)")
+    ap.add_argument("--repeats", type=int, default=5, help="alternating runs per tree")
+    ap.add_argument("--config-duration", type=float, default=0.1,
+                    help="simulated time per shipped config [s]")
     args = ap.parse_args(argv)
 
-    cold, cached = compile_times()
     lines = [
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"Python {platform.python_version()}",
         "",
-        f"JIT compile (import + 10-step two-clearance case, fresh interpreter): "
-        f"cold {cold:.1f} s, cached {cached:.2f} s",
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        commit = export_revision(args.baseline or default_baseline(), Path(tmp))
+        print(f"baseline: {commit}", file=sys.stderr)
+        trees = {commit: Path(tmp), "this tree": ROOT}
+        colds = {label: compile_times(tree) for label, tree in trees.items()}
+        rates = side_by_side(trees, args.duration, args.repeats)
+    lines += [
+        "JIT compile (import + 10-step two-clearance case, fresh interpreter, empty cache):",
+        "",
+        "| tree | cold [s] | cached [s] |",
+        "|---|---|---|",
+        *(f"| {label} | {cold:.1f} | {cached:.2f} |" for label, (cold, cached) in colds.items()),
+        "",
+        f"RK4 steps/s, {args.duration:g} s simulated per case, median of {args.repeats} "
+        f"alternating runs (a fresh process per tree and run):",
+        "",
+        f"| case | {commit} | this tree | ratio |",
+        "|---|---|---|---|",
+        *(f"| {case} | {rates[commit][case]:,.0f} | {rates['this tree'][case]:,.0f} | "
+          f"{rates['this tree'][case] / rates[commit][case]:.2f} |" for case in CASES),
+        "",
+        f"Shipped case configs, {args.config_duration:g} s simulated each (warm, this tree):",
+        "",
+        "| config | grid steps/s | RK4 (sub-)steps/s | simulated s / wall s |",
+        "|---|---|---|---|",
+    ]
+    for path in shipped_case_configs():
+        grid, sub, sim = config_rate(path, args.config_duration)
+        lines.append(f"| {path.name} | {grid:,.0f} | {sub:,.0f} | {sim:.3f} |")
+    lines += [
         "",
         f"Each case: {args.duration:g} s simulated at 60 r/min, realistic preset, uncoated steel.",
         "",

@@ -26,10 +26,10 @@ def cap_area(psi_rad, radius=R):
 
 
 def spread(n, vol, area, shape):
-    wmap = np.zeros(shape)
+    wmap = np.zeros((1,) + shape)  # one joint's map
     scratch = np.zeros((4 * shape[0], 3))
-    top = deposit(wmap, n, vol, area, R, scratch)
-    return wmap, top
+    top = deposit(wmap, 0, n, vol, area, R, scratch)
+    return wmap[0], top
 
 
 @pytest.mark.parametrize("polar, azimuth", [(0.0, 0.0), (0.3, 17.0), (90.0, 0.0), (91.3, 179.9),
@@ -64,13 +64,13 @@ def test_same_loading_at_pole_and_equator_gives_the_same_depth(shape):
     area = cap_area(psi)
     depths = []
     for pole in (True, False):
-        wmap = np.zeros(shape)
+        wmap = np.zeros((1,) + shape)
         scratch = np.zeros((4 * shape[0], 3))
         for k in range(60):
             s = math.radians(-15.0 + 0.5 * k)
             # arc through the pole (along the azimuth-0 meridian) or along the equator
             n = (math.sin(s), 0.0, math.cos(s)) if pole else (math.cos(s), math.sin(s), 0.0)
-            deposit(wmap, n, 1e-16, area, R, scratch)
+            deposit(wmap, 0, n, 1e-16, area, R, scratch)
         depths.append(wmap.max())
     assert depths[0] == pytest.approx(depths[1], rel=0.05)
 
@@ -80,8 +80,8 @@ def test_undo_restores_the_map():
     before = wmap.copy()
     scratch = np.zeros((4 * 72, 3))
     n, area = direction(60.0, -20.0), cap_area(math.radians(3.0))
-    deposit(wmap, n, 2e-15, area, R, scratch)
-    deposit(wmap, n, -2e-15, area, R, scratch)
+    deposit(wmap[None], 0, n, 2e-15, area, R, scratch)
+    deposit(wmap[None], 0, n, -2e-15, area, R, scratch)
     np.testing.assert_allclose(wmap, before, rtol=0, atol=1e-12 * before.max())
 
 

@@ -19,7 +19,7 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from .contact import (
     damping_factor,
@@ -143,15 +143,16 @@ ContactState = namedtuple("ContactState", (
 
 
 @njit(cache=True)
-def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
-    """Contact state and force of one clearance joint (docs/physics.md section 3).
+def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
+    """Contact state and force of clearance joint j (docs/physics.md section 3).
 
     Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    Returns a :data:`ContactState`.
+    Returns a :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint
+    index, never a row of them: a row is a new array view, reference-counted at every call.
     """
-    c = jp_j[J_C]
-    ri = jp_j[J_RI]
-    rj = jp_j[J_RJ]
+    c = jp[j, J_C]
+    ri = jp[j, J_RI]
+    rj = jp[j, J_RJ]
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     d = sub(pb, ps)
@@ -164,8 +165,8 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     n_s = mtv(Rs, n)
     h = 0.0
     if p[P_FEEDBACK] != 0.0:
-        ip, ia = map_bin(n_s, wmap_j.shape[0], wmap_j.shape[1])
-        h = wmap_j[ip, ia]
+        ip, ia = map_bin(n_s, wmap.shape[1], wmap.shape[2])
+        h = wmap[j, ip, ia]
     c_eff = c + h
     delta = e - c_eff
     qj = add(pb, scale(rj, n))
@@ -180,18 +181,18 @@ def contact(jp_j, s_j, wmap_j, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
                             h, 0.0, 0.0)
     vt = sub(v, scale(ddot, n))
     vtn = math.sqrt(dot(vt, vt))
-    dv0 = s_j[S_DV0]
+    dv0 = s[j, S_DV0]
     if dv0 <= 0.0:
         dv0 = max(ddot, p[P_DV0_MIN])
     kappa = damping_factor(p[P_CR], dv0)
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, jp_j[J_EW], ri, kappa)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, jp[j, J_EW], ri, kappa)
     force = scale(-fn, n)
     pdiss = (fn - fel) * ddot
     if p[P_FRICTION] != 0.0 and vtn > 0.0:
-        ft = jp_j[J_MU] * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
+        ft = jp[j, J_MU] * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
         force = add(force, scale(-ft / vtn, vt))
         pdiss += ft * vtn
-    uel = elastic_energy(delta, c_eff, jp_j[J_EW], ri)
+    uel = elastic_energy(delta, c_eff, jp[j, J_EW], ri)
     return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
                         uel, pdiss)
 
@@ -203,8 +204,9 @@ def body_moment(R, r, q, f):
 
 
 @njit(cache=True)
-def solve_spd(S, b, nc, L):
-    """Solve S x = b in place (b <- x) by Cholesky; L receives the factor. False if singular."""
+def solve_spd(S, vz, b, nc, L):
+    """Solve S x = vz[b] in place (vz[b] <- x) by Cholesky; L receives the factor. False if
+    singular."""
     for i in range(nc):
         for j in range(i + 1):
             acc = S[i, j]
@@ -216,60 +218,63 @@ def solve_spd(S, b, nc, L):
                 L[i, i] = math.sqrt(acc)
             else:
                 L[i, j] = acc / L[j, j]
-    chol_solve(L, b, nc)
+    chol_solve(L, vz, b, nc)
     return True
 
 
 @njit(cache=True)
-def chol_solve(L, b, nc):
-    """Solve L L^T x = b in place."""
+def chol_solve(L, vz, b, nc):
+    """Solve L L^T x = vz[b] in place."""
     for i in range(nc):
-        acc = b[i]
+        acc = vz[b, i]
         for k in range(i):
-            acc -= L[i, k] * b[k]
-        b[i] = acc / L[i, i]
+            acc -= L[i, k] * vz[b, k]
+        vz[b, i] = acc / L[i, i]
     for i in range(nc - 1, -1, -1):
-        acc = b[i]
+        acc = vz[b, i]
         for k in range(i + 1, nc):
-            acc -= L[k, i] * b[k]
-        b[i] = acc / L[i, i]
+            acc -= L[k, i] * vz[b, k]
+        vz[b, i] = acc / L[i, i]
 
 
 @njit(cache=True)
-def minv_apply(minv, mr_inv, v, out):
-    """out = M_zz^-1 v for the block-diagonal free-coordinate mass matrix."""
-    out[0] = minv[0] * v[0]
-    out[1] = minv[0] * v[1]
-    out[2] = minv[0] * v[2]
-    out[3] = mr_inv[0] * v[3] + mr_inv[1] * v[4]
-    out[4] = mr_inv[2] * v[3] + mr_inv[3] * v[4]
-    out[5] = minv[1] * v[5]
+def minv_apply(minv, mr_inv, vz, v, out):
+    """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
+    rows of the work array vz)."""
+    vz[out, 0] = minv[0] * vz[v, 0]
+    vz[out, 1] = minv[0] * vz[v, 1]
+    vz[out, 2] = minv[0] * vz[v, 2]
+    vz[out, 3] = mr_inv[0] * vz[v, 3] + mr_inv[1] * vz[v, 4]
+    vz[out, 4] = mr_inv[2] * vz[v, 3] + mr_inv[3] * vz[v, 4]
+    vz[out, 5] = minv[1] * vz[v, 5]
 
 
 @njit(cache=True)
-def constrained_apply(g, C, L, nc, minv, mr_inv, w1, w2, lam):
-    """w1 = W g, W the constrained inverse mass of the free coordinates (Schur form)."""
-    minv_apply(minv, mr_inv, g, w1)
+def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
+    """vz[w1] = W vz[g], W the constrained inverse mass of the free coordinates (Schur form;
+    g, w1, w2, lam: rows of the work array vz)."""
+    minv_apply(minv, mr_inv, vz, g, w1)
     if nc == 0:
         return
     for i in range(nc):
         acc = 0.0
         for k in range(NZ):
-            acc += C[i, k] * w1[k]
-        lam[i] = acc
-    chol_solve(L, lam, nc)
-    back_substitute(g, C, lam, nc, minv, mr_inv, w2, w1)
+            acc += C[i, k] * vz[w1, k]
+        vz[lam, i] = acc
+    chol_solve(L, vz, lam, nc)
+    back_substitute(vz, g, C, lam, nc, minv, mr_inv, w2, w1)
 
 
 @njit(cache=True)
-def back_substitute(f, C, lam, nc, minv, mr_inv, tmp, out):
-    """out = M_zz^-1 (f - C^T lam): free accelerations from the multipliers."""
+def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
+    """vz[out] = M_zz^-1 (vz[f] - C^T vz[lam]): free accelerations from the multipliers
+    (f, lam, tmp, out: rows of the work array vz)."""
     for k in range(NZ):
-        acc = f[k]
+        acc = vz[f, k]
         for i in range(nc):
-            acc -= C[i, k] * lam[i]
-        tmp[k] = acc
-    minv_apply(minv, mr_inv, tmp, out)
+            acc -= C[i, k] * vz[lam, i]
+        vz[tmp, k] = acc
+    minv_apply(minv, mr_inv, vz, tmp, out)
 
 
 @njit(cache=True)
@@ -294,30 +299,28 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
                 a0[0] * b0[2] + a1[0] * b1[2], im + a0[1] * b0[1] + a1[1] * b1[1],
                 a0[1] * b0[2] + a1[1] * b1[2], im + a0[2] * b0[2] + a1[2] * b1[2])
     # general case: g_k = J^T e_k, W_p[a, b] = g_a . (W g_b)
+    # rows of vz: 0-2 g_k, 3-4 work, 5 the result (xx, xy, xz, yy, yz, zz), 6 W g_b
     for k in range(3):
-        g = vz[k]
-        g[0] = 1.0 if k == 0 else 0.0
-        g[1] = 1.0 if k == 1 else 0.0
-        g[2] = 1.0 if k == 2 else 0.0
-        g[3] = Jr[3 * k]
-        g[4] = Jr[3 * k + 1]
-        g[5] = -1.0 if (j == 1 and k == 0) else 0.0
-    wg = vz[6]
-    res = vz[5]  # res[0..5] <- xx, xy, xz, yy, yz, zz
+        vz[k, 0] = 1.0 if k == 0 else 0.0
+        vz[k, 1] = 1.0 if k == 1 else 0.0
+        vz[k, 2] = 1.0 if k == 2 else 0.0
+        vz[k, 3] = Jr[3 * k]
+        vz[k, 4] = Jr[3 * k + 1]
+        vz[k, 5] = -1.0 if (j == 1 and k == 0) else 0.0
     for b in range(3):
-        constrained_apply(vz[b], C, L, nc, minv, mr_inv, wg, vz[3], vz[4])
+        constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
         for a in range(b + 1):
             acc = 0.0
             for k in range(NZ):
-                acc += vz[a][k] * wg[k]
+                acc += vz[a, k] * vz[6, k]
             # (a, b) with a <= b -> packed index
             if a == 0:
-                res[b] = acc
+                vz[5, b] = acc
             elif a == 1:
-                res[2 + b] = acc
+                vz[5, 2 + b] = acc
             else:
-                res[5] = acc
-    return (res[0], res[1], res[2], res[3], res[4], res[5])
+                vz[5, 5] = acc
+    return (vz[5, 0], vz[5, 1], vz[5, 2], vz[5, 3], vz[5, 4], vz[5, 5])
 
 
 @njit(cache=True)
@@ -340,7 +343,12 @@ def tangent_basis(n):
     return t1, cross(n, t1)
 
 
-@njit(cache=True)
+#: Local variables that Numba must type as plain int64: a constant argument would otherwise
+#: compile the callee once per value (a Literal specialisation).
+_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
 def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     """Right-hand side dy = f(t, y) of the mechanism; diagnostics into dg.
 
@@ -370,6 +378,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     int
         layout.ST_OK or layout.ST_SINGULAR.
     """
+    joint_a = 0
+    joint_b = 1
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
     l2 = p[P_L2]
@@ -451,23 +461,23 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     fB = zero
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
     if jp[0, J_CLEARANCE] != 0.0:
-        cA = contact(jp[0], s[0], wmap[0], p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3)
+        cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3)
         fA = cA.force
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
         F3 = sub(F3, fA)
         N3 = sub(N3, body_moment(R3, r3, cA.q_socket, fA))
         pdiss += cA.diss_power
-        store_contact(dg, 0, cA)
+        store_contact(dg, joint_a, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
     if jp[1, J_CLEARANCE] != 0.0:
-        cB = contact(jp[1], s[1], wmap[1], p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero)
+        cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero)
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
         F4x -= fB[0]
         pdiss += cB.diss_power
-        store_contact(dg, 1, cB)
+        store_contact(dg, joint_b, cB)
 
     # ---- rod generalised forces ----
     Jw3 = (J3[0] * w3[0], J3[1] * w3[1], J3[2] * w3[2])
@@ -475,13 +485,13 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     mom3 = sub(N3, add(cross(w3, Jw3), Jg3))
     Qp3 = mtv(G3, mom3)
     Mr3 = rot_mass(J3, G3)
-    f = vz[0]
-    f[0] = F3[0]
-    f[1] = F3[1]
-    f[2] = F3[2]
-    f[3] = Qp3[0] - Mr3[2] * gdd3
-    f[4] = Qp3[1] - Mr3[5] * gdd3
-    f[5] = F4x
+    # rows of the work array vz: 0 f, 1 rhs, 2 zdd, 3 M^-1 f, 4 lambda, 5-6 work
+    vz[0, 0] = F3[0]
+    vz[0, 1] = F3[1]
+    vz[0, 2] = F3[2]
+    vz[0, 3] = Qp3[0] - Mr3[2] * gdd3
+    vz[0, 4] = Qp3[1] - Mr3[5] * gdd3
+    vz[0, 5] = F4x
     det = Mr3[0] * Mr3[4] - Mr3[1] * Mr3[3]
     if not det > 0.0:
         return ST_SINGULAR
@@ -490,7 +500,6 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
 
     # ---- ideal spherical joints: rows of C (free coordinates) and right-hand sides ----
     nc = 0
-    rhs = vz[1]
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
         # crank pin acceleration (fully known: the crank is driven)
@@ -507,7 +516,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             C[nc + i, i] = 1.0
             C[nc + i, 3] = JrA[3 * i]
             C[nc + i, 4] = JrA[3 * i + 1]
-            rhs[nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
+            vz[1, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
                            - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
         nc += 3
@@ -524,40 +533,37 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             C[nc + i, i] = -1.0
             C[nc + i, 3] = -JrB[3 * i]
             C[nc + i, 4] = -JrB[3 * i + 1]
-            rhs[nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
+            vz[1, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
                            + JrB[3 * i + 2] * gdd3 + quad[i])
             cons = max(cons, abs(cpos[i]))
         C[nc, 5] = 1.0
         nc += 3
 
     # ---- Schur complement solve ----
-    zdd = vz[2]
-    mf = vz[3]
-    lam = vz[4]
-    minv_apply(minv, mr_inv, f, mf)
+    minv_apply(minv, mr_inv, vz, 0, 3)
     if nc > 0:
-        mcol = vz[5]
         for i in range(nc):
-            acc = -rhs[i]
+            acc = -vz[1, i]
             for k in range(NZ):
-                acc += C[i, k] * mf[k]
-            lam[i] = acc
+                acc += C[i, k] * vz[3, k]
+            vz[4, i] = acc
         for jj in range(nc):
             for k in range(NZ):
-                mcol[k] = C[jj, k]
-            minv_apply(minv, mr_inv, mcol, vz[6])
+                vz[5, k] = C[jj, k]
+            minv_apply(minv, mr_inv, vz, 5, 6)
             for i in range(jj, nc):
                 acc = 0.0
                 for k in range(NZ):
-                    acc += C[i, k] * vz[6][k]
+                    acc += C[i, k] * vz[6, k]
                 S[i, jj] = acc
                 S[jj, i] = acc
-        if not solve_spd(S, lam, nc, L):
+        if not solve_spd(S, vz, 4, nc, L):
             return ST_SINGULAR
-        back_substitute(f, C, lam, nc, minv, mr_inv, mcol, zdd)
+        back_substitute(vz, 0, C, 4, nc, minv, mr_inv, 5, 2)
     else:
         for k in range(NZ):
-            zdd[k] = mf[k]
+            vz[2, k] = vz[3, k]
+    zdd = (vz[2, 0], vz[2, 1], vz[2, 2], vz[2, 3], vz[2, 4], vz[2, 5])
 
     # ---- assemble qdd ----
     for k in range(N_Q):
@@ -581,13 +587,13 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
     if jp[0, J_CLEARANCE] == 0.0:
-        fA = (lam[0], lam[1], lam[2])
+        fA = (vz[4, 0], vz[4, 1], vz[4, 2])
         k0 = 3
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
     if jp[1, J_CLEARANCE] == 0.0:
-        fB = (lam[k0], lam[k0 + 1], lam[k0 + 2])
+        fB = (vz[4, k0], vz[4, k0 + 1], vz[4, k0 + 2])
     Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
     Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
     Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
@@ -626,14 +632,14 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
                 continue
             delta = dg[D_DELTA + j]
             if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-                rate = max(rate, joint_rate(j, jp[j], s[j], p, dg, R3, G3, r3, C, L, nc, minv,
+                rate = max(rate, joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv,
                                             mr_inv, vz))
         dg[D_RATE] = rate
     return ST_OK
 
 
 @njit(cache=True)
-def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
+def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
@@ -646,10 +652,10 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
     if j == 0:
         # the socket point Q_i on the rod
-        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp_j[J_RI], n))
+        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
     else:
         # the ball point Q_j on the rod
-        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp_j[J_RJ], n))
+        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
     Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
     wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
     inv_m = quad_form(wp, n, n)
@@ -660,16 +666,16 @@ def joint_rate(j, jp_j, s_j, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     ddot = dg[D_DDOT + j]
     if ddot > 0.0:
         c_eff = dg[D_CEFF + j]
-        kk = stiffness_factor(jp_j[J_EW], jp_j[J_RI])
+        kk = stiffness_factor(jp[j, J_EW], jp[j, J_RI])
         delta = max(dg[D_DELTA + j], 0.0)
         dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
-        dv0 = s_j[S_DV0]
+        dv0 = s[j, S_DV0]
         if dv0 <= 0.0:
             dv0 = max(ddot, p[P_DV0_MIN])
         kappa = damping_factor(p[P_CR], dv0)
-        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, jp_j[J_EW], jp_j[J_RI], kappa)
+        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, jp[j, J_EW], jp[j, J_RI], kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
-    mu = jp_j[J_MU]
+    mu = jp[j, J_MU]
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
         # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
@@ -708,10 +714,13 @@ def store_contact(dg, j, cres):
         dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
 
 
-@njit(cache=True)
 def ideal_joint_forces(t, y, p, jp):
     """Forces on the balls [N] (2 x 3, global frame) of the mechanism with both spherical
-    joints ideal, at state y and time t: the reactions a seated start leans the balls on."""
+    joints ideal, at state y and time t: the reactions a seated start leans the balls on.
+
+    Plain Python around the compiled :func:`evaluate` (the argument types that
+    rk4.integrate uses): a compiled wrapper would optimise evaluate's code once more.
+    """
     jp_ideal = jp.copy()
     jp_ideal[0, J_CLEARANCE] = 0.0
     jp_ideal[1, J_CLEARANCE] = 0.0
@@ -724,7 +733,8 @@ def ideal_joint_forces(t, y, p, jp):
     L = np.zeros((6, 6))
     vz = np.zeros((8, 6))
     out = np.full((2, 3), np.nan)
-    if evaluate(t, y, p, jp_ideal, s, wmap, dy, dg, False, C, S, L, vz) != ST_OK:
+    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), p, jp_ideal, s, wmap, dy, dg,
+                False, C, S, L, vz) != ST_OK:
         return out
     for j in range(2):
         for i in range(3):

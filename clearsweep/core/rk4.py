@@ -11,7 +11,7 @@ contact angle advance once per accepted sub-step.
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from .contact import contact_angle, contact_area, episode_impact_velocity
 from .dynamics import evaluate
@@ -95,23 +95,30 @@ def energy_total(dg):
     return dg[D_KE] + dg[D_PE_GRAV] + dg[D_UEL] + dg[D_UEL + 1]
 
 
-@njit(cache=True)
+#: Local variables that Numba must type as plain values: a constant argument would otherwise
+#: compile the callee once per value (a Literal specialisation), evaluate among them.
+_NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": types.int64,
+                "settled": types.int64}
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
 def rk4_substep(t, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz):
     """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place."""
+    stage = False  # stage derivatives only: no energies, no stiff rates
     n = y.shape[0]
     for i in range(n):
         yt[i] = y[i] + 0.5 * hs * k1[i]
-    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k2, dg, False, C, S, L, vz)
+    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k2, dg, stage, C, S, L, vz)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + 0.5 * hs * k2[i]
-    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k3, dg, False, C, S, L, vz)
+    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k3, dg, stage, C, S, L, vz)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + hs * k3[i]
-    st = evaluate(t + hs, yt, p, jp, s, wmap, k4, dg, False, C, S, L, vz)
+    st = evaluate(t + hs, yt, p, jp, s, wmap, k4, dg, stage, C, S, L, vz)
     if st != ST_OK:
         return st
     for i in range(n):
@@ -127,33 +134,55 @@ WEAR_MERGE_AREA = 0.05
 
 
 @njit(cache=True)
-def wear_mergeable(pend, cur):
-    """Whether the step's wear ``cur`` may join the waiting wear ``pend`` (rows as in
-    integrate: sum V n, sum V, sum V A, R_i) without moving the cap noticeably."""
-    ap = pend[4] / pend[3]
-    ac = cur[4] / cur[3]
+def wear_mergeable(pend, cur, j):
+    """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
+    (rows as in integrate: sum V n, sum V, sum V A, R_i) without moving the cap noticeably."""
+    ap = pend[j, 4] / pend[j, 3]
+    ac = cur[j, 4] / cur[j, 3]
     if abs(ac - ap) > WEAR_MERGE_AREA * ap:
         return False
-    np_ = math.sqrt(pend[0] * pend[0] + pend[1] * pend[1] + pend[2] * pend[2])
-    nc = math.sqrt(cur[0] * cur[0] + cur[1] * cur[1] + cur[2] * cur[2])
+    np_ = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
+    nc = math.sqrt(cur[j, 0] * cur[j, 0] + cur[j, 1] * cur[j, 1] + cur[j, 2] * cur[j, 2])
     d2 = 0.0
     for i in range(3):
-        d = pend[i] / np_ - cur[i] / nc
+        d = pend[j, i] / np_ - cur[j, i] / nc
         d2 += d * d
     # cap angular radius^2 ~ A / (pi R^2) for small caps
-    return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[5] * pend[5])
+    return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[j, 5] * pend[j, 5])
 
 
 @njit(cache=True)
-def flush_wear(wmap_j, pend, scratch):
-    """Spread the waiting wear on the map (volume-weighted mean direction and cap area);
-    clear it; return the largest depth written [m]."""
-    size = math.sqrt(pend[0] * pend[0] + pend[1] * pend[1] + pend[2] * pend[2])
-    n = (pend[0] / size, pend[1] / size, pend[2] / size)
-    top = deposit(wmap_j, n, pend[3], pend[4] / pend[3], pend[5], scratch)
+def flush_wear(wmap, j, pend, scratch):
+    """Spread joint j's waiting wear on its map (volume-weighted mean direction and cap
+    area); clear it; return the largest depth written [m]."""
+    size = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
+    n = (pend[j, 0] / size, pend[j, 1] / size, pend[j, 2] / size)
+    top = deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
     for i in range(6):
-        pend[i] = 0.0
+        pend[j, i] = 0.0
     return top
+
+
+@njit(cache=True)
+def copy_into(dst, src):
+    """dst[:] = src for 1-d arrays, without making a slice view."""
+    for i in range(src.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(cache=True)
+def copy_rows_into(dst, src):
+    """dst[:, :] = src for 2-d arrays, without making a slice view."""
+    for i in range(src.shape[0]):
+        for k in range(src.shape[1]):
+            dst[i, k] = src[i, k]
+
+
+@njit(cache=True)
+def copy_row(dst, row, src):
+    """dst[row, :] = src, without making a slice view."""
+    for i in range(src.shape[0]):
+        dst[row, i] = src[i]
 
 
 @njit(cache=True)
@@ -178,7 +207,7 @@ def record_sample(m, w, dg, jp, weight):
             m[w, M_CONTACT_T + j] += weight
 
 
-@njit(cache=True)
+@njit(cache=True, locals=_NOT_LITERAL)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
               out_wmax, info, stats):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
@@ -199,6 +228,9 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     -------
     float64[2] : (largest |energy residual| [J], peak kinetic energy [J]).
     """
+    step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
+    whole = W_WHOLE
+    settled = W_SETTLED
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
@@ -241,7 +273,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             stats[w, i] = 0.0
 
     status = ST_OK
-    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
+    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
     if st != ST_OK:
         info[0] = st
         info[1] = 0
@@ -256,22 +288,22 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                                          jp[j, J_RI], jp[j, J_RJ])
             seated = True
     if seated:
-        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
+        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
         if st != ST_OK:
             info[0] = st
             info[1] = 0
             return np.zeros(2)
-    record_sample(stats, W_WHOLE, dg, jp, 0.0)
+    record_sample(stats, whole, dg, jp, 0.0)
     if t0 >= settle:
-        record_sample(stats, W_SETTLED, dg, jp, 0.0)
+        record_sample(stats, settled, dg, jp, 0.0)
     e0 = energy_total(dg)
     ke_peak = dg[D_KE]
     res_max = 0.0
     work_abs = 0.0
     n_saved = 0
     out_t[0] = t0
-    out_y[0, :] = y
-    out_d[0, :] = dg
+    copy_row(out_y, 0, y)
+    copy_row(out_d, 0, dg)
     n_saved = 1
     deepest = 0
     total = 0
@@ -281,12 +313,12 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
         t = t0 + step * h
         steps_done = step + 1
         level = level_for(dg[D_RATE], h, stab)
-        ysave[:] = y
-        k1save[:] = k1
-        dgsave[:] = dg
-        ssave[:, :] = s
-        msave[:, :] = stats
-        ddot_prev_save[:] = ddot_prev
+        copy_into(ysave, y)
+        copy_into(k1save, k1)
+        copy_into(dgsave, dg)
+        copy_rows_into(ssave, s)
+        copy_rows_into(msave, stats)
+        copy_into(ddot_prev_save, ddot_prev)
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
@@ -302,7 +334,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                 ts = t + sub * hs
                 st = rk4_substep(ts, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz)
                 if st == ST_OK:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
+                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
                 if st != ST_OK:
                     status = st
                     break
@@ -373,13 +405,13 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                         changed = True
                     ddot_prev[j] = ddot
                 if changed:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, True, C, S, L, vz)
+                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
                     if st != ST_OK:
                         status = st
                         break
-                record_sample(stats, W_WHOLE, dg, jp, hs)
+                record_sample(stats, whole, dg, jp, hs)
                 if in_settled:
-                    record_sample(stats, W_SETTLED, dg, jp, hs)
+                    record_sample(stats, settled, dg, jp, hs)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
@@ -389,12 +421,12 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                 proj[j, 1, buf_i[b, 2]] -= buf_v[b, 2]
                 proj[j, 2, buf_i[b, 3]] -= buf_v[b, 3]
                 wvol[j] -= buf_v[b, 0]
-            y[:] = ysave
-            k1[:] = k1save
-            dg[:] = dgsave
-            s[:, :] = ssave
-            stats[:, :] = msave
-            ddot_prev[:] = ddot_prev_save
+            copy_into(y, ysave)
+            copy_into(k1, k1save)
+            copy_into(dg, dgsave)
+            copy_rows_into(s, ssave)
+            copy_rows_into(stats, msave)
+            copy_into(ddot_prev, ddot_prev_save)
             level = max(level + 1, need)
         if status != ST_OK:
             if status != ST_UNSTABLE_STEP:
@@ -411,13 +443,13 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
         deepest = max(deepest, level)
         for j in range(2):
             if cur[j, 3] > 0.0:
-                if pend[j, 3] > 0.0 and not wear_mergeable(pend[j], cur[j]):
-                    wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
+                if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
+                    wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
                 for i in range(6):
                     pend[j, i] += cur[j, i]
                 pend[j, 5] = cur[j, 5]
             elif pend[j, 3] > 0.0:
-                wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
+                wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
         # ---- checks ----
         for i in range(ny):
@@ -440,8 +472,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                 status = ST_ENERGY
         if (step + 1) % save_every == 0:
             out_t[n_saved] = t + h
-            out_y[n_saved, :] = y
-            out_d[n_saved, :] = dg
+            copy_row(out_y, n_saved, y)
+            copy_row(out_d, n_saved, dg)
             out_wmax[n_saved, 0] = wmax[0]
             out_wmax[n_saved, 1] = wmax[1]
             n_saved += 1
@@ -449,7 +481,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             break
     for j in range(2):
         if pend[j, 3] > 0.0:
-            wmax[j] = max(wmax[j], flush_wear(wmap[j], pend[j], scratch))
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
     if status == ST_OK and n_saved > 0:
         out_wmax[n_saved - 1, 0] = wmax[0]
         out_wmax[n_saved - 1, 1] = wmax[1]

@@ -77,9 +77,9 @@ def cap_half_width(theta, cos_tc, sin_tc, cos_psi):
 
 
 @njit(cache=True)
-def _arc_to_bins(wmap_j, ip, phi_c, half, weight, nazim, dmax):
+def _arc_to_bins(wmap, j, ip, phi_c, half, weight, nazim, dmax):
     """Add weight * (overlap of the arc [phi_c - half, phi_c + half] with each azimuth bin,
-    in bin widths) to row ip; returns the largest value written (and dmax)."""
+    in bin widths) to row ip of joint j's map; returns the largest value written (and dmax)."""
     dphi = 2.0 * math.pi / nazim
     u0 = (phi_c - half + math.pi) / dphi
     u1 = (phi_c + half + math.pi) / dphi
@@ -90,14 +90,14 @@ def _arc_to_bins(wmap_j, ip, phi_c, half, weight, nazim, dmax):
         hi = min(float(k + 1), u1)
         if hi > lo:
             ia = k % nazim
-            wmap_j[ip, ia] += weight * (hi - lo)
-            dmax = max(dmax, wmap_j[ip, ia])
+            wmap[j, ip, ia] += weight * (hi - lo)
+            dmax = max(dmax, wmap[j, ip, ia])
         k += 1
     return dmax
 
 
 @njit(cache=True)
-def deposit(wmap_j, n, vol, area, radius, scratch):
+def deposit(wmap, j, n, vol, area, radius, scratch):
     """Spread the worn volume ``vol`` [m^3] over the bins overlapped by the contact cap of
     area ``area`` [m^2] centred on the unit direction n (socket frame), on a sphere of the
     given radius; each bin's depth grows by its share of the volume over its area.
@@ -106,12 +106,14 @@ def deposit(wmap_j, n, vol, area, radius, scratch):
     exactly in azimuth; the weights are normalised by their sum, so the volume is kept to
     rounding whatever the grid. A cap smaller than the quadrature resolves falls into the bin
     under its centre. A negative ``vol`` undoes an earlier deposit of the same cap.
+    ``wmap`` holds every joint's map (joint, polar, azimuth), j picks one: the whole array
+    is passed, never a view of it (reference-counted at every call).
     ``scratch`` is a float64[4 * npolar, 3] work array.
 
     Returns the largest depth of a bin written [m].
     """
-    npolar = wmap_j.shape[0]
-    nazim = wmap_j.shape[1]
+    npolar = wmap.shape[1]
+    nazim = wmap.shape[2]
     cz = max(-1.0, min(1.0, n[2]))
     tc = math.acos(cz)
     phi_c = math.atan2(n[1], n[0])
@@ -149,13 +151,13 @@ def deposit(wmap_j, n, vol, area, radius, scratch):
                 total += wt * 2.0 * half
     if not total > 0.0:
         ip, ia = map_bin(n, npolar, nazim)
-        wmap_j[ip, ia] += vol / bin_area(ip, npolar, nazim, radius)
-        return wmap_j[ip, ia]
+        wmap[j, ip, ia] += vol / bin_area(ip, npolar, nazim, radius)
+        return wmap[j, ip, ia]
     # pass 2: each node's arc, in bin widths, times its share of the volume over bin area
     dmax = 0.0
     scale = vol * (2.0 * math.pi / nazim) / total
     for k in range(nn):
         ip = int(scratch[k, 0])
         weight = scale * scratch[k, 2] / bin_area(ip, npolar, nazim, radius)
-        dmax = _arc_to_bins(wmap_j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
+        dmax = _arc_to_bins(wmap, j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
     return dmax

@@ -1,0 +1,72 @@
+"""Bit-identity reference of the kernel's full raw output: tests/data/kernel_cases.npz.
+
+Short cases (a few thousand steps each) that between them take every branch of the
+stepping loop: ideal joints, one and two clearance joints, a coated socket, the centred
+start (impacts), friction off, the paper slip rule with amplified wear, a deeply
+sub-stepped paper-preset case and one that stops with unstable_step (rejected steps
+undone). For each case the file keeps every array ``simulation.run_kernel`` returns
+(rows, wear map, projections, worn volume, statistics) and its counters.
+
+The file was made with the kernel as it was before the hot loop stopped passing array
+views into compiled functions, with
+
+    PYTHONPATH=. python tests/kernel_cases.py tests/data/kernel_cases.npz
+
+tests/test_regression.py asserts that the kernel still reproduces it bit for bit;
+regenerate it only for a deliberate change of results, and say so in the commit.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+CONFIGS = Path(__file__).resolve().parent.parent / "configs"
+
+#: name -> (config file, overrides)
+CASES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "ideal": ("ideal.yaml", ("solver.duration=0.02",)),
+    "one_clearance": ("one_clearance.yaml", ("solver.duration=0.03",)),
+    "two_clearances": ("two_clearances.yaml", ("solver.duration=0.03",)),
+    "coated": ("two_clearances.yaml", ("solver.duration=0.03", "joints.B.coating=PTFE",
+                                       "joints.A.coating=MoS2")),
+    "centred": ("two_clearances.yaml", ("solver.duration=0.03", "initial.joints=centred")),
+    "friction_off": ("two_clearances.yaml", ("solver.duration=0.03", "friction.enabled=false")),
+    "paper_slip": ("one_clearance.yaml", ("solver.duration=0.03", "wear.slip=paper",
+                                          "wear.amplification=1000", "wear.map=[36,72]",
+                                          "metrics.settle_time=0.01")),
+    "paper_preset": ("paper_case.yaml", ("solver.duration=0.002", "solver.save_every=10")),
+    "unstable": ("paper_case.yaml", ("solver.dt=1e-5", "solver.duration=0.02",
+                                     "initial.joints=centred", "solver.save_every=1")),
+}
+
+ARRAYS = ("t", "y", "d", "wmax", "wmap", "proj", "wvol", "stats")
+COUNTERS = ("n_saved", "deepest", "rk4_steps", "t_end", "residual_max", "ke_peak")
+
+
+def run_case(name: str) -> dict[str, np.ndarray]:
+    """The raw kernel output of one case, keyed ``name__field``."""
+    from clearsweep.config import load_config
+    from clearsweep.simulation import preflight, prepare_kernel, run_kernel
+
+    path, overrides = CASES[name]
+    cfg = load_config(str(CONFIGS / path), list(overrides))
+    packed = preflight(cfg)
+    prepare_kernel()
+    raw = run_kernel(packed)
+    out = {f"{name}__{key}": np.asarray(raw[key]) for key in ARRAYS + COUNTERS}
+    out[f"{name}__status"] = np.array(raw["status"])
+    return out
+
+
+def run_all() -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    for name in CASES:
+        out.update(run_case(name))
+    return out
+
+
+if __name__ == "__main__":
+    np.savez_compressed(sys.argv[1], **run_all())
