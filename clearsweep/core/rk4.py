@@ -207,6 +207,83 @@ def record_sample(m, w, dg, jp, weight):
             m[w, M_CONTACT_T + j] += weight
 
 
+@njit(cache=True)
+def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, buf_v, nbuf,
+                   ddot_prev):
+    """What an accepted (sub-)step of length hs changes besides the state: wear (into the
+    projections, the worn volume, the waiting cap ``cur`` and the undo buffer at row ``nbuf``),
+    the contact angle and episode impact velocity in ``s``, impact counts and velocities.
+
+    Returns (whether the contact state changed, so that the step-end evaluation must be
+    redone; the next free undo-buffer row).
+    """
+    wear_on = p[P_WEAR] != 0.0
+    ampl = p[P_AMPL]
+    changed = False
+    for j in range(2):
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        ddot = dg[D_DDOT + j]
+        if dg[D_DELTA + j] > 0.0:
+            fn = dg[D_FN + j]
+            ri = jp[j, J_RI]
+            rj = jp[j, J_RJ]
+            e = dg[D_ECC + j]
+            pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
+            beta = contact_angle(pen, e, ri, rj)
+            if wear_on and fn > 0.0:
+                if p[P_SLIP] == 0.0:
+                    ds = dg[D_VT + j] * hs
+                else:
+                    ds = ri * abs(beta - s[j, S_BETA])
+                vol = ampl * jp[j, J_K] * fn * ds
+                area = contact_area(pen, e, ri, rj)
+                nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
+                       dg[D_NORMAL + 3 * j + 2])
+                bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
+                buf_i[nbuf, 0] = j
+                buf_i[nbuf, 1] = bx
+                buf_i[nbuf, 2] = by
+                buf_i[nbuf, 3] = bz
+                buf_v[nbuf, 0] = vol
+                buf_v[nbuf, 1] = vol * abs(nrm[0]) / area
+                buf_v[nbuf, 2] = vol * abs(nrm[1]) / area
+                buf_v[nbuf, 3] = vol * abs(nrm[2]) / area
+                for i in range(3):
+                    cur[j, i] += vol * nrm[i]
+                cur[j, 3] += vol
+                cur[j, 4] += vol * area
+                cur[j, 5] = ri
+                proj[j, 0, bx] += buf_v[nbuf, 1]
+                proj[j, 1, by] += buf_v[nbuf, 2]
+                proj[j, 2, bz] += buf_v[nbuf, 3]
+                wvol[j] += vol
+                nbuf += 1
+            s[j, S_BETA] = beta
+            dv0 = episode_impact_velocity(s[j, S_DV0], ddot, p[P_DV0_MIN])
+            if s[j, S_DV0] == 0.0:
+                # onset of a contact episode: an impact
+                s[j, S_DV0] = dv0
+                changed = True
+                vimp = max(ddot, ddot_prev[j])
+                stats[W_WHOLE, M_IMPACTS + j] += 1.0
+                stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j],
+                                                     vimp)
+                if in_settled:
+                    stats[W_SETTLED, M_IMPACTS + j] += 1.0
+                    stats[W_SETTLED, M_VIMP_MAX + j] = max(
+                        stats[W_SETTLED, M_VIMP_MAX + j], vimp)
+            elif dv0 != s[j, S_DV0]:
+                s[j, S_DV0] = dv0
+                changed = True
+        elif s[j, S_DV0] != 0.0:
+            s[j, S_DV0] = 0.0
+            s[j, S_BETA] = math.pi
+            changed = True
+        ddot_prev[j] = ddot
+    return changed, nbuf
+
+
 @njit(cache=True, locals=_NOT_LITERAL)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
               out_wmax, info, stats):
@@ -235,8 +312,6 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     stab = p[P_STAB]
     settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
-    wear_on = p[P_WEAR] != 0.0
-    ampl = p[P_AMPL]
     ny = N_Y
     y = y0.copy()
     ysave = np.empty(ny)
@@ -341,69 +416,9 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                 if dg[D_RATE] * hs > stab:
                     need = level_for(dg[D_RATE], h, stab)
                     break
-                changed = False
                 in_settled = ts + hs >= settle
-                for j in range(2):
-                    if jp[j, J_CLEARANCE] == 0.0:
-                        continue
-                    ddot = dg[D_DDOT + j]
-                    if dg[D_DELTA + j] > 0.0:
-                        fn = dg[D_FN + j]
-                        ri = jp[j, J_RI]
-                        rj = jp[j, J_RJ]
-                        e = dg[D_ECC + j]
-                        pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
-                        beta = contact_angle(pen, e, ri, rj)
-                        if wear_on and fn > 0.0:
-                            if p[P_SLIP] == 0.0:
-                                ds = dg[D_VT + j] * hs
-                            else:
-                                ds = ri * abs(beta - s[j, S_BETA])
-                            vol = ampl * jp[j, J_K] * fn * ds
-                            area = contact_area(pen, e, ri, rj)
-                            nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
-                                   dg[D_NORMAL + 3 * j + 2])
-                            bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
-                            buf_i[nbuf, 0] = j
-                            buf_i[nbuf, 1] = bx
-                            buf_i[nbuf, 2] = by
-                            buf_i[nbuf, 3] = bz
-                            buf_v[nbuf, 0] = vol
-                            buf_v[nbuf, 1] = vol * abs(nrm[0]) / area
-                            buf_v[nbuf, 2] = vol * abs(nrm[1]) / area
-                            buf_v[nbuf, 3] = vol * abs(nrm[2]) / area
-                            for i in range(3):
-                                cur[j, i] += vol * nrm[i]
-                            cur[j, 3] += vol
-                            cur[j, 4] += vol * area
-                            cur[j, 5] = ri
-                            proj[j, 0, bx] += buf_v[nbuf, 1]
-                            proj[j, 1, by] += buf_v[nbuf, 2]
-                            proj[j, 2, bz] += buf_v[nbuf, 3]
-                            wvol[j] += vol
-                            nbuf += 1
-                        s[j, S_BETA] = beta
-                        dv0 = episode_impact_velocity(s[j, S_DV0], ddot, p[P_DV0_MIN])
-                        if s[j, S_DV0] == 0.0:
-                            # onset of a contact episode: an impact
-                            s[j, S_DV0] = dv0
-                            changed = True
-                            vimp = max(ddot, ddot_prev[j])
-                            stats[W_WHOLE, M_IMPACTS + j] += 1.0
-                            stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j],
-                                                                 vimp)
-                            if in_settled:
-                                stats[W_SETTLED, M_IMPACTS + j] += 1.0
-                                stats[W_SETTLED, M_VIMP_MAX + j] = max(
-                                    stats[W_SETTLED, M_VIMP_MAX + j], vimp)
-                        elif dv0 != s[j, S_DV0]:
-                            s[j, S_DV0] = dv0
-                            changed = True
-                    elif s[j, S_DV0] != 0.0:
-                        s[j, S_DV0] = 0.0
-                        s[j, S_BETA] = math.pi
-                        changed = True
-                    ddot_prev[j] = ddot
+                changed, nbuf = accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol,
+                                               cur, buf_i, buf_v, nbuf, ddot_prev)
                 if changed:
                     st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
                     if st != ST_OK:
