@@ -284,6 +284,33 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
     return changed, nbuf
 
 
+@njit(cache=True)
+def step_checks(y, dg, p, jp, status, e0, track):
+    """Status after an accepted output-grid step (docs/physics.md section 4): non-finite
+    state, Euler-angle limit, penetration, constraint drift, energy residual. ``track``
+    (peak kinetic energy, largest |drive work|, largest |residual| [J]) is updated in place.
+    """
+    for i in range(N_Y):
+        if not math.isfinite(y[i]):
+            status = ST_NONFINITE
+    if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
+        status = ST_EULER
+    for j in range(2):
+        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
+            status = ST_PENETRATION
+    track[0] = max(track[0], dg[D_KE])
+    track[1] = max(track[1], abs(y[Y_WORK]))
+    res = energy_total(dg) - y[Y_WORK] + y[Y_DISS] - e0
+    track[2] = max(track[2], abs(res))
+    if status == ST_OK and not (dg[D_CONS] <= p[P_CONS_TOL]):
+        status = ST_CONSTRAINT
+    if status == ST_OK:
+        throughput = max(track[0], max(track[1], y[Y_DISS]))
+        if not (abs(res) <= p[P_ENERGY_TOL] * throughput):
+            status = ST_ENERGY
+    return status
+
+
 @njit(cache=True, locals=_NOT_LITERAL)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
               out_wmax, info, stats):
@@ -372,9 +399,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     if t0 >= settle:
         record_sample(stats, settled, dg, jp, 0.0)
     e0 = energy_total(dg)
-    ke_peak = dg[D_KE]
-    res_max = 0.0
-    work_abs = 0.0
+    track = np.zeros(3)     # peak kinetic energy, largest |drive work|, largest |residual|
+    track[0] = dg[D_KE]
     n_saved = 0
     out_t[0] = t0
     copy_row(out_y, 0, y)
@@ -466,25 +492,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             elif pend[j, 3] > 0.0:
                 wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
-        # ---- checks ----
-        for i in range(ny):
-            if not math.isfinite(y[i]):
-                status = ST_NONFINITE
-        if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
-            status = ST_EULER
-        for j in range(2):
-            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
-                status = ST_PENETRATION
-        ke_peak = max(ke_peak, dg[D_KE])
-        work_abs = max(work_abs, abs(y[Y_WORK]))
-        res = energy_total(dg) - y[Y_WORK] + y[Y_DISS] - e0
-        res_max = max(res_max, abs(res))
-        if status == ST_OK and not (dg[D_CONS] <= p[P_CONS_TOL]):
-            status = ST_CONSTRAINT
-        if status == ST_OK:
-            throughput = max(ke_peak, max(work_abs, y[Y_DISS]))
-            if not (abs(res) <= p[P_ENERGY_TOL] * throughput):
-                status = ST_ENERGY
+        status = step_checks(y, dg, p, jp, status, e0, track)
         if (step + 1) % save_every == 0:
             out_t[n_saved] = t + h
             copy_row(out_y, n_saved, y)
@@ -506,6 +514,6 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     info[3] = total
     info[4] = steps_done
     out = np.empty(2)
-    out[0] = res_max
-    out[1] = ke_peak
+    out[0] = track[2]
+    out[1] = track[0]
     return out
