@@ -7,7 +7,7 @@ docs/physics.md section 1.1 (the `realistic` preset replaces the rod's printed i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -258,6 +258,14 @@ def pack(cfg: Config, materials: dict) -> Packed:
         jp[j, L.J_MU] = surface.friction_coefficient
         k = joint.wear_coefficient
         jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
+        # where the coating is worn through: the uncoated pair (docs/service_life.md)
+        coated = joint.coating != "none"
+        base = materials[BASE_MATERIAL]
+        jp[j, L.J_EW_BASE] = (equivalent_modulus(replace(joint, coating="none"), materials,
+                                                 contact.layer_rule) if coated else jp[j, L.J_EW])
+        jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
+        jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
+        jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
     # whole output samples, rounded up: the run covers at least `duration`
     save_every = solver.save_every
     n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
