@@ -2,7 +2,7 @@
 
 from .version import __version__
 
-__all__ = ["__version__", "simulate", "sweep", "open_results", "load_config"]
+__all__ = ["__version__", "simulate", "life", "sweep", "open_results", "load_config"]
 
 
 def __getattr__(name):
@@ -10,6 +10,9 @@ def __getattr__(name):
     if name == "simulate":
         from .simulation import simulate
         return simulate
+    if name == "life":
+        from .service_life import life
+        return life
     if name == "sweep":
         from .sweeping.run import run_sweep
         return run_sweep
@@ -19,7 +22,7 @@ def __getattr__(name):
     if name == "load_config":
         from .config import load_config
         return load_config
-    # Module names differ from the function names (simulation / simulate, the package
+    # Module names differ from the function names (simulation / simulate, service_life / life, the package
     # sweeping / sweep) so that importing a submodule never shadows the public function
     # on the package: `import clearsweep.sweep` would bind the module over the function.
     raise AttributeError(f"module 'clearsweep' has no attribute {name!r}")

@@ -130,6 +130,46 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         ctx.exit(1)
 
 
+@main.command("life")
+@click.argument("config", type=click.Path(dir_okay=False))
+@click.option("-o", "--out", type=click.Path(dir_okay=False),
+              help="Output netCDF file [default: <config stem>_life.nc in the current folder].")
+@_overrides
+@_allow_large
+@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.pass_context
+def life_command(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
+                 allow_large: bool, quiet: bool) -> None:
+    """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
+    clearance growth, coating wear-through and vibration against revolutions."""
+    cfg = load_config(config, overrides)
+    from .dataset import write_netcdf_atomic
+    from .service_life import life, life_summary_text
+
+    announce_compile(quiet)
+
+    def progress(row: dict[str, Any]) -> None:
+        if not quiet:
+            depth = ", ".join(f"{d:.3g}" for d in row["wear_depth_max"])
+            click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth (A, B) {depth} m, "
+                       f"status {row['block_status']}", err=True)
+
+    ds = life(cfg, allow_large=allow_large, progress=progress)
+    path = Path(out) if out else Path(Path(config).stem + "_life.nc")
+    try:
+        write_netcdf_atomic(ds, path)
+    except OSError as exc:
+        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        ctx.exit(1)
+    if not quiet:
+        click.echo(life_summary_text(ds))
+        click.echo(f"wrote {path}")
+    if str(ds["stop_reason"].values).startswith("block_status:"):
+        click.echo(f"clearsweep: life run stopped: {ds['stop_reason'].values} (results so far in "
+                   f"{path})", err=True)
+        ctx.exit(1)
+
+
 @main.command()
 @click.argument("config", type=click.Path(dir_okay=False))
 @_overrides
@@ -193,6 +233,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     if reference and metric:
         raise click.UsageError("--reference and --metric print different tables; give one of them")
     with open_input(path) as ds:
+        if "cycle" in ds.dims and "stop_reason" in ds:
+            from .service_life import life_summary_text
+
+            click.echo(life_summary_text(ds))
+            return
         try:
             if metric:
                 text = format_metric_table(ds, metric, fmt)

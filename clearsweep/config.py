@@ -152,6 +152,9 @@ class WearConfig(_Section):
                                     "wear map bins (polar, azimuth)")
     amplification: float = _setting(Field(1.0, lo=0.0), "1", "wear amplification")
     feedback: bool = _setting(Field(True, bool), None, "wear enlarges the clearance")
+    #: false: c_eff reads the bin holding the contact direction; true: bilinear between bin
+    #: centres (a worn socket without steps between bins; life runs, docs/service_life.md)
+    interpolate: bool = _setting(Field(False, bool), None, "wear map read bilinearly")
 
     @property
     def feeds_back(self) -> bool:
@@ -179,6 +182,37 @@ class SolverConfig(_Section):
                                        "energy residual stop, fraction of the throughput")
 
 
+def _fraction(default: float) -> Field:
+    return Field(default, lo=0.0, lo_open=True, hi=1.0)
+
+
+def _limit() -> Field:
+    return Field(None, lo=0.0, lo_open=True, nullable=True)
+
+
+@dataclass(frozen=True)
+class LifeConfig(_Section):
+    """Service life by cycle jumps (``clearsweep life``, docs/service_life.md); ignored by
+    ``run`` and ``sweep``. A limit left null is not checked."""
+
+    cycles: float = _setting(_positive(1.0e6), "1", "crank revolutions to reach")
+    block_revolutions: int = _setting(Field(1, int, lo=1), "1",
+                                      "crank revolutions simulated in each dynamic block")
+    jump_clearance_fraction: float = _setting(
+        _fraction(0.01), "1", "largest depth growth of a wear-map bin per jump, fraction of the clearance")
+    jump_coating_fraction: float = _setting(
+        _fraction(0.25), "1", "largest depth growth of a bin per jump, fraction of its remaining coating")
+    max_clearance_growth: float | None = _setting(_limit(), "m",
+                                                  "clearance growth limit (largest wear depth)")
+    max_normal_force: float | None = _setting(_limit(), "N", "settled peak normal force limit")
+    max_rms_acceleration: float | None = _setting(_limit(), "m s-2",
+                                                  "settled RMS slider acceleration limit")
+    stop_at_wear_through: bool = _setting(Field(False, bool), None,
+                                          "stop when a coating is first worn through")
+    snapshots: int = _setting(Field(12, int, lo=2), "1", "wear-map snapshots kept")
+    max_blocks: int = _setting(Field(200, int, lo=1), "1", "most dynamic blocks")
+
+
 @dataclass(frozen=True)
 class Config(_Section):
     """A resolved case configuration: validated once by :func:`load_config`, then passed
@@ -198,6 +232,7 @@ class Config(_Section):
     wear: WearConfig = _section(WearConfig)
     metrics: MetricsConfig = _section(MetricsConfig)
     solver: SolverConfig = _section(SolverConfig)
+    life: LifeConfig = _section(LifeConfig)
 
     def replace(self, *overrides: str, **values: Any) -> Config:
         """A validated copy with ``"dotted.key=VALUE"`` overrides and/or ``dotted__key=value``

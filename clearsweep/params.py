@@ -7,7 +7,7 @@ docs/physics.md section 1.1 (the `realistic` preset replaces the rod's printed i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -170,15 +170,31 @@ def static_penetration(force_N: float, c: float, ew: float, ri: float) -> float:
     return delta
 
 
+def worn_contact(jp_j: np.ndarray, wmap_j: np.ndarray, normal_socket: np.ndarray,
+                 feedback: bool) -> tuple[float, float]:
+    """Local clearance c_eff [m] and modulus E_w [Pa] that the kernel's contact law uses in
+    socket-frame direction ``normal_socket`` of a worn socket (docs/physics.md 3.1; the base
+    material's modulus where the bin is worn through the coating)."""
+    from .core.wear import map_bin
+
+    ip, ia = map_bin(normal_socket, wmap_j.shape[0], wmap_j.shape[1])
+    depth = float(wmap_j[ip, ia])
+    ew = jp_j[L.J_EW_BASE] if depth >= jp_j[L.J_COAT] else jp_j[L.J_EW]
+    return jp_j[L.J_C] + (depth if feedback else 0.0), ew
+
+
 def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
-                   omega: float) -> tuple[np.ndarray, np.ndarray]:
+                   omega: float, wmap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Ball-centre offsets [m] (global frame, A and B) of a seated start.
 
     Each clearance joint's ball rests on the socket wall along the ideal mechanism's joint
     reaction at t = 0: the force F on the ball is carried by a contact whose normal n points
-    along -F, at the eccentricity c + delta_s where the elastic force equals |F|.
+    along -F, at the eccentricity c + delta_s where the elastic force equals |F|. With a
+    wear map (a socket worn by an earlier run), c is the local worn clearance c_eff(n) and
+    the modulus the one the contact law uses there.
     """
     from .core.dynamics import ideal_joint_forces
+    from .core.kinematics import rotation, trig
 
     y_ideal = initial_state(preset, theta0, omega)
     forces = ideal_joint_forces(0.0, y_ideal, p, jp)
@@ -190,8 +206,13 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         size = float(np.linalg.norm(f))
         if not (math.isfinite(size) and size > 0.0):
             continue  # no load to lean on: the ball stays centred
-        c = jp[j, L.J_C]
-        delta = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI])
+        c, ew = jp[j, L.J_C], jp[j, L.J_EW]
+        if wmap is not None:
+            # the socket body: the rod for A, the slider for B
+            phi = y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if j == 0 else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3]
+            rot = np.array(rotation(trig(*phi))).reshape(3, 3)
+            c, ew = worn_contact(jp[j], wmap[j], rot.T @ (-f / size), p[L.P_FEEDBACK] != 0.0)
+        delta = static_penetration(size, c, ew, jp[j, L.J_RI])
         offsets[j] = -(c + delta) * f / size
     return offsets[0], offsets[1]
 
@@ -208,8 +229,11 @@ class Packed:
     map_shape: tuple[int, int]
 
 
-def pack(cfg: Config, materials: dict) -> Packed:
-    """Resolved config (config.load_config) + materials -> kernel vectors (SI)."""
+def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed:
+    """Resolved config (config.load_config) + materials -> kernel vectors (SI).
+
+    ``wmap`` (float64[2, npolar, nazim], [m]): a worn socket to start from; the seated
+    start then rests each ball on the worn wall."""
     preset = PRESETS[cfg.mechanism.preset]
     solver = cfg.solver
     p = np.zeros(L.N_P)
@@ -246,6 +270,7 @@ def pack(cfg: Config, materials: dict) -> Packed:
     p[L.P_MAX_LEVEL] = solver.max_substep_level
     p[L.P_SETTLE] = cfg.metrics.settle_time
     p[L.P_FEEDBACK] = 1.0 if wear.feeds_back else 0.0
+    p[L.P_INTERP] = 1.0 if wear.interpolate else 0.0
     jp = np.zeros((2, L.N_JP))
     for j, (_, joint) in enumerate(cfg.joints.items()):
         surface = surface_material(joint, materials)
@@ -258,13 +283,21 @@ def pack(cfg: Config, materials: dict) -> Packed:
         jp[j, L.J_MU] = surface.friction_coefficient
         k = joint.wear_coefficient
         jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
+        # where the coating is worn through: the uncoated pair (docs/service_life.md)
+        coated = joint.coating != "none"
+        base = materials[BASE_MATERIAL]
+        jp[j, L.J_EW_BASE] = (equivalent_modulus(replace(joint, coating="none"), materials,
+                                                 contact.layer_rule) if coated else jp[j, L.J_EW])
+        jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
+        jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
+        jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
     # whole output samples, rounded up: the run covers at least `duration`
     save_every = solver.save_every
     n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
     theta0 = cfg.mechanism.theta0
     if cfg.initial.joints == "seated":
-        offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega)
+        offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega, wmap)
         y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
     else:
         y0 = initial_state(preset, theta0, omega)

@@ -26,6 +26,11 @@ Kinds (``KINDS``):
 ``sweep``
     one summary metric (``analysis.case_summary``) over one sweep dimension
     (lines) or two (heat maps).
+``life``
+    a life run (``clearsweep life``): wear depth, effective clearance, coating
+    remaining, settled peak normal force, RMS slider acceleration and impacts
+    per revolution against revolutions (log axis), the limits that are set, and
+    the wear map's evolution (snapshots, joint B or the worn joint).
 """
 
 from __future__ import annotations
@@ -458,7 +463,69 @@ def _failed_cells(ds: xr.Dataset, values: xr.DataArray, dims: tuple) -> np.ndarr
     return ~np.isin(status.values.astype(str), ["ok", "skipped"])
 
 
-_SIZES = {"slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
+def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("cycle", "wear_depth_max", "wear_map_snapshot"), "--kind life")
+    cycles = ds["cycle"].values
+    xlabel = axis_label(ds["cycle"], "crank revolutions")
+    limits = {"wear_depth_max": "life.max_clearance_growth",
+              "normal_force_peak_settled": "life.max_normal_force",
+              "slider_acceleration_rms_settled": "life.max_rms_acceleration"}
+    try:
+        config = yaml.safe_load(ds.attrs.get("config") or "") or {}
+    except yaml.YAMLError:
+        config = {}
+    panels = ("wear_depth_max", "clearance_effective", "coating_remaining", "normal_force_peak_settled",
+              "slider_acceleration_rms_settled", "impacts_per_revolution")
+    grid = fig.add_gridspec(3, 4)
+    for k, name in enumerate(panels):
+        ax = fig.add_subplot(grid[k // 2, k % 2])
+        var = ds[name]
+        if "joint" in var.dims:
+            for joint in var["joint"].values:
+                values = var.sel(joint=joint).values
+                if np.isfinite(values).any():
+                    ax.plot(cycles, values, marker=".", label=f"joint {value_text(joint)}")
+        else:
+            ax.plot(cycles, var.values, marker=".")
+        limit = _life_limit(config, limits.get(name))
+        if limit is not None:
+            ax.axhline(limit, color="r", linestyle="--", label=limits[name])
+        ax.set_xscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name)))
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize="x-small")
+    snaps = ds["wear_map_snapshot"]
+    joint = "B" if float(snaps.sel(joint="B").max()) >= float(snaps.sel(joint="A").max()) else "A"
+    picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, 6).round().astype(int))
+    maps = snaps.sel(joint=joint)
+    peak = float(maps.max())
+    norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
+    polar = _edges(ds["polar"].values, 0.0, 180.0)
+    azimuth = _edges(ds["azimuth"].values, -180.0, 180.0)
+    mesh = None
+    for k, s in enumerate(picks):
+        ax = fig.add_subplot(grid[k // 2, 2 + k % 2])
+        mesh = ax.pcolormesh(azimuth, polar, maps.isel(snapshot=s).values, cmap="viridis", norm=norm,
+                             shading="flat")
+        ax.set_ylim(180.0, 0.0)
+        ax.set_title(f"joint {joint}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
+        ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
+        ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
+    if mesh is not None:
+        fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth"))
+    fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}")
+
+
+def _life_limit(config: dict, key: str | None) -> float | None:
+    """The value of a life limit ``key`` ("life.max_...") in the dataset's config, if set."""
+    if key is None:
+        return None
+    value = config.get("life", {}).get(key.split(".")[1])
+    return None if value is None else float(value)
+
+
+_SIZES = {"life": (16, 10), "slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
           "orbit": (12, 8), "sweep": (8, 5)}
 
 
@@ -507,6 +574,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         _draw_wear_polar(fig, ds)
     elif kind == "orbit":
         _draw_orbit(fig, ds)
+    elif kind == "life":
+        _draw_life(fig, ds)
     else:
         _draw_sweep(fig, ds, metric)
     return fig

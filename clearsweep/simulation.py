@@ -97,18 +97,25 @@ def prepare_kernel() -> float:
     return time.perf_counter() - start
 
 
-def run_kernel(packed: Packed) -> dict[str, Any]:
+def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
+               wvol0: np.ndarray | None = None) -> dict[str, Any]:
     """Run the Numba kernel on packed inputs; raw arrays and counters.
 
-    ``wall_time`` times the integration call alone (compiling included when the kernel has
-    not been compiled yet: ``simulate`` calls ``prepare_kernel`` first).
+    ``wmap0`` (float64[2, npolar, nazim], [m]) and ``wvol0`` (float64[2], [m^3]): the wear
+    map and worn volume to start from (a worn socket, e.g. the previous block of a life
+    run); copied, not changed. Default: unworn. ``wall_time`` times the integration call
+    alone (compiling included when the kernel has not been compiled yet: ``simulate``
+    calls ``prepare_kernel`` first).
     """
     from .core.rk4 import integrate
 
     n_save = packed.n_steps // packed.save_every + 1
-    wmap = np.zeros((2,) + packed.map_shape)
+    wmap = np.zeros((2,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
+    if wmap.shape != (2,) + tuple(packed.map_shape):
+        raise ValueError(f"wmap0 has shape {wmap.shape}, the config's map needs "
+                         f"{(2,) + tuple(packed.map_shape)}")
     proj = np.zeros((2, 3, L.N_ANGLE_BINS))
-    wvol = np.zeros(2)
+    wvol = np.zeros(2) if wvol0 is None else np.array(wvol0, dtype=float)
     out_t = np.full(n_save, np.nan)
     out_y = np.full((n_save, L.N_Y), np.nan)
     out_d = np.full((n_save, L.N_D), np.nan)

@@ -71,10 +71,14 @@ from .layout import (
     D_TORQUE,
     D_UEL,
     D_VT,
+    D_WORN,
     J_C,
     J_CLEARANCE,
+    J_COAT,
     J_EW,
+    J_EW_BASE,
     J_MU,
+    J_MU_BASE,
     J_RI,
     J_RJ,
     N_D,
@@ -88,6 +92,7 @@ from .layout import (
     P_FEEDBACK,
     P_FRICTION,
     P_G,
+    P_INTERP,
     P_J2,
     P_J3,
     P_J4,
@@ -114,7 +119,7 @@ from .layout import (
     Y_R4,
     Y_WORK,
 )
-from .wear import map_bin
+from .wear import map_bin, map_interp
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
 
@@ -139,6 +144,7 @@ ContactState = namedtuple("ContactState", (
     "wear_depth",       # wear depth h under the contact point [m]
     "elastic_energy",   # elastic energy U_el [J]
     "diss_power",       # power dissipated by damping and friction [W]
+    "worn_through",     # 1.0: coating worn through under the contact, base values used
 ))
 
 
@@ -164,9 +170,18 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     d_s = mtv(Rs, d)
     n_s = mtv(Rs, n)
     h = 0.0
-    if p[P_FEEDBACK] != 0.0:
+    worn = 0.0
+    ew = jp[j, J_EW]
+    mu = jp[j, J_MU]
+    if p[P_FEEDBACK] != 0.0 or jp[j, J_COAT] < math.inf:
         ip, ia = map_bin(n_s, wmap.shape[1], wmap.shape[2])
-        h = wmap[j, ip, ia]
+        if p[P_FEEDBACK] != 0.0:
+            h = map_interp(wmap, j, n_s) if p[P_INTERP] != 0.0 else wmap[j, ip, ia]
+        if wmap[j, ip, ia] >= jp[j, J_COAT]:
+            # coating worn through in this direction: the base material's values
+            worn = 1.0
+            ew = jp[j, J_EW_BASE]
+            mu = jp[j, J_MU_BASE]
     c_eff = c + h
     delta = e - c_eff
     qj = add(pb, scale(rj, n))
@@ -178,23 +193,23 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
     ddot = dot(n, v)
     if delta <= 0.0:
         return ContactState(zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff,
-                            h, 0.0, 0.0)
+                            h, 0.0, 0.0, worn)
     vt = sub(v, scale(ddot, n))
     vtn = math.sqrt(dot(vt, vt))
     dv0 = s[j, S_DV0]
     if dv0 <= 0.0:
         dv0 = max(ddot, p[P_DV0_MIN])
     kappa = damping_factor(p[P_CR], dv0)
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, jp[j, J_EW], ri, kappa)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, kappa)
     force = scale(-fn, n)
     pdiss = (fn - fel) * ddot
     if p[P_FRICTION] != 0.0 and vtn > 0.0:
-        ft = jp[j, J_MU] * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
+        ft = mu * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
         force = add(force, scale(-ft / vtn, vt))
         pdiss += ft * vtn
-    uel = elastic_energy(delta, c_eff, jp[j, J_EW], ri)
+    uel = elastic_energy(delta, c_eff, ew, ri)
     return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
-                        uel, pdiss)
+                        uel, pdiss, worn)
 
 
 @njit(cache=True)
@@ -666,16 +681,17 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     ddot = dg[D_DDOT + j]
     if ddot > 0.0:
         c_eff = dg[D_CEFF + j]
-        kk = stiffness_factor(jp[j, J_EW], jp[j, J_RI])
+        ew = jp[j, J_EW_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_EW]
+        kk = stiffness_factor(ew, jp[j, J_RI])
         delta = max(dg[D_DELTA + j], 0.0)
         dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
         dv0 = s[j, S_DV0]
         if dv0 <= 0.0:
             dv0 = max(ddot, p[P_DV0_MIN])
         kappa = damping_factor(p[P_CR], dv0)
-        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, jp[j, J_EW], jp[j, J_RI], kappa)
+        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, jp[j, J_RI], kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
-    mu = jp[j, J_MU]
+    mu = jp[j, J_MU_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_MU]
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
         # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
@@ -710,6 +726,7 @@ def store_contact(dg, j, cres):
     dg[D_UEL + j] = cres.elastic_energy
     dg[D_DFD + j] = cres.dfn_ddelta
     dg[D_DFDD + j] = cres.dfn_dddot
+    dg[D_WORN + j] = cres.worn_through
     for i in range(3):
         dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
 

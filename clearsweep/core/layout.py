@@ -34,7 +34,8 @@ P_DT = 34           # output-grid step h [s]
 P_MAX_LEVEL = 35    # largest sub-step level k (2**k sub-steps)
 P_SETTLE = 36       # start of the settled statistics window [s]
 P_FEEDBACK = 37     # 1.0 = the worn depth enlarges the local clearance c_eff
-N_P = 38
+P_INTERP = 38       # 1.0 = c_eff reads the map bilinearly between bin centres, 0.0 = its bin
+N_P = 39
 
 # --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
@@ -44,7 +45,12 @@ J_RJ = 3            # ball radius R_j [m]
 J_EW = 4            # equivalent modulus E_w [Pa]
 J_MU = 5            # friction coefficient of the socket surface [-]
 J_K = 6             # wear coefficient of the socket surface [m^2/N]
-N_JP = 7
+# base material, used where the bin of the contact direction is worn to J_COAT or deeper
+J_EW_BASE = 7       # equivalent modulus E_w of the uncoated pair [Pa]
+J_MU_BASE = 8       # friction coefficient of the base [-]
+J_K_BASE = 9        # wear coefficient of the base [m^2/N]
+J_COAT = 10         # coating thickness [m]; inf = no coating to wear through
+N_JP = 11
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
@@ -95,7 +101,8 @@ D_PDISS = 46
 D_NGLOBAL = 47     # 2 x 3, contact normal in the global frame
 D_DFD = 53         # 2, dF_N/d delta [N/m]
 D_DFDD = 55        # 2, dF_N/d delta_dot [N s/m]
-N_D = 57
+D_WORN = 57        # 2, 1.0 = coating worn through under the contact point (base values used)
+N_D = 59
 
 # --- running statistics m[w, :] (w = 0: whole run, 1: settled window) ---------
 # Updated at every accepted RK4 (sub-)step end, never from the saved output rows.

@@ -30,9 +30,11 @@ from .layout import (
     D_TORQUE,
     D_UEL,
     D_VT,
+    D_WORN,
     J_C,
     J_CLEARANCE,
     J_K,
+    J_K_BASE,
     J_RI,
     J_RJ,
     M_ACC_PEAK,
@@ -236,7 +238,8 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
                     ds = dg[D_VT + j] * hs
                 else:
                     ds = ri * abs(beta - s[j, S_BETA])
-                vol = ampl * jp[j, J_K] * fn * ds
+                k_wear = jp[j, J_K_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_K]
+                vol = ampl * k_wear * fn * ds
                 area = contact_area(pen, e, ri, rj)
                 nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
                        dg[D_NORMAL + 3 * j + 2])

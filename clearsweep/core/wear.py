@@ -34,6 +34,32 @@ def map_bin(n, npolar, nazim):
 
 
 @njit(cache=True)
+def map_interp(wmap, j, n):
+    """Depth [m] of joint j's map in unit direction n (socket frame), bilinear between the
+    bin centres (azimuth periodic, polar clamped at the poles): a worn surface without steps."""
+    npolar = wmap.shape[1]
+    nazim = wmap.shape[2]
+    cz = max(-1.0, min(1.0, n[2]))
+    u = math.acos(cz) / math.pi * npolar - 0.5
+    v = (math.atan2(n[1], n[0]) + math.pi) / (2.0 * math.pi) * nazim - 0.5
+    i0 = int(math.floor(u))
+    fu = u - i0
+    if i0 < 0:
+        i0 = 0
+        fu = 0.0
+    if i0 >= npolar - 1:
+        i0 = npolar - 1
+        fu = 0.0
+    i1 = min(i0 + 1, npolar - 1)
+    k = int(math.floor(v))
+    fv = v - k
+    k0 = k % nazim
+    k1 = (k + 1) % nazim
+    return ((1.0 - fu) * ((1.0 - fv) * wmap[j, i0, k0] + fv * wmap[j, i0, k1])
+            + fu * ((1.0 - fv) * wmap[j, i1, k0] + fv * wmap[j, i1, k1]))
+
+
+@njit(cache=True)
 def bin_area(ip, npolar, nazim, radius):
     """Area of polar row ip's bins on a sphere of the given radius [m^2]."""
     t0 = math.pi * ip / npolar

@@ -1,0 +1,357 @@
+"""Service life by cycle jumps with geometry update (docs/service_life.md).
+
+A life run alternates a dynamic block (``life.block_revolutions`` crank revolutions
+simulated from a seated start on the worn sockets; the wear map records the block's wear)
+with a jump that adds dN revolutions' worth of that wear to the map, dN chosen so that no
+bin's depth grows by more than ``life.jump_clearance_fraction`` of the joint's clearance,
+nor, while a bin still has coating, by more than ``life.jump_coating_fraction`` of its
+remaining coating (Mukras et al., Wear 268, 2010; Flores, Mech. Mach. Theory 44, 2009).
+The next block starts from the worn map; where a bin is worn through its coating, the
+kernel's contact uses the base material there. It stops at ``life.cycles`` revolutions,
+when a limit is crossed, or after ``life.max_blocks`` blocks.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+from .config import Config, dump_config, load_config, resolve_materials
+from .core import layout as L
+from .params import pack
+from .simulation import preflight, prepare_kernel, run_kernel
+
+#: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
+WORN_FRACTION = 1e-2
+
+#: Criteria of a life run: name -> (config key, the row variable it watches).
+CRITERIA = {
+    "clearance_growth": ("life.max_clearance_growth", "wear_depth_max"),
+    "normal_force": ("life.max_normal_force", "normal_force_peak_settled"),
+    "rms_acceleration": ("life.max_rms_acceleration", "slider_acceleration_rms_settled"),
+}
+
+
+def bin_areas(shape: tuple[int, int], radius: float) -> np.ndarray:
+    """Area [m^2] of each bin of a polar x azimuth map on a sphere of ``radius``."""
+    npolar, nazim = shape
+    edges = np.cos(np.linspace(0.0, math.pi, npolar + 1))
+    row = radius ** 2 * (edges[:-1] - edges[1:]) * (2.0 * math.pi / nazim)
+    return np.repeat(row[:, None], nazim, axis=1)
+
+
+def jump_revolutions(depth: np.ndarray, rate: np.ndarray, clearance: np.ndarray,
+                     coating: np.ndarray, clearance_fraction: float,
+                     coating_fraction: float) -> float:
+    """Largest jump dN [revolutions] under the depth-growth limits.
+
+    ``depth`` and ``rate`` (per revolution) are [2, npolar, nazim] maps [m]; ``clearance``
+    and ``coating`` per joint [m] (coating inf where uncoated). A bin may deepen by at most
+    ``clearance_fraction * c`` and, while it holds coating (remaining r > 0), by at most
+    ``coating_fraction * max(r, coating_fraction * l_c)``: the floor keeps the approach to
+    wear-through finite (a bin crosses it within a few jumps). inf when nothing wears.
+    """
+    dn = math.inf
+    for j in range(2):
+        grows = rate[j] > 0.0
+        if clearance[j] <= 0.0 or not grows.any():
+            continue
+        limit = np.full(depth[j].shape, clearance_fraction * clearance[j])
+        if math.isfinite(coating[j]):
+            remaining = coating[j] - depth[j]
+            coated = remaining > 0.0
+            floor = coating_fraction * coating[j]
+            limit[coated] = np.minimum(limit[coated],
+                                       coating_fraction * np.maximum(remaining[coated], floor))
+        dn = min(dn, float(np.min(limit[grows] / rate[j][grows])))
+    return dn
+
+
+def first_crossing(before: np.ndarray, after: np.ndarray, level: float) -> tuple[float, int, int] | None:
+    """Where a map first reaches ``level`` between two states of it that differ linearly:
+    (fraction of the way, polar index, azimuth index) of the earliest bin, or None."""
+    crossed = (before < level) & (after >= level)
+    if not crossed.any():
+        return None
+    frac = np.full(before.shape, np.inf)
+    frac[crossed] = (level - before[crossed]) / (after[crossed] - before[crossed])
+    ip, ia = np.unravel_index(int(np.argmin(frac)), frac.shape)
+    return float(frac[ip, ia]), int(ip), int(ia)
+
+
+def crossing_cycle(cycles: np.ndarray, values: np.ndarray, limit: float) -> float:
+    """Revolutions at which ``values`` (sampled at ``cycles``) first reaches ``limit``,
+    interpolated linearly between the rows either side; NaN if it never does."""
+    for k, value in enumerate(values):
+        if np.isfinite(value) and value >= limit:
+            if k == 0 or not np.isfinite(values[k - 1]):
+                return float(cycles[k])
+            v0, v1 = float(values[k - 1]), float(value)
+            return float(cycles[k - 1] + (cycles[k] - cycles[k - 1]) * (limit - v0) / (v1 - v0))
+    return math.nan
+
+
+@dataclass
+class LifeState:
+    """What a life run carries from block to block, and its rows."""
+
+    wmap: np.ndarray
+    wvol: np.ndarray
+    cycles: float = 0.0
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    snapshots: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    wear_through: list[tuple[float, int, int] | None] = field(default_factory=lambda: [None, None])
+    block_volumes: list[np.ndarray] = field(default_factory=list)
+
+
+def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.ndarray) -> dict[str, Any]:
+    """One row of the life dataset from a finished block (map and volume after it)."""
+    from .simulation import statistics_from_raw
+
+    clearance = jp[:, L.J_C]
+    coat = jp[:, L.J_COAT]
+    stats = statistics_from_raw(raw["stats"], clearance > 0.0)
+    settled_revs = raw["stats"][L.W_SETTLED, L.M_TIME] * cfg.mechanism.speed_rpm / 60.0
+    depth_max = state.wmap.reshape(2, -1).max(axis=1)
+    mean = np.zeros(2)
+    for j in range(2):
+        worn = state.wmap[j] > WORN_FRACTION * depth_max[j]
+        if worn.any():
+            areas = bin_areas(state.wmap.shape[1:], jp[j, L.J_RI])
+            mean[j] = float((state.wmap[j] * areas)[worn].sum() / areas[worn].sum())
+    ideal = clearance <= 0.0
+    row = {
+        "cycle": state.cycles,
+        "block_revolutions": revs,
+        "wear_depth_max": depth_max,
+        "wear_depth_mean": mean,
+        "wear_volume": state.wvol.copy(),
+        "clearance_effective": np.where(ideal, np.nan, clearance + depth_max),
+        "coating_remaining": np.where(np.isfinite(coat), np.maximum(coat - depth_max, 0.0), np.nan),
+        "normal_force_peak_settled": stats["normal_force_peak_settled"],
+        "slider_acceleration_rms_settled": stats["slider_acceleration_rms_settled"],
+        "slider_acceleration_peak_settled": stats["slider_acceleration_peak_settled"],
+        "impacts_per_revolution": np.where(
+            ideal, np.nan, stats["impact_count_settled"] / settled_revs if settled_revs > 0 else np.nan),
+        "block_status": raw["status"],
+        "jump_revolutions": 0.0,
+    }
+    for j in range(2):
+        if ideal[j]:
+            row["wear_depth_max"][j] = row["wear_depth_mean"][j] = np.nan
+    return row
+
+
+def _snapshot_due(cycle: float, kept: list[tuple[float, np.ndarray]], first: float, last: float,
+                  count: int) -> bool:
+    """Keep a map when ``cycle`` has passed the next of ``count`` log-spaced marks between the
+    first block's cycle and the target (the final map is always added at the end)."""
+    if not kept:
+        return True
+    if last <= first:
+        return False
+    marks = np.geomspace(first, last, count)
+    return bool(np.searchsorted(marks, cycle, side="right") > np.searchsorted(marks, kept[-1][0], side="right"))
+
+
+def life(config, overrides=(), *, allow_large: bool = False,
+         progress: Callable[[dict[str, Any]], None] | None = None) -> xr.Dataset:
+    """Run a service-life estimate by cycle jumps (docs/service_life.md).
+
+    Parameters
+    ----------
+    config
+        A :class:`clearsweep.config.Config`, a YAML path or a config dict; the ``life``
+        section drives the run, ``solver.duration`` is replaced by the block length.
+    overrides
+        ``"dotted.key=VALUE"`` strings.
+    allow_large
+        Lift the work and memory bounds of one block.
+    progress
+        Called with each block's row as it is finished.
+
+    Returns
+    -------
+    xr.Dataset
+        Dimension ``cycle`` (revolutions at the end of each block), per joint the wear and
+        the settled dynamics of each block, wear-map snapshots, when and where each coating
+        was first worn through, the revolutions to each limit and ``stop_reason``.
+    """
+    start = time.perf_counter()
+    cfg = load_config(config, overrides)
+    lc = cfg.life
+    period = 60.0 / cfg.mechanism.speed_rpm
+    n_block = int(math.ceil(lc.block_revolutions * period / cfg.solver.dt - 1e-9))
+    block_cfg = cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
+                               "solver__save_every": n_block})
+    packed = preflight(block_cfg, allow_large=allow_large)
+    materials = resolve_materials(block_cfg)
+    prepare_kernel()
+    jp = packed.jp
+    clearance = np.where(jp[:, L.J_CLEARANCE] != 0.0, jp[:, L.J_C], 0.0)
+    coat = np.where(clearance > 0.0, jp[:, L.J_COAT], math.inf)
+    revs = packed.n_steps * packed.p[L.P_DT] / period
+    state = LifeState(wmap=np.zeros((2,) + packed.map_shape), wvol=np.zeros(2))
+    stop = "cycles"
+    first_cycle = revs
+    while True:
+        if len(state.rows) >= lc.max_blocks:
+            stop = "max_blocks"
+            break
+        before = state.wmap
+        raw = run_kernel(pack(block_cfg, materials, before), before, state.wvol)
+        state.block_volumes.append(raw["wvol"] - state.wvol)
+        rate = (raw["wmap"] - before) / revs
+        _note_wear_through(state, before, raw["wmap"], coat, state.cycles, revs)
+        state.wmap, state.wvol = raw["wmap"], raw["wvol"]
+        state.cycles += revs
+        row = _block_row(cfg, raw, state, revs, jp)
+        state.rows.append(row)
+        if _snapshot_due(state.cycles, state.snapshots, first_cycle, lc.cycles, lc.snapshots):
+            state.snapshots.append((state.cycles, state.wmap.copy()))
+        if progress is not None:
+            progress(row)
+        if raw["status"] != "ok":
+            stop = f"block_status:{raw['status']}"
+            break
+        reached = _limit_reached(cfg, row, state)
+        if reached:
+            stop = reached
+            break
+        if state.cycles + revs > lc.cycles * (1.0 + 1e-12):
+            break
+        dn = jump_revolutions(state.wmap, rate, clearance, coat, lc.jump_clearance_fraction,
+                              lc.jump_coating_fraction)
+        dn = max(0.0, min(dn, lc.cycles - state.cycles - revs))
+        if dn > 0.0:
+            after = state.wmap + dn * rate
+            _note_wear_through(state, state.wmap, after, coat, state.cycles, dn)
+            state.wmap = after
+            state.wvol = state.wvol + dn * state.block_volumes[-1] / revs
+            state.cycles += dn
+            row["jump_revolutions"] = dn
+    if not state.snapshots or state.snapshots[-1][0] != state.rows[-1]["cycle"]:
+        # the loop ends after a block, so the map is the last row's
+        state.snapshots.append((state.rows[-1]["cycle"], state.wmap.copy()))
+    return _life_dataset(cfg, state, stop, time.perf_counter() - start)
+
+
+def _note_wear_through(state: LifeState, before: np.ndarray, after: np.ndarray, coat: np.ndarray,
+                       cycle0: float, span: float) -> None:
+    """Record the first wear-through of each coated joint between two maps ``span``
+    revolutions apart, starting at ``cycle0`` (linear in between)."""
+    for j in range(2):
+        if state.wear_through[j] is not None or not math.isfinite(coat[j]):
+            continue
+        hit = first_crossing(before[j], after[j], coat[j])
+        if hit is not None:
+            state.wear_through[j] = (cycle0 + hit[0] * span, hit[1], hit[2])
+
+
+def _limit_reached(cfg: Config, row: dict[str, Any], state: LifeState) -> str | None:
+    """Name of the first criterion this block's row has crossed, or None."""
+    lc = cfg.life
+    for name, (key, var) in CRITERIA.items():
+        limit = cfg.get(key)
+        value = np.nanmax(np.atleast_1d(row[var])) if np.isfinite(row[var]).any() else math.nan
+        if limit is not None and value >= limit:
+            return name
+    if lc.stop_at_wear_through and any(w is not None for w in state.wear_through):
+        return "wear_through"
+    return None
+
+
+def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float) -> xr.Dataset:
+    import xarray as xr
+
+    from .dataset import bin_centres_deg, versions
+    from .variables import JOINTS, LIFE_VARIABLES
+
+    rows = state.rows
+    cycles = np.array([r["cycle"] for r in rows])
+    data: dict[str, Any] = {}
+    for name, spec in LIFE_VARIABLES.items():
+        if spec.dims and spec.dims[0] == "cycle" and name != "cycle":
+            data[name] = (spec.dims, np.array([r[name] for r in rows]))
+    npolar, nazim = state.wmap.shape[1:]
+    polar = bin_centres_deg(npolar, 0.0, 180.0)
+    azimuth = bin_centres_deg(nazim, -180.0, 180.0)
+    data["wear_map_snapshot"] = (("snapshot", "joint", "polar", "azimuth"),
+                                 np.array([m for _, m in state.snapshots]))
+    data["snapshot_cycle"] = (("snapshot",), np.array([c for c, _ in state.snapshots]))
+    data["wear_map"] = (("joint", "polar", "azimuth"), state.wmap)
+    wt = state.wear_through
+    data["wear_through_cycle"] = (("joint",), np.array([w[0] if w else np.nan for w in wt]))
+    data["wear_through_polar"] = (("joint",), np.array([polar[w[1]] if w else np.nan for w in wt]))
+    data["wear_through_azimuth"] = (("joint",), np.array([azimuth[w[2]] if w else np.nan for w in wt]))
+    for name, (key, var) in CRITERIA.items():
+        limit = cfg.get(key)
+        values = data[var][1]
+        values = values if values.ndim == 1 else np.nanmax(np.where(np.isfinite(values), values, -np.inf),
+                                                             axis=1)
+        data[f"cycles_to_{name}"] = ((), np.nan if limit is None else crossing_cycle(cycles, values, limit))
+    data["cycles_to_wear_through"] = ((), float(np.nanmin(data["wear_through_cycle"][1]))
+                                      if np.isfinite(data["wear_through_cycle"][1]).any() else np.nan)
+    data["wall_time"] = ((), wall)
+    ds = xr.Dataset({k: (v[0], v[1]) for k, v in data.items()},
+                    coords={"cycle": ("cycle", cycles), "joint": ("joint", list(JOINTS)),
+                            "polar": ("polar", polar), "azimuth": ("azimuth", azimuth)})
+    for key in [*ds.data_vars, "cycle", "joint", "polar", "azimuth"]:
+        info = LIFE_VARIABLES.get(str(key))
+        if info is not None:
+            ds[key].attrs.update(units=info.units, long_name=info.long_name)
+            if info.description:
+                ds[key].attrs["description"] = info.description
+    ds["stop_reason"] = ((), stop, {"long_name": "why the life run stopped",
+                                    "description": "cycles, max_blocks, a criterion name, "
+                                                   "wear_through or block_status:<status>"})
+    ds.attrs.update({
+        "title": "clearsweep service life by cycle jumps",
+        "Conventions": "CF-1.8",
+        "source": "clearsweep",
+        "config": dump_config(cfg),
+        "life_method": "cycle-jump extrapolation with geometry update: dynamic blocks of "
+                       "life.block_revolutions revolutions from a seated start on the worn "
+                       "sockets, jumps adding dN times the block's wear per revolution",
+        "wear_amplification": cfg.wear.amplification,
+        "settle_time_s": cfg.metrics.settle_time,
+    })
+    ds.attrs.update(versions())
+    return ds
+
+
+def life_summary_text(ds: xr.Dataset) -> str:
+    """Text report of a life dataset: revolutions to each limit, wear-through, last block."""
+    lines = [f"life run: {ds.sizes['cycle']} blocks, {float(ds.cycle[-1]):.4g} revolutions, "
+             f"stopped by {ds['stop_reason'].values}"]
+    for name, (key, _) in CRITERIA.items():
+        value = float(ds[f"cycles_to_{name}"])
+        text = f"{value:.4g}" if math.isfinite(value) else "not reached"
+        lines.append(f"  revolutions to {key}: {text}")
+    for j, joint in enumerate(ds.joint.values):
+        cyc = float(ds.wear_through_cycle[j])
+        if math.isfinite(cyc):
+            lines.append(f"  coating of {joint} worn through at {cyc:.4g} revolutions, polar "
+                         f"{float(ds.wear_through_polar[j]):.4g} deg, azimuth "
+                         f"{float(ds.wear_through_azimuth[j]):.4g} deg")
+        else:
+            lines.append(f"  coating of {joint}: not worn through")
+    last = ds.isel(cycle=-1)
+    for j, joint in enumerate(ds.joint.values):
+        depth = float(last.wear_depth_max[j])
+        if math.isfinite(depth):
+            lines.append(f"  {joint} at the end: max depth {depth:.4g} m, effective clearance "
+                         f"{float(last.clearance_effective[j]):.4g} m, settled peak normal force "
+                         f"{float(last.normal_force_peak_settled[j]):.4g} N, "
+                         f"{float(last.impacts_per_revolution[j]):.3g} impacts per revolution")
+    lines.append(f"  settled RMS slider acceleration at the end: "
+                 f"{float(last.slider_acceleration_rms_settled):.4g} m s-2")
+    return "\n".join(lines)
