@@ -315,6 +315,58 @@ def step_checks(y, dg, p, jp, status, e0, track):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
+def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
+    """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
+    (their episode begins without an impact); statistics cleared and the initial state
+    recorded. Returns the evaluation's status."""
+    step_end = True
+    whole = W_WHOLE
+    settled = W_SETTLED
+    for w in range(2):
+        for i in range(N_M):
+            stats[w, i] = 0.0
+    for j in range(2):
+        s[j, S_DV0] = 0.0
+        s[j, S_BETA] = math.pi
+    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    # a ball that starts on the socket wall (seated start) is in contact, not an impact
+    seated = False
+    for j in range(2):
+        ddot_prev[j] = dg[D_DDOT + j]
+        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+            s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
+            s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
+                                         jp[j, J_RI], jp[j, J_RJ])
+            seated = True
+    if seated:
+        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+        if st != ST_OK:
+            return st
+    record_sample(stats, whole, dg, jp, 0.0)
+    if t0 >= p[P_SETTLE]:
+        record_sample(stats, settled, dg, jp, 0.0)
+    return ST_OK
+
+
+@njit(cache=True)
+def merge_wear(wmap, cur, pend, wmax, scratch):
+    """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
+    enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
+    without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m]."""
+    for j in range(2):
+        if cur[j, 3] > 0.0:
+            if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
+                wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+            for i in range(6):
+                pend[j, i] += cur[j, i]
+            pend[j, 5] = cur[j, 5]
+        elif pend[j, 3] > 0.0:
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
               out_wmax, info, stats):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
@@ -358,8 +410,6 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     msave = np.zeros((2, N_M))
     ddot_prev = np.zeros(2)
     ddot_prev_save = np.zeros(2)
-    for j in range(2):
-        s[j, S_BETA] = math.pi
     C = np.zeros((6, 6))
     S = np.zeros((6, 6))
     L = np.zeros((6, 6))
@@ -373,34 +423,13 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     cur = np.zeros((2, 6))
     pend = np.zeros((2, 6))
     scratch = np.zeros((4 * wmap.shape[1], 3))
-    for w in range(2):
-        for i in range(N_M):
-            stats[w, i] = 0.0
 
     status = ST_OK
-    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+    st = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
     if st != ST_OK:
         info[0] = st
         info[1] = 0
         return np.zeros(2)
-    # a ball that starts on the socket wall (seated start) is in contact, not an impact
-    seated = False
-    for j in range(2):
-        ddot_prev[j] = dg[D_DDOT + j]
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-            s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
-            s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
-                                         jp[j, J_RI], jp[j, J_RJ])
-            seated = True
-    if seated:
-        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
-        if st != ST_OK:
-            info[0] = st
-            info[1] = 0
-            return np.zeros(2)
-    record_sample(stats, whole, dg, jp, 0.0)
-    if t0 >= settle:
-        record_sample(stats, settled, dg, jp, 0.0)
     e0 = energy_total(dg)
     track = np.zeros(3)     # peak kinetic energy, largest |drive work|, largest |residual|
     track[0] = dg[D_KE]
@@ -485,15 +514,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             break
         total += 1 << level
         deepest = max(deepest, level)
-        for j in range(2):
-            if cur[j, 3] > 0.0:
-                if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
-                    wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
-                for i in range(6):
-                    pend[j, i] += cur[j, i]
-                pend[j, 5] = cur[j, 5]
-            elif pend[j, 3] > 0.0:
-                wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+        merge_wear(wmap, cur, pend, wmax, scratch)
 
         status = step_checks(y, dg, p, jp, status, e0, track)
         if (step + 1) % save_every == 0:
