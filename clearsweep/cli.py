@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 import shlex
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -62,16 +63,20 @@ _allow_large = click.option(
 COMPILE_ESTIMATE_S = 30
 
 
-def announce_compile(quiet: bool = False) -> None:
-    """Compile the kernel now, saying so, if neither this process nor the cache has it."""
+def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> None:
+    """Compile the integrators ``methods`` (solver.method) now, saying so, where neither
+    this process nor the cache has them."""
     from .simulation import kernel_needs_compiling, prepare_kernel
 
-    if kernel_needs_compiling():
-        if not quiet:
-            click.echo(f"compiling the kernel (once, about {COMPILE_ESTIMATE_S} s) ...", err=True)
-        seconds = prepare_kernel()
-        if not quiet:
-            click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
+    for method in dict.fromkeys(methods):
+        if kernel_needs_compiling(method):
+            if not quiet:
+                name = "kernel" if method == "rk4" else f"{method} kernel"
+                click.echo(f"compiling the {name} (once, about {COMPILE_ESTIMATE_S} s) ...",
+                           err=True)
+            seconds = prepare_kernel(method)
+            if not quiet:
+                click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
 
 
 _overrides = click.option(
@@ -102,7 +107,7 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
-    announce_compile(quiet)
+    announce_compile(quiet, [cfg.solver.method])
     try:
         ds = simulate(cfg, allow_large=allow_large)
     except ConfigError as exc:
@@ -146,7 +151,7 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
     from .dataset import write_netcdf_atomic
     from .service_life import life, life_summary_text
 
-    announce_compile(quiet)
+    announce_compile(quiet, [cfg.solver.method])
 
     def progress(row: dict[str, Any]) -> None:
         if not quiet:
@@ -352,7 +357,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
         if not scheduler:
             # compile once here so that the workers load the cached kernel
-            announce_compile()
+            announce_compile(methods=[c.solver.method for c in plan.runnable().values()])
         client: Any = scheduler
         if dask_local:
             from distributed import Client, LocalCluster

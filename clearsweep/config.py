@@ -180,6 +180,21 @@ class SolverConfig(_Section):
     constraint_tolerance: float = _setting(_positive(1.0e-6), "m", "constraint violation stop")
     energy_tolerance: float = _setting(_positive(1.0e-3), "1",
                                        "energy residual stop, fraction of the throughput")
+    #: rk4: fixed steps of dt with 2^k sub-steps (the reference); dopri5: adaptive
+    #: Dormand-Prince 5(4) with error control (docs/physics.md section 4.4)
+    method: str = _setting(Field("rk4", ("rk4", "dopri5")), None, "time integrator")
+    rtol: float = _setting(Field(1.0e-6, lo=0.0, lo_open=True, hi=1.0), "1",
+                           "relative tolerance (dopri5)")
+    atol_position: float = _setting(_positive(1.0e-9), "m",
+                                    "absolute tolerance of positions and angles (dopri5; rad for angles)")
+    atol_velocity: float = _setting(_positive(1.0e-6), "m s-1",
+                                    "absolute tolerance of velocities (dopri5; rad/s for angles)")
+    atol_energy: float = _setting(_positive(1.0e-6), "J",
+                                  "absolute tolerance of drive work and dissipated energy (dopri5)")
+    max_step: float | None = _setting(Field(None, lo=0.0, lo_open=True, nullable=True), "s",
+                                      "longest step (dopri5); null: 10 * dt")
+    onset_tolerance: float = _setting(_positive(1.0e-6), "s",
+                                      "longest step over which a contact begins (dopri5)")
 
 
 def _fraction(default: float) -> Field:

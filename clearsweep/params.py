@@ -227,6 +227,8 @@ class Packed:
     n_steps: int
     save_every: int
     map_shape: tuple[int, int]
+    #: time integrator (solver.method)
+    method: str = "rk4"
 
 
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed:
@@ -270,6 +272,13 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     p[L.P_MAX_LEVEL] = solver.max_substep_level
     p[L.P_SETTLE] = cfg.metrics.settle_time
     p[L.P_FEEDBACK] = 1.0 if wear.feeds_back else 0.0
+    p[L.P_RTOL] = solver.rtol
+    p[L.P_ATOL_Q] = solver.atol_position
+    p[L.P_ATOL_V] = solver.atol_velocity
+    p[L.P_ATOL_E] = solver.atol_energy
+    # not tied to save_every: the steps, and so every statistic, do not depend on the output
+    p[L.P_HMAX] = 10.0 * solver.dt if solver.max_step is None else solver.max_step
+    p[L.P_ONSET_TOL] = solver.onset_tolerance
     p[L.P_INTERP] = 1.0 if wear.interpolate else 0.0
     jp = np.zeros((2, L.N_JP))
     for j, (_, joint) in enumerate(cfg.joints.items()):
@@ -302,4 +311,4 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     else:
         y0 = initial_state(preset, theta0, omega)
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
-                  map_shape=(wear.map[0], wear.map[1]))
+                  map_shape=(wear.map[0], wear.map[1]), method=solver.method)

@@ -194,7 +194,7 @@ def life(config, overrides=(), *, allow_large: bool = False,
                                "solver__save_every": n_block})
     packed = preflight(block_cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
-    prepare_kernel()
+    prepare_kernel(cfg.solver.method)
     jp = packed.jp
     clearance = np.where(jp[:, L.J_CLEARANCE] != 0.0, jp[:, L.J_C], 0.0)
     coat = np.where(clearance > 0.0, jp[:, L.J_COAT], math.inf)

@@ -68,28 +68,37 @@ def preflight(cfg: Config, *, allow_large: bool = False) -> Packed:
     return packed
 
 
-def kernel_needs_compiling() -> bool:
-    """True when neither this process nor the on-disk cache holds the compiled kernel."""
+def _kernel(method: str = "rk4"):
+    """The compiled integrator of ``solver.method`` (each compiles on first use only)."""
+    if method == "dopri5":
+        from .core.dopri5 import integrate_dopri5
+
+        return integrate_dopri5
     from .core.rk4 import integrate
 
-    if integrate.signatures:
+    return integrate
+
+
+def kernel_needs_compiling(method: str = "rk4") -> bool:
+    """True when neither this process nor the on-disk cache holds the compiled kernel."""
+    kernel = _kernel(method)
+    if kernel.signatures:
         return False
-    index = getattr(getattr(getattr(integrate, "_cache", None), "_cache_file", None),
+    index = getattr(getattr(getattr(kernel, "_cache", None), "_cache_file", None),
                     "_index_path", None)
     return not (index and os.path.exists(index))
 
 
-def prepare_kernel() -> float:
+def prepare_kernel(method: str = "rk4") -> float:
     """Compile (or load from the cache) the kernel with a run of no steps; seconds taken.
 
     Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
     """
-    from .core.rk4 import integrate
-
     start = time.perf_counter()
-    if integrate.signatures:
+    if _kernel(method).signatures:
         return 0.0
-    cfg = DEFAULTS.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4)
+    cfg = DEFAULTS.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4,
+                           solver__method=method)
     packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
@@ -107,8 +116,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     alone (compiling included when the kernel has not been compiled yet: ``simulate``
     calls ``prepare_kernel`` first).
     """
-    from .core.rk4 import integrate
-
+    integrate = _kernel(packed.method)
     n_save = packed.n_steps // packed.save_every + 1
     wmap = np.zeros((2,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
     if wmap.shape != (2,) + tuple(packed.map_shape):
@@ -135,6 +143,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
                 status=L.STATUS_NAMES[int(info[0])], n_saved=n_ok, deepest=int(info[2]),
                 t_end=float(info[4]) * h,
                 rk4_steps=int(info[3]), residual_max=float(res[0]), ke_peak=float(res[1]),
+                first_impact=np.array(res[2:4]),
                 wall_time=wall)
 
 
@@ -162,7 +171,7 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
 
     cfg = load_config(config, overrides)
     packed = preflight(cfg, allow_large=allow_large)
-    prepare_kernel()
+    prepare_kernel(cfg.solver.method)
     raw = run_kernel(packed)
     arrays = arrays_from_raw(raw, packed)
     attrs = {
@@ -317,6 +326,7 @@ def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
         "substeps_used": np.int32(1 << raw["deepest"]),
         "rk4_steps": np.int64(raw["rk4_steps"]),
         "energy_residual_max": raw["residual_max"],
+        "first_impact_time": raw["first_impact"],
         "energy_residual_relative": raw["residual_max"] / ke_peak if ke_peak > 0 else np.nan,
         "wall_time": raw["wall_time"],
         **statistics_from_raw(raw["stats"], clearance),

@@ -25,7 +25,8 @@ WEAR_TABLE_VARIABLES = ("wear_depth_axis_max", "wear_angle_max", "wear_angle_min
                         "wear_angle_of_max", "wear_arc")
 
 #: Scalars copied from the case dataset into its summary.
-PASS_THROUGH_VARIABLES = ("energy_residual_relative", "substeps_used", "rk4_steps", "wall_time")
+PASS_THROUGH_VARIABLES = ("first_impact_time", "energy_residual_relative", "substeps_used", "rk4_steps",
+                          "wall_time")
 
 #: The kernel's every-step statistics (``variables.STATISTICS``), settled window first.
 STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + tuple(

@@ -59,7 +59,11 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
     "wear_volume": VariableSpec(("joint",), "m3", "worn volume sum of k F_N dS"),
     "substeps_used": VariableSpec((), "1", "largest number of RK4 sub-steps in one output step",
                                   "2**k of the deepest sub-step level used (1 = never split)"),
-    "rk4_steps": VariableSpec((), "1", "RK4 steps taken, sub-steps included"),
+    "rk4_steps": VariableSpec((), "1", "RK4 steps taken, sub-steps included",
+                              "solver.method dopri5: accepted Dormand-Prince steps"),
+    "first_impact_time": VariableSpec(("joint",), "s", "time of the first impact",
+                                      "end of the accepted step in which the joint's first contact "
+                                      "episode began; NaN when there was none"),
     "energy_residual_max": VariableSpec((), "J", "largest absolute energy residual", "",
                                         "time: maximum"),
     "energy_residual_relative": VariableSpec((), "1", "largest energy residual / peak kinetic energy"),

@@ -35,7 +35,14 @@ P_MAX_LEVEL = 35    # largest sub-step level k (2**k sub-steps)
 P_SETTLE = 36       # start of the settled statistics window [s]
 P_FEEDBACK = 37     # 1.0 = the worn depth enlarges the local clearance c_eff
 P_INTERP = 38       # 1.0 = c_eff reads the map bilinearly between bin centres, 0.0 = its bin
-N_P = 39
+# adaptive Dormand-Prince 5(4) only (solver.method = dopri5)
+P_RTOL = 39         # relative tolerance [-]
+P_ATOL_Q = 40       # absolute tolerance of positions and angles [m | rad]
+P_ATOL_V = 41       # absolute tolerance of velocities [m/s | rad/s]
+P_ATOL_E = 42       # absolute tolerance of the energy integrals [J]
+P_HMAX = 43         # longest step [s]
+P_ONSET_TOL = 44    # longest step over which a contact begins [s]
+N_P = 45
 
 # --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal

@@ -366,6 +366,26 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
 
+@njit(cache=True)
+def note_first_impact(first, stats, t):
+    """Record t as a joint's first impact time when its impact count has just left 0."""
+    for j in range(2):
+        if first[j] < 0.0 and stats[W_WHOLE, M_IMPACTS + j] > 0.0:
+            first[j] = t
+
+
+@njit(cache=True)
+def kernel_result(track, first):
+    """What an integrator returns: (largest |energy residual| [J], peak kinetic energy [J],
+    first impact time at A, at B [s], NaN when none)."""
+    out = np.empty(4)
+    out[0] = track[2]
+    out[1] = track[0]
+    for j in range(2):
+        out[2 + j] = first[j] if first[j] >= 0.0 else np.nan
+    return out
+
+
 @njit(cache=True, locals=_NOT_LITERAL)
 def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
               out_wmax, info, stats):
@@ -385,7 +405,8 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
 
     Returns
     -------
-    float64[2] : (largest |energy residual| [J], peak kinetic energy [J]).
+    float64[4] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
+        at A and at B [s], NaN where none); see kernel_result.
     """
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
@@ -429,10 +450,12 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     if st != ST_OK:
         info[0] = st
         info[1] = 0
-        return np.zeros(2)
+        return np.full(4, np.nan)
     e0 = energy_total(dg)
     track = np.zeros(3)     # peak kinetic energy, largest |drive work|, largest |residual|
     track[0] = dg[D_KE]
+    first = np.full(2, -1.0)    # time of each joint's first impact [s]; -1: none yet
+    first_save = np.empty(2)
     n_saved = 0
     out_t[0] = t0
     copy_row(out_y, 0, y)
@@ -451,6 +474,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
         copy_into(dgsave, dg)
         copy_rows_into(ssave, s)
         copy_rows_into(msave, stats)
+        copy_into(first_save, first)
         copy_into(ddot_prev_save, ddot_prev)
         while True:
             if level > max_level:
@@ -477,6 +501,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
                 in_settled = ts + hs >= settle
                 changed, nbuf = accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol,
                                                cur, buf_i, buf_v, nbuf, ddot_prev)
+                note_first_impact(first, stats, ts + hs)
                 if changed:
                     st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
                     if st != ST_OK:
@@ -499,6 +524,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
             copy_into(dg, dgsave)
             copy_rows_into(s, ssave)
             copy_rows_into(stats, msave)
+            copy_into(first, first_save)
             copy_into(ddot_prev, ddot_prev_save)
             level = max(level + 1, need)
         if status != ST_OK:
@@ -537,7 +563,4 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     info[2] = deepest
     info[3] = total
     info[4] = steps_done
-    out = np.empty(2)
-    out[0] = track[2]
-    out[1] = track[0]
-    return out
+    return kernel_result(track, first)

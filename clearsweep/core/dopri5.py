@@ -1,0 +1,331 @@
+"""Embedded Dormand-Prince 5(4) with error control, FSAL, dense output and contact-onset
+location (docs/physics.md section 4.4).
+
+The same right-hand side, per-step rules and statuses as the fixed-step RK4 of
+:mod:`.rk4`: every accepted step goes through ``accept_substep`` (wear, contact episode,
+impacts), ``record_sample`` (running statistics), ``merge_wear`` and ``step_checks``.
+What differs is the step: its length follows the local error estimate of the embedded
+4th-order solution, weighted per state group (positions, velocities, the two energy
+integrals) by ``atol + rtol * |y|``; a step over which a clearance joint's gap closes is
+shortened until it is at most ``onset_tolerance`` long, so that contact onsets are located
+in time within that tolerance; output rows at the fixed sample times come from the
+method's 4th-order continuous extension, with the diagnostics evaluated there.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .dynamics import evaluate
+from .layout import (
+    D_DELTA,
+    D_KE,
+    J_CLEARANCE,
+    N_D,
+    N_S,
+    N_Y,
+    P_ATOL_E,
+    P_ATOL_Q,
+    P_ATOL_V,
+    P_DT,
+    P_HMAX,
+    P_MAX_LEVEL,
+    P_ONSET_TOL,
+    P_RTOL,
+    P_SETTLE,
+    ST_OK,
+    ST_UNSTABLE_STEP,
+    W_SETTLED,
+    W_WHOLE,
+    Y_QD,
+    Y_WORK,
+)
+from .rk4 import (
+    _NOT_LITERAL,
+    accept_substep,
+    begin_case,
+    copy_into,
+    copy_row,
+    energy_total,
+    flush_wear,
+    kernel_result,
+    merge_wear,
+    note_first_impact,
+    record_sample,
+    step_checks,
+)
+
+# Dormand & Prince (1980) coefficients; E = b5 - b4 (error weights); D: the 4th-order
+# continuous extension of Hairer, Norsett & Wanner, Solving ODEs I, section II.6.
+C2, C3, C4, C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
+A21 = 1.0 / 5.0
+A31, A32 = 3.0 / 40.0, 9.0 / 40.0
+A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+A61, A62, A63, A64, A65 = (9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0,
+                           -5103.0 / 18656.0)
+A71, A73, A74, A75, A76 = (35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+                           11.0 / 84.0)
+E1, E3, E4, E5, E6, E7 = (71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
+                          22.0 / 525.0, -1.0 / 40.0)
+D1 = -12715105075.0 / 11282082432.0
+D3 = 87487479700.0 / 32700410799.0
+D4 = -10690763975.0 / 1880347072.0
+D5 = 701980252875.0 / 199316789632.0
+D6 = -1453857185.0 / 822651844.0
+D7 = 69997945.0 / 29380423.0
+
+#: Step-size controller: safety factor, largest shrink and growth per step.
+SAFETY = 0.9
+SHRINK_MIN = 0.2
+GROW_MAX = 5.0
+
+
+@njit(cache=True)
+def dense_row(out, row, theta, h, y0, y1, k1, k3, k4, k5, k6, k7):
+    """out[row, :] = the continuous extension at t0 + theta h of the step y0 -> y1."""
+    t1 = 1.0 - theta
+    for i in range(y0.shape[0]):
+        dy = y1[i] - y0[i]
+        b = h * k1[i] - dy
+        r4 = dy - h * k7[i] - b
+        r5 = h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i])
+        out[row, i] = y0[i] + theta * (dy + t1 * (b + theta * (r4 + t1 * r5)))
+
+
+@njit(cache=True)
+def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
+    """RMS over the state of the embedded error estimate, each component scaled by its
+    group's atol + rtol * max(|y0|, |y1|); <= 1 accepts the step."""
+    rtol = p[P_RTOL]
+    acc = 0.0
+    for i in range(y0.shape[0]):
+        if i < Y_QD:
+            atol = p[P_ATOL_Q]
+        elif i < Y_WORK:
+            atol = p[P_ATOL_V]
+        else:
+            atol = p[P_ATOL_E]
+        sc = atol + rtol * max(abs(y0[i]), abs(y1[i]))
+        e = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i])
+        acc += (e / sc) ** 2
+    return math.sqrt(acc / y0.shape[0])
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
+def dopri5_trial(t, h, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap, C, S, L, vz):
+    """Stages 2-7 of one trial step of length h from (t, y) with k1 = f(t, y): the 5th-order
+    solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1."""
+    stage = False
+    step_end = True
+    n = y.shape[0]
+    scratch = dg1
+    for i in range(n):
+        yt[i] = y[i] + h * A21 * k1[i]
+    st = evaluate(t + C2 * h, yt, p, jp, s, wmap, k2, scratch, stage, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    for i in range(n):
+        yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
+    st = evaluate(t + C3 * h, yt, p, jp, s, wmap, k3, scratch, stage, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    for i in range(n):
+        yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
+    st = evaluate(t + C4 * h, yt, p, jp, s, wmap, k4, scratch, stage, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    for i in range(n):
+        yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
+    st = evaluate(t + C5 * h, yt, p, jp, s, wmap, k5, scratch, stage, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    for i in range(n):
+        yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
+                            + A65 * k5[i])
+    st = evaluate(t + h, yt, p, jp, s, wmap, k6, scratch, stage, C, S, L, vz)
+    if st != ST_OK:
+        return st
+    for i in range(n):
+        y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i]
+                            + A76 * k6[i])
+    return evaluate(t + h, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+
+
+@njit(cache=True)
+def onset_step(p, jp, dg0, dg1, h):
+    """0 when no clearance joint's gap closes over the step, or the step is within the
+    onset tolerance; else a shorter step that ends just after the estimated onset."""
+    tol = p[P_ONSET_TOL]
+    if h <= tol:
+        return 0.0
+    shorter = 0.0
+    for j in range(2):
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        d0 = dg0[D_DELTA + j]     # signed: the gap is -delta before contact
+        d1 = dg1[D_DELTA + j]
+        if d0 <= 0.0 < d1:
+            theta = d0 / (d0 - d1)     # linear estimate of the onset in the step
+            hj = max(theta * h + 0.5 * tol, tol)
+            hj = min(hj, 0.5 * h) if hj >= h else hj
+            shorter = hj if shorter == 0.0 else min(shorter, hj)
+    return shorter
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
+def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y,
+                     out_d, out_wmax, info, stats):
+    """Integrate one case to t0 + n_steps * p[P_DT] with adaptive Dormand-Prince 5(4).
+
+    Arguments and outputs as :func:`.rk4.integrate`; output rows at the same times
+    (every ``save_every`` grid steps). ``info[2]`` holds the level k of the shortest
+    accepted step (h >= p[P_DT] / 2^k), ``info[3]`` the accepted steps. Steps are bounded by
+    p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error control would make
+    shorter stops the case with ST_UNSTABLE_STEP.
+    """
+    step_end = True
+    whole = W_WHOLE
+    settled = W_SETTLED
+    grid = p[P_DT]
+    settle = p[P_SETTLE]
+    hmax = p[P_HMAX]
+    hmin = grid / (1 << int(p[P_MAX_LEVEL]))
+    t_end = t0 + n_steps * grid
+    ny = N_Y
+    y = y0.copy()
+    y1 = np.empty(ny)
+    yt = np.empty(ny)
+    k1 = np.empty(ny)
+    k2 = np.empty(ny)
+    k3 = np.empty(ny)
+    k4 = np.empty(ny)
+    k5 = np.empty(ny)
+    k6 = np.empty(ny)
+    k7 = np.empty(ny)
+    kt = np.empty(ny)
+    row = np.empty((1, ny))
+    yrow = np.empty(ny)
+    dg = np.zeros(N_D)
+    dg1 = np.zeros(N_D)
+    dgo = np.zeros(N_D)
+    s = np.zeros((2, N_S))
+    ddot_prev = np.zeros(2)
+    C = np.zeros((6, 6))
+    S = np.zeros((6, 6))
+    L = np.zeros((6, 6))
+    vz = np.zeros((8, 6))
+    buf_i = np.zeros((2, 4), dtype=np.int64)
+    buf_v = np.zeros((2, 4))
+    wmax = np.zeros(2)
+    cur = np.zeros((2, 6))
+    pend = np.zeros((2, 6))
+    scratch = np.zeros((4 * wmap.shape[1], 3))
+
+    status = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
+    if status != ST_OK:
+        info[0] = status
+        info[1] = 0
+        return np.full(4, np.nan)
+    e0 = energy_total(dg)
+    track = np.zeros(3)
+    track[0] = dg[D_KE]
+    first = np.full(2, -1.0)
+    out_t[0] = t0
+    copy_row(out_y, 0, y)
+    copy_row(out_d, 0, dg)
+    n_saved = 1
+    n_save = out_t.shape[0]
+    accepted = 0
+    h_small = hmax
+    t = t0
+    h = min(hmax, grid)
+    while t < t_end and status == ST_OK:
+        hh = min(h, t_end - t)
+        last = hh >= t_end - t
+        if hh < hmin and not last:
+            status = ST_UNSTABLE_STEP
+            break
+        st = dopri5_trial(t, hh, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap,
+                          C, S, L, vz)
+        if st != ST_OK:
+            if hh <= hmin:
+                status = st
+                break
+            h = max(0.25 * hh, hmin)
+            continue
+        err = error_norm(p, hh, y, y1, k1, k3, k4, k5, k6, k7)
+        if not err <= 1.0:
+            if not math.isfinite(err):
+                h = max(0.25 * hh, hmin)
+            else:
+                h = max(hh * max(SHRINK_MIN, SAFETY * err ** -0.2), min(hmin, 0.5 * hh))
+            if hh <= hmin:
+                status = ST_UNSTABLE_STEP
+                break
+            continue
+        shorter = onset_step(p, jp, dg, dg1, hh)
+        if shorter > 0.0:
+            h = shorter
+            continue
+        # ---- accepted: the same per-step rules as RK4 ----
+        in_settled = t + hh >= settle
+        for j in range(2):
+            for i in range(6):
+                cur[j, i] = 0.0
+        changed, _ = accept_substep(hh, in_settled, p, jp, s, dg1, stats, proj, wvol, cur,
+                                    buf_i, buf_v, 0, ddot_prev)
+        note_first_impact(first, stats, t + hh)
+        if changed:
+            st = evaluate(t + hh, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+            if st != ST_OK:
+                status = st
+        record_sample(stats, whole, dg1, jp, hh)
+        if in_settled:
+            record_sample(stats, settled, dg1, jp, hh)
+        merge_wear(wmap, cur, pend, wmax, scratch)
+        # output rows inside the step, from the continuous extension (before y moves on)
+        while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
+            # the sample's time from its grid-step count: the same for any save_every
+            ts = t0 + (n_saved * save_every) * grid
+            out_t[n_saved] = ts
+            theta = (ts - t) / hh
+            if theta >= 1.0 - 1e-12:
+                copy_row(out_y, n_saved, y1)
+                copy_row(out_d, n_saved, dg1)
+            else:
+                dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
+                for i in range(ny):
+                    yrow[i] = row[0, i]
+                evaluate(ts, yrow, p, jp, s, wmap, kt, dgo, step_end, C, S, L, vz)
+                copy_row(out_y, n_saved, yrow)
+                copy_row(out_d, n_saved, dgo)
+            out_wmax[n_saved, 0] = wmax[0]
+            out_wmax[n_saved, 1] = wmax[1]
+            n_saved += 1
+        copy_into(y, y1)
+        copy_into(k1, k7)
+        copy_into(dg, dg1)
+        t += hh
+        accepted += 1
+        if not last:
+            h_small = min(h_small, hh)
+        status = step_checks(y, dg, p, jp, status, e0, track)
+        grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
+        h = min(hh * grow, hmax)
+    for j in range(2):
+        if pend[j, 3] > 0.0:
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+    if status == ST_OK and n_saved > 0:
+        out_wmax[n_saved - 1, 0] = wmax[0]
+        out_wmax[n_saved - 1, 1] = wmax[1]
+    deepest = 0
+    while grid / (1 << deepest) > h_small * (1.0 + 1e-12) and deepest < 62:
+        deepest += 1
+    info[0] = status
+    info[1] = n_saved
+    info[2] = deepest
+    info[3] = accepted
+    info[4] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))
+    return kernel_result(track, first)
