@@ -54,14 +54,18 @@ def assert_rendered(path, fig) -> None:
         assert UNITS.search(text), f"axis label without units in brackets: {text!r}"
 
 
-@pytest.mark.parametrize("kind", [k for k in KINDS if k != "sweep"])
+#: kinds drawn from one case or a sweep (``life`` needs a life dataset: tests/test_service_life.py)
+CASE_KINDS = [k for k in KINDS if k != "life"]
+
+
+@pytest.mark.parametrize("kind", [k for k in CASE_KINDS if k != "sweep"])
 def test_every_kind_renders_one_case(tmp_path, case, kind):
     path = tmp_path / f"{kind}.png"
     fig = plot(case, kind, path, dpi=TEST_DPI)
     assert_rendered(path, fig)
 
 
-@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("kind", CASE_KINDS)
 def test_every_kind_renders_from_a_sweep(tmp_path, sweep_ds, kind):
     path = tmp_path / f"{kind}.png"
     fig = plot(sweep_ds, kind, path, SWEEP_SELECTION[kind], dpi=TEST_DPI)
@@ -185,7 +189,7 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
     with xr.open_dataset(paths["full"]) as full:
         assert list(full["status"].values) == ["ok", "ok"]
         assert "status: ok" in run_summary_text(full.sel(B_coating="none"))
-        for kind in KINDS:
+        for kind in CASE_KINDS:
             select = ["B_coating=PTFE"] if kind == "wear-map" else None
             fig = plot(full, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
             assert_rendered(tmp_path / f"{kind}.png", fig)
@@ -255,3 +259,8 @@ def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):
     assert "hatched: 1 case(s) that failed" in fig.get_suptitle()
     clean = plot(sweep_ds, "sweep", tmp_path / "c.png", dpi=TEST_DPI)
     assert "failed" not in [t.get_text() for t in clean.axes[0].texts]
+
+
+def test_life_kind_on_a_case_dataset_says_what_it_needs(tmp_path, case):
+    with pytest.raises(PlotError, match="--kind life needs cycle"):
+        plot(case, "life", tmp_path / "x.png", dpi=TEST_DPI)

@@ -65,10 +65,19 @@ def test_worn_through_coating_contacts_as_the_base_material():
     assert fresh["d"][-1, L.D_WORN + 1] == 0.0
 
 
-def test_volume_conserved_across_blocks_and_jumps():
-    ds = life(CASE, [*SMALL, "wear.amplification=1000", "life.cycles=30",
-                     "life.jump_clearance_fraction=0.05", "joints.B.coating=MoS2",
-                     "joints.B.coating_thickness=1e-6"])
+#: A short life run: MoS2 at B, a 1 um coating that wears through, 30 revolutions.
+SHORT_LIFE = [*SMALL, "wear.amplification=1000", "life.cycles=30",
+              "life.jump_clearance_fraction=0.05", "joints.B.coating=MoS2",
+              "joints.B.coating_thickness=1e-6"]
+
+
+@pytest.fixture(scope="module")
+def short_life():
+    return life(CASE, SHORT_LIFE)
+
+
+def test_volume_conserved_across_blocks_and_jumps(short_life):
+    ds = short_life
     assert ds.sizes["cycle"] >= 3 and float(ds.jump_revolutions.sum()) > 0
     areas = bin_areas((12, 24), 0.015)
     on_map = float((ds.wear_map.sel(joint="B").values * areas).sum())
@@ -111,3 +120,24 @@ def test_life_agrees_with_a_direct_simulation():
     h_direct = float(direct.wear_map.sel(joint="B").max())
     h_life = float(jumped.wear_depth_max.isel(cycle=-1).sel(joint="B"))
     assert h_life == pytest.approx(h_direct, rel=0.2)       # measured +14 %
+
+
+def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life):
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+    from clearsweep.plotting import plot
+
+    out = tmp_path / "life.nc"
+    args = ["life", CASE, "-o", str(out), "-q"] + [a for o in SHORT_LIFE for a in ("--set", o)]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    import xarray as xr
+    with xr.open_dataset(out) as ds:
+        # the file holds what the Python call returns
+        np.testing.assert_array_equal(ds.wear_volume.values, short_life.wear_volume.values)
+        fig = plot(ds, "life", tmp_path / "life.png", dpi=40)
+        assert len(fig.axes) >= 2 and (tmp_path / "life.png").stat().st_size > 0
+    report = CliRunner().invoke(main, ["report", str(out)])
+    assert report.exit_code == 0, report.output
+    assert "revolutions" in report.output or "cycles" in report.output
