@@ -198,8 +198,11 @@ def _count_values(root: yaml.Node) -> int:
     return count(root)
 
 
-class _Dumper(yaml.SafeDumper):
-    """Safe dumper: sections in block style, lists inline, strings quoted where ``_Loader`` needs."""
+class _Dumper(getattr(yaml, "CSafeDumper", yaml.SafeDumper)):  # type: ignore[misc]
+    """Safe dumper: sections in block style, lists inline, strings quoted where ``_Loader`` needs.
+
+    libyaml's emitter where PyYAML has it: every case of a sweep carries its config's text,
+    and the pure-Python emitter took a third of a small case's time outside the kernel."""
 
 
 _Dumper.add_representer(list, lambda dumper, value: dumper.represent_sequence(

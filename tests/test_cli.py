@@ -47,7 +47,8 @@ def fake_run(monkeypatch):
                           coords={"time": [0.0, 0.1]})
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=simulate, kernel_needs_compiling=lambda: False, prepare_kernel=lambda: 0.0))
+        simulate=simulate, kernel_needs_compiling=lambda method="rk4": False,
+        prepare_kernel=lambda method="rk4": 0.0))
     monkeypatch.setitem(sys.modules, "clearsweep.analysis", types.SimpleNamespace(
         run_summary_text=lambda ds: f"summary: status {ds['status'].item()}"))
     return calls
@@ -167,7 +168,8 @@ def test_other_exceptions_propagate(tmp_path, monkeypatch):
         raise RuntimeError("kernel exploded")
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=simulate, kernel_needs_compiling=lambda: False, prepare_kernel=lambda: 0.0))
+        simulate=simulate, kernel_needs_compiling=lambda method="rk4": False,
+        prepare_kernel=lambda method="rk4": 0.0))
     result, _, out = run_case(tmp_path, "name: x\n")
     assert result.exit_code != 0 and isinstance(result.exception, RuntimeError)
     assert not out.exists()
@@ -268,15 +270,16 @@ def test_run_says_when_it_compiles_and_times_stepping_only(tmp_path, monkeypatch
     import clearsweep.simulation as simulation
 
     calls = []
-    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda: True)
+    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method="rk4": True)
     real = simulation.prepare_kernel
-    monkeypatch.setattr(simulation, "prepare_kernel", lambda: calls.append(1) or real())
+    monkeypatch.setattr(simulation, "prepare_kernel",
+                        lambda method="rk4": calls.append(method) or real(method))
     cfg = tmp_path / "c.yaml"
     cfg.write_text("joints: {A: {clearance: 2.5e-4}, B: {clearance: 2.5e-4}}\n"
                    "solver: {duration: 0.01}\n")
     result = CliRunner().invoke(main, ["run", str(cfg), "-o", str(tmp_path / "o.nc")])
     assert result.exit_code == 0, result.output
     assert "compiling the kernel (once, about" in result.stderr
-    assert calls  # compiled before the run
+    assert calls and set(calls) == {"rk4"}  # compiled before the run: the integrator asked for
     quiet = CliRunner().invoke(main, ["run", str(cfg), "-q", "-o", str(tmp_path / "q.nc")])
     assert quiet.exit_code == 0 and "compiling" not in quiet.stderr
