@@ -33,6 +33,9 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
+#: Host memory [bytes] that one batch's arrays and results may take.
+HOST_BATCH_BYTES = 1 << 30
+
 #: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
 SIMULATOR_BATCH = 64
 
@@ -82,6 +85,13 @@ def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
 def config_bytes(cfg: Config) -> int:
     """:func:`case_bytes` of a resolved config."""
     return case_bytes(cfg.wear.map, cfg.solver.max_substep_level)
+
+
+def batch_window(configs: Sequence[Config]) -> int:
+    """Cases per batch that a sweep hands to :func:`simulate_batch` (host memory bound)."""
+    if not configs:
+        return 1
+    return max(1, min(len(configs), HOST_BATCH_BYTES // max(config_bytes(c) for c in configs)))
 
 
 def _device_budget() -> int:
