@@ -24,3 +24,7 @@ DPI_RANGE = (10, 1200)
 #: Most sweep points expanded without ``--yes`` (``max_cases``): every case is validated
 #: before anything runs, so a grid of 10^7 points would spend hours just being checked.
 MAX_CASES = 10_000
+
+#: Where ``clearsweep sweep --backend`` runs the cases: this process / a process pool / Dask,
+#: or batches on a CUDA device (:mod:`clearsweep.gpu`).
+SWEEP_BACKENDS = ("processes", "cuda")

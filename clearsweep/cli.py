@@ -37,6 +37,7 @@ from .choices import (
     MAX_CASES,
     OUTPUT_SUFFIXES,
     REPORT_FORMATS,
+    SWEEP_BACKENDS,
     X_AXES,
 )
 from .config import ConfigError, dump_config, load_config
@@ -292,6 +293,19 @@ def plot_command(ctx: click.Context, path: str, kind: str, output: str,
     click.echo(f"wrote {output}")
 
 
+def _series_selection(text: str | None) -> str | tuple[int, ...]:
+    """``--keep-series`` -> run_sweep's ``keep_series``."""
+    if not text:
+        return ()
+    if text.strip() == "all":
+        return "all"
+    try:
+        return tuple(int(item) for item in text.split(",") if item.strip())
+    except ValueError:
+        raise click.BadParameter(f"{text!r}: 'all' or comma-separated case positions (0, 1, ...)",
+                                 param_hint="--keep-series") from None
+
+
 def _fail(message: str, code: int):
     click.echo(f"clearsweep: {message}", err=True)
     sys.exit(code)
@@ -322,9 +336,18 @@ def _fail(message: str, code: int):
 @click.option("--no-progress", is_flag=True, help="Do not show the progress bar.")
 @click.option("-y", "--yes", is_flag=True,
               help=f"Run a sweep of more than {MAX_CASES:,} cases (refused without it).")
+@click.option("--backend", type=click.Choice(SWEEP_BACKENDS), default="processes", show_default=True,
+              help="processes: this process, a process pool or Dask (--workers, --scheduler, "
+                   "--dask-local); cuda: batches on a CUDA device, one thread per case, "
+                   "summaries only.")
+@click.option("--keep-series", metavar="SELECTION",
+              help="With --backend cuda: the cases whose time series are kept (run on the CPU "
+                   "and stored in full): 'all' or comma-separated case positions in sweep order "
+                   "(0-based).")
 def sweep_command(config: str, out: str | None, workers: int | None, resume: bool, overwrite: bool,
                   discard_parts: bool, scheduler: str | None, dask_local: int | None, overrides: tuple[str, ...],
-                  keep_parts: bool, allow_large: bool, no_progress: bool, yes: bool) -> None:
+                  keep_parts: bool, allow_large: bool, no_progress: bool, yes: bool, backend: str,
+                  keep_series: str | None) -> None:
     """Run the parameter sweep described by CONFIG (YAML) and write one netCDF file.
 
     Exit status: 0 all cases ok (or skipped), 1 some cases failed (their
@@ -347,15 +370,30 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     if resume and overwrite:
         raise click.UsageError("--resume keeps the finished cases and --overwrite deletes them; "
                                "give one")
+    if backend == "cuda" and (scheduler or dask_local):
+        raise click.UsageError("--backend cuda runs on the device; --scheduler and --dask-local "
+                               "choose a Dask cluster: give one")
+    if keep_series and backend != "cuda":
+        raise click.UsageError("--keep-series selects the cases of --backend cuda that keep their "
+                               "time series (the processes backend stores what the sweep file's "
+                               "store says)")
+    series = _series_selection(keep_series)
     out = out or f"{Path(config).stem}.nc"
     cluster = local_client = None
+    if backend == "cuda":
+        from .gpu import NoCudaDevice, device_name
+
+        try:
+            click.echo(f"clearsweep: CUDA device: {device_name()}", err=True)
+        except NoCudaDevice as exc:
+            _fail(str(exc), 2)
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
         cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
                                                           max(len(plan.runnable()), 1)))
         click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
-        if not scheduler:
+        if not scheduler and (backend != "cuda" or series):
             # compile once here so that the workers load the cached kernel
             announce_compile(methods=[c.solver.method for c in plan.runnable().values()])
         client: Any = scheduler
@@ -367,7 +405,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
             client = local_client = Client(cluster)
         ds = run_sweep(plan, out, workers=workers, client=client, resume=resume,
                        overrides=overrides, progress=not no_progress, overwrite=overwrite,
-                       keep_parts=keep_parts, discard_parts=discard_parts, allow_large=allow_large)
+                       keep_parts=keep_parts, discard_parts=discard_parts, allow_large=allow_large,
+                       backend=backend, keep_series=series)
         with ds:
             n, failed = ds.attrs["sweep_cases"], ds.attrs["sweep_failed"]
             skipped = ds.attrs["sweep_skipped"]

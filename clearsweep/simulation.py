@@ -167,12 +167,17 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
         docs/physics.md section 8 variables with CF attributes; ``status`` is ``"ok"`` or the reason the
         case stopped (rows after the stop are NaN).
     """
-    from .dataset import build_dataset
-
     cfg = load_config(config, overrides)
     packed = preflight(cfg, allow_large=allow_large)
     prepare_kernel(cfg.solver.method)
-    raw = run_kernel(packed)
+    return case_dataset(cfg, packed, run_kernel(packed))
+
+
+def case_dataset(cfg: Config, packed: Packed, raw: dict[str, Any]) -> xr.Dataset:
+    """A case's dataset from its config, packed inputs and the kernel's raw output
+    (:func:`run_kernel`, or one case of a CUDA batch: ``clearsweep.gpu``)."""
+    from .dataset import build_dataset
+
     arrays = arrays_from_raw(raw, packed)
     attrs = {
         "slip_rule": cfg.wear.slip,

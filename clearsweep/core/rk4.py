@@ -173,6 +173,14 @@ def copy_into(dst, src):
 
 
 @njit(cache=True)
+def zero_rows(a):
+    """a[:, :] = 0 for 2-d arrays, without making a slice view."""
+    for i in range(a.shape[0]):
+        for k in range(a.shape[1]):
+            a[i, k] = 0.0
+
+
+@njit(cache=True)
 def copy_rows_into(dst, src):
     """dst[:, :] = src for 2-d arrays, without making a slice view."""
     for i in range(src.shape[0]):
@@ -314,6 +322,31 @@ def step_checks(y, dg, p, jp, status, e0, track):
     return status
 
 
+#: Rows of the work arrays that :func:`advance` takes (``work_shapes`` gives their shapes):
+#: vec: y, its copy at the step's start, k1, k1's copy, k2, k3, k4, the stage state;
+#: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its
+#: copy, the largest depth written per joint, the first impact times and their copy;
+#: mats: C, S, L of evaluate; caps: the wear of the step being taken and the accepted wear
+#: waiting to be spread.
+VEC_ROWS = 8
+DIAG_ROWS = 2
+CSTATE_ROWS = 2
+PAIR_ROWS = 5
+#: row of ``pairs`` holding each joint's first impact time (the next row: its copy)
+PAIR_FIRST = 3
+MAT_ROWS = 3
+CAP_ROWS = 2
+
+
+def work_shapes(max_level, npolar):
+    """Shapes of advance's work arrays, in argument order (after ``track``), for a case of
+    the given sub-step level cap and wear-map polar bins; buf_i is int64, the rest float64."""
+    nbuf_max = 2 * (1 << max_level)
+    return ((VEC_ROWS, N_Y), (DIAG_ROWS, N_D), (CSTATE_ROWS, 2, N_S), (2, N_M), (PAIR_ROWS, 2),
+            (MAT_ROWS, 6, 6), (8, 6), (nbuf_max, 4), (nbuf_max, 4), (CAP_ROWS, 2, 6),
+            (4 * npolar, 3))
+
+
 @njit(cache=True, locals=_NOT_LITERAL)
 def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
@@ -407,6 +440,32 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     -------
     float64[4] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
         at A and at B [s], NaN where none); see kernel_result.
+
+    The CPU entry point: allocates the work arrays (:func:`work_shapes`) once and runs
+    :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
+    """
+    nbuf_max = 2 * (1 << int(p[P_MAX_LEVEL]))
+    track = np.zeros(3)
+    pairs = np.zeros((PAIR_ROWS, 2))
+    advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
+            out_wmax, info, stats, track, np.zeros((VEC_ROWS, N_Y)), np.zeros((DIAG_ROWS, N_D)),
+            np.zeros((CSTATE_ROWS, 2, N_S)), np.zeros((2, N_M)), pairs,
+            np.zeros((MAT_ROWS, 6, 6)), np.zeros((8, 6)),
+            np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
+            np.zeros((CAP_ROWS, 2, 6)), np.zeros((4 * wmap.shape[1], 3)))
+    return kernel_result(track, pairs[PAIR_FIRST])
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
+def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
+            out_wmax, info, stats, track, vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v,
+            caps, scratch):
+    """:func:`integrate` without allocation: every work array is an argument (shapes:
+    :func:`work_shapes`; their contents on entry do not matter), so that one source serves
+    the CPU and the CUDA device. ``keep_rows`` False writes no output rows (out_* are not
+    touched; info[1] still counts the rows a run would save). ``track`` (float64[3]) receives
+    the peak kinetic energy, the largest |drive work| and the largest |energy residual| [J];
+    ``pairs[PAIR_FIRST]`` each joint's first impact time [s] (-1: none).
     """
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
@@ -415,51 +474,69 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     stab = p[P_STAB]
     settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
-    ny = N_Y
-    y = y0.copy()
-    ysave = np.empty(ny)
-    k1 = np.empty(ny)
-    k1save = np.empty(ny)
-    k2 = np.empty(ny)
-    k3 = np.empty(ny)
-    k4 = np.empty(ny)
-    yt = np.empty(ny)
-    dg = np.zeros(N_D)
-    dgsave = np.zeros(N_D)
-    s = np.zeros((2, N_S))
-    ssave = np.zeros((2, N_S))
-    msave = np.zeros((2, N_M))
-    ddot_prev = np.zeros(2)
-    ddot_prev_save = np.zeros(2)
-    C = np.zeros((6, 6))
-    S = np.zeros((6, 6))
-    L = np.zeros((6, 6))
-    vz = np.zeros((8, 6))
-    nbuf_max = 2 * (1 << max_level)
-    buf_i = np.zeros((nbuf_max, 4), dtype=np.int64)   # joint, bx, by, bz
-    buf_v = np.zeros((nbuf_max, 4))   # volume, proj x, y, z (undone if the step is rejected)
-    wmax = np.zeros(2)
+    zero_rows(vec)
+    zero_rows(diag)
+    zero_rows(msave)
+    zero_rows(pairs)
+    zero_rows(vz)
+    zero_rows(buf_v)
+    zero_rows(buf_i)
+    for r in range(2):
+        zero_rows(cstate[r])
+        zero_rows(caps[r])
+    for r in range(MAT_ROWS):
+        zero_rows(mats[r])
+    zero_rows(scratch)
+    y = vec[0]
+    ysave = vec[1]
+    k1 = vec[2]
+    k1save = vec[3]
+    k2 = vec[4]
+    k3 = vec[5]
+    k4 = vec[6]
+    yt = vec[7]
+    copy_into(y, y0)
+    dg = diag[0]
+    dgsave = diag[1]
+    s = cstate[0]
+    ssave = cstate[1]
+    ddot_prev = pairs[0]
+    ddot_prev_save = pairs[1]
+    wmax = pairs[2]
+    for j in range(2):
+        s[j, S_BETA] = math.pi
+    C = mats[0]
+    S = mats[1]
+    L = mats[2]
     # wear waiting to be spread on the map (per joint): sum of V n (3), sum V, sum V A, R_i;
     # ``cur`` holds the step being taken, ``pend`` the accepted steps not yet spread
-    cur = np.zeros((2, 6))
-    pend = np.zeros((2, 6))
-    scratch = np.zeros((4 * wmap.shape[1], 3))
+    cur = caps[0]
+    pend = caps[1]
+    for w in range(2):
+        for i in range(N_M):
+            stats[w, i] = 0.0
+    for i in range(3):
+        track[i] = 0.0
+    for i in range(2, 5):
+        info[i] = 0
 
     status = ST_OK
     st = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
     if st != ST_OK:
         info[0] = st
         info[1] = 0
-        return np.full(4, np.nan)
+        return
     e0 = energy_total(dg)
-    track = np.zeros(3)     # peak kinetic energy, largest |drive work|, largest |residual|
     track[0] = dg[D_KE]
-    first = np.full(2, -1.0)    # time of each joint's first impact [s]; -1: none yet
-    first_save = np.empty(2)
+    first = pairs[PAIR_FIRST]    # time of each joint's first impact [s]; -1: none yet
+    first_save = pairs[PAIR_FIRST + 1]
+    first[0] = -1.0
+    first[1] = -1.0
     n_saved = 0
-    out_t[0] = t0
-    copy_row(out_y, 0, y)
-    copy_row(out_d, 0, dg)
+    if keep_rows:
+        out_t[0] = t0
+        copy_row(out_y, 0, y)
+        copy_row(out_d, 0, dg)
     n_saved = 1
     deepest = 0
     total = 0
@@ -544,18 +621,19 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
 
         status = step_checks(y, dg, p, jp, status, e0, track)
         if (step + 1) % save_every == 0:
-            out_t[n_saved] = t + h
-            copy_row(out_y, n_saved, y)
-            copy_row(out_d, n_saved, dg)
-            out_wmax[n_saved, 0] = wmax[0]
-            out_wmax[n_saved, 1] = wmax[1]
+            if keep_rows:
+                out_t[n_saved] = t + h
+                copy_row(out_y, n_saved, y)
+                copy_row(out_d, n_saved, dg)
+                out_wmax[n_saved, 0] = wmax[0]
+                out_wmax[n_saved, 1] = wmax[1]
             n_saved += 1
         if status != ST_OK:
             break
     for j in range(2):
         if pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
-    if status == ST_OK and n_saved > 0:
+    if keep_rows and status == ST_OK and n_saved > 0:
         out_wmax[n_saved - 1, 0] = wmax[0]
         out_wmax[n_saved - 1, 1] = wmax[1]
     info[0] = status
@@ -563,4 +641,3 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     info[2] = deepest
     info[3] = total
     info[4] = steps_done
-    return kernel_result(track, first)

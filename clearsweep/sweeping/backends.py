@@ -7,10 +7,12 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
-from .worker import _run_and_store, _run_case, _worker_init
+from ..summary import case_summary
+from .worker import _error_part, _part, _run_and_store, _run_case, _worker_init
 
 #: Futures kept in flight per worker, so that no worker waits for the driver.
 IN_FLIGHT_PER_WORKER = 2
@@ -88,6 +90,61 @@ class _Serial:
 
     def cancel(self, futures) -> None:
         pass
+
+    def close(self, interrupted: bool = False) -> None:
+        pass
+
+
+class _Cuda:
+    """Runs the cases in batches on a CUDA device (``clearsweep.gpu``), one thread per case.
+
+    ``submit`` only queues a case; ``wait`` runs every queued case as one batch (split
+    further to fit the device) and hands back their parts: summaries only, whatever the
+    sweep's store. The cases named in ``series`` (hashes) keep their time series: they
+    run on the CPU kernel in this process, with the sweep's store set to ``full``.
+    """
+
+    def __init__(self, guard: _InterruptGuard, window: int, series: frozenset[str] = frozenset()):
+        from ..gpu import device_name
+
+        self.guard, self.window, self.series = guard, max(1, int(window)), series
+        self.label = f"cuda({device_name()}, {self.window} cases per batch)"
+        self._queued: list[tuple[cf.Future, str, tuple]] = []
+
+    def submit(self, h: str, payload) -> cf.Future:
+        future: cf.Future = cf.Future()
+        self._queued.append((future, h, payload))
+        return future
+
+    def wait(self, futures):
+        from ..gpu import simulate_batch
+
+        queued, self._queued = self._queued, []
+        on_device = [(f, p) for f, h, p in queued if h not in self.series]
+        with self.guard.interruptible():
+            for future, h, payload in queued:
+                if h in self.series:
+                    future.set_result(_run_case((payload[0], "full", None, payload[3])))
+            started = time.perf_counter()
+            try:
+                results = simulate_batch([payload[0] for _, payload in on_device])
+            except Exception as exc:     # the device failed: every case of the batch did
+                results = [exc] * len(on_device)
+            wall = (time.perf_counter() - started) / max(len(on_device), 1)
+        for (future, payload), result in zip(on_device, results):
+            try:
+                part = (_error_part(result, wall) if isinstance(result, BaseException)
+                        else _part(result, "summary", payload[3] or case_summary))
+            except Exception as exc:
+                part = _error_part(exc, wall)
+            future.set_result(part)
+        return futures
+
+    def restart(self) -> str | None:
+        return None
+
+    def cancel(self, futures) -> None:
+        self._queued.clear()
 
     def close(self, interrupted: bool = False) -> None:
         pass
@@ -210,7 +267,10 @@ class _Dask:
             self.client.close()
 
 
-def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, parts_dir: Path):
+def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, parts_dir: Path,
+             cuda: dict | None = None):
+    if cuda is not None:
+        return _Cuda(guard, **cuda)
     if client is not None:
         if isinstance(client, cf.Executor):
             return _Futures(client, own=False, guard=guard, parts_dir=parts_dir)

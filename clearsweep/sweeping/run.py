@@ -18,6 +18,7 @@ from typing import Any
 
 import xarray as xr
 
+from ..config import ConfigError
 from ..dataset import open_results, remove_stale_temporaries, versions
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
@@ -146,7 +147,8 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
               workers: int | None = None, client=None, resume: bool = False,
               overrides: Iterable[str] = (), progress: bool = True, *, overwrite: bool = False,
               keep_parts: bool = False, discard_parts: bool = False, allow_large: bool = False,
-              max_cases: int | None = MAX_CASES, _simulate: Callable | None = None,
+              max_cases: int | None = MAX_CASES, backend: str | None = None,
+              keep_series: str | Iterable[int] = (), _simulate: Callable | None = None,
               _summarize: Callable | None = None) -> xr.Dataset:
     """Run a parameter sweep and return its results as one labelled dataset.
 
@@ -187,6 +189,16 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         :func:`clearsweep.budget.check_budget`.
     max_cases
         Refuse a sweep of more points (:func:`expand`); ``None``: no limit.
+    backend
+        ``None`` or ``"processes"``: this process, a process pool or Dask, as
+        ``workers`` and ``client`` say; ``"cuda"``: batches on a CUDA device
+        (``clearsweep.gpu``; ``workers`` and ``client`` ignored), summaries only.
+        Without a device it raises :class:`clearsweep.gpu.NoCudaDevice` before
+        anything runs.
+    keep_series
+        With ``backend="cuda"``: the cases (positions in sweep order, as in
+        ``plan.cases``; ``"all"`` for every one) whose time series are kept; they
+        run on the CPU kernel in this process and are stored in full.
 
     Returns
     -------
@@ -211,6 +223,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
     """
     plan = (config_or_path if isinstance(config_or_path, SweepPlan)
             else expand(config_or_path, overrides, allow_large=allow_large, max_cases=max_cases))
+    cuda = _cuda_options(plan, backend, keep_series)
     tmpdir = None
     if out is None:
         tmpdir = tempfile.mkdtemp(prefix="clearsweep-")
@@ -229,7 +242,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             try:
                 todo = [(h, (cfg, plan.store, _simulate, _summarize))
                         for h, cfg in runnable.items() if h not in finished]
-                _execute(plan, store, todo, len(runnable), workers, client, progress, guard)
+                _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
                 try:
                     counts = write_sweep_netcdf(out, sweep_dims=plan.dims, sweep_coords=plan.coords,
                                                 slots=plan.slots(), store=store, attrs=_attrs(plan),
@@ -251,8 +264,33 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             shutil.rmtree(tmpdir, ignore_errors=True)
 
 
+def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Iterable[int]) -> dict | None:
+    """``_backend``'s ``cuda`` argument for ``backend`` (None: not the CUDA backend)."""
+    if backend in (None, "processes"):
+        return None
+    if backend != "cuda":
+        raise ValueError(f"backend must be 'processes' or 'cuda', got {backend!r}")
+    from ..gpu import batch_window, device_name
+
+    device_name()       # NoCudaDevice before anything runs
+    if isinstance(keep_series, str):
+        if keep_series != "all":
+            raise ConfigError("keep_series", keep_series, "'all' or case positions", "<sweep>")
+        positions: Iterable[int] = range(len(plan.cases))
+    else:
+        positions = keep_series
+    series = set()
+    for i in positions:
+        if not 0 <= int(i) < len(plan.cases):
+            raise ConfigError("keep_series", i, f"case positions 0 to {len(plan.cases) - 1}",
+                              "<sweep>")
+        if plan.cases[int(i)].hash is not None:
+            series.add(plan.cases[int(i)].hash)
+    return {"window": batch_window(list(plan.runnable().values())), "series": frozenset(series)}
+
+
 def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers, client,
-             progress: bool, guard: _InterruptGuard) -> None:
+             progress: bool, guard: _InterruptGuard, cuda: dict | None = None) -> None:
     """Run ``todo`` on the chosen backend, writing each finished case at once."""
     from tqdm.auto import tqdm
 
@@ -261,7 +299,7 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     failed = sum(1 for r in store.events("done") if r.get("status") not in NOT_FAILED
                  and r.get("hash") in runnable) if kept else 0
     try:
-        backend = (_backend(workers, client, len(todo), guard, store.directory) if todo
+        backend = (_backend(workers, client, len(todo), guard, store.directory, cuda) if todo
                    else _Serial(guard))
     except (OSError, TimeoutError) as exc:
         raise SweepFailed(f"cannot start the backend for {client or workers!r}: "

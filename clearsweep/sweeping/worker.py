@@ -62,25 +62,36 @@ def _run_case(payload: tuple) -> xr.Dataset:
         summarize = case_summary
     start = time.perf_counter()
     try:
-        ds = simulate(config)
-        status = _text(ds["status"].values)
-        if status == "ok":
-            summary = summarize(ds)
-            extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
-            # one assign, not a merge per variable (most of a small case's time outside the kernel)
-            return (summary if store_mode == "summary" else ds).assign(extra)
-        if "message" in ds:
-            message = _text(ds["message"].values)
-        else:
-            when = ds.attrs.get("status_time_s")
-            message = f"the simulation stopped with status {status!r}" + (
-                f" at t = {float(when):g} s" if when is not None else "")
-        if ds.attrs.get("status_hint"):
-            message += f"; {ds.attrs['status_hint']}"
-        wall = float(ds["wall_time"].values) if "wall_time" in ds else time.perf_counter() - start
-        return _failed_part(status, message, wall)
+        return _part(simulate(config), store_mode, summarize, start)
     except Exception as exc:    # a failed case, not a failed sweep
-        return _failed_part("error", f"{type(exc).__name__}: {exc}", time.perf_counter() - start)
+        return _error_part(exc, time.perf_counter() - start)
+
+
+def _part(ds: xr.Dataset, store_mode: str, summarize=case_summary, start: float | None = None) -> xr.Dataset:
+    """The part of a simulated case (see :func:`_run_case`); ``start`` is when it began
+    (perf_counter), for the wall time of a failed case without one."""
+    status = _text(ds["status"].values)
+    if status == "ok":
+        summary = summarize(ds)
+        extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
+        # one assign, not a merge per variable (most of a small case's time outside the kernel)
+        return (summary if store_mode == "summary" else ds).assign(extra)
+    if "message" in ds:
+        message = _text(ds["message"].values)
+    else:
+        when = ds.attrs.get("status_time_s")
+        message = f"the simulation stopped with status {status!r}" + (
+            f" at t = {float(when):g} s" if when is not None else "")
+    if ds.attrs.get("status_hint"):
+        message += f"; {ds.attrs['status_hint']}"
+    wall = (float(ds["wall_time"].values) if "wall_time" in ds
+            else 0.0 if start is None else time.perf_counter() - start)
+    return _failed_part(status, message, wall)
+
+
+def _error_part(exc: BaseException, wall_time: float = 0.0) -> xr.Dataset:
+    """The part of a case that raised ``exc``."""
+    return _failed_part("error", f"{type(exc).__name__}: {exc}", wall_time)
 
 
 def _receipt(part: xr.Dataset) -> dict[str, Any]:

@@ -1,0 +1,93 @@
+"""CUDA backend benchmark: cases/s of a two_clearances sweep on the device against the
+2-worker CPU backend on the same sweep, with the device's name printed beside the numbers.
+
+Run: ``python benchmarks/bench_gpu.py [--sizes 100 1000 10000] [--duration 1.0]
+[--cpu-max 1000]``. Each size is a ``store: summary`` sweep of ``configs/two_clearances.yaml``
+over that many distinct joint-B clearances (1.0e-4 to 3.0e-4 m), ``--duration`` seconds of
+motion per case. The CPU backend runs at most ``--cpu-max`` cases per size (its cases/s
+does not depend on the sweep's size; a larger size is reported as not run). Wall time
+covers the whole sweep (planning excluded): device batches, parts and the final file.
+
+Without a CUDA device it prints ``no CUDA device`` and exits 0. ``--simulator`` runs the
+CUDA path in numba's CUDA simulator instead (sizes and duration should then be tiny, e.g.
+``--simulator --sizes 2 --duration 0.002``): a check that the script works, not a figure.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def sweep_doc(n: int, duration: float) -> dict:
+    step = 2.0e-4 / max(n - 1, 1)
+    clearances = [1.0e-4 + i * step for i in range(n)]
+    return {"name": f"bench_gpu_{n}", "store": "summary",
+            "base": str(ROOT / "configs" / "two_clearances.yaml"),
+            "sweep": {"grid": {"joints.B.clearance": clearances}},
+            "overrides": [f"solver.duration={duration}"]}
+
+
+def timed_sweep(n: int, duration: float, **backend) -> tuple[float, int]:
+    """Seconds and failed cases of one sweep of n cases."""
+    from clearsweep.sweeping import expand, run_sweep
+
+    doc = sweep_doc(n, duration)
+    plan = expand({k: v for k, v in doc.items() if k != "overrides"}, doc["overrides"],
+                  max_cases=None)
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        with run_sweep(plan, Path(tmp) / "bench.nc", progress=False, **backend) as ds:
+            failed = int(ds.attrs["sweep_failed"])
+        return time.perf_counter() - start, failed
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[100, 1000, 10000])
+    ap.add_argument("--duration", type=float, default=1.0, help="simulated time per case [s]")
+    ap.add_argument("--cpu-max", type=int, default=1000,
+                    help="largest sweep run on the CPU backend")
+    ap.add_argument("--simulator", action="store_true",
+                    help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
+    args = ap.parse_args(argv)
+    if args.simulator:
+        os.environ["NUMBA_ENABLE_CUDASIM"] = "1"     # read when numba is first imported
+    sys.path.insert(0, str(ROOT))
+    from clearsweep.gpu import NoCudaDevice, device_name
+    from clearsweep.simulation import prepare_kernel
+
+    try:
+        name = device_name()
+    except NoCudaDevice as exc:
+        print(str(exc).split(":")[0])
+        return 0
+    prepare_kernel()
+    # compile the device kernel outside the clock: one tiny batch
+    timed_sweep(1, 1.0e-4, backend="cuda")
+    print(f"device: {name}; CPU: {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} cores; two_clearances, {args.duration:g} s of motion per case")
+    print()
+    print("| cases | cuda [s] | cuda cases/s | 2-worker CPU [s] | CPU cases/s | ratio |")
+    print("|---|---|---|---|---|---|")
+    for n in args.sizes:
+        gpu_s, gpu_failed = timed_sweep(n, args.duration, backend="cuda")
+        if n <= args.cpu_max:
+            cpu_s, cpu_failed = timed_sweep(n, args.duration, workers=2)
+            cpu = f"{cpu_s:.1f} | {n / cpu_s:,.1f} | {cpu_s / gpu_s:.1f}"
+        else:
+            cpu_failed, cpu = 0, "not run | | "
+        note = f" ({gpu_failed} / {cpu_failed} failed)" if gpu_failed or cpu_failed else ""
+        print(f"| {n:,}{note} | {gpu_s:.1f} | {n / gpu_s:,.1f} | {cpu} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

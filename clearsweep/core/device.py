@@ -1,0 +1,64 @@
+"""CUDA batch kernel: one thread per case, running the CPU kernel's own :func:`rk4.advance`.
+
+No physics is written here. Numba's CUDA target compiles a CPU ``@njit`` function that a
+kernel calls as a device function (``CUDATypingContext.resolve_value_type`` turns the CPU
+dispatcher into a device dispatcher of the same Python source), so :func:`run_cases`
+reaches ``advance``, ``evaluate``, the contact law and the wear map through the very
+functions that ``rk4.integrate`` runs on the CPU.
+
+Every array argument carries the case as its first axis; thread i integrates case i on
+its own slices: inputs (p, jp, y0, n_steps, save_every), results (wmap, proj, wvol,
+info, stats, track) and the work arrays of ``rk4.work_shapes``. No rows are saved on
+the device (``keep_rows`` False): the summaries are the kernel's running statistics, the
+wear map and projections.
+
+Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
+numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
+Python thread and ``advance`` runs compiled for the CPU: the simulator hands kernels
+wrapped arrays, which :func:`_advance` unwraps there.
+"""
+
+import numba
+from numba import cuda
+
+from .rk4 import advance
+
+SIMULATED = bool(numba.config.ENABLE_CUDASIM)
+
+#: Threads per block. The kernel is register- and local-memory-heavy (the right-hand side
+#: keeps its 3-vectors and 3x3 matrices in registers): small blocks keep occupancy even.
+THREADS_PER_BLOCK = 64
+
+if SIMULATED:
+    def _plain(a):
+        """The numpy array behind a simulator kernel argument (or its slice)."""
+        inner = getattr(a, "_item", None)
+        return a if inner is None else inner._ary
+
+    def _advance(*args):
+        return advance(*(_plain(a) for a in args))
+else:
+    _advance = advance
+
+
+@cuda.jit
+def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, vec, diag,
+              cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y, rows_d,
+              rows_wmax):
+    """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); ``rows_*`` are
+    placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
+    i = cuda.grid(1)
+    if i < p.shape[0]:
+        _advance(p[i], jp[i], y0[i], 0.0, n_steps[i], save_every[i], wmap[i], proj[i], wvol[i],
+                 False, rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i], stats[i], track[i],
+                 vec[i], diag[i], cstate[i], msave[i], pairs[i], mats[i], vz[i], buf_i[i],
+                 buf_v[i], caps[i], scratch[i])
+
+
+def launch(arrays: tuple) -> None:
+    """Run :func:`run_cases` over every case of ``arrays`` (its arguments, device or host
+    arrays) and wait for it to finish."""
+    n = arrays[0].shape[0]
+    blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
+    run_cases[blocks, THREADS_PER_BLOCK](*arrays)
+    cuda.synchronize()

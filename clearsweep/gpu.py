@@ -1,0 +1,198 @@
+"""Cases in batches on a CUDA device: pack, copy, one thread per case, summaries back.
+
+The device runs ``core.device.run_cases``, which calls the CPU kernel's own
+``core.rk4.advance`` (one source of the physics for both targets). What comes back per
+case is what the summaries need: the running statistics (layout.M_*), the wear map, the
+projections, the worn volume, the counters and the energy residual; no time series (a
+sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
+
+Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
+projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
+other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
+Cases are grouped by wear-map shape and run in batches that fit the device's free memory.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .config import Config, resolve_materials
+from .core import layout as L
+from .core.rk4 import PAIR_FIRST, work_shapes
+from .params import Packed, pack
+from .simulation import check_step
+
+#: What a sweep or the CLI reports when no device is there.
+NO_DEVICE = "no CUDA device: use --backend processes"
+
+#: Share of the device's free memory that one batch may take.
+DEVICE_MEMORY_FRACTION = 0.5
+
+#: Host memory [bytes] that one batch's arrays and results may take.
+HOST_BATCH_BYTES = 1 << 30
+
+#: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
+SIMULATOR_BATCH = 64
+
+
+class NoCudaDevice(RuntimeError):
+    """``--backend cuda`` without a CUDA device (and without the simulator)."""
+
+    def __init__(self, detail: str = ""):
+        super().__init__(NO_DEVICE + (f" ({detail})" if detail else ""))
+
+
+def simulated() -> bool:
+    """Whether numba's CUDA simulator stands in for the device (``NUMBA_ENABLE_CUDASIM=1``)."""
+    import numba
+
+    return bool(getattr(numba.config, "ENABLE_CUDASIM", 0))
+
+
+def device_name() -> str:
+    """The CUDA device's name; raises :class:`NoCudaDevice` when there is none."""
+    if simulated():
+        return "numba CUDA simulator"
+    try:
+        from numba import cuda
+
+        if not cuda.is_available():
+            raise NoCudaDevice()
+        name = cuda.get_current_device().name
+    except NoCudaDevice:
+        raise
+    except Exception as exc:    # no driver, no toolkit, a broken install: all "no device"
+        raise NoCudaDevice(f"{type(exc).__name__}: {exc}") from exc
+    return name.decode() if isinstance(name, bytes) else str(name)
+
+
+def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
+    """Device memory [bytes] that one case of a batch takes (inputs, results, work)."""
+    npolar, nazim = int(map_shape[0]), int(map_shape[1])
+    items = (L.N_P + 2 * L.N_JP + L.N_Y + 2        # p, jp, y0, n_steps, save_every
+             + 2 * npolar * nazim + 2 * 3 * L.N_ANGLE_BINS + 2   # wmap, proj, wvol
+             + 5 + 2 * L.N_M + 3                   # info, stats, track
+             + 1 + L.N_Y + L.N_D + 2)              # row placeholders
+    items += sum(math.prod(s) for s in work_shapes(max_level, npolar))
+    return 8 * items
+
+
+def config_bytes(cfg: Config) -> int:
+    """:func:`case_bytes` of a resolved config."""
+    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level)
+
+
+def batch_window(configs: Sequence[Config]) -> int:
+    """Cases per batch that a sweep hands to :func:`simulate_batch` (host memory bound)."""
+    if not configs:
+        return 1
+    return max(1, min(len(configs), HOST_BATCH_BYTES // max(config_bytes(c) for c in configs)))
+
+
+def _device_budget() -> int:
+    from numba import cuda
+
+    free, _ = cuda.current_context().get_memory_info()
+    return int(DEVICE_MEMORY_FRACTION * free)
+
+
+def _allocate(group: Sequence[Packed]) -> tuple:
+    """Host arrays of run_cases' arguments for one batch of cases of one map shape."""
+    n = len(group)
+    npolar, nazim = group[0].map_shape
+    max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
+    inputs = (np.stack([pk.p for pk in group]), np.stack([pk.jp for pk in group]),
+              np.stack([pk.y0 for pk in group]),
+              np.array([pk.n_steps for pk in group], dtype=np.int64),
+              np.array([pk.save_every for pk in group], dtype=np.int64))
+    results = (np.zeros((n, 2, npolar, nazim)), np.zeros((n, 2, 3, L.N_ANGLE_BINS)),
+               np.zeros((n, 2)), np.zeros((n, 5), dtype=np.int64), np.zeros((n, 2, L.N_M)),
+               np.zeros((n, 3)))
+    shapes = work_shapes(max_level, npolar)
+    work = tuple(np.zeros((n,) + s, dtype=np.int64 if k == 7 else np.float64)
+                 for k, s in enumerate(shapes))
+    rows = (np.zeros((n, 1)), np.zeros((n, 1, L.N_Y)), np.zeros((n, 1, L.N_D)),
+            np.zeros((n, 1, 2)))
+    return inputs + results + work + rows
+
+
+#: Position of the work array ``pairs`` in run_cases' arguments: after the 5 inputs, the 6
+#: results and the 4 work arrays before it (rk4.work_shapes order).
+_PAIRS_ARG = 5 + 6 + 4
+
+
+def _run_on_device(args: tuple) -> tuple:
+    """Launch one batch; the result arrays (wmap, proj, wvol, info, stats, track) and the
+    work array ``pairs`` (which holds the first impact times) on the host."""
+    from .core import device
+
+    if simulated():
+        device.launch(args)
+        return args[5:11] + (args[_PAIRS_ARG],)
+    from numba import cuda
+
+    stream = cuda.stream()
+    on_device = tuple(cuda.to_device(a, stream=stream) for a in args)
+    stream.synchronize()
+    device.launch(on_device)
+    return tuple(a.copy_to_host() for a in on_device[5:11] + (on_device[_PAIRS_ARG],))
+
+
+def run_packed(packed: Sequence[Packed]) -> list[dict[str, Any]]:
+    """Run cases on the device; per case the raw dict of ``simulation.run_kernel`` with
+    one NaN row for the time series (none is kept) and the batch's wall time shared out."""
+    device_name()
+    out: list[dict[str, Any] | None] = [None] * len(packed)
+    by_shape: dict[tuple[int, ...], list[int]] = {}
+    for i, pk in enumerate(packed):
+        by_shape.setdefault(tuple(pk.map_shape), []).append(i)
+    for shape, members in by_shape.items():
+        need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL])) for i in members)
+        size = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
+        for start in range(0, len(members), size):
+            batch = members[start:start + size]
+            began = time.perf_counter()
+            wmap, proj, wvol, info, stats, track, pairs = _run_on_device(
+                _allocate([packed[i] for i in batch]))
+            wall = (time.perf_counter() - began) / len(batch)
+            for k, i in enumerate(batch):
+                out[i] = _raw(packed[i], wmap[k], proj[k], wvol[k], info[k], stats[k], track[k],
+                              pairs[k][PAIR_FIRST], wall)
+    return [r for r in out if r is not None]
+
+
+def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> dict[str, Any]:
+    h = float(pk.p[L.P_DT])
+    return dict(t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
+                wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol, stats=stats,
+                status=L.STATUS_NAMES[int(info[0])], n_saved=int(info[1]), deepest=int(info[2]),
+                t_end=float(info[4]) * h, rk4_steps=int(info[3]), residual_max=float(track[2]),
+                ke_peak=float(track[0]), first_impact=np.where(first >= 0.0, first, np.nan),
+                wall_time=wall)
+
+
+def simulate_batch(configs: Sequence[Config]) -> list[Any]:
+    """Simulate resolved configs on the device (budgets checked by the sweep plan); per
+    config its dataset (``simulation.case_dataset``, no time series) or the exception that
+    its packing raised."""
+    from .simulation import case_dataset
+
+    results: list[Any] = [None] * len(configs)
+    ready: list[tuple[int, Packed]] = []
+    for i, cfg in enumerate(configs):
+        try:
+            pk = pack(cfg, resolve_materials(cfg))
+            check_step(cfg, pk)
+        except Exception as exc:    # a failed case, not a failed batch
+            results[i] = exc
+            continue
+        ready.append((i, pk))
+    raws = run_packed([pk for _, pk in ready])
+    for (i, pk), raw in zip(ready, raws):
+        results[i] = case_dataset(configs[i], pk, raw)
+    return results

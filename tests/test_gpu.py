@@ -1,0 +1,130 @@
+"""The CUDA backend in numba's CUDA simulator, against the CPU backend; the no-device report.
+
+``NUMBA_ENABLE_CUDASIM`` is read when numba is first imported, so the simulator runs in a
+fresh interpreter (the script below). Cases are tiny: the simulator runs every thread as
+a Python thread around the compiled CPU ``rk4.advance``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from clearsweep.cli import sweep_command
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Three cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, and
+#: the centred start (impacts); ``store: full`` so that the CPU sweep keeps series too.
+SWEEP = {
+    "name": "gpu_sim", "store": "full",
+    "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
+             "wear": {"map": [6, 12], "amplification": 1000.0},
+             "metrics": {"settle_time": 0.001},
+             "solver": {"duration": 0.003}},
+    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred"],
+                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4],
+                       "initial.joints": ["seated", "seated", "centred"]}]},
+}
+
+SCRIPT = r"""
+import json, sys
+import numpy as np
+import xarray as xr
+from clearsweep.sweeping import drop_timing, run_sweep
+from clearsweep.summary import SUMMARY_ORDER
+
+doc = json.loads(sys.argv[1])
+cpu = run_sweep(doc, workers=1, progress=False)
+gpu = run_sweep(doc, backend="cuda", keep_series=[1], progress=False)
+again = run_sweep(doc, backend="cuda", keep_series=[1], progress=False)
+xr.testing.assert_identical(drop_timing(gpu), drop_timing(again))
+worst = 0.0
+compared = []
+for name in SUMMARY_ORDER:
+    if name in ("wall_time", "status") or name not in cpu:
+        continue
+    a = np.asarray(cpu[name].values, dtype=float)
+    b = np.asarray(gpu[name].values, dtype=float)
+    assert a.shape == b.shape, name
+    assert np.array_equal(np.isnan(a), np.isnan(b)), name
+    ok = ~np.isnan(a)
+    scale = np.maximum(np.abs(a[ok]), 1e-300)
+    worst = max(worst, float(np.max(np.abs(a[ok] - b[ok]) / scale, initial=0.0)))
+    compared.append(name)
+for name in ("wear_map", "wear_projection", "wear_volume"):
+    a = cpu[name].values
+    b = gpu[name].isel(variant=1).values
+    assert np.array_equal(a[1], b), name
+print(json.dumps({
+    "worst_relative": worst, "compared": compared,
+    "status_cpu": [str(s) for s in cpu["status"].values],
+    "status_gpu": [str(s) for s in gpu["status"].values],
+    "series": [bool(np.isfinite(gpu["slider_acceleration"].isel(variant=i).values).any())
+               for i in range(3)],
+}))
+"""
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(SWEEP)], capture_output=True,
+                          text=True, env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
+    assert simulated["status_cpu"] == simulated["status_gpu"] == ["ok"] * 3
+    assert "slider_acceleration_peak_settled" in simulated["compared"]
+    assert "wear_depth_axis_max" in simulated["compared"]
+    # the simulator runs the same compiled CPU functions: equal to the last bit in practice
+    assert simulated["worst_relative"] <= 1e-9
+
+
+def test_simulated_cuda_keeps_series_only_for_the_selected_cases(simulated):
+    assert simulated["series"] == [False, True, False]
+
+
+def test_cuda_backend_without_a_device_says_so(tmp_path, monkeypatch):
+    """No GPU and no simulator: exit status 2 and the one-line hint (this test process has
+    the simulator off; on a machine with a GPU the backend would run instead)."""
+    from clearsweep import gpu
+
+    if gpu.simulated():
+        pytest.skip("the simulator is on in this process")
+    try:
+        gpu.device_name()
+    except gpu.NoCudaDevice:
+        pass
+    else:
+        pytest.skip("a CUDA device is present")
+    path = tmp_path / "s.yaml"
+    path.write_text(json.dumps(SWEEP))
+    result = CliRunner().invoke(sweep_command, [str(path), "--backend", "cuda", "-o",
+                                                str(tmp_path / "s.nc")])
+    assert result.exit_code == 2
+    assert "no CUDA device: use --backend processes" in result.output
+    assert not (tmp_path / "s.nc").exists()
+
+
+def test_keep_series_needs_the_cuda_backend(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text(json.dumps(SWEEP))
+    result = CliRunner().invoke(sweep_command, [str(path), "--keep-series", "0"])
+    assert result.exit_code == 2
+    assert "--keep-series" in result.output
+
+
+def test_case_bytes_of_the_default_map():
+    from clearsweep.gpu import case_bytes
+
+    per_case = case_bytes((144, 288), 8)
+    assert 0.70e6 < per_case < 0.76e6      # the figure docs/architecture.md states
