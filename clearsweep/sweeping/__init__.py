@@ -30,6 +30,11 @@ Sweep file
         - {B_coating: none, B_clearance: 1.0e-4}
 
 Keys are dotted paths of the case configuration (docs/architecture.md).
+A base with an ensemble (``ensemble: {members: 16, seed: 1, perturb: {...}}``,
+docs/physics.md section 10) adds a last dimension ``member`` (0 .. members - 1): every
+member is an ordinary case, and the file gains the ensemble statistics
+(:mod:`clearsweep.ensemble`: ``<name>_mean``, ``_std``, ``_ci_low``, ``_ci_high``,
+``members_ok``). ``ensemble.member`` and ``ensemble.members`` cannot be swept.
 Command-line ``--set KEY=VALUE`` overrides apply to the base; a key that the
 sweep varies cannot be overridden.
 

@@ -38,7 +38,11 @@ from .assemble import SweepSlot
 from .parts import canonical_json, case_hash
 
 #: First components of a dotted key that the dimension name leaves out.
-DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver")
+DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver", "ensemble")
+#: The ensemble's dimension: one index per member, after the sweep's own dimensions.
+MEMBER_DIM = "member"
+#: Keys that the ensemble section sets for every case and a sweep cannot vary.
+ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members")
 #: What a sweep stores per case.
 STORE_MODES = ("full", "summary")
 #: Top-level keys of a sweep file.
@@ -53,7 +57,7 @@ SECONDS_PER_STEP = 3e-6
 
 def _reserved_names() -> set[str]:
     return {*variables.CASE_VARIABLES, *variables.COORDINATES, *variables.SUMMARY_VARIABLES,
-            "status", "message"}
+            "status", "message", MEMBER_DIM}
 
 
 def dimension_name(key: str) -> str:
@@ -291,6 +295,10 @@ def _check_swept_key(key, base: Config, where: str, source: str) -> str:
     if isinstance(value, Mapping):
         raise ConfigError(f"{where}.{key}", None, f"a key of a value, not of the section {key} "
                           f"(e.g. {key}.{next(iter(value))})", source, got="a section")
+    if key in ENSEMBLE_KEYS:
+        raise ConfigError(f"{where}.{key}", None, "a key other than ensemble.member(s): set "
+                          "ensemble.members in the base and every member is run along the "
+                          f"{MEMBER_DIM!r} dimension", source, got="an ensemble key")
     return key
 
 
@@ -383,6 +391,14 @@ def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
         taken.add(dim)
         axes.append(Axis(dim, kind, keys, tuple(names[k] for k in keys), values, labels))
     return axes
+
+
+def member_axes(base: Config) -> list[Axis]:
+    """The ``member`` dimension of an ensemble (``ensemble.members > 1``), else none."""
+    n = base.ensemble.members
+    if n <= 1:
+        return []
+    return [Axis(MEMBER_DIM, "grid", ("ensemble.member",), (MEMBER_DIM,), (tuple(range(n)),))]
 
 
 def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
@@ -488,7 +504,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
     base = _load_base(doc.get("base"), base_dir, source, overrides)
     spec = doc.get("sweep")
-    axes = _parse_axes(spec, base, source)
+    axes = _parse_axes(spec, base, source) + member_axes(base)
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
     n_points = math.prod(a.size for a in axes)
