@@ -93,12 +93,19 @@ def main() -> None:
 @_overrides
 @_allow_large
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes for the members of an ensemble [default: all cores].")
 @click.pass_context
 def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-        allow_large: bool, quiet: bool) -> None:
-    """Simulate one case described by CONFIG (YAML) and write its results."""
+        allow_large: bool, quiet: bool, workers: int | None) -> None:
+    """Simulate one case described by CONFIG (YAML) and write its results; with
+    ``ensemble.members > 1``, every member (a ``member`` dimension) and the ensemble
+    statistics."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
+    if cfg.ensemble.members > 1:
+        _run_ensemble(ctx, config, cfg, out, allow_large, quiet, workers)
+        return
     from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
@@ -127,6 +134,33 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         hint = ds.attrs.get("status_hint")
         click.echo(f"clearsweep: run stopped: {status} (results so far in {path})"
                    + (f"; {hint}" if hint else ""), err=True)
+        ctx.exit(1)
+
+
+def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None, allow_large: bool,
+                  quiet: bool, workers: int | None) -> None:
+    """``run`` of an ensemble: its members as a sweep of one design (all in one file)."""
+    from .analysis import format_ensemble_report
+    from .sweeping import expand, run_sweep
+
+    path = Path(out) if out else Path(Path(config).stem + ".nc")
+    plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
+    announce_compile(quiet)
+    try:
+        ds = run_sweep(plan, path, workers=workers, progress=not quiet, overwrite=True,
+                       allow_large=allow_large)
+    except OSError as exc:
+        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        ctx.exit(1)
+    with ds:
+        if not quiet:
+            click.echo(format_ensemble_report(ds))
+            click.echo(f"wrote {path}")
+        failed = int(ds.attrs["sweep_failed"])
+        n = int(ds.attrs["sweep_cases"])
+    if failed:
+        click.echo(f"clearsweep: {failed} of {n} members stopped with a status other than ok "
+                   f"(see the status and message variables in {path})", err=True)
         ctx.exit(1)
 
 
@@ -180,14 +214,19 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
     With --reference, the reduction of the maximum wear depth and the change
     of the wear range against that case (Table 6); with --metric, one summary
-    metric over the sweep dimensions.
+    metric over the sweep dimensions. An ensemble (a ``member`` dimension) prints
+    each design's mean -+ the 95 % confidence half-width and the design
+    comparisons, each "distinguishable" or "not distinguishable" (--reference
+    then picks the designs compared against).
     """
     from .analysis import (
         SelectionError,
+        format_ensemble_report,
         format_metric_table,
         format_reduction_table,
         format_statistics_table,
         format_wear_table,
+        is_ensemble,
     )
 
     if reference and metric:
@@ -196,6 +235,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         try:
             if metric:
                 text = format_metric_table(ds, metric, fmt)
+            elif is_ensemble(ds):
+                text = format_ensemble_report(ds, fmt, reference)
             elif reference:
                 text = format_reduction_table(ds, reference, fmt)
             else:

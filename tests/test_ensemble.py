@@ -218,3 +218,73 @@ def test_welch_interval_matches_scipy():
     assert welch_interval(1.0, 0.0, 4, 1.0, 0.0, 4)[1:] == (0.0, 0.0)
     assert distinguishable(0.0, 0.0) is False
     assert distinguishable(np.nan, 1.0) is None
+
+
+# ---------------------------------------------------------------------------- report, run, plot
+
+def synthetic_ensemble() -> xr.Dataset:
+    """Three coatings x 6 members of a wear depth at joint B: none and MoS2 overlap, PTFE
+    wears far more; one MoS2 member failed."""
+    rng = np.random.default_rng(4)
+    centre = np.array([1.0, 1.05, 3.0])[:, None] * 1e-9
+    depth = np.zeros((3, 6, 2))
+    depth[:, :, 1] = centre * (1.0 + 0.2 * rng.standard_normal((3, 6)))
+    status = np.full((3, 6), "ok", dtype=object)
+    status[1, 0] = "penetration"
+    depth[1, 0] = np.nan
+    ds = xr.Dataset({
+        "status": (("B_coating", "member"), status),
+        "wear_depth_max_final": (("B_coating", "member", "joint"), depth,
+                                 {"units": "m", "long_name": "maximum wear depth"}),
+    }, coords={"B_coating": ["none", "MoS2", "PTFE"], "member": np.arange(6), "joint": ["A", "B"]})
+    return xr.merge([ds, ensemble_statistics(ds)], combine_attrs="override")
+
+
+def test_report_prints_intervals_and_verdicts():
+    from clearsweep.analysis import format_ensemble_report
+
+    text = format_ensemble_report(synthetic_ensemble())
+    assert "+- 95% CI" in text and "Members ok" in text
+    assert "1 member(s) stopped" in text
+    lines = {line.split()[1]: line for line in text.splitlines() if line.startswith("B_coating:")}
+    assert lines["MoS2"].endswith("not distinguishable")
+    assert lines["PTFE"].endswith(" distinguishable") and "not" not in lines["PTFE"]
+    # the ideal joint A (no wear, no spread) is not compared
+    assert not any(" A " in line for line in lines.values())
+
+
+def test_report_reference_picks_the_compared_design():
+    from clearsweep.analysis import ensemble_comparisons
+
+    groups = ensemble_comparisons(synthetic_ensemble(), ["B_coating=PTFE"])
+    assert [r["compared"] for r in groups[0].rows] == ["B_coating: none vs PTFE",
+                                                     "B_coating: MoS2 vs PTFE"]
+
+
+def test_cli_run_of_an_ensemble_runs_every_member(tmp_path):
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main, report_command
+
+    config = tmp_path / "c.yaml"
+    import yaml
+
+    config.write_text(yaml.safe_dump(ensemble(3)))
+    out = tmp_path / "c.nc"
+    result = CliRunner().invoke(main, ["run", str(config), "-o", str(out), "--workers", "1"],
+                                catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    assert "Ensemble statistics over 3 members" in result.output
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["member"] == 3 and "slider_acceleration_rms_ci_high" in ds
+    report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
+    assert report.exit_code == 0 and "+- 95% CI" in report.output
+
+
+def test_sweep_plot_of_an_ensemble_draws_error_bars(tmp_path):
+    from clearsweep.plotting import figure
+
+    fig = figure(synthetic_ensemble(), "sweep", metric="wear_depth_max_final")
+    ax = fig.axes[0]
+    assert len(ax.containers) == 2          # one errorbar per joint
+    assert "confidence interval" in fig.texts[0].get_text()
