@@ -283,6 +283,43 @@ def plot_command(ctx: click.Context, path: str, kind: str, output: str,
     click.echo(f"wrote {output}")
 
 
+@main.command("sensitivity")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--output", "output", required=True, metavar="VAR",
+              help="Summary variable to analyse (the ensemble mean where the file is an ensemble).")
+@click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
+              help="Fix another dimension of VAR (e.g. joint=B); repeatable.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the indices with their intervals to this file (.png, .pdf, .svg).")
+def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
+                        plot_path: str | None) -> None:
+    """First-order and total Sobol' indices of VAR over the inputs of the Saltelli sampling
+    sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib)."""
+    from .analysis import SelectionError
+    from .sensitivity import (
+        SensitivityError,
+        format_indices,
+        indices_figure,
+        save_figure,
+        sweep_indices,
+    )
+
+    if plot_path and Path(plot_path).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise click.BadParameter(f"{plot_path!r}: the suffix must be one of "
+                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'--plot'")
+    with open_input(path) as ds:
+        try:
+            result = sweep_indices(ds, output, select_items)
+        except SelectionError as exc:
+            raise click.UsageError(str(exc)) from exc
+        except SensitivityError as exc:
+            raise click.ClickException(f"{path}: {exc}") from exc
+    click.echo(format_indices(result))
+    if plot_path:
+        save_figure(indices_figure(result), plot_path)
+        click.echo(f"wrote {plot_path}")
+
+
 def _fail(message: str, code: int):
     click.echo(f"clearsweep: {message}", err=True)
     sys.exit(code)
