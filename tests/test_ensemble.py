@@ -288,3 +288,26 @@ def test_sweep_plot_of_an_ensemble_draws_error_bars(tmp_path):
     ax = fig.axes[0]
     assert len(ax.containers) == 2          # one errorbar per joint
     assert "confidence interval" in fig.texts[0].get_text()
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+
+
+def test_shipped_coating_ensemble_expands_to_192_members():
+    plan = expand(ROOT / "configs" / "coating_ensemble.yaml")
+    assert plan.dims == {"B_coating": 4, "B_clearance": 3, "member": 16}
+    assert len(plan.runnable()) == 192 and plan.store == "summary"
+
+
+@pytest.mark.slow
+def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path):
+    from click.testing import CliRunner
+
+    from clearsweep.cli import report_command
+
+    out = tmp_path / "coating_ensemble.nc"
+    # shortened to 0.1 s per member: the verdicts come from the spread, not from the length
+    run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, workers=2, progress=False,
+              overrides=["solver.duration=0.1"]).close()
+    report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
+    assert "+- 95% CI" in report.output and " not distinguishable" in report.output
