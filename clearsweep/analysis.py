@@ -682,6 +682,8 @@ def format_ensemble_table(ds: xr.Dataset, fmt: str = "text",
     from .ensemble import CI_METHOD
 
     dims = _design_dims(ds)
+    # designs that a sweep's skip rules left out are not listed
+    skipped = (ds["status"].astype(str) == "skipped").all(MEMBER_DIM)
     groups = []
     for wanted in metrics:
         name = _present_metric(ds, wanted)
@@ -689,9 +691,10 @@ def format_ensemble_table(ds: xr.Dataset, fmt: str = "text",
             continue
         table = xr.Dataset({"mean": ds[name + "_mean"], "std": ds[name + "_std"],
                             "half_width": 0.5 * (ds[name + "_ci_high"] - ds[name + "_ci_low"]),
-                            "members_ok": ds["members_ok"]})
+                            "members_ok": ds["members_ok"], "skipped": skipped})
         inner = tuple(d for d in table["mean"].dims if d in CASE_DIMS)
         rows = [{**keys, **row} for keys, point in iter_points(table, dims)
+                if not bool(point["skipped"])
                 for row in _rows(point, inner, [c.name for c in _ENSEMBLE_COLUMNS])]
         groups.append(_Group(_metric_heading(ds, name), {"metric": name}, rows))
     n = ds.sizes[MEMBER_DIM]

@@ -311,3 +311,12 @@ def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path):
               overrides=["solver.duration=0.1"]).close()
     report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
     assert "+- 95% CI" in report.output and " not distinguishable" in report.output
+
+
+def test_report_leaves_out_designs_that_the_sweep_skipped():
+    from clearsweep.analysis import format_ensemble_table
+
+    ds = synthetic_ensemble()
+    ds["status"] = ds["status"].where(ds["B_coating"] != "MoS2", "skipped")
+    text = format_ensemble_table(ds)
+    assert "MoS2" not in text and "PTFE" in text
