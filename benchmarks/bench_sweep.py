@@ -13,6 +13,11 @@ Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped]``; prints mark
   resident memory of the driver and all its descendants (sampled every 20
   ms with psutil; RSS counts shared library pages once per process, so this
   is an upper bound), and each process's own peak.
+- **Ensemble** (``--ensemble``): 48 designs (4 coatings x 6 clearances x clearance at
+  B / at A and B) x 16 members = 768 cases of 5 ms of motion, ``store: summary``, 2
+  workers, in a fresh interpreter; beside it a plain 768-case summary sweep of the same
+  cases without perturbations (48 designs x 16 speeds) to show that members run at the
+  speed of ordinary cases; wall, cases/s, peak memory and file size per case.
 - **Shipped sweeps** (``--shipped``): ``configs/coating_clearance.yaml`` and
   ``configs/paper.yaml`` through the CLI with two workers: wall time, peak
   memory, cases and file size.
@@ -55,6 +60,28 @@ MEMORY_SWEEP = {
     "sweep": {"grid": {"joints.B.coating": ["none", "MoS2", "lead", "PTFE"],
                        "joints.B.clearance": [round(5e-5 + 4e-5 * i, 10) for i in range(25)],
                        "mechanism.speed_rpm": [30, 45, 60, 75, 90]}},
+}
+
+_CASE_GRID = {"joints.B.coating": ["none", "MoS2", "lead", "PTFE"],
+            "joints.B.clearance": [5.0e-5, 1.0e-4, 2.5e-4, 5.0e-4, 7.5e-4, 1.0e-3]}
+_JOINT_SETS = [{"name": "clearance_joints", "labels": ["B", "AB"], "joints.A.clearance": [0.0, 2.5e-4]}]
+#: 48 designs x 16 members = 768 cases of 5 ms, summaries only.
+ENSEMBLE_SWEEP = {
+    "name": "ensemble",
+    "store": "summary",
+    "base": {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.005},
+             "ensemble": {"members": 16, "seed": 1,
+                          "perturb": {"ball_offset": 0.5, "crank_phase_deg": 5.0,
+                                      "wear_coefficient_cv": 0.3}}},
+    "sweep": {"grid": _CASE_GRID, "zip": _JOINT_SETS},
+}
+#: The same 768 cases without an ensemble: 48 designs x 16 speeds.
+PLAIN_SWEEP = {
+    "name": "plain",
+    "store": "summary",
+    "base": {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.005}},
+    "sweep": {"grid": {**_CASE_GRID, "mechanism.speed_rpm": [52.0 + i for i in range(16)]},
+              "zip": _JOINT_SETS},
 }
 
 RUN_SNIPPET = """
@@ -157,10 +184,10 @@ def measured_run(command: list[str]) -> dict:
     return result
 
 
-def memory_sweep() -> dict:
+def memory_sweep(doc: dict = MEMORY_SWEEP) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "memory.nc"
-        run = measured_run([sys.executable, "-c", RUN_SNIPPET, json.dumps(MEMORY_SWEEP), str(out)])
+        run = measured_run([sys.executable, "-c", RUN_SNIPPET, json.dumps(doc), str(out)])
         if run["returncode"]:
             raise RuntimeError(run["stderr"])
         run.update(json.loads(run["stdout"].strip().splitlines()[-1]))
@@ -190,9 +217,22 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=2, help="alternating timing rounds")
     parser.add_argument("--shipped", action="store_true", help="also run the shipped sweeps")
+    parser.add_argument("--ensemble", action="store_true",
+                        help="only the 768-case ensemble and its plain twin")
     args = parser.parse_args()
 
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    if args.ensemble:
+        print("\n## 48 designs x 16 members, summary store, 2 workers\n")
+        print("| sweep | cases | wall [s] | cases/s | peak RSS, driver + descendants [MB] | "
+              "file [MB] | file per case [bytes] |")
+        print("|---|---|---|---|---|---|---|")
+        for doc in (ENSEMBLE_SWEEP, PLAIN_SWEEP):
+            m = memory_sweep(doc)
+            print(f"| {doc['name']} | {m['cases']} | {m['wall_s']:.1f} | {m['cases'] / m['wall_s']:.1f} | "
+                  f"{m['total_mb']:.0f} | {m['file_mb']:.2f} | {m['file_mb'] * 2**20 / m['cases']:.0f} |",
+                  flush=True)
+        return
     s = scaling(args.repeats)
     print("\n## Scaling: serial vs 2 workers, same cases\n")
     print("| cases | serial [s] | 2 workers, warm [s] | speed-up (best/best) | 2 workers, cold [s] |")

@@ -26,6 +26,7 @@ Conventions (docs/physics.md section 5, paper Tables 4-6):
 
 from __future__ import annotations
 
+import collections
 import csv
 import io
 import itertools
@@ -39,6 +40,7 @@ import numpy as np
 import xarray as xr
 
 from .choices import REPORT_FORMATS
+from .ensemble import MEMBER_DIM
 from .schema import close_matches
 from .summary import (  # noqa: F401
     PASS_THROUGH_VARIABLES,
@@ -622,3 +624,172 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
 
 
 # --------------------------------------------------------------------------- command line
+
+
+# --------------------------------------------------------------------------- ensembles
+
+#: Metrics of the ensemble report, in order; the settled statistic is replaced by its
+#: whole-run twin where the run ends before the settled window (all NaN).
+ENSEMBLE_METRICS = ("slider_acceleration_rms_settled", "slider_acceleration_peak_settled",
+                    "crank_torque_peak_settled", "normal_force_peak_settled",
+                    "impact_count_settled", "contact_fraction_settled", "wear_depth_max_final")
+#: Metrics whose designs the ensemble report compares.
+COMPARED_METRICS = ("wear_depth_max_final", "slider_acceleration_rms_settled",
+                    "normal_force_peak_settled")
+
+_ENSEMBLE_COLUMNS = (
+    _Column("mean", "Mean", ".4g"),
+    _Column("half_width", "+- 95% CI", ".2g"),
+    _Column("std", "Std", ".3g"),
+    _Column("members_ok", "Members ok", ""),
+)
+_COMPARISON_COLUMNS = (
+    _Column("difference", "Difference", ".3g"),
+    _Column("ci_low", "95% CI low", ".3g"),
+    _Column("ci_high", "95% CI high", ".3g"),
+    _Column("verdict", "Verdict", ""),
+)
+
+
+def is_ensemble(ds: xr.Dataset) -> bool:
+    """Whether ``ds`` is an ensemble sweep with its statistics."""
+    return MEMBER_DIM in ds.dims and "members_ok" in ds
+
+
+def _present_metric(ds: xr.Dataset, name: str) -> str | None:
+    """``name`` if its mean is stored and not all NaN, else its whole-run twin, else None."""
+    for candidate in (name, name.removesuffix("_settled")):
+        mean = ds.get(candidate + "_mean")
+        if mean is not None and bool(np.isfinite(mean.values.astype(float)).any()):
+            return candidate
+    return None
+
+
+def _design_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    return tuple(d for d in sweep_dims(ds) if d != MEMBER_DIM)
+
+
+def _metric_heading(ds: xr.Dataset, name: str) -> str:
+    units = ds[name + "_mean"].attrs.get("units", "")
+    long_name = ds[name].attrs.get("long_name", name) if name in ds else name
+    return f"{name}: {long_name}" + (f" [{units}]" if units and units != "1" else "")
+
+
+def format_ensemble_table(ds: xr.Dataset, fmt: str = "text",
+                          metrics: Iterable[str] = ENSEMBLE_METRICS) -> str:
+    """Ensemble mean -+ the half-width of its 95 % Student t interval, the standard deviation
+    and the members counted, per design (and joint), one block per metric."""
+    from .ensemble import CI_METHOD
+
+    dims = _design_dims(ds)
+    # designs that a sweep's skip rules left out are not listed
+    skipped = (ds["status"].astype(str) == "skipped").all(MEMBER_DIM)
+    groups = []
+    for wanted in metrics:
+        name = _present_metric(ds, wanted)
+        if name is None:
+            continue
+        table = xr.Dataset({"mean": ds[name + "_mean"], "std": ds[name + "_std"],
+                            "half_width": 0.5 * (ds[name + "_ci_high"] - ds[name + "_ci_low"]),
+                            "members_ok": ds["members_ok"], "skipped": skipped})
+        inner = tuple(d for d in table["mean"].dims if d in CASE_DIMS)
+        rows = [{**keys, **row} for keys, point in iter_points(table, dims)
+                if not bool(point["skipped"])
+                for row in _rows(point, inner, [c.name for c in _ENSEMBLE_COLUMNS])]
+        groups.append(_Group(_metric_heading(ds, name), {"metric": name}, rows))
+    n = ds.sizes[MEMBER_DIM]
+    title = (f"Ensemble statistics over {n} members (mean +- half-width of the 95% confidence "
+             f"interval of the mean; {CI_METHOD}; members that stopped with another status are "
+             "left out and counted in 'Members ok')")
+    return _render(title, groups, dims + _joint_key(groups), _ENSEMBLE_COLUMNS, {}, fmt)
+
+
+def _joint_key(groups: list[_Group]) -> tuple[str, ...]:
+    """``("joint",)`` when some rows have a joint (the others then get an empty one)."""
+    if not any("joint" in r for g in groups for r in g.rows):
+        return ()
+    for group in groups:
+        for row in group.rows:
+            row.setdefault("joint", "")
+    return ("joint",)
+
+
+def _reference_values(ds: xr.Dataset, dims: tuple[str, ...], reference) -> dict[str, object]:
+    chosen = parse_selection(ds, reference, dims_only=True) if reference else {}
+    return {d: chosen.get(d, ds[d].values[0] if d in ds.coords else 0) for d in dims}
+
+
+def ensemble_comparisons(ds: xr.Dataset, reference=None,
+                         metrics: Iterable[str] = COMPARED_METRICS) -> list[_Group]:
+    """Each design against the reference value of one design dimension, the others held:
+    difference of the ensemble means, its 95 % Welch interval and whether it excludes 0.
+
+    The reference of a dimension is its ``reference`` value (``DIM=VALUE``), else its first.
+    A pair that is equal without spread (an ideal joint's zero wear) is not listed.
+    """
+    from .ensemble import distinguishable, welch_interval
+
+    dims = _design_dims(ds)
+    refs = _reference_values(ds, dims, reference)
+    groups = []
+    for wanted in metrics:
+        name = _present_metric(ds, wanted)
+        if name is None:
+            continue
+        mean, std, n_ok = ds[name + "_mean"], ds[name + "_std"], ds["members_ok"]
+        inner = tuple(d for d in mean.dims if d in CASE_DIMS)
+        rows = []
+        for dim in dims:
+            if ds.sizes[dim] < 2:
+                continue
+            others = tuple(d for d in dims if d != dim)
+            for held, _ in iter_points(mean.isel({dim: 0}), others) if others else [({}, None)]:
+                ref = {**held, dim: refs[dim]}
+                for value in ds[dim].values:
+                    if value_text(value) == value_text(refs[dim]):
+                        continue
+                    case = {**held, dim: value}
+                    for where, _ in iter_points(mean.isel({d: 0 for d in dims}), inner) if inner else [({}, None)]:
+                        a, b = {**ref, **where}, {**case, **where}
+                        m1, s1, n1 = float(mean.sel(a)), float(std.sel(a)), int(n_ok.sel(ref))
+                        m2, s2, n2 = float(mean.sel(b)), float(std.sel(b)), int(n_ok.sel(case))
+                        if not (np.isfinite(m1) and np.isfinite(m2)) or (s1 == s2 == 0.0 and m1 == m2):
+                            continue
+                        diff, low, high = welch_interval(m1, s1, n1, m2, s2, n2)
+                        verdict = {True: "distinguishable", False: "not distinguishable",
+                                   None: "n/a (fewer than 2 members)"}[distinguishable(low, high)]
+                        rows.append({"compared": f"{dim}: {value_text(value)} vs {value_text(refs[dim])}",
+                                     "held": label_text(held), **{k: value_text(v) for k, v in where.items()},
+                                     "difference": diff, "ci_low": low, "ci_high": high,
+                                     "verdict": verdict})
+        if rows:
+            groups.append(_Group(_metric_heading(ds, name), {"metric": name}, rows))
+    return groups
+
+
+def format_ensemble_comparisons(ds: xr.Dataset, fmt: str = "text", reference=None) -> str:
+    """:func:`ensemble_comparisons` as a table, and a closing count of the verdicts."""
+    groups = ensemble_comparisons(ds, reference)
+    if not groups:
+        return ""
+    title = ("Design comparisons (case minus reference, ensemble means; 95% Welch t interval of "
+             "the difference; 'not distinguishable': the interval contains 0)")
+    text = _render(title, groups, ("compared", "held", *_joint_key(groups)), _COMPARISON_COLUMNS,
+                   {}, fmt)
+    if fmt in ("text", "markdown"):
+        verdicts = collections.Counter(r["verdict"] for g in groups for r in g.rows)
+        text += "\n\n" + ", ".join(f"{n} {v}" for v, n in sorted(verdicts.items())) + "."
+    return text
+
+
+def format_ensemble_report(ds: xr.Dataset, fmt: str = "text", reference=None) -> str:
+    """The ensemble statistics and the design comparisons of an ensemble sweep."""
+    parts = [format_ensemble_table(ds, fmt)]
+    status = ds["status"].astype(str)
+    failed = int(((status != "ok") & (status != "skipped")).sum())
+    if failed and fmt in ("text", "markdown"):
+        parts.append(f"{failed} member(s) stopped with a status other than ok and are not "
+                     "averaged in (see the status and message variables).")
+    if fmt in ("text", "markdown"):
+        parts.append(format_ensemble_comparisons(ds, fmt, reference))
+    return "\n\n".join(p for p in parts if p)

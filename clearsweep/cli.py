@@ -99,12 +99,19 @@ def main() -> None:
 @_overrides
 @_allow_large
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes for the members of an ensemble [default: all cores].")
 @click.pass_context
 def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-        allow_large: bool, quiet: bool) -> None:
-    """Simulate one case described by CONFIG (YAML) and write its results."""
+        allow_large: bool, quiet: bool, workers: int | None) -> None:
+    """Simulate one case described by CONFIG (YAML) and write its results; with
+    ``ensemble.members > 1``, every member (a ``member`` dimension) and the ensemble
+    statistics."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
+    if cfg.ensemble.members > 1:
+        _run_ensemble(ctx, config, cfg, out, allow_large, quiet, workers)
+        return
     from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
@@ -173,6 +180,32 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
     if str(ds["stop_reason"].values).startswith("block_status:"):
         click.echo(f"clearsweep: life run stopped: {ds['stop_reason'].values} (results so far in "
                    f"{path})", err=True)
+
+
+def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None, allow_large: bool,
+                  quiet: bool, workers: int | None) -> None:
+    """``run`` of an ensemble: its members as a sweep of one design (all in one file)."""
+    from .analysis import format_ensemble_report
+    from .sweeping import expand, run_sweep
+
+    path = Path(out) if out else Path(Path(config).stem + ".nc")
+    plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
+    announce_compile(quiet)
+    try:
+        ds = run_sweep(plan, path, workers=workers, progress=not quiet, overwrite=True,
+                       allow_large=allow_large)
+    except OSError as exc:
+        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        ctx.exit(1)
+    with ds:
+        if not quiet:
+            click.echo(format_ensemble_report(ds))
+            click.echo(f"wrote {path}")
+        failed = int(ds.attrs["sweep_failed"])
+        n = int(ds.attrs["sweep_cases"])
+    if failed:
+        click.echo(f"clearsweep: {failed} of {n} members stopped with a status other than ok "
+                   f"(see the status and message variables in {path})", err=True)
         ctx.exit(1)
 
 
@@ -226,14 +259,19 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
     With --reference, the reduction of the maximum wear depth and the change
     of the wear range against that case (Table 6); with --metric, one summary
-    metric over the sweep dimensions.
+    metric over the sweep dimensions. An ensemble (a ``member`` dimension) prints
+    each design's mean -+ the 95 % confidence half-width and the design
+    comparisons, each "distinguishable" or "not distinguishable" (--reference
+    then picks the designs compared against).
     """
     from .analysis import (
         SelectionError,
+        format_ensemble_report,
         format_metric_table,
         format_reduction_table,
         format_statistics_table,
         format_wear_table,
+        is_ensemble,
     )
 
     if reference and metric:
@@ -247,6 +285,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         try:
             if metric:
                 text = format_metric_table(ds, metric, fmt)
+            elif is_ensemble(ds):
+                text = format_ensemble_report(ds, fmt, reference)
             elif reference:
                 text = format_reduction_table(ds, reference, fmt)
             else:
@@ -304,6 +344,43 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
     except ValueError:
         raise click.BadParameter(f"{text!r}: 'all' or comma-separated case positions (0, 1, ...)",
                                  param_hint="--keep-series") from None
+
+
+@main.command("sensitivity")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.option("--output", "output", required=True, metavar="VAR",
+              help="Summary variable to analyse (the ensemble mean where the file is an ensemble).")
+@click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
+              help="Fix another dimension of VAR (e.g. joint=B); repeatable.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the indices with their intervals to this file (.png, .pdf, .svg).")
+def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
+                        plot_path: str | None) -> None:
+    """First-order and total Sobol' indices of VAR over the inputs of the Saltelli sampling
+    sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib)."""
+    from .analysis import SelectionError
+    from .sensitivity import (
+        SensitivityError,
+        format_indices,
+        indices_figure,
+        save_figure,
+        sweep_indices,
+    )
+
+    if plot_path and Path(plot_path).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise click.BadParameter(f"{plot_path!r}: the suffix must be one of "
+                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'--plot'")
+    with open_input(path) as ds:
+        try:
+            result = sweep_indices(ds, output, select_items)
+        except SelectionError as exc:
+            raise click.UsageError(str(exc)) from exc
+        except SensitivityError as exc:
+            raise click.ClickException(f"{path}: {exc}") from exc
+    click.echo(format_indices(result))
+    if plot_path:
+        save_figure(indices_figure(result), plot_path)
+        click.echo(f"wrote {plot_path}")
 
 
 def _fail(message: str, code: int):

@@ -37,7 +37,8 @@ from .schema import (  # noqa: F401
 )
 
 __all__ = [
-    "ConfigError", "Field", "Config", "JointConfig", "SCHEMA", "DEFAULTS", "load_config",
+    "ConfigError", "Field", "Config", "JointConfig", "EnsembleConfig", "PerturbConfig", "SCHEMA",
+    "DEFAULTS", "load_config",
     "apply_override", "dump_config",
     "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
     "field_info", "FIELD_INFO",
@@ -229,6 +230,38 @@ class LifeConfig(_Section):
 
 
 @dataclass(frozen=True)
+class PerturbConfig(_Section):
+    """Scatter of one ensemble member (docs/physics.md section 10); 0 = none."""
+
+    #: radius of the uniform ball the offset is drawn from, fraction of each clearance
+    ball_offset: float = _setting(Field(0.0, lo=0.0, hi=1.0), "1",
+                                  "initial ball offset scatter, fraction of the clearance")
+    #: theta0 + U(-x, x)
+    crank_phase_deg: float = _setting(Field(0.0, lo=0.0, hi=180.0), "degree",
+                                      "half-width of the uniform initial crank angle scatter")
+    #: k * lognormal factor of mean 1 and this coefficient of variation, per joint
+    wear_coefficient_cv: float = _setting(Field(0.0, lo=0.0, hi=10.0), "1",
+                                          "coefficient of variation of the wear coefficient")
+
+    @property
+    def any(self) -> bool:
+        """Whether any perturbation is switched on."""
+        return self.ball_offset > 0.0 or self.crank_phase_deg > 0.0 or self.wear_coefficient_cv > 0.0
+
+
+@dataclass(frozen=True)
+class EnsembleConfig(_Section):
+    """An ensemble: ``members`` cases that differ only by a perturbation drawn from
+    (``seed``, ``member``); a sweep runs every member, a resolved case is one member."""
+
+    members: int = _setting(Field(1, int, lo=1), "1", "ensemble members")
+    seed: int = _setting(Field(0, int, lo=0), "1", "ensemble random seed")
+    #: set by the sweep for each member; 0 .. members - 1
+    member: int = _setting(Field(0, int, lo=0), "1", "ensemble member index")
+    perturb: PerturbConfig = _section(PerturbConfig)
+
+
+@dataclass(frozen=True)
 class Config(_Section):
     """A resolved case configuration: validated once by :func:`load_config`, then passed
     down as it is. Frozen: change a value with :func:`load_config` and an override, or
@@ -248,6 +281,7 @@ class Config(_Section):
     metrics: MetricsConfig = _section(MetricsConfig)
     solver: SolverConfig = _section(SolverConfig)
     life: LifeConfig = _section(LifeConfig)
+    ensemble: EnsembleConfig = _section(EnsembleConfig)
 
     def replace(self, *overrides: str, **values: Any) -> Config:
         """A validated copy with ``"dotted.key=VALUE"`` overrides and/or ``dotted__key=value``
@@ -318,6 +352,7 @@ MIN_BALL_RADIUS_FRACTION = 0.5
 _RELATIONS = [
     ("friction.v1", ">", "friction.v0"),
     ("solver.dt", "<=", "solver.duration"),
+    ("ensemble.member", "<", "ensemble.members"),
 ]
 _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt}
 

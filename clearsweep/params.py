@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .config import Config, JointConfig
+from .config import Config, EnsembleConfig, JointConfig
 from .core import layout as L
 
 
@@ -217,6 +217,63 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     return offsets[0], offsets[1]
 
 
+@dataclass(frozen=True)
+class MemberPerturbation:
+    """What makes one ensemble member differ from the nominal case (docs/physics.md section 10).
+
+    Attributes
+    ----------
+    crank_phase_rad : float
+        Added to theta0 [rad].
+    ball_offset : np.ndarray
+        (2, 3) per joint (A, B): ball-centre displacement from the nominal start, as a
+        fraction of that joint's clearance (global frame), inside the ball of radius
+        ``perturb.ball_offset``.
+    wear_factor : np.ndarray
+        (2,) per joint: multiplies the wear coefficient k (lognormal, mean 1).
+    """
+
+    crank_phase_rad: float
+    ball_offset: np.ndarray
+    wear_factor: np.ndarray
+
+
+def member_perturbation(ensemble: EnsembleConfig) -> MemberPerturbation:
+    """The perturbation of member ``ensemble.member``, from ``(seed, member)`` only.
+
+    The generator is ``np.random.SeedSequence(seed, spawn_key=(member,))`` (the member-th
+    child of ``SeedSequence(seed)``), so a member's draw does not depend on the other members,
+    the workers or the order cases finish. Every draw is made whatever the amplitudes, in a
+    fixed order (phase, then per joint A, B: direction, radius, wear), so switching one
+    perturbation on or off leaves the others' values unchanged.
+    """
+    rng = np.random.default_rng(np.random.SeedSequence(ensemble.seed, spawn_key=(ensemble.member,)))
+    pert = ensemble.perturb
+    phase = rng.uniform(-1.0, 1.0)
+    offsets = np.zeros((2, 3))
+    factors = np.ones(2)
+    sigma = math.sqrt(math.log1p(pert.wear_coefficient_cv ** 2))
+    for j in range(2):
+        direction = rng.standard_normal(3)
+        radius = rng.random() ** (1.0 / 3.0)        # uniform in the unit ball
+        z = rng.standard_normal()
+        norm = float(np.linalg.norm(direction))
+        if norm > 0.0:
+            offsets[j] = pert.ball_offset * radius * direction / norm
+        factors[j] = math.exp(sigma * z - 0.5 * sigma ** 2)
+    return MemberPerturbation(math.radians(pert.crank_phase_deg) * phase, offsets, factors)
+
+
+def perturbed_offset(nominal: np.ndarray, shift: np.ndarray, clearance: float) -> np.ndarray:
+    """Nominal ball-centre offset [m] moved by ``shift * clearance`` and kept within
+    max(|nominal|, clearance) of the socket centre: never deeper in the wall than the seated
+    start (docs/physics.md section 10)."""
+    d = nominal + clearance * shift
+    limit = max(float(np.linalg.norm(nominal)), clearance)
+    size = float(np.linalg.norm(d))
+    return d * (limit / size) if size > limit else d
+
+
 @dataclass
 class Packed:
     """Kernel inputs of one case."""
@@ -300,15 +357,23 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
         jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
+    perturb = cfg.ensemble.perturb
+    member = member_perturbation(cfg.ensemble) if perturb.any else None
+    if member is not None:      # unperturbed: the nominal case, bit for bit
+        jp[:, L.J_K] *= member.wear_factor
+        p[L.P_THETA0] += member.crank_phase_rad
     # whole output samples, rounded up: the run covers at least `duration`
     save_every = solver.save_every
     n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
-    theta0 = cfg.mechanism.theta0
+    theta0 = float(p[L.P_THETA0])
     if cfg.initial.joints == "seated":
         offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega, wmap)
-        y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
     else:
-        y0 = initial_state(preset, theta0, omega)
+        offset_A, offset_B = np.zeros(3), np.zeros(3)
+    if member is not None and perturb.ball_offset > 0.0:
+        offset_A, offset_B = (perturbed_offset(d, member.ball_offset[j], float(jp[j, L.J_C]))
+                              for j, d in enumerate((offset_A, offset_B)))
+    y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
                   map_shape=(wear.map[0], wear.map[1]), method=solver.method)

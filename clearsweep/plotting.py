@@ -25,7 +25,9 @@ Kinds (``KINDS``):
     inside the clearance circle; cases overlaid.
 ``sweep``
     one summary metric (``analysis.case_summary``) over one sweep dimension
-    (lines) or two (heat maps).
+    (lines) or two (heat maps); for an ensemble (a ``member`` dimension), the
+    ensemble mean over one or two design dimensions with its 95 % confidence
+    interval as error bars, one line per value of the second dimension.
 ``life``
     a life run (``clearsweep life``): wear depth, effective clearance, coating
     remaining, settled peak normal force, RMS slider acceleration and impacts
@@ -49,6 +51,7 @@ from matplotlib.patches import Rectangle
 
 from .analysis import (
     CASE_DIMS,
+    MEMBER_DIM,
     SelectionError,
     choice_message,
     iter_cases,
@@ -379,8 +382,46 @@ def _category_positions(coord: xr.DataArray) -> tuple[np.ndarray, list[str] | No
     return np.arange(coord.size), [value_text(v) for v in coord.values]
 
 
+def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
+    """Ensemble mean of ``metric`` with its confidence interval as error bars, over the
+    first design dimension; a line per value of the second (and per joint / axis)."""
+    mean = ds[metric + "_mean"]
+    dims = tuple(d for d in sweep_dims(mean))
+    if not dims or len(dims) > 2:
+        raise PlotError(f"--kind sweep draws an ensemble mean over one or two design dimensions; "
+                        f"this dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the "
+                        "others with --select DIM=VALUE")
+    low, high = ds[metric + "_ci_low"], ds[metric + "_ci_high"]
+    ax = fig.add_subplot()
+    xs, ticks = _category_positions(mean[dims[0]])
+    series = tuple(str(d) for d in mean.dims if d != dims[0])
+    lines = list(iter_points(mean, series))
+    step = (np.ptp(xs) if len(xs) > 1 else 1.0) * 0.01
+    for k, (keys, line) in enumerate(lines):
+        y = line.transpose(dims[0]).values.astype(float)
+        lo = low.sel(keys).transpose(dims[0]).values.astype(float) if keys else low.values
+        hi = high.sel(keys).transpose(dims[0]).values.astype(float) if keys else high.values
+        text = ", ".join(f"{d} {value_text(v)}" for d, v in keys.items())
+        # nudge the lines apart so that their error bars do not hide each other
+        ax.errorbar(xs + (k - 0.5 * (len(lines) - 1)) * step, y, yerr=[y - lo, hi - y], marker="o",
+                    capsize=3, label=_case_label(text, len(lines), metric))
+    if ticks is not None:
+        ax.set_xticks(xs, ticks)
+    ax.set_xlabel(axis_label(mean[dims[0]]))
+    ax.set_ylabel(axis_label(mean))
+    ax.grid(alpha=0.3)
+    if series and len(lines) <= MAX_LEGEND_ENTRIES:
+        ax.legend(fontsize="x-small")
+    n = ds.sizes[MEMBER_DIM]
+    fig.suptitle(f"{metric} over {dims[0]}: ensemble mean of {n} members,\nbars: 95% confidence "
+                 "interval of the mean (Student t)")
+
+
 def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     metric = metric or DEFAULT_SWEEP_METRIC
+    if MEMBER_DIM in ds.dims and metric + "_mean" in ds:
+        _draw_ensemble_sweep(fig, ds, metric)
+        return
     values = metric_table(ds, metric)
     if values.dtype.kind not in "fiub":
         raise PlotError(f"metric {metric!r} is not numeric; --kind sweep plots numbers")

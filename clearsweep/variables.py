@@ -175,6 +175,9 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
     "wear_range_reduction_percent": VariableSpec(
         ("joint", "axis"), "%", "reduction of the wear range in percent",
         "100 (reference - case) / reference (paper Table 6)"),
+    "members_ok": VariableSpec((), "1", "ensemble members with status ok",
+                               "members counted in the ensemble statistics; the others stopped "
+                               "with another status and are left out"),
     "is_reference": VariableSpec((), "", "reference case of the comparison",
                                  "true for the cases the reduction table compares against"),
 }

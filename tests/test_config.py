@@ -248,6 +248,7 @@ def _consistent(raw):
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
+    raw["ensemble"]["members"] = raw["ensemble"]["member"] + raw["ensemble"]["members"]
     return raw
 
 

@@ -29,7 +29,25 @@ Sweep file
       skip:                        # optional; matching points are not run (status "skipped")
         - {B_coating: none, B_clearance: 1.0e-4}
 
+    sweep:                         # or: points drawn over continuous ranges
+      sample:                      # ONE dimension "sample"; every key a coordinate along it
+        method: saltelli           # sobol | lhs (scipy.stats.qmc) | saltelli (SALib)
+        n: 64                      # points; for saltelli base points: n (D + 2) cases
+        seed: 1                    # the same seed draws the same points
+        second_order: false        # saltelli only: n (2 D + 2) cases, second-order indices
+        ranges:
+          joints.B.clearance: [1.0e-4, 5.0e-4]
+          mechanism.speed_rpm: [40.0, 80.0]
+
 Keys are dotted paths of the case configuration (docs/architecture.md).
+A ``sample:`` section (it may stand beside grid and zip axes) is one dimension
+``sample`` whose index is the point number; ``clearsweep sensitivity`` computes
+Sobol' indices from a ``saltelli`` sample (:mod:`clearsweep.sensitivity`).
+A base with an ensemble (``ensemble: {members: 16, seed: 1, perturb: {...}}``,
+docs/physics.md section 10) adds a last dimension ``member`` (0 .. members - 1): every
+member is an ordinary case, and the file gains the ensemble statistics
+(:mod:`clearsweep.ensemble`: ``<name>_mean``, ``_std``, ``_ci_low``, ``_ci_high``,
+``members_ok``). ``ensemble.member`` and ``ensemble.members`` cannot be swept.
 Command-line ``--set KEY=VALUE`` overrides apply to the base; a key that the
 sweep varies cannot be overridden.
 

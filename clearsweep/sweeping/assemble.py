@@ -334,7 +334,8 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                        sweep_coords: Mapping[str, tuple[str, np.ndarray, Mapping]],
                        slots: Sequence[SweepSlot], store: PartStore,
                        attrs: Mapping | None = None,
-                       check: Callable[[], None] | None = None) -> dict[str, int]:
+                       check: Callable[[], None] | None = None,
+                       finish: Callable[[Path], None] | None = None) -> dict[str, int]:
     """Assemble the parts into one netCDF4 file, one case at a time, and rename it into place.
 
     Parameters
@@ -356,6 +357,9 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     check
         Called before each case is copied; may raise (``KeyboardInterrupt``)
         to stop, leaving no file.
+    finish
+        Called with the complete temporary file before it is renamed into
+        place, to add variables computed from it (the ensemble statistics).
 
     Returns
     -------
@@ -402,6 +406,8 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                 if names:
                     raw.append((where, store.path(slot.hash), names))
         _copy_chunks(Path(tmp), raw, check)
+        if finish is not None:
+            finish(Path(tmp))
     return counts
 
 

@@ -38,12 +38,22 @@ from .assemble import SweepSlot
 from .parts import canonical_json, case_hash
 
 #: First components of a dotted key that the dimension name leaves out.
-DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver")
+DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver", "ensemble")
+#: The ensemble's dimension: one index per member, after the sweep's own dimensions.
+MEMBER_DIM = "member"
+#: Keys that the ensemble section sets for every case and a sweep cannot vary.
+ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members")
 #: What a sweep stores per case.
 STORE_MODES = ("full", "summary")
 #: Top-level keys of a sweep file.
 SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
-SWEEP_KEYS = ("grid", "zip", "skip")
+SWEEP_KEYS = ("grid", "zip", "sample", "skip")
+#: Keys of a ``sample:`` section, and its methods: Sobol' and Latin hypercube points over the
+#: ranges (scipy.stats.qmc), or the Saltelli design that Sobol' indices need (SALib).
+SAMPLE_KEYS = ("method", "n", "seed", "ranges", "second_order")
+SAMPLE_METHODS = ("sobol", "lhs", "saltelli")
+#: The dimension of a sampling sweep.
+SAMPLE_DIM = "sample"
 #: Keys of a zip group that are not config keys.
 ZIP_META_KEYS = ("name", "labels")
 #: Rough cost of one RK4 step of the kernel on one warm core [s] (README: 1e5 steps in 0.3 s),
@@ -53,7 +63,7 @@ SECONDS_PER_STEP = 3e-6
 
 def _reserved_names() -> set[str]:
     return {*variables.CASE_VARIABLES, *variables.COORDINATES, *variables.SUMMARY_VARIABLES,
-            "status", "message"}
+            "status", "message", MEMBER_DIM}
 
 
 def dimension_name(key: str) -> str:
@@ -95,7 +105,7 @@ class Axis:
     dim : str
         Dimension name.
     kind : str
-        ``"grid"`` or ``"zip"``.
+        ``"grid"``, ``"zip"`` or ``"sample"`` (a zip group whose values were drawn).
     keys : tuple of str
         Dotted config keys set along this dimension.
     names : tuple of str
@@ -131,9 +141,9 @@ class Axis:
         """Coordinates of this dimension: ``name -> (dim, values, attrs)``."""
         out = {}
         if self.labels is not None:
+            what = "sample point" if self.kind == "sample" else f"sweep zip group {self.dim}"
             out[self.dim] = (self.dim, _coord_values(self.labels),
-                             {"long_name": f"sweep zip group {self.dim}",
-                              "config_keys": " ".join(self.keys)})
+                             {"long_name": what, "config_keys": " ".join(self.keys)})
         for key, name, vals in zip(self.keys, self.names, self.values):
             info = field_info(key)
             attrs = {"long_name": info[1] if info else f"swept config value {key}",
@@ -291,6 +301,10 @@ def _check_swept_key(key, base: Config, where: str, source: str) -> str:
     if isinstance(value, Mapping):
         raise ConfigError(f"{where}.{key}", None, f"a key of a value, not of the section {key} "
                           f"(e.g. {key}.{next(iter(value))})", source, got="a section")
+    if key in ENSEMBLE_KEYS:
+        raise ConfigError(f"{where}.{key}", None, "a key other than ensemble.member(s): set "
+                          "ensemble.members in the base and every member is run along the "
+                          f"{MEMBER_DIM!r} dimension", source, got="an ensemble key")
     return key
 
 
@@ -358,6 +372,11 @@ def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
             _check_unique(labels, f"{where}.labels", source)
         raw.append(("zip", tuple(keys), tuple(values), name, labels))
 
+    sample = spec.get("sample")
+    if sample is not None:
+        sample_keys, drawn = _parse_sample(sample, base, source)
+        raw.append(("sample", sample_keys, drawn, SAMPLE_DIM, tuple(range(len(drawn[0])))))
+
     all_keys = [k for _, keys, *_ in raw for k in keys]
     for key in all_keys:
         if all_keys.count(key) > 1:
@@ -383,6 +402,74 @@ def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
         taken.add(dim)
         axes.append(Axis(dim, kind, keys, tuple(names[k] for k in keys), values, labels))
     return axes
+
+
+def sample_points(method: str, n: int, ranges: Mapping[str, Sequence[float]], seed: int,
+                  second_order: bool = False) -> np.ndarray:
+    """Points of a sampling sweep, one row per case, one column per key of ``ranges``.
+
+    ``sobol``: n scrambled Sobol' points (``scipy.stats.qmc.Sobol``, n a power of 2 keeps
+    its balance); ``lhs``: n Latin hypercube points (``scipy.stats.qmc.LatinHypercube``);
+    ``saltelli``: SALib's Saltelli design for Sobol' indices with n base points,
+    n (D + 2) cases (n (2 D + 2) with ``second_order``). Seeded: the same arguments give
+    the same points.
+    """
+    lo = np.array([float(r[0]) for r in ranges.values()])
+    hi = np.array([float(r[1]) for r in ranges.values()])
+    if method == "saltelli":
+        from SALib.sample import sobol as saltelli
+
+        problem = {"num_vars": len(ranges), "names": list(ranges),
+                   "bounds": [[a, b] for a, b in zip(lo, hi)]}
+        return saltelli.sample(problem, n, calc_second_order=second_order, seed=seed)
+    from scipy.stats import qmc
+
+    engine = (qmc.Sobol(len(ranges), scramble=True, seed=seed) if method == "sobol"
+              else qmc.LatinHypercube(len(ranges), seed=seed))
+    return qmc.scale(engine.random(n), lo, hi)
+
+
+def _parse_sample(spec, base: Config, source: str) -> tuple[tuple[str, ...], tuple[tuple, ...]]:
+    """The keys and per-key values of a ``sample:`` section."""
+    where = "sweep.sample"
+    if not isinstance(spec, Mapping):
+        raise ConfigError(where, spec, f"a mapping with keys {', '.join(SAMPLE_KEYS)}", source)
+    _check_keys(spec, SAMPLE_KEYS, where, source)
+    method = spec.get("method", "sobol")
+    if method not in SAMPLE_METHODS:
+        raise ConfigError(f"{where}.method", method, " or ".join(SAMPLE_METHODS), source,
+                          close_match(method, SAMPLE_METHODS))
+    n = spec.get("n")
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise ConfigError(f"{where}.n", n, "an integer >= 1 (points, or base points of saltelli)",
+                          source)
+    seed = spec.get("seed", 0)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise ConfigError(f"{where}.seed", seed, "an integer >= 0", source)
+    second = spec.get("second_order", False)
+    if not isinstance(second, bool):
+        raise ConfigError(f"{where}.second_order", second, "true or false", source)
+    ranges = spec.get("ranges")
+    if not isinstance(ranges, Mapping) or not ranges:
+        raise ConfigError(f"{where}.ranges", ranges, "a mapping of dotted config keys to "
+                          "[low, high]", source)
+    for key, bounds in ranges.items():
+        _check_swept_key(key, base, f"{where}.ranges", source)
+        if (not isinstance(bounds, list) or len(bounds) != 2
+                or not all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds)
+                or not bounds[0] < bounds[1]):
+            raise ConfigError(f"{where}.ranges.{key}", bounds, "[low, high], two numbers with "
+                              "low < high", source)
+    points = sample_points(method, n, ranges, seed, second)
+    return tuple(ranges), tuple(tuple(float(v) for v in points[:, i]) for i in range(len(ranges)))
+
+
+def member_axes(base: Config) -> list[Axis]:
+    """The ``member`` dimension of an ensemble (``ensemble.members > 1``), else none."""
+    n = base.ensemble.members
+    if n <= 1:
+        return []
+    return [Axis(MEMBER_DIM, "grid", ("ensemble.member",), (MEMBER_DIM,), (tuple(range(n)),))]
 
 
 def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
@@ -488,7 +575,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
     base = _load_base(doc.get("base"), base_dir, source, overrides)
     spec = doc.get("sweep")
-    axes = _parse_axes(spec, base, source)
+    axes = _parse_axes(spec, base, source) + member_axes(base)
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
     n_points = math.prod(a.size for a in axes)

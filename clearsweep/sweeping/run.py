@@ -16,6 +16,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import xarray as xr
 
 from ..config import ConfigError
@@ -23,7 +24,7 @@ from ..dataset import open_results, remove_stale_temporaries, versions
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .parts import NOT_FAILED, PartStore, parts_dir_for
-from .plan import MAX_CASES, SweepPlan, expand
+from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
 from .worker import _receipt, _worker_died
 
 #: Variables (and dataset attributes) that change from run to run of the same sweep.
@@ -116,6 +117,21 @@ def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str
     except BaseException:
         backend.cancel(list(pending))
         raise
+
+
+def add_ensemble_statistics(path: Path) -> None:
+    """Append the ensemble statistics (:func:`clearsweep.ensemble.ensemble_statistics`) of
+    the summary variables of the sweep file at ``path``; reads the summaries only."""
+    from ..ensemble import ensemble_statistics, summary_variables
+
+    with xr.open_dataset(path) as ds:
+        names = ["status", *summary_variables(ds)]
+        stats = ensemble_statistics(ds[names].load())
+    stats = stats.drop_vars(list(stats.coords))
+    with netCDF4.Dataset(path, "a") as nc:
+        nc.setncatts(stats.attrs)
+    stats.attrs = {}
+    stats.to_netcdf(path, mode="a", engine="netcdf4")
 
 
 def drop_timing(ds: xr.Dataset) -> xr.Dataset:
@@ -246,7 +262,9 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
                 try:
                     counts = write_sweep_netcdf(out, sweep_dims=plan.dims, sweep_coords=plan.coords,
                                                 slots=plan.slots(), store=store, attrs=_attrs(plan),
-                                                check=guard.check)
+                                                check=guard.check,
+                                                finish=add_ensemble_statistics if MEMBER_DIM in plan.dims
+                                                else None)
                 except KeyboardInterrupt:
                     store.log("interrupted", finished=len(runnable), total=len(runnable))
                     raise SweepInterrupted(len(runnable), len(runnable), store.directory) from None

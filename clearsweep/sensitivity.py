@@ -1,0 +1,179 @@
+"""Sobol' sensitivity indices of a sampling sweep (``sweep: sample: method: saltelli``).
+
+First-order (S1) and total (ST) Sobol' indices of one output over the sampled inputs,
+with 95 % confidence intervals, computed by SALib (``SALib.analyze.sobol``: Saltelli's
+and Jansen's estimators, bootstrap intervals) from the Saltelli design that the sweep ran.
+The design (method, base points, seed, ranges) is read back from the sweep file's
+``sweep_config`` attribute, so the points need not be trusted to be in design order by
+anything but the sweep's own ``sample`` dimension.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+import yaml
+from matplotlib.figure import Figure
+
+from .analysis import SelectionError, choice_message, value_text
+from .ensemble import CONFIDENCE_LEVEL, MEMBER_DIM
+
+#: The dimension of a sampling sweep (as :data:`clearsweep.sweeping.plan.SAMPLE_DIM`).
+SAMPLE_DIM = "sample"
+#: Bootstrap resamples of SALib's confidence intervals.
+BOOTSTRAP_RESAMPLES = 1000
+
+
+class SensitivityError(ValueError):
+    """A file or output that Sobol' indices cannot be computed from."""
+
+
+@dataclass(frozen=True)
+class SobolIndices:
+    """First-order and total indices of one output, per input, with 95 % half-widths."""
+
+    names: tuple[str, ...]
+    S1: np.ndarray
+    S1_conf: np.ndarray
+    ST: np.ndarray
+    ST_conf: np.ndarray
+    output: str = ""
+    samples: int = 0
+
+    def to_dataset(self) -> xr.Dataset:
+        dims = ("input",)
+        attrs = {"confidence_level": CONFIDENCE_LEVEL,
+                 "ci_method": f"bootstrap, {BOOTSTRAP_RESAMPLES} resamples (SALib)"}
+        return xr.Dataset({
+            "S1": (dims, self.S1, {"long_name": "first-order Sobol index", "units": "1"}),
+            "S1_conf": (dims, self.S1_conf, {"long_name": "half-width of the S1 confidence "
+                                             "interval", "units": "1", **attrs}),
+            "ST": (dims, self.ST, {"long_name": "total Sobol index", "units": "1"}),
+            "ST_conf": (dims, self.ST_conf, {"long_name": "half-width of the ST confidence "
+                                             "interval", "units": "1", **attrs}),
+        }, coords={"input": list(self.names)}, attrs={"output": self.output, "samples": self.samples})
+
+
+def sobol_indices(names: Sequence[str], bounds: Sequence[Sequence[float]], y: np.ndarray, *,
+                  second_order: bool = False, seed: int = 0) -> SobolIndices:
+    """Sobol' indices of outputs ``y`` of a Saltelli design (``SALib.sample.sobol``) over
+    ``bounds``; intervals: SALib's bootstrap at 95 %, seeded."""
+    from SALib.analyze import sobol
+
+    problem = {"num_vars": len(names), "names": list(names), "bounds": [list(b) for b in bounds]}
+    y = np.asarray(y, dtype=float)
+    result = sobol.analyze(problem, y, calc_second_order=second_order, conf_level=CONFIDENCE_LEVEL,
+                           num_resamples=BOOTSTRAP_RESAMPLES, seed=seed)
+    return SobolIndices(tuple(names), np.asarray(result["S1"]), np.asarray(result["S1_conf"]),
+                        np.asarray(result["ST"]), np.asarray(result["ST_conf"]), samples=len(y))
+
+
+def sample_design(ds: xr.Dataset) -> dict[str, Any]:
+    """The ``sweep.sample`` section of the sweep that wrote ``ds``; it must be a Saltelli design."""
+    text = ds.attrs.get("sweep_config")
+    spec = (yaml.safe_load(text) or {}).get("sweep", {}).get("sample") if text else None
+    if SAMPLE_DIM not in ds.dims or not isinstance(spec, Mapping):
+        raise SensitivityError("not a sampling sweep: Sobol' indices need a sweep with "
+                               "'sweep: sample: method: saltelli'")
+    if spec.get("method") != "saltelli":
+        raise SensitivityError(f"the sweep sampled with method {spec.get('method')!r}; Sobol' "
+                               "indices need the Saltelli design (sweep.sample.method: saltelli)")
+    return dict(spec)
+
+
+def output_values(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> xr.DataArray:
+    """The output over ``sample``: the ensemble mean where the file is an ensemble, other
+    dimensions (``joint``) fixed by ``select`` items ``DIM=VALUE``."""
+    name = output + "_mean" if MEMBER_DIM in ds.dims and output + "_mean" in ds else output
+    if name not in ds:
+        names = [str(n) for n, v in ds.data_vars.items() if v.dims and v.dims[0] == SAMPLE_DIM
+                 and v.dtype.kind in "fiu"]
+        raise SelectionError(choice_message("output", output, names), name=output, choices=names)
+    values = ds[name]
+    chosen: dict[str, Any] = {}
+    for item in select:
+        dim, _, wanted = str(item).partition("=")
+        if dim not in values.dims or dim == SAMPLE_DIM or dim not in ds.coords:
+            others = [str(d) for d in values.dims if d != SAMPLE_DIM]
+            raise SelectionError(choice_message("dimension", dim, others), name=dim, choices=others)
+        texts = [value_text(v) for v in ds[dim].values]
+        if wanted.strip() not in texts:
+            raise SelectionError(choice_message(f"value for {dim}", wanted, texts), name=dim,
+                                 value=wanted, choices=texts)
+        chosen[dim] = ds[dim].values[texts.index(wanted.strip())]
+    values = values.sel(chosen) if chosen else values
+    extra = [d for d in values.dims if d != SAMPLE_DIM]
+    if extra:
+        raise SelectionError(f"{output} also varies over {', '.join(map(str, extra))}: choose one "
+                             f"value with --select (e.g. --select {extra[0]}="
+                             f"{value_text(ds[extra[0]].values[-1]) if extra[0] in ds.coords else 0})")
+    return values
+
+
+def sweep_indices(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> SobolIndices:
+    """Sobol' indices of ``output`` of the Saltelli sampling sweep ``ds``.
+
+    Raises
+    ------
+    SensitivityError
+        Not a Saltelli sampling sweep, or a case without a value (a failed case: the
+        estimators need every point of the design).
+    """
+    spec = sample_design(ds)
+    values = output_values(ds, output, select)
+    y = values.transpose(SAMPLE_DIM).values.astype(float)
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise SensitivityError(f"{bad.size} of {y.size} sample points have no finite {output} "
+                               f"(failed cases, e.g. sample {int(bad[0])}); the Sobol' estimators "
+                               "need every point of the design")
+    ranges = spec["ranges"]
+    result = sobol_indices(list(ranges), list(ranges.values()), y,
+                           second_order=bool(spec.get("second_order", False)),
+                           seed=int(spec.get("seed", 0)))
+    return SobolIndices(result.names, result.S1, result.S1_conf, result.ST, result.ST_conf,
+                        output=output, samples=result.samples)
+
+
+def format_indices(result: SobolIndices) -> str:
+    """A text table: input, S1 -+ half-width, ST -+ half-width."""
+    width = max(len("input"), *(len(n) for n in result.names))
+    lines = [f"Sobol' indices of {result.output} ({result.samples} cases; 95% bootstrap "
+             f"confidence half-widths, {BOOTSTRAP_RESAMPLES} resamples)",
+             f"{'input'.ljust(width)}  {'S1':>17}  {'ST':>17}"]
+    for i, name in enumerate(result.names):
+        lines.append(f"{name.ljust(width)}  {result.S1[i]:>8.3f} +- {result.S1_conf[i]:<5.3f}  "
+                     f"{result.ST[i]:>8.3f} +- {result.ST_conf[i]:<5.3f}")
+    return "\n".join(lines)
+
+
+def indices_figure(result: SobolIndices) -> Figure:
+    """Bars of S1 and ST per input with their confidence intervals as error bars."""
+    fig = Figure(figsize=(7, 4.5), layout="constrained")
+    ax = fig.add_subplot()
+    x = np.arange(len(result.names))
+    ax.bar(x - 0.2, result.S1, 0.4, yerr=result.S1_conf, capsize=3, label="first order S1")
+    ax.bar(x + 0.2, result.ST, 0.4, yerr=result.ST_conf, capsize=3, label="total ST")
+    ax.set_xticks(x, list(result.names))
+    ax.set_ylabel("Sobol index [-]")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize="small")
+    fig.suptitle(f"Sobol' indices of {result.output} ({result.samples} cases), bars: 95% "
+                 "confidence intervals")
+    return fig
+
+
+def save_figure(fig: Figure, path, dpi: int = 150) -> None:
+    """Save ``fig`` to ``path`` (format from the suffix), atomically."""
+    from pathlib import Path
+
+    from .dataset import replaced_on_success
+
+    path = Path(path)
+    with replaced_on_success(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lower()[1:] or "png")
