@@ -1,6 +1,8 @@
 """Sweep benchmarks: worker scaling, memory of a 500-case summary sweep, the shipped sweeps.
 
-Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped]``; prints markdown.
+Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped] [--main-job] [--ensemble]``;
+prints markdown. ``--main-job``: the 48-case main job on 1 worker, 2 pool workers and a
+2-worker local Dask cluster, wall and CPU time.
 
 - **Scaling.** One list of cases (16 cases, 1 s of motion each, full store)
   run serially in this process and on two warm worker processes, alternately,
@@ -121,6 +123,46 @@ def scaling(repeats: int) -> dict:
             "ratio": min(serial) / min(pooled)}
 
 
+def _cpu_seconds() -> float:
+    """CPU time of this process and its live descendants (pool or cluster workers)."""
+    total = 0.0
+    me = psutil.Process()
+    for proc in [me, *me.children(recursive=True)]:
+        try:
+            t = proc.cpu_times()
+            total += t.user + t.system
+        except psutil.Error:
+            pass
+    return total
+
+
+def main_job(repeats: int) -> dict:
+    """The shipped main job (configs/coating_clearance.yaml, 48 cases): one warm worker (this
+    process) against two warm pool workers and a warm two-worker local Dask cluster, rounds
+    alternating; wall time and CPU time of all processes involved."""
+    from clearsweep.sweeping import expand, process_pool
+
+    plan_doc = str(ROOT / "configs" / "coating_clearance.yaml")
+    n = len(expand(plan_doc).runnable())
+    timed_sweep(WARMUP_SWEEP, workers=1)
+    rows: dict[str, list[tuple[float, float]]] = {"1 worker": [], "2 workers (pool)": [],
+                                                  "2 workers (Dask, local)": []}
+    from distributed import Client, LocalCluster
+
+    with process_pool(2) as pool, LocalCluster(n_workers=2, threads_per_worker=1,
+                                               processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        timed_sweep(WARMUP_SWEEP, client=pool)
+        timed_sweep(WARMUP_SWEEP, client=client)
+        for _ in range(repeats):
+            for label, kwargs in (("1 worker", {"workers": 1}), ("2 workers (pool)", {"client": pool}),
+                                  ("2 workers (Dask, local)", {"client": client})):
+                cpu0 = _cpu_seconds()
+                wall = timed_sweep(plan_doc, **kwargs)
+                rows[label].append((wall, _cpu_seconds() - cpu0))
+    return {"cases": n, "rows": rows}
+
+
 class TreeMemory:
     """Peak of the summed RSS of a process and its descendants, sampled in a thread."""
 
@@ -217,11 +259,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=2, help="alternating timing rounds")
     parser.add_argument("--shipped", action="store_true", help="also run the shipped sweeps")
+    parser.add_argument("--main-job", action="store_true",
+                        help="only the 48-case main job: 1 worker, 2 pool workers, 2 Dask workers")
     parser.add_argument("--ensemble", action="store_true",
                         help="only the 768-case ensemble and its plain twin")
     args = parser.parse_args()
 
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    if args.main_job:
+        r = main_job(args.repeats)
+        print(f"\n## Main job (configs/coating_clearance.yaml, {r['cases']} cases), warm\n")
+        print("| backend | wall [s] per round | CPU [s] per round (all processes) | "
+              "speed-up vs 1 worker (best/best) | CPU vs pool (best/best) |")
+        print("|---|---|---|---|---|")
+        best = {k: (min(w for w, _ in v), min(c for _, c in v)) for k, v in r["rows"].items()}
+        for label, runs in r["rows"].items():
+            print(f"| {label} | {', '.join(f'{w:.1f}' for w, _ in runs)} | "
+                  f"{', '.join(f'{c:.1f}' for _, c in runs)} | "
+                  f"{best['1 worker'][0] / best[label][0]:.2f}x | "
+                  f"{best[label][1] / best['2 workers (pool)'][1]:.2f} |", flush=True)
+        return
     if args.ensemble:
         print("\n## 48 designs x 16 members, summary store, 2 workers\n")
         print("| sweep | cases | wall [s] | cases/s | peak RSS, driver + descendants [MB] | "
