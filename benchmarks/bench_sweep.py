@@ -1,8 +1,9 @@
 """Sweep benchmarks: worker scaling, memory of a 500-case summary sweep, the shipped sweeps.
 
-Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped] [--main-job] [--ensemble]``;
-prints markdown. ``--main-job``: the 48-case main job on 1 worker, 2 pool workers and a
-2-worker local Dask cluster, wall and CPU time.
+Run: ``python benchmarks/bench_sweep.py [--repeats 2] [--shipped] [--overhead] [--main-job]
+[--ensemble]``; prints markdown. ``--overhead``: CPU per case outside the kernel.
+``--main-job``: the 48-case main job on 1 worker, 2 pool workers and a 2-worker local Dask
+cluster, wall and CPU time.
 
 - **Scaling.** One list of cases (16 cases, 1 s of motion each, full store)
   run serially in this process and on two warm worker processes, alternately,
@@ -137,9 +138,13 @@ def _cpu_seconds() -> float:
 
 
 def main_job(repeats: int) -> dict:
-    """The shipped main job (configs/coating_clearance.yaml, 48 cases): one warm worker (this
-    process) against two warm pool workers and a warm two-worker local Dask cluster, rounds
-    alternating; wall time and CPU time of all processes involved."""
+    """The shipped main job (configs/coating_clearance.yaml, 48 cases): one worker (this
+    process), two pool workers and a two-worker local Dask cluster, each warmed up (kernel
+    loaded) before its clock starts and alone on the machine while it runs (pool and
+    cluster are started and shut down around their own runs); rounds alternate. Wall time,
+    and CPU time of this process and its children (workers, nannies)."""
+    from distributed import Client, LocalCluster
+
     from clearsweep.sweeping import expand, process_pool
 
     plan_doc = str(ROOT / "configs" / "coating_clearance.yaml")
@@ -147,20 +152,43 @@ def main_job(repeats: int) -> dict:
     timed_sweep(WARMUP_SWEEP, workers=1)
     rows: dict[str, list[tuple[float, float]]] = {"1 worker": [], "2 workers (pool)": [],
                                                   "2 workers (Dask, local)": []}
-    from distributed import Client, LocalCluster
 
-    with process_pool(2) as pool, LocalCluster(n_workers=2, threads_per_worker=1,
-                                               processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
-        timed_sweep(WARMUP_SWEEP, client=pool)
-        timed_sweep(WARMUP_SWEEP, client=client)
-        for _ in range(repeats):
-            for label, kwargs in (("1 worker", {"workers": 1}), ("2 workers (pool)", {"client": pool}),
-                                  ("2 workers (Dask, local)", {"client": client})):
-                cpu0 = _cpu_seconds()
-                wall = timed_sweep(plan_doc, **kwargs)
-                rows[label].append((wall, _cpu_seconds() - cpu0))
+    def measure(label: str, **kwargs) -> None:
+        cpu0 = _cpu_seconds()
+        wall = timed_sweep(plan_doc, **kwargs)
+        rows[label].append((wall, _cpu_seconds() - cpu0))
+
+    for _ in range(repeats):
+        measure("1 worker", workers=1)
+        with process_pool(2) as pool:
+            timed_sweep(WARMUP_SWEEP, client=pool)
+            measure("2 workers (pool)", client=pool)
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            timed_sweep(WARMUP_SWEEP, client=client)
+            measure("2 workers (Dask, local)", client=client)
     return {"cases": n, "rows": rows}
+
+
+def case_overhead(n: int = 50) -> dict:
+    """CPU per case outside the kernel: a worker's whole job for a 1 ms two-clearance case
+    (simulate, summarize, build the part; no file), summary and full store, minus the
+    kernel's own time; ``n`` cases each, warm."""
+    from clearsweep.config import load_config
+    from clearsweep.simulation import prepare_kernel
+    from clearsweep.sweeping.worker import _run_case
+
+    prepare_kernel()
+    cfg = load_config(ROOT / "configs" / "two_clearances.yaml", ["solver.duration=0.001"])
+    out = {}
+    for store in ("summary", "full"):
+        _run_case((cfg, store, None, None))
+        kernel = 0.0
+        t0 = time.process_time()
+        for _ in range(n):
+            kernel += float(_run_case((cfg, store, None, None))["wall_time"])
+        out[store] = ((time.process_time() - t0) / n, kernel / n)
+    return out
 
 
 class TreeMemory:
@@ -259,6 +287,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=2, help="alternating timing rounds")
     parser.add_argument("--shipped", action="store_true", help="also run the shipped sweeps")
+    parser.add_argument("--overhead", action="store_true",
+                        help="only the CPU per case outside the kernel (1 ms cases)")
     parser.add_argument("--main-job", action="store_true",
                         help="only the 48-case main job: 1 worker, 2 pool workers, 2 Dask workers")
     parser.add_argument("--ensemble", action="store_true",
@@ -266,6 +296,13 @@ def main() -> None:
     args = parser.parse_args()
 
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    if args.overhead:
+        print("\n## CPU per case outside the kernel (1 ms two-clearance case, warm)\n")
+        print("| store | CPU per case [ms] | kernel [ms] | outside the kernel [ms] |")
+        print("|---|---|---|---|")
+        for store, (cpu, kernel) in case_overhead().items():
+            print(f"| {store} | {1e3 * cpu:.1f} | {1e3 * kernel:.2f} | {1e3 * (cpu - kernel):.1f} |")
+        return
     if args.main_job:
         r = main_job(args.repeats)
         print(f"\n## Main job (configs/coating_clearance.yaml, {r['cases']} cases), warm\n")

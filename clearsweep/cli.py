@@ -80,6 +80,19 @@ def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> 
                 click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
 
 
+def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
+    """Write ``ds`` to ``out`` atomically; an unwritable path is one error line and exit 1."""
+    from .dataset import write_netcdf_atomic
+
+    path = Path(out)
+    try:
+        write_netcdf_atomic(ds, path)
+    except OSError as exc:
+        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        ctx.exit(1)
+    return path
+
+
 _overrides = click.option(
     "--set", "overrides", multiple=True, metavar="KEY=VALUE",
     help="Override a config value, VALUE in YAML (e.g. joints.B.coating=PTFE, "
@@ -112,7 +125,6 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     if cfg.ensemble.members > 1:
         _run_ensemble(ctx, config, cfg, out, allow_large, quiet, workers)
         return
-    from .dataset import write_netcdf_atomic
     from .simulation import simulate
 
     announce_compile(quiet, [cfg.solver.method])
@@ -124,12 +136,7 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         # A check on the resolved config (the step bound): name the file it came from.
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
                           exc.got) from None
-    path = Path(out) if out else Path(Path(config).stem + ".nc")
-    try:
-        write_netcdf_atomic(ds, path)
-    except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
-        ctx.exit(1)
+    path = _write_or_exit(ctx, ds, out or Path(config).stem + ".nc")
     if not quiet:
         from .analysis import run_summary_text
 
@@ -156,7 +163,6 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
     """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
     clearance growth, coating wear-through and vibration against revolutions."""
     cfg = load_config(config, overrides)
-    from .dataset import write_netcdf_atomic
     from .service_life import life, life_summary_text
 
     announce_compile(quiet, [cfg.solver.method])
@@ -168,12 +174,7 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
                        f"status {row['block_status']}", err=True)
 
     ds = life(cfg, allow_large=allow_large, progress=progress)
-    path = Path(out) if out else Path(Path(config).stem + "_life.nc")
-    try:
-        write_netcdf_atomic(ds, path)
-    except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
-        ctx.exit(1)
+    path = _write_or_exit(ctx, ds, out or Path(config).stem + "_life.nc")
     if not quiet:
         click.echo(life_summary_text(ds))
         click.echo(f"wrote {path}")
