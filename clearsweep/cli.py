@@ -283,6 +283,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
             click.echo(life_summary_text(ds))
             return
+        if ds.attrs.get("sweep_store") == "life" and not metric:
+            from .service_life import life_sweep_text
+
+            click.echo(life_sweep_text(ds))
+            return
         try:
             if metric:
                 text = format_metric_table(ds, metric, fmt)

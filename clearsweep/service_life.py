@@ -355,3 +355,75 @@ def life_summary_text(ds: xr.Dataset) -> str:
     lines.append(f"  settled RMS slider acceleration at the end: "
                  f"{float(last.slider_acceleration_rms_settled):.4g} m s-2")
     return "\n".join(lines)
+
+
+#: Per-joint variables of a life run whose final value a life sweep keeps.
+FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coating_remaining")
+
+
+def life_case(config) -> xr.Dataset:
+    """One life run as a sweep case (``store: life``): :func:`life` with ``status`` (``ok``,
+    or the status of the block that stopped it) and ``message``."""
+    import xarray as xr
+
+    ds = life(config, allow_large=True)     # the sweep checked every case's budget
+    stop = str(ds["stop_reason"].values)
+    status = stop.split(":", 1)[1] if stop.startswith("block_status:") else "ok"
+    ds["status"] = xr.DataArray(status, attrs={"long_name": "life run status"})
+    if status != "ok":
+        ds["message"] = xr.DataArray(f"a dynamic block stopped with status {status!r} at "
+                                     f"{float(ds.cycle[-1]):.6g} revolutions")
+    return ds
+
+
+def life_summary(ds: xr.Dataset) -> xr.Dataset:
+    """What a life sweep keeps of one life run: revolutions to each limit and to
+    wear-through, revolutions reached, why it stopped, and each joint's final wear depth,
+    worn volume, effective clearance, remaining coating and first wear-through."""
+    import xarray as xr
+
+    from .variables import LIFE_VARIABLES
+
+    out = {str(name): ds[name] for name in ds.data_vars
+           if str(name).startswith("cycles_to_") or name in ("status", "stop_reason", "wall_time",
+                                                             "wear_through_cycle")}
+    for name in FINAL_VARIABLES:
+        spec = LIFE_VARIABLES[name]
+        out[f"{name}_final"] = ds[name].isel(cycle=-1, drop=True).assign_attrs(
+            units=spec.units, long_name=f"{spec.long_name} at the end of the life run")
+    out["cycles_reached"] = xr.DataArray(float(ds.cycle[-1]), attrs={
+        "units": "1", "long_name": "crank revolutions reached"})
+    summary = xr.Dataset(out)
+    summary.attrs = dict(ds.attrs)
+    return summary
+
+
+def life_sweep_text(ds: xr.Dataset) -> str:
+    """A life sweep's designs ranked by revolutions to the first limit the config sets
+    (else by the final wear depth): revolutions reached, why each stopped, revolutions to
+    each limit and to wear-through, and the final largest wear depth per joint."""
+    dims = [d for d in ds["status"].dims]
+    flat = ds.stack(design=dims) if dims else ds.expand_dims(design=[0])
+    limits = [str(n) for n in ds.data_vars if str(n).startswith("cycles_to_")
+              and np.isfinite(ds[n].values).any()]
+    rows = []
+    for k in range(flat.sizes["design"]):
+        case = flat.isel(design=k)
+        label = ", ".join(f"{d}={case[d].values.item()}" for d in dims) or "case"
+        depth = case["wear_depth_max_final"].values if "wear_depth_max_final" in case else []
+        rows.append((label, str(case["status"].values),
+                     float(case["cycles_reached"]) if "cycles_reached" in case else math.nan,
+                     str(case["stop_reason"].values) if "stop_reason" in case else "",
+                     [float(case[n]) for n in limits],
+                     float(np.nanmax(depth)) if np.isfinite(depth).any() else math.nan))
+    key = ((lambda r: -np.nan_to_num(r[4][0], nan=np.inf)) if limits
+           else (lambda r: np.nan_to_num(r[5], nan=np.inf)))
+    rows.sort(key=key)
+    head = ["design", "status", "revolutions reached", "stopped by", *limits, "largest final depth [m]"]
+    table = [head] + [[r[0], r[1], f"{r[2]:.4g}", r[3], *(f"{v:.4g}" if np.isfinite(v) else "not reached"
+                                                         for v in r[4]), f"{r[5]:.3g}"] for r in rows]
+    widths = [max(len(row[i]) for row in table) for i in range(len(head))]
+    lines = ["Service life per design (ranked: " + (f"most revolutions to {limits[0][10:]} first"
+                                                 if limits else "least final wear depth first") + ")"]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip() for row in table]
+    return "\n".join(lines)

@@ -141,3 +141,36 @@ def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life):
     report = CliRunner().invoke(main, ["report", str(out)])
     assert report.exit_code == 0, report.output
     assert "revolutions" in report.output or "cycles" in report.output
+
+
+def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
+    """store: life runs every case as a life run and keeps revolutions to each limit and the
+    final wear per design; the MoS2 design is the short life run above, bit for bit."""
+    from clearsweep.config import load_config
+    from clearsweep.sweeping import run_sweep
+
+    base = load_config(CASE, SHORT_LIFE).to_dict()
+    doc = {"name": "life_sweep", "store": "life", "base": base,
+           "sweep": {"grid": {"joints.B.coating": ["MoS2", "PTFE"]}}}
+    with run_sweep(doc, tmp_path / "life_sweep.nc", workers=1, progress=False) as ds:
+        assert list(ds.status.values) == ["ok", "ok"]
+        assert "time" not in ds.dims and "cycle" not in ds.dims
+        mos2 = ds.sel(B_coating="MoS2")
+        assert float(mos2.cycles_reached) == float(short_life.cycle[-1])
+        np.testing.assert_array_equal(mos2.wear_volume_final.values,
+                                      short_life.wear_volume.isel(cycle=-1).values)
+        np.testing.assert_array_equal(mos2.wear_through_cycle.values,
+                                      short_life.wear_through_cycle.values)
+        assert ds.wear_depth_max_final.attrs["units"] == "m"
+        assert str(mos2.stop_reason.values) == str(short_life.stop_reason.values)
+        # a coating of the same thickness with other values wears through at another time
+        assert float(ds.cycles_to_wear_through.sel(B_coating="PTFE")) != float(
+            mos2.cycles_to_wear_through)
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    report = CliRunner().invoke(main, ["report", str(tmp_path / "life_sweep.nc")])
+    assert report.exit_code == 0, report.output
+    assert "Service life per design" in report.output
+    assert "B_coating=MoS2" in report.output and "B_coating=PTFE" in report.output

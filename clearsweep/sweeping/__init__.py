@@ -16,7 +16,8 @@ Sweep file
 ::
 
     name: coating_clearance        # optional; default: the file's stem
-    store: full                    # full (time series + summaries) | summary
+    store: full                    # full (time series + summaries) | summary | life (each
+                                   # case a service-life run, stored as its life summary)
     base: case.yaml                # a case config: inline mapping, or a path relative to this file
     sweep:
       grid:                        # cartesian product; one dimension per key

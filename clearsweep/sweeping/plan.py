@@ -43,8 +43,9 @@ DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solve
 MEMBER_DIM = "member"
 #: Keys that the ensemble section sets for every case and a sweep cannot vary.
 ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members")
-#: What a sweep stores per case.
-STORE_MODES = ("full", "summary")
+#: What a sweep stores per case; ``life``: each case is a service-life run
+#: (``clearsweep life``), stored as its summary (revolutions to each limit, final wear).
+STORE_MODES = ("full", "summary", "life")
 #: Top-level keys of a sweep file.
 SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
 SWEEP_KEYS = ("grid", "zip", "sample", "skip")
@@ -230,6 +231,15 @@ class SweepPlan:
         """
         runnable = self.runnable()
         estimates = [estimate(cfg) for cfg in runnable.values()]
+        if self.store == "life":
+            # a life run simulates up to life.max_blocks blocks of life.block_revolutions
+            blocks = sum(cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
+                         / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values())
+            seconds = blocks * SECONDS_PER_STEP / (workers or 1)
+            where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
+            return (f"sweep {self.name!r}: {len(self.cases):,} life runs, {len(runnable):,} to run: "
+                    f"at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), at most about "
+                    f"{_duration_text(seconds)} {where}; most runs end sooner")
         steps = sum(e.steps for e in estimates)
         seconds = steps * SECONDS_PER_STEP / (workers or 1)
         per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes for e in estimates)

@@ -256,7 +256,13 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             # OUT is ours while we hold the lock: drop what a killed assembly left beside it
             remove_stale_temporaries(out)
             try:
-                todo = [(h, (cfg, plan.store, _simulate, _summarize))
+                simulate_case, summarize_case = _simulate, _summarize
+                if plan.store == "life":
+                    from ..service_life import life_case, life_summary
+
+                    simulate_case = simulate_case or life_case
+                    summarize_case = summarize_case or life_summary
+                todo = [(h, (cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
                 try:
@@ -288,6 +294,10 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
         return None
     if backend != "cuda":
         raise ValueError(f"backend must be 'processes' or 'cuda', got {backend!r}")
+    if plan.store == "life":
+        raise ConfigError("store", "life", "full or summary with --backend cuda (life runs "
+                          "alternate simulation and jumps on the CPU: use --backend processes)",
+                          plan.source)
     from ..gpu import batch_window, device_name
 
     device_name()       # NoCudaDevice before anything runs

@@ -48,7 +48,7 @@ def _run_case(payload: tuple) -> xr.Dataset:
     -------
     xr.Dataset
         Summaries, ``status`` and ``message``, and the time series unless
-        ``store_mode == "summary"``. A case that raises, or stops with a
+        ``store_mode`` is ``"summary"`` or ``"life"``. A case that raises, or stops with a
         status other than ``ok``, gives only ``status``, ``message`` and
         ``wall_time``.
     """
@@ -75,7 +75,7 @@ def _part(ds: xr.Dataset, store_mode: str, summarize=case_summary, start: float 
         summary = summarize(ds)
         extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
         # one assign, not a merge per variable (most of a small case's time outside the kernel)
-        return (summary if store_mode == "summary" else ds).assign(extra)
+        return (ds if store_mode == "full" else summary).assign(extra)
     if "message" in ds:
         message = _text(ds["message"].values)
     else:
