@@ -5,7 +5,7 @@ docs/data/coatings_k_tenth.yaml (each coating's k a tenth of steel's).
 Run from the repository root: ``.venv/bin/python docs/service_life_figure.py`` (two life
 sweeps of configs/life_sweep.yaml, about 2 minutes each on 2 cores; ``--shipped FILE`` and
 ``--tenth FILE`` reuse sweep files made before). Writes
-docs/figures/service_life_coatings.png and prints the two ranking tables.
+docs/figures/service_life/coatings.png and prints the two ranking tables.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from clearsweep.service_life import life_sweep_text  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 SWEEP = ROOT / "configs" / "life_sweep.yaml"
 TENTH = ROOT / "docs" / "data" / "coatings_k_tenth.yaml"
-OUT = ROOT / "docs" / "figures" / "service_life_coatings.png"
+OUT = ROOT / "docs" / "figures" / "service_life" / "coatings.png"
 
 
 def sweep_file(given: str | None, path: Path, overrides: list[str]) -> Path:
