@@ -3,7 +3,7 @@ and initial clearance, with the shipped wear coefficients and with the what-if o
 docs/data/coatings_k_tenth.yaml (each coating's k a tenth of steel's).
 
 Run from the repository root: ``.venv/bin/python docs/service_life_figure.py`` (two life
-sweeps of configs/life_sweep.yaml, about 2 minutes each on 2 cores; ``--shipped FILE`` and
+sweeps of configs/life_sweep.yaml, 108 s and 53 s measured on 2 cores; ``--shipped FILE`` and
 ``--tenth FILE`` reuse sweep files made before). Writes
 docs/figures/service_life/coatings.png and prints the two ranking tables.
 """
