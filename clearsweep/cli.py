@@ -61,7 +61,7 @@ _allow_large = click.option(
 
 #: Cold compile of the kernel on this project's 2-core reference machine
 #: (benchmarks/bench_engine.py measures it).
-COMPILE_ESTIMATE_S = 30
+COMPILE_ESTIMATE_S = 40
 
 
 def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> None:
