@@ -128,3 +128,20 @@ def test_case_bytes_of_the_default_map():
 
     per_case = case_bytes((144, 288), 8)
     assert 0.70e6 < per_case < 0.76e6      # the figure docs/architecture.md states
+
+
+@pytest.mark.parametrize("store, key", [("summary", "solver.method"), ("life", "store")])
+def test_cuda_backend_refuses_what_the_device_does_not_run(tmp_path, store, key):
+    """dopri5 cases and life runs are CPU-only: refused by name before the device is even
+    looked for, never run silently as something else."""
+    from clearsweep.config import ConfigError
+    from clearsweep.sweeping import run_sweep
+
+    doc = json.loads(json.dumps(SWEEP))
+    doc["store"] = store
+    if store == "summary":
+        doc["base"]["solver"]["method"] = "dopri5"
+    with pytest.raises(ConfigError, match=key) as info:
+        run_sweep(doc, tmp_path / "s.nc", backend="cuda", progress=False)
+    assert "--backend processes" in str(info.value)
+    assert not (tmp_path / "s.nc").exists()

@@ -298,6 +298,11 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
         raise ConfigError("store", "life", "full or summary with --backend cuda (life runs "
                           "alternate simulation and jumps on the CPU: use --backend processes)",
                           plan.source)
+    methods = {cfg.solver.method for cfg in plan.runnable().values()}
+    if methods - {"rk4"}:
+        raise ConfigError("solver.method", sorted(methods - {"rk4"})[0],
+                          "rk4 with --backend cuda (the device runs the fixed-step RK4 only: "
+                          "use --backend processes for dopri5)", plan.source)
     from ..gpu import batch_window, device_name
 
     device_name()       # NoCudaDevice before anything runs
