@@ -191,7 +191,7 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None, allow_l
 
     path = Path(out) if out else Path(Path(config).stem + ".nc")
     plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
-    announce_compile(quiet)
+    announce_compile(quiet, [cfg.solver.method])
     try:
         ds = run_sweep(plan, path, workers=workers, progress=not quiet, overwrite=True,
                        allow_large=allow_large)

@@ -503,8 +503,6 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     ddot_prev = pairs[0]
     ddot_prev_save = pairs[1]
     wmax = pairs[2]
-    for j in range(2):
-        s[j, S_BETA] = math.pi
     C = mats[0]
     S = mats[1]
     L = mats[2]
@@ -512,9 +510,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     # ``cur`` holds the step being taken, ``pend`` the accepted steps not yet spread
     cur = caps[0]
     pend = caps[1]
-    for w in range(2):
-        for i in range(N_M):
-            stats[w, i] = 0.0
+    # begin_case clears the statistics and sets the contact state
     for i in range(3):
         track[i] = 0.0
     for i in range(2, 5):
