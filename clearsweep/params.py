@@ -170,17 +170,24 @@ def static_penetration(force_N: float, c: float, ew: float, ri: float) -> float:
     return delta
 
 
-def worn_contact(jp_j: np.ndarray, wmap_j: np.ndarray, normal_socket: np.ndarray,
-                 feedback: bool) -> tuple[float, float]:
+def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
+                 p: np.ndarray) -> tuple[float, float]:
     """Local clearance c_eff [m] and modulus E_w [Pa] that the kernel's contact law uses in
-    socket-frame direction ``normal_socket`` of a worn socket (docs/physics.md 3.1; the base
-    material's modulus where the bin is worn through the coating)."""
-    from .core.wear import map_bin
+    socket-frame direction ``normal_socket`` of joint j's worn socket (docs/physics.md 3.1).
 
-    ip, ia = map_bin(normal_socket, wmap_j.shape[0], wmap_j.shape[1])
-    depth = float(wmap_j[ip, ia])
-    ew = jp_j[L.J_EW_BASE] if depth >= jp_j[L.J_COAT] else jp_j[L.J_EW]
-    return jp_j[L.J_C] + (depth if feedback else 0.0), ew
+    The kernel's own functions: ``wear.worn_surface`` reads the map as the run will (bin or
+    bilinear, ``wear.interpolate``; feedback on or off) and ``contact.surface`` switches to
+    the base material where the coating is worn through.
+    """
+    from .core.contact import surface
+    from .core.wear import worn_surface
+
+    n = tuple(float(v) for v in normal_socket)
+    h, worn = worn_surface(np.ascontiguousarray(wmap, dtype=np.float64), j, n,
+                           float(jp[j, L.J_COAT]), bool(p[L.P_FEEDBACK] != 0.0),
+                           bool(p[L.P_INTERP] != 0.0))
+    ew, _, _ = surface(jp, j, worn)
+    return float(jp[j, L.J_C] + h), float(ew)
 
 
 def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
@@ -211,7 +218,7 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
             # the socket body: the rod for A, the slider for B
             phi = y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if j == 0 else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3]
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
-            c, ew = worn_contact(jp[j], wmap[j], rot.T @ (-f / size), p[L.P_FEEDBACK] != 0.0)
+            c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
         delta = static_penetration(size, c, ew, jp[j, L.J_RI])
         offsets[j] = -(c + delta) * f / size
     return offsets[0], offsets[1]

@@ -41,10 +41,12 @@ CRITERIA = {
 
 
 def bin_areas(shape: tuple[int, int], radius: float) -> np.ndarray:
-    """Area [m^2] of each bin of a polar x azimuth map on a sphere of ``radius``."""
+    """Area [m^2] of each bin of a polar x azimuth map on a sphere of ``radius``: the
+    kernel's own ``core.wear.bin_area``, row by row."""
+    from .core.wear import bin_area
+
     npolar, nazim = shape
-    edges = np.cos(np.linspace(0.0, math.pi, npolar + 1))
-    row = radius ** 2 * (edges[:-1] - edges[1:]) * (2.0 * math.pi / nazim)
+    row = np.array([bin_area(ip, npolar, nazim, radius) for ip in range(npolar)])
     return np.repeat(row[:, None], nazim, axis=1)
 
 

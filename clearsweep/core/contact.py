@@ -1,11 +1,13 @@
-"""Coated spherical contact law, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
+"""Coated contact law, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
 
-Pure functions of floats in SI units.
+Pure functions of floats in SI units, and the choice of surface values (coated or base).
 """
 
 import math
 
 from numba import njit
+
+from .layout import J_EW, J_EW_BASE, J_K, J_K_BASE, J_MU, J_MU_BASE
 
 
 @njit(cache=True)
@@ -129,3 +131,29 @@ def stiff_rate(m_eff, k, c):
     if disc <= 0.0:
         return math.sqrt(max(k, 0.0) / m_eff)
     return (c + math.sqrt(disc)) / (2.0 * m_eff)
+
+
+@njit(cache=True)
+def contact_damping(dv0, ddot, cr, floor):
+    """kappa [s/m] of a contact whose episode impact velocity is ``dv0`` [m/s] (0: the episode
+    begins within this step, and the approach rate ``ddot`` of the evaluation, floored at
+    ``floor``, stands in for it; docs/physics.md section 3.2)."""
+    if dv0 <= 0.0:
+        dv0 = max(ddot, floor)
+    return damping_factor(cr, dv0)
+
+
+@njit(cache=True)
+def friction_magnitude(mu, fn, vt, v0, v1):
+    """|F_t| = mu c_d(|v_t|) F_N [N] of the improved Coulomb law (docs/physics.md section 3.3)."""
+    return mu * friction_factor(vt, v0, v1) * fn
+
+
+@njit(cache=True)
+def surface(jp, j, worn):
+    """(E_w [Pa], mu [-], k [m^2/N]) that joint j's contact uses: the coated surface's, or the
+    base material's where the coating is worn through (``worn``; wear.worn_surface says
+    where). The one place where the coating/base switch is made."""
+    if worn:
+        return jp[j, J_EW_BASE], jp[j, J_MU_BASE], jp[j, J_K_BASE]
+    return jp[j, J_EW], jp[j, J_MU], jp[j, J_K]

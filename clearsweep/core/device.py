@@ -21,7 +21,7 @@ wrapped arrays, which :func:`_advance` unwraps there.
 import numba
 from numba import cuda
 
-from .rk4 import advance
+from .rk4 import PAIR_FIRST, advance
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
 
@@ -45,14 +45,19 @@ else:
 def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, vec, diag,
               cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y, rows_d,
               rows_wmax):
-    """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); ``rows_*`` are
+    """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); the grouped work
+    arrays of ``rk4.work_shapes`` are handed to advance row by row; ``rows_*`` are
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
     i = cuda.grid(1)
     if i < p.shape[0]:
+        v = vec[i]
+        pr = pairs[i]
         _advance(p[i], jp[i], y0[i], 0.0, n_steps[i], save_every[i], wmap[i], proj[i], wvol[i],
                  False, rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i], stats[i], track[i],
-                 vec[i], diag[i], cstate[i], msave[i], pairs[i], mats[i], vz[i], buf_i[i],
-                 buf_v[i], caps[i], scratch[i])
+                 pr[PAIR_FIRST], v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], diag[i, 0],
+                 diag[i, 1], cstate[i, 0], cstate[i, 1], msave[i], pr[0], pr[1], pr[2],
+                 pr[PAIR_FIRST + 1], mats[i, 0], mats[i, 1], mats[i, 2], vz[i], buf_i[i],
+                 buf_v[i], caps[i, 0], caps[i, 1], scratch[i])
 
 
 def launch(arrays: tuple) -> None:

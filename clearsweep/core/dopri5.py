@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .dynamics import evaluate
+from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
@@ -48,12 +48,13 @@ from .rk4 import (
     copy_into,
     copy_row,
     energy_total,
-    flush_wear,
+    flush_all_wear,
     kernel_result,
     merge_wear,
     note_first_impact,
     record_sample,
     step_checks,
+    zero_rows,
 )
 
 # Dormand & Prince (1980) coefficients; E = b5 - b4 (error weights); D: the 4th-order
@@ -183,7 +184,35 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     (every ``save_every`` grid steps). ``info[2]`` holds the level k of the shortest
     accepted step (h >= p[P_DT] / 2^k), ``info[3]`` the accepted steps. Steps are bounded by
     p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error control would make
-    shorter stops the case with ST_UNSTABLE_STEP.
+    shorter stops the case with ST_UNSTABLE_STEP. Allocates the work arrays and runs
+    :func:`advance_dopri5`.
+    """
+    track = np.zeros(3)
+    first = np.zeros(2)
+    ny = N_Y
+    advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
+                   out_wmax, info, stats, track, first,
+                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                   np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D), np.zeros(N_D),
+                   np.zeros(N_D), np.zeros((2, N_S)), np.zeros(2), np.zeros(2),
+                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                   np.zeros((2, 4), dtype=np.int64), np.zeros((2, 4)), np.zeros((2, 6)),
+                   np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
+    if info[1] == 0 and info[0] != ST_OK:
+        return np.full(4, np.nan)
+    return kernel_result(track, first)
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
+def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
+                   out_wmax, info, stats, track, first, y, y1, yt, k1, k2, k3, k4, k5, k6, k7, kt,
+                   row, yrow, dg, dg1, dgo, s, ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur,
+                   pend, scratch):
+    """:func:`integrate_dopri5` without allocation: every work array is an argument (their
+    contents on entry do not matter). ``track`` and ``first`` receive what
+    :func:`.rk4.kernel_result` reports. Every status an evaluation returns stops the case,
+    the dense-output evaluations of the sample rows included.
     """
     step_end = True
     whole = W_WHOLE
@@ -194,44 +223,29 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     hmin = grid / (1 << int(p[P_MAX_LEVEL]))
     t_end = t0 + n_steps * grid
     ny = N_Y
-    y = y0.copy()
-    y1 = np.empty(ny)
-    yt = np.empty(ny)
-    k1 = np.empty(ny)
-    k2 = np.empty(ny)
-    k3 = np.empty(ny)
-    k4 = np.empty(ny)
-    k5 = np.empty(ny)
-    k6 = np.empty(ny)
-    k7 = np.empty(ny)
-    kt = np.empty(ny)
-    row = np.empty((1, ny))
-    yrow = np.empty(ny)
-    dg = np.zeros(N_D)
-    dg1 = np.zeros(N_D)
-    dgo = np.zeros(N_D)
-    s = np.zeros((2, N_S))
-    ddot_prev = np.zeros(2)
-    C = np.zeros((6, 6))
-    S = np.zeros((6, 6))
-    L = np.zeros((6, 6))
-    vz = np.zeros((8, 6))
-    buf_i = np.zeros((2, 4), dtype=np.int64)
-    buf_v = np.zeros((2, 4))
-    wmax = np.zeros(2)
-    cur = np.zeros((2, 6))
-    pend = np.zeros((2, 6))
-    scratch = np.zeros((4 * wmap.shape[1], 3))
+    copy_into(y, y0)
+    zero_rows(buf_i)
+    zero_rows(buf_v)
+    zero_rows(cur)
+    zero_rows(pend)
+    for j in range(2):
+        wmax[j] = 0.0
+    for i in range(N_D):
+        dg[i] = 0.0
+        dg1[i] = 0.0
+        dgo[i] = 0.0
+    for i in range(3):
+        track[i] = 0.0
+    first[0] = -1.0
+    first[1] = -1.0
 
     status = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
     if status != ST_OK:
         info[0] = status
         info[1] = 0
-        return np.full(4, np.nan)
+        return
     e0 = energy_total(dg)
-    track = np.zeros(3)
     track[0] = dg[D_KE]
-    first = np.full(2, -1.0)
     out_t[0] = t0
     copy_row(out_y, 0, y)
     copy_row(out_d, 0, dg)
@@ -281,6 +295,7 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
             st = evaluate(t + hh, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
             if st != ST_OK:
                 status = st
+                break
         record_sample(stats, whole, dg1, jp, hh)
         if in_settled:
             record_sample(stats, settled, dg1, jp, hh)
@@ -289,7 +304,6 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
             # the sample's time from its grid-step count: the same for any save_every
             ts = t0 + (n_saved * save_every) * grid
-            out_t[n_saved] = ts
             theta = (ts - t) / hh
             if theta >= 1.0 - 1e-12:
                 copy_row(out_y, n_saved, y1)
@@ -298,12 +312,18 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
                 dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
                 for i in range(ny):
                     yrow[i] = row[0, i]
-                evaluate(ts, yrow, p, jp, s, wmap, kt, dgo, step_end, C, S, L, vz)
+                st = evaluate(ts, yrow, p, jp, s, wmap, kt, dgo, step_end, C, S, L, vz)
+                if st != ST_OK:
+                    status = st
+                    break
                 copy_row(out_y, n_saved, yrow)
                 copy_row(out_d, n_saved, dgo)
+            out_t[n_saved] = ts
             out_wmax[n_saved, 0] = wmax[0]
             out_wmax[n_saved, 1] = wmax[1]
             n_saved += 1
+        if status != ST_OK:
+            break
         copy_into(y, y1)
         copy_into(k1, k7)
         copy_into(dg, dg1)
@@ -314,9 +334,7 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
         status = step_checks(y, dg, p, jp, status, e0, track)
         grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
         h = min(hh * grow, hmax)
-    for j in range(2):
-        if pend[j, 3] > 0.0:
-            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+    flush_all_wear(wmap, pend, wmax, scratch)
     if status == ST_OK and n_saved > 0:
         out_wmax[n_saved - 1, 0] = wmax[0]
         out_wmax[n_saved - 1, 1] = wmax[1]
@@ -328,4 +346,3 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     info[2] = deepest
     info[3] = accepted
     info[4] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))
-    return kernel_result(track, first)

@@ -16,19 +16,11 @@ Eq. 24).
 """
 
 import math
-from collections import namedtuple
 
 import numpy as np
 from numba import njit, types
 
-from .contact import (
-    damping_factor,
-    elastic_energy,
-    friction_factor,
-    normal_force,
-    stiff_rate,
-    stiffness_factor,
-)
+from .contact import contact_damping, normal_force, stiff_rate, stiffness_factor, surface
 from .kinematics import (
     add,
     cross,
@@ -72,13 +64,7 @@ from .layout import (
     D_UEL,
     D_VT,
     D_WORN,
-    J_C,
     J_CLEARANCE,
-    J_COAT,
-    J_EW,
-    J_EW_BASE,
-    J_MU,
-    J_MU_BASE,
     J_RI,
     J_RJ,
     N_D,
@@ -89,10 +75,8 @@ from .layout import (
     P_CR,
     P_DT,
     P_DV0_MIN,
-    P_FEEDBACK,
     P_FRICTION,
     P_G,
-    P_INTERP,
     P_J2,
     P_J3,
     P_J4,
@@ -119,98 +103,9 @@ from .layout import (
     Y_R4,
     Y_WORK,
 )
-from .wear import map_bin, map_interp
+from .spherical import contact
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
-
-#: What :func:`contact` returns for one clearance joint (Numba compiles a namedtuple as a
-#: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
-#: named ``_socket``.
-ContactState = namedtuple("ContactState", (
-    "force",            # force on the ball [N]
-    "q_ball",           # contact point Q_j on the ball
-    "q_socket",         # contact point Q_i on the socket
-    "fn",               # normal force F_N [N]
-    "dfn_ddelta",       # dF_N / d delta [N/m]
-    "dfn_dddot",        # dF_N / d delta_dot [N s/m]
-    "delta",            # penetration delta = e - c_eff [m] (negative: a gap)
-    "ddot",             # normal approach rate delta_dot [m/s]
-    "ecc",              # eccentricity e [m]
-    "normal",           # contact normal n
-    "offset_socket",    # ball-centre offset d in the socket frame [m]
-    "normal_socket",    # n in the socket frame
-    "slip_speed",       # tangential slip speed |v_t| [m/s]
-    "c_eff",            # local clearance c + h [m]
-    "wear_depth",       # wear depth h under the contact point [m]
-    "elastic_energy",   # elastic energy U_el [J]
-    "diss_power",       # power dissipated by damping and friction [W]
-    "worn_through",     # 1.0: coating worn through under the contact, base values used
-))
-
-
-@njit(cache=True)
-def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us):
-    """Contact state and force of clearance joint j (docs/physics.md section 3).
-
-    Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    Returns a :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint
-    index, never a row of them: a row is a new array view, reference-counted at every call.
-    """
-    c = jp[j, J_C]
-    ri = jp[j, J_RI]
-    rj = jp[j, J_RJ]
-    pb, _ = point_state(rb, vb, Rb, wb, ub)
-    ps, _ = point_state(rs, vs, Rs, ws_, us)
-    d = sub(pb, ps)
-    e = math.sqrt(dot(d, d))
-    if e > 0.0:
-        n = scale(1.0 / e, d)
-    else:
-        n = (1.0, 0.0, 0.0)
-    d_s = mtv(Rs, d)
-    n_s = mtv(Rs, n)
-    h = 0.0
-    worn = 0.0
-    ew = jp[j, J_EW]
-    mu = jp[j, J_MU]
-    if p[P_FEEDBACK] != 0.0 or jp[j, J_COAT] < math.inf:
-        ip, ia = map_bin(n_s, wmap.shape[1], wmap.shape[2])
-        if p[P_FEEDBACK] != 0.0:
-            h = map_interp(wmap, j, n_s) if p[P_INTERP] != 0.0 else wmap[j, ip, ia]
-        if wmap[j, ip, ia] >= jp[j, J_COAT]:
-            # coating worn through in this direction: the base material's values
-            worn = 1.0
-            ew = jp[j, J_EW_BASE]
-            mu = jp[j, J_MU_BASE]
-    c_eff = c + h
-    delta = e - c_eff
-    qj = add(pb, scale(rj, n))
-    qi = add(ps, scale(ri, n))
-    zero = (0.0, 0.0, 0.0)
-    vqj = add(vb, mv(Rb, cross(wb, mtv(Rb, sub(qj, rb)))))
-    vqi = add(vs, mv(Rs, cross(ws_, mtv(Rs, sub(qi, rs)))))
-    v = sub(vqj, vqi)
-    ddot = dot(n, v)
-    if delta <= 0.0:
-        return ContactState(zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff,
-                            h, 0.0, 0.0, worn)
-    vt = sub(v, scale(ddot, n))
-    vtn = math.sqrt(dot(vt, vt))
-    dv0 = s[j, S_DV0]
-    if dv0 <= 0.0:
-        dv0 = max(ddot, p[P_DV0_MIN])
-    kappa = damping_factor(p[P_CR], dv0)
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, kappa)
-    force = scale(-fn, n)
-    pdiss = (fn - fel) * ddot
-    if p[P_FRICTION] != 0.0 and vtn > 0.0:
-        ft = mu * friction_factor(vtn, p[P_V0], p[P_V1]) * fn
-        force = add(force, scale(-ft / vtn, vt))
-        pdiss += ft * vtn
-    uel = elastic_energy(delta, c_eff, ew, ri)
-    return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
-                        uel, pdiss, worn)
-
 
 @njit(cache=True)
 def body_moment(R, r, q, f):
@@ -363,51 +258,29 @@ def tangent_basis(n):
 _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
-def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
-    """Right-hand side dy = f(t, y) of the mechanism; diagnostics into dg.
+#: Rows of evaluate's work array vz (float64[VZ_ROWS, 6], one value per free coordinate or
+#: constraint row): the free coordinates' generalised forces, the constraint right-hand
+#: sides, the free accelerations, M^-1 times the forces, the multipliers, two work rows.
+VZ_FORCE = 0
+VZ_RHS = 1
+VZ_ZDD = 2
+VZ_MINV_FORCE = 3
+VZ_LAMBDA = 4
+VZ_WORK1 = 5
+VZ_WORK2 = 6
+VZ_ROWS = 8
 
-    Parameters
-    ----------
-    t : float
-        Time [s].
-    y : float64[38]
-        State (layout.Y_*): q, qd, drive work, dissipated energy.
-    p, jp : float64 arrays
-        Packed parameters (layout.P_*, layout.J_*).
-    s : float64[2, 2]
-        Discrete contact state (impact velocity, contact angle) per joint.
-    wmap : float64[2, npolar, nazim]
-        Wear map [m].
-    dy : float64[38]
-        Output derivative.
-    dg : float64[N_D]
-        Output diagnostics (forces, contact state; with ``full`` also energies, constraint
-        violation and the stiff rate of docs/physics.md section 4).
-    full : bool
-        Compute the energies, constraint violation and stiff rates too.
-    C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, 8x6).
 
-    Returns
-    -------
-    int
-        layout.ST_OK or layout.ST_SINGULAR.
+@njit(cache=True, inline="always")
+def bodies(y):
+    """Positions, velocities, rotations and body angular velocities of crank, rod, slider.
+
+    Returns (r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2, gq3):
+    centroids r [m], velocities v [m/s], Euler-angle rates pd [rad/s], rotations R, rate
+    matrices G (w' = G phi_dot), body angular velocities w [rad/s] and the
+    velocity-quadratic parts gq = G_dot phi_dot of the crank and rod.
     """
-    joint_a = 0
-    joint_b = 1
-    a_b = p[P_BAUM_A]
-    b_b = p[P_BAUM_B]
-    l2 = p[P_L2]
-    l3 = p[P_L3]
-    m2 = p[P_M2]
-    m3 = p[P_M3]
-    m4 = p[P_M4]
-    grav = (p[P_G], p[P_G + 1], p[P_G + 2])
-    J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
-    J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
     qd = Y_QD
-
-    # ---- bodies ----
     r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
     r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
     r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
@@ -431,14 +304,20 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     w4 = mv(G4, pd4)
     gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
     gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
+    return r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2, gq3
 
-    uO = (0.0, 0.0, 0.5 * l2)
-    uA2 = (0.0, 0.0, -0.5 * l2)
-    uA3 = (-0.5 * l3, 0.0, 0.0)
-    uB3 = (0.5 * l3, 0.0, 0.0)
-    zero = (0.0, 0.0, 0.0)
 
-    # ---- accelerations fixed by single-body constraints (Baumgarte rows) ----
+@njit(cache=True, inline="always")
+def driven_accelerations(t, y, p, r2, v2, R2, G2, w2, gq2, pd2, pd3, v4, dy):
+    """Accelerations that single-body constraints fix (Baumgarte rows): the driven crank
+    (revolute O + driver), the rod's spin gamma3 and the slider's y, z and angles (written
+    into dy). Returns (pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4): the crank's angular
+    accelerations, body angular acceleration and centroid acceleration, the position of its
+    point O, and the rod's gamma3 and slider's y, z accelerations."""
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    qd = Y_QD
+    uO = (0.0, 0.0, 0.5 * p[P_L2])
     theta = p[P_THETA0] + p[P_OMEGA] * t
     pdd2 = (-2.0 * a_b * pd2[0] - b_b * b_b * y[Y_PHI2],
             -2.0 * a_b * pd2[1] - b_b * b_b * y[Y_PHI2 + 1],
@@ -452,68 +331,42 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     zdd4 = -2.0 * a_b * v4[2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
     for k in range(3):
         dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
+    return pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4
 
-    # ---- applied forces: gravity, contact ----
-    F2 = scale(m2, grav)
-    N2 = zero
-    F3 = scale(m3, grav)
-    N3 = zero
-    F4x = m4 * grav[0]
-    pdiss = 0.0
-    for j in range(2):
-        dg[D_FN + j] = 0.0
-        dg[D_FT + j] = 0.0
-        dg[D_DELTA + j] = 0.0
-        dg[D_DDOT + j] = 0.0
-        dg[D_VT + j] = 0.0
-        dg[D_UEL + j] = 0.0
-        dg[D_HWEAR + j] = 0.0
-        dg[D_ECC + j] = 0.0
-        dg[D_CEFF + j] = 0.0
-        dg[D_DFD + j] = 0.0
-        dg[D_DFDD + j] = 0.0
-    fA = zero
-    fB = zero
-    # joint A: ball = crank pin, socket = rod end (socket frame: rod)
-    if jp[0, J_CLEARANCE] != 0.0:
-        cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3)
-        fA = cA.force
-        F2 = add(F2, fA)
-        N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
-        F3 = sub(F3, fA)
-        N3 = sub(N3, body_moment(R3, r3, cA.q_socket, fA))
-        pdiss += cA.diss_power
-        store_contact(dg, joint_a, cA)
-    # joint B: ball = rod end, socket = slider (socket frame: slider)
-    if jp[1, J_CLEARANCE] != 0.0:
-        cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero)
-        fB = cB.force
-        F3 = add(F3, fB)
-        N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
-        F4x -= fB[0]
-        pdiss += cB.diss_power
-        store_contact(dg, joint_b, cB)
 
-    # ---- rod generalised forces ----
+@njit(cache=True, inline="always")
+def rod_equations(F3, N3, F4x, w3, gq3, G3, J3, gdd3, vz):
+    """Generalised forces of the free coordinates (x3, y3, z3, alpha3, beta3, x4) into
+    vz[VZ_FORCE]; returns (mr_inv, ok): the inverse of the rod's 2x2 rotational mass block
+    over (alpha3, beta3) (row-major 4-tuple) and whether that block is positive definite."""
     Jw3 = (J3[0] * w3[0], J3[1] * w3[1], J3[2] * w3[2])
     Jg3 = (J3[0] * gq3[0], J3[1] * gq3[1], J3[2] * gq3[2])
     mom3 = sub(N3, add(cross(w3, Jw3), Jg3))
     Qp3 = mtv(G3, mom3)
     Mr3 = rot_mass(J3, G3)
-    # rows of the work array vz: 0 f, 1 rhs, 2 zdd, 3 M^-1 f, 4 lambda, 5-6 work
-    vz[0, 0] = F3[0]
-    vz[0, 1] = F3[1]
-    vz[0, 2] = F3[2]
-    vz[0, 3] = Qp3[0] - Mr3[2] * gdd3
-    vz[0, 4] = Qp3[1] - Mr3[5] * gdd3
-    vz[0, 5] = F4x
+    vz[VZ_FORCE, 0] = F3[0]
+    vz[VZ_FORCE, 1] = F3[1]
+    vz[VZ_FORCE, 2] = F3[2]
+    vz[VZ_FORCE, 3] = Qp3[0] - Mr3[2] * gdd3
+    vz[VZ_FORCE, 4] = Qp3[1] - Mr3[5] * gdd3
+    vz[VZ_FORCE, 5] = F4x
     det = Mr3[0] * Mr3[4] - Mr3[1] * Mr3[3]
     if not det > 0.0:
-        return ST_SINGULAR
-    mr_inv = (Mr3[4] / det, -Mr3[1] / det, -Mr3[3] / det, Mr3[0] / det)
-    minv = (1.0 / m3, 1.0 / m4)
+        return (0.0, 0.0, 0.0, 0.0), False
+    return (Mr3[4] / det, -Mr3[1] / det, -Mr3[3] / det, Mr3[0] / det), True
 
-    # ---- ideal spherical joints: rows of C (free coordinates) and right-hand sides ----
+
+@njit(cache=True, inline="always")
+def ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, r4, v4, gdd3,
+                     ydd4, zdd4, C, vz):
+    """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
+    spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
+    rows written and the largest position violation of these joints [m]."""
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
+    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
+    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
@@ -531,8 +384,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             C[nc + i, i] = 1.0
             C[nc + i, 3] = JrA[3 * i]
             C[nc + i, 4] = JrA[3 * i + 1]
-            vz[1, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
-                           - quad[i] + a2A[i])
+            vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
+                                  - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
         nc += 3
     if jp[1, J_CLEARANCE] == 0.0:
@@ -548,37 +401,172 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             C[nc + i, i] = -1.0
             C[nc + i, 3] = -JrB[3 * i]
             C[nc + i, 4] = -JrB[3 * i + 1]
-            vz[1, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
-                           + JrB[3 * i + 2] * gdd3 + quad[i])
+            vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
+                                  + JrB[3 * i + 2] * gdd3 + quad[i])
             cons = max(cons, abs(cpos[i]))
         C[nc, 5] = 1.0
         nc += 3
+    return nc, cons
 
-    # ---- Schur complement solve ----
-    minv_apply(minv, mr_inv, vz, 0, 3)
-    if nc > 0:
-        for i in range(nc):
-            acc = -vz[1, i]
-            for k in range(NZ):
-                acc += C[i, k] * vz[3, k]
-            vz[4, i] = acc
-        for jj in range(nc):
-            for k in range(NZ):
-                vz[5, k] = C[jj, k]
-            minv_apply(minv, mr_inv, vz, 5, 6)
-            for i in range(jj, nc):
-                acc = 0.0
-                for k in range(NZ):
-                    acc += C[i, k] * vz[6, k]
-                S[i, jj] = acc
-                S[jj, i] = acc
-        if not solve_spd(S, vz, 4, nc, L):
-            return ST_SINGULAR
-        back_substitute(vz, 0, C, 4, nc, minv, mr_inv, 5, 2)
-    else:
+
+@njit(cache=True, inline="always")
+def schur_solve(C, S, L, nc, minv, mr_inv, vz):
+    """Free accelerations into vz[VZ_ZDD] and the ideal joints' multipliers into
+    vz[VZ_LAMBDA], by the Schur complement S = C M^-1 C^T (Cholesky). False if singular."""
+    minv_apply(minv, mr_inv, vz, VZ_FORCE, VZ_MINV_FORCE)
+    if nc == 0:
         for k in range(NZ):
-            vz[2, k] = vz[3, k]
-    zdd = (vz[2, 0], vz[2, 1], vz[2, 2], vz[2, 3], vz[2, 4], vz[2, 5])
+            vz[VZ_ZDD, k] = vz[VZ_MINV_FORCE, k]
+        return True
+    for i in range(nc):
+        acc = -vz[VZ_RHS, i]
+        for k in range(NZ):
+            acc += C[i, k] * vz[VZ_MINV_FORCE, k]
+        vz[VZ_LAMBDA, i] = acc
+    for jj in range(nc):
+        for k in range(NZ):
+            vz[VZ_WORK1, k] = C[jj, k]
+        minv_apply(minv, mr_inv, vz, VZ_WORK1, VZ_WORK2)
+        for i in range(jj, nc):
+            acc = 0.0
+            for k in range(NZ):
+                acc += C[i, k] * vz[VZ_WORK2, k]
+            S[i, jj] = acc
+            S[jj, i] = acc
+    if not solve_spd(S, vz, VZ_LAMBDA, nc, L):
+        return False
+    back_substitute(vz, VZ_FORCE, C, VZ_LAMBDA, nc, minv, mr_inv, VZ_WORK1, VZ_ZDD)
+    return True
+
+
+@njit(cache=True, inline="always")
+def crank_reactions(p, F2, N2, r2, R2, G2, w2, gq2, pdd2, rdd2):
+    """The crank's multipliers from its own equations once the forces on it are known:
+    (drive torque [N m], lambda_O [N], the revolute's multiplier on the crank)."""
+    m2 = p[P_M2]
+    J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
+    uO = (0.0, 0.0, 0.5 * p[P_L2])
+    Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
+    Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
+    Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
+    Mr2 = rot_mass(J2, G2)
+    Mp2 = mv(Mr2, pdd2)
+    lamO = sub(F2, scale(m2, rdd2))
+    JO = point_jacobian_rot(R2, uO, G2)
+    lam_ang = sub(sub(Qp2, Mp2), mtv(JO, lamO))
+    return -lam_ang[2], lamO
+
+
+@njit(cache=True, inline="always")
+def kinetic_energy(p, v2, v3, v4, w2, w3, w4):
+    """Kinetic energy of crank, rod and slider [J]."""
+    m2 = p[P_M2]
+    m3 = p[P_M3]
+    m4 = p[P_M4]
+    J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
+    J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
+    J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
+    ke = 0.5 * (m2 * dot(v2, v2) + m3 * dot(v3, v3) + m4 * dot(v4, v4))
+    ke += 0.5 * (J2[0] * w2[0] ** 2 + J2[1] * w2[1] ** 2 + J2[2] * w2[2] ** 2)
+    ke += 0.5 * (J3[0] * w3[0] ** 2 + J3[1] * w3[1] ** 2 + J3[2] * w3[2] ** 2)
+    ke += 0.5 * (J4[0] * w4[0] ** 2 + J4[1] * w4[1] ** 2 + J4[2] * w4[2] ** 2)
+    return ke
+
+
+#: Local variables that Numba must type as plain int64: a constant argument would otherwise
+#: compile the callee once per value (a Literal specialisation).
+_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
+
+
+@njit(cache=True, locals=_NOT_LITERAL)
+def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
+    """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : float64[38]
+        State (layout.Y_*): q, qd, drive work, dissipated energy.
+    p, jp : float64 arrays
+        Packed parameters (layout.P_*, layout.J_*).
+    s : float64[2, 2]
+        Discrete contact state (impact velocity, contact angle) per joint.
+    wmap : float64[2, npolar, nazim]
+        Wear map [m].
+    dy : float64[38]
+        Output derivative.
+    dg : float64[N_D]
+        Output diagnostics (forces, contact state, energies, constraint violation and the
+        stiff rate of docs/physics.md section 4), written only with ``full``.
+    full : bool
+        An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
+        dopri5's inner stages need the derivative only.
+    C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, VZ_ROWS x 6).
+
+    Returns
+    -------
+    int
+        layout.ST_OK or layout.ST_SINGULAR.
+    """
+    joint_a = 0
+    joint_b = 1
+    qd = Y_QD
+    (r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2,
+     gq3) = bodies(y)
+    pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4 = driven_accelerations(t, y, p, r2, v2, R2, G2, w2, gq2,
+                                                                 pd2, pd3, v4, dy)
+    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
+    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
+    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
+    zero = (0.0, 0.0, 0.0)
+    grav = (p[P_G], p[P_G + 1], p[P_G + 2])
+
+    # ---- applied forces: gravity, contact ----
+    F2 = scale(p[P_M2], grav)
+    N2 = zero
+    F3 = scale(p[P_M3], grav)
+    N3 = zero
+    F4x = p[P_M4] * grav[0]
+    pdiss = 0.0
+    if full:
+        clear_contacts(dg)
+    fA = zero
+    fB = zero
+    # joint A: ball = crank pin, socket = rod end (socket frame: rod)
+    if jp[0, J_CLEARANCE] != 0.0:
+        cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3, full)
+        fA = cA.force
+        F2 = add(F2, fA)
+        N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
+        F3 = sub(F3, fA)
+        N3 = sub(N3, body_moment(R3, r3, cA.q_socket, fA))
+        pdiss += cA.diss_power
+        if full:
+            store_contact(dg, joint_a, cA)
+    # joint B: ball = rod end, socket = slider (socket frame: slider)
+    if jp[1, J_CLEARANCE] != 0.0:
+        cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero, full)
+        fB = cB.force
+        F3 = add(F3, fB)
+        N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
+        F4x -= fB[0]
+        pdiss += cB.diss_power
+        if full:
+            store_contact(dg, joint_b, cB)
+
+    # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
+    J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
+    mr_inv, ok = rod_equations(F3, N3, F4x, w3, gq3, G3, J3, gdd3, vz)
+    if not ok:
+        return ST_SINGULAR
+    minv = (1.0 / p[P_M3], 1.0 / p[P_M4])
+    nc, cons = ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, r4, v4,
+                                gdd3, ydd4, zdd4, C, vz)
+    if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
+        return ST_SINGULAR
+    zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
+           vz[VZ_ZDD, 5])
 
     # ---- assemble qdd ----
     for k in range(N_Q):
@@ -602,24 +590,18 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
     if jp[0, J_CLEARANCE] == 0.0:
-        fA = (vz[4, 0], vz[4, 1], vz[4, 2])
+        fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
     if jp[1, J_CLEARANCE] == 0.0:
-        fB = (vz[4, k0], vz[4, k0 + 1], vz[4, k0 + 2])
-    Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
-    Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
-    Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
-    Mr2 = rot_mass(J2, G2)
-    Mp2 = mv(Mr2, pdd2)
-    lamO = sub(F2, scale(m2, rdd2))
-    JO = point_jacobian_rot(R2, uO, G2)
-    lam_ang = sub(sub(Qp2, Mp2), mtv(JO, lamO))
-    torque = -lam_ang[2]
+        fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
+    torque, lamO = crank_reactions(p, F2, N2, r2, R2, G2, w2, gq2, pdd2, rdd2)
     dy[Y_WORK] = torque * pd2[2]
     dy[Y_DISS] = pdiss
+    if not full:
+        return ST_OK
 
     dg[D_SLIDER_ACC] = zdd[5]
     dg[D_TORQUE] = torque
@@ -629,27 +611,20 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         dg[D_JOINT_FORCE + 3 + i] = fB[i]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
-
-    if full:
-        J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
-        ke = 0.5 * (m2 * dot(v2, v2) + m3 * dot(v3, v3) + m4 * dot(v4, v4))
-        ke += 0.5 * (J2[0] * w2[0] ** 2 + J2[1] * w2[1] ** 2 + J2[2] * w2[2] ** 2)
-        ke += 0.5 * (J3[0] * w3[0] ** 2 + J3[1] * w3[1] ** 2 + J3[2] * w3[2] ** 2)
-        ke += 0.5 * (J4[0] * w4[0] ** 2 + J4[1] * w4[1] ** 2 + J4[2] * w4[2] ** 2)
-        dg[D_KE] = ke
-        dg[D_PE_GRAV] = -(m2 * dot(grav, r2) + m3 * dot(grav, r3) + m4 * dot(grav, r4))
-        cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
-        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
-        dg[D_CONS] = cons
-        rate = 0.0
-        for j in range(2):
-            if jp[j, J_CLEARANCE] == 0.0:
-                continue
-            delta = dg[D_DELTA + j]
-            if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-                rate = max(rate, joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv,
-                                            mr_inv, vz))
-        dg[D_RATE] = rate
+    dg[D_KE] = kinetic_energy(p, v2, v3, v4, w2, w3, w4)
+    dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
+    cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
+    cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
+    dg[D_CONS] = cons
+    rate = 0.0
+    for j in range(2):
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        delta = dg[D_DELTA + j]
+        if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
+            rate = max(rate, joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv,
+                                        mr_inv, vz))
+    dg[D_RATE] = rate
     return ST_OK
 
 
@@ -679,19 +654,15 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     m_eff = 1.0 / inv_m
     rate = stiff_rate(m_eff, dg[D_DFD + j], dg[D_DFDD + j])
     ddot = dg[D_DDOT + j]
+    ew, mu, _ = surface(jp, j, dg[D_WORN + j] != 0.0)
     if ddot > 0.0:
         c_eff = dg[D_CEFF + j]
-        ew = jp[j, J_EW_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_EW]
         kk = stiffness_factor(ew, jp[j, J_RI])
         delta = max(dg[D_DELTA + j], 0.0)
         dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
-        dv0 = s[j, S_DV0]
-        if dv0 <= 0.0:
-            dv0 = max(ddot, p[P_DV0_MIN])
-        kappa = damping_factor(p[P_CR], dv0)
+        kappa = contact_damping(s[j, S_DV0], ddot, p[P_CR], p[P_DV0_MIN])
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, jp[j, J_RI], kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
-    mu = jp[j, J_MU_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_MU]
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
         # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
@@ -704,6 +675,23 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
         slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
         rate = max(rate, mu * fn * slope * inv_t)
     return rate
+
+
+@njit(cache=True, inline="always")
+def clear_contacts(dg):
+    """Zero both joints' contact diagnostics (an ideal joint keeps zeros)."""
+    for j in range(2):
+        dg[D_FN + j] = 0.0
+        dg[D_FT + j] = 0.0
+        dg[D_DELTA + j] = 0.0
+        dg[D_DDOT + j] = 0.0
+        dg[D_VT + j] = 0.0
+        dg[D_UEL + j] = 0.0
+        dg[D_HWEAR + j] = 0.0
+        dg[D_ECC + j] = 0.0
+        dg[D_CEFF + j] = 0.0
+        dg[D_DFD + j] = 0.0
+        dg[D_DFDD + j] = 0.0
 
 
 @njit(cache=True)
@@ -748,10 +736,10 @@ def ideal_joint_forces(t, y, p, jp):
     C = np.zeros((6, 6))
     S = np.zeros((6, 6))
     L = np.zeros((6, 6))
-    vz = np.zeros((8, 6))
+    vz = np.zeros((VZ_ROWS, 6))
     out = np.full((2, 3), np.nan)
     if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), p, jp_ideal, s, wmap, dy, dg,
-                False, C, S, L, vz) != ST_OK:
+                True, C, S, L, vz) != ST_OK:
         return out
     for j in range(2):
         for i in range(3):

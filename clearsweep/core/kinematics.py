@@ -8,11 +8,27 @@ import math
 
 from numba import njit
 
+#: Below this |x| (2^-27) the correctly rounded cos x is 1.0 and sin x is x, to the bit.
+#: Six of the nine Euler angles are held near 0 by constraints (the crank's alpha and beta,
+#: the rod's gamma, the slider's), so most evaluations skip their libm calls.
+TINY_ANGLE = 2.0 ** -27
+
+
+@njit(cache=True)
+def cos_sin(x):
+    """(cos x, sin x), exact for |x| < TINY_ANGLE without calling libm."""
+    if abs(x) < TINY_ANGLE:
+        return 1.0, x
+    return math.cos(x), math.sin(x)
+
 
 @njit(cache=True)
 def trig(a, b, g):
     """(cos a, sin a, cos b, sin b, cos g, sin g): computed once per body and evaluation."""
-    return (math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g))
+    ca, sa = cos_sin(a)
+    cb, sb = cos_sin(b)
+    cg, sg = cos_sin(g)
+    return (ca, sa, cb, sb, cg, sg)
 
 
 @njit(cache=True)

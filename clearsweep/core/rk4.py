@@ -13,8 +13,8 @@ import math
 import numpy as np
 from numba import njit, types
 
-from .contact import contact_angle, contact_area, episode_impact_velocity
-from .dynamics import evaluate
+from .contact import contact_angle, contact_area, episode_impact_velocity, surface
+from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_CONS,
     D_DDOT,
@@ -33,8 +33,6 @@ from .layout import (
     D_WORN,
     J_C,
     J_CLEARANCE,
-    J_K,
-    J_K_BASE,
     J_RI,
     J_RJ,
     M_ACC_PEAK,
@@ -228,6 +226,7 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
     redone; the next free undo-buffer row).
     """
     wear_on = p[P_WEAR] != 0.0
+    paper_slip = p[P_SLIP] != 0.0
     ampl = p[P_AMPL]
     changed = False
     for j in range(2):
@@ -240,13 +239,14 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
             rj = jp[j, J_RJ]
             e = dg[D_ECC + j]
             pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
-            beta = contact_angle(pen, e, ri, rj)
+            # the contact angle matters to the paper's slip rule only
+            beta = contact_angle(pen, e, ri, rj) if paper_slip else math.pi
             if wear_on and fn > 0.0:
-                if p[P_SLIP] == 0.0:
+                if not paper_slip:
                     ds = dg[D_VT + j] * hs
                 else:
                     ds = ri * abs(beta - s[j, S_BETA])
-                k_wear = jp[j, J_K_BASE] if dg[D_WORN + j] != 0.0 else jp[j, J_K]
+                _, _, k_wear = surface(jp, j, dg[D_WORN + j] != 0.0)
                 vol = ampl * k_wear * fn * ds
                 area = contact_area(pen, e, ri, rj)
                 nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
@@ -322,12 +322,16 @@ def step_checks(y, dg, p, jp, status, e0, track):
     return status
 
 
-#: Rows of the work arrays that :func:`advance` takes (``work_shapes`` gives their shapes):
+#: The CUDA batch kernel (core/device.py) keeps advance's work arrays grouped, one batched
+#: array per group with the case as its first axis (:func:`work_shapes`), and hands advance
+#: their rows; the CPU path (:func:`integrate`) allocates each work array on its own, so that
+#: no array view is made or passed in the hot loop. Rows of each group, in advance's
+#: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2, k3, k4, the stage state;
-#: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its
-#: copy, the largest depth written per joint, the first impact times and their copy;
-#: mats: C, S, L of evaluate; caps: the wear of the step being taken and the accepted wear
-#: waiting to be spread.
+#: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its copy,
+#: the largest depth written per joint, the first impact times and their copy; mats: C, S, L
+#: of evaluate; caps: the wear of the step being taken and the accepted wear waiting to be
+#: spread.
 VEC_ROWS = 8
 DIAG_ROWS = 2
 CSTATE_ROWS = 2
@@ -338,12 +342,19 @@ MAT_ROWS = 3
 CAP_ROWS = 2
 
 
+@njit(cache=True)
+def undo_rows(max_level):
+    """Rows of the undo buffer: one per joint and accepted sub-step of the deepest level."""
+    return 2 * (1 << max_level)
+
+
 def work_shapes(max_level, npolar):
-    """Shapes of advance's work arrays, in argument order (after ``track``), for a case of
-    the given sub-step level cap and wear-map polar bins; buf_i is int64, the rest float64."""
-    nbuf_max = 2 * (1 << max_level)
+    """Shapes of the grouped work arrays (vec, diag, cstate, msave, pairs, mats, vz, buf_i,
+    buf_v, caps, scratch) for a case of the given sub-step level cap and wear-map polar bins;
+    buf_i is int64, the rest float64."""
+    nbuf_max = undo_rows(max_level)
     return ((VEC_ROWS, N_Y), (DIAG_ROWS, N_D), (CSTATE_ROWS, 2, N_S), (2, N_M), (PAIR_ROWS, 2),
-            (MAT_ROWS, 6, 6), (8, 6), (nbuf_max, 4), (nbuf_max, 4), (CAP_ROWS, 2, 6),
+            (MAT_ROWS, 6, 6), (VZ_ROWS, 6), (nbuf_max, 4), (nbuf_max, 4), (CAP_ROWS, 2, 6),
             (4 * npolar, 3))
 
 
@@ -400,6 +411,15 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
 
 
 @njit(cache=True)
+def flush_all_wear(wmap, pend, wmax, scratch):
+    """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
+    deepest bin [m]). Every integrator ends with it."""
+    for j in range(2):
+        if pend[j, 3] > 0.0:
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+
+
+@njit(cache=True)
 def note_first_impact(first, stats, t):
     """Record t as a joint's first impact time when its impact count has just left 0."""
     for j in range(2):
@@ -441,31 +461,45 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     float64[4] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
         at A and at B [s], NaN where none); see kernel_result.
 
-    The CPU entry point: allocates the work arrays (:func:`work_shapes`) once and runs
+    The CPU entry point: allocates every work array on its own (no row views) and runs
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
     """
-    nbuf_max = 2 * (1 << int(p[P_MAX_LEVEL]))
+    nbuf_max = undo_rows(int(p[P_MAX_LEVEL]))
     track = np.zeros(3)
-    pairs = np.zeros((PAIR_ROWS, 2))
+    first = np.zeros(2)
     advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
-            out_wmax, info, stats, track, np.zeros((VEC_ROWS, N_Y)), np.zeros((DIAG_ROWS, N_D)),
-            np.zeros((CSTATE_ROWS, 2, N_S)), np.zeros((2, N_M)), pairs,
-            np.zeros((MAT_ROWS, 6, 6)), np.zeros((8, 6)),
+            out_wmax, info, stats, track, first,
+            np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
+            np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
+            np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
+            np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
+            np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
             np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-            np.zeros((CAP_ROWS, 2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    return kernel_result(track, pairs[PAIR_FIRST])
+            np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
+    return kernel_result(track, first)
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
 def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
-            out_wmax, info, stats, track, vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v,
-            caps, scratch):
-    """:func:`integrate` without allocation: every work array is an argument (shapes:
-    :func:`work_shapes`; their contents on entry do not matter), so that one source serves
-    the CPU and the CUDA device. ``keep_rows`` False writes no output rows (out_* are not
-    touched; info[1] still counts the rows a run would save). ``track`` (float64[3]) receives
-    the peak kinetic energy, the largest |drive work| and the largest |energy residual| [J];
-    ``pairs[PAIR_FIRST]`` each joint's first impact time [s] (-1: none).
+            out_wmax, info, stats, track, first, y, ysave, k1, k1save, k2, k3, k4, yt, dg,
+            dgsave, s, ssave, msave, ddot_prev, ddot_prev_save, wmax, first_save, C, S, L, vz,
+            buf_i, buf_v, cur, pend, scratch):
+    """:func:`integrate` without allocation: every work array is an argument (one each, so
+    that the CPU path passes no views; the CUDA kernel passes rows of :func:`work_shapes`'
+    groups), their contents on entry do not matter. ``keep_rows`` False writes no output rows
+    (out_* are not touched; info[1] still counts the rows a run would save). ``track``
+    (float64[3]) receives the peak kinetic energy, the largest |drive work| and the largest
+    |energy residual| [J]; ``first`` (float64[2]) each joint's first impact time [s] (-1:
+    none).
+
+    Work arrays: y, ysave, k1, k1save, k2, k3, k4, yt (N_Y each: the state, its copy at the
+    step's start, the stage derivatives and state); dg, dgsave (N_D: diagnostics and copy);
+    s, ssave (2 x N_S: contact state and copy); msave (2 x N_M: statistics at the step's
+    start); ddot_prev, ddot_prev_save, wmax, first_save (2 each: approach rates and copy, the
+    deepest bin written per joint, the first impact times' copy); C, S, L (6 x 6) and vz
+    (VZ_ROWS x 6) of evaluate; buf_i, buf_v (undo_rows x 4: the step's wear, to undo a
+    rejected step); cur, pend (2 x 6: wear of the step being taken, wear waiting to be spread:
+    sum V n (3), sum V, sum V A, R_i); scratch (4 npolar x 3) of wear.deposit.
     """
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
@@ -474,42 +508,32 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     stab = p[P_STAB]
     settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
-    zero_rows(vec)
-    zero_rows(diag)
     zero_rows(msave)
-    zero_rows(pairs)
     zero_rows(vz)
     zero_rows(buf_v)
     zero_rows(buf_i)
-    for r in range(2):
-        zero_rows(cstate[r])
-        zero_rows(caps[r])
-    for r in range(MAT_ROWS):
-        zero_rows(mats[r])
+    zero_rows(ssave)
+    zero_rows(cur)
+    zero_rows(pend)
+    zero_rows(C)
+    zero_rows(S)
+    zero_rows(L)
     zero_rows(scratch)
-    y = vec[0]
-    ysave = vec[1]
-    k1 = vec[2]
-    k1save = vec[3]
-    k2 = vec[4]
-    k3 = vec[5]
-    k4 = vec[6]
-    yt = vec[7]
+    for i in range(N_Y):
+        ysave[i] = 0.0
+        k1save[i] = 0.0
+        k2[i] = 0.0
+        k3[i] = 0.0
+        k4[i] = 0.0
+        yt[i] = 0.0
+    for i in range(N_D):
+        dg[i] = 0.0
+        dgsave[i] = 0.0
+    for j in range(2):
+        ddot_prev_save[j] = 0.0
+        wmax[j] = 0.0
+        first_save[j] = 0.0
     copy_into(y, y0)
-    dg = diag[0]
-    dgsave = diag[1]
-    s = cstate[0]
-    ssave = cstate[1]
-    ddot_prev = pairs[0]
-    ddot_prev_save = pairs[1]
-    wmax = pairs[2]
-    C = mats[0]
-    S = mats[1]
-    L = mats[2]
-    # wear waiting to be spread on the map (per joint): sum of V n (3), sum V, sum V A, R_i;
-    # ``cur`` holds the step being taken, ``pend`` the accepted steps not yet spread
-    cur = caps[0]
-    pend = caps[1]
     # begin_case clears the statistics and sets the contact state
     for i in range(3):
         track[i] = 0.0
@@ -524,11 +548,8 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
         return
     e0 = energy_total(dg)
     track[0] = dg[D_KE]
-    first = pairs[PAIR_FIRST]    # time of each joint's first impact [s]; -1: none yet
-    first_save = pairs[PAIR_FIRST + 1]
-    first[0] = -1.0
+    first[0] = -1.0    # time of each joint's first impact [s]; -1: none yet
     first[1] = -1.0
-    n_saved = 0
     if keep_rows:
         out_t[0] = t0
         copy_row(out_y, 0, y)
@@ -626,9 +647,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
             n_saved += 1
         if status != ST_OK:
             break
-    for j in range(2):
-        if pend[j, 3] > 0.0:
-            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+    flush_all_wear(wmap, pend, wmax, scratch)
     if keep_rows and status == ST_OK and n_saved > 0:
         out_wmax[n_saved - 1, 0] = wmax[0]
         out_wmax[n_saved - 1, 1] = wmax[1]

@@ -187,3 +187,24 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
         weight = scale * scratch[k, 2] / bin_area(ip, npolar, nazim, radius)
         dmax = _arc_to_bins(wmap, j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
     return dmax
+
+
+@njit(cache=True)
+def worn_surface(wmap, j, n, coat, feedback, interp):
+    """What joint j's worn socket is in unit direction n (socket frame): (h, worn).
+
+    h [m] is the wear depth the contact adds to the clearance, c_eff(n) = c + h
+    (docs/physics.md 3.1): 0 without ``feedback``, else read bilinearly between bin centres
+    (``interp``, :func:`map_interp`) or from the bin holding n. ``worn`` says whether the
+    coating of thickness ``coat`` [m] (inf: none) is worn through there: the bin's depth
+    reaches it. The one reading of a worn socket: the kernel's contact and the seated start
+    both call it.
+    """
+    h = 0.0
+    worn = False
+    if feedback or coat < math.inf:
+        ip, ia = map_bin(n, wmap.shape[1], wmap.shape[2])
+        if feedback:
+            h = map_interp(wmap, j, n) if interp else wmap[j, ip, ia]
+        worn = wmap[j, ip, ia] >= coat
+    return h, worn

@@ -1,0 +1,142 @@
+"""The spherical clearance joint: a ball in a worn, possibly coated socket (docs/physics.md 3, 5).
+
+A clearance-joint type is a module of this shape (docs/architecture.md, "Joint types"):
+
+- :func:`gap`: from the two bodies' states, the gap geometry in the socket: eccentricity,
+  contact normal, penetration against the worn clearance, and whether the coating is worn
+  through there;
+- :func:`contact_points` and :func:`point_velocity`: where the force pair acts and how fast
+  those points move, hence the normal approach rate and the tangential slip;
+- the wear-map geometry it wears: a map over the socket's inner sphere (``wear.map_bin``,
+  ``wear.deposit``, ``wear.worn_surface``);
+- :func:`contact`: the composition with the coated contact law, damping and friction of
+  ``contact.py``, returning a :data:`ContactState` that the equations of motion apply to
+  the two bodies.
+
+The kernel composes these; nothing of a joint type's geometry is written elsewhere.
+"""
+
+import math
+from collections import namedtuple
+
+from numba import njit
+
+from .contact import (
+    contact_damping,
+    elastic_energy,
+    friction_magnitude,
+    normal_force,
+    surface,
+)
+from .kinematics import add, cross, dot, mtv, mv, point_state, scale, sub
+from .layout import (
+    J_C,
+    J_COAT,
+    J_RI,
+    J_RJ,
+    P_CR,
+    P_DV0_MIN,
+    P_FEEDBACK,
+    P_FRICTION,
+    P_INTERP,
+    P_V0,
+    P_V1,
+    S_DV0,
+)
+from .wear import worn_surface
+
+#: What :func:`contact` returns for one clearance joint (Numba compiles a namedtuple as a
+#: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
+#: named ``_socket``.
+ContactState = namedtuple("ContactState", (
+    "force",            # force on the ball [N]
+    "q_ball",           # contact point Q_j on the ball
+    "q_socket",         # contact point Q_i on the socket
+    "fn",               # normal force F_N [N]
+    "dfn_ddelta",       # dF_N / d delta [N/m]
+    "dfn_dddot",        # dF_N / d delta_dot [N s/m]
+    "delta",            # penetration delta = e - c_eff [m] (negative: a gap)
+    "ddot",             # normal approach rate delta_dot [m/s]
+    "ecc",              # eccentricity e [m]
+    "normal",           # contact normal n
+    "offset_socket",    # ball-centre offset d in the socket frame [m]
+    "normal_socket",    # n in the socket frame
+    "slip_speed",       # tangential slip speed |v_t| [m/s]
+    "c_eff",            # local clearance c + h [m]
+    "wear_depth",       # wear depth h under the contact point [m]
+    "elastic_energy",   # elastic energy U_el [J] (0 unless asked for)
+    "diss_power",       # power dissipated by damping and friction [W]
+    "worn_through",     # 1.0: coating worn through under the contact, base values used
+))
+
+
+@njit(cache=True)
+def gap(jp, j, wmap, p, pb, ps, Rs):
+    """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
+    of rotation Rs: (e, n, d_s, n_s, h, worn, c_eff, delta).
+
+    e = |d| [m], d = pb - ps; n = d / e (global; e = 0: the x axis); d_s, n_s: d and n in the
+    socket frame; h [m] and worn: the worn socket in direction n_s (wear.worn_surface);
+    c_eff = c + h; delta = e - c_eff, the penetration (negative: a gap).
+    """
+    d = sub(pb, ps)
+    e = math.sqrt(dot(d, d))
+    if e > 0.0:
+        n = scale(1.0 / e, d)
+    else:
+        n = (1.0, 0.0, 0.0)
+    d_s = mtv(Rs, d)
+    n_s = mtv(Rs, n)
+    h, worn = worn_surface(wmap, j, n_s, jp[j, J_COAT], p[P_FEEDBACK] != 0.0, p[P_INTERP] != 0.0)
+    c_eff = jp[j, J_C] + h
+    return e, n, d_s, n_s, h, worn, c_eff, e - c_eff
+
+
+@njit(cache=True)
+def contact_points(pb, ps, n, ri, rj):
+    """(Q_j on the ball, Q_i on the socket): the surface points along the normal n."""
+    return add(pb, scale(rj, n)), add(ps, scale(ri, n))
+
+
+@njit(cache=True)
+def point_velocity(r, v, R, w, q):
+    """Velocity of the material point at global position q of a body (centroid r, velocity
+    v, rotation R, body-frame angular velocity w)."""
+    return add(v, mv(R, cross(w, mtv(R, sub(q, r)))))
+
+
+@njit(cache=True)
+def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
+    """Contact state and force of clearance joint j (docs/physics.md section 3).
+
+    Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
+    ``energy``: also compute the elastic energy (else 0). Returns a :data:`ContactState`.
+    The whole arrays jp, s, wmap are passed with the joint index, never a row of them: a
+    row is a new array view, reference-counted at every call.
+    """
+    pb, _ = point_state(rb, vb, Rb, wb, ub)
+    ps, _ = point_state(rs, vs, Rs, ws_, us)
+    e, n, d_s, n_s, h, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)
+    ew, mu, _ = surface(jp, j, worn)
+    worn_flag = 1.0 if worn else 0.0
+    ri = jp[j, J_RI]
+    qj, qi = contact_points(pb, ps, n, ri, jp[j, J_RJ])
+    zero = (0.0, 0.0, 0.0)
+    v = sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
+    ddot = dot(n, v)
+    if delta <= 0.0:
+        return ContactState(zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff,
+                            h, 0.0, 0.0, worn_flag)
+    vt = sub(v, scale(ddot, n))
+    vtn = math.sqrt(dot(vt, vt))
+    kappa = contact_damping(s[j, S_DV0], ddot, p[P_CR], p[P_DV0_MIN])
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, kappa)
+    force = scale(-fn, n)
+    pdiss = (fn - fel) * ddot
+    if p[P_FRICTION] != 0.0 and vtn > 0.0:
+        ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1])
+        force = add(force, scale(-ft / vtn, vt))
+        pdiss += ft * vtn
+    uel = elastic_energy(delta, c_eff, ew, ri) if energy else 0.0
+    return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
+                        uel, pdiss, worn_flag)
