@@ -213,8 +213,30 @@ def write_netcdf_atomic(ds: xr.Dataset, path: str | os.PathLike, *, encoding: di
     # coordinates hold no missing values: no _FillValue on them (CF 2.5.1)
     encoding = {**{str(name): {"_FillValue": None} for name in ds.coords}, **(encoding or {})}
     with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
-        ds.to_netcdf(tmp, engine=engine, encoding=encoding)  # type: ignore[call-overload]  # engine: str, not xarray's Literal
+        from xarray.backends.common import ArrayWriter
+
+        store = _writable_store(tmp, engine)
+        writer = ArrayWriter()   # what is not written at once (dask-chunked arrays) waits here
+        try:
+            ds.dump_to_store(store, writer=writer, encoding=encoding)
+            writer.sync()
+        finally:
+            store.close()
     return path
+
+
+def _writable_store(path: str | os.PathLike, engine: str):
+    """A new netCDF file's xarray data store, with a lock of its own: xarray's default
+    (``Dataset.to_netcdf``) asks dask which scheduler is running, which imports dask.array
+    and distributed (half a second) into every ``clearsweep run``; a file written by one
+    process needs no scheduler-aware lock."""
+    import threading
+
+    from xarray.backends import H5NetCDFStore, NetCDF4DataStore
+
+    if engine == "h5netcdf":
+        return H5NetCDFStore.open(str(path), mode="w", lock=threading.Lock())
+    return NetCDF4DataStore.open(str(path), mode="w", format="NETCDF4", lock=threading.Lock())
 
 
 def open_results(path: str | os.PathLike, **kwargs) -> xr.Dataset:

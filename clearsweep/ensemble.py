@@ -26,7 +26,6 @@ from collections.abc import Iterable
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
 from .summary import PASS_THROUGH_VARIABLES, SUMMARY_ORDER
 from .variables import attrs_for
@@ -52,6 +51,8 @@ def summary_variables(ds: xr.Dataset, dim: str = MEMBER_DIM) -> list[str]:
 
 def t_quantile(n, level: float = CONFIDENCE_LEVEL):
     """t(0.5 + level / 2, n - 1); NaN where n < 2 (works on arrays and DataArrays)."""
+    from scipy import stats  # imported here: 0.5 s that a plain run does not need
+
     df = np.asarray(n, dtype=float) - 1.0
     with np.errstate(invalid="ignore"):
         q = stats.t.ppf(0.5 + 0.5 * level, np.where(df >= 1.0, df, np.nan))
@@ -133,6 +134,8 @@ def welch_interval(mean1: float, std1: float, n1: int, mean2: float, std2: float
     Welch-Satterthwaite degrees of freedom; two ensembles without spread (std 0) give
     the exact difference as both bounds. NaN bounds when either has fewer than two members.
     """
+    from scipy import stats  # imported here: 0.5 s that a plain run does not need
+
     diff = mean2 - mean1
     if n1 < 2 or n2 < 2 or not all(map(math.isfinite, (mean1, mean2, std1, std2))):
         return diff, math.nan, math.nan
