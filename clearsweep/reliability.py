@@ -188,19 +188,25 @@ def check_reliability(cfg: Config, source: str = "<config>") -> None:
 
 
 def _all_reached(cfg: Config, row: dict[str, Any], state: LifeState) -> str | None:
-    """Stop rule of a member: stop once every watched limit has been reached."""
+    """Stop rule of a member: once every watched limit has been reached, the name of the
+    one reached last (the first of those reached in this block, in :data:`CRITERIA` order;
+    with one limit, what a plain life run names); else None."""
+    previous = state.rows[-2]["cycle"] if len(state.rows) > 1 else -math.inf
+    now = []
     for name in watched_limits(cfg):
         if name == WEAR_THROUGH:
-            if all(w is None for w in state.wear_through):
+            cycles = [w[0] for w in state.wear_through if w is not None]
+            if not cycles:
                 return None
+            now += [name] if min(cycles) > previous else []
             continue
         key, var = CRITERIA[name]
-        limit = cfg.get(key)
-        values = np.array([np.nanmax(np.atleast_1d(r[var])) if np.isfinite(r[var]).any()
-                           else -np.inf for r in state.rows])
-        if not (values >= limit).any():
+        hit = [np.nanmax(np.atleast_1d(r[var])) >= cfg.get(key) for r in state.rows
+               if np.isfinite(r[var]).any()]
+        if not any(hit):
             return None
-    return "all_limits"
+        now += [name] if hit[-1] and not any(hit[:-1]) else []
+    return now[0] if now else "all_limits"
 
 
 def reliability_case(config) -> xr.Dataset:
@@ -299,7 +305,8 @@ def estimate_limit(revolutions: np.ndarray, censored: np.ndarray, grid: np.ndarr
                    level: float = CONFIDENCE_LEVEL) -> LimitEstimate:
     """Kaplan-Meier R(N) on ``grid`` with its Greenwood band, B10 and B50 with intervals,
     and a Weibull fit, from the members' revolutions and censoring flags (NaN members left
-    out). R is NaN beyond the largest revolutions observed (nothing is known there)."""
+    out). R is NaN beyond the largest revolutions observed when that member is censored
+    (nothing is known there); 0 when every member has reached the limit."""
     from lifelines import KaplanMeierFitter, WeibullFitter
     from lifelines.utils import qth_survival_times
 
@@ -315,14 +322,17 @@ def estimate_limit(revolutions: np.ndarray, censored: np.ndarray, grid: np.ndarr
     band = kmf.confidence_interval_survival_function_
     low_high = band.to_numpy(dtype=float)
     idx = np.searchsorted(timeline, grid, side="right") - 1
-    beyond = grid > t.max()
+    last = t == t.max()
+    beyond = (grid > t.max()) & bool((~e[last]).any())
     r = np.where(beyond, np.nan, surv[idx])
     r_low = np.where(beyond, np.nan, low_high[idx, 0])
     r_high = np.where(beyond, np.nan, low_high[idx, 1])
 
     def percentile(q: float) -> tuple[float, float, float]:
         bounds = qth_survival_times(q, band).to_numpy(dtype=float).ravel()
-        return float(kmf.percentile(q)), float(bounds[0]), float(bounds[1])
+        with warnings.catch_warnings():     # "approximating using survival_function_": the
+            warnings.simplefilter("ignore")  # KM curve is that step function, so exact here
+            return float(kmf.percentile(q)), float(bounds[0]), float(bounds[1])
 
     shape = scale = b10w = _NAN3
     if int(e.sum()) >= MIN_WEIBULL_EVENTS:
@@ -574,8 +584,7 @@ def _distinguishable(rows: list) -> list[str]:
     for (a, ca), (b, cb) in zip(rows, rows[1:]):
         lo_a, hi_a = float(ca["b10_ci_low"]), float(ca["b10_ci_high"])
         lo_b, hi_b = float(cb["b10_ci_low"]), float(cb["b10_ci_high"])
-        if not all(math.isfinite(v) or math.isinf(v) for v in (lo_a, hi_a, lo_b, hi_b)) or \
-                any(math.isnan(v) for v in (lo_a, hi_a, lo_b, hi_b)):
+        if any(math.isnan(v) for v in (lo_a, hi_a, lo_b, hi_b)):
             out.append(f"  {a} vs {b}: B10 interval undefined, not compared")
         elif lo_a <= hi_b and lo_b <= hi_a:
             out.append(f"  {a} and {b}: not distinguishable (B10 intervals overlap)")
