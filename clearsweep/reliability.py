@@ -419,8 +419,11 @@ def reliability_estimate(ds: xr.Dataset, level: float = CONFIDENCE_LEVEL) -> xr.
     cens = ds["censored"].transpose(*order).to_numpy().reshape(n_design, n_member, n_limit)
     times = np.where(ok[..., None], times, np.nan)
     base = (parse_yaml(ds.attrs["sweep_config"]) or {}).get("base", {})
+    # from half the earliest revolutions observed (at least one block) to the largest
     first = float(base.get("life", {}).get("block_revolutions", 1))
-    grid = revolution_grid(first, float(np.nanmax(times)) if np.isfinite(times).any() else first)
+    seen = np.isfinite(times).any()
+    grid = revolution_grid(max(first, 0.5 * float(np.nanmin(times))) if seen else first,
+                           float(np.nanmax(times)) if seen else first)
     inputs = [(name, var, j) for name, var, j, _ in INPUTS if var in ds
               and np.isfinite(ds[var].isel(joint=j) if j is not None else ds[var]).any()]
     draws = np.full((n_design, n_member, len(inputs)), np.nan)
