@@ -283,6 +283,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
             click.echo(life_summary_text(ds))
             return
+        if ds.attrs.get("sweep_store") == "reliability" and not metric and "b10" in ds:
+            from .reliability import reliability_text
+
+            click.echo(reliability_text(ds))
+            return
         if ds.attrs.get("sweep_store") == "life" and not metric:
             from .service_life import life_sweep_text
 
@@ -318,9 +323,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
               help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
 @click.option("--dpi", type=click.IntRange(*DPI_RANGE), default=FIGURE_DPI, show_default=True,
               help=f"Resolution of raster output, {DPI_RANGE[0]} to {DPI_RANGE[1]}.")
+@click.option("--b10", is_flag=True, help="--kind reliability: draw each design's B10 with its "
+                                          "interval as error bars instead of R(N).")
 @click.pass_context
 def plot_command(ctx: click.Context, path: str, kind: str, output: str,
-                 select_items: tuple[str, ...], x_axis: str, metric: str | None, dpi: int) -> None:
+                 select_items: tuple[str, ...], x_axis: str, metric: str | None, dpi: int,
+                 b10: bool) -> None:
     """Draw a figure from the results file PATH."""
     from .analysis import SelectionError
     from .plotting import PlotError, plot
@@ -330,7 +338,7 @@ def plot_command(ctx: click.Context, path: str, kind: str, output: str,
                                  f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
     with open_input(path) as ds:
         try:
-            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi)
+            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
         except (SelectionError, PlotError) as exc:
             raise click.UsageError(str(exc)) from exc
         except OSError as exc:      # as `run`: an output that cannot be written exits 1

@@ -37,7 +37,8 @@ from .schema import (  # noqa: F401
 )
 
 __all__ = [
-    "ConfigError", "Field", "Config", "JointConfig", "EnsembleConfig", "PerturbConfig", "SCHEMA",
+    "ConfigError", "Field", "Config", "JointConfig", "EnsembleConfig", "PerturbConfig",
+    "ReliabilityConfig", "SCHEMA",
     "DEFAULTS", "load_config",
     "apply_override", "dump_config",
     "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
@@ -223,6 +224,8 @@ class LifeConfig(_Section):
     max_normal_force: float | None = _setting(_limit(), "N", "settled peak normal force limit")
     max_rms_acceleration: float | None = _setting(_limit(), "m s-2",
                                                   "settled RMS slider acceleration limit")
+    #: the largest settled |x_slider - x_ideal(theta)| of a block (docs/physics.md section 1)
+    max_motion_error: float | None = _setting(_limit(), "m", "slider motion error limit")
     stop_at_wear_through: bool = _setting(Field(False, bool), None,
                                           "stop when a coating is first worn through")
     snapshots: int = _setting(Field(12, int, lo=2), "1", "wear-map snapshots kept")
@@ -262,6 +265,37 @@ class EnsembleConfig(_Section):
 
 
 @dataclass(frozen=True)
+class ReliabilityConfig(_Section):
+    """Reliability over service life (``store: reliability``, docs/reliability.md): each of
+    ``members`` life runs draws the inputs a manufacturer cannot pin down from (``seed``,
+    ``member``) only; ignored by ``run``, ``life`` and other sweeps. 0 = no scatter."""
+
+    members: int = _setting(Field(16, int, lo=2), "1", "reliability members per design")
+    seed: int = _setting(Field(0, int, lo=0), "1", "reliability random seed")
+    #: set by the sweep for each member; 0 .. members - 1
+    member: int = _setting(Field(0, int, lo=0), "1", "reliability member index")
+    #: uniform: c + U(-t, t); normal: c + t z / 3 with z cut at -+3 (the band is -+3 sigma)
+    clearance_tolerance: float = _setting(Field(0.0, lo=0.0), "m",
+                                          "half-width of the initial radial clearance tolerance band")
+    clearance_distribution: str = _setting(Field("uniform", ("uniform", "normal")), None,
+                                           "distribution of the initial radial clearance in its band")
+    #: lognormal factor of mean 1 on the socket surface's k of each clearance joint (the
+    #: coating's where coated; the base's after wear-through keeps its value)
+    wear_coefficient_cv: float = _setting(Field(0.0, lo=0.0, hi=10.0), "1",
+                                          "coefficient of variation of the wear coefficient")
+    coating_thickness_cv: float = _setting(Field(0.0, lo=0.0, hi=1.0), "1",
+                                           "coefficient of variation of the coating thickness")
+    speed_cv: float = _setting(Field(0.0, lo=0.0, hi=1.0), "1",
+                               "coefficient of variation of the crank speed")
+
+    @property
+    def any(self) -> bool:
+        """Whether any input is scattered."""
+        return (self.clearance_tolerance > 0.0 or self.wear_coefficient_cv > 0.0
+                or self.coating_thickness_cv > 0.0 or self.speed_cv > 0.0)
+
+
+@dataclass(frozen=True)
 class Config(_Section):
     """A resolved case configuration: validated once by :func:`load_config`, then passed
     down as it is. Frozen: change a value with :func:`load_config` and an override, or
@@ -282,6 +316,7 @@ class Config(_Section):
     solver: SolverConfig = _section(SolverConfig)
     life: LifeConfig = _section(LifeConfig)
     ensemble: EnsembleConfig = _section(EnsembleConfig)
+    reliability: ReliabilityConfig = _section(ReliabilityConfig)
 
     def replace(self, *overrides: str, **values: Any) -> Config:
         """A validated copy with ``"dotted.key=VALUE"`` overrides and/or ``dotted__key=value``
@@ -353,6 +388,7 @@ _RELATIONS = [
     ("friction.v1", ">", "friction.v0"),
     ("solver.dt", "<=", "solver.duration"),
     ("ensemble.member", "<", "ensemble.members"),
+    ("reliability.member", "<", "reliability.members"),
 ]
 _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt}
 
@@ -405,6 +441,12 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                 f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.socket_radius "
                 f"({most:.6g}), so that the ball radius R_j = socket_radius - clearance is at "
                 f"least {MIN_BALL_RADIUS_FRACTION:g} * socket_radius", source)
+    tolerance = cfg["reliability"]["clearance_tolerance"]
+    for joint, spec in cfg["joints"].items():
+        if 0.0 < spec["clearance"] <= tolerance:
+            raise ConfigError("reliability.clearance_tolerance", tolerance,
+                              f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
+                              "every member keeps a clearance", source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):

@@ -33,6 +33,11 @@ Kinds (``KINDS``):
     remaining, settled peak normal force, RMS slider acceleration and impacts
     per revolution against revolutions (log axis), the limits that are set, and
     the wear map's evolution (snapshots, joint B or the worn joint).
+``reliability``
+    a reliability sweep (``store: reliability``): one panel per limit (and "any"),
+    the Kaplan-Meier reliability R(N) of each design against revolutions (log axis)
+    with its 95 % band; with ``b10=True`` (``--b10``), each design's B10 with its
+    interval as error bars instead.
 """
 
 from __future__ import annotations
@@ -566,12 +571,65 @@ def _life_limit(config: dict, key: str | None) -> float | None:
     return None if value is None else float(value)
 
 
-_SIZES = {"life": (16, 10), "slider": (8, 8), "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
+def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
+    _require(ds, ("reliability", "reliability_ci_low", "reliability_ci_high", "b10"),
+             "--kind reliability")
+    limits = [str(v) for v in ds["limit"].values]
+    designs = [d for d in ds["b10"].dims if d != "limit"]
+    flat = ds.stack(design=designs) if designs else ds.expand_dims(design=[0])
+    labels = [", ".join(f"{d}={value_text(flat[d].values[k])}" for d in designs) or "design"
+              for k in range(flat.sizes["design"])]
+    colours = colormaps["tab10"] if len(labels) <= MAX_CYCLE_COLOURS else colormaps["viridis"]
+    ncols = min(3, len(limits))
+    nrows = -(-len(limits) // ncols)
+    level = float(ds.attrs.get("reliability_confidence_level", 0.95))
+    for k, limit in enumerate(limits):
+        ax = fig.add_subplot(nrows, ncols, k + 1)
+        case = flat.sel(limit=limit)
+        for i, label in enumerate(labels):
+            colour = colours(i if len(labels) <= MAX_CYCLE_COLOURS else i / max(len(labels) - 1, 1))
+            one = case.isel(design=i)
+            if b10:
+                value = float(one["b10"])
+                low, high = float(one["b10_ci_low"]), float(one["b10_ci_high"])
+                top = float(ds["revolutions"].max())
+                shown = value if np.isfinite(value) else top
+                err = [[max(shown - low, 0.0) if np.isfinite(low) else 0.0],
+                       [max((high if np.isfinite(high) else top) - shown, 0.0)]]
+                ax.errorbar([i], [shown], yerr=err, fmt="o" if np.isfinite(value) else "^",
+                            color=colour, capsize=4)
+                continue
+            n = ds["revolutions"].values
+            ax.step(n, one["reliability"].values, where="post", color=colour, label=label)
+            ax.fill_between(n, one["reliability_ci_low"].values, one["reliability_ci_high"].values,
+                            step="post", color=colour, alpha=0.2)
+        ax.set_title(f"limit: {limit}", fontsize="medium")
+        if b10:
+            ax.set_yscale("log")
+            ax.set_xticks(range(len(labels)), labels, rotation=30, ha="right", fontsize="x-small")
+            ax.set_ylabel(f"B10 [revolutions], bars: {level:.0%} interval")
+        else:
+            ax.set_xscale("log")
+            ax.set_xlim(float(ds["revolutions"].min()), float(ds["revolutions"].max()))
+            ax.set_ylim(-0.02, 1.02)
+            ax.axhline(0.9, color="0.5", lw=0.8, ls=":")
+            ax.set_xlabel(axis_label(ds["revolutions"], "crank revolutions N"))
+            ax.set_ylabel("reliability R(N) [-]")
+            if k == 0:
+                ax.legend(fontsize="x-small")
+        ax.grid(alpha=0.3)
+    what = "B10 per design (triangle: beyond the revolutions reached)" if b10 else \
+        f"Kaplan-Meier reliability per design, bands: {level:.0%} Greenwood"
+    fig.suptitle(f"{what}; {ds.sizes.get('member', 0)} members per design")
+
+
+_SIZES = {"life": (16, 10), "reliability": (14, 8), "slider": (8, 8),
+          "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
           "orbit": (12, 8), "sweep": (8, 5)}
 
 
 def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
-           metric: str | None = None) -> Figure:
+           metric: str | None = None, b10: bool = False) -> Figure:
     """Build the figure of ``kind`` from ``ds`` (see the module docstring).
 
     Parameters
@@ -586,6 +644,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         Abscissa of time series: ``"angle"`` (crank angle [degree]) or ``"time"`` [s].
     metric
         Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
+    b10
+        ``kind="reliability"``: draw B10 with its interval instead of R(N).
 
     Raises
     ------
@@ -603,6 +663,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
                              choices=X_AXES)
     if metric is not None and kind != "sweep":
         raise PlotError("a metric applies to --kind sweep only")
+    if b10 and kind != "reliability":
+        raise PlotError("--b10 applies to --kind reliability only")
     ds = cast(xr.Dataset, select_cases(ds, select))   # a dataset in, a dataset out
     fig = Figure(figsize=_SIZES[kind], layout="constrained")
     if kind == "slider":
@@ -617,13 +679,15 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         _draw_orbit(fig, ds)
     elif kind == "life":
         _draw_life(fig, ds)
+    elif kind == "reliability":
+        _draw_reliability(fig, ds, b10)
     else:
         _draw_sweep(fig, ds, metric)
     return fig
 
 
 def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
-         metric: str | None = None, dpi: int = FIGURE_DPI) -> Figure:
+         metric: str | None = None, dpi: int = FIGURE_DPI, b10: bool = False) -> Figure:
     """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
 
     Parameters and errors as ``figure``; ``dpi`` sets the raster resolution.
@@ -639,7 +703,7 @@ def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
     if out_path.suffix.lower() not in OUTPUT_SUFFIXES:
         raise SelectionError(choice_message("output suffix", out_path.suffix, list(OUTPUT_SUFFIXES)),
                              name="output", value=out_path.suffix, choices=OUTPUT_SUFFIXES)
-    fig = figure(ds, kind, select, x=x, metric=metric)
+    fig = figure(ds, kind, select, x=x, metric=metric, b10=b10)
     # a temporary file renamed into place: a full disk or a kill leaves no partial figure
     with replaced_on_success(out_path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:])

@@ -37,7 +37,35 @@ CRITERIA = {
     "clearance_growth": ("life.max_clearance_growth", "wear_depth_max"),
     "normal_force": ("life.max_normal_force", "normal_force_peak_settled"),
     "rms_acceleration": ("life.max_rms_acceleration", "slider_acceleration_rms_settled"),
+    "motion_error": ("life.max_motion_error", "slider_motion_error_settled"),
 }
+
+#: Most steps between the saved rows of a block (rows the motion error is read from).
+BLOCK_ROW_STRIDE = 10
+
+
+def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
+    """Steps between the saved rows of a block of ``n_block`` steps: the largest divisor of
+    ``n_block`` up to ``most``, so that saving rows never lengthens the block (the kernel
+    rounds the steps up to whole rows). The steps and statistics do not depend on it."""
+    return next(s for s in range(min(most, n_block), 0, -1) if n_block % s == 0)
+
+
+def settled_motion_error(cfg: Config, raw: dict[str, Any]) -> float:
+    """Largest settled |x_slider - x_ideal(theta)| [m] of a block's saved rows: the slider's
+    motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
+    crank angle reached); NaN when no saved row lies in the settled window."""
+    from .params import PRESETS, ideal_slider_x
+
+    preset = PRESETS[cfg.mechanism.preset]
+    n = int(raw["n_saved"])
+    t, y = raw["t"][:n], raw["y"][:n]
+    settled = t >= cfg.metrics.settle_time
+    if not settled.any():
+        return math.nan
+    theta = y[settled, L.Y_CRANK_ANGLE]
+    ideal = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
+    return float(np.max(np.abs(y[settled, L.Y_SLIDER_X] - ideal)))
 
 
 def bin_areas(shape: tuple[int, int], radius: float) -> np.ndarray:
@@ -141,6 +169,7 @@ def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.nda
         "normal_force_peak_settled": stats["normal_force_peak_settled"],
         "slider_acceleration_rms_settled": stats["slider_acceleration_rms_settled"],
         "slider_acceleration_peak_settled": stats["slider_acceleration_peak_settled"],
+        "slider_motion_error_settled": settled_motion_error(cfg, raw),
         "impacts_per_revolution": np.where(
             ideal, np.nan, stats["impact_count_settled"] / settled_revs if settled_revs > 0 else np.nan),
         "block_status": raw["status"],
@@ -165,7 +194,9 @@ def _snapshot_due(cycle: float, kept: list[tuple[float, np.ndarray]], first: flo
 
 
 def life(config, overrides=(), *, allow_large: bool = False,
-         progress: Callable[[dict[str, Any]], None] | None = None) -> xr.Dataset:
+         progress: Callable[[dict[str, Any]], None] | None = None,
+         stop_rule: Callable[[Config, dict[str, Any], LifeState], str | None] | None = None
+         ) -> xr.Dataset:
     """Run a service-life estimate by cycle jumps (docs/service_life.md).
 
     Parameters
@@ -179,6 +210,10 @@ def life(config, overrides=(), *, allow_large: bool = False,
         Lift the work and memory bounds of one block.
     progress
         Called with each block's row as it is finished.
+    stop_rule
+        ``stop_rule(cfg, row, state)`` after each block: the name of what stops the run, or
+        None to go on. Default: the first limit crossed (a reliability member runs on until
+        every limit it watches is crossed: :mod:`clearsweep.reliability`).
 
     Returns
     -------
@@ -192,8 +227,9 @@ def life(config, overrides=(), *, allow_large: bool = False,
     lc = cfg.life
     period = 60.0 / cfg.mechanism.speed_rpm
     n_block = int(math.ceil(lc.block_revolutions * period / cfg.solver.dt - 1e-9))
+    # rows every few steps: the motion error is read from them
     block_cfg = cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
-                               "solver__save_every": n_block})
+                               "solver__save_every": row_stride(n_block)})
     packed = preflight(block_cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
     prepare_kernel(cfg.solver.method)
@@ -224,7 +260,7 @@ def life(config, overrides=(), *, allow_large: bool = False,
         if raw["status"] != "ok":
             stop = f"block_status:{raw['status']}"
             break
-        reached = _limit_reached(cfg, row, state)
+        reached = (stop_rule or _limit_reached)(cfg, row, state)
         if reached:
             stop = reached
             break

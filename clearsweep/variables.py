@@ -211,6 +211,10 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
                                                     "over the block's settled window"),
     "slider_acceleration_peak_settled": VariableSpec(("cycle",), "m s-2", "settled peak slider acceleration",
                                                      "over the block's settled window", "time: maximum"),
+    "slider_motion_error_settled": VariableSpec(
+        ("cycle",), "m", "settled slider motion error",
+        "largest |x_slider - x_ideal(theta)| over the block's saved rows in the settled window, "
+        "x_ideal the ideal mechanism's slider position (docs/physics.md section 1)", "time: maximum"),
     "impacts_per_revolution": VariableSpec(("cycle", "joint"), "1", "impacts per revolution",
                                            "settled impact count / settled revolutions of the block"),
     "wear_map_snapshot": VariableSpec(("snapshot", "joint", "polar", "azimuth"), "m",
@@ -231,6 +235,9 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
     "cycles_to_rms_acceleration": VariableSpec((), "1", "revolutions to life.max_rms_acceleration",
                                                "settled RMS slider acceleration, interpolated between "
                                                "blocks; NaN if not reached or not set"),
+    "cycles_to_motion_error": VariableSpec((), "1", "revolutions to life.max_motion_error",
+                                           "settled slider motion error, interpolated between "
+                                           "blocks; NaN if not reached or not set"),
     "cycles_to_wear_through": VariableSpec((), "1", "revolutions to the first coating wear-through",
                                            "earliest joint; NaN if none"),
     "wall_time": VariableSpec((), "s", "wall-clock time of the life run"),

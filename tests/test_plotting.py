@@ -54,8 +54,9 @@ def assert_rendered(path, fig) -> None:
         assert UNITS.search(text), f"axis label without units in brackets: {text!r}"
 
 
-#: kinds drawn from one case or a sweep (``life`` needs a life dataset: tests/test_service_life.py)
-CASE_KINDS = [k for k in KINDS if k != "life"]
+#: kinds drawn from one case or a sweep (``life`` needs a life dataset: tests/test_service_life.py;
+#: ``reliability`` a reliability sweep: tests/test_reliability.py)
+CASE_KINDS = [k for k in KINDS if k not in ("life", "reliability")]
 
 
 @pytest.mark.parametrize("kind", [k for k in CASE_KINDS if k != "sweep"])

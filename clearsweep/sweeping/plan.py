@@ -42,10 +42,12 @@ DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solve
 #: The ensemble's dimension: one index per member, after the sweep's own dimensions.
 MEMBER_DIM = "member"
 #: Keys that the ensemble section sets for every case and a sweep cannot vary.
-ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members")
+ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members", "reliability.member", "reliability.members")
 #: What a sweep stores per case; ``life``: each case is a service-life run
-#: (``clearsweep life``), stored as its summary (revolutions to each limit, final wear).
-STORE_MODES = ("full", "summary", "life")
+#: (``clearsweep life``), stored as its summary (revolutions to each limit, final wear);
+#: ``reliability``: each design is ``reliability.members`` life runs with scatter, stored
+#: as their summaries and the reliability estimate (docs/reliability.md).
+STORE_MODES = ("full", "summary", "life", "reliability")
 #: Top-level keys of a sweep file.
 SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
 SWEEP_KEYS = ("grid", "zip", "sample", "skip")
@@ -312,8 +314,9 @@ def _check_swept_key(key, base: Config, where: str, source: str) -> str:
         raise ConfigError(f"{where}.{key}", None, f"a key of a value, not of the section {key} "
                           f"(e.g. {key}.{next(iter(value))})", source, got="a section")
     if key in ENSEMBLE_KEYS:
-        raise ConfigError(f"{where}.{key}", None, "a key other than ensemble.member(s): set "
-                          "ensemble.members in the base and every member is run along the "
+        raise ConfigError(f"{where}.{key}", None, "a key other than ensemble.member(s) and "
+                          "reliability.member(s): set members in the base and every member is "
+                          "run along the "
                           f"{MEMBER_DIM!r} dimension", source, got="an ensemble key")
     return key
 
@@ -482,6 +485,31 @@ def member_axes(base: Config) -> list[Axis]:
     return [Axis(MEMBER_DIM, "grid", ("ensemble.member",), (MEMBER_DIM,), (tuple(range(n)),))]
 
 
+def reliability_member_axes(base: Config) -> list[Axis]:
+    """The ``member`` dimension of a reliability sweep: ``reliability.members`` life runs."""
+    n = base.reliability.members
+    return [Axis(MEMBER_DIM, "grid", ("reliability.member",), (MEMBER_DIM,), (tuple(range(n)),))]
+
+
+def _check_reliability_base(base: Config, source: str) -> None:
+    if base.ensemble.members > 1:
+        raise ConfigError("ensemble.members", base.ensemble.members, "1 with store: reliability "
+                          "(its members are reliability.members)", source)
+
+
+def _check_reliability_case(cfg: Config, source: str, allow_large: bool) -> None:
+    """A reliability case: limits that can be reached, and a member config (its draws
+    applied) that the simulator admits."""
+    from ..reliability import check_reliability, member_config
+
+    check_reliability(cfg, source)
+    try:
+        preflight(member_config(cfg), allow_large=allow_large)
+    except ConfigError as exc:
+        raise ConfigError(exc.key, exc.value, f"{exc.expected} (with the draws of reliability "
+                          f"member {cfg.reliability.member})", source, exc.suggestion) from None
+
+
 def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
     """Skip rules as lists of (coordinate name, allowed values)."""
     if rules is None:
@@ -585,7 +613,10 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
     base = _load_base(doc.get("base"), base_dir, source, overrides)
     spec = doc.get("sweep")
-    axes = _parse_axes(spec, base, source) + member_axes(base)
+    if store == "reliability":
+        _check_reliability_base(base, source)
+    axes = _parse_axes(spec, base, source) + (reliability_member_axes(base) if store == "reliability"
+                                              else member_axes(base))
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
     n_points = math.prod(a.size for a in axes)
@@ -611,6 +642,8 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         try:
             resolved = load_config(cfg, source_name=source)
             preflight(resolved, allow_large=allow_large)
+            if store == "reliability":
+                _check_reliability_case(resolved, source, allow_large)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_hash(resolved.to_dict()), resolved))

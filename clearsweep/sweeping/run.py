@@ -257,20 +257,29 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             remove_stale_temporaries(out)
             try:
                 simulate_case, summarize_case = _simulate, _summarize
+                finish = add_ensemble_statistics if MEMBER_DIM in plan.dims else None
                 if plan.store == "life":
                     from ..service_life import life_case, life_summary
 
                     simulate_case = simulate_case or life_case
                     summarize_case = summarize_case or life_summary
+                elif plan.store == "reliability":
+                    from ..reliability import (
+                        add_reliability_estimate,
+                        reliability_case,
+                        reliability_summary,
+                    )
+
+                    simulate_case = simulate_case or reliability_case
+                    summarize_case = summarize_case or reliability_summary
+                    finish = add_reliability_estimate
                 todo = [(h, (cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
                 try:
                     counts = write_sweep_netcdf(out, sweep_dims=plan.dims, sweep_coords=plan.coords,
                                                 slots=plan.slots(), store=store, attrs=_attrs(plan),
-                                                check=guard.check,
-                                                finish=add_ensemble_statistics if MEMBER_DIM in plan.dims
-                                                else None)
+                                                check=guard.check, finish=finish)
                 except KeyboardInterrupt:
                     store.log("interrupted", finished=len(runnable), total=len(runnable))
                     raise SweepInterrupted(len(runnable), len(runnable), store.directory) from None
@@ -294,8 +303,8 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
         return None
     if backend != "cuda":
         raise ValueError(f"backend must be 'processes' or 'cuda', got {backend!r}")
-    if plan.store == "life":
-        raise ConfigError("store", "life", "full or summary with --backend cuda (life runs "
+    if plan.store in ("life", "reliability"):
+        raise ConfigError("store", plan.store, "full or summary with --backend cuda (life runs "
                           "alternate simulation and jumps on the CPU: use --backend processes)",
                           plan.source)
     methods = {cfg.solver.method for cfg in plan.runnable().values()}
