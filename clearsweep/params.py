@@ -183,7 +183,7 @@ def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.nda
     from .core.wear import worn_surface
 
     n = tuple(float(v) for v in normal_socket)
-    h, worn = worn_surface(np.ascontiguousarray(wmap, dtype=np.float64), j, n,
+    h, _, worn = worn_surface(np.ascontiguousarray(wmap, dtype=np.float64), j, n,
                            float(jp[j, L.J_COAT]), bool(p[L.P_FEEDBACK] != 0.0),
                            bool(p[L.P_INTERP] != 0.0))
     ew, _, _ = surface(jp, j, worn)

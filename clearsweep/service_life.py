@@ -173,6 +173,8 @@ def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.nda
         "impacts_per_revolution": np.where(
             ideal, np.nan, stats["impact_count_settled"] / settled_revs if settled_revs > 0 else np.nan),
         "block_status": raw["status"],
+        "energy_residual_relative": (raw["residual_max"] / raw["ke_peak"] if raw["ke_peak"] > 0
+                                     else np.nan),
         "jump_revolutions": 0.0,
     }
     for j in range(2):

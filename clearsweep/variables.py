@@ -194,6 +194,10 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
     "jump_revolutions": VariableSpec(("cycle",), "1", "revolutions jumped after the block",
                                      "the block's wear per revolution times this is added to the map"),
     "block_status": VariableSpec(("cycle",), "", "simulation status of the block"),
+    "energy_residual_relative": VariableSpec(
+        ("cycle",), "1", "largest energy residual of the block over its peak kinetic energy",
+        "the block's energy balance (docs/physics.md 8.3); the run stops a block whose residual "
+        "passes solver.energy_tolerance of the energy throughput"),
     "wear_depth_max": VariableSpec(("cycle", "joint"), "m", "maximum wear depth",
                                    "largest bin of the socket wear map after the block"),
     "wear_depth_mean": VariableSpec(("cycle", "joint"), "m", "mean wear depth over the worn area",

@@ -13,8 +13,10 @@ from clearsweep.service_life import bin_areas, crossing_cycle, jump_revolutions,
 from clearsweep.simulation import run_kernel, simulate
 
 CASE = "configs/one_clearance.yaml"
-#: small map, bilinear read, energy check relaxed as in configs/life.yaml
-SMALL = ["wear.map=[12,24]", "wear.interpolate=true", "solver.energy_tolerance=0.5"]
+#: a coarse map read bilinearly, as configs/life.yaml reads its own; the default energy
+#: tolerance (the force follows the worn surface, docs/physics.md 3.5). Coarser maps than
+#: 36 x 72 (5 degree bins) make V-shaped valleys under a worn-in ball (docs/service_life.md)
+SMALL = ["wear.map=[36,72]", "wear.interpolate=true"]
 
 
 def test_jump_limited_by_clearance_and_remaining_coating():
@@ -52,7 +54,7 @@ def _kernel(overrides, wmap):
 def test_worn_through_coating_contacts_as_the_base_material():
     """A PTFE socket worn through everywhere (feedback off, so the geometry is the unworn
     one) behaves exactly as the uncoated steel socket."""
-    worn = np.full((2, 12, 24), 2e-4)
+    worn = np.full((2, 36, 72), 2e-4)
     packed, coated = _kernel(["joints.B.coating=PTFE", "wear.feedback=false"], worn)
     assert packed.jp[1, L.J_EW_BASE] > packed.jp[1, L.J_EW]
     _, steel = _kernel(["wear.feedback=false"], worn)
@@ -79,7 +81,7 @@ def short_life():
 def test_volume_conserved_across_blocks_and_jumps(short_life):
     ds = short_life
     assert ds.sizes["cycle"] >= 3 and float(ds.jump_revolutions.sum()) > 0
-    areas = bin_areas((12, 24), 0.015)
+    areas = bin_areas(ds.wear_map.shape[1:], 0.015)
     on_map = float((ds.wear_map.sel(joint="B").values * areas).sum())
     volume = float(ds.wear_volume.isel(cycle=-1).sel(joint="B"))
     assert on_map == pytest.approx(volume, rel=1e-9)
@@ -96,8 +98,9 @@ def test_volume_conserved_across_blocks_and_jumps(short_life):
 
 @pytest.mark.slow
 def test_cycles_to_limit_converge_as_the_jump_limit_is_halved():
-    """First order in the jump limit: 1124, 1303, 1392, 1435 revolutions at 0.04, 0.02,
-    0.01, 0.005 (docs/service_life.md); below 5 % change from 0.01 to 0.005."""
+    """First order in the jump limit: 1082, 1208, 1275, 1304 revolutions at 0.04, 0.02,
+    0.01, 0.005 (docs/service_life_verification.py, quoted in docs/service_life.md); below
+    5 % change from 0.01 to 0.005."""
     common = [*SMALL, "wear.amplification=300", "life.cycles=1e4", "life.max_clearance_growth=4e-5"]
     cycles = [float(life(CASE, [*common, f"life.jump_clearance_fraction={f}"]).cycles_to_clearance_growth)
               for f in (0.01, 0.005)]
@@ -109,17 +112,17 @@ def test_cycles_to_limit_converge_as_the_jump_limit_is_halved():
 def test_life_agrees_with_a_direct_simulation():
     """12 revolutions with wear amplified 2000 times: jumps against every revolution
     simulated (docs/service_life.md states the measured agreement)."""
-    common = ["wear.map=[36,72]", "wear.interpolate=true", "solver.energy_tolerance=0.5",
-              "wear.amplification=2000", "joints.B.coating=MoS2"]
+    common = ["wear.map=[36,72]", "wear.interpolate=true", "wear.amplification=2000",
+              "joints.B.coating=MoS2"]
     direct = simulate(CASE, [*common, "solver.duration=12", "solver.save_every=1000"])
     jumped = life(CASE, [*common, "life.cycles=12", "life.jump_clearance_fraction=0.01"])
     assert float(jumped.jump_revolutions.sum()) > 4
     v_direct = float(direct.wear_volume.sel(joint="B"))
     v_life = float(jumped.wear_volume.isel(cycle=-1).sel(joint="B"))
-    assert v_life == pytest.approx(v_direct, rel=1e-3)      # measured 2.5e-4
+    assert v_life == pytest.approx(v_direct, rel=1e-3)      # measured -3.9e-4
     h_direct = float(direct.wear_map.sel(joint="B").max())
     h_life = float(jumped.wear_depth_max.isel(cycle=-1).sel(joint="B"))
-    assert h_life == pytest.approx(h_direct, rel=0.2)       # measured +14 %
+    assert h_life == pytest.approx(h_direct, rel=0.2)       # measured +12.7 %
 
 
 def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life):

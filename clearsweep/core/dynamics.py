@@ -697,10 +697,9 @@ def clear_contacts(dg):
 @njit(cache=True)
 def store_contact(dg, j, cres):
     """Copy one joint's contact state (a :data:`ContactState`) into the diagnostics vector."""
-    force = cres.force
     fn = cres.fn
     dg[D_FN + j] = fn
-    ft_vec = add(force, scale(fn, cres.normal))
+    ft_vec = sub(cres.force, cres.force_normal)   # the friction force
     dg[D_FT + j] = math.sqrt(dot(ft_vec, ft_vec))
     dg[D_DELTA + j] = cres.delta
     dg[D_DDOT + j] = cres.ddot

@@ -50,6 +50,7 @@ from .wear import worn_surface
 #: named ``_socket``.
 ContactState = namedtuple("ContactState", (
     "force",            # force on the ball [N]
+    "force_normal",     # its normal part (the force without friction) [N]
     "q_ball",           # contact point Q_j on the ball
     "q_socket",         # contact point Q_i on the socket
     "fn",               # normal force F_N [N]
@@ -58,7 +59,7 @@ ContactState = namedtuple("ContactState", (
     "delta",            # penetration delta = e - c_eff [m] (negative: a gap)
     "ddot",             # normal approach rate delta_dot [m/s]
     "ecc",              # eccentricity e [m]
-    "normal",           # contact normal n
+    "normal",           # line of the normal force (n on a flat surface)
     "offset_socket",    # ball-centre offset d in the socket frame [m]
     "normal_socket",    # n in the socket frame
     "slip_speed",       # tangential slip speed |v_t| [m/s]
@@ -73,11 +74,13 @@ ContactState = namedtuple("ContactState", (
 @njit(cache=True)
 def gap(jp, j, wmap, p, pb, ps, Rs):
     """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
-    of rotation Rs: (e, n, d_s, n_s, h, worn, c_eff, delta).
+    of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta).
 
     e = |d| [m], d = pb - ps; n = d / e (global; e = 0: the x axis); d_s, n_s: d and n in the
-    socket frame; h [m] and worn: the worn socket in direction n_s (wear.worn_surface);
-    c_eff = c + h; delta = e - c_eff, the penetration (negative: a gap).
+    socket frame; h [m], worn: the worn socket in direction n_s (wear.worn_surface);
+    c_eff = c + h; delta = e - c_eff, the penetration (negative: a gap). ``slope`` is the
+    gradient of h with respect to the ball centre, grad_d h = R_s grad h / e (global,
+    tangent to n, dimensionless), so that grad_d delta = n - slope: the worn gap's normal.
     """
     d = sub(pb, ps)
     e = math.sqrt(dot(d, d))
@@ -87,9 +90,13 @@ def gap(jp, j, wmap, p, pb, ps, Rs):
         n = (1.0, 0.0, 0.0)
     d_s = mtv(Rs, d)
     n_s = mtv(Rs, n)
-    h, worn = worn_surface(wmap, j, n_s, jp[j, J_COAT], p[P_FEEDBACK] != 0.0, p[P_INTERP] != 0.0)
+    h, grad, worn = worn_surface(wmap, j, n_s, jp[j, J_COAT], p[P_FEEDBACK] != 0.0,
+                                 p[P_INTERP] != 0.0)
+    slope = (0.0, 0.0, 0.0)
+    if e > 0.0 and (grad[0] != 0.0 or grad[1] != 0.0 or grad[2] != 0.0):
+        slope = scale(1.0 / e, mv(Rs, grad))
     c_eff = jp[j, J_C] + h
-    return e, n, d_s, n_s, h, worn, c_eff, e - c_eff
+    return e, n, d_s, n_s, h, slope, worn, c_eff, e - c_eff
 
 
 @njit(cache=True)
@@ -106,37 +113,75 @@ def point_velocity(r, v, R, w, q):
 
 
 @njit(cache=True)
+def slip(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi, u):
+    """Relative velocity v = v(Q_j) - v(Q_i) of the contact points and its part v_t
+    tangent to the unit vector u (the force's line); returns (v, v_t, |v_t|)."""
+    v = sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
+    vt = sub(v, scale(dot(u, v), u))
+    return v, vt, math.sqrt(dot(vt, vt))
+
+
+@njit(cache=True)
 def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     """Contact state and force of clearance joint j (docs/physics.md section 3).
 
     Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    ``energy``: also compute the elastic energy (else 0). Returns a :data:`ContactState`.
-    The whole arrays jp, s, wmap are passed with the joint index, never a row of them: a
-    row is a new array view, reference-counted at every call.
+    ``energy``: also compute the elastic energy (else 0 where not needed). Returns a
+    :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint index,
+    never a row of them: a row is a new array view, reference-counted at every call.
+
+    On a sloped worn surface (bilinear map read, :func:`gap`'s ``slope`` s != 0) the
+    penetration delta = e - c - h(n) has the gradient m = n - s, and the contact force
+    derives from the elastic potential U(delta, c_eff) (docs/physics.md 3.5):
+    F = -F_N m - X s on the ball, X = dU/dc_eff at fixed delta while F_N > 0 (0 otherwise),
+    acting along its own line through the ball centre, so that its power is exactly
+    -F_N delta_dot - X h_dot with delta_dot = m . w, h_dot = s . w, w the ball centre's
+    velocity as the socket sees it; damping and friction are booked as dissipated.
+    A flat surface (s = 0) gives the radial force F = -F_N n of section 3.4.
     """
-    pb, _ = point_state(rb, vb, Rb, wb, ub)
-    ps, _ = point_state(rs, vs, Rs, ws_, us)
-    e, n, d_s, n_s, h, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)
+    pb, vpb = point_state(rb, vb, Rb, wb, ub)
+    ps, vps = point_state(rs, vs, Rs, ws_, us)
+    e, n, d_s, n_s, h, slope, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)
     ew, mu, _ = surface(jp, j, worn)
     worn_flag = 1.0 if worn else 0.0
     ri = jp[j, J_RI]
-    qj, qi = contact_points(pb, ps, n, ri, jp[j, J_RJ])
+    rj = jp[j, J_RJ]
     zero = (0.0, 0.0, 0.0)
-    v = sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
-    ddot = dot(n, v)
+    sloped = slope[0] != 0.0 or slope[1] != 0.0 or slope[2] != 0.0
+    hdot = 0.0
+    if sloped:
+        # the ball centre's velocity relative to the socket, in the socket's rotating frame
+        w = sub(sub(vpb, vps), cross(mv(Rs, ws_), sub(pb, ps)))
+        hdot = dot(slope, w)
+        ddot = dot(n, w) - hdot
+        qj, qi = contact_points(pb, pb, n, rj - delta, rj)
+    else:
+        qj, qi = contact_points(pb, ps, n, ri, rj)
+        ddot = dot(n, sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi)))
     if delta <= 0.0:
-        return ContactState(zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0, c_eff,
-                            h, 0.0, 0.0, worn_flag)
-    vt = sub(v, scale(ddot, n))
-    vtn = math.sqrt(dot(vt, vt))
+        return ContactState(zero, zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0,
+                            c_eff, h, 0.0, 0.0, worn_flag)
     kappa = contact_damping(s[j, S_DV0], ddot, p[P_CR], p[P_DV0_MIN])
     fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, kappa)
-    force = scale(-fn, n)
-    pdiss = (fn - fel) * ddot
+    uel = elastic_energy(delta, c_eff, ew, ri) if (energy or sloped) else 0.0
+    line = n
+    if sloped:
+        uc = (2.0 * uel - delta * fel) / c_eff       # dU/dc_eff at fixed delta
+        x = uc if fn > 0.0 else 0.0
+        force = add(scale(-fn, n), scale(fn - x, slope))
+        pdiss = (fn - fel) * ddot + (x - uc) * hdot
+        size = math.sqrt(dot(force, force))
+        if size > 0.0:
+            line = scale(-1.0 / size, force)
+        qj, qi = contact_points(pb, pb, line, rj - delta, rj)
+    else:
+        force = scale(-fn, n)
+        pdiss = (fn - fel) * ddot
+    force_normal = force
+    v, vt, vtn = slip(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi, line)
     if p[P_FRICTION] != 0.0 and vtn > 0.0:
         ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1])
         force = add(force, scale(-ft / vtn, vt))
         pdiss += ft * vtn
-    uel = elastic_energy(delta, c_eff, ew, ri) if energy else 0.0
-    return ContactState(force, qj, qi, fn, dfd, dfdd, delta, ddot, e, n, d_s, n_s, vtn, c_eff, h,
-                        uel, pdiss, worn_flag)
+    return ContactState(force, force_normal, qj, qi, fn, dfd, dfdd, delta, ddot, e, line, d_s, n_s, vtn, c_eff,
+                        h, uel if energy else 0.0, pdiss, worn_flag)

@@ -36,7 +36,11 @@ def map_bin(n, npolar, nazim):
 @njit(cache=True)
 def map_interp(wmap, j, n):
     """Depth [m] of joint j's map in unit direction n (socket frame), bilinear between the
-    bin centres (azimuth periodic, polar clamped at the poles): a worn surface without steps."""
+    bin centres (azimuth periodic, polar clamped at the poles): a worn surface without
+    steps; and its surface gradient, a tangent 3-vector (socket frame) [m per rad]:
+    dh/dtheta e_theta + (1 / sin theta) dh/dphi e_phi, theta the polar angle from +z and phi
+    the azimuth of n. Zero at the poles (within 1e-9 rad) and across a clamped polar row.
+    """
     npolar = wmap.shape[1]
     nazim = wmap.shape[2]
     cz = max(-1.0, min(1.0, n[2]))
@@ -44,19 +48,38 @@ def map_interp(wmap, j, n):
     v = (math.atan2(n[1], n[0]) + math.pi) / (2.0 * math.pi) * nazim - 0.5
     i0 = int(math.floor(u))
     fu = u - i0
+    clamped = False
     if i0 < 0:
         i0 = 0
         fu = 0.0
+        clamped = True
     if i0 >= npolar - 1:
         i0 = npolar - 1
         fu = 0.0
+        clamped = True
     i1 = min(i0 + 1, npolar - 1)
     k = int(math.floor(v))
     fv = v - k
     k0 = k % nazim
     k1 = (k + 1) % nazim
-    return ((1.0 - fu) * ((1.0 - fv) * wmap[j, i0, k0] + fv * wmap[j, i0, k1])
-            + fu * ((1.0 - fv) * wmap[j, i1, k0] + fv * wmap[j, i1, k1]))
+    w00 = wmap[j, i0, k0]
+    w01 = wmap[j, i0, k1]
+    w10 = wmap[j, i1, k0]
+    w11 = wmap[j, i1, k1]
+    h = ((1.0 - fu) * ((1.0 - fv) * w00 + fv * w01)
+         + fu * ((1.0 - fv) * w10 + fv * w11))
+    rho2 = n[0] * n[0] + n[1] * n[1]
+    if not rho2 > 1e-18:
+        return h, (0.0, 0.0, 0.0)
+    dh_du = 0.0 if clamped else ((1.0 - fv) * w10 + fv * w11) - ((1.0 - fv) * w00 + fv * w01)
+    dh_dv = (1.0 - fu) * (w01 - w00) + fu * (w11 - w10)
+    dh_dtheta = dh_du * npolar / math.pi
+    dh_dphi = dh_dv * nazim / (2.0 * math.pi)
+    rho = math.sqrt(rho2)
+    # e_theta = (cz nx, cz ny, -rho^2) / rho; e_phi / sin(theta) = (-ny, nx, 0) / rho^2
+    a = dh_dtheta / rho
+    b = dh_dphi / rho2
+    return h, (a * cz * n[0] - b * n[1], a * cz * n[1] + b * n[0], -a * rho2)
 
 
 @njit(cache=True)
@@ -191,20 +214,26 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
 
 @njit(cache=True)
 def worn_surface(wmap, j, n, coat, feedback, interp):
-    """What joint j's worn socket is in unit direction n (socket frame): (h, worn).
+    """What joint j's worn socket is in unit direction n (socket frame): (h, grad, worn).
 
     h [m] is the wear depth the contact adds to the clearance, c_eff(n) = c + h
     (docs/physics.md 3.1): 0 without ``feedback``, else read bilinearly between bin centres
-    (``interp``, :func:`map_interp`) or from the bin holding n. ``worn`` says whether the
+    (``interp``, :func:`map_interp`) or from the bin holding n. ``grad`` is h's surface
+    gradient [m per rad] (socket frame, tangent to the sphere): the bilinear surface's, zero
+    for the bin read (a stepped surface, flat inside each bin). ``worn`` says whether the
     coating of thickness ``coat`` [m] (inf: none) is worn through there: the bin's depth
     reaches it. The one reading of a worn socket: the kernel's contact and the seated start
     both call it.
     """
     h = 0.0
+    grad = (0.0, 0.0, 0.0)
     worn = False
     if feedback or coat < math.inf:
         ip, ia = map_bin(n, wmap.shape[1], wmap.shape[2])
         if feedback:
-            h = map_interp(wmap, j, n) if interp else wmap[j, ip, ia]
+            if interp:
+                h, grad = map_interp(wmap, j, n)
+            else:
+                h = wmap[j, ip, ia]
         worn = wmap[j, ip, ia] >= coat
-    return h, worn
+    return h, grad, worn
