@@ -1,0 +1,128 @@
+"""Each rule of the kernel is defined once (docs/architecture.md, "The kernel"), and the
+places that used to repeat it now call that one definition.
+
+- the coating/base switch: ``contact.surface``;
+- the worn-socket read (bin or bilinear): ``wear.worn_surface``, also behind the seated start;
+- the damping set-up of a contact: ``contact.contact_damping``;
+- the bin geometry: ``wear.bin_area``, also behind service_life's bin areas;
+- the end-of-run wear flush: ``rk4.flush_all_wear``, for both integrators.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clearsweep.config import load_config, resolve_materials
+from clearsweep.core import layout as L
+from clearsweep.core.contact import contact_damping, damping_factor, surface
+from clearsweep.core.rk4 import flush_all_wear
+from clearsweep.core.wear import bin_area, map_bin, map_interp, worn_surface
+from clearsweep.params import pack, worn_contact
+from clearsweep.service_life import bin_areas
+
+PACKAGE = Path(__file__).resolve().parent.parent / "clearsweep"
+
+
+def sources():
+    return {p.relative_to(PACKAGE).as_posix(): p.read_text() for p in PACKAGE.rglob("*.py")}
+
+
+@pytest.mark.parametrize("pattern, allowed", [
+    # the base material's values are read by the switch only (params packs them)
+    (r"J_(EW|MU|K)_BASE\b", {"core/layout.py", "core/contact.py", "params.py"}),
+    # the contact's damping is set up in one place
+    (r"\bdamping_factor\(", {"core/contact.py"}),
+    # the map is read (bin or bilinear) in one place
+    (r"\bmap_interp\(", {"core/wear.py"}),
+    (r"\bworn_surface\(", {"core/wear.py", "core/spherical.py", "params.py"}),
+    # bin areas come from one formula
+    (r"def bin_area\b", {"core/wear.py"}),
+    # the coating thickness is compared with the depth in one place
+    (r">= coat\b|>= jp\[.*J_COAT\]", {"core/wear.py"}),
+])
+def test_a_rule_is_written_in_one_module(pattern, allowed):
+    found = {name for name, text in sources().items() if re.search(pattern, text)}
+    assert found <= allowed, f"{pattern} also in {sorted(found - allowed)}"
+
+
+def packed_case(overrides=()):
+    cfg = load_config({"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
+                       "wear": {"map": [12, 24]}}, list(overrides))
+    return pack(cfg, resolve_materials(cfg))
+
+
+def test_the_switch_gives_the_base_values_where_the_coating_is_worn_through():
+    jp = packed_case(["joints.B.coating=PTFE"]).jp
+    assert surface(jp, 1, False) == (jp[1, L.J_EW], jp[1, L.J_MU], jp[1, L.J_K])
+    assert surface(jp, 1, True) == (jp[1, L.J_EW_BASE], jp[1, L.J_MU_BASE], jp[1, L.J_K_BASE])
+    assert jp[1, L.J_EW_BASE] > jp[1, L.J_EW]      # PTFE is softer than the steel base
+
+
+def test_worn_through_is_where_the_bin_reaches_the_coating():
+    wmap = np.zeros((2, 12, 24))
+    n = (1.0, 0.0, 0.0)
+    ip, ia = map_bin(n, 12, 24)
+    wmap[1, ip, ia] = 1e-4
+    assert worn_surface(wmap, 1, n, 1e-4, True, False)[2]
+    assert not worn_surface(wmap, 1, n, 1e-4 * (1 + 1e-12), True, False)[2]
+    assert not worn_surface(wmap, 1, n, math.inf, True, False)[2]
+
+
+def test_the_seated_start_reads_the_worn_socket_as_the_kernel_does():
+    """With wear.interpolate the seated start's clearance is the bilinear one the run uses
+    (it used to read the bin, a different clearance from the kernel it starts)."""
+    pk = packed_case(["wear.interpolate=true", "joints.B.coating=MoS2"])
+    rng = np.random.default_rng(5)
+    wmap = rng.random((2, 12, 24)) * 2e-5
+    n = np.array([0.6, -0.3, math.sqrt(1 - 0.45)])
+    c_eff, ew = worn_contact(pk.jp, 1, wmap, n, pk.p)
+    h, _ = map_interp(wmap, 1, tuple(n))
+    ip, ia = map_bin(tuple(n), 12, 24)
+    assert c_eff == pk.jp[1, L.J_C] + h
+    assert c_eff != pk.jp[1, L.J_C] + wmap[1, ip, ia]
+    assert ew == pk.jp[1, L.J_EW]                  # 20 um < 0.1 mm of MoS2: not worn through
+    pk_bin = packed_case(["joints.B.coating=MoS2"])
+    assert worn_contact(pk_bin.jp, 1, wmap, n, pk_bin.p)[0] == pk_bin.jp[1, L.J_C] + wmap[1, ip, ia]
+    deep = np.full((2, 12, 24), 2e-4)
+    assert worn_contact(pk.jp, 1, deep, n, pk.p)[1] == pk.jp[1, L.J_EW_BASE]
+
+
+@pytest.mark.parametrize("dv0, ddot, expected_dv0", [
+    (0.0, 0.05, 0.05),      # the episode begins in this step: the evaluation's own rate
+    (0.0, -0.2, 1e-2),      # ... floored
+    (0.3, 0.05, 0.3),       # an episode under way: its impact velocity
+])
+def test_damping_of_a_contact(dv0, ddot, expected_dv0):
+    assert contact_damping(dv0, ddot, 0.7, 1e-2) == damping_factor(0.7, expected_dv0)
+
+
+@pytest.mark.parametrize("shape", [(12, 24), (36, 72), (144, 288)])
+def test_bins_tile_the_sphere(shape):
+    r = 0.015
+    areas = bin_areas(shape, r)
+    assert areas.sum() == pytest.approx(4 * math.pi * r * r, rel=1e-12)
+    assert areas[3, 5] == bin_area(3, shape[0], shape[1], r)
+    # symmetric about the equator
+    np.testing.assert_allclose(areas, areas[::-1], rtol=1e-9)
+
+
+def test_the_flush_spreads_every_waiting_cap_and_keeps_its_volume():
+    wmap = np.zeros((2, 36, 72))
+    pend = np.zeros((2, 6))
+    vol = 3e-15
+    n = np.array([0.0, 0.6, 0.8])
+    pend[1, :3] = vol * n           # sum V n
+    pend[1, 3] = vol                # sum V
+    pend[1, 4] = vol * 2e-7         # sum V A: a cap of 0.2 mm^2
+    pend[1, 5] = 0.015              # R_i
+    wmax = np.zeros(2)
+    flush_all_wear(wmap, pend, wmax, np.zeros((4 * 36, 3)))
+    assert not pend.any()
+    assert wmap[0].sum() == 0.0
+    assert wmax[1] == wmap[1].max() > 0.0
+    assert (wmap[1] * bin_areas((36, 72), 0.015)).sum() == pytest.approx(vol, rel=1e-12)
