@@ -147,6 +147,10 @@ def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path):
         for suffix in ("_mean", "_std", "_ci_low", "_ci_high"):
             var = one["slider_acceleration_rms" + suffix]
             assert var.dims == ("B_coating",) and var.attrs["units"] == "m s-2"
+            volume = one["wear_volume" + suffix]
+            assert volume.dims == ("B_coating", "joint") and volume.attrs["units"] == "m3"
+        np.testing.assert_array_equal(one["wear_volume_mean"].values,
+                                      one["wear_volume"].mean("member").values)
         assert "Student t" in one["slider_acceleration_rms_ci_low"].attrs["ci_method"]
         assert one.attrs["ensemble_confidence_level"] == CONFIDENCE_LEVEL
 
@@ -275,6 +279,9 @@ def test_cli_run_of_an_ensemble_runs_every_member(tmp_path):
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output
     assert "Ensemble statistics over 3 members" in result.output
+    # the worn volume beside the largest depth
+    depth = result.output.index("wear_depth_max_final: ")
+    assert result.output.index("wear_volume: ") > depth
     with xr.open_dataset(out) as ds:
         assert ds.sizes["member"] == 3 and "slider_acceleration_rms_ci_high" in ds
     report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
