@@ -114,17 +114,30 @@ def main() -> None:
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Worker processes for the members of an ensemble [default: all cores].")
+@click.option("--resume", is_flag=True,
+              help="Ensemble: continue an interrupted run, keeping the members in OUT.parts/.")
+@click.option("--overwrite", is_flag=True,
+              help="Ensemble: delete the members an earlier run left in OUT.parts/.")
+@click.option("--discard-parts", is_flag=True,
+              help="Ensemble: delete the parts in OUT.parts/ that belong to another sweep or "
+                   "config; without it such parts make the run refuse.")
 @click.pass_context
 def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-        allow_large: bool, quiet: bool, workers: int | None) -> None:
+        allow_large: bool, quiet: bool, workers: int | None, resume: bool, overwrite: bool,
+        discard_parts: bool) -> None:
     """Simulate one case described by CONFIG (YAML) and write its results; with
     ``ensemble.members > 1``, every member (a ``member`` dimension) and the ensemble
-    statistics."""
+    statistics, run as a sweep: finished members are kept in OUT.parts/ until OUT is
+    written, and an interrupted run continues with --resume (exit 130 on interrupt)."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
     if cfg.ensemble.members > 1:
-        _run_ensemble(ctx, config, cfg, out, allow_large, quiet, workers)
+        _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, workers,
+                      resume=resume, overwrite=overwrite, discard_parts=discard_parts)
         return
+    if resume or overwrite or discard_parts:
+        raise click.UsageError("--resume, --overwrite and --discard-parts act on the parts of an "
+                               "ensemble (ensemble.members > 1); this config runs one case")
     from .simulation import simulate
 
     announce_compile(quiet, [cfg.solver.method])
@@ -183,18 +196,32 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
                    f"{path})", err=True)
 
 
-def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None, allow_large: bool,
-                  quiet: bool, workers: int | None) -> None:
-    """``run`` of an ensemble: its members as a sweep of one design (all in one file)."""
+def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
+                  overrides: tuple[str, ...], allow_large: bool, quiet: bool, workers: int | None,
+                  *, resume: bool, overwrite: bool, discard_parts: bool) -> None:
+    """``run`` of an ensemble: its members as a sweep of one design (all in one file), under
+    the sweep's rules for its parts."""
     from .analysis import format_ensemble_report
-    from .sweeping import expand, run_sweep
+    from .sweeping import StoreError, SweepFailed, SweepInterrupted, expand, run_sweep
 
+    if resume and overwrite:
+        raise click.UsageError("--resume keeps the finished members and --overwrite deletes "
+                               "them; give one")
     path = Path(out) if out else Path(Path(config).stem + ".nc")
     plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
+    plan.source, plan.command = config, "run"
     announce_compile(quiet, [cfg.solver.method])
     try:
-        ds = run_sweep(plan, path, workers=workers, progress=not quiet, overwrite=True,
-                       allow_large=allow_large)
+        ds = run_sweep(plan, path, workers=workers, progress=not quiet, allow_large=allow_large,
+                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
+    except StoreError as exc:
+        _fail(f"error: {exc}", 2)
+    except SweepInterrupted as exc:
+        _interrupted(exc, "run", config, str(path), overrides)
+    except KeyboardInterrupt:
+        _fail("interrupted before any member ran", 130)
+    except SweepFailed as exc:
+        _fail(f"error: {exc}", 1)
     except OSError as exc:
         click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
         ctx.exit(1)
@@ -394,6 +421,20 @@ def _fail(message: str, code: int):
     sys.exit(code)
 
 
+def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
+    """The command line that continues interrupted work: the same overrides, as they are
+    part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
+    return shlex.join(["clearsweep", command, config, "-o", out, "--resume",
+                       *(a for o in overrides for a in ("--set", o))])
+
+
+def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str, ...]):
+    """Exit 130 with the command that continues an interrupted sweep (or ensemble ``run``)."""
+    _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
+          f"{exc.parts_dir}; continue with: {_resume_command(command, config, out, overrides)}",
+          130)
+
+
 @main.command("sweep")
 @click.argument("config", type=click.Path(dir_okay=False))
 @click.option("-o", "--out", type=click.Path(dir_okay=False),
@@ -496,11 +537,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     except (ConfigError, StoreError) as exc:
         _fail(f"error: {exc}", 2)
     except SweepInterrupted as exc:
-        # The same cases only: the overrides are part of every case's hash.
-        cmd = shlex.join(["clearsweep", "sweep", config, "-o", out, "--resume",
-                          *(a for o in overrides for a in ("--set", o))])
-        _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
-              f"{exc.parts_dir}; continue with: {cmd}", 130)
+        _interrupted(exc, "sweep", config, out, overrides)
     except KeyboardInterrupt:
         _fail("interrupted before any case ran", 130)
     except SweepFailed as exc:
