@@ -170,14 +170,33 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
 @_overrides
 @_allow_large
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--resume", is_flag=True,
+              help="Continue an interrupted life run from its checkpoint OUT.life-checkpoint.")
+@click.option("--discard-checkpoint", is_flag=True,
+              help="Delete a checkpoint OUT.life-checkpoint that this run cannot continue (an "
+                   "earlier run without --resume, another config or other --set values); "
+                   "without it such a checkpoint makes the run refuse.")
 @click.pass_context
 def life_command(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-                 allow_large: bool, quiet: bool) -> None:
+                 allow_large: bool, quiet: bool, resume: bool, discard_checkpoint: bool) -> None:
     """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
-    clearance growth, coating wear-through and vibration against revolutions."""
-    cfg = load_config(config, overrides)
-    from .service_life import life, life_summary_text
+    clearance growth, coating wear-through and vibration against revolutions.
 
+    The state after every block is kept in OUT.life-checkpoint until OUT is written; an
+    interrupted or killed run continues with --resume (exit 130 on interrupt).
+    """
+    cfg = load_config(config, overrides)
+    from .service_life import (
+        CheckpointError,
+        LifeInterrupted,
+        LifeState,
+        checkpoint_path_for,
+        life,
+        life_summary_text,
+    )
+
+    out = out or Path(config).stem + "_life.nc"
+    checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
     def progress(row: dict[str, Any]) -> None:
@@ -186,8 +205,24 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth (A, B) {depth} m, "
                        f"status {row['block_status']}", err=True)
 
-    ds = life(cfg, allow_large=allow_large, progress=progress)
-    path = _write_or_exit(ctx, ds, out or Path(config).stem + "_life.nc")
+    def resumed(state: LifeState) -> None:
+        if not quiet:
+            click.echo(f"resuming from {checkpoint}: {len(state.rows)} blocks, "
+                       f"{state.cycles:.4g} revolutions", err=True)
+
+    try:
+        ds = life(cfg, allow_large=allow_large, progress=progress, checkpoint=checkpoint,
+                  resume=resume, discard_checkpoint=discard_checkpoint, resumed=resumed)
+    except CheckpointError as exc:
+        _fail(f"error: {exc}", 2)
+    except LifeInterrupted as exc:
+        _fail(f"interrupted: {exc.blocks} finished blocks are kept in {checkpoint}; continue "
+              f"with: {_resume_command('life', config, out, overrides)}" if exc.blocks
+              else "interrupted before a block finished", 130)
+    except OSError as exc:
+        _fail(f"error: cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
+    path = _write_or_exit(ctx, ds, out)
+    checkpoint.unlink(missing_ok=True)
     if not quiet:
         click.echo(life_summary_text(ds))
         click.echo(f"wrote {path}")
