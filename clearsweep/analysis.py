@@ -550,26 +550,34 @@ _CONTACT_COLUMNS = (
     _Column("impact_velocity_max_settled", "Largest impact velocity, settled", ".3g"),
     _Column("contact_fraction_settled", "Contact fraction, settled", ".3f"),
 )
+_FINAL_WEAR_COLUMNS = (
+    _Column("wear_depth_max_final", "Max wear depth (largest map bin)", ".4g"),
+    _Column("wear_volume", "Worn volume", ".4g"),
+)
 
 
 def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
     """The kernel's every-step statistics: settled window first, whole run beside it.
 
-    Two tables: slider and crank (one row per case), contacts (one row per case and joint).
+    Three tables: slider and crank (one row per case), contacts and the wear at the end
+    (largest depth of the wear map beside the worn volume; one row per case and joint).
     A file without the statistics gives an empty string.
     """
     summary = case_summary(ds)
     settle = ds.attrs.get("settle_time_s")
     window = f"settled = t >= {float(settle):g} s" if settle is not None else "settled window"
     blocks = []
+    statistics = f"every-step statistics; {window}"
     specs: tuple[tuple[str, tuple[_Column, ...], tuple[str, ...]], ...] = (
-        ("Slider and crank", _MOTION_COLUMNS, ()), ("Contacts", _CONTACT_COLUMNS, ("joint",)))
-    for title, wanted, dims in specs:
+        (f"Slider and crank ({statistics})", _MOTION_COLUMNS, ()),
+        (f"Contacts ({statistics})", _CONTACT_COLUMNS, ("joint",)),
+        ("Wear at the end of the run (the worn volume does not depend on the map's grid)",
+         _FINAL_WEAR_COLUMNS, ("joint",)))
+    for heading, wanted, dims in specs:
         columns = tuple(c for c in wanted if c.name in summary)
         if not columns:
             continue
         table = _with_status(ds, summary[[c.name for c in columns]])
-        heading = f"{title} (every-step statistics; {window})"
         keys: tuple[str, ...]
         if dims:
             groups = _case_groups(table, columns, dims)
@@ -632,9 +640,10 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
 #: whole-run twin where the run ends before the settled window (all NaN).
 ENSEMBLE_METRICS = ("slider_acceleration_rms_settled", "slider_acceleration_peak_settled",
                     "crank_torque_peak_settled", "normal_force_peak_settled",
-                    "impact_count_settled", "contact_fraction_settled", "wear_depth_max_final")
+                    "impact_count_settled", "contact_fraction_settled", "wear_depth_max_final",
+                    "wear_volume")
 #: Metrics whose designs the ensemble report compares.
-COMPARED_METRICS = ("wear_depth_max_final", "slider_acceleration_rms_settled",
+COMPARED_METRICS = ("wear_depth_max_final", "wear_volume", "slider_acceleration_rms_settled",
                     "normal_force_peak_settled")
 
 _ENSEMBLE_COLUMNS = (

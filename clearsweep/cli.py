@@ -114,17 +114,30 @@ def main() -> None:
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Worker processes for the members of an ensemble [default: all cores].")
+@click.option("--resume", is_flag=True,
+              help="Ensemble: continue an interrupted run, keeping the members in OUT.parts/.")
+@click.option("--overwrite", is_flag=True,
+              help="Ensemble: delete the members an earlier run left in OUT.parts/.")
+@click.option("--discard-parts", is_flag=True,
+              help="Ensemble: delete the parts in OUT.parts/ that belong to another sweep or "
+                   "config; without it such parts make the run refuse.")
 @click.pass_context
 def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-        allow_large: bool, quiet: bool, workers: int | None) -> None:
+        allow_large: bool, quiet: bool, workers: int | None, resume: bool, overwrite: bool,
+        discard_parts: bool) -> None:
     """Simulate one case described by CONFIG (YAML) and write its results; with
     ``ensemble.members > 1``, every member (a ``member`` dimension) and the ensemble
-    statistics."""
+    statistics, run as a sweep: finished members are kept in OUT.parts/ until OUT is
+    written, and an interrupted run continues with --resume (exit 130 on interrupt)."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
     if cfg.ensemble.members > 1:
-        _run_ensemble(ctx, config, cfg, out, allow_large, quiet, workers)
+        _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, workers,
+                      resume=resume, overwrite=overwrite, discard_parts=discard_parts)
         return
+    if resume or overwrite or discard_parts:
+        raise click.UsageError("--resume, --overwrite and --discard-parts act on the parts of an "
+                               "ensemble (ensemble.members > 1); this config runs one case")
     from .simulation import simulate
 
     announce_compile(quiet, [cfg.solver.method])
@@ -157,14 +170,33 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
 @_overrides
 @_allow_large
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--resume", is_flag=True,
+              help="Continue an interrupted life run from its checkpoint OUT.life-checkpoint.")
+@click.option("--discard-checkpoint", is_flag=True,
+              help="Delete a checkpoint OUT.life-checkpoint that this run cannot continue (an "
+                   "earlier run without --resume, another config or other --set values); "
+                   "without it such a checkpoint makes the run refuse.")
 @click.pass_context
 def life_command(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-                 allow_large: bool, quiet: bool) -> None:
+                 allow_large: bool, quiet: bool, resume: bool, discard_checkpoint: bool) -> None:
     """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
-    clearance growth, coating wear-through and vibration against revolutions."""
-    cfg = load_config(config, overrides)
-    from .service_life import life, life_summary_text
+    clearance growth, coating wear-through and vibration against revolutions.
 
+    The state after every block is kept in OUT.life-checkpoint until OUT is written; an
+    interrupted or killed run continues with --resume (exit 130 on interrupt).
+    """
+    cfg = load_config(config, overrides)
+    from .service_life import (
+        CheckpointError,
+        LifeInterrupted,
+        LifeState,
+        checkpoint_path_for,
+        life,
+        life_summary_text,
+    )
+
+    out = out or Path(config).stem + "_life.nc"
+    checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
     def progress(row: dict[str, Any]) -> None:
@@ -173,8 +205,24 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth (A, B) {depth} m, "
                        f"status {row['block_status']}", err=True)
 
-    ds = life(cfg, allow_large=allow_large, progress=progress)
-    path = _write_or_exit(ctx, ds, out or Path(config).stem + "_life.nc")
+    def resumed(state: LifeState) -> None:
+        if not quiet:
+            click.echo(f"resuming from {checkpoint}: {len(state.rows)} blocks, "
+                       f"{state.cycles:.4g} revolutions", err=True)
+
+    try:
+        ds = life(cfg, allow_large=allow_large, progress=progress, checkpoint=checkpoint,
+                  resume=resume, discard_checkpoint=discard_checkpoint, resumed=resumed)
+    except CheckpointError as exc:
+        _fail(f"error: {exc}", 2)
+    except LifeInterrupted as exc:
+        _fail(f"interrupted: {exc.blocks} finished blocks are kept in {checkpoint}; continue "
+              f"with: {_resume_command('life', config, out, overrides)}" if exc.blocks
+              else "interrupted before a block finished", 130)
+    except OSError as exc:
+        _fail(f"error: cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
+    path = _write_or_exit(ctx, ds, out)
+    checkpoint.unlink(missing_ok=True)
     if not quiet:
         click.echo(life_summary_text(ds))
         click.echo(f"wrote {path}")
@@ -183,18 +231,32 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
                    f"{path})", err=True)
 
 
-def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None, allow_large: bool,
-                  quiet: bool, workers: int | None) -> None:
-    """``run`` of an ensemble: its members as a sweep of one design (all in one file)."""
+def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
+                  overrides: tuple[str, ...], allow_large: bool, quiet: bool, workers: int | None,
+                  *, resume: bool, overwrite: bool, discard_parts: bool) -> None:
+    """``run`` of an ensemble: its members as a sweep of one design (all in one file), under
+    the sweep's rules for its parts."""
     from .analysis import format_ensemble_report
-    from .sweeping import expand, run_sweep
+    from .sweeping import StoreError, SweepFailed, SweepInterrupted, expand, run_sweep
 
+    if resume and overwrite:
+        raise click.UsageError("--resume keeps the finished members and --overwrite deletes "
+                               "them; give one")
     path = Path(out) if out else Path(Path(config).stem + ".nc")
     plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
+    plan.source, plan.command = config, "run"
     announce_compile(quiet, [cfg.solver.method])
     try:
-        ds = run_sweep(plan, path, workers=workers, progress=not quiet, overwrite=True,
-                       allow_large=allow_large)
+        ds = run_sweep(plan, path, workers=workers, progress=not quiet, allow_large=allow_large,
+                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
+    except StoreError as exc:
+        _fail(f"error: {exc}", 2)
+    except SweepInterrupted as exc:
+        _interrupted(exc, "run", config, str(path), overrides)
+    except KeyboardInterrupt:
+        _fail("interrupted before any member ran", 130)
+    except SweepFailed as exc:
+        _fail(f"error: {exc}", 1)
     except OSError as exc:
         click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
         ctx.exit(1)
@@ -402,6 +464,20 @@ def _fail(message: str, code: int):
     sys.exit(code)
 
 
+def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
+    """The command line that continues interrupted work: the same overrides, as they are
+    part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
+    return shlex.join(["clearsweep", command, config, "-o", out, "--resume",
+                       *(a for o in overrides for a in ("--set", o))])
+
+
+def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str, ...]):
+    """Exit 130 with the command that continues an interrupted sweep (or ensemble ``run``)."""
+    _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
+          f"{exc.parts_dir}; continue with: {_resume_command(command, config, out, overrides)}",
+          130)
+
+
 @main.command("sweep")
 @click.argument("config", type=click.Path(dir_okay=False))
 @click.option("-o", "--out", type=click.Path(dir_okay=False),
@@ -504,11 +580,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     except (ConfigError, StoreError) as exc:
         _fail(f"error: {exc}", 2)
     except SweepInterrupted as exc:
-        # The same cases only: the overrides are part of every case's hash.
-        cmd = shlex.join(["clearsweep", "sweep", config, "-o", out, "--resume",
-                          *(a for o in overrides for a in ("--set", o))])
-        _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
-              f"{exc.parts_dir}; continue with: {cmd}", 130)
+        _interrupted(exc, "sweep", config, out, overrides)
     except KeyboardInterrupt:
         _fail("interrupted before any case ran", 130)
     except SweepFailed as exc:

@@ -13,10 +13,14 @@ when a limit is crossed, or after ``life.max_blocks`` blocks.
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import time
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -26,8 +30,10 @@ if TYPE_CHECKING:
 
 from .config import Config, dump_config, load_config, resolve_materials
 from .core import layout as L
+from .dataset import replaced_on_success
 from .params import pack
 from .simulation import preflight, prepare_kernel, run_kernel
+from .version import __version__
 
 #: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
 WORN_FRACTION = 1e-2
@@ -140,6 +146,181 @@ class LifeState:
     snapshots: list[tuple[float, np.ndarray]] = field(default_factory=list)
     wear_through: list[tuple[float, int, int] | None] = field(default_factory=lambda: [None, None])
     block_volumes: list[np.ndarray] = field(default_factory=list)
+    #: Wall time [s] of the earlier sessions of a resumed run.
+    wall_before: float = 0.0
+
+
+# --------------------------------------------------------------------------- checkpoints
+
+#: Layout of a checkpoint file; one of another layout is refused.
+CHECKPOINT_FORMAT = 1
+#: A life run writing OUT keeps its checkpoint beside it: ``OUT`` + this suffix.
+CHECKPOINT_SUFFIX = ".life-checkpoint"
+
+
+class CheckpointError(RuntimeError):
+    """A checkpoint that cannot be used as asked (an earlier run's, another config's, unreadable)."""
+
+
+class LifeInterrupted(KeyboardInterrupt):
+    """A life run stopped (Ctrl-C); the blocks finished before are kept in its checkpoint.
+
+    Attributes
+    ----------
+    blocks : int
+        Blocks in the checkpoint (0: none was kept).
+    checkpoint : pathlib.Path or None
+        The checkpoint file.
+    """
+
+    def __init__(self, blocks: int, checkpoint: Path | None):
+        super().__init__(f"life run interrupted: {blocks} blocks kept in {checkpoint}")
+        self.blocks, self.checkpoint = blocks, checkpoint
+
+
+def checkpoint_path_for(out: str | os.PathLike) -> Path:
+    """The checkpoint of the life run that writes ``out``: ``OUT.life-checkpoint`` beside it."""
+    out = Path(out)
+    return out.with_name(out.name + CHECKPOINT_SUFFIX)
+
+
+def _config_json(cfg: Config) -> str:
+    """What identifies a life run: its resolved config as canonical JSON."""
+    return json.dumps(cfg.to_dict(), sort_keys=True, separators=(",", ":"))
+
+
+def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
+    if not isinstance(tree, dict):
+        return {prefix: tree}
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def _differences(theirs: str, ours: Config, limit: int = 3) -> str:
+    """The first config keys whose values differ, as ``key: VALUE there, VALUE here``."""
+    a, b = _flat(json.loads(theirs)), _flat(ours.to_dict())
+    keys = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
+    text = "; ".join(f"{k}: {a.get(k)!r} there, {b.get(k)!r} here" for k in keys[:limit])
+    return text + (f"; and {len(keys) - limit} more" if len(keys) > limit else "")
+
+
+def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall: float) -> Path:
+    """Write ``state`` (after a block and its jump) to ``path`` atomically: a temporary file
+    beside it, flushed to disk, renamed into place; a kill leaves the previous checkpoint.
+
+    Holds the config it belongs to, the worn maps and volumes, the cycle count, every row,
+    the map snapshots, the wear-through records, each block's worn volume and the wall time
+    so far (``wall`` [s] in this session); a life run has no random state (an ensemble
+    member's perturbation is drawn from ``(seed, member)`` in the config).
+    """
+    path = Path(path)
+    rows = state.rows
+    arrays: dict[str, Any] = {
+        "format": np.array(CHECKPOINT_FORMAT), "config": np.array(_config_json(cfg)),
+        "version": np.array(__version__), "cycles": np.array(state.cycles),
+        "wall": np.array(state.wall_before + wall), "wmap": state.wmap, "wvol": state.wvol,
+        "row_keys": np.array(list(rows[0])),
+        "snapshot_cycle": np.array([c for c, _ in state.snapshots]),
+        "snapshot_map": np.array([m for _, m in state.snapshots]),
+        "wear_through": np.array([w if w is not None else (np.nan,) * 3 for w in state.wear_through],
+                                 dtype=float),
+        "block_volumes": np.array(state.block_volumes),
+    }
+    for key in rows[0]:
+        arrays[f"row_{key}"] = np.array([r[key] for r in rows])
+    with replaced_on_success(path) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **arrays)
+        f.flush()
+        os.fsync(f.fileno())
+    return path
+
+
+def _unreadable(path: Path, reason: str) -> CheckpointError:
+    return CheckpointError(f"{path} is not a readable life checkpoint ({reason}); pass "
+                           "--discard-checkpoint to delete it")
+
+
+def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
+    """The state saved by :func:`save_checkpoint` at ``path`` for the life run of ``cfg``.
+
+    Raises
+    ------
+    CheckpointError
+        The file is not a readable checkpoint, or it belongs to another config or version.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            saved = {k: data[k] for k in data.files}
+        layout = int(saved["format"])
+        config, version = str(saved["config"]), str(saved["version"])
+        keys = [str(k) for k in saved["row_keys"]]
+        columns = {k: saved[f"row_{k}"] for k in keys}
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
+        raise _unreadable(path, f"{type(exc).__name__}: {exc}") from None
+    if layout != CHECKPOINT_FORMAT:
+        raise _unreadable(path, f"layout {layout}, this version reads {CHECKPOINT_FORMAT}")
+    if config != _config_json(cfg):
+        raise CheckpointError(f"{path} holds the blocks of a life run of another config "
+                              f"({_differences(config, cfg)}); run that config to continue it, "
+                              "write to another output file, or pass --discard-checkpoint to "
+                              "delete it")
+    if version != __version__:
+        raise CheckpointError(f"{path} was written by clearsweep {version}, this is "
+                              f"{__version__}: a resumed run would not be the run it began; "
+                              "pass --discard-checkpoint to delete it")
+
+    def value(column: np.ndarray, i: int) -> Any:
+        return column[i].copy() if column.ndim > 1 else column[i].item()
+
+    rows = [{k: value(columns[k], i) for k in keys} for i in range(len(columns[keys[0]]))]
+    return LifeState(
+        wmap=saved["wmap"], wvol=saved["wvol"], cycles=float(saved["cycles"]), rows=rows,
+        snapshots=[(float(c), m) for c, m in zip(saved["snapshot_cycle"], saved["snapshot_map"])],
+        wear_through=[None if np.isnan(w[0]) else (float(w[0]), int(w[1]), int(w[2]))
+                      for w in saved["wear_through"]],
+        block_volumes=list(saved["block_volumes"]), wall_before=float(saved["wall"]))
+
+
+def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = False,
+                     discard: bool = False) -> LifeState | None:
+    """Take the checkpoint at ``path`` for the life run of ``cfg``, as a sweep takes its
+    parts: the state to continue from, or None to start at block 0.
+
+    A checkpoint is never deleted unless ``discard``: without ``resume`` an existing one
+    makes the run refuse; with ``resume`` one of another config (or unreadable) does.
+
+    Raises
+    ------
+    CheckpointError
+        The checkpoint is there and cannot be used as asked.
+    """
+    path = Path(path)
+    if not path.exists():
+        return None
+    if resume:
+        try:
+            return load_checkpoint(path, cfg)
+        except CheckpointError:
+            if not discard:
+                raise
+    elif not discard:
+        raise CheckpointError(f"{path} holds the finished blocks of an earlier life run; pass "
+                              "--resume to continue it, or --discard-checkpoint to delete it and "
+                              "start again")
+    path.unlink()
+    return None
+
+
+def checkpoint_blocks(path: str | os.PathLike) -> int:
+    """Blocks held by the checkpoint at ``path`` (0 when there is none or it is unreadable)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return int(data["row_cycle"].size)
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile):
+        return 0
 
 
 def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.ndarray) -> dict[str, Any]:
@@ -197,8 +378,10 @@ def _snapshot_due(cycle: float, kept: list[tuple[float, np.ndarray]], first: flo
 
 def life(config, overrides=(), *, allow_large: bool = False,
          progress: Callable[[dict[str, Any]], None] | None = None,
-         stop_rule: Callable[[Config, dict[str, Any], LifeState], str | None] | None = None
-         ) -> xr.Dataset:
+         stop_rule: Callable[[Config, dict[str, Any], LifeState], str | None] | None = None,
+         checkpoint: str | os.PathLike | None = None, resume: bool = False,
+         discard_checkpoint: bool = False,
+         resumed: Callable[[LifeState], None] | None = None) -> xr.Dataset:
     """Run a service-life estimate by cycle jumps (docs/service_life.md).
 
     Parameters
@@ -216,6 +399,17 @@ def life(config, overrides=(), *, allow_large: bool = False,
         ``stop_rule(cfg, row, state)`` after each block: the name of what stops the run, or
         None to go on. Default: the first limit crossed (a reliability member runs on until
         every limit it watches is crossed: :mod:`clearsweep.reliability`).
+    checkpoint
+        Keep the run's state in this file after every block (:func:`save_checkpoint`;
+        :func:`checkpoint_path_for` names the one beside an output file). The caller
+        deletes it once the dataset is safely written.
+    resume
+        Continue from ``checkpoint`` (:func:`claim_checkpoint`); the dataset is the one an
+        uninterrupted run gives, bit for bit (``wall_time`` aside).
+    discard_checkpoint
+        Delete a ``checkpoint`` that cannot be continued instead of refusing.
+    resumed
+        Called with the state a resumed run continues from.
 
     Returns
     -------
@@ -223,9 +417,33 @@ def life(config, overrides=(), *, allow_large: bool = False,
         Dimension ``cycle`` (revolutions at the end of each block), per joint the wear and
         the settled dynamics of each block, wear-map snapshots, when and where each coating
         was first worn through, the revolutions to each limit and ``stop_reason``.
+
+    Raises
+    ------
+    CheckpointError
+        ``checkpoint`` exists and cannot be used as asked (:func:`claim_checkpoint`).
+    LifeInterrupted
+        Ctrl-C; the blocks finished before are in ``checkpoint``.
     """
     start = time.perf_counter()
     cfg = load_config(config, overrides)
+    earlier = (claim_checkpoint(checkpoint, cfg, resume=resume, discard=discard_checkpoint)
+               if checkpoint is not None else None)
+    if earlier is not None and resumed is not None:
+        resumed(earlier)
+    try:
+        return _life(cfg, allow_large, progress, checkpoint, earlier, start, stop_rule)
+    except KeyboardInterrupt:
+        kept = checkpoint_blocks(checkpoint) if checkpoint is not None else 0
+        raise LifeInterrupted(kept, Path(checkpoint) if checkpoint is not None else None) from None
+
+
+def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], None] | None,
+          checkpoint: str | os.PathLike | None, earlier: LifeState | None,
+          start: float,
+          stop_rule: Callable[[Config, dict[str, Any], LifeState], str | None] | None = None
+          ) -> xr.Dataset:
+    """:func:`life` from ``earlier`` (None: from block 0)."""
     lc = cfg.life
     period = 60.0 / cfg.mechanism.speed_rpm
     n_block = int(math.ceil(lc.block_revolutions * period / cfg.solver.dt - 1e-9))
@@ -239,7 +457,8 @@ def life(config, overrides=(), *, allow_large: bool = False,
     clearance = np.where(jp[:, L.J_CLEARANCE] != 0.0, jp[:, L.J_C], 0.0)
     coat = np.where(clearance > 0.0, jp[:, L.J_COAT], math.inf)
     revs = packed.n_steps * packed.p[L.P_DT] / period
-    state = LifeState(wmap=np.zeros((2,) + packed.map_shape), wvol=np.zeros(2))
+    state = (earlier if earlier is not None
+             else LifeState(wmap=np.zeros((2,) + packed.map_shape), wvol=np.zeros(2)))
     stop = "cycles"
     first_cycle = revs
     while True:
@@ -278,10 +497,12 @@ def life(config, overrides=(), *, allow_large: bool = False,
             state.wvol = state.wvol + dn * state.block_volumes[-1] / revs
             state.cycles += dn
             row["jump_revolutions"] = dn
+        if checkpoint is not None:
+            save_checkpoint(checkpoint, cfg, state, time.perf_counter() - start)
     if not state.snapshots or state.snapshots[-1][0] != state.rows[-1]["cycle"]:
         # the loop ends after a block, so the map is the last row's
         state.snapshots.append((state.rows[-1]["cycle"], state.wmap.copy()))
-    return _life_dataset(cfg, state, stop, time.perf_counter() - start)
+    return _life_dataset(cfg, state, stop, state.wall_before + time.perf_counter() - start)
 
 
 def _note_wear_through(state: LifeState, before: np.ndarray, after: np.ndarray, coat: np.ndarray,

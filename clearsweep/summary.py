@@ -33,8 +33,8 @@ STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + t
     n for n in STATISTICS if not n.endswith("_settled"))
 
 #: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, "wear_depth_max_final", *WEAR_TABLE_VARIABLES,
-                 *PASS_THROUGH_VARIABLES)
+SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, "wear_depth_max_final", "wear_volume",
+                 *WEAR_TABLE_VARIABLES, *PASS_THROUGH_VARIABLES)
 
 
 def with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
@@ -151,8 +151,9 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         ``status``; the kernel's every-step statistics (``variables.STATISTICS``:
         peaks, RMS, impacts, contact fraction; settled window first, then the whole
         run), copied as they are, never recomputed from the saved rows;
-        ``wear_depth_max_final(joint)`` [m] (max of ``wear_map``); the
-        ``wear_table`` variables; ``energy_residual_relative``,
+        ``wear_depth_max_final(joint)`` [m] (max of ``wear_map``);
+        ``wear_volume(joint)`` [m^3] (the worn volume, which unlike a largest bin does not
+        depend on the map's grid); the ``wear_table`` variables; ``energy_residual_relative``,
         ``substeps_used``, ``rk4_steps``, ``wall_time`` [s]. Dataset
         attributes (provenance) are kept.
     """

@@ -147,6 +147,10 @@ def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path):
         for suffix in ("_mean", "_std", "_ci_low", "_ci_high"):
             var = one["slider_acceleration_rms" + suffix]
             assert var.dims == ("B_coating",) and var.attrs["units"] == "m s-2"
+            volume = one["wear_volume" + suffix]
+            assert volume.dims == ("B_coating", "joint") and volume.attrs["units"] == "m3"
+        np.testing.assert_array_equal(one["wear_volume_mean"].values,
+                                      one["wear_volume"].mean("member").values)
         assert "Student t" in one["slider_acceleration_rms_ci_low"].attrs["ci_method"]
         assert one.attrs["ensemble_confidence_level"] == CONFIDENCE_LEVEL
 
@@ -275,6 +279,9 @@ def test_cli_run_of_an_ensemble_runs_every_member(tmp_path):
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output
     assert "Ensemble statistics over 3 members" in result.output
+    # the worn volume beside the largest depth
+    depth = result.output.index("wear_depth_max_final: ")
+    assert result.output.index("wear_volume: ") > depth
     with xr.open_dataset(out) as ds:
         assert ds.sizes["member"] == 3 and "slider_acceleration_rms_ci_high" in ds
     report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
@@ -320,3 +327,130 @@ def test_report_leaves_out_designs_that_the_sweep_skipped():
     ds["status"] = ds["status"].where(ds["B_coating"] != "MoS2", "skipped")
     text = format_ensemble_table(ds)
     assert "MoS2" not in text and "PTFE" in text
+
+
+# ---------------------------------------------------------------------------- run of an ensemble: parts
+
+def _run_cli(config, out, *options):
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    return CliRunner().invoke(main, ["run", str(config), "-o", str(out), "-q", "--workers", "1",
+                                     *options])
+
+
+def _ensemble_config(tmp_path, members=3, **extra):
+    import yaml
+
+    config = tmp_path / "ens.yaml"
+    config.write_text(yaml.safe_dump(ensemble(members, **extra)))
+    return config
+
+
+def test_run_of_an_ensemble_refuses_parts_of_another_sweep(tmp_path):
+    """Once, `run` of an ensemble deleted every part in OUT.parts (overwrite=True)."""
+    from clearsweep.sweeping import parts_dir_for
+
+    out = tmp_path / "ce.nc"
+    other = sweep_doc(2)
+    other["name"] = "other"
+    run_sweep(other, out, workers=1, progress=False, keep_parts=True).close()
+    out.unlink()
+    parts = parts_dir_for(out)
+    kept = sorted(p.name for p in parts.glob("*.nc"))
+    assert len(kept) == 4
+    config = _ensemble_config(tmp_path)
+    for options in ([], ["--resume"]):
+        result = _run_cli(config, out, *options)
+        assert result.exit_code == 2, result.output
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("clearsweep: error: ")
+        assert "'other'" in lines[0] and "--discard-parts" in lines[0]
+        assert sorted(p.name for p in parts.glob("*.nc")) == kept and not out.exists()
+    result = _run_cli(config, out, "--discard-parts")
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes["member"] == 3 and int(ds["members_ok"]) == 3
+
+
+def test_run_of_an_ensemble_refuses_its_own_earlier_parts_without_resume(tmp_path, monkeypatch):
+    from clearsweep import simulation
+    from clearsweep.sweeping import expand, parts_dir_for
+
+    config = _ensemble_config(tmp_path)
+    doc = {"name": "ens", "base": load_config(config).to_dict()}
+    first = next(iter(expand(doc).runnable()))
+    full = tmp_path / "full.nc"
+    run_sweep(doc, full, workers=1, progress=False, keep_parts=True).close()
+    # one finished member, as an interrupted run leaves it
+    out = tmp_path / "e.nc"
+    parts = parts_dir_for(out)
+    parts.mkdir()
+    (parts / f"{first}.nc").write_bytes((parts_dir_for(full) / f"{first}.nc").read_bytes())
+    stamp = (parts / f"{first}.nc").stat().st_mtime_ns
+    result = _run_cli(config, out)
+    assert result.exit_code == 2, result.output
+    assert "--resume" in result.stderr and "--overwrite" in result.stderr
+    assert (parts / f"{first}.nc").stat().st_mtime_ns == stamp and not out.exists()
+    ran = []
+    real = simulation.simulate
+    monkeypatch.setattr(simulation, "simulate",
+                        lambda cfg, **kw: ran.append(cfg.ensemble.member) or real(cfg, **kw))
+    result = _run_cli(config, out, "--resume")
+    assert result.exit_code == 0, result.output
+    assert ran == [1, 2]                        # the kept member 0 did not run again
+    with xr.open_dataset(out) as ds, xr.open_dataset(full) as ref:
+        xr.testing.assert_identical(drop_timing(ds.load()), drop_timing(ref.load()))
+
+
+def test_two_runs_of_an_ensemble_on_one_output_refuse_in_one_line(tmp_path):
+    """The second of two concurrent runs raised an uncaught StoreError."""
+    from clearsweep.sweeping import PartStore, parts_dir_for
+
+    config = _ensemble_config(tmp_path)
+    out = tmp_path / "e.nc"
+    with PartStore(parts_dir_for(out)) as first:       # another run holds the folder
+        first.open()
+        result = _run_cli(config, out)
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("clearsweep: error: ") and "in use" in lines[0]
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    assert not out.exists()
+
+
+def test_sigint_stops_a_run_of_an_ensemble_with_130_and_the_resume_command(tmp_path):
+    """Ctrl-C printed "Aborted!" and exited 1, and the next run recomputed every member."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from clearsweep.sweeping import PartStore, parts_dir_for
+
+    config = _ensemble_config(tmp_path, members=4, solver={"duration": 0.4})
+    out = tmp_path / "e.nc"
+    parts = parts_dir_for(out)
+    command = [sys.executable, "-m", "clearsweep.cli", "run", str(config), "-o", str(out), "-q",
+               "--workers", "1"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
+    end = time.monotonic() + 120
+    while not (parts.is_dir() and list(parts.glob("*.nc"))):
+        if process.poll() is not None or time.monotonic() > end:
+            pytest.fail(f"no part written: {process.communicate()}")
+        time.sleep(0.01)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert f"continue with: clearsweep run {config} -o {out} --resume" in err
+    with PartStore(parts) as store:
+        kept = store.finished()
+    assert 1 <= len(kept) < 4 and not out.exists()
+    resumed = subprocess.run([*command, "--resume"], capture_output=True, text=True, cwd=tmp_path,
+                             env=env, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    with xr.open_dataset(out) as ds:
+        assert int(ds["members_ok"]) == 4

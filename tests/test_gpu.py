@@ -85,6 +85,7 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     assert simulated["status_cpu"] == simulated["status_gpu"] == ["ok"] * 3
     assert "slider_acceleration_peak_settled" in simulated["compared"]
     assert "wear_depth_axis_max" in simulated["compared"]
+    assert "wear_volume" in simulated["compared"]       # kept by the CUDA summaries too
     # the simulator runs the same compiled CPU functions: equal to the last bit in practice
     assert simulated["worst_relative"] <= 1e-9
 

@@ -244,6 +244,26 @@ def test_summary_store_keeps_summaries_only(tmp_path):
         assert ds["wear_depth_axis_max"].dims == ("B_coating", "clearance_joints", "joint", "axis")
 
 
+def test_summary_store_keeps_the_worn_volume_of_the_full_store(tmp_path):
+    """The worn volume, the one wear figure that does not depend on the map's grid, was
+    missing from summary stores; it is the full store's, bit for bit, and report prints it
+    beside the largest depth."""
+    summary = write_sweep(tmp_path, SMALL, store="summary", name="summary")
+    full = write_sweep(tmp_path, SMALL, name="full")
+    with run_sweep(summary, tmp_path / "s.nc", workers=1, progress=False) as s, \
+            run_sweep(full, tmp_path / "f.nc", workers=1, progress=False) as f:
+        assert s["wear_volume"].dims == ("B_coating", "clearance_joints", "joint")
+        assert s["wear_volume"].attrs["units"] == "m3"
+        np.testing.assert_array_equal(s["wear_volume"].values, f["wear_volume"].values)
+        assert (s["wear_volume"].sel(joint="B") > 0).all()
+    from clearsweep.cli import report_command
+
+    report = CliRunner().invoke(report_command, [str(tmp_path / "s.nc")], catch_exceptions=False)
+    assert report.exit_code == 0, report.output
+    block = report.output.split("Wear at the end of the run")[1]
+    assert "Max wear depth (largest map bin) [m]" in block and "Worn volume [m3]" in block
+
+
 def test_without_out_the_result_is_in_memory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     ds = run_sweep({"base": BASE, "sweep": {"grid": {"joints.B.coating": ["none", "lead"]}}},

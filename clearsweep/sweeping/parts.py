@@ -213,7 +213,8 @@ class PartStore:
             whose, again = "another sweep (sweep.log names none)", ""
         else:
             whose = f"the sweep {describe(owner)}"
-            again = (f"; to finish that sweep run: clearsweep sweep {owner['source']} -o {out} "
+            command = owner.get("command", "sweep")
+            again = (f"; to finish that sweep run: clearsweep {command} {owner['source']} -o {out} "
                      "--resume (with its --set values)" if owner.get("source") else "")
         this = f" {describe(sweep)}" if sweep else ""
         return (f"{self.directory} holds {len(foreign)} finished case(s) of {whose}, which are "

@@ -189,6 +189,9 @@ class SweepPlan:
     base: Config
     axes: tuple[Axis, ...]
     cases: list[Case]
+    #: The clearsweep command that runs it (``sweep``; ``run`` for an ensemble config),
+    #: named in the hint that continues it.
+    command: str = "sweep"
 
     @property
     def dims(self) -> dict[str, int]:

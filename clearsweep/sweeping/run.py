@@ -347,7 +347,7 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         raise SweepFailed(f"cannot start the backend for {client or workers!r}: "
                           f"{type(exc).__name__}: {exc}") from exc
     store.log("run", name=plan.name, source=plan.source, cases=len(plan.cases), to_run=len(todo), kept=kept,
-              backend=backend.label)
+              backend=backend.label, command=plan.command)
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
                file=sys.stderr, dynamic_ncols=True)
     bar.set_postfix(failed=failed)

@@ -1,0 +1,175 @@
+"""Resumable life runs: a checkpoint after every block, --resume bit-identical to an
+uninterrupted run, at most one block lost to a SIGKILL, foreign checkpoints refused."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+
+from clearsweep import service_life
+from clearsweep.cli import main
+from clearsweep.config import load_config
+from clearsweep.dataset import write_netcdf_atomic
+from clearsweep.service_life import (
+    CheckpointError,
+    LifeInterrupted,
+    checkpoint_blocks,
+    checkpoint_path_for,
+    life,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+CASE = str(ROOT / "configs" / "one_clearance.yaml")
+#: A quick life run: 300 r/min (0.2 s blocks), small map, MoS2 that wears through, ten blocks.
+QUICK = ["wear.map=[12,24]", "wear.interpolate=true", "solver.energy_tolerance=0.5",
+         "mechanism.speed_rpm=300", "wear.amplification=1000", "life.cycles=30",
+         "life.jump_clearance_fraction=0.05", "joints.B.coating=MoS2",
+         "joints.B.coating_thickness=1e-6", "life.max_blocks=10"]
+
+
+def sets(overrides) -> list[str]:
+    return [a for o in overrides for a in ("--set", o)]
+
+
+@pytest.fixture(scope="module")
+def reference():
+    """The uninterrupted run, without a checkpoint."""
+    return life(CASE, QUICK)
+
+
+def same_run(a: xr.Dataset, b: xr.Dataset) -> None:
+    xr.testing.assert_identical(a.drop_vars("wall_time"), b.drop_vars("wall_time"))
+
+
+def _interrupt_at_block(n: int):
+    seen = []
+
+    def progress(row):
+        seen.append(row["cycle"])
+        if len(seen) == n:
+            raise KeyboardInterrupt
+    return progress
+
+
+def test_resumed_run_is_bit_identical_to_an_uninterrupted_one(tmp_path, reference):
+    assert reference.sizes["cycle"] == 10 and float(reference.jump_revolutions.sum()) > 0
+    checkpoint = tmp_path / "l.nc.life-checkpoint"
+    with pytest.raises(LifeInterrupted) as stopped:
+        life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(5))
+    # the fifth block was running when it stopped: four are kept
+    assert stopped.value.blocks == 4 == checkpoint_blocks(checkpoint)
+    states = []
+    resumed = life(CASE, QUICK, checkpoint=checkpoint, resume=True,
+                   resumed=lambda state: states.append(len(state.rows)))
+    assert states == [4]
+    same_run(reference, resumed)
+    # the wear-through found before the interrupt survives it
+    assert np.isfinite(resumed.wear_through_cycle.sel(joint="B"))
+
+
+def test_an_existing_checkpoint_is_never_deleted_silently(tmp_path):
+    checkpoint = tmp_path / "l.nc.life-checkpoint"
+    with pytest.raises(LifeInterrupted):
+        life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(3))
+    stamp = checkpoint.stat().st_mtime_ns
+    with pytest.raises(CheckpointError, match="--resume.*--discard-checkpoint"):
+        life(CASE, QUICK, checkpoint=checkpoint)
+    other = [*QUICK, "wear.amplification=500"]
+    with pytest.raises(CheckpointError, match=r"another config \(wear.amplification: 1000.0 there, "
+                                              r"500.0 here\).*--discard-checkpoint"):
+        life(CASE, other, checkpoint=checkpoint, resume=True)
+    assert checkpoint.stat().st_mtime_ns == stamp
+    # asked for, it goes: the run starts at block 0
+    ds = life(CASE, [*other, "life.max_blocks=2"], checkpoint=checkpoint, resume=True,
+              discard_checkpoint=True)
+    assert ds.sizes["cycle"] == 2
+
+
+def _cli(*args: str):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_cli_refuses_foreign_and_unreadable_checkpoints_in_one_line(tmp_path):
+    out = tmp_path / "l.nc"
+    checkpoint = checkpoint_path_for(out)
+    with pytest.raises(LifeInterrupted):
+        life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(2))
+    for extra in (["--set", "life.max_blocks=9"], ["--resume", "--set", "life.max_blocks=9"], []):
+        result = _cli("life", CASE, "-o", out, "-q", *sets(QUICK), *extra)
+        assert result.exit_code == 2, result.output
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("clearsweep: error: "), result.stderr
+        assert str(checkpoint) in lines[0] and "--discard-checkpoint" in lines[0]
+        assert checkpoint_blocks(checkpoint) == 1 and not out.exists()
+    checkpoint.write_bytes(b"not a checkpoint")
+    result = _cli("life", CASE, "-o", out, "-q", "--resume", *sets(QUICK))
+    assert result.exit_code == 2 and "not a readable life checkpoint" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_cli_interrupt_exits_130_with_the_resume_command(tmp_path, monkeypatch):
+    saved = []
+    real = service_life.save_checkpoint
+
+    def save_then_stop(*args, **kwargs):
+        path = real(*args, **kwargs)
+        saved.append(path)
+        if len(saved) == 2:
+            raise KeyboardInterrupt
+        return path
+
+    monkeypatch.setattr(service_life, "save_checkpoint", save_then_stop)
+    out = tmp_path / "my life.nc"
+    result = _cli("life", CASE, "-o", out, "-q", *sets(QUICK))
+    assert result.exit_code == 130, result.output
+    assert "interrupted: 2 finished blocks are kept in" in result.stderr
+    assert f"continue with: clearsweep life {CASE} -o '{out}' --resume --set" in result.stderr
+    assert checkpoint_blocks(checkpoint_path_for(out)) == 2 and not out.exists()
+
+
+def test_sigkill_midway_loses_at_most_one_block_and_resume_finishes_the_run(tmp_path, reference):
+    out = tmp_path / "k.nc"
+    checkpoint = checkpoint_path_for(out)
+    command = [sys.executable, "-m", "clearsweep.cli", "life", CASE, "-o", str(out), *sets(QUICK)]
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    end = time.monotonic() + 120
+    while checkpoint_blocks(checkpoint) < 3:
+        if process.poll() is not None or time.monotonic() > end:
+            pytest.fail(f"no checkpoint of 3 blocks: {process.communicate()}")
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    _, err = process.communicate()
+    assert process.returncode == -signal.SIGKILL and not out.exists()
+    finished = err.count("block at")            # blocks the killed run reported as finished
+    kept = checkpoint_blocks(checkpoint)
+    assert 3 <= kept < 10 and kept >= finished - 1
+
+    result = _cli("life", CASE, "-o", out, *sets(QUICK))     # no --resume: refused, kept
+    assert result.exit_code == 2 and "--resume" in result.stderr
+    assert checkpoint_blocks(checkpoint) == kept
+
+    result = _cli("life", CASE, "-o", out, "--resume", *sets(QUICK))
+    assert result.exit_code == 0, result.output
+    assert f"resuming from {checkpoint}: {kept} blocks" in result.stderr
+    assert result.stderr.count("block at") == 10 - kept     # no finished block runs again
+    assert not checkpoint.exists()
+    write_netcdf_atomic(reference, tmp_path / "reference.nc")
+    with xr.open_dataset(out) as ds, xr.open_dataset(tmp_path / "reference.nc") as ref:
+        same_run(ref.load(), ds.load())
+
+
+def test_the_checkpoint_belongs_to_the_resolved_config():
+    """--set values are part of the identity, as they are of a sweep case's hash."""
+    a = service_life._config_json(load_config(CASE, QUICK))
+    b = service_life._config_json(load_config(CASE, [*QUICK, "life.max_blocks=11"]))
+    assert a != b and a == service_life._config_json(load_config(CASE, QUICK))
