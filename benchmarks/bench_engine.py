@@ -54,7 +54,9 @@ out = {}
 for name, overrides in cases.items():
     packed = preflight(load_config({"solver": {"duration": float(sys.argv[1])}}, overrides))
     run_kernel(packed)
-    out[name] = [packed.n_steps, run_kernel(packed)["wall_time"]]
+    res = run_kernel(packed)
+    # a KernelRun (a dict in revisions before it): this snippet also times older trees
+    out[name] = [packed.n_steps, res["wall_time"] if isinstance(res, dict) else res.wall_time]
 print(json.dumps(out))
 """
 
@@ -125,8 +127,8 @@ def config_rate(path: Path, duration: float) -> tuple[float, float, float]:
     packed = preflight(load_config(str(path), [f"solver.duration={duration}"]))
     run_kernel(packed)
     raw = run_kernel(packed)
-    wall = raw["wall_time"]
-    return packed.n_steps / wall, raw["rk4_steps"] / wall, raw["t_end"] / wall
+    wall = raw.wall_time
+    return packed.n_steps / wall, raw.rk4_steps / wall, raw.t_end / wall
 
 
 def packed_case(overrides, duration):
@@ -142,7 +144,7 @@ def rk4_rate(packed, repeats=3) -> float:
     from clearsweep.simulation import run_kernel
 
     run_kernel(packed)
-    best = min(run_kernel(packed)["wall_time"] for _ in range(repeats))
+    best = min(run_kernel(packed).wall_time for _ in range(repeats))
     return packed.n_steps / best
 
 

@@ -25,7 +25,7 @@ from .config import Config, resolve_materials
 from .core import layout as L
 from .core.rk4 import PAIR_FIRST, work_shapes
 from .params import Packed, pack
-from .simulation import check_step
+from .simulation import KernelRun, check_step
 
 #: What a sweep or the CLI reports when no device is there.
 NO_DEVICE = "no CUDA device: use --backend processes"
@@ -143,11 +143,11 @@ def _run_on_device(args: tuple) -> tuple:
     return tuple(a.copy_to_host() for a in on_device[5:11] + (on_device[_PAIRS_ARG],))
 
 
-def run_packed(packed: Sequence[Packed]) -> list[dict[str, Any]]:
-    """Run cases on the device; per case the raw dict of ``simulation.run_kernel`` with
-    one NaN row for the time series (none is kept) and the batch's wall time shared out."""
+def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
+    """Run cases on the device; per case what ``simulation.run_kernel`` returns, with one
+    NaN row for the time series (none is kept) and the batch's wall time shared out."""
     device_name()
-    out: list[dict[str, Any] | None] = [None] * len(packed)
+    out: list[KernelRun | None] = [None] * len(packed)
     by_shape: dict[tuple[int, ...], list[int]] = {}
     for i, pk in enumerate(packed):
         by_shape.setdefault(tuple(pk.map_shape), []).append(i)
@@ -166,14 +166,13 @@ def run_packed(packed: Sequence[Packed]) -> list[dict[str, Any]]:
     return [r for r in out if r is not None]
 
 
-def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> dict[str, Any]:
-    h = float(pk.p[L.P_DT])
-    return dict(t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
-                wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol, stats=stats,
-                status=L.STATUS_NAMES[int(info[0])], n_saved=int(info[1]), deepest=int(info[2]),
-                t_end=float(info[4]) * h, rk4_steps=int(info[3]), residual_max=float(track[2]),
-                ke_peak=float(track[0]), first_impact=np.where(first >= 0.0, first, np.nan),
-                wall_time=wall)
+def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> KernelRun:
+    """One case of a batch as a :class:`~clearsweep.simulation.KernelRun`: one NaN row for
+    the series the device does not keep."""
+    return KernelRun.from_counters(pk, info, track[2], track[0], first, wall, t=np.zeros(1),
+                                   y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
+                                   wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol,
+                                   stats=stats)
 
 
 def simulate_batch(configs: Sequence[Config]) -> list[Any]:

@@ -32,7 +32,7 @@ from .config import Config, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
 from .params import pack
-from .simulation import preflight, prepare_kernel, run_kernel
+from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .version import __version__
 
 #: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
@@ -57,15 +57,15 @@ def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
     return next(s for s in range(min(most, n_block), 0, -1) if n_block % s == 0)
 
 
-def settled_motion_error(cfg: Config, raw: dict[str, Any]) -> float:
+def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
     """Largest settled |x_slider - x_ideal(theta)| [m] of a block's saved rows: the slider's
     motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
     crank angle reached); NaN when no saved row lies in the settled window."""
     from .params import PRESETS, ideal_slider_x
 
     preset = PRESETS[cfg.mechanism.preset]
-    n = int(raw["n_saved"])
-    t, y = raw["t"][:n], raw["y"][:n]
+    n = int(raw.n_saved)
+    t, y = raw.t[:n], raw.y[:n]
     settled = t >= cfg.metrics.settle_time
     if not settled.any():
         return math.nan
@@ -323,14 +323,14 @@ def checkpoint_blocks(path: str | os.PathLike) -> int:
         return 0
 
 
-def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.ndarray) -> dict[str, Any]:
+def _block_row(cfg: Config, raw: KernelRun, state: LifeState, revs: float, jp: np.ndarray) -> dict[str, Any]:
     """One row of the life dataset from a finished block (map and volume after it)."""
     from .simulation import statistics_from_raw
 
     clearance = jp[:, L.J_C]
     coat = jp[:, L.J_COAT]
-    stats = statistics_from_raw(raw["stats"], clearance > 0.0)
-    settled_revs = raw["stats"][L.W_SETTLED, L.M_TIME] * cfg.mechanism.speed_rpm / 60.0
+    stats = statistics_from_raw(raw.stats, clearance > 0.0)
+    settled_revs = raw.stats[L.W_SETTLED, L.M_TIME] * cfg.mechanism.speed_rpm / 60.0
     depth_max = state.wmap.reshape(2, -1).max(axis=1)
     mean = np.zeros(2)
     for j in range(2):
@@ -353,8 +353,8 @@ def _block_row(cfg: Config, raw: dict, state: LifeState, revs: float, jp: np.nda
         "slider_motion_error_settled": settled_motion_error(cfg, raw),
         "impacts_per_revolution": np.where(
             ideal, np.nan, stats["impact_count_settled"] / settled_revs if settled_revs > 0 else np.nan),
-        "block_status": raw["status"],
-        "energy_residual_relative": (raw["residual_max"] / raw["ke_peak"] if raw["ke_peak"] > 0
+        "block_status": raw.status,
+        "energy_residual_relative": (raw.residual_max / raw.ke_peak if raw.ke_peak > 0
                                      else np.nan),
         "jump_revolutions": 0.0,
     }
@@ -467,10 +467,10 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
             break
         before = state.wmap
         raw = run_kernel(pack(block_cfg, materials, before), before, state.wvol)
-        state.block_volumes.append(raw["wvol"] - state.wvol)
-        rate = (raw["wmap"] - before) / revs
-        _note_wear_through(state, before, raw["wmap"], coat, state.cycles, revs)
-        state.wmap, state.wvol = raw["wmap"], raw["wvol"]
+        state.block_volumes.append(raw.wvol - state.wvol)
+        rate = (raw.wmap - before) / revs
+        _note_wear_through(state, before, raw.wmap, coat, state.cycles, revs)
+        state.wmap, state.wvol = raw.wmap, raw.wvol
         state.cycles += revs
         row = _block_row(cfg, raw, state, revs, jp)
         state.rows.append(row)
@@ -478,8 +478,8 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
             state.snapshots.append((state.cycles, state.wmap.copy()))
         if progress is not None:
             progress(row)
-        if raw["status"] != "ok":
-            stop = f"block_status:{raw['status']}"
+        if raw.status != "ok":
+            stop = f"block_status:{raw.status}"
             break
         reached = (stop_rule or _limit_reached)(cfg, row, state)
         if reached:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -106,9 +107,48 @@ def prepare_kernel(method: str = "rk4") -> float:
     return time.perf_counter() - start
 
 
+@dataclass(frozen=True)
+class KernelRun:
+    """What one integration of the kernel gives: the saved rows, the wear, the running
+    statistics and the counters (:func:`run_kernel` on the CPU; one case of a CUDA batch,
+    ``clearsweep.gpu``, with one NaN row since the device keeps no series)."""
+
+    t: np.ndarray               #: output times [s] (n_save)
+    y: np.ndarray               #: state rows (n_save x layout.N_Y); NaN after a stop
+    d: np.ndarray               #: diagnostics rows (n_save x layout.N_D)
+    wmax: np.ndarray            #: deepest map bin per joint at each row [m] (n_save x 2)
+    wmap: np.ndarray            #: wear map [m] (2 x npolar x nazim)
+    proj: np.ndarray            #: per-axis projections [m] (2 x 3 x 360)
+    wvol: np.ndarray            #: worn volume per joint [m^3]
+    stats: np.ndarray           #: running statistics (2 x layout.N_M)
+    status: str                 #: layout.STATUS_NAMES
+    n_saved: int                #: rows written
+    deepest: int                #: deepest sub-step level k (2^k sub-steps)
+    t_end: float                #: time reached [s] (the stopping step included)
+    rk4_steps: int              #: RK4 (sub-)steps taken (dopri5: accepted steps)
+    residual_max: float         #: largest |energy residual| [J]
+    ke_peak: float              #: peak kinetic energy [J]
+    first_impact: np.ndarray    #: first impact time per joint [s], NaN: none
+    wall_time: float            #: seconds the integration took
+
+    @classmethod
+    def from_counters(cls, packed: Packed, info: np.ndarray, residual_max: float, ke_peak: float,
+                      first_impact: np.ndarray, wall_time: float, **arrays: np.ndarray) -> KernelRun:
+        """From an integrator's ``info`` (status, saved rows, deepest level, sub-steps, grid
+        steps done), its energy figures and first impact times (negative or NaN: none),
+        and the arrays (t, y, d, wmax, wmap, proj, wvol, stats)."""
+        first = np.asarray(first_impact, dtype=float)
+        return cls(status=L.STATUS_NAMES[int(info[0])], n_saved=int(info[1]),
+                   deepest=int(info[2]), rk4_steps=int(info[3]),
+                   t_end=float(info[4]) * float(packed.p[L.P_DT]),
+                   residual_max=float(residual_max), ke_peak=float(ke_peak),
+                   first_impact=np.where(first >= 0.0, first, np.nan), wall_time=wall_time,
+                   **arrays)
+
+
 def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
-               wvol0: np.ndarray | None = None) -> dict[str, Any]:
-    """Run the Numba kernel on packed inputs; raw arrays and counters.
+               wvol0: np.ndarray | None = None) -> KernelRun:
+    """Run the Numba kernel on packed inputs: the saved rows, wear, statistics, counters.
 
     ``wmap0`` (float64[2, npolar, nazim], [m]) and ``wvol0`` (float64[2], [m^3]): the wear
     map and worn volume to start from (a worn socket, e.g. the previous block of a life
@@ -134,17 +174,11 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
                     wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info, stats)
     wall = time.perf_counter() - t0
-    n_ok = int(info[1])
-    out_wmax[n_ok:] = np.nan
-    h = packed.p[L.P_DT]
-    out_t = np.arange(n_save) * h * packed.save_every
-    return dict(t=out_t, y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
-                stats=stats,
-                status=L.STATUS_NAMES[int(info[0])], n_saved=n_ok, deepest=int(info[2]),
-                t_end=float(info[4]) * h,
-                rk4_steps=int(info[3]), residual_max=float(res[0]), ke_peak=float(res[1]),
-                first_impact=np.array(res[2:4]),
-                wall_time=wall)
+    out_wmax[int(info[1]):] = np.nan
+    out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
+    return KernelRun.from_counters(packed, info, res[0], res[1], res[2:4], wall, t=out_t, y=out_y,
+                                   d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
+                                   stats=stats)
 
 
 def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
@@ -173,7 +207,7 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     return case_dataset(cfg, packed, run_kernel(packed))
 
 
-def case_dataset(cfg: Config, packed: Packed, raw: dict[str, Any]) -> xr.Dataset:
+def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
     """A case's dataset from its config, packed inputs and the kernel's raw output
     (:func:`run_kernel`, or one case of a CUDA batch: ``clearsweep.gpu``)."""
     from .dataset import build_dataset
@@ -204,12 +238,12 @@ def case_dataset(cfg: Config, packed: Packed, raw: dict[str, Any]) -> xr.Dataset
         # where the run ended (the stop, for a failed case: rows after the last saved
         # one are NaN, while wear_map, wear_projection and wear_volume hold the wear up
         # to this time)
-        "status_time_s": raw["t_end"],
+        "status_time_s": raw.t_end,
         "simulated_duration_s": float(packed.n_steps * packed.p[L.P_DT]),
     }
-    if raw["status"] == L.STATUS_NAMES[L.ST_ENERGY]:
-        attrs["status_hint"] = energy_residual_hint(arrays, raw["t"], cfg)
-    return build_dataset(arrays, raw["t"], config_text=dump_config(cfg), attrs=attrs)
+    if raw.status == L.STATUS_NAMES[L.ST_ENERGY]:
+        attrs["status_hint"] = energy_residual_hint(arrays, raw.t, cfg)
+    return build_dataset(arrays, raw.t, config_text=dump_config(cfg), attrs=attrs)
 
 
 def statistics_from_raw(stats: np.ndarray, clearance: np.ndarray) -> dict[str, np.ndarray]:
@@ -284,9 +318,9 @@ def energy_residual_hint(arrays: dict[str, np.ndarray], t: np.ndarray, cfg: Conf
     return text
 
 
-def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
+def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     """Kernel rows -> registered output variables (variables.CASE_VARIABLES)."""
-    y, d = raw["y"], raw["d"]
+    y, d = raw.y, raw.d
     qd = L.Y_QD
     clearance = packed.jp[:, L.J_CLEARANCE] != 0.0
     joint_force = d[:, L.D_JOINT_FORCE:L.D_JOINT_FORCE + 6].reshape(-1, 2, 3)
@@ -301,9 +335,9 @@ def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
     work = y[:, L.Y_WORK]
     diss = y[:, L.Y_DISS]
     residual = ke + pe - work + diss - (ke[0] + pe[0])
-    ke_peak = raw["ke_peak"]
+    ke_peak = raw.ke_peak
     return {
-        "status": raw["status"],
+        "status": raw.status,
         "crank_angle": y[:, L.Y_CRANK_ANGLE],
         "slider_position": y[:, L.Y_SLIDER_X],
         "slider_velocity": y[:, qd + L.Y_SLIDER_X],
@@ -316,23 +350,23 @@ def arrays_from_raw(raw: dict, packed: Packed) -> dict[str, np.ndarray]:
         "penetration": penetration,
         "eccentricity": ecc,
         "ball_offset": offset,
-        "wear_depth_max": raw["wmax"],
+        "wear_depth_max": raw.wmax,
         "energy_kinetic": ke,
         "energy_potential": pe,
         "work_drive": work,
         "energy_dissipated": diss,
         "energy_residual": residual,
         "constraint_violation": d[:, L.D_CONS],
-        "wear_map": raw["wmap"],
-        "wear_projection": raw["proj"],
-        "wear_volume": raw["wvol"],
+        "wear_map": raw.wmap,
+        "wear_projection": raw.proj,
+        "wear_volume": raw.wvol,
         # counters: int32 where the value fits (2**16 sub-steps at most); rk4_steps can pass
         # 2**31 with --allow-large, so it stays int64
-        "substeps_used": np.int32(1 << raw["deepest"]),
-        "rk4_steps": np.int64(raw["rk4_steps"]),
-        "energy_residual_max": raw["residual_max"],
-        "first_impact_time": raw["first_impact"],
-        "energy_residual_relative": raw["residual_max"] / ke_peak if ke_peak > 0 else np.nan,
-        "wall_time": raw["wall_time"],
-        **statistics_from_raw(raw["stats"], clearance),
+        "substeps_used": np.int32(1 << raw.deepest),
+        "rk4_steps": np.int64(raw.rk4_steps),
+        "energy_residual_max": raw.residual_max,
+        "first_impact_time": raw.first_impact,
+        "energy_residual_relative": raw.residual_max / ke_peak if ke_peak > 0 else np.nan,
+        "wall_time": raw.wall_time,
+        **statistics_from_raw(raw.stats, clearance),
     }

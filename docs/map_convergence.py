@@ -40,6 +40,8 @@ CONFIGS = {
     "paper": ("paper.yaml", "sweep", ["solver.duration=0.25"], []),
     "coating_ensemble": ("coating_ensemble.yaml", "sweep", ["ensemble.members=4"], []),
     "life": ("life.yaml", "life", ["life.max_blocks=3"], ["life.max_blocks=12"]),
+    # a reliability sweep's members are life runs of its base: member 0's, unperturbed
+    "reliability": ("reliability.yaml", "reliability", ["life.max_blocks=3"], ["life.max_blocks=12"]),
 }
 
 
@@ -54,11 +56,12 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int) -> tuple[l
 
         ds = simulate(path, overrides)
         shape, depth = load_config(path, overrides).wear.map, ds.wear_map.max(("polar", "azimuth"))
-    elif kind == "life":
+    elif kind in ("life", "reliability"):
         from clearsweep.service_life import life
 
-        ds = life(path, overrides)
-        shape, depth = load_config(path, overrides).wear.map, ds.wear_depth_max.isel(cycle=-1)
+        cfg = load_config(path, overrides) if kind == "life" else _sweep_base(path, overrides)
+        ds = life(cfg)
+        shape, depth = cfg.wear.map, ds.wear_depth_max.isel(cycle=-1)
     else:
         from clearsweep.sweeping import run_sweep
 
@@ -71,6 +74,13 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int) -> tuple[l
         shape = base["wear"]["map"]
     values = np.asarray(depth.values, dtype=float).ravel()
     return list(shape), np.where(values > 0.0, values, np.nan)
+
+
+def _sweep_base(path: Path, overrides: list[str]):
+    """The resolved base case of a sweep file, with ``overrides``."""
+    from clearsweep.sweeping import expand
+
+    return expand(path).base.replace(*overrides)
 
 
 def measure(name: str, short: bool, workers: int = 1) -> dict:

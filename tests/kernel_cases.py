@@ -56,8 +56,8 @@ def run_case(name: str) -> dict[str, np.ndarray]:
     packed = preflight(cfg)
     prepare_kernel()
     raw = run_kernel(packed)
-    out = {f"{name}__{key}": np.asarray(raw[key]) for key in ARRAYS + COUNTERS}
-    out[f"{name}__status"] = np.array(raw["status"])
+    out = {f"{name}__{key}": np.asarray(getattr(raw, key)) for key in ARRAYS + COUNTERS}
+    out[f"{name}__status"] = np.array(raw.status)
     return out
 
 

@@ -26,13 +26,14 @@ TABLE = {
     "coating_clearance": ([288, 576], 0.952),     # 0.893 at 144 x 288
     "paper": ([144, 288], 0.953),
     "coating_ensemble": ([144, 288], 0.949),
-    "life": ([72, 144], 1.016),
+    "life": ([72, 144], 0.997),
+    "reliability": ([36, 72], 0.958),             # member 0's life run, 12 blocks
 }
 
 
 def shipped_map(name: str) -> list[int]:
     path = ROOT / "configs" / mc.CONFIGS[name][0]
-    if mc.CONFIGS[name][1] == "sweep":
+    if mc.CONFIGS[name][1] in ("sweep", "reliability"):
         return list(expand(path).base.wear.map)
     return list(load_config(path).wear.map)
 

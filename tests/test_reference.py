@@ -272,8 +272,8 @@ def simulated_states():
     for joints in JOINTS:
         pk = packed_case(joints, "realistic", solver={"duration": 0.3})
         raw = run_kernel(pk)
-        assert raw["status"] == "ok"
-        out[joints] = (pk, float(raw["t"][-1]), np.array(raw["y"][-1]))
+        assert raw.status == "ok"
+        out[joints] = (pk, float(raw.t[-1]), np.array(raw.y[-1]))
     return out
 
 

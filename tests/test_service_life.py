@@ -59,12 +59,12 @@ def test_worn_through_coating_contacts_as_the_base_material():
     assert packed.jp[1, L.J_EW_BASE] > packed.jp[1, L.J_EW]
     _, steel = _kernel(["wear.feedback=false"], worn)
     _, fresh = _kernel(["joints.B.coating=PTFE", "wear.feedback=false"], 0 * worn)
-    assert coated["status"] == steel["status"] == "ok"
-    assert np.array_equal(coated["stats"], steel["stats"])
-    assert np.array_equal(coated["wvol"], steel["wvol"])
-    assert not np.allclose(fresh["stats"], steel["stats"])
-    assert np.all(coated["d"][-1, L.D_WORN + 1] == 1.0)
-    assert fresh["d"][-1, L.D_WORN + 1] == 0.0
+    assert coated.status == steel.status == "ok"
+    assert np.array_equal(coated.stats, steel.stats)
+    assert np.array_equal(coated.wvol, steel.wvol)
+    assert not np.allclose(fresh.stats, steel.stats)
+    assert np.all(coated.d[-1, L.D_WORN + 1] == 1.0)
+    assert fresh.d[-1, L.D_WORN + 1] == 0.0
 
 
 #: A short life run: MoS2 at B, a 1 um coating that wears through, 30 revolutions.
