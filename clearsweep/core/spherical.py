@@ -5,8 +5,9 @@ A clearance-joint type is a module of this shape (docs/architecture.md, "Joint t
 - :func:`gap`: from the two bodies' states, the gap geometry in the socket: eccentricity,
   contact normal, penetration against the worn clearance, and whether the coating is worn
   through there;
-- :func:`contact_points` and :func:`point_velocity`: where the force pair acts and how fast
-  those points move, hence the normal approach rate and the tangential slip;
+- :func:`contact_points`, :func:`point_velocity` and :func:`relative_velocity`: where the
+  force pair acts and how fast those points move, hence the normal approach rate and the
+  tangential slip (:func:`tangential`);
 - the wear-map geometry it wears: a map over the socket's inner sphere (``wear.map_bin``,
   ``wear.deposit``, ``wear.worn_surface``);
 - :func:`contact`: the composition with the coated contact law, damping and friction of
@@ -113,12 +114,16 @@ def point_velocity(r, v, R, w, q):
 
 
 @njit(cache=True)
-def slip(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi, u):
-    """Relative velocity v = v(Q_j) - v(Q_i) of the contact points and its part v_t
-    tangent to the unit vector u (the force's line); returns (v, v_t, |v_t|)."""
-    v = sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
+def tangential(v, u):
+    """The part v_t of v tangent to the unit vector u, and |v_t|."""
     vt = sub(v, scale(dot(u, v), u))
-    return v, vt, math.sqrt(dot(vt, vt))
+    return vt, math.sqrt(dot(vt, vt))
+
+
+@njit(cache=True)
+def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
+    """v(Q_j) - v(Q_i): the velocity of the ball's point Q_j relative to the socket's Q_i."""
+    return sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
 
 
 @njit(cache=True)
@@ -155,9 +160,11 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
         hdot = dot(slope, w)
         ddot = dot(n, w) - hdot
         qj, qi = contact_points(pb, pb, n, rj - delta, rj)
+        v = zero
     else:
         qj, qi = contact_points(pb, ps, n, ri, rj)
-        ddot = dot(n, sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi)))
+        v = relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi)
+        ddot = dot(n, v)
     if delta <= 0.0:
         return ContactState(zero, zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0,
                             c_eff, h, 0.0, 0.0, worn_flag)
@@ -174,11 +181,12 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
         if size > 0.0:
             line = scale(-1.0 / size, force)
         qj, qi = contact_points(pb, pb, line, rj - delta, rj)
+        v = relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi)
     else:
         force = scale(-fn, n)
         pdiss = (fn - fel) * ddot
     force_normal = force
-    v, vt, vtn = slip(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi, line)
+    vt, vtn = tangential(v, line)
     if p[P_FRICTION] != 0.0 and vtn > 0.0:
         ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1])
         force = add(force, scale(-ft / vtn, vt))
