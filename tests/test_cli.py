@@ -250,13 +250,13 @@ def test_hostile_yaml_is_one_error_line_exit_2(tmp_path, fake_run, command, text
 
 def test_full_disk_during_the_write_is_one_error_line_and_no_file(tmp_path, fake_run, monkeypatch):
     """netCDF-C reports a full disk as RuntimeError("NetCDF: HDF error"), after writing part of it."""
-    real = xr.Dataset.to_netcdf
+    real = xr.Dataset.dump_to_store      # what dataset.write_netcdf_atomic writes through
 
-    def full(self, path, *args, **kwargs):
-        real(self, path, *args, **kwargs)
+    def full(self, store, *args, **kwargs):
+        real(self, store, *args, **kwargs)
         raise RuntimeError("NetCDF: HDF error")
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
+    monkeypatch.setattr(xr.Dataset, "dump_to_store", full)
     result, path, out = run_case(tmp_path, "name: ok\n")
     assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
     assert result.stderr.startswith(f"clearsweep: error: cannot write {out}: NetCDF: HDF error")

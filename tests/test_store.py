@@ -76,13 +76,13 @@ def test_lock_keeps_a_second_sweep_out(parts):
 
 def test_part_write_is_atomic(parts, monkeypatch):
     """A write that fails half-way leaves neither the part nor its temporary file."""
-    real = xr.Dataset.to_netcdf
+    real = xr.Dataset.dump_to_store         # what dataset.write_netcdf_atomic writes through
 
-    def crash(self, path, *args, **kwargs):
-        real(self, path, *args, **kwargs)       # the bytes are on disk, under the temporary name
+    def crash(self, store, *args, **kwargs):
+        real(self, store, *args, **kwargs)      # the bytes are on disk, under the temporary name
         raise OSError("disk full")
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", crash)
+    monkeypatch.setattr(xr.Dataset, "dump_to_store", crash)
     with pytest.raises(OSError, match="disk full"):
         parts.write("bbbb", _part())
     assert sorted(p.name for p in parts.directory.iterdir()) == [".lock", P.LOG_NAME]
