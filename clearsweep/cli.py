@@ -59,9 +59,9 @@ _allow_large = click.option(
     "--allow-large", is_flag=True,
     help="Run a case beyond the bounds on its work and memory (4 GiB of arrays, 1e9 RK4 steps).")
 
-#: Cold compile of the kernel on this project's 2-core reference machine
-#: (benchmarks/bench_engine.py measures it).
-COMPILE_ESTIMATE_S = 40
+#: Cold compile of an integrator, measured on this project's 2-core x86-64 machine: 21 s for
+#: RK4 (benchmarks/bench_engine.py: import and a 10-step case, empty cache), 22 s for dopri5.
+COMPILE_ESTIMATE_S = 20
 
 
 def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> None:
@@ -73,7 +73,8 @@ def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> 
         if kernel_needs_compiling(method):
             if not quiet:
                 name = "kernel" if method == "rk4" else f"{method} kernel"
-                click.echo(f"compiling the {name} (once, about {COMPILE_ESTIMATE_S} s) ...",
+                click.echo(f"compiling the {name} (once, about {COMPILE_ESTIMATE_S} s on a 2-core "
+                           "machine) ...",
                            err=True)
             seconds = prepare_kernel(method)
             if not quiet:
