@@ -40,7 +40,7 @@ from .choices import (
     SWEEP_BACKENDS,
     X_AXES,
 )
-from .config import ConfigError, dump_config, load_config
+from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
 from .version import __version__
 
 
@@ -277,11 +277,27 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
 @click.argument("config", type=click.Path(dir_okay=False))
 @_overrides
 @_allow_large
-def validate(config: str, overrides: tuple[str, ...], allow_large: bool) -> None:
-    """Check CONFIG, and the work and memory it implies, and print it resolved as YAML."""
+@click.option("-y", "--yes", is_flag=True,
+              help=f"Sweep file: check a sweep of more than {MAX_CASES:,} cases (refused without it).")
+def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bool) -> None:
+    """Check CONFIG and the work and memory it implies, running nothing.
+
+    A case config is printed resolved as YAML (its steps, memory and time on
+    stderr); a sweep file is checked case by case, and its dimensions, case
+    count, steps, memory and time estimate are printed.
+    """
+    if file_kind(read_yaml(config, config)) == "sweep":
+        from .sweeping import expand
+
+        plan = expand(config, overrides, allow_large=allow_large,
+                      max_cases=None if yes else MAX_CASES)
+        click.echo(plan.plan_text(min(os.cpu_count() or 1, max(len(plan.runnable()), 1))))
+        return
     cfg = load_config(config, overrides)
-    check_budget(cfg, allow_large=allow_large, source=config)
+    est = check_budget(cfg, allow_large=allow_large, source=config)
     click.echo(dump_config(cfg), nl=False)
+    click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory up to "
+               f"{est.describe()}; run it with `clearsweep run {config}`", err=True)
 
 
 @main.command()
