@@ -333,9 +333,17 @@ def open_input(path: str) -> xr.Dataset:
 @click.option("--metric", default=None, metavar="NAME",
               help="Print this summary metric over the sweep dimensions instead "
                    "(e.g. slider_acceleration_peak).")
-def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None) -> None:
+@click.option("--full", is_flag=True,
+              help="Sweep: print every case's tables after the summary (csv and json always "
+                   "give them).")
+def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None,
+                   full: bool) -> None:
     """Print the every-step statistics (settled first) and the wear table (paper Tables
     4-5) of a results file PATH (csv and json: the wear table alone).
+
+    A sweep (or an ensemble) prints a summary first: its design axes and, per headline
+    metric, the best and worst design and their spread; every case's tables follow with
+    --full, and csv and json give them without the summary.
 
     With --reference, the reduction of the maximum wear depth and the change
     of the wear range against that case (Table 6); with --metric, one summary
@@ -346,10 +354,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     """
     from .analysis import (
         SelectionError,
+        design_dims,
         format_ensemble_report,
         format_metric_table,
         format_reduction_table,
         format_statistics_table,
+        format_sweep_summary,
         format_wear_table,
         is_ensemble,
     )
@@ -373,7 +383,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             click.echo(life_sweep_text(ds))
             return
         try:
-            if metric:
+            summary = (format_sweep_summary(ds, fmt) if fmt in ("text", "markdown")
+                       and not (metric or reference) and design_dims(ds) else "")
+            if summary and not full:
+                text = summary
+            elif metric:
                 text = format_metric_table(ds, metric, fmt)
             elif is_ensemble(ds):
                 text = format_ensemble_report(ds, fmt, reference)
@@ -382,6 +396,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             else:
                 statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
                 text = "\n\n".join(t for t in (statistics, format_wear_table(ds, fmt)) if t)
+            if summary and full:
+                text = f"{summary}\n\n{text}"
         except SelectionError as exc:
             raise click.UsageError(str(exc)) from exc
         except ValueError as exc:

@@ -291,9 +291,13 @@ def test_reduction_text_leaves_out_the_reference(sweep_ds):
 
 @pytest.mark.parametrize("fmt", REPORT_FORMATS)
 def test_report_cli_every_format(sweep_file, fmt):
-    result = invoke(sweep_file, "--format", fmt)
+    result = invoke(sweep_file, "--format", fmt, "--full")
     assert result.exit_code == 0, result.output
     out = result.output
+    if fmt in ("text", "markdown"):     # the summary first (tests/test_report_summary.py)
+        summary, _, out = out.partition("\n\n## " if fmt == "markdown" else "\n\nSlider")
+        out = ("## " if fmt == "markdown" else "Slider") + out
+        assert "Headline metrics" in summary
     if fmt == "json":
         doc = json.loads(out)
         rows = doc["rows"]
