@@ -10,14 +10,12 @@ long names come from ``variables.SUMMARY_VARIABLES``.
 Conventions (docs/physics.md section 5, paper Tables 4-6):
 
 - Projection angles are the bin centres of ``wear_projection`` on
-  (-180, 180] degrees. The minimum and maximum wear angles are the smallest
-  and largest bin centres whose depth exceeds ``WEAR_THRESHOLD_FRACTION`` of
-  that axis's maximum, and the wear range is their difference, as in the
-  paper: a worn region that straddles +-180 degrees is not unwrapped and
-  reads as a range close to 360 degrees (Table 4, one clearance, x).
-  ``wear_arc`` is the circular alternative: the shortest arc holding every
-  worn bin, equal to ``wear_range`` unless the worn region straddles +-180
-  degrees (then a few degrees rather than nearly 360).
+  (-180, 180] degrees. The worn bins are those whose depth exceeds
+  ``WEAR_THRESHOLD_FRACTION`` of that axis's maximum; the wear range is the
+  smallest arc on the circle that holds them all, and the minimum and maximum
+  wear angles are its ends going up in angle, so that a worn region that
+  straddles +-180 degrees reads as the few degrees the polar plot shows (the
+  minimum angle then above the maximum), not as nearly 360.
 - A (joint, axis) without any wear has depth 0 and NaN angles and range.
 - Table 6 "reduction" is reference minus case; a negative wear-range
   reduction means that the range grew. Percentages are relative to the
@@ -51,7 +49,7 @@ from .summary import (  # noqa: F401
     case_summary,
     wear_table,
     with_attrs,
-    worn_arc_deg,
+    worn_arc,
 )
 
 #: Dimensions of one case; every other dimension of a dataset is a sweep dimension.
@@ -443,7 +441,6 @@ _WEAR_COLUMNS = (
     _Column("wear_angle_min", "Min wear angle", ".1f"),
     _Column("wear_range", "Wear range", ".1f"),
     _Column("wear_angle_of_max", "Angle of max depth", ".1f"),
-    _Column("wear_arc", "Worn arc", ".1f"),
 )
 _REDUCTION_COLUMNS = (
     _Column("wear_depth_reduction", "Reduction of max wear depth", ".3e"),
