@@ -16,6 +16,7 @@ path).
 
 from __future__ import annotations
 
+import math
 import os
 import shlex
 import sys
@@ -41,6 +42,7 @@ from .choices import (
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
+from .variables import JOINTS
 from .version import __version__
 
 
@@ -202,8 +204,10 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
 
     def progress(row: dict[str, Any]) -> None:
         if not quiet:
-            depth = ", ".join(f"{d:.3g}" for d in row["wear_depth_max"])
-            click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth (A, B) {depth} m, "
+            # the joints with a clearance (an ideal joint's depth is NaN)
+            depth = ", ".join(f"{j} {d:.3g} m" for j, d in zip(JOINTS, row["wear_depth_max"])
+                              if math.isfinite(d))
+            click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
                        f"status {row['block_status']}", err=True)
 
     def resumed(state: LifeState) -> None:

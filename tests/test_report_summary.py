@@ -137,3 +137,18 @@ def test_a_failed_case_is_left_out_of_best_and_worst():
     lowest = next(ln for ln in text.splitlines() if ln.strip().startswith("lowest"))
     assert float(lowest.split()[1]) == pytest.approx(float(np.min(values)), rel=1e-3)
     assert math.isfinite(float(lowest.split()[1]))
+
+
+def test_a_life_run_says_nothing_of_an_ideal_uncoated_joint(tmp_path):
+    """configs/one_clearance.yaml: A ideal and uncoated; the life run printed "max depth
+    (A, B) nan, ..." per block and "coating of A: not worn through"."""
+    from tests.test_service_life import CASE, SHORT_LIFE
+
+    out = tmp_path / "life.nc"
+    args = ["life", ROOT / CASE, "-o", out, *[a for o in SHORT_LIFE for a in ("--set", o)]]
+    result = CliRunner().invoke(main, [str(a) for a in args])
+    assert result.exit_code == 0, result.stderr
+    blocks = [ln for ln in result.stderr.splitlines() if ln.startswith("  block at")]
+    assert blocks and all(": max depth B " in ln and "nan" not in ln for ln in blocks)
+    for text in (result.stdout, report(out)):
+        assert "coating of B" in text and "coating of A" not in text and "nan" not in text
