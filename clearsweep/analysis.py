@@ -10,14 +10,12 @@ long names come from ``variables.SUMMARY_VARIABLES``.
 Conventions (docs/physics.md section 5, paper Tables 4-6):
 
 - Projection angles are the bin centres of ``wear_projection`` on
-  (-180, 180] degrees. The minimum and maximum wear angles are the smallest
-  and largest bin centres whose depth exceeds ``WEAR_THRESHOLD_FRACTION`` of
-  that axis's maximum, and the wear range is their difference, as in the
-  paper: a worn region that straddles +-180 degrees is not unwrapped and
-  reads as a range close to 360 degrees (Table 4, one clearance, x).
-  ``wear_arc`` is the circular alternative: the shortest arc holding every
-  worn bin, equal to ``wear_range`` unless the worn region straddles +-180
-  degrees (then a few degrees rather than nearly 360).
+  (-180, 180] degrees. The worn bins are those whose depth exceeds
+  ``WEAR_THRESHOLD_FRACTION`` of that axis's maximum; the wear range is the
+  smallest arc on the circle that holds them all, and the minimum and maximum
+  wear angles are its ends going up in angle, so that a worn region that
+  straddles +-180 degrees reads as the few degrees the polar plot shows (the
+  minimum angle then above the maximum), not as nearly 360.
 - A (joint, axis) without any wear has depth 0 and NaN angles and range.
 - Table 6 "reduction" is reference minus case; a negative wear-range
   reduction means that the range grew. Percentages are relative to the
@@ -51,7 +49,7 @@ from .summary import (  # noqa: F401
     case_summary,
     wear_table,
     with_attrs,
-    worn_arc_deg,
+    worn_arc,
 )
 
 #: Dimensions of one case; every other dimension of a dataset is a sweep dimension.
@@ -220,6 +218,58 @@ def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataA
     """``obj.sel`` of the cases named by ``items`` (see ``parse_selection``)."""
     selection = parse_selection(obj, items)
     return obj.sel(selection) if selection else obj
+
+
+# --------------------------------------------------------------------------- ideal joints
+
+def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
+    """Radial clearance [m] of each joint in the configuration text; empty when there is none.
+
+    A case file holds its resolved config in the ``config`` attribute, a sweep file its
+    base case under ``base`` of ``sweep_config``.
+    """
+    from .schema import ConfigError, parse_yaml
+
+    for attr, section in (("config", None), ("sweep_config", "base")):
+        try:
+            config = parse_yaml(ds.attrs.get(attr) or "", attr) or {}
+            joints = (config[section] if section else config)["joints"]
+            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
+        except (ConfigError, KeyError, TypeError, ValueError, AttributeError):
+            continue
+    return {}
+
+
+def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
+    """Radial clearance [m] of every joint in every case: (sweep dims..., joint), 0 for an
+    ideal joint; ``None`` where the file says neither by a sweep coordinate nor its config.
+
+    A swept clearance (the coordinate whose ``config_key`` is ``joints.<J>.clearance``) wins
+    over the configured one.
+    """
+    if "joint" not in ds.coords:
+        return None
+    configured = configured_clearances(ds)
+    per_joint = []
+    for joint in ds["joint"].values:
+        key = f"joints.{value_text(joint)}.clearance"
+        swept = next((c for c in ds.coords.values() if c.attrs.get("config_key") == key), None)
+        if swept is not None:
+            per_joint.append(xr.DataArray(swept.values.astype(float), dims=swept.dims))
+        elif value_text(joint) in configured:
+            per_joint.append(xr.DataArray(configured[value_text(joint)]))
+        else:
+            return None
+    return xr.concat(per_joint, dim="joint", coords="minimal").assign_coords(joint=ds["joint"])
+
+
+def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:
+    """``rows`` without those of an ideal joint (clearance 0) of the case ``clearance`` is of."""
+    if clearance is None:
+        return rows
+    ideal = {value_text(j) for j in clearance["joint"].values
+             if float(clearance.sel(joint=j)) == 0.0}
+    return [r for r in rows if "joint" not in r or value_text(r["joint"]) not in ideal]
 
 
 # --------------------------------------------------------------------------- tables and summaries
@@ -391,7 +441,6 @@ _WEAR_COLUMNS = (
     _Column("wear_angle_min", "Min wear angle", ".1f"),
     _Column("wear_range", "Wear range", ".1f"),
     _Column("wear_angle_of_max", "Angle of max depth", ".1f"),
-    _Column("wear_arc", "Worn arc", ".1f"),
 )
 _REDUCTION_COLUMNS = (
     _Column("wear_depth_reduction", "Reduction of max wear depth", ".3e"),
@@ -435,11 +484,15 @@ def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tupl
     Points that a sweep's ``skip:`` rules left out (status ``skipped``) are not listed.
     """
     groups = []
+    clearances = joint_clearances(table)
+    if clearances is not None:
+        table = table.assign(joint_clearance=clearances)
     for label, case in iter_cases(table):
         if keep is not None and not keep(case):
             continue
         if "status" in case and value_text(case["status"].values[()]) == "skipped":
             continue
+        clearance = case["joint_clearance"] if clearances is not None else None
         keys = dict(label)
         heading = label_text(label)
         if "status" in case:
@@ -447,7 +500,8 @@ def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tupl
             keys["status"] = status
             if heading or status != "ok":
                 heading = f"{heading} (status: {status})" if heading else f"status: {status}"
-        groups.append(_Group(heading, keys, _rows(case, row_dims, [c.name for c in columns])))
+        rows = _drop_ideal_rows(_rows(case, row_dims, [c.name for c in columns]), clearance)
+        groups.append(_Group(heading, keys, rows))
     return groups
 
 
@@ -515,7 +569,11 @@ def _units(table: xr.Dataset, columns: tuple[_Column, ...]) -> dict[str, str]:
 
 
 def _with_status(ds: xr.Dataset, table: xr.Dataset) -> xr.Dataset:
-    return table.assign(status=ds["status"]) if "status" in ds else table
+    """``table`` with the status of ``ds`` and its attributes (the config that says which
+    joints are ideal)."""
+    out = table.assign(status=ds["status"]) if "status" in ds else table.copy()
+    out.attrs = {**ds.attrs, **table.attrs}
+    return out
 
 
 def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
@@ -574,7 +632,10 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         ("Wear at the end of the run (the worn volume does not depend on the map's grid)",
          _FINAL_WEAR_COLUMNS, ("joint",)))
     for heading, wanted, dims in specs:
-        columns = tuple(c for c in wanted if c.name in summary)
+        # a column with no value in any case (the settled window of runs that end before
+        # it) is left out, not printed as a column of n/a
+        columns = tuple(c for c in wanted if c.name in summary
+                        and bool(summary[c.name].notnull().any()))
         if not columns:
             continue
         table = _with_status(ds, summary[[c.name for c in columns]])
@@ -674,7 +735,8 @@ def _present_metric(ds: xr.Dataset, name: str) -> str | None:
     return None
 
 
-def _design_dims(ds: xr.Dataset) -> tuple[str, ...]:
+def design_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    """The sweep dimensions of ``ds`` but an ensemble's ``member``: one per design axis."""
     return tuple(d for d in sweep_dims(ds) if d != MEMBER_DIM)
 
 
@@ -690,7 +752,7 @@ def format_ensemble_table(ds: xr.Dataset, fmt: str = "text",
     and the members counted, per design (and joint), one block per metric."""
     from .ensemble import CI_METHOD
 
-    dims = _design_dims(ds)
+    dims = design_dims(ds)
     # designs that a sweep's skip rules left out are not listed
     skipped = (ds["status"].astype(str) == "skipped").all(MEMBER_DIM)
     groups = []
@@ -738,7 +800,7 @@ def ensemble_comparisons(ds: xr.Dataset, reference=None,
     """
     from .ensemble import distinguishable, welch_interval
 
-    dims = _design_dims(ds)
+    dims = design_dims(ds)
     refs = _reference_values(ds, dims, reference)
     groups = []
     for wanted in metrics:
@@ -802,3 +864,164 @@ def format_ensemble_report(ds: xr.Dataset, fmt: str = "text", reference=None) ->
     if fmt in ("text", "markdown"):
         parts.append(format_ensemble_comparisons(ds, fmt, reference))
     return "\n\n".join(p for p in parts if p)
+
+
+# --------------------------------------------------------------------------- sweep summary
+
+#: Headline metrics of a sweep's summary, in order (lower is better for each); a settled
+#: statistic gives way to its whole-run twin where every run ends before the settled window.
+HEADLINE_METRICS = ("slider_acceleration_rms_settled", "slider_acceleration_peak_settled",
+                    "crank_torque_peak_settled", "normal_force_peak_settled",
+                    "wear_depth_max_final", "wear_volume")
+
+
+def _axis_line(ds: xr.Dataset, dim: str) -> str:
+    """``  B_clearance (radial clearance of joint B) [m]: 5e-05, 0.0001 (6 values)``"""
+    coord = ds[dim] if dim in ds.coords else None
+    if coord is None:
+        return f"  {dim}: {ds.sizes[dim]} positions"
+    long_name = coord.attrs.get("long_name", "")
+    units = coord.attrs.get("units", "")
+    head = f"  {dim}" + (f" ({long_name})" if long_name and not long_name.startswith("sweep zip")
+                         else "") + (f" [{units}]" if units else "")
+    values = [value_text(v) for v in coord.values]
+    text = ", ".join(values[:8]) + (f", ... ({len(values)} values)" if len(values) > 8 else "")
+    companions = [n for n, c in ds.coords.items() if n != dim and c.dims == (dim,)]
+    for name in companions:
+        unit = ds[name].attrs.get("units", "")
+        text += (f"; {name}{f' [{unit}]' if unit else ''}: "
+                 + ", ".join(value_text(v) for v in ds[name].values[:8]))
+    return f"{head}: {text}"
+
+
+def _headline_values(ds: xr.Dataset, name: str, ensemble: bool) -> tuple[str, Any, Any] | None:
+    """(variable shown, values, 95 % half-widths or None) of a headline metric, its settled
+    statistic falling back to the whole run's; None when the file lacks both."""
+    source = ds if ensemble else case_summary(ds)
+    for candidate in (name, name.removesuffix("_settled")):
+        if ensemble:
+            if candidate + "_mean" not in ds:
+                continue
+            values = ds[candidate + "_mean"]
+            half = 0.5 * (ds[candidate + "_ci_high"] - ds[candidate + "_ci_low"])
+        else:
+            if candidate not in source:
+                continue
+            values, half = source[candidate], None
+        if bool(np.isfinite(values.values.astype(float)).any()):
+            return candidate, values, half
+    return None
+
+
+def _metric_title(ds: xr.Dataset, shown: str, values: xr.DataArray, joint: str | None) -> str:
+    long_name = (ds[shown].attrs.get("long_name") if shown in ds
+                 else values.attrs.get("long_name")) or shown
+    units = values.attrs.get("units", "")
+    settle = ds.attrs.get("settle_time_s")
+    if shown.endswith("_settled"):
+        where = f", t >= {float(settle):g} s" if settle is not None else ""
+    elif shown + "_settled" in HEADLINE_METRICS:
+        where = ", whole run (the runs end before the settled window)"
+    else:
+        where = ""
+    at = f", joint {joint}" if joint else ""
+    return f"{long_name}{at}{where}" + (f" [{units}]" if units and units != "1" else "")
+
+
+def _ranked(values: xr.DataArray, half: xr.DataArray | None, usable: xr.DataArray,
+            dims: tuple[str, ...]) -> list[tuple[float, float, dict]]:
+    """(value, half-width, design label) of every usable design with a finite value."""
+    out = []
+    for label, point in iter_points(values, dims):
+        index = {d: label[d] for d in dims}
+        if not bool(usable.sel(index) if index else usable):
+            continue
+        value = float(point)
+        if math.isfinite(value):
+            width = float(half.sel(index) if index else half) if half is not None else math.nan
+            out.append((value, width, label))
+    return sorted(out, key=lambda r: r[0])
+
+
+def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
+    """What a sweep answers, first: its design axes and, per headline metric, the lowest
+    (best) and highest (worst) design and their spread; an ensemble's means with the
+    half-width of their 95 % interval, and whether best and worst are distinguishable.
+
+    Per-joint metrics leave out the cases where the joint is ideal (no clearance), and every
+    metric the cases whose status is not ``ok`` (an ensemble: designs without a member ok).
+    """
+    from .ensemble import distinguishable, welch_interval
+
+    ensemble = is_ensemble(ds)
+    dims = design_dims(ds)
+    status = ds["status"].astype(str) if "status" in ds else None
+    n = int(np.prod([ds.sizes[d] for d in dims])) if dims else 1
+    if ensemble:
+        usable = ds["members_ok"] > 0
+        counted = f"{n} designs x {ds.sizes[MEMBER_DIM]} members"
+    else:
+        usable = (status == "ok") if status is not None else xr.DataArray(True)
+        counted = f"{n} cases"
+    if status is not None:
+        tally = collections.Counter(status.values.ravel().tolist())
+        counted += " (" + ", ".join(f"{k} {v}" for k, v in sorted(tally.items(),
+                                                                  key=lambda kv: kv[0] != "ok")) + ")"
+    name = ds.attrs.get("sweep_name", "")
+    lines = [f"Sweep {name + ': ' if name else ''}{counted}; design axes:"]
+    lines += [_axis_line(ds, d) for d in dims]
+    lines.append("")
+    lines.append("Headline metrics, lowest (best) and highest (worst) design"
+                 + (" (ensemble mean +- half-width of its 95% interval)" if ensemble else "") + ":")
+    clearances = joint_clearances(ds)
+    for metric in HEADLINE_METRICS:
+        found = _headline_values(ds, metric, ensemble)
+        if found is None:
+            continue
+        shown, values, half = found
+        joints = [value_text(j) for j in values["joint"].values] if "joint" in values.dims else [None]
+        for joint in joints:
+            v, h, ok = values, half, usable
+            if joint is not None:
+                v = values.sel(joint=joint)
+                h = half.sel(joint=joint) if half is not None else None
+                if clearances is not None:
+                    gap = clearances.sel(joint=joint)
+                    ok = ok & xr.DataArray(gap.values > 0, dims=gap.dims)
+            ranked = _ranked(v, h, ok, dims)
+            if not ranked:
+                continue
+            (low, low_h, low_at), (high, high_h, high_at) = ranked[0], ranked[-1]
+            units = values.attrs.get("units", "")
+            units = "" if units == "1" else f" {units}"
+            spread = f"spread {high - low:.3g}{units}"
+            if low > 0:
+                spread += (f" (highest = {high / low:.3g} x lowest)" if high >= 2.0 * low
+                           else f" ({100.0 * (high - low) / low:.2g} % of the lowest)")
+            if ensemble and len(ranked) > 1:
+                n_low = int(ds["members_ok"].sel({d: low_at[d] for d in dims}))
+                n_high = int(ds["members_ok"].sel({d: high_at[d] for d in dims}))
+                std = ds[shown + "_std"] if joint is None else ds[shown + "_std"].sel(joint=joint)
+                s_low = float(std.sel({d: low_at[d] for d in dims}))
+                s_high = float(std.sel({d: high_at[d] for d in dims}))
+                _, lo, hi = welch_interval(low, s_low, n_low, high, s_high, n_high)
+                verdict = {True: "distinguishable", False: "not distinguishable",
+                           None: "not tested (fewer than 2 members)"}[distinguishable(lo, hi)]
+                spread += f"; lowest vs highest: {verdict}"
+
+            def shown_value(value: float, width: float) -> str:
+                return f"{value:.4g}" + (f" +- {width:.2g}" if math.isfinite(width) else "")
+
+            lines.append(f"- {_metric_title(ds, shown, values, joint)}")
+            if len(ranked) == 1 or low == high:
+                lines.append(f"    all {len(ranked)} equal: {shown_value(low, low_h)}")
+                continue
+            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {label_text(low_at)}")
+            lines.append(f"    highest {shown_value(high, high_h):>16}  {label_text(high_at)}")
+            lines.append(f"    {spread}")
+    lines.append("")
+    lines.append("Every case's tables: --full (text), or --format csv / json.")
+    text = "\n".join(lines)
+    if fmt == "markdown":
+        return "## Summary\n\n```text\n" + text + "\n```"
+    return text

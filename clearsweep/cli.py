@@ -16,6 +16,7 @@ path).
 
 from __future__ import annotations
 
+import math
 import os
 import shlex
 import sys
@@ -40,7 +41,8 @@ from .choices import (
     SWEEP_BACKENDS,
     X_AXES,
 )
-from .config import ConfigError, dump_config, load_config
+from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
+from .variables import JOINTS
 from .version import __version__
 
 
@@ -202,8 +204,10 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
 
     def progress(row: dict[str, Any]) -> None:
         if not quiet:
-            depth = ", ".join(f"{d:.3g}" for d in row["wear_depth_max"])
-            click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth (A, B) {depth} m, "
+            # the joints with a clearance (an ideal joint's depth is NaN)
+            depth = ", ".join(f"{j} {d:.3g} m" for j, d in zip(JOINTS, row["wear_depth_max"])
+                              if math.isfinite(d))
+            click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
                        f"status {row['block_status']}", err=True)
 
     def resumed(state: LifeState) -> None:
@@ -277,11 +281,27 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
 @click.argument("config", type=click.Path(dir_okay=False))
 @_overrides
 @_allow_large
-def validate(config: str, overrides: tuple[str, ...], allow_large: bool) -> None:
-    """Check CONFIG, and the work and memory it implies, and print it resolved as YAML."""
+@click.option("-y", "--yes", is_flag=True,
+              help=f"Sweep file: check a sweep of more than {MAX_CASES:,} cases (refused without it).")
+def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bool) -> None:
+    """Check CONFIG and the work and memory it implies, running nothing.
+
+    A case config is printed resolved as YAML (its steps, memory and time on
+    stderr); a sweep file is checked case by case, and its dimensions, case
+    count, steps, memory and time estimate are printed.
+    """
+    if file_kind(read_yaml(config, config)) == "sweep":
+        from .sweeping import expand
+
+        plan = expand(config, overrides, allow_large=allow_large,
+                      max_cases=None if yes else MAX_CASES)
+        click.echo(plan.plan_text(min(os.cpu_count() or 1, max(len(plan.runnable()), 1))))
+        return
     cfg = load_config(config, overrides)
-    check_budget(cfg, allow_large=allow_large, source=config)
+    est = check_budget(cfg, allow_large=allow_large, source=config)
     click.echo(dump_config(cfg), nl=False)
+    click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory up to "
+               f"{est.describe()}; run it with `clearsweep run {config}`", err=True)
 
 
 @main.command()
@@ -317,9 +337,17 @@ def open_input(path: str) -> xr.Dataset:
 @click.option("--metric", default=None, metavar="NAME",
               help="Print this summary metric over the sweep dimensions instead "
                    "(e.g. slider_acceleration_peak).")
-def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None) -> None:
+@click.option("--full", is_flag=True,
+              help="Sweep: print every case's tables after the summary (csv and json always "
+                   "give them).")
+def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None,
+                   full: bool) -> None:
     """Print the every-step statistics (settled first) and the wear table (paper Tables
     4-5) of a results file PATH (csv and json: the wear table alone).
+
+    A sweep (or an ensemble) prints a summary first: its design axes and, per headline
+    metric, the best and worst design and their spread; every case's tables follow with
+    --full, and csv and json give them without the summary.
 
     With --reference, the reduction of the maximum wear depth and the change
     of the wear range against that case (Table 6); with --metric, one summary
@@ -330,10 +358,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     """
     from .analysis import (
         SelectionError,
+        design_dims,
         format_ensemble_report,
         format_metric_table,
         format_reduction_table,
         format_statistics_table,
+        format_sweep_summary,
         format_wear_table,
         is_ensemble,
     )
@@ -357,7 +387,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             click.echo(life_sweep_text(ds))
             return
         try:
-            if metric:
+            summary = (format_sweep_summary(ds, fmt) if fmt in ("text", "markdown")
+                       and not (metric or reference) and design_dims(ds) else "")
+            if summary and not full:
+                text = summary
+            elif metric:
                 text = format_metric_table(ds, metric, fmt)
             elif is_ensemble(ds):
                 text = format_ensemble_report(ds, fmt, reference)
@@ -366,6 +400,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             else:
                 statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
                 text = "\n\n".join(t for t in (statistics, format_wear_table(ds, fmt)) if t)
+            if summary and full:
+                text = f"{summary}\n\n{text}"
         except SelectionError as exc:
             raise click.UsageError(str(exc)) from exc
         except ValueError as exc:

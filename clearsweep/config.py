@@ -42,7 +42,7 @@ __all__ = [
     "DEFAULTS", "load_config",
     "apply_override", "dump_config",
     "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
-    "field_info", "FIELD_INFO",
+    "field_info", "FIELD_INFO", "SWEEP_FILE_KEYS", "file_kind",
 ]
 
 
@@ -394,6 +394,30 @@ _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt}
 
 _SWEEP_HINT = " (sweep files are run with `clearsweep sweep`)"
 
+#: Top-level keys of a sweep file (:mod:`clearsweep.sweeping`); all but ``name`` are keys
+#: that a case config does not have.
+SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
+
+
+def file_kind(doc: Any) -> str | None:
+    """``"sweep"`` or ``"case"`` for a parsed YAML document whose top-level keys are those of
+    one kind of file only, else ``None`` (not a mapping, mixed or misspelt keys, ``name`` alone).
+
+    The commands use it to say which command fits a file given to the other one.
+    """
+    if not isinstance(doc, Mapping):
+        return None
+    keys = set(doc) - {"name"}
+    if keys and keys <= set(SWEEP_FILE_KEYS):
+        return "sweep"
+    if keys and keys <= set(SCHEMA):
+        return "case"
+    return None
+
+
+def _keys_text(doc: Mapping) -> str:
+    return ", ".join(str(k) for k in doc)
+
 
 #: The resolved default configuration.
 DEFAULTS: Config = Config()
@@ -567,6 +591,10 @@ def load_config(source: str | os.PathLike | Mapping[str, Any] | Config, override
         if raw is None:
             raise ConfigError(None, None, f"a mapping with keys {', '.join(SCHEMA)}", label,
                               got="an empty file")
+        if file_kind(raw) == "sweep":
+            raise ConfigError(None, None, f"a case config; run a sweep file with `clearsweep sweep "
+                              f"{label}` (check it with `clearsweep validate {label}`)", label,
+                              got=f"a sweep file (top-level keys {_keys_text(raw)})")
     if not isinstance(raw, dict):
         raise ConfigError(None, raw, f"a mapping with keys {', '.join(SCHEMA)}", label)
     overridden: list[str] = []

@@ -59,6 +59,7 @@ from .analysis import (
     MEMBER_DIM,
     SelectionError,
     choice_message,
+    configured_clearances,
     iter_cases,
     iter_points,
     label_text,
@@ -309,22 +310,6 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
                  + _legend_note(len(cases)), fontsize="medium")
 
 
-def _configured_clearances(ds: xr.Dataset) -> dict[str, float]:
-    """Radial clearance [m] of each joint in the configuration text; empty when there is none.
-
-    A case file holds its resolved config in the ``config`` attribute, a sweep
-    file its base case under ``base`` of ``sweep_config``.
-    """
-    for attr, section in (("config", None), ("sweep_config", "base")):
-        try:
-            config = yaml.safe_load(ds.attrs.get(attr) or "") or {}
-            joints = (config[section] if section else config)["joints"]
-            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
-        except (yaml.YAMLError, KeyError, TypeError, ValueError, AttributeError):
-            continue
-    return {}
-
-
 def _clearance(case: xr.Dataset, joint: str, configured: dict[str, float]) -> tuple[float, str] | None:
     """Radial clearance of ``joint`` in ``case`` [m] and where it came from; None for an ideal joint.
 
@@ -352,7 +337,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     joints = offset["joint"].values
-    configured = _configured_clearances(ds)
+    configured = configured_clearances(ds)
     for j, joint in enumerate(joints):
         clearances: dict[float, str] = {}   # clearance [m] -> where it was read
         for _, case, _ in cases:

@@ -28,7 +28,7 @@ import numpy as np
 if TYPE_CHECKING:
     import xarray as xr
 
-from .config import Config, dump_config, load_config, resolve_materials
+from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
 from .params import pack
@@ -597,8 +597,15 @@ def life_summary_text(ds: xr.Dataset) -> str:
         value = float(ds[f"cycles_to_{name}"])
         text = f"{value:.4g}" if math.isfinite(value) else "not reached"
         lines.append(f"  revolutions to {key}: {text}")
+    try:
+        joints = load_config(parse_yaml(ds.attrs.get("config") or "", "config") or {}).joints
+    except ConfigError:
+        joints = None
     for j, joint in enumerate(ds.joint.values):
         cyc = float(ds.wear_through_cycle[j])
+        spec = getattr(joints, str(joint), None) if joints is not None else None
+        if spec is not None and (spec.clearance == 0.0 or spec.coating == "none"):
+            continue        # an ideal or uncoated joint has no coating to wear through
         if math.isfinite(cyc):
             lines.append(f"  coating of {joint} worn through at {cyc:.4g} revolutions, polar "
                          f"{float(ds.wear_through_polar[j]):.4g} deg, azimuth "

@@ -9,8 +9,6 @@ section 5 and the :mod:`clearsweep.analysis` docstring.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import xarray as xr
 
@@ -22,7 +20,7 @@ WEAR_THRESHOLD_FRACTION = 1.0e-3
 #: Variables of the wear table, in the column order of the paper's Tables 4-5
 #: (the angle of the maximum, which the paper does not print, last).
 WEAR_TABLE_VARIABLES = ("wear_depth_axis_max", "wear_angle_max", "wear_angle_min", "wear_range",
-                        "wear_angle_of_max", "wear_arc")
+                        "wear_angle_of_max")
 
 #: Scalars copied from the case dataset into its summary.
 PASS_THROUGH_VARIABLES = ("first_impact_time", "energy_residual_relative", "substeps_used", "rk4_steps",
@@ -43,30 +41,36 @@ def with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
     return da
 
 
-def worn_arc_deg(worn: np.ndarray) -> float:
-    """Shortest arc [degree] between bin centres that holds every worn bin of a full circle.
+def worn_arc(worn: np.ndarray) -> tuple[int, int, int]:
+    """The smallest arc of a full circle of equal bins that holds every worn bin.
 
     Parameters
     ----------
     worn
-        One flag per equal angle bin spanning 360 degrees.
+        One flag per equal angle bin spanning 360 degrees, in angle order.
 
     Returns
     -------
-    float
-        360 minus the widest circular run of unworn bins and one bin width:
-        ``hi - lo`` for worn bins on [lo, hi] that do not wrap, 360 when
-        every bin is worn, NaN when none is.
+    (first, last, bins) : tuple of int
+        Index of the arc's first and last worn bin going up in angle (``first > last``
+        where the arc crosses the end of the bin range, +-180 degrees) and the bin
+        centres it spans, ``last - first`` modulo the bins: the circle minus its widest
+        run of unworn bins (of equal arcs, one that does not cross +-180 degrees, else
+        the one whose last bin comes first). Every bin worn: ``(0, n - 1, n)``, the whole circle;
+        none: ``(-1, -1, -1)``.
     """
     n = worn.size
     index = np.flatnonzero(worn)
     if index.size == 0:
-        return math.nan
-    width = 360.0 / n
+        return -1, -1, -1
     if index.size == n:
-        return 360.0
-    gaps = np.append(np.diff(index) - 1, index[0] + n - index[-1] - 1)
-    return (n - 1 - int(gaps.max())) * width
+        return 0, n - 1, n
+    # unworn runs after each worn bin, the one across +-180 degrees first so that, of equal
+    # arcs, the one that does not cross it is taken
+    gaps = np.append(index[0] + n - index[-1] - 1, np.diff(index) - 1)
+    widest = int(np.argmax(gaps))        # the unworn run after index[widest - 1]
+    last, first = int(index[widest - 1]), int(index[widest])
+    return first, last, n - 1 - int(gaps[widest])
 
 
 def wear_table(ds: xr.Dataset) -> xr.Dataset:
@@ -84,12 +88,13 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
     xr.Dataset
         Over (sweep dims..., joint, axis): ``wear_depth_axis_max`` [m] (max
         over angle), ``wear_angle_of_max`` [degree] (centre of the first bin
-        holding the maximum), ``wear_angle_min`` and ``wear_angle_max``
-        [degree] (smallest and largest bin centre with depth above
-        ``WEAR_THRESHOLD_FRACTION`` of the maximum), ``wear_range`` [degree]
-        (max - min); ``wear_arc`` [degree] (shortest arc between bin centres
-        that holds every worn bin, see ``worn_arc_deg``). Without any wear on
-        a (joint, axis): depth 0, angles, range and arc NaN. Cases whose
+        holding the maximum), ``wear_angle_min`` and ``wear_angle_max`` [degree]
+        (the centres of the first and last bin, going up in angle, of the smallest
+        arc that holds every bin with depth above ``WEAR_THRESHOLD_FRACTION`` of the
+        maximum, :func:`worn_arc`; min > max where the arc crosses +-180 degrees),
+        ``wear_range`` [degree] (that arc: max - min on the circle, so that it
+        agrees with the polar plot). Without any wear on a (joint, axis): depth 0,
+        angles and range NaN. Cases whose
         projection is all NaN give NaN depth.
     """
     if "wear_projection" not in ds:
@@ -115,10 +120,15 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
         first_max = np.argmax(np.where(np.isnan(p), -np.inf, p), axis=-1)
         angle_of_max = np.where(depth > 0, angle[first_max], np.nan)
         worn = p > WEAR_THRESHOLD_FRACTION * depth[..., None]
-    any_worn = worn.any(axis=-1)
-    angle_min = np.where(any_worn, np.min(np.where(worn, angle, np.inf), axis=-1), np.nan)
-    angle_max = np.where(any_worn, np.max(np.where(worn, angle, -np.inf), axis=-1), np.nan)
-    arc = np.apply_along_axis(worn_arc_deg, -1, worn) if worn.size else np.zeros(worn.shape[:-1])
+    arcs = (np.apply_along_axis(worn_arc, -1, worn) if worn.size
+            else np.full((*worn.shape[:-1], 3), -1))
+    any_worn = arcs[..., 2] >= 0
+    width = 360.0 / angle.size
+    angle_min = np.where(any_worn, angle[np.maximum(arcs[..., 0], 0)], np.nan)
+    angle_max = np.where(any_worn, angle[np.maximum(arcs[..., 1], 0)], np.nan)
+    # bins spanned between the end centres; the whole circle when every bin is worn
+    spanned = np.where(arcs[..., 2] == angle.size, 360.0, arcs[..., 2] * width)
+    wear_range = np.where(any_worn, spanned, np.nan)
     threshold = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
 
     def var(name: str, values: np.ndarray, **extra) -> xr.DataArray:
@@ -129,9 +139,8 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
         "wear_depth_axis_max": var("wear_depth_axis_max", depth),
         "wear_angle_max": var("wear_angle_max", angle_max, **threshold),
         "wear_angle_min": var("wear_angle_min", angle_min, **threshold),
-        "wear_range": var("wear_range", angle_max - angle_min, **threshold),
+        "wear_range": var("wear_range", wear_range, **threshold),
         "wear_angle_of_max": var("wear_angle_of_max", angle_of_max),
-        "wear_arc": var("wear_arc", arc.astype(float), **threshold),
     })
 
 

@@ -153,17 +153,16 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
     "wear_angle_of_max": VariableSpec(("joint", "axis"), "degree", "angle of the maximum projected wear",
                                       "centre of the first bin holding the maximum"),
     "wear_angle_min": VariableSpec(("joint", "axis"), "degree", "minimum wear angle",
-                                   "smallest bin centre whose depth exceeds wear_threshold_fraction "
-                                   "of the axis maximum (paper Tables 4-5, docs/physics.md section 5)"),
+                                   "centre of the first bin, going up in angle, of the smallest "
+                                   "arc holding every bin whose depth exceeds "
+                                   "wear_threshold_fraction of the axis maximum (paper Tables 4-5, "
+                                   "docs/physics.md section 5); above wear_angle_max where the arc "
+                                   "crosses +-180 degree"),
     "wear_angle_max": VariableSpec(("joint", "axis"), "degree", "maximum wear angle",
-                                   "largest bin centre whose depth exceeds wear_threshold_fraction "
-                                   "of the axis maximum (paper Tables 4-5, docs/physics.md section 5)"),
+                                   "centre of the last bin, going up in angle, of that arc"),
     "wear_range": VariableSpec(("joint", "axis"), "degree", "wear range",
-                               "wear_angle_max - wear_angle_min (paper Tables 4-5)"),
-    "wear_arc": VariableSpec(("joint", "axis"), "degree", "worn arc",
-                             "shortest arc between bin centres holding every bin whose depth "
-                             "exceeds wear_threshold_fraction of the axis maximum; equals "
-                             "wear_range unless the worn region straddles +-180 degree"),
+                               "wear_angle_max - wear_angle_min on the circle: the smallest arc "
+                               "holding every worn bin (paper Tables 4-5)"),
     "wear_depth_reduction": VariableSpec(("joint", "axis"), "m", "reduction of the maximum wear depth",
                                          "reference minus case (paper Table 6)"),
     "wear_depth_reduction_percent": VariableSpec(

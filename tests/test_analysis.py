@@ -28,7 +28,7 @@ from clearsweep.analysis import (
     reduction_table,
     run_summary_text,
     wear_table,
-    worn_arc_deg,
+    worn_arc,
 )
 from clearsweep.cli import report_command
 from clearsweep.dataset import write_netcdf_atomic
@@ -38,11 +38,11 @@ from clearsweep.variables import STATISTICS, SUMMARY_VARIABLES
 # hand from synthetic.WEAR_PROFILES: bins on [lo, hi], peak at peak_angle. A x wears every bin:
 # range 179.5 - (-179.5) = 359, arc a full 360.
 EXPECTED_WEAR = {
-    ("A", "x"): (7.5e-11, -150.5, -179.5, 179.5, 359.0, 360.0),
-    ("A", "y"): (7.0e-12, 44.5, -4.5, 44.5, 49.0, 49.0),
-    ("B", "x"): (8.0e-11, 20.5, -10.5, 40.5, 51.0, 51.0),
-    ("B", "y"): (2.7e-11, 10.5, -5.5, 46.5, 52.0, 52.0),
-    ("B", "z"): (1.2e-10, 27.5, -22.5, 27.5, 50.0, 50.0),
+    ("A", "x"): (7.5e-11, -150.5, -179.5, 179.5, 360.0),     # every bin worn: the circle
+    ("A", "y"): (7.0e-12, 44.5, -4.5, 44.5, 49.0),
+    ("B", "x"): (8.0e-11, 20.5, -10.5, 40.5, 51.0),
+    ("B", "y"): (2.7e-11, 10.5, -5.5, 46.5, 52.0),
+    ("B", "z"): (1.2e-10, 27.5, -22.5, 27.5, 50.0),
 }
 
 
@@ -60,14 +60,13 @@ def invoke(*args: str):
 def test_wear_table_matches_hand_computed_bins(case):
     table = wear_table(case)
     assert table["wear_depth_axis_max"].dims == ("joint", "axis")
-    for (joint, axis), (depth, at_max, lo, hi, width, arc) in EXPECTED_WEAR.items():
+    for (joint, axis), (depth, at_max, lo, hi, width) in EXPECTED_WEAR.items():
         row = table.sel(joint=joint, axis=axis)
         assert float(row["wear_depth_axis_max"]) == pytest.approx(depth, rel=1e-12)
         assert float(row["wear_angle_of_max"]) == at_max
         assert float(row["wear_angle_min"]) == lo
         assert float(row["wear_angle_max"]) == hi
         assert float(row["wear_range"]) == width
-        assert float(row["wear_arc"]) == arc
 
 
 def test_sub_threshold_bins_are_not_worn(case):
@@ -80,29 +79,31 @@ def test_sub_threshold_bins_are_not_worn(case):
 def test_no_wear_gives_zero_depth_and_nan_angles(case):
     row = wear_table(case).sel(joint="A", axis="z")
     assert float(row["wear_depth_axis_max"]) == 0.0
-    for name in ("wear_angle_of_max", "wear_angle_min", "wear_angle_max", "wear_range", "wear_arc"):
+    for name in ("wear_angle_of_max", "wear_angle_min", "wear_angle_max", "wear_range"):
         assert np.isnan(float(row[name]))
 
 
-def test_wear_straddling_180_degree(case):
-    # Worn bin centres 173.5..179.5 and -179.5..-174.5: the paper's min/max reading
-    # spans the circle (359 degree); the worn arc goes the short way through 180, from the
-    # centre 173.5 to the centre -174.5 = 185.5 (12 degree).
+def test_wear_straddling_180_degree_is_read_on_the_circle(case):
+    # Worn bin centres 173.5..179.5 and -179.5..-174.5: the smallest arc holding them goes
+    # through 180, from the centre 173.5 to the centre -174.5 = 185.5 (12 degree), as the polar
+    # plot shows; min/max of the angles read 359 degree (the table printed "Wear range 359.0
+    # deg" beside a 12 degree worn arc).
     straddling = case.copy(deep=True)
     centres = straddling["angle"].values
     worn = (centres >= 173.5) | (centres <= -174.5)
     straddling["wear_projection"].loc[dict(joint="A", axis="z")] = np.where(worn, 1e-11, 0.0)
     row = wear_table(straddling).sel(joint="A", axis="z")
-    assert float(row["wear_range"]) == 359.0
-    assert float(row["wear_arc"]) == 12.0
+    assert float(row["wear_range"]) == 12.0
+    assert float(row["wear_angle_min"]) == 173.5 and float(row["wear_angle_max"]) == -174.5
 
 
 @pytest.mark.parametrize("flags, arc", [
-    ([0, 0, 0, 0], np.nan), ([1, 1, 1, 1], 360.0), ([0, 1, 0, 0], 0.0), ([0, 1, 1, 0], 90.0),
-    ([1, 0, 0, 1], 90.0), ([1, 0, 1, 0], 180.0), ([1, 1, 0, 1], 180.0),
+    ([0, 0, 0, 0], (-1, -1, -1)), ([1, 1, 1, 1], (0, 3, 4)), ([0, 1, 0, 0], (1, 1, 0)),
+    ([0, 1, 1, 0], (1, 2, 1)), ([1, 0, 0, 1], (3, 0, 1)), ([1, 0, 1, 0], (0, 2, 2)),  # equal arcs: not across +-180
+    ([1, 1, 0, 1], (3, 1, 2)),
 ])
 def test_worn_arc_on_four_bins(flags, arc):
-    np.testing.assert_equal(worn_arc_deg(np.array(flags, dtype=bool)), arc)
+    assert worn_arc(np.array(flags, dtype=bool)) == arc
 
 
 def test_all_nan_projection_gives_nan_not_error(case):
@@ -270,14 +271,14 @@ def test_wear_table_text_layout(case):
     b_x = next(ln for ln in text.splitlines() if ln.split()[:2] == ["B", "x"])
     assert b_x.split()[2:6] == ["8.0000e-11", "40.5", "-10.5", "51.0"]
     a_z = next(ln for ln in text.splitlines() if ln.split()[:2] == ["A", "z"])
-    assert a_z.split()[2:] == ["0.0000e+00"] + ["n/a"] * 5
+    assert a_z.split()[2:] == ["0.0000e+00"] + ["n/a"] * 4
 
 
 def test_wear_table_sweep_blocks(sweep_ds):
     text = format_wear_table(sweep_ds, "markdown")
     assert text.count("### B_coating=") == 4
     assert "### B_coating=PTFE, B_clearance=0.00025 (status: ok)" in text
-    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 | 61.0 |" in text
+    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 |" in text
 
 
 def test_reduction_text_leaves_out_the_reference(sweep_ds):
@@ -291,9 +292,13 @@ def test_reduction_text_leaves_out_the_reference(sweep_ds):
 
 @pytest.mark.parametrize("fmt", REPORT_FORMATS)
 def test_report_cli_every_format(sweep_file, fmt):
-    result = invoke(sweep_file, "--format", fmt)
+    result = invoke(sweep_file, "--format", fmt, "--full")
     assert result.exit_code == 0, result.output
     out = result.output
+    if fmt in ("text", "markdown"):     # the summary first (tests/test_report_summary.py)
+        summary, _, out = out.partition("\n\n## " if fmt == "markdown" else "\n\nSlider")
+        out = ("## " if fmt == "markdown" else "Slider") + out
+        assert "Headline metrics" in summary
     if fmt == "json":
         doc = json.loads(out)
         rows = doc["rows"]
@@ -452,9 +457,26 @@ def test_report_prints_the_statistics_before_the_wear_table(case_file):
     assert result.output.index("every-step statistics") < result.output.index("Wear prediction")
 
 
+def _smallest_arc(worn: np.ndarray) -> tuple[float, float, float]:
+    """(first, last, bins) of the smallest arc holding every worn bin, by trying every
+    start and length; of equal arcs one that does not cross the end of the bins, else the
+    one whose last bin comes first."""
+    n = worn.size
+    if not worn.any():
+        return np.nan, np.nan, np.nan
+    for length in range(n):
+        ends = [(first + length >= n, (first + length) % n, first) for first in range(n)
+                if all(worn[i] <= (((i - first) % n) <= length) for i in range(n))]
+        if ends:
+            _, last, first = min(ends)
+            return first, last, length
+    raise AssertionError("unreachable")
+
+
 def _wear_table_by_xarray(ds):
-    """The wear table written with xarray reductions: the oracle of the numpy version."""
-    from clearsweep.summary import WEAR_THRESHOLD_FRACTION, with_attrs, worn_arc_deg
+    """The wear table written with xarray reductions and a brute-force smallest arc: the
+    oracle of the numpy version."""
+    from clearsweep.summary import WEAR_THRESHOLD_FRACTION, with_attrs
 
     projection = ds["wear_projection"]
     angle = projection["angle"]
@@ -462,18 +484,21 @@ def _wear_table_by_xarray(ds):
     first_max = projection.fillna(-np.inf).argmax("angle")
     angle_of_max = angle.isel(angle=first_max).drop_vars("angle").where(depth > 0)
     worn = projection > WEAR_THRESHOLD_FRACTION * depth
-    worn_angle = angle.where(worn)
-    angle_min, angle_max = worn_angle.min("angle"), worn_angle.max("angle")
-    arc = xr.apply_ufunc(worn_arc_deg, worn, input_core_dims=[["angle"]], vectorize=True,
-                         output_dtypes=[float])
+    first, last, bins = xr.apply_ufunc(_smallest_arc, worn, input_core_dims=[["angle"]],
+                                       output_core_dims=[[], [], []], vectorize=True,
+                                       output_dtypes=[float, float, float])
+    def centre(i):
+        return np.where(np.isnan(i), np.nan, angle.values[np.nan_to_num(i).astype(int)])
+
+    angle_min, angle_max = xr.apply_ufunc(centre, first), xr.apply_ufunc(centre, last)
+    width = xr.where(worn.all("angle"), 360.0, bins * (360.0 / angle.size))
     thr = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
     return xr.Dataset({
         "wear_depth_axis_max": with_attrs(depth, "wear_depth_axis_max"),
         "wear_angle_max": with_attrs(angle_max, "wear_angle_max", **thr),
         "wear_angle_min": with_attrs(angle_min, "wear_angle_min", **thr),
-        "wear_range": with_attrs(angle_max - angle_min, "wear_range", **thr),
+        "wear_range": with_attrs(width, "wear_range", **thr),
         "wear_angle_of_max": with_attrs(angle_of_max, "wear_angle_of_max"),
-        "wear_arc": with_attrs(arc, "wear_arc", **thr),
     })
 
 

@@ -306,8 +306,9 @@ BAD = [
     ("solver:\n  baumgarte: [5, -1]\n", "solver.baumgarte", [5, -1], "2 numbers >= 0"),
     ("solver: 5\n", "solver", 5, "a mapping with keys dt, duration"),
     ("name: 12\n", "name", 12, "a string"),
-    ("sweep:\n  grid: {}\n", "sweep", {"grid": {}}, "clearsweep sweep"),
-    ("base: {}\n", "base", {}, "clearsweep sweep"),
+    # a sweep key beside case keys (a sweep file alone: tests/test_file_kinds.py)
+    ("mechanism: {}\nsweep:\n  grid: {}\n", "sweep", {"grid": {}}, "clearsweep sweep"),
+    ("joints: {}\nbase: {}\n", "base", {}, "clearsweep sweep"),
 ]
 
 

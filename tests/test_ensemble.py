@@ -316,7 +316,7 @@ def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path):
     # shortened to 0.1 s per member: the verdicts come from the spread, not from the length
     run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, workers=2, progress=False,
               overrides=["solver.duration=0.1"]).close()
-    report = CliRunner().invoke(report_command, [str(out)], catch_exceptions=False)
+    report = CliRunner().invoke(report_command, [str(out), "--full"], catch_exceptions=False)
     assert "+- 95% CI" in report.output and " not distinguishable" in report.output
 
 

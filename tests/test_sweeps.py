@@ -258,8 +258,10 @@ def test_summary_store_keeps_the_worn_volume_of_the_full_store(tmp_path):
         assert (s["wear_volume"].sel(joint="B") > 0).all()
     from clearsweep.cli import report_command
 
-    report = CliRunner().invoke(report_command, [str(tmp_path / "s.nc")], catch_exceptions=False)
+    report = CliRunner().invoke(report_command, [str(tmp_path / "s.nc"), "--full"],
+                                catch_exceptions=False)
     assert report.exit_code == 0, report.output
+    assert "- worn volume sum of k F_N dS, joint B [m3]" in report.output     # the summary
     block = report.output.split("Wear at the end of the run")[1]
     assert "Max wear depth (largest map bin) [m]" in block and "Worn volume [m3]" in block
 

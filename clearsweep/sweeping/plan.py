@@ -23,15 +23,18 @@ from .. import variables
 from ..budget import estimate, format_bytes
 from ..choices import MAX_CASES
 from ..config import (
+    SWEEP_FILE_KEYS,
     Config,
     ConfigError,
     close_match,
     dump_config,
     field_info,
+    file_kind,
     get_path,
     load_config,
     read_yaml,
     set_path,
+    short_repr,
 )
 from ..simulation import preflight
 from .assemble import SweepSlot
@@ -48,8 +51,6 @@ ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members", "reliability.member", "r
 #: ``reliability``: each design is ``reliability.members`` life runs with scatter, stored
 #: as their summaries and the reliability estimate (docs/reliability.md).
 STORE_MODES = ("full", "summary", "life", "reliability")
-#: Top-level keys of a sweep file.
-SWEEP_FILE_KEYS = ("name", "store", "base", "sweep")
 SWEEP_KEYS = ("grid", "zip", "sample", "skip")
 #: Keys of a ``sample:`` section, and its methods: Sobol' and Latin hypercube points over the
 #: ranges (scipy.stats.qmc), or the Saltelli design that Sobol' indices need (SALib).
@@ -256,6 +257,31 @@ class SweepPlan:
                 f"per step; contacts that need sub-steps take longer); results up to "
                 f"{format_bytes(per_case)} before compression")
 
+    def plan_text(self, workers: int | None = None) -> str:
+        """What ``clearsweep validate`` prints for a sweep file: its dimensions, the cases,
+        one case's steps and memory, and :meth:`describe`'s total and time estimate."""
+        lines = [f"{self.source}: a valid sweep file (store: {self.store}); run it with "
+                 f"`clearsweep {self.command} {self.source}`"]
+        for axis in self.axes:
+            values = (axis.labels if axis.labels is not None and axis.kind != "sample"
+                      else axis.values[0])
+            shown = ", ".join(short_repr(v) for v in values[:8]) + (", ..." if axis.size > 8 else "")
+            if axis.kind == "sample":
+                shown = "; ".join(f"{k} in [{min(v):.4g}, {max(v):.4g}]"
+                                  for k, v in zip(axis.keys, axis.values))
+            elif len(axis.keys) > 1 or axis.keys[0] != axis.dim:
+                shown += f" ({', '.join(axis.keys)})"
+            lines.append(f"  dimension {axis.dim} ({axis.size}): {shown}")
+        estimates = [estimate(cfg) for cfg in self.runnable().values()]
+        if estimates:
+            steps = [e.steps for e in estimates]
+            largest = max(estimates, key=lambda e: e.output_bytes)
+            span = (f"{min(steps):,}" if min(steps) == max(steps)
+                    else f"{min(steps):,} to {max(steps):,}")
+            lines.append(f"  one case: {span} RK4 steps; memory up to {largest.describe()}")
+        lines.append("  " + self.describe(workers))
+        return "\n".join(lines)
+
 
 def _duration_text(seconds: float) -> str:
     for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
@@ -273,6 +299,11 @@ def _read_sweep(config_or_path) -> tuple[dict, str, Path, str]:
     if not isinstance(doc, dict):
         raise ConfigError(None, doc, f"a sweep mapping with keys {', '.join(SWEEP_FILE_KEYS)}",
                           str(config_or_path))
+    if file_kind(doc) == "case":
+        raise ConfigError(None, None, f"a sweep file (top-level keys {', '.join(SWEEP_FILE_KEYS)});"
+                          f" run a case config with `clearsweep run {config_or_path}` (check it "
+                          f"with `clearsweep validate {config_or_path}`)", str(config_or_path),
+                          got=f"a case config (top-level keys {', '.join(map(str, doc))})")
     return doc, str(config_or_path), path.resolve().parent, path.stem
 
 
