@@ -2,9 +2,10 @@
 nominal design against the cycle-jump limit, extrapolated to jumps of zero, and compared
 with the width of the B10 interval the example reports.
 
-    python docs/reliability_bias.py [REL.nc]
+    python docs/reliability_bias.py [REL.nc] [--set KEY=VALUE ...]
 
-Runs the base of configs/reliability.yaml (MoS2 at B, no scatter) as a life run at
+Runs the base of configs/reliability.yaml (MoS2 at B, no scatter; ``--set`` changes it, e.g.
+``--set joints.B.coating=PTFE`` for another design of the example) as a life run at
 life.jump_clearance_fraction 0.04, 0.02, 0.01 and 0.005, until both limits are reached.
 The revolutions to a depth limit are first order in the jump limit f
 (docs/service_life.md), so N(0) ~ 2 N(f / 2) - N(f) (Richardson) from the two smallest.
@@ -14,7 +15,7 @@ width relative to its B10 beside the bias at the example's jump limit.
 
 from __future__ import annotations
 
-import sys
+import argparse
 import time
 from pathlib import Path
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from clearsweep.config import load_config
 from clearsweep.reliability import _all_reached
-from clearsweep.schema import read_yaml
+from clearsweep.schema import ConfigError, read_yaml
 from clearsweep.service_life import life
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,9 +31,17 @@ FRACTIONS = (0.04, 0.02, 0.01, 0.005)
 LIMITS = ("clearance_growth", "motion_error")
 
 
-def main(argv: list[str]) -> None:
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("rel", nargs="?", help="the example's sweep output (rel.nc)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="KEY=VALUE", help="override of the base design")
+    args = parser.parse_args(argv)
     sweep = read_yaml(ROOT / "configs" / "reliability.yaml")
-    base = load_config(sweep["base"])
+    try:
+        base = load_config(sweep["base"]).replace(*args.overrides)
+    except ConfigError as exc:
+        parser.error(str(exc))
     shipped = base.life.jump_clearance_fraction
     cycles = {}
     for f in FRACTIONS:
@@ -47,10 +56,10 @@ def main(argv: list[str]) -> None:
     for name, value, b in zip(LIMITS, extrapolated, bias):
         print(f"{name}: extrapolated to jumps of zero {value:.5g} revolutions; bias at the "
               f"example's jump limit {shipped}: {100 * b:+.1f} %")
-    if len(argv) > 1:
+    if args.rel:
         import xarray as xr
 
-        with xr.open_dataset(argv[1]) as rel:
+        with xr.open_dataset(args.rel) as rel:
             for name in LIMITS:
                 for coating in rel["B_coating"].values:
                     case = rel.sel(B_coating=coating, limit=name)
@@ -60,4 +69,4 @@ def main(argv: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv)
+    main()
