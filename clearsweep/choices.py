@@ -24,7 +24,17 @@ DPI_RANGE = (10, 1200)
 #: Most sweep points expanded without ``--yes`` (``max_cases``): every case is validated
 #: before anything runs, so a grid of 10^7 points would spend hours just being checked.
 MAX_CASES = 10_000
+#: Most sweep points whatever the options: the plan holds every resolved case in memory.
+MAX_CASES_ANY = 1_000_000
 
 #: Where ``clearsweep sweep --backend`` runs the cases: this process / a process pool / Dask,
 #: or batches on a CUDA device (:mod:`clearsweep.gpu`).
 SWEEP_BACKENDS = ("processes", "cuda")
+
+#: Most members of an ensemble or a reliability design, and most wear-map snapshots of a
+#: life run: schema bounds, so that no config line asks for memory before the case bound
+#: (MAX_CASES, lifted by --yes) is checked.
+MAX_MEMBERS = 100_000
+MAX_SNAPSHOTS = 10_000
+#: Most points a ``sample:`` section may draw, --yes or not (the points are drawn in memory).
+MAX_SAMPLE_POINTS = 1_000_000

@@ -83,6 +83,17 @@ def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> 
                 click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
 
 
+def _cap_workers(workers: int | None, option: str = "--workers") -> int | None:
+    """Worker processes on this machine: at most its cores (a process per case beyond them
+    only takes memory); says so on stderr when it caps."""
+    cores = os.cpu_count() or 1
+    if workers is not None and workers > cores:
+        click.echo(f"clearsweep: note: {option} {workers} is more than this machine's {cores} "
+                   f"cores; using {cores}", err=True)
+        return cores
+    return workers
+
+
 def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
     """Write ``ds`` to ``out`` atomically; an unwritable path is one error line and exit 1."""
     from .dataset import write_netcdf_atomic
@@ -135,7 +146,7 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
     if cfg.ensemble.members > 1:
-        _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, workers,
+        _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
         return
     if resume or overwrite or discard_parts:
@@ -248,7 +259,12 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
         raise click.UsageError("--resume keeps the finished members and --overwrite deletes "
                                "them; give one")
     path = Path(out) if out else Path(Path(config).stem + ".nc")
-    plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large)
+    try:
+        plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large,
+                      too_many_hint="a sweep file with this config as its base runs more: "
+                                    "clearsweep sweep FILE --yes")
+    except ConfigError as exc:   # the members' count: name the file it came from
+        raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion, exc.got) from None
     plan.source, plan.command = config, "run"
     announce_compile(quiet, [cfg.solver.method])
     try:
@@ -294,7 +310,8 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
         from .sweeping import expand
 
         plan = expand(config, overrides, allow_large=allow_large,
-                      max_cases=None if yes else MAX_CASES)
+                      max_cases=None if yes else MAX_CASES,
+                      too_many_hint="clearsweep validate --yes checks them all")
         click.echo(plan.plan_text(min(os.cpu_count() or 1, max(len(plan.runnable()), 1))))
         return
     cfg = load_config(config, overrides)
@@ -582,6 +599,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
                                "time series (the processes backend stores what the sweep file's "
                                "store says)")
     series = _series_selection(keep_series)
+    workers = _cap_workers(workers)
+    dask_local = _cap_workers(dask_local, "--dask-local")
     out = out or f"{Path(config).stem}.nc"
     cluster = local_client = None
     if backend == "cuda":

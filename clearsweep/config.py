@@ -22,6 +22,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
+from .choices import MAX_MEMBERS, MAX_SNAPSHOTS
 from .schema import (  # noqa: F401
     MAX_YAML_ALIASES,
     MAX_YAML_BYTES,
@@ -228,7 +229,7 @@ class LifeConfig(_Section):
     max_motion_error: float | None = _setting(_limit(), "m", "slider motion error limit")
     stop_at_wear_through: bool = _setting(Field(False, bool), None,
                                           "stop when a coating is first worn through")
-    snapshots: int = _setting(Field(12, int, lo=2), "1", "wear-map snapshots kept")
+    snapshots: int = _setting(Field(12, int, lo=2, hi=MAX_SNAPSHOTS), "1", "wear-map snapshots kept")
     max_blocks: int = _setting(Field(200, int, lo=1), "1", "most dynamic blocks")
 
 
@@ -257,7 +258,7 @@ class EnsembleConfig(_Section):
     """An ensemble: ``members`` cases that differ only by a perturbation drawn from
     (``seed``, ``member``); a sweep runs every member, a resolved case is one member."""
 
-    members: int = _setting(Field(1, int, lo=1), "1", "ensemble members")
+    members: int = _setting(Field(1, int, lo=1, hi=MAX_MEMBERS), "1", "ensemble members")
     seed: int = _setting(Field(0, int, lo=0), "1", "ensemble random seed")
     #: set by the sweep for each member; 0 .. members - 1
     member: int = _setting(Field(0, int, lo=0), "1", "ensemble member index")
@@ -270,7 +271,7 @@ class ReliabilityConfig(_Section):
     ``members`` life runs draws the inputs a manufacturer cannot pin down from (``seed``,
     ``member``) only; ignored by ``run``, ``life`` and other sweeps. 0 = no scatter."""
 
-    members: int = _setting(Field(16, int, lo=2), "1", "reliability members per design")
+    members: int = _setting(Field(16, int, lo=2, hi=MAX_MEMBERS), "1", "reliability members per design")
     seed: int = _setting(Field(0, int, lo=0), "1", "reliability random seed")
     #: set by the sweep for each member; 0 .. members - 1
     member: int = _setting(Field(0, int, lo=0), "1", "reliability member index")

@@ -248,9 +248,10 @@ def _consistent(raw):
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
-    raw["ensemble"]["members"] = raw["ensemble"]["member"] + raw["ensemble"]["members"]
+    # member < members, both inside their bounds
+    raw["ensemble"]["member"] = raw["ensemble"]["member"] % raw["ensemble"]["members"]
     rel = raw["reliability"]
-    rel["members"] = rel["member"] + rel["members"]
+    rel["member"] = rel["member"] % rel["members"]
     clearances = [j["clearance"] for j in raw["joints"].values() if j["clearance"] > 0.0]
     rel["clearance_tolerance"] = min([rel["clearance_tolerance"], *(0.5 * c for c in clearances)])
     return raw

@@ -333,10 +333,14 @@ def test_a_huge_grid_is_refused_before_any_case_is_validated(monkeypatch):
     monkeypatch.setattr(sweep_plan, "preflight", validated)
     grid = {f"{key}": [1e-4 * (i + 1) for i in range(10)] for key in
             ("joints.A.clearance", "joints.B.clearance", "friction.v0", "contact.min_impact_velocity",
-             "wear.amplification", "solver.energy_tolerance", "solver.constraint_tolerance")}
-    with pytest.raises(ConfigError, match=r"sweep: got 10,000,000 cases \(10 A_clearance x 10 "
-                                          r"B_clearance x .*expected at most 10,000 cases; pass --yes"):
+             "wear.amplification", "solver.energy_tolerance")}
+    with pytest.raises(ConfigError, match=r"sweep: got 1,000,000 cases \(10 A_clearance x 10 "
+                                          r"B_clearance x .*expected at most 10,000 cases "
+                                          r"\(clearsweep sweep --yes runs them all\)"):
         expand({"base": BASE, "sweep": {"grid": grid}})
+    grid["solver.constraint_tolerance"] = grid["friction.v0"]
+    with pytest.raises(ConfigError, match=r"10,000,000 cases .*at most 1,000,000 cases, --yes or not"):
+        expand({"base": BASE, "sweep": {"grid": grid}}, max_cases=None)
 
 
 def test_cli_prints_the_size_first_and_needs_yes_above_the_limit(tmp_path, monkeypatch):

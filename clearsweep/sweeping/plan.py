@@ -11,7 +11,7 @@ import itertools
 import json
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -21,7 +21,7 @@ import xarray as xr
 
 from .. import variables
 from ..budget import estimate, format_bytes
-from ..choices import MAX_CASES
+from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
     SWEEP_FILE_KEYS,
     Config,
@@ -58,6 +58,8 @@ SAMPLE_KEYS = ("method", "n", "seed", "ranges", "second_order")
 SAMPLE_METHODS = ("sobol", "lhs", "saltelli")
 #: The dimension of a sampling sweep.
 SAMPLE_DIM = "sample"
+#: What a refusal of too many cases tells the user to type (``expand``'s default: a sweep).
+TOO_MANY_HINT = "clearsweep sweep --yes runs them all"
 #: Keys of a zip group that are not config keys.
 ZIP_META_KEYS = ("name", "labels")
 #: Rough cost of one RK4 step of the kernel on one warm core [s] (README: 1e5 steps in 0.3 s),
@@ -375,7 +377,8 @@ def _check_unique(values: tuple, where: str, source: str) -> None:
         seen.add(v)
 
 
-def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
+def _parse_axes(spec, base: Config, source: str, max_cases: int | None = MAX_CASES,
+                members: int = 1, too_many_hint: str = TOO_MANY_HINT) -> list[Axis]:
     if spec is None:
         spec = {}
     if not isinstance(spec, Mapping):
@@ -421,7 +424,13 @@ def _parse_axes(spec, base: Config, source: str) -> list[Axis]:
 
     sample = spec.get("sample")
     if sample is not None:
-        sample_keys, drawn = _parse_sample(sample, base, source)
+        # the cases of every other dimension: a sample is drawn only if the total fits
+        others = [(len(values[0]), name or keys[0]) for _, keys, values, name, _ in raw]
+        if members > 1:
+            others.append((members, MEMBER_DIM))
+        sample_keys, drawn = _parse_sample(sample, base, source,
+                                           lambda n: _check_case_count([*others, (n, SAMPLE_DIM)],
+                                                                       max_cases, too_many_hint, source))
         raw.append(("sample", sample_keys, drawn, SAMPLE_DIM, tuple(range(len(drawn[0])))))
 
     all_keys = [k for _, keys, *_ in raw for k in keys]
@@ -476,8 +485,19 @@ def sample_points(method: str, n: int, ranges: Mapping[str, Sequence[float]], se
     return qmc.scale(engine.random(n), lo, hi)
 
 
-def _parse_sample(spec, base: Config, source: str) -> tuple[tuple[str, ...], tuple[tuple, ...]]:
-    """The keys and per-key values of a ``sample:`` section."""
+def sample_size(method: str, n: int, dims: int, second_order: bool = False) -> int:
+    """Points :func:`sample_points` draws: n, or n (D + 2) for saltelli (n (2 D + 2) with
+    second-order indices)."""
+    if method != "saltelli":
+        return n
+    return n * (2 * dims + 2 if second_order else dims + 2)
+
+
+def _parse_sample(spec, base: Config, source: str,
+                  check_count: Callable[[int], None] | None = None
+                  ) -> tuple[tuple[str, ...], tuple[tuple, ...]]:
+    """The keys and per-key values of a ``sample:`` section; ``check_count(points)`` refuses
+    too many before any is drawn (at most MAX_SAMPLE_POINTS in any case)."""
     where = "sweep.sample"
     if not isinstance(spec, Mapping):
         raise ConfigError(where, spec, f"a mapping with keys {', '.join(SAMPLE_KEYS)}", source)
@@ -507,8 +527,29 @@ def _parse_sample(spec, base: Config, source: str) -> tuple[tuple[str, ...], tup
                 or not bounds[0] < bounds[1]):
             raise ConfigError(f"{where}.ranges.{key}", bounds, "[low, high], two numbers with "
                               "low < high", source)
+    size = sample_size(method, n, len(ranges), second)
+    if size > MAX_SAMPLE_POINTS:
+        raise ConfigError(f"{where}.n", n, f"at most {MAX_SAMPLE_POINTS:,} points in all (the "
+                          "points are drawn in memory)", source,
+                          got=str(n) if size == n else f"{n} ({method}: {size:,} points)")
+    if check_count is not None:
+        check_count(size)
     points = sample_points(method, n, ranges, seed, second)
     return tuple(ranges), tuple(tuple(float(v) for v in points[:, i]) for i in range(len(ranges)))
+
+
+def _check_case_count(sizes: Sequence[tuple[int, str]], max_cases: int | None, hint: str,
+                      source: str) -> None:
+    """Refuse more than ``max_cases`` cases, from the dimensions' sizes alone (nothing of
+    the cases is made before)."""
+    n_points = math.prod(size for size, _ in sizes)
+    shape = " x ".join(f"{size:,} {dim}" for size, dim in sizes)
+    if n_points > MAX_CASES_ANY:
+        raise ConfigError("sweep", None, f"at most {MAX_CASES_ANY:,} cases, --yes or not (the "
+                          "plan holds every case in memory)", source, got=f"{n_points:,} cases ({shape})")
+    if max_cases is not None and n_points > max_cases:
+        raise ConfigError("sweep", None, f"at most {max_cases:,} cases ({hint})", source,
+                          got=f"{n_points:,} cases ({shape})")
 
 
 def member_axes(base: Config) -> list[Axis]:
@@ -609,7 +650,8 @@ def _check_overrides(overrides: Iterable[str], axes: Sequence[Axis], source: str
 
 
 def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str] = (), *,
-           allow_large: bool = False, max_cases: int | None = MAX_CASES) -> SweepPlan:
+           allow_large: bool = False, max_cases: int | None = MAX_CASES,
+           too_many_hint: str = TOO_MANY_HINT) -> SweepPlan:
     """Read a sweep, validate every case and return the plan; nothing runs.
 
     Parameters
@@ -623,8 +665,11 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         Admit cases beyond the work and memory bounds of
         :func:`clearsweep.budget.check_budget`.
     max_cases
-        Refuse a sweep of more points than this (checked before any case is
-        validated); ``None``: no limit (``--yes``).
+        Refuse a sweep of more points than this (computed from the axes' sizes and the
+        member count before any case, member or sample point is made); ``None``: no limit
+        (``--yes``).
+    too_many_hint
+        What the refusal tells the user to type instead (the command in use).
 
     Returns
     -------
@@ -649,15 +694,13 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
     spec = doc.get("sweep")
     if store == "reliability":
         _check_reliability_base(base, source)
-    axes = _parse_axes(spec, base, source) + (reliability_member_axes(base) if store == "reliability"
-                                              else member_axes(base))
+    members = base.reliability.members if store == "reliability" else base.ensemble.members
+    axes = _parse_axes(spec, base, source, max_cases, members, too_many_hint)
+    _check_case_count([(a.size, a.dim) for a in axes] + ([(members, MEMBER_DIM)] if members > 1 else []),
+                      max_cases, too_many_hint, source)
+    axes += reliability_member_axes(base) if store == "reliability" else member_axes(base)
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
-    n_points = math.prod(a.size for a in axes)
-    if max_cases is not None and n_points > max_cases:
-        shape = " x ".join(f"{a.size} {a.dim}" for a in axes)
-        raise ConfigError("sweep", None, f"at most {max_cases:,} cases; pass --yes (max_cases=None) "
-                          "to run them all", source, got=f"{n_points:,} cases ({shape})")
 
     cases = []
     for index in itertools.product(*(range(a.size) for a in axes)):
