@@ -378,22 +378,24 @@ def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     for j in range(2):
         s[j, S_DV0] = 0.0
         s[j, S_BETA] = math.pi
-    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
-    if st != ST_OK:
-        return st
-    # a ball that starts on the socket wall (seated start) is in contact, not an impact
-    seated = False
-    for j in range(2):
-        ddot_prev[j] = dg[D_DDOT + j]
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-            s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
-            s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
-                                         jp[j, J_RI], jp[j, J_RJ])
-            seated = True
-    if seated:
+    # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
+    # (seated start): it is in contact, not an impact
+    for again in range(2):
         st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
         if st != ST_OK:
             return st
+        if again == 1:
+            break
+        seated = False
+        for j in range(2):
+            ddot_prev[j] = dg[D_DDOT + j]
+            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+                s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
+                s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
+                                             jp[j, J_RI], jp[j, J_RJ])
+                seated = True
+        if not seated:
+            break
     record_sample(stats, whole, dg, jp, 0.0)
     if t0 >= p[P_SETTLE]:
         record_sample(stats, settled, dg, jp, 0.0)
