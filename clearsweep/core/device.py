@@ -14,8 +14,10 @@ wear map and projections.
 
 Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
 numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
-Python thread and ``advance`` runs compiled for the CPU: the simulator hands kernels
-wrapped arrays, which :func:`_advance` unwraps there.
+Python thread: the simulator hands kernels wrapped arrays, which :func:`_advance` unwraps
+there. ``advance`` then runs compiled for the CPU, unless ``NUMBA_DISABLE_JIT=1`` is set
+too, when it runs as the Python source that the CUDA compiler sees (tests/test_gpu.py).
+The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
 import numba
