@@ -83,7 +83,7 @@ def _kernel(method: str = "rk4"):
 def kernel_needs_compiling(method: str = "rk4") -> bool:
     """True when neither this process nor the on-disk cache holds the compiled kernel."""
     kernel = _kernel(method)
-    if kernel.signatures:
+    if getattr(kernel, "signatures", True):    # compiled, or plain Python (NUMBA_DISABLE_JIT)
         return False
     index = getattr(getattr(getattr(kernel, "_cache", None), "_cache_file", None),
                     "_index_path", None)
@@ -96,7 +96,7 @@ def prepare_kernel(method: str = "rk4") -> float:
     Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
     """
     start = time.perf_counter()
-    if _kernel(method).signatures:
+    if getattr(_kernel(method), "signatures", True):
         return 0.0
     cfg = DEFAULTS.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4,
                            solver__method=method)

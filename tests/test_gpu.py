@@ -1,8 +1,11 @@
-"""The CUDA backend in numba's CUDA simulator, against the CPU backend; the no-device report.
+"""The CUDA backend's code path in numba's CUDA simulator, against the CPU backend; the
+no-device report.
 
-``NUMBA_ENABLE_CUDASIM`` is read when numba is first imported, so the simulator runs in a
-fresh interpreter (the script below). Cases are tiny: the simulator runs every thread as
-a Python thread around the compiled CPU ``rk4.advance``.
+The simulator runs in a fresh interpreter (``NUMBA_ENABLE_CUDASIM`` is read when numba is
+first imported) with ``NUMBA_DISABLE_JIT=1``: ``run_cases`` and everything it calls
+(``rk4.advance``, ``evaluate``, the contact law, the wear map) then run as the Python
+source that the CUDA compiler compiles, not the CPU build. This test process runs the
+same sweep on the CPU backend, compiled, and compares. Cases are tiny (Python speed).
 """
 
 from __future__ import annotations
@@ -13,7 +16,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+import xarray as xr
 from click.testing import CliRunner
 
 from clearsweep.cli import sweep_command
@@ -35,63 +40,72 @@ SWEEP = {
 
 SCRIPT = r"""
 import json, sys
-import numpy as np
 import xarray as xr
+from clearsweep.core import device, dynamics, rk4
 from clearsweep.sweeping import drop_timing, run_sweep
-from clearsweep.summary import SUMMARY_ORDER
 
+# the device path runs as Python source: no compiled kernel anywhere in this process
+assert device.SIMULATED
+assert not hasattr(rk4.advance, "py_func") and not hasattr(dynamics.evaluate, "py_func")
 doc = json.loads(sys.argv[1])
-cpu = run_sweep(doc, workers=1, progress=False)
-gpu = run_sweep(doc, backend="cuda", keep_series=[1], progress=False)
+gpu = run_sweep(doc, sys.argv[2], backend="cuda", keep_series=[1], progress=False)
 again = run_sweep(doc, backend="cuda", keep_series=[1], progress=False)
 xr.testing.assert_identical(drop_timing(gpu), drop_timing(again))
-worst = 0.0
-compared = []
-for name in SUMMARY_ORDER:
-    if name in ("wall_time", "status") or name not in cpu:
-        continue
-    a = np.asarray(cpu[name].values, dtype=float)
-    b = np.asarray(gpu[name].values, dtype=float)
-    assert a.shape == b.shape, name
-    assert np.array_equal(np.isnan(a), np.isnan(b)), name
-    ok = ~np.isnan(a)
-    scale = np.maximum(np.abs(a[ok]), 1e-300)
-    worst = max(worst, float(np.max(np.abs(a[ok] - b[ok]) / scale, initial=0.0)))
-    compared.append(name)
-for name in ("wear_map", "wear_projection", "wear_volume"):
-    a = cpu[name].values
-    b = gpu[name].isel(variant=1).values
-    assert np.array_equal(a[1], b), name
-print(json.dumps({
-    "worst_relative": worst, "compared": compared,
-    "status_cpu": [str(s) for s in cpu["status"].values],
-    "status_gpu": [str(s) for s in gpu["status"].values],
-    "series": [bool(np.isfinite(gpu["slider_acceleration"].isel(variant=i).values).any())
-               for i in range(3)],
-}))
 """
+
+#: Largest relative difference allowed between a summary of the device code path (run as
+#: Python in the simulator) and the CPU backend's. Both are IEEE float64 arithmetic in the
+#: same order calling the same libm here, and they agree to the last bit on the machine
+#: that wrote this test (measured: 0). The margin covers a numba build whose compiled math
+#: differs from Python's ``math`` in the last bit (SVML, LLVM's folding of ``x ** 2``),
+#: which 300 steps of contact dynamics can amplify. A real device is another matter
+#: (libdevice, fused multiply-adds): benchmarks/bench_gpu.py measures that agreement.
+SIMULATOR_RTOL = 1e-9
 
 
 @pytest.fixture(scope="module")
-def simulated():
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(SWEEP)], capture_output=True,
-                          text=True, env=env, cwd=ROOT, timeout=600)
+def simulated(tmp_path_factory):
+    from clearsweep.sweeping import run_sweep
+
+    out = tmp_path_factory.mktemp("gpu_sim") / "gpu.nc"
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(SWEEP), str(out)],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
     assert proc.returncode == 0, proc.stderr[-4000:]
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    cpu = run_sweep(SWEEP, workers=1, progress=False)
+    with xr.open_dataset(out) as gpu:
+        return cpu, gpu.load()
 
 
 def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
-    assert simulated["status_cpu"] == simulated["status_gpu"] == ["ok"] * 3
-    assert "slider_acceleration_peak_settled" in simulated["compared"]
-    assert "wear_depth_axis_max" in simulated["compared"]
-    assert "wear_volume" in simulated["compared"]       # kept by the CUDA summaries too
-    # the simulator runs the same compiled CPU functions: equal to the last bit in practice
-    assert simulated["worst_relative"] <= 1e-9
+    from clearsweep.summary import SUMMARY_ORDER
+
+    cpu, gpu = simulated
+    assert [str(s) for s in cpu["status"].values] == ["ok"] * 3
+    assert [str(s) for s in gpu["status"].values] == ["ok"] * 3
+    compared = []
+    for name in SUMMARY_ORDER:
+        if name in ("wall_time", "status") or name not in cpu:
+            continue
+        a = np.asarray(cpu[name].values, dtype=float)
+        b = np.asarray(gpu[name].values, dtype=float)
+        assert a.shape == b.shape, name
+        assert np.array_equal(np.isnan(a), np.isnan(b)), name
+        np.testing.assert_allclose(b, a, rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True,
+                                   err_msg=name)
+        compared.append(name)
+    assert "slider_acceleration_peak_settled" in compared
+    assert "wear_depth_axis_max" in compared
+    assert "impact_count" in compared
+    assert "wear_volume" in compared        # kept by the CUDA summaries too
 
 
 def test_simulated_cuda_keeps_series_only_for_the_selected_cases(simulated):
-    assert simulated["series"] == [False, True, False]
+    _, gpu = simulated
+    series = [bool(np.isfinite(gpu["slider_acceleration"].isel(variant=i).values).any())
+              for i in range(3)]
+    assert series == [False, True, False]
 
 
 def test_cuda_backend_without_a_device_says_so(tmp_path, monkeypatch):

@@ -14,8 +14,10 @@ wear map and projections.
 
 Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
 numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
-Python thread and ``advance`` runs compiled for the CPU: the simulator hands kernels
-wrapped arrays, which :func:`_advance` unwraps there.
+Python thread: the simulator hands kernels wrapped arrays, which :func:`_advance` unwraps
+there. ``advance`` then runs compiled for the CPU, unless ``NUMBA_DISABLE_JIT=1`` is set
+too, when it runs as the Python source that the CUDA compiler sees (tests/test_gpu.py).
+The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
 import numba
@@ -54,7 +56,7 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
         pr = pairs[i]
         _advance(p[i], jp[i], y0[i], 0.0, n_steps[i], save_every[i], wmap[i], proj[i], wvol[i],
                  False, rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i], stats[i], track[i],
-                 pr[PAIR_FIRST], v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], diag[i, 0],
+                 pr[PAIR_FIRST], v[0], v[1], v[2], v[3], v[4], v[5], v[6], diag[i, 0],
                  diag[i, 1], cstate[i, 0], cstate[i, 1], msave[i], pr[0], pr[1], pr[2],
                  pr[PAIR_FIRST + 1], mats[i, 0], mats[i, 1], mats[i, 2], vz[i], buf_i[i],
                  buf_v[i], caps[i, 0], caps[i, 1], scratch[i])

@@ -253,11 +253,6 @@ def tangent_basis(n):
     return t1, cross(n, t1)
 
 
-#: Local variables that Numba must type as plain int64: a constant argument would otherwise
-#: compile the callee once per value (a Literal specialisation).
-_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
-
-
 #: Rows of evaluate's work array vz (float64[VZ_ROWS, 6], one value per free coordinate or
 #: constraint row): the free coordinates' generalised forces, the constraint right-hand
 #: sides, the free accelerations, M^-1 times the forces, the multipliers, two work rows.
@@ -272,73 +267,69 @@ VZ_ROWS = 8
 
 
 @njit(cache=True, inline="always")
-def bodies(y):
-    """Positions, velocities, rotations and body angular velocities of crank, rod, slider.
-
-    Returns (r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2, gq3):
-    centroids r [m], velocities v [m/s], Euler-angle rates pd [rad/s], rotations R, rate
-    matrices G (w' = G phi_dot), body angular velocities w [rad/s] and the
-    velocity-quadratic parts gq = G_dot phi_dot of the crank and rod.
-    """
+def body_motion(y, r_at, phi_at):
+    """Centroid position [m], velocity [m/s] and Euler-angle rates [rad/s] of the body whose
+    coordinates start at y[r_at] (centroid) and y[phi_at] (angles)."""
     qd = Y_QD
-    r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
-    r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
-    r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
-    v2 = (y[qd + Y_R2], y[qd + Y_R2 + 1], y[qd + Y_R2 + 2])
-    v3 = (y[qd + Y_R3], y[qd + Y_R3 + 1], y[qd + Y_R3 + 2])
-    v4 = (y[qd + Y_R4], y[qd + Y_R4 + 1], y[qd + Y_R4 + 2])
-    pd2 = (y[qd + Y_PHI2], y[qd + Y_PHI2 + 1], y[qd + Y_PHI2 + 2])
-    pd3 = (y[qd + Y_PHI3], y[qd + Y_PHI3 + 1], y[qd + Y_PHI3 + 2])
-    pd4 = (y[qd + Y_PHI4], y[qd + Y_PHI4 + 1], y[qd + Y_PHI4 + 2])
-    t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
-    t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
-    t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
-    R2 = rotation(t2)
-    R3 = rotation(t3)
-    R4 = rotation(t4)
-    G2 = gmat(t2)
-    G3 = gmat(t3)
-    G4 = gmat(t4)
-    w2 = mv(G2, pd2)
-    w3 = mv(G3, pd3)
-    w4 = mv(G4, pd4)
-    gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
-    gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
-    return r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2, gq3
+    return ((y[r_at], y[r_at + 1], y[r_at + 2]),
+            (y[qd + r_at], y[qd + r_at + 1], y[qd + r_at + 2]),
+            (y[qd + phi_at], y[qd + phi_at + 1], y[qd + phi_at + 2]))
 
 
 @njit(cache=True, inline="always")
-def driven_accelerations(t, y, p, r2, v2, R2, G2, w2, gq2, pd2, pd3, v4, dy):
-    """Accelerations that single-body constraints fix (Baumgarte rows): the driven crank
-    (revolute O + driver), the rod's spin gamma3 and the slider's y, z and angles (written
-    into dy). Returns (pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4): the crank's angular
-    accelerations, body angular acceleration and centroid acceleration, the position of its
-    point O, and the rod's gamma3 and slider's y, z accelerations."""
+def body_frame(tr, pd):
+    """Rotation R and body angular velocity w = G phi_dot [rad/s] of a body from its Euler
+    angles' trig(...) and rates pd."""
+    return rotation(tr), mv(gmat(tr), pd)
+
+
+@njit(cache=True, inline="always")
+def crank_accelerations(t, y, p, t2):
+    """Accelerations of the driven crank (revolute O + driver, Baumgarte rows): (pdd2, wd2,
+    rdd2), its Euler-angle and body angular accelerations and its centroid acceleration."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
-    qd = Y_QD
     uO = (0.0, 0.0, 0.5 * p[P_L2])
     theta = p[P_THETA0] + p[P_OMEGA] * t
+    r2, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
+    R2, w2 = body_frame(t2, pd2)
+    gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
     pdd2 = (-2.0 * a_b * pd2[0] - b_b * b_b * y[Y_PHI2],
             -2.0 * a_b * pd2[1] - b_b * b_b * y[Y_PHI2 + 1],
             -2.0 * a_b * (pd2[2] - p[P_OMEGA]) - b_b * b_b * (y[Y_PHI2 + 2] - theta))
-    wd2 = add(mv(G2, pdd2), gq2)
+    wd2 = add(mv(gmat(t2), pdd2), gq2)
     pO, vO = point_state(r2, v2, R2, w2, uO)
     rdd2 = sub(sub(scale(-2.0 * a_b, vO), scale(b_b * b_b, pO)),
                mv(R2, add(cross(wd2, uO), cross(w2, cross(w2, uO)))))
-    gdd3 = -2.0 * a_b * pd3[2] - b_b * b_b * y[Y_PHI3 + 2]
-    ydd4 = -2.0 * a_b * v4[1] - b_b * b_b * y[Y_R4 + 1]
-    zdd4 = -2.0 * a_b * v4[2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
-    for k in range(3):
-        dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
-    return pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4
+    return pdd2, wd2, rdd2
 
 
 @njit(cache=True, inline="always")
-def rod_equations(F3, N3, F4x, w3, gq3, G3, J3, gdd3, vz):
+def fixed_accelerations(y, p, dy):
+    """Accelerations that the other single-body constraints fix (Baumgarte rows): the rod's
+    spin gamma3 and the slider's y and z (returned: gdd3, ydd4, zdd4) and its angles
+    (written into dy)."""
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    qd = Y_QD
+    gdd3 = -2.0 * a_b * y[qd + Y_PHI3 + 2] - b_b * b_b * y[Y_PHI3 + 2]
+    ydd4 = -2.0 * a_b * y[qd + Y_R4 + 1] - b_b * b_b * y[Y_R4 + 1]
+    zdd4 = -2.0 * a_b * y[qd + Y_R4 + 2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
+    for k in range(3):
+        dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
+    return gdd3, ydd4, zdd4
+
+
+@njit(cache=True, inline="always")
+def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
     """Generalised forces of the free coordinates (x3, y3, z3, alpha3, beta3, x4) into
     vz[VZ_FORCE]; returns (mr_inv, ok): the inverse of the rod's 2x2 rotational mass block
     over (alpha3, beta3) (row-major 4-tuple) and whether that block is positive definite."""
+    qd = Y_QD
+    pd3 = (y[qd + Y_PHI3], y[qd + Y_PHI3 + 1], y[qd + Y_PHI3 + 2])
+    G3 = gmat(t3)
+    w3 = mv(G3, pd3)
+    gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
     Jw3 = (J3[0] * w3[0], J3[1] * w3[1], J3[2] * w3[2])
     Jg3 = (J3[0] * gq3[0], J3[1] * gq3[1], J3[2] * gq3[2])
     mom3 = sub(N3, add(cross(w3, Jw3), Jg3))
@@ -357,8 +348,7 @@ def rod_equations(F3, N3, F4x, w3, gq3, G3, J3, gdd3, vz):
 
 
 @njit(cache=True, inline="always")
-def ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, r4, v4, gdd3,
-                     ydd4, zdd4, C, vz):
+def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
     rows written and the largest position violation of these joints [m]."""
@@ -370,6 +360,12 @@ def ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, 
     nc = 0
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
+        r2, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
+        R2, w2 = body_frame(t2, pd2)
+        r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
+        R3, w3 = body_frame(t3, pd3)
+        G3 = gmat(t3)
+        gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
         # crank pin acceleration (fully known: the crank is driven)
         a2A = add(rdd2, mv(R2, add(cross(wd2, uA2), cross(w2, cross(w2, uA2)))))
         JrA = point_jacobian_rot(R3, uA3, G3)
@@ -389,6 +385,11 @@ def ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, 
             cons = max(cons, abs(cpos[i]))
         nc += 3
     if jp[1, J_CLEARANCE] == 0.0:
+        r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
+        R3, w3 = body_frame(t3, pd3)
+        G3 = gmat(t3)
+        gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
+        r4, v4, _ = body_motion(y, Y_R4, Y_PHI4)
         JrB = point_jacobian_rot(R3, uB3, G3)
         p3B, v3B = point_state(r3, v3, R3, w3, uB3)
         cpos = sub(r4, p3B)
@@ -440,12 +441,18 @@ def schur_solve(C, S, L, nc, minv, mr_inv, vz):
 
 
 @njit(cache=True, inline="always")
-def crank_reactions(p, F2, N2, r2, R2, G2, w2, gq2, pdd2, rdd2):
+def crank_reactions(p, F2, N2, y, t2, pdd2, rdd2):
     """The crank's multipliers from its own equations once the forces on it are known:
     (drive torque [N m], lambda_O [N], the revolute's multiplier on the crank)."""
     m2 = p[P_M2]
     J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
     uO = (0.0, 0.0, 0.5 * p[P_L2])
+    qd = Y_QD
+    pd2 = (y[qd + Y_PHI2], y[qd + Y_PHI2 + 1], y[qd + Y_PHI2 + 2])
+    R2 = rotation(t2)
+    G2 = gmat(t2)
+    w2 = mv(G2, pd2)
+    gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
     Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
     Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
     Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
@@ -458,7 +465,7 @@ def crank_reactions(p, F2, N2, r2, R2, G2, w2, gq2, pdd2, rdd2):
 
 
 @njit(cache=True, inline="always")
-def kinetic_energy(p, v2, v3, v4, w2, w3, w4):
+def kinetic_energy(p, y, t2, t3, t4):
     """Kinetic energy of crank, rod and slider [J]."""
     m2 = p[P_M2]
     m3 = p[P_M3]
@@ -466,6 +473,12 @@ def kinetic_energy(p, v2, v3, v4, w2, w3, w4):
     J2 = (p[P_J2], p[P_J2 + 1], p[P_J2 + 2])
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
     J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
+    _, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
+    _, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
+    _, v4, pd4 = body_motion(y, Y_R4, Y_PHI4)
+    w2 = mv(gmat(t2), pd2)
+    w3 = mv(gmat(t3), pd3)
+    w4 = mv(gmat(t4), pd4)
     ke = 0.5 * (m2 * dot(v2, v2) + m3 * dot(v3, v3) + m4 * dot(v4, v4))
     ke += 0.5 * (J2[0] * w2[0] ** 2 + J2[1] * w2[1] ** 2 + J2[2] * w2[2] ** 2)
     ke += 0.5 * (J3[0] * w3[0] ** 2 + J3[1] * w3[1] ** 2 + J3[2] * w3[2] ** 2)
@@ -508,14 +521,19 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     -------
     int
         layout.ST_OK or layout.ST_SINGULAR.
+
+    Each body's Euler-angle sines and cosines are computed once (``trig``); its rotation,
+    angular velocity and the other products of them are formed again in each part that
+    uses them (:func:`body_frame`), from the state and the trig values, rather than all up
+    front: few values then stay live across the contacts and the solve, which is what a
+    GPU thread's registers hold (``python -m clearsweep.ptx``).
     """
     joint_a = 0
     joint_b = 1
     qd = Y_QD
-    (r2, r3, r4, v2, v3, v4, pd2, pd3, R2, R3, R4, G2, G3, w2, w3, w4, gq2,
-     gq3) = bodies(y)
-    pdd2, wd2, rdd2, pO, gdd3, ydd4, zdd4 = driven_accelerations(t, y, p, r2, v2, R2, G2, w2, gq2,
-                                                                 pd2, pd3, v4, dy)
+    t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
+    t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
+    t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
     uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
@@ -534,6 +552,10 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     fA = zero
     fB = zero
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
+    r2, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
+    R2, w2 = body_frame(t2, pd2)
+    r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
+    R3, w3 = body_frame(t3, pd3)
     if jp[0, J_CLEARANCE] != 0.0:
         cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3, full)
         fA = cA.force
@@ -546,6 +568,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             store_contact(dg, joint_a, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
     if jp[1, J_CLEARANCE] != 0.0:
+        r4, v4, pd4 = body_motion(y, Y_R4, Y_PHI4)
+        R4, w4 = body_frame(t4, pd4)
         cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero, full)
         fB = cB.force
         F3 = add(F3, fB)
@@ -555,14 +579,17 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         if full:
             store_contact(dg, joint_b, cB)
 
+    # ---- accelerations that single-body constraints fix ----
+    pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
+    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy)
+
     # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
-    mr_inv, ok = rod_equations(F3, N3, F4x, w3, gq3, G3, J3, gdd3, vz)
+    mr_inv, ok = rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz)
     if not ok:
         return ST_SINGULAR
     minv = (1.0 / p[P_M3], 1.0 / p[P_M4])
-    nc, cons = ideal_joint_rows(jp, p, r2, v2, R2, w2, wd2, rdd2, r3, v3, R3, G3, w3, gq3, r4, v4,
-                                gdd3, ydd4, zdd4, C, vz)
+    nc, cons = ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
     zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
@@ -592,13 +619,15 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     if jp[0, J_CLEARANCE] == 0.0:
         fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
+        r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
+        R2 = rotation(t2)
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
     if jp[1, J_CLEARANCE] == 0.0:
         fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
-    torque, lamO = crank_reactions(p, F2, N2, r2, R2, G2, w2, gq2, pdd2, rdd2)
-    dy[Y_WORK] = torque * pd2[2]
+    torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
+    dy[Y_WORK] = torque * y[qd + Y_PHI2 + 2]
     dy[Y_DISS] = pdiss
     if not full:
         return ST_OK
@@ -611,8 +640,13 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         dg[D_JOINT_FORCE + 3 + i] = fB[i]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
-    dg[D_KE] = kinetic_energy(p, v2, v3, v4, w2, w3, w4)
+    dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
+    r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
+    r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
+    r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
     dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
+    R2 = rotation(t2)
+    pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
     cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
     cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
@@ -622,8 +656,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             continue
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-            rate = max(rate, joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv,
-                                        mr_inv, vz))
+            rate = max(rate, joint_rate(j, jp, s, p, dg, rotation(t3), gmat(t3), r3, C, L, nc,
+                                        minv, mr_inv, vz))
     dg[D_RATE] = rate
     return ST_OK
 

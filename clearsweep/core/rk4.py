@@ -102,27 +102,32 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def rk4_substep(t, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz):
-    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place."""
+def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
+    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place.
+
+    The stage derivatives k2, k3, k4 (at t + c hs, c = 1/2, 1/2, 1) come from one call of
+    evaluate in a loop, each into the work array ``kst``; the work array ``ksum`` keeps
+    k2, then k2 + k3 (the sum the update uses, formed as before: bit-identical). One call
+    site because a GPU build inlines evaluate wherever it is called: three sites made the
+    kernel's code, and the register spills that each copy brings, three times larger.
+    """
     stage = False  # stage derivatives only: no energies, no stiff rates
     n = y.shape[0]
+    copy_into(kst, k1)
+    for i_stage in range(3):
+        c = 1.0 if i_stage == 2 else 0.5
+        for i in range(n):
+            yt[i] = y[i] + c * hs * kst[i]
+        st = evaluate(t + c * hs, yt, p, jp, s, wmap, kst, dg, stage, C, S, L, vz)
+        if st != ST_OK:
+            return st
+        if i_stage == 0:
+            copy_into(ksum, kst)
+        elif i_stage == 1:
+            for i in range(n):
+                ksum[i] += kst[i]
     for i in range(n):
-        yt[i] = y[i] + 0.5 * hs * k1[i]
-    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k2, dg, stage, C, S, L, vz)
-    if st != ST_OK:
-        return st
-    for i in range(n):
-        yt[i] = y[i] + 0.5 * hs * k2[i]
-    st = evaluate(t + 0.5 * hs, yt, p, jp, s, wmap, k3, dg, stage, C, S, L, vz)
-    if st != ST_OK:
-        return st
-    for i in range(n):
-        yt[i] = y[i] + hs * k3[i]
-    st = evaluate(t + hs, yt, p, jp, s, wmap, k4, dg, stage, C, S, L, vz)
-    if st != ST_OK:
-        return st
-    for i in range(n):
-        y[i] += hs / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i])
+        y[i] += hs / 6.0 * (k1[i] + 2.0 * ksum[i] + kst[i])
     return ST_OK
 
 
@@ -327,12 +332,13 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: their rows; the CPU path (:func:`integrate`) allocates each work array on its own, so that
 #: no array view is made or passed in the hot loop. Rows of each group, in advance's
 #: argument order:
-#: vec: y, its copy at the step's start, k1, k1's copy, k2, k3, k4, the stage state;
+#: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
+#: the stage state;
 #: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its copy,
 #: the largest depth written per joint, the first impact times and their copy; mats: C, S, L
 #: of evaluate; caps: the wear of the step being taken and the accepted wear waiting to be
 #: spread.
-VEC_ROWS = 8
+VEC_ROWS = 7
 DIAG_ROWS = 2
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
@@ -372,22 +378,24 @@ def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     for j in range(2):
         s[j, S_DV0] = 0.0
         s[j, S_BETA] = math.pi
-    st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
-    if st != ST_OK:
-        return st
-    # a ball that starts on the socket wall (seated start) is in contact, not an impact
-    seated = False
-    for j in range(2):
-        ddot_prev[j] = dg[D_DDOT + j]
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-            s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
-            s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
-                                         jp[j, J_RI], jp[j, J_RJ])
-            seated = True
-    if seated:
+    # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
+    # (seated start): it is in contact, not an impact
+    for again in range(2):
         st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
         if st != ST_OK:
             return st
+        if again == 1:
+            break
+        seated = False
+        for j in range(2):
+            ddot_prev[j] = dg[D_DDOT + j]
+            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+                s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
+                s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
+                                             jp[j, J_RI], jp[j, J_RJ])
+                seated = True
+        if not seated:
+            break
     record_sample(stats, whole, dg, jp, 0.0)
     if t0 >= p[P_SETTLE]:
         record_sample(stats, settled, dg, jp, 0.0)
@@ -470,7 +478,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
             out_wmax, info, stats, track, first,
             np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
-            np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
+            np.zeros(N_Y), np.zeros(N_Y),
             np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
             np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
             np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
@@ -481,7 +489,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
 
 @njit(cache=True, locals=_NOT_LITERAL)
 def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
-            out_wmax, info, stats, track, first, y, ysave, k1, k1save, k2, k3, k4, yt, dg,
+            out_wmax, info, stats, track, first, y, ysave, k1, k1save, ksum, kst, yt, dg,
             dgsave, s, ssave, msave, ddot_prev, ddot_prev_save, wmax, first_save, C, S, L, vz,
             buf_i, buf_v, cur, pend, scratch):
     """:func:`integrate` without allocation: every work array is an argument (one each, so
@@ -492,13 +500,15 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     |energy residual| [J]; ``first`` (float64[2]) each joint's first impact time [s] (-1:
     none).
 
-    Work arrays: y, ysave, k1, k1save, k2, k3, k4, yt (N_Y each: the state, its copy at the
-    step's start, the stage derivatives and state); dg, dgsave (N_D: diagnostics and copy);
-    s, ssave (2 x N_S: contact state and copy); msave (2 x N_M: statistics at the step's
-    start); ddot_prev, ddot_prev_save, wmax, first_save (2 each: approach rates and copy, the
-    deepest bin written per joint, the first impact times' copy); C, S, L (6 x 6) and vz
-    (VZ_ROWS x 6) of evaluate; buf_i, buf_v (undo_rows x 4: the step's wear, to undo a
-    rejected step); cur, pend (2 x 6: wear of the step being taken, wear waiting to be spread:
+    Work arrays: y, ysave, k1, k1save, ksum, kst, yt (N_Y each: the state, its copy at the
+    step's start, the derivative at the (sub-)step's start and its copy, the sum k2 + k3 of
+    the stage derivatives, the stage derivative and the stage state: rk4_substep); dg,
+    dgsave (N_D: diagnostics and copy); s, ssave (2 x N_S: contact state and copy); msave
+    (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax, first_save
+    (2 each: approach rates and copy, the deepest bin written per joint, the first impact
+    times' copy); C, S, L (6 x 6) and vz (VZ_ROWS x 6) of evaluate; buf_i, buf_v (undo_rows
+    x 4: the step's wear, to undo a rejected step); cur, pend (2 x 6: wear of the step being
+    taken, wear waiting to be spread:
     sum V n (3), sum V, sum V A, R_i); scratch (4 npolar x 3) of wear.deposit.
     """
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
@@ -522,9 +532,8 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     for i in range(N_Y):
         ysave[i] = 0.0
         k1save[i] = 0.0
-        k2[i] = 0.0
-        k3[i] = 0.0
-        k4[i] = 0.0
+        ksum[i] = 0.0
+        kst[i] = 0.0
         yt[i] = 0.0
     for i in range(N_D):
         dg[i] = 0.0
@@ -583,7 +592,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
-                st = rk4_substep(ts, hs, y, k1, k2, k3, k4, yt, p, jp, s, wmap, dg, C, S, L, vz)
+                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
                 if st != ST_OK:

@@ -144,8 +144,8 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     velocity as the socket sees it; damping and friction are booked as dissipated.
     A flat surface (s = 0) gives the radial force F = -F_N n of section 3.4.
     """
-    pb, vpb = point_state(rb, vb, Rb, wb, ub)
-    ps, vps = point_state(rs, vs, Rs, ws_, us)
+    pb, _ = point_state(rb, vb, Rb, wb, ub)
+    ps, _ = point_state(rs, vs, Rs, ws_, us)
     e, n, d_s, n_s, h, slope, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)
     ew, mu, _ = surface(jp, j, worn)
     worn_flag = 1.0 if worn else 0.0
@@ -156,7 +156,9 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     hdot = 0.0
     if sloped:
         # the ball centre's velocity relative to the socket, in the socket's rotating frame
-        w = sub(sub(vpb, vps), cross(mv(Rs, ws_), sub(pb, ps)))
+        # (the centres' velocities formed here, not kept live across the flat path)
+        w = sub(sub(point_velocity(rb, vb, Rb, wb, pb), point_velocity(rs, vs, Rs, ws_, ps)),
+                cross(mv(Rs, ws_), sub(pb, ps)))
         hdot = dot(slope, w)
         ddot = dot(n, w) - hdot
         qj, qi = contact_points(pb, pb, n, rj - delta, rj)

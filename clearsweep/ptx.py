@@ -1,0 +1,164 @@
+"""The CUDA batch kernel built for a GPU without one: PTX from NVVM, resources from ptxas.
+
+:func:`compile_run_cases_ptx` compiles ``core.device.run_cases`` to PTX for a compute
+capability (sm_90 by default) with numba-cuda's NVVM, on a machine without a CUDA device:
+numba-cuda asks the current device for its compute capability when it compiles the
+device functions that the kernel calls, so a stand-in device of the requested capability
+answers while the compile runs. :func:`ptxas_report` assembles the PTX with the ``ptxas``
+of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
+resource figures per thread: registers, stack frame, spill stores and loads.
+
+``python -m clearsweep.ptx`` prints them (tests/test_ptx.py checks them in CI;
+benchmarks/README.md records them).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+#: The compute capability that the checks build for (H100: sm_90).
+DEFAULT_CC = (9, 0)
+
+
+def run_cases_signature() -> tuple:
+    """Numba types of ``run_cases``' arguments, in order (C-contiguous arrays with the case
+    as first axis, as ``gpu._allocate`` builds them): p, jp, y0, n_steps, save_every; the
+    results wmap, proj, wvol, info, stats, track; the work arrays of ``rk4.work_shapes``
+    (vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch); the row
+    placeholders rows_t, rows_y, rows_d, rows_wmax."""
+    from numba import types
+
+    def arr(ndim, dtype=types.float64):
+        return types.Array(dtype, ndim, "C")
+
+    i64 = types.int64
+    inputs = (arr(2), arr(3), arr(2), arr(1, i64), arr(1, i64))
+    results = (arr(4), arr(4), arr(2), arr(2, i64), arr(3), arr(2))
+    work = (arr(3), arr(3), arr(4), arr(3), arr(3), arr(4), arr(3), arr(3, i64), arr(3),
+            arr(4), arr(3))
+    rows = (arr(2), arr(3), arr(3), arr(3))
+    return inputs + results + work + rows
+
+
+class _StandInDevice:
+    """What numba-cuda's dispatcher reads of the current device while compiling."""
+
+    def __init__(self, cc: tuple[int, int]):
+        self.compute_capability = cc
+        self.id = 0
+        self.name = f"sm_{cc[0]}{cc[1]} (no device: compile only)".encode()
+
+
+@contextlib.contextmanager
+def _device_of_capability(cc: tuple[int, int]) -> Iterator[None]:
+    """numba-cuda's dispatcher sees a device of capability cc (restored on exit)."""
+    from numba.cuda import dispatcher
+
+    real = dispatcher.get_current_device
+    dispatcher.get_current_device = lambda: _StandInDevice(cc)
+    try:
+        yield
+    finally:
+        dispatcher.get_current_device = real
+
+
+def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC) -> str:
+    """PTX of ``core.device.run_cases`` for compute capability cc; needs numba-cuda with NVVM
+    (``pip install numba-cuda[cu12]``), no device. About a minute on one core: the whole
+    kernel is compiled, every device function inlined."""
+    from numba import cuda
+
+    from .core import device
+
+    if device.SIMULATED:
+        raise RuntimeError("NUMBA_ENABLE_CUDASIM is set: the simulator compiles no PTX")
+    with _device_of_capability(cc):
+        ptx, _ = cuda.compile_ptx(device.run_cases.py_func, run_cases_signature(), cc=cc)
+    return ptx
+
+
+def find_ptxas() -> Path:
+    """The ``ptxas`` of the nvidia-cuda-nvcc wheel; FileNotFoundError saying what to install."""
+    spec = importlib.util.find_spec("nvidia.cuda_nvcc") if importlib.util.find_spec("nvidia") else None
+    for root in (spec.submodule_search_locations or []) if spec else []:
+        exe = Path(root) / "bin" / ("ptxas.exe" if sys.platform == "win32" else "ptxas")
+        if exe.is_file():
+            return exe
+    raise FileNotFoundError("no ptxas: the nvidia-cuda-nvcc wheel is not installed "
+                            "(pip install 'numba-cuda[cu12]', or clearsweep's 'test' extra)")
+
+
+@dataclass(frozen=True)
+class PtxasReport:
+    """ptxas -v resource figures of a kernel, per thread."""
+
+    arch: str
+    registers: int
+    stack_bytes: int
+    spill_store_bytes: int
+    spill_load_bytes: int
+    seconds: float
+    log: str
+
+    def line(self) -> str:
+        return (f"{self.arch}: {self.registers} registers, {self.stack_bytes} bytes stack frame, "
+                f"{self.spill_store_bytes} bytes spill stores, {self.spill_load_bytes} bytes "
+                f"spill loads per thread (ptxas {self.seconds:.0f} s)")
+
+
+_FRAME = re.compile(r"(\d+) bytes stack frame, (\d+) bytes spill stores, (\d+) bytes spill loads")
+_REGS = re.compile(r"Used (\d+) registers")
+
+
+def parse_ptxas(log: str, arch: str = "sm_90", seconds: float = 0.0) -> PtxasReport:
+    """The kernel entry's figures from a ``ptxas -v`` log (one entry function: run_cases).
+    ValueError if the log holds none."""
+    entry = log.split("Compiling entry function", 1)
+    if len(entry) != 2:
+        raise ValueError(f"no entry function in the ptxas log:\n{log}")
+    frame = _FRAME.search(entry[1])
+    regs = _REGS.search(entry[1])
+    if frame is None or regs is None:
+        raise ValueError(f"no resource figures in the ptxas log:\n{log}")
+    return PtxasReport(arch, int(regs.group(1)), int(frame.group(1)), int(frame.group(2)),
+                       int(frame.group(3)), seconds, log)
+
+
+def ptxas_report(ptx: str, arch: str = "sm_90") -> PtxasReport:
+    """Assemble ptx for arch with the wheel's ``ptxas -v``; its resource figures.
+    RuntimeError with ptxas' messages if it fails."""
+    exe = find_ptxas()
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp) / "kernel.ptx"
+        src.write_text(ptx)
+        began = time.perf_counter()
+        proc = subprocess.run([str(exe), f"-arch={arch}", "-v", str(src), "-o",
+                               str(Path(tmp) / "kernel.cubin")], capture_output=True, text=True)
+        seconds = time.perf_counter() - began
+    log = proc.stdout + proc.stderr
+    if proc.returncode != 0:
+        raise RuntimeError(f"ptxas failed (exit {proc.returncode}):\n{log[-4000:]}")
+    return parse_ptxas(log, arch, seconds)
+
+
+def main() -> None:
+    """Print the figures of run_cases for sm_90 (argument: a path to keep the PTX in)."""
+    began = time.perf_counter()
+    ptx = compile_run_cases_ptx()
+    print(f"PTX: {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
+    if len(sys.argv) > 1:
+        Path(sys.argv[1]).write_text(ptx)
+    print(ptxas_report(ptx).line())
+
+
+if __name__ == "__main__":
+    main()
