@@ -491,6 +491,9 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
         except SensitivityError as exc:
             raise click.ClickException(f"{path}: {exc}") from exc
     click.echo(format_indices(result))
+    warning = result.ranking_warning()
+    if warning:
+        click.echo(f"clearsweep: warning: {path}: {warning}", err=True)
     if plot_path:
         save_figure(indices_figure(result), plot_path)
         click.echo(f"wrote {plot_path}")
