@@ -195,38 +195,47 @@ def format_indices(result: SobolIndices) -> str:
 
 
 def ranking_text(result: SobolIndices) -> str:
-    """The inputs by total index, largest first, the negligible ones (ST interval below
-    :data:`INFLUENTIAL_ST`) named after them; "?" where the intervals cannot tell two apart."""
-    order = result.ranking()
-    upper = result.ST + result.ST_conf
-    influential = [i for i in order if upper[i] >= INFLUENTIAL_ST]
+    """The inputs by total index, largest first ("?" where the intervals cannot tell two
+    apart), then the negligible ones: ST interval below :data:`INFLUENTIAL_ST` and told
+    apart from every ranked input."""
     unordered = result.unranked_pairs()
+    upper = result.ST + result.ST_conf
+    ranked: list[int] = []
+    for i in result.ranking():
+        if upper[i] >= INFLUENTIAL_ST or (ranked and (ranked[-1], i) in unordered):
+            ranked.append(i)
     parts = []
-    for k, i in enumerate(influential):
+    for k, i in enumerate(ranked):
         if k:
-            parts.append(" ? " if (influential[k - 1], i) in unordered else " > ")
+            parts.append(" ? " if (ranked[k - 1], i) in unordered else " > ")
         parts.append(result.names[i])
     text = "ranked by ST: " + ("".join(parts) or "no input")
-    rest = [result.names[i] for i in order if upper[i] < INFLUENTIAL_ST]
+    rest = [result.names[i] for i in result.ranking() if i not in ranked]
     if rest:
         text += f" (ST < {INFLUENTIAL_ST:g}: {', '.join(rest)})"
     return text
 
 
 def indices_figure(result: SobolIndices) -> Figure:
-    """Bars of S1 and ST per input with their confidence intervals as error bars."""
-    fig = Figure(figsize=(7, 4.5), layout="constrained")
+    """Horizontal bars of S1 and ST per input (the largest ST on top) with their 95 %
+    confidence intervals as error bars; the input names, dotted config keys, read along
+    the bars' axis, where they have room."""
+    fig = Figure(figsize=(7, 1.6 + 0.55 * len(result.names)), layout="constrained")
     ax = fig.add_subplot()
-    x = np.arange(len(result.names))
-    ax.bar(x - 0.2, result.S1, 0.4, yerr=result.S1_conf, capsize=3, label="first order S1")
-    ax.bar(x + 0.2, result.ST, 0.4, yerr=result.ST_conf, capsize=3, label="total ST")
-    ax.set_xticks(x, list(result.names))
-    ax.set_ylabel("Sobol index [-]")
-    ax.axhline(0.0, color="0.5", lw=0.8)
-    ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize="small")
-    fig.suptitle(f"Sobol' indices of {result.output} ({result.samples} cases), bars: 95% "
-                 "confidence intervals")
+    order = result.ranking()[::-1]
+    y = np.arange(len(order))
+    ax.barh(y + 0.2, result.S1[order], 0.4, xerr=result.S1_conf[order], capsize=3,
+            label="first order S1")
+    ax.barh(y - 0.2, result.ST[order], 0.4, xerr=result.ST_conf[order], capsize=3,
+            label="total ST")
+    ax.set_yticks(y, [result.names[i] for i in order])
+    ax.set_xlabel("Sobol index [-]")
+    ax.axvline(0.0, color="0.5", lw=0.8)
+    ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize="small", loc="lower right")
+    cases = f"{result.samples} cases" + (f", n = {result.base_points}" if result.base_points else "")
+    fig.suptitle(f"Sobol' indices of {result.output} ({cases})\nbars: 95% confidence intervals",
+                 fontsize="medium")
     return fig
 
 
