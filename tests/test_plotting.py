@@ -265,3 +265,18 @@ def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):
 def test_life_kind_on_a_case_dataset_says_what_it_needs(tmp_path, case):
     with pytest.raises(PlotError, match="--kind life needs cycle"):
         plot(case, "life", tmp_path / "x.png", dpi=TEST_DPI)
+
+
+def test_categorical_axes_draw_points_and_numeric_axes_lines(sweep_ds):
+    from test_ensemble import synthetic_ensemble
+
+    from clearsweep.plotting import figure
+
+    coatings = figure(sweep_ds, "sweep", ["B_clearance=1e-4"])        # x: B_coating
+    assert coatings.axes[0].get_xlabel() == "coating of B [-]"
+    assert {line.get_linestyle() for line in coatings.axes[0].get_lines()} == {"None"}
+    clearances = figure(sweep_ds, "sweep", ["B_coating=PTFE"])         # x: B_clearance
+    assert {line.get_linestyle() for line in clearances.axes[0].get_lines()} == {"-"}
+    ensemble = figure(synthetic_ensemble(), "sweep", metric="wear_depth_max_final")
+    bars = ensemble.axes[0].containers
+    assert bars and all(c.lines[0].get_linestyle() == "None" for c in bars)
