@@ -99,6 +99,13 @@ HEATMAP_PANEL_INCHES = (4.2, 3.4)
 #: Narrowest figure of ``--kind sweep``, so that its title fits [inch].
 MIN_FIGURE_WIDTH_INCHES = 7.0
 
+#: Robust colour limits of a heat map (one outlier would flatten the others): with at least
+#: ``ROBUST_MIN_CELLS`` values, a value farther than ``ROBUST_FENCE`` times the range between
+#: these percentiles beyond them is an outlier, and the scale stops at the percentile on its side.
+ROBUST_PERCENTILES = (2.0, 98.0)
+ROBUST_MIN_CELLS = 8
+ROBUST_FENCE = 1.0
+
 #: Heat-map annotations turn dark on cells brighter than this (normalised colour value).
 ANNOTATION_DARK_TEXT_ABOVE = 0.6
 
@@ -478,7 +485,10 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     for i, (text, panel) in enumerate(panels):
         ax = fig.add_subplot(nrows, ncols, i + 1)
         grid = panel.transpose(*dims).values.astype(float)
-        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+        limits = robust_limits(grid)
+        vmin, vmax = limits if limits else (None, None)
+        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=vmin,
+                          vmax=vmax)
         for axis_dim, set_ticks in zip(dims, (ax.set_yticks, ax.set_xticks)):
             coord = values[axis_dim]
             set_ticks(np.arange(coord.size), [value_text(v) for v in coord.values])
@@ -499,12 +509,46 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
                 ax.text(c, r, "failed", ha="center", va="center", fontsize="x-small", color="0.2")
         if text:
             ax.set_title(text, fontsize="small")
-        fig.colorbar(image, ax=ax).set_label(wrapped_label(label))
+        if limits is None:
+            fig.colorbar(image, ax=ax).set_label(wrapped_label(label))
+            continue
+        below, above = grid < limits[0], grid > limits[1]
+        for r, c in zip(*np.nonzero(below | above)):
+            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, edgecolor="red",
+                                   lw=1.5))
+        extend = {(True, True): "both", (True, False): "min", (False, True): "max"}.get(
+            (bool(below.any()), bool(above.any())), "neither")
+        stops = " and ".join(f"{q:g}th" for q, side in zip(ROBUST_PERCENTILES, (below, above))
+                             if side.any())
+        fig.colorbar(image, ax=ax, extend=extend).set_label(
+            f"{wrapped_label(label)}\nscale stops at the {stops} percentile;\n"
+            f"red outline: {int((below | above).sum())} outlying cell(s)")
     note = ""
     if failed is not None and failed.any():
         note = (f"\nhatched: {int(failed.sum())} case(s) that failed, no value (see the status "
                 "and message variables)")
     fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}{note}")
+
+
+def robust_limits(grid: np.ndarray) -> tuple[float, float] | None:
+    """Colour limits of a heat map that an outlier cannot flatten, or None where the full
+    range serves (few cells, no outlier); see :data:`ROBUST_PERCENTILES`.
+
+    >>> robust_limits(np.array([*range(47), 900.0]))
+    (0.0, 46.0)
+    """
+    values = grid[np.isfinite(grid)]
+    if values.size < ROBUST_MIN_CELLS:
+        return None
+    # the values nearest inside the percentiles, not interpolated towards an outlier
+    p_lo = float(np.percentile(values, ROBUST_PERCENTILES[0], method="higher"))
+    p_hi = float(np.percentile(values, ROBUST_PERCENTILES[1], method="lower"))
+    fence = ROBUST_FENCE * (p_hi - p_lo)
+    if not fence > 0:
+        return None
+    lo = p_lo if values.min() < p_lo - fence else float(values.min())
+    hi = p_hi if values.max() > p_hi + fence else float(values.max())
+    return (lo, hi) if (lo, hi) != (values.min(), values.max()) else None
 
 
 def _failed_cells(ds: xr.Dataset, values: xr.DataArray, dims: tuple) -> np.ndarray | None:

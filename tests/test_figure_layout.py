@@ -15,7 +15,7 @@ import pytest
 import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
-from synthetic import case, sweep_ds  # noqa: F401  (pytest fixtures)
+from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
 from test_ensemble import synthetic_ensemble
 
 from clearsweep.config import load_config
@@ -123,6 +123,14 @@ def test_a_sweep_figure_keeps_its_text_apart(sweep_ds, kind, select):
 @pytest.mark.parametrize("metric", ["wear_depth_axis_max", "normal_force_peak"])
 def test_a_sweep_heat_map_of_per_joint_metrics_keeps_its_text_apart(sweep_ds, metric):
     assert layout_problems(figure(sweep_ds, "sweep", metric=metric)) == []
+
+
+def test_a_heat_map_with_an_outlier_keeps_its_text_apart():
+    grid = np.arange(24.0).reshape(4, 6)
+    grid[3, 0] = 300.0
+    fig = figure(heat_map_sweep(grid), "sweep")
+    assert "percentile" in fig.axes[1].get_ylabel()
+    assert layout_problems(fig) == []
 
 
 def test_an_ensemble_figure_keeps_its_text_apart():
