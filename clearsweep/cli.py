@@ -487,7 +487,9 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
 def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
                         plot_path: str | None) -> None:
     """First-order and total Sobol' indices of VAR over the inputs of the Saltelli sampling
-    sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib)."""
+    sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib),
+    the inputs ranked by ST. Warns on stderr, with a larger n to try, when an influential
+    input's interval overlaps the next one's (too wide to rank them)."""
     from .analysis import SelectionError
     from .sensitivity import (
         SensitivityError,
@@ -508,6 +510,9 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
         except SensitivityError as exc:
             raise click.ClickException(f"{path}: {exc}") from exc
     click.echo(format_indices(result))
+    warning = result.ranking_warning()
+    if warning:
+        click.echo(f"clearsweep: warning: {path}: {warning}", err=True)
     if plot_path:
         save_figure(indices_figure(result), plot_path)
         click.echo(f"wrote {plot_path}")

@@ -42,6 +42,8 @@ Kinds (``KINDS``):
 
 from __future__ import annotations
 
+import re
+import textwrap
 from pathlib import Path
 from typing import cast
 
@@ -97,11 +99,22 @@ HEATMAP_PANEL_INCHES = (4.2, 3.4)
 #: Narrowest figure of ``--kind sweep``, so that its title fits [inch].
 MIN_FIGURE_WIDTH_INCHES = 7.0
 
+#: Robust colour limits of a heat map (one outlier would flatten the others): with at least
+#: ``ROBUST_MIN_CELLS`` values, a value farther than ``ROBUST_FENCE`` times the range between
+#: these percentiles beyond them is an outlier, and the scale stops at the percentile on its side.
+ROBUST_PERCENTILES = (2.0, 98.0)
+ROBUST_MIN_CELLS = 8
+ROBUST_FENCE = 1.0
+
 #: Heat-map annotations turn dark on cells brighter than this (normalised colour value).
 ANNOTATION_DARK_TEXT_ABOVE = 0.6
 
 #: Unit text of dimensionless and categorical quantities.
 DIMENSIONLESS = "-"
+
+#: Colour-bar labels are wrapped to lines of at most this many characters, so that the
+#: layout engine can keep them inside a figure of the default size.
+COLOURBAR_LABEL_CHARACTERS = 36
 
 _AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
 _SINGLE_CASE_COLOUR = "tab:red"
@@ -124,6 +137,23 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     name = text or obj.attrs.get("long_name") or str(obj.name)
     unit = obj.attrs.get("units", "") if units is None else units
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
+
+
+def wrapped_label(label: str, width: int = COLOURBAR_LABEL_CHARACTERS) -> str:
+    """``label`` on lines of at most ``width`` characters; its ``[units]`` never split.
+
+    >>> wrapped_label("peak absolute slider acceleration after start-up [m s-2]")
+    'peak absolute slider acceleration\\nafter start-up [m s-2]'
+    """
+    match = re.fullmatch(r"(.*?)\s*(\[[^\]]*\])", label)
+    name, units = (match.group(1), match.group(2)) if match else (label, "")
+    lines = textwrap.wrap(name, width) or [""]
+    if units:
+        if len(lines[-1]) + 1 + len(units) <= width:
+            lines[-1] = f"{lines[-1]} {units}".strip()
+        else:
+            lines.append(units)
+    return "\n".join(lines)
 
 
 def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
@@ -264,10 +294,15 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
             # Look at the most worn bin.
             ip, ia = np.unravel_index(int(np.nanargmax(depth.values)), depth.shape)
             ax3.view_init(elev=90.0 - float(depth["polar"][ip]), azim=float(depth["azimuth"][ia]))
-        ax3.set_xlabel(f"x [{DIMENSIONLESS}]")
-        ax3.set_ylabel(f"y [{DIMENSIONLESS}]")
-        ax3.set_zlabel(f"z [{DIMENSIONLESS}]")
-        ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small")
+        # the axes name the socket frame's directions; tick labels of the unit sphere would
+        # only crowd the panel title
+        for set_label, set_ticks, name in ((ax3.set_xlabel, ax3.set_xticks, "x"),
+                                           (ax3.set_ylabel, ax3.set_yticks, "y"),
+                                           (ax3.set_zlabel, ax3.set_zticks, "z")):
+            set_ticks([-1.0, 0.0, 1.0], ["", "", ""])
+            set_label(f"{name} [{DIMENSIONLESS}]", labelpad=-12)
+        ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small",
+                      pad=12)
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(
             axis_label(wear, "wear depth"))
     fig.suptitle("Socket wear depth")
@@ -394,7 +429,8 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
         text = ", ".join(f"{d} {value_text(v)}" for d, v in keys.items())
         # nudge the lines apart so that their error bars do not hide each other
         ax.errorbar(xs + (k - 0.5 * (len(lines) - 1)) * step, y, yerr=[y - lo, hi - y], marker="o",
-                    capsize=3, label=_case_label(text, len(lines), metric))
+                    capsize=3, linestyle="none" if ticks is not None else "-",
+                    label=_case_label(text, len(lines), metric))
     if ticks is not None:
         ax.set_xticks(xs, ticks)
     ax.set_xlabel(axis_label(mean[dims[0]]))
@@ -428,7 +464,9 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         ax = fig.add_subplot()
         xs, ticks = _category_positions(values[dims[0]])
         for text, panel in panels:
+            # categories are not ordered: points, not lines between them
             ax.plot(xs, panel.transpose(dims[0]).values, marker="o",
+                    linestyle="none" if ticks is not None else "-",
                     label=_case_label(text, len(panels), metric))
         if ticks is not None:
             ax.set_xticks(xs, ticks)
@@ -447,7 +485,10 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     for i, (text, panel) in enumerate(panels):
         ax = fig.add_subplot(nrows, ncols, i + 1)
         grid = panel.transpose(*dims).values.astype(float)
-        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+        limits = robust_limits(grid)
+        vmin, vmax = limits if limits else (None, None)
+        image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=vmin,
+                          vmax=vmax)
         for axis_dim, set_ticks in zip(dims, (ax.set_yticks, ax.set_xticks)):
             coord = values[axis_dim]
             set_ticks(np.arange(coord.size), [value_text(v) for v in coord.values])
@@ -468,12 +509,46 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
                 ax.text(c, r, "failed", ha="center", va="center", fontsize="x-small", color="0.2")
         if text:
             ax.set_title(text, fontsize="small")
-        fig.colorbar(image, ax=ax).set_label(label)
+        if limits is None:
+            fig.colorbar(image, ax=ax).set_label(wrapped_label(label))
+            continue
+        below, above = grid < limits[0], grid > limits[1]
+        for r, c in zip(*np.nonzero(below | above)):
+            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, edgecolor="red",
+                                   lw=1.5))
+        extend = {(True, True): "both", (True, False): "min", (False, True): "max"}.get(
+            (bool(below.any()), bool(above.any())), "neither")
+        stops = " and ".join(f"{q:g}th" for q, side in zip(ROBUST_PERCENTILES, (below, above))
+                             if side.any())
+        fig.colorbar(image, ax=ax, extend=extend).set_label(
+            f"{wrapped_label(label)}\nscale stops at the {stops} percentile;\n"
+            f"red outline: {int((below | above).sum())} outlying cell(s)")
     note = ""
     if failed is not None and failed.any():
         note = (f"\nhatched: {int(failed.sum())} case(s) that failed, no value (see the status "
                 "and message variables)")
     fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}{note}")
+
+
+def robust_limits(grid: np.ndarray) -> tuple[float, float] | None:
+    """Colour limits of a heat map that an outlier cannot flatten, or None where the full
+    range serves (few cells, no outlier); see :data:`ROBUST_PERCENTILES`.
+
+    >>> robust_limits(np.array([*range(47), 900.0]))
+    (0.0, 46.0)
+    """
+    values = grid[np.isfinite(grid)]
+    if values.size < ROBUST_MIN_CELLS:
+        return None
+    # the values nearest inside the percentiles, not interpolated towards an outlier
+    p_lo = float(np.percentile(values, ROBUST_PERCENTILES[0], method="higher"))
+    p_hi = float(np.percentile(values, ROBUST_PERCENTILES[1], method="lower"))
+    fence = ROBUST_FENCE * (p_hi - p_lo)
+    if not fence > 0:
+        return None
+    lo = p_lo if values.min() < p_lo - fence else float(values.min())
+    hi = p_hi if values.max() > p_hi + fence else float(values.max())
+    return (lo, hi) if (lo, hi) != (values.min(), values.max()) else None
 
 
 def _failed_cells(ds: xr.Dataset, values: xr.DataArray, dims: tuple) -> np.ndarray | None:

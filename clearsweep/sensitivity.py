@@ -10,6 +10,7 @@ anything but the sweep's own ``sample`` dimension.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -26,6 +27,10 @@ from .ensemble import CONFIDENCE_LEVEL, MEMBER_DIM
 SAMPLE_DIM = "sample"
 #: Bootstrap resamples of SALib's confidence intervals.
 BOOTSTRAP_RESAMPLES = 1000
+#: An input whose total index ST may reach this (the upper end of its 95 % interval) is
+#: influential and needs a rank; below it an input explains under 5 % of the output's
+#: variance, a common screening threshold, and the order among such inputs is not asked.
+INFLUENTIAL_ST = 0.05
 
 
 class SensitivityError(ValueError):
@@ -43,6 +48,44 @@ class SobolIndices:
     ST_conf: np.ndarray
     output: str = ""
     samples: int = 0
+    #: base points n of the Saltelli design (``sweep.sample.n``); 0: not known
+    base_points: int = 0
+
+    def ranking(self) -> list[int]:
+        """Input positions by total index ST, largest first."""
+        return [int(i) for i in np.argsort(-self.ST, kind="stable")]
+
+    def unranked_pairs(self) -> list[tuple[int, int]]:
+        """Neighbours in the ST ranking that the intervals cannot order.
+
+        The inputs are ranked by ST. Each influential input (the upper end of its ST
+        interval at least :data:`INFLUENTIAL_ST`) must be told from the next one down,
+        influential or not: their 95 % ST intervals must not overlap. Inputs that are all
+        below the threshold need no order among themselves.
+        """
+        order = self.ranking()
+        return [(upper, lower) for upper, lower in zip(order, order[1:])
+                if self.ST[upper] + self.ST_conf[upper] >= INFLUENTIAL_ST
+                and self.ST[upper] - self.ST_conf[upper] <= self.ST[lower] + self.ST_conf[lower]]
+
+    def ranking_warning(self) -> str | None:
+        """One line when the intervals are too wide to rank the inputs (see
+        :meth:`unranked_pairs`), naming n and a larger n to try; None when they rank."""
+        pairs = self.unranked_pairs()
+        if not pairs:
+            return None
+        i, j = pairs[0]
+        gap = self.ST[i] - self.ST[j]
+        width = self.ST_conf[i] + self.ST_conf[j]
+        # the half-widths shrink as 1 / sqrt(n): n (width / gap)^2 separates the pair
+        factor = min(max((width / gap) ** 2 if gap > 0 else 16.0, 2.0), 16.0)
+        n = self.base_points
+        suggest = 2 ** math.ceil(math.log2(n * factor * 1.2)) if n else 0
+        return (f"the 95 % intervals are too wide to rank the inputs: ST of {self.names[i]} "
+                f"{self.ST[i]:.3f} +- {self.ST_conf[i]:.3f} overlaps ST of {self.names[j]} "
+                f"{self.ST[j]:.3f} +- {self.ST_conf[j]:.3f}"
+                + (f" with n = {n} base points; try sweep.sample.n: {suggest} (intervals "
+                   f"shrink as 1/sqrt(n))" if n else "; try a larger sweep.sample.n"))
 
     def to_dataset(self) -> xr.Dataset:
         dims = ("input",)
@@ -136,7 +179,7 @@ def sweep_indices(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> So
                            second_order=bool(spec.get("second_order", False)),
                            seed=int(spec.get("seed", 0)))
     return SobolIndices(result.names, result.S1, result.S1_conf, result.ST, result.ST_conf,
-                        output=output, samples=result.samples)
+                        output=output, samples=result.samples, base_points=int(spec.get("n", 0)))
 
 
 def format_indices(result: SobolIndices) -> str:
@@ -148,23 +191,51 @@ def format_indices(result: SobolIndices) -> str:
     for i, name in enumerate(result.names):
         lines.append(f"{name.ljust(width)}  {result.S1[i]:>8.3f} +- {result.S1_conf[i]:<5.3f}  "
                      f"{result.ST[i]:>8.3f} +- {result.ST_conf[i]:<5.3f}")
-    return "\n".join(lines)
+    return "\n".join([lines[0], ranking_text(result), *lines[1:]])
+
+
+def ranking_text(result: SobolIndices) -> str:
+    """The inputs by total index, largest first ("?" where the intervals cannot tell two
+    apart), then the negligible ones: ST interval below :data:`INFLUENTIAL_ST` and told
+    apart from every ranked input."""
+    unordered = result.unranked_pairs()
+    upper = result.ST + result.ST_conf
+    ranked: list[int] = []
+    for i in result.ranking():
+        if upper[i] >= INFLUENTIAL_ST or (ranked and (ranked[-1], i) in unordered):
+            ranked.append(i)
+    parts = []
+    for k, i in enumerate(ranked):
+        if k:
+            parts.append(" ? " if (ranked[k - 1], i) in unordered else " > ")
+        parts.append(result.names[i])
+    text = "ranked by ST: " + ("".join(parts) or "no input")
+    rest = [result.names[i] for i in result.ranking() if i not in ranked]
+    if rest:
+        text += f" (ST < {INFLUENTIAL_ST:g}: {', '.join(rest)})"
+    return text
 
 
 def indices_figure(result: SobolIndices) -> Figure:
-    """Bars of S1 and ST per input with their confidence intervals as error bars."""
-    fig = Figure(figsize=(7, 4.5), layout="constrained")
+    """Horizontal bars of S1 and ST per input (the largest ST on top) with their 95 %
+    confidence intervals as error bars; the input names, dotted config keys, read along
+    the bars' axis, where they have room."""
+    fig = Figure(figsize=(7, 1.6 + 0.55 * len(result.names)), layout="constrained")
     ax = fig.add_subplot()
-    x = np.arange(len(result.names))
-    ax.bar(x - 0.2, result.S1, 0.4, yerr=result.S1_conf, capsize=3, label="first order S1")
-    ax.bar(x + 0.2, result.ST, 0.4, yerr=result.ST_conf, capsize=3, label="total ST")
-    ax.set_xticks(x, list(result.names))
-    ax.set_ylabel("Sobol index [-]")
-    ax.axhline(0.0, color="0.5", lw=0.8)
-    ax.grid(alpha=0.3, axis="y")
-    ax.legend(fontsize="small")
-    fig.suptitle(f"Sobol' indices of {result.output} ({result.samples} cases), bars: 95% "
-                 "confidence intervals")
+    order = result.ranking()[::-1]
+    y = np.arange(len(order))
+    ax.barh(y + 0.2, result.S1[order], 0.4, xerr=result.S1_conf[order], capsize=3,
+            label="first order S1")
+    ax.barh(y - 0.2, result.ST[order], 0.4, xerr=result.ST_conf[order], capsize=3,
+            label="total ST")
+    ax.set_yticks(y, [result.names[i] for i in order])
+    ax.set_xlabel("Sobol index [-]")
+    ax.axvline(0.0, color="0.5", lw=0.8)
+    ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize="small", loc="lower right")
+    cases = f"{result.samples} cases" + (f", n = {result.base_points}" if result.base_points else "")
+    fig.suptitle(f"Sobol' indices of {result.output} ({cases})\nbars: 95% confidence intervals",
+                 fontsize="medium")
     return fig
 
 

@@ -226,6 +226,14 @@ def sweep() -> xr.Dataset:
 
 # Fixtures shared by the test modules (import them by name there).
 
+def heat_map_sweep(grid: np.ndarray) -> xr.Dataset:
+    """A summary sweep of 4 coatings x 6 clearances of B: one metric, its values ``grid``."""
+    return xr.Dataset(
+        {"slider_acceleration_peak_settled": (("B_coating", "B_clearance"), grid,
+                                              {"units": "m s-2", "long_name": "settled peak"})},
+        coords={"B_coating": ["none", "MoS2", "lead", "PTFE"], "B_clearance": np.arange(6) * 1e-4})
+
+
 @pytest.fixture(scope="module")
 def case() -> xr.Dataset:
     """``one_case()``."""

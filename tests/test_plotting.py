@@ -265,3 +265,37 @@ def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):
 def test_life_kind_on_a_case_dataset_says_what_it_needs(tmp_path, case):
     with pytest.raises(PlotError, match="--kind life needs cycle"):
         plot(case, "life", tmp_path / "x.png", dpi=TEST_DPI)
+
+
+def test_categorical_axes_draw_points_and_numeric_axes_lines(sweep_ds):
+    from test_ensemble import synthetic_ensemble
+
+    from clearsweep.plotting import figure
+
+    coatings = figure(sweep_ds, "sweep", ["B_clearance=1e-4"])        # x: B_coating
+    assert coatings.axes[0].get_xlabel() == "coating of B [-]"
+    assert {line.get_linestyle() for line in coatings.axes[0].get_lines()} == {"None"}
+    clearances = figure(sweep_ds, "sweep", ["B_coating=PTFE"])         # x: B_clearance
+    assert {line.get_linestyle() for line in clearances.axes[0].get_lines()} == {"-"}
+    ensemble = figure(synthetic_ensemble(), "sweep", metric="wear_depth_max_final")
+    bars = ensemble.axes[0].containers
+    assert bars and all(c.lines[0].get_linestyle() == "None" for c in bars)
+
+
+def test_one_outlier_does_not_set_the_heat_map_colour_scale():
+    from clearsweep.plotting import figure, robust_limits
+
+    grid = np.arange(24.0).reshape(4, 6)
+    plain = figure(syn.heat_map_sweep(grid), "sweep")
+    assert plain.axes[0].images[0].get_clim() == (0.0, 23.0)
+    assert "percentile" not in plain.axes[1].get_ylabel()
+    grid[3, 0] = 300.0                                   # one outlier among 24 cells
+    fig = figure(syn.heat_map_sweep(grid), "sweep")
+    assert fig.axes[0].images[0].get_clim() == (0.0, 23.0)
+    outlined = [p for p in fig.axes[0].patches if p.get_edgecolor()[:3] == (1.0, 0.0, 0.0)]
+    assert len(outlined) == 1 and outlined[0].get_xy() == (-0.5, 2.5)
+    assert "scale stops at the 98th percentile" in fig.axes[1].get_ylabel()
+    assert "1 outlying cell(s)" in fig.axes[1].get_ylabel()
+    grid[0, 0] = -300.0                                  # and one below
+    assert robust_limits(grid) == (1.0, 23.0)
+    assert robust_limits(grid[:1, :6]) is None           # too few cells to call one an outlier

@@ -4,6 +4,7 @@ kind of a sweep file, and the sensitivity command on a short mechanism sweep."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from click.testing import CliRunner
 
 from clearsweep.cli import main
 from clearsweep.config import ConfigError
-from clearsweep.sensitivity import SensitivityError, sobol_indices, sweep_indices
+from clearsweep.sensitivity import SensitivityError, format_indices, sobol_indices, sweep_indices
 from clearsweep.sweeping import expand, run_sweep
 from clearsweep.sweeping.plan import sample_points
 
@@ -108,3 +109,58 @@ def test_sensitivity_needs_a_saltelli_design():
                     attrs={"sweep_config": yaml.safe_dump({"sweep": {"sample": {"method": "lhs"}}})})
     with pytest.raises(SensitivityError, match="Saltelli"):
         sweep_indices(ds, "y")
+
+
+RANGES = {"x1": [0.0, 1.0], "x2": [0.0, 1.0], "x3": [0.0, 1.0]}
+
+
+def linear_sample(n: int, weights=(1.0, 0.6, 0.01)) -> xr.Dataset:
+    """A Saltelli sampling sweep file of y = sum w_i x_i: ST about 0.73, 0.27, 0."""
+    points = sample_points("saltelli", n, RANGES, seed=1)
+    spec = {"sweep": {"sample": {"method": "saltelli", "n": n, "seed": 1, "ranges": RANGES}}}
+    return xr.Dataset({"y": ("sample", points @ np.asarray(weights))},
+                      attrs={"sweep_config": yaml.safe_dump(spec)})
+
+
+def test_too_few_base_points_to_rank_the_inputs_warn_with_a_larger_n():
+    small = sweep_indices(linear_sample(8), "y")
+    # x1 0.68 +- 0.37 and x2 0.29 +- 0.18: the intervals overlap, the order is unknown
+    assert small.unranked_pairs() == [(0, 1)]
+    warning = small.ranking_warning()
+    assert warning is not None and "n = 8 base points" in warning
+    assert "try sweep.sample.n: 32" in warning and "\n" not in warning
+    assert format_indices(small).splitlines()[1] == "ranked by ST: x1 ? x2 (ST < 0.05: x3)"
+    enough = sweep_indices(linear_sample(64), "y")
+    assert enough.unranked_pairs() == [] and enough.ranking_warning() is None
+    assert format_indices(enough).splitlines()[1] == "ranked by ST: x1 > x2 (ST < 0.05: x3)"
+
+
+def test_negligible_inputs_need_no_order_among_themselves():
+    # one input acts alone: it is told from the others even with 8 base points, and
+    # the inputs whose ST intervals stay below 0.05 are not ranked against each other
+    result = sweep_indices(linear_sample(8, (1.0, 0.0, 0.0)), "y")
+    assert result.ranking_warning() is None
+    assert format_indices(result).splitlines()[1] == "ranked by ST: x1 (ST < 0.05: x2, x3)"
+
+
+@pytest.mark.parametrize("n, warns", [(8, True), (64, False)])
+def test_sensitivity_command_warns_on_stderr_when_the_inputs_cannot_be_ranked(tmp_path, n, warns):
+    path = tmp_path / "linear.nc"
+    linear_sample(n).to_netcdf(path)
+    result = CliRunner().invoke(main, ["sensitivity", str(path), "--output", "y"])
+    assert result.exit_code == 0, result.output
+    assert "ranked by ST: x1" in result.stdout
+    lines = result.stderr.splitlines()
+    if warns:
+        assert len(lines) == 1 and lines[0].startswith("clearsweep: warning: ")
+        assert "n = 8 base points" in lines[0] and "sweep.sample.n: 32" in lines[0]
+    else:
+        assert lines == []
+
+
+def test_the_shipped_sensitivity_example_is_a_saltelli_design_over_four_inputs():
+    config = Path(__file__).resolve().parent.parent / "configs" / "sensitivity.yaml"
+    spec = yaml.safe_load(config.read_text())["sweep"]["sample"]
+    plan = expand(config)
+    assert spec["method"] == "saltelli" and len(spec["ranges"]) == 4
+    assert plan.dims == {"sample": spec["n"] * (len(spec["ranges"]) + 2)}
