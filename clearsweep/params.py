@@ -196,7 +196,7 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
 
     Each clearance joint's ball rests on the socket wall along the ideal mechanism's joint
     reaction at t = 0: the force F on the ball is carried by a contact whose normal n points
-    along -F, at the eccentricity c + delta_s where the elastic force equals |F|. With a
+    along -F, at the eccentricity c + delta_s where the elastic force equals ``|F|``. With a
     wear map (a socket worn by an earlier run), c is the local worn clearance c_eff(n) and
     the modulus the one the contact law uses there.
     """
@@ -273,7 +273,7 @@ def member_perturbation(ensemble: EnsembleConfig) -> MemberPerturbation:
 
 def perturbed_offset(nominal: np.ndarray, shift: np.ndarray, clearance: float) -> np.ndarray:
     """Nominal ball-centre offset [m] moved by ``shift * clearance`` and kept within
-    max(|nominal|, clearance) of the socket centre: never deeper in the wall than the seated
+    ``max(|nominal|, clearance)`` of the socket centre: never deeper in the wall than the seated
     start (docs/physics.md section 10)."""
     d = nominal + clearance * shift
     limit = max(float(np.linalg.norm(nominal)), clearance)

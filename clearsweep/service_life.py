@@ -58,7 +58,7 @@ def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
-    """Largest settled |x_slider - x_ideal(theta)| [m] of a block's saved rows: the slider's
+    """Largest settled ``|x_slider - x_ideal(theta)|`` [m] of a block's saved rows: the slider's
     motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
     crank angle reached); NaN when no saved row lies in the settled window."""
     from .params import PRESETS, ideal_slider_x

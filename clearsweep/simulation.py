@@ -126,7 +126,7 @@ class KernelRun:
     deepest: int                #: deepest sub-step level k (2^k sub-steps)
     t_end: float                #: time reached [s] (the stopping step included)
     rk4_steps: int              #: RK4 (sub-)steps taken (dopri5: accepted steps)
-    residual_max: float         #: largest |energy residual| [J]
+    residual_max: float         #: largest ``|energy residual|`` [J]
     ke_peak: float              #: peak kinetic energy [J]
     first_impact: np.ndarray    #: first impact time per joint [s], NaN: none
     wall_time: float            #: seconds the integration took
