@@ -1,4 +1,5 @@
-"""The README's commands run as written (simulated time shortened with --set)."""
+"""The commands of README.md and of the docs pages run as written (simulated time shortened
+with --set)."""
 
 from __future__ import annotations
 
@@ -13,12 +14,13 @@ import xarray as xr
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
+DOCS = ROOT / "docs"
 CLI = [sys.executable, "-m", "clearsweep.cli"]
 
 
-def commands_under(heading: str) -> list[list[str]]:
-    """The clearsweep command lines of the first bash block after ``heading``."""
-    section = README.split(heading, 1)[1]
+def commands_under(heading: str, text: str = README) -> list[list[str]]:
+    """The clearsweep command lines of the first bash block after ``heading`` in ``text``."""
+    section = text.split(heading, 1)[1]
     block = re.search(r"```bash\n(.*?)```", section, re.S).group(1)
     out = []
     for line in block.splitlines():
@@ -49,7 +51,7 @@ def test_quick_start_main_job_runs(tmp_path):
 @pytest.mark.slow
 def test_reproduction_commands_run_as_written(tmp_path):
     (tmp_path / "docs" / "figures").mkdir(parents=True)
-    cmds = commands_under("## Reproducing Jing & Liu (2023)")
+    cmds = commands_under("## Commands", (DOCS / "reproduction.md").read_text())
     assert cmds[0][:2] == ["sweep", "configs/paper.yaml"] and len(cmds) > 5
     for cmd in cmds:
         res = run(cmd, tmp_path)
@@ -75,16 +77,31 @@ def test_run_writes_a_labelled_file_with_units(tmp_path):
         assert "joints:" in ds.attrs["config"] and ds.attrs["numba_version"]
 
 
+def test_run_command_of_the_guide_is_the_one_tested():
+    """docs/runs.md opens with the command test_run_writes_a_labelled_file_with_units runs."""
+    (cmd, *_) = commands_under("# Runs: one case", (DOCS / "runs.md").read_text())
+    assert cmd == ["run", "configs/two_clearances.yaml", "-o", "out.nc"]
+
+
 def test_every_status_code_is_documented():
     from clearsweep.core.layout import STATUS_NAMES
 
-    missing = [name for name in STATUS_NAMES.values() if f"`{name}`" not in README]
-    assert not missing, f"README does not list the status(es) {missing}"
+    for page in ("runs.md", "physics.md"):
+        text = (DOCS / page).read_text()
+        missing = [name for name in STATUS_NAMES.values() if f"`{name}`" not in text]
+        assert not missing, f"docs/{page} does not list the status(es) {missing}"
+
+
+def test_readme_stays_short_and_ci_runs_its_test_command():
+    assert len(README.splitlines()) <= 150
+    (block,) = [b for b in re.findall(r"```bash\n(.*?)```", README, re.S) if "pytest" in b]
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert block.strip() in ci
 
 
 def test_benchmarks_are_run_with_the_project_interpreter():
-    section = README.split("## Benchmarks", 1)[1].split("\n## ", 1)[0]
-    commands = re.findall(r"`([^`]*benchmarks/[^`]*\.py)`", section)
+    text = (ROOT / "benchmarks" / "README.md").read_text()
+    commands = re.findall(r"`(\S*python benchmarks/[^` ]*\.py)", text)
     assert commands and all(c.startswith(".venv/bin/python benchmarks/") for c in commands), commands
     for command in commands:
         assert (ROOT / command.split()[-1]).is_file()
