@@ -11,7 +11,9 @@ and no output file is written. A run whose status is not ``ok`` writes its
 results, reports the status on stderr and exits with 1; so does a run, a sweep
 or a plot whose output file cannot be written (a full disk, a read-only
 folder: one ``clearsweep: error: cannot write ...`` line, nothing left at its
-path).
+path). An output that is one of the command's inputs, or an existing file that
+clearsweep did not write (without ``--overwrite``), is refused before any work
+with exit 2 (:mod:`clearsweep.outputs`).
 """
 
 from __future__ import annotations
