@@ -44,7 +44,7 @@ from .choices import (
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
-from .outputs import OutputError, check_output, is_own_figure
+from .outputs import OVERWRITE_REMEDY, RESUME_REMEDY, OutputError, check_output, is_own_figure
 from .variables import JOINTS
 from .version import __version__
 
@@ -116,11 +116,14 @@ def _case_inputs(config: str, cfg) -> list[tuple[str, str | None]]:
     return [("the config file", config), ("the materials file", cfg.materials_file)]
 
 
-def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool) -> str:
+def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
+               parts_resumed: bool = False) -> str:
     """``-o/--out`` (or its default), refused where it is an input or a file that is not
-    a clearsweep results file (without --overwrite); returns the path."""
+    a clearsweep results file (without --overwrite); returns the path. ``parts_resumed``:
+    --resume of a sweep or ensemble, which --overwrite cannot join."""
     path = out or str(default)
-    check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite)
+    check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite,
+                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY)
     return path
 
 
@@ -169,14 +172,14 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     written, and an interrupted run continues with --resume (exit 130 on interrupt)."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
-    out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite)
+    if cfg.ensemble.members <= 1 and (resume or discard_parts):
+        raise click.UsageError("--resume and --discard-parts act on the parts of an ensemble "
+                               "(ensemble.members > 1); this config runs one case")
+    out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite, resume)
     if cfg.ensemble.members > 1:
         _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
         return
-    if resume or discard_parts:
-        raise click.UsageError("--resume and --discard-parts act on the parts of an ensemble "
-                               "(ensemble.members > 1); this config runs one case")
     from .simulation import simulate
 
     announce_compile(quiet, [cfg.solver.method])
@@ -657,7 +660,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
-        _check_out(given, out, plan.input_files(), overwrite)
+        _check_out(given, out, plan.input_files(), overwrite, resume)
         cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
                                                           max(len(plan.runnable()), 1)))
         click.echo(f"clearsweep: {plan.describe(cores)}", err=True)

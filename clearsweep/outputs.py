@@ -45,6 +45,13 @@ _FIGURE_MARKS = {
 _FIGURE_READ_BYTES = 1 << 20
 
 
+#: What to do about an existing file that clearsweep did not write.
+OVERWRITE_REMEDY = "pass --overwrite to replace it, or choose another output file"
+#: The same where --resume is given and --overwrite would delete the parts that it keeps.
+RESUME_REMEDY = ("move it away and run again (--overwrite would also delete the finished parts "
+                 "that --resume keeps)")
+
+
 class OutputError(ValueError):
     """An output path that is an input of the command, or an existing file clearsweep did not write."""
 
@@ -109,7 +116,7 @@ def is_own_figure(path: str | os.PathLike) -> bool:
 def check_output(path: str | os.PathLike, option: str,
                  inputs: Iterable[tuple[str, str | os.PathLike | None]], *, overwrite: bool,
                  replaceable: Callable[[Path], bool] = is_results_file,
-                 what: str = "a clearsweep results file") -> None:
+                 what: str = "a clearsweep results file", remedy: str = OVERWRITE_REMEDY) -> None:
     """Refuse to write ``path`` over an input, or over an existing file that is not ``replaceable``.
 
     Parameters
@@ -128,6 +135,8 @@ def check_output(path: str | os.PathLike, option: str,
         :func:`is_results_file` or :func:`is_own_figure`.
     what
         Those files, in words, for the message.
+    remedy
+        What the user can do about an existing file that is not ``replaceable``.
 
     Raises
     ------
@@ -144,5 +153,4 @@ def check_output(path: str | os.PathLike, option: str,
             raise OutputError(f"{option} {path} {how} {description} {source}, which this command "
                               "reads; an output never replaces an input: choose another output file")
     if path.exists() and not overwrite and not replaceable(path):
-        raise OutputError(f"{option} {path} exists and is not {what}; pass --overwrite to "
-                          "replace it, or choose another output file")
+        raise OutputError(f"{option} {path} exists and is not {what}; {remedy}")

@@ -186,3 +186,15 @@ def test_files_of_the_same_format_from_elsewhere_are_not_clearsweeps(tmp_path):
 def test_sensitivity_overwrite_without_plot_is_a_usage_error(files):
     result = invoke("sensitivity", "sample.nc", "--output", "y", "--overwrite")
     assert result.exit_code == 2 and "--overwrite acts on the --plot file" in result.output
+
+
+@pytest.mark.parametrize("command", [["run", "ens.yaml", "-q"], ["sweep", "sweep.yaml"]],
+                         ids=["run", "sweep"])
+def test_resume_onto_a_file_clearsweep_did_not_write_says_to_move_it(files, command):
+    """--resume and --overwrite exclude each other: the message does not send the user from
+    one refusal to the other."""
+    (files / "out.nc").write_text("notes\n")
+    result = invoke(*command, "--workers", "1", "-o", "out.nc", "--resume")
+    assert result.exit_code == 2, result.output
+    one_error_line(result, "out.nc exists and is not a clearsweep results file; move it away")
+    assert (files / "out.nc").read_text() == "notes\n"
