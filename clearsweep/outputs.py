@@ -141,8 +141,9 @@ def check_output(path: str | os.PathLike, option: str,
     Raises
     ------
     OutputError
-        ``path`` is one of ``inputs`` (whatever ``overwrite``), or an existing file that is
-        not ``replaceable`` and ``overwrite`` is false.
+        ``path`` is one of ``inputs`` or an existing non-regular file (a device such as
+        ``/dev/null``, a pipe), whatever ``overwrite``; or an existing file that is not
+        ``replaceable`` and ``overwrite`` is false.
     """
     path = Path(path)
     for description, source in inputs:
@@ -152,5 +153,9 @@ def check_output(path: str | os.PathLike, option: str,
                    else "is a hard link to")
             raise OutputError(f"{option} {path} {how} {description} {source}, which this command "
                               "reads; an output never replaces an input: choose another output file")
+    if path.exists() and not path.is_file():
+        # the write renames a new file into place: it would replace the device or pipe itself
+        raise OutputError(f"{option} {path} is not a regular file (a device, a pipe, a socket); "
+                          "an output is written to a file: choose one")
     if path.exists() and not overwrite and not replaceable(path):
         raise OutputError(f"{option} {path} exists and is not {what}; {remedy}")

@@ -198,3 +198,17 @@ def test_resume_onto_a_file_clearsweep_did_not_write_says_to_move_it(files, comm
     assert result.exit_code == 2, result.output
     one_error_line(result, "out.nc exists and is not a clearsweep results file; move it away")
     assert (files / "out.nc").read_text() == "notes\n"
+
+
+@pytest.mark.parametrize("args", [["run", "case.yaml", "-q", "-o", "OUT", "--overwrite"],
+                                  ["plot", "results.nc", "--kind", "slider", "-o", "OUT",
+                                   "--overwrite"]], ids=["run", "plot"])
+def test_an_output_that_is_a_pipe_or_device_is_refused_even_with_overwrite(files, args):
+    """The atomic write renames a new file over the path: `-o /dev/null` (run as root)
+    replaced the device with a results file. A FIFO stands in for it here."""
+    name = "pipe.png" if args[0] == "plot" else "pipe.nc"
+    os.mkfifo(files / name)
+    result = invoke(*[name if a == "OUT" else a for a in args])
+    assert result.exit_code == 2, result.output
+    one_error_line(result, f"{name} is not a regular file")
+    assert (files / name).is_fifo()
