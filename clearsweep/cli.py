@@ -11,7 +11,9 @@ and no output file is written. A run whose status is not ``ok`` writes its
 results, reports the status on stderr and exits with 1; so does a run, a sweep
 or a plot whose output file cannot be written (a full disk, a read-only
 folder: one ``clearsweep: error: cannot write ...`` line, nothing left at its
-path).
+path). An output that is one of the command's inputs, or an existing file that
+clearsweep did not write (without ``--overwrite``), is refused before any work
+with exit 2 (:mod:`clearsweep.outputs`).
 """
 
 from __future__ import annotations
@@ -42,17 +44,19 @@ from .choices import (
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
+from .outputs import OVERWRITE_REMEDY, RESUME_REMEDY, OutputError, check_output, is_own_figure
 from .variables import JOINTS
 from .version import __version__
 
 
 class _Group(click.Group):
-    """Group that reports ``ConfigError``, whichever command raises it, with exit 2."""
+    """Group that reports ``ConfigError`` and ``OutputError``, whichever command raises
+    them, with exit 2."""
 
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
-        except ConfigError as exc:
+        except (ConfigError, OutputError) as exc:
             click.echo(f"clearsweep: error: {exc}", err=True)
             ctx.exit(2)
 
@@ -107,6 +111,28 @@ def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
     return path
 
 
+def _case_inputs(config: str, cfg) -> list[tuple[str, str | None]]:
+    """The files a case config's command reads (for ``outputs.check_output``)."""
+    return [("the config file", config), ("the materials file", cfg.materials_file)]
+
+
+def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
+               parts_resumed: bool = False) -> str:
+    """``-o/--out`` (or its default), refused where it is an input or a file that is not
+    a clearsweep results file (without --overwrite); returns the path. ``parts_resumed``:
+    --resume of a sweep or ensemble, which --overwrite cannot join."""
+    path = out or str(default)
+    check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite,
+                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY)
+    return path
+
+
+def _check_figure(path: str, option: str, inputs, overwrite: bool) -> None:
+    """A figure's output: never an input; an existing file only if clearsweep drew it (or --overwrite)."""
+    check_output(path, option, inputs, overwrite=overwrite, replaceable=is_own_figure,
+                 what="a figure clearsweep drew")
+
+
 _overrides = click.option(
     "--set", "overrides", multiple=True, metavar="KEY=VALUE",
     help="Override a config value, VALUE in YAML (e.g. joints.B.coating=PTFE, "
@@ -131,7 +157,8 @@ def main() -> None:
 @click.option("--resume", is_flag=True,
               help="Ensemble: continue an interrupted run, keeping the members in OUT.parts/.")
 @click.option("--overwrite", is_flag=True,
-              help="Ensemble: delete the members an earlier run left in OUT.parts/.")
+              help="Replace an existing OUT that is not a clearsweep results file; ensemble: "
+                   "also delete the members an earlier run left in OUT.parts/.")
 @click.option("--discard-parts", is_flag=True,
               help="Ensemble: delete the parts in OUT.parts/ that belong to another sweep or "
                    "config; without it such parts make the run refuse.")
@@ -145,13 +172,14 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
     written, and an interrupted run continues with --resume (exit 130 on interrupt)."""
     cfg = load_config(config, overrides)
     check_budget(cfg, allow_large=allow_large, source=config)
+    if cfg.ensemble.members <= 1 and (resume or discard_parts):
+        raise click.UsageError("--resume and --discard-parts act on the parts of an ensemble "
+                               "(ensemble.members > 1); this config runs one case")
+    out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite, resume)
     if cfg.ensemble.members > 1:
         _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
         return
-    if resume or overwrite or discard_parts:
-        raise click.UsageError("--resume, --overwrite and --discard-parts act on the parts of an "
-                               "ensemble (ensemble.members > 1); this config runs one case")
     from .simulation import simulate
 
     announce_compile(quiet, [cfg.solver.method])
@@ -163,7 +191,7 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         # A check on the resolved config (the step bound): name the file it came from.
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
                           exc.got) from None
-    path = _write_or_exit(ctx, ds, out or Path(config).stem + ".nc")
+    path = _write_or_exit(ctx, ds, out)
     if not quiet:
         from .analysis import run_summary_text
 
@@ -190,9 +218,12 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
               help="Delete a checkpoint OUT.life-checkpoint that this run cannot continue (an "
                    "earlier run without --resume, another config or other --set values); "
                    "without it such a checkpoint makes the run refuse.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace an existing OUT that is not a clearsweep results file.")
 @click.pass_context
 def life_command(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-                 allow_large: bool, quiet: bool, resume: bool, discard_checkpoint: bool) -> None:
+                 allow_large: bool, quiet: bool, resume: bool, discard_checkpoint: bool,
+                 overwrite: bool) -> None:
     """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
     clearance growth, coating wear-through and vibration against revolutions.
 
@@ -209,7 +240,7 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
         life_summary_text,
     )
 
-    out = out or Path(config).stem + "_life.nc"
+    out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite)
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
@@ -247,7 +278,7 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
                    f"{path})", err=True)
 
 
-def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
+def _run_ensemble(ctx: click.Context, config: str, cfg, out: str,
                   overrides: tuple[str, ...], allow_large: bool, quiet: bool, workers: int | None,
                   *, resume: bool, overwrite: bool, discard_parts: bool) -> None:
     """``run`` of an ensemble: its members as a sweep of one design (all in one file), under
@@ -258,7 +289,7 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
     if resume and overwrite:
         raise click.UsageError("--resume keeps the finished members and --overwrite deletes "
                                "them; give one")
-    path = Path(out) if out else Path(Path(config).stem + ".nc")
+    path = Path(out)
     try:
         plan = expand({"name": Path(config).stem, "base": cfg.to_dict()}, allow_large=allow_large,
                       too_many_hint="a sweep file with this config as its base runs more: "
@@ -441,10 +472,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
               help=f"Resolution of raster output, {DPI_RANGE[0]} to {DPI_RANGE[1]}.")
 @click.option("--b10", is_flag=True, help="--kind reliability: draw each design's B10 with its "
                                           "interval as error bars instead of R(N).")
+@click.option("--overwrite", is_flag=True,
+              help="Replace an existing OUTPUT that is not a figure clearsweep drew.")
 @click.pass_context
 def plot_command(ctx: click.Context, path: str, kind: str, output: str,
                  select_items: tuple[str, ...], x_axis: str, metric: str | None, dpi: int,
-                 b10: bool) -> None:
+                 b10: bool, overwrite: bool) -> None:
     """Draw a figure from the results file PATH."""
     from .analysis import SelectionError
     from .plotting import PlotError, plot
@@ -452,6 +485,7 @@ def plot_command(ctx: click.Context, path: str, kind: str, output: str,
     if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
         raise click.BadParameter(f"{output!r}: the suffix must be one of "
                                  f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
+    _check_figure(output, "-o/--output", [("the results file", path)], overwrite)
     with open_input(path) as ds:
         try:
             plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
@@ -484,8 +518,10 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
               help="Fix another dimension of VAR (e.g. joint=B); repeatable.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
               help="Also draw the indices with their intervals to this file (.png, .pdf, .svg).")
+@click.option("--overwrite", is_flag=True,
+              help="Replace an existing --plot file that is not a figure clearsweep drew.")
 def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
-                        plot_path: str | None) -> None:
+                        plot_path: str | None, overwrite: bool) -> None:
     """First-order and total Sobol' indices of VAR over the inputs of the Saltelli sampling
     sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib),
     the inputs ranked by ST. Warns on stderr, with a larger n to try, when an influential
@@ -502,6 +538,10 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
     if plot_path and Path(plot_path).suffix.lower() not in OUTPUT_SUFFIXES:
         raise click.BadParameter(f"{plot_path!r}: the suffix must be one of "
                                  f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'--plot'")
+    if plot_path:
+        _check_figure(plot_path, "--plot", [("the results file", path)], overwrite)
+    elif overwrite:
+        raise click.UsageError("--overwrite acts on the --plot file; give --plot")
     with open_input(path) as ds:
         try:
             result = sweep_indices(ds, output, select_items)
@@ -546,7 +586,9 @@ def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str,
               help="Worker processes [default: all cores]; 1 runs the cases in this process.")
 @click.option("--resume", is_flag=True,
               help="Continue an interrupted sweep: keep the cases in OUT.parts/, run the others.")
-@click.option("--overwrite", is_flag=True, help="Delete the parts of an earlier sweep in OUT.parts/.")
+@click.option("--overwrite", is_flag=True,
+              help="Delete the parts of an earlier sweep in OUT.parts/, and replace an existing "
+                   "OUT that is not a clearsweep results file.")
 @click.option("--discard-parts", is_flag=True,
               help="Delete the parts in OUT.parts/ that belong to another sweep (another sweep "
                    "file or other --set values); without it such parts make the sweep refuse.")
@@ -606,7 +648,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     series = _series_selection(keep_series)
     workers = _cap_workers(workers)
     dask_local = _cap_workers(dask_local, "--dask-local")
-    out = out or f"{Path(config).stem}.nc"
+    given, out = out, out or f"{Path(config).stem}.nc"
     cluster = local_client = None
     if backend == "cuda":
         from .gpu import NoCudaDevice, device_name
@@ -618,6 +660,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
+        _check_out(given, out, plan.input_files(), overwrite, resume)
         cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
                                                           max(len(plan.runnable()), 1)))
         click.echo(f"clearsweep: {plan.describe(cores)}", err=True)

@@ -79,6 +79,7 @@ from .choices import (  # noqa: F401
     X_AXES,
 )
 from .dataset import replaced_on_success
+from .outputs import figure_metadata
 
 #: On ``wear-polar`` the largest depth of a joint is drawn as this fraction of the unit radius.
 WEAR_POLAR_EXAGGERATION = 0.3
@@ -766,5 +767,6 @@ def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
     fig = figure(ds, kind, select, x=x, metric=metric, b10=b10)
     # a temporary file renamed into place: a full disk or a kill leaves no partial figure
     with replaced_on_success(out_path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:])
+        fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:],
+                    metadata=figure_metadata(out_path.suffix))
     return fig

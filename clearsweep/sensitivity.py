@@ -244,7 +244,9 @@ def save_figure(fig: Figure, path, dpi: int = 150) -> None:
     from pathlib import Path
 
     from .dataset import replaced_on_success
+    from .outputs import figure_metadata
 
     path = Path(path)
+    fmt = path.suffix.lower()[1:] or "png"
     with replaced_on_success(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=path.suffix.lower()[1:] or "png")
+        fig.savefig(tmp, dpi=dpi, format=fmt, metadata=figure_metadata(fmt))

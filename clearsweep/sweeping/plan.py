@@ -195,6 +195,8 @@ class SweepPlan:
     #: The clearsweep command that runs it (``sweep``; ``run`` for an ensemble config),
     #: named in the hint that continues it.
     command: str = "sweep"
+    #: The case YAML file named by the sweep file's ``base:`` (None: an inline base).
+    base_file: str | None = None
 
     @property
     def dims(self) -> dict[str, int]:
@@ -220,6 +222,16 @@ class SweepPlan:
         """Hash -> resolved config of each distinct case to run, in sweep order."""
         # a case has a hash exactly when it has a config (a skipped point has neither)
         return {c.hash: c.config for c in self.cases if c.hash is not None and c.config is not None}
+
+    def input_files(self) -> list[tuple[str, str]]:
+        """``(description, path)`` of every file the sweep reads: the sweep file, its base
+        file and the materials files of its cases (for ``clearsweep.outputs.check_output``)."""
+        files = [("the sweep file", self.source)] if Path(self.source).is_file() else []
+        if self.base_file:
+            files.append(("the base config", self.base_file))
+        materials = {self.base.materials_file, *(c.materials_file for c in self.runnable().values())}
+        files += [("the materials file", m) for m in sorted(m for m in materials if m)]
+        return files
 
     def slots(self) -> list[SweepSlot]:
         """The sweep points for :func:`clearsweep.sweeping.assemble.write_sweep_netcdf`."""
@@ -726,4 +738,6 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         cases.append(Case(index, case_hash(resolved.to_dict()), resolved))
 
     text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
-    return SweepPlan(name, store, source, text, base, tuple(axes), cases)
+    base_file = doc.get("base")
+    return SweepPlan(name, store, source, text, base, tuple(axes), cases,
+                     base_file=str(base_dir / base_file) if isinstance(base_file, str) else None)

@@ -1,0 +1,161 @@
+"""Output paths: an output never replaces an input, nor a file that clearsweep did not write.
+
+Every command that writes a file checks its output path with :func:`check_output` before any
+work starts:
+
+- An output that is one of the command's inputs (the config, its ``base:`` file, a
+  ``materials_file``, the results file that ``plot`` or ``sensitivity`` reads) is refused, with
+  or without ``--overwrite``. "Is" means the same file: the same path once symbolic links are
+  resolved (:func:`os.path.realpath`), or, where both exist, the same inode
+  (:func:`os.path.samefile`: a hard link).
+- An existing file at the output path is replaced only if clearsweep wrote it: a results file
+  (:func:`is_results_file`: a netCDF file whose global attribute ``source`` is
+  ``clearsweep``, as every run, life run and sweep writes it) or, for a figure, a figure
+  clearsweep drew (:func:`is_own_figure`: the creator :func:`figure_metadata` writes into
+  every figure). Any other existing file needs ``--overwrite``.
+
+The checks raise :class:`OutputError`, which the CLI reports in one line with exit code 2.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+from .version import __version__
+
+#: The global attribute ``source`` of every results file clearsweep writes
+#: (``dataset.build_dataset``, the sweep and life datasets).
+RESULTS_SOURCE = "clearsweep"
+#: First bytes of a netCDF file: classic (CDF1, CDF2, CDF5) and netCDF-4 (HDF5).
+NETCDF_SIGNATURES = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF\r\n\x1a\n")
+#: Creator written into every figure (:func:`figure_metadata`) and looked for by :func:`is_own_figure`.
+FIGURE_CREATOR = f"clearsweep {__version__}"
+#: How each figure format holds :data:`FIGURE_CREATOR` (matplotlib's ``metadata`` keys):
+#: a PNG tEXt chunk ``Software``, the PDF Info entry ``/Creator``, the SVG Dublin Core creator.
+_FIGURE_MARKS = {
+    ".png": (b"\x89PNG\r\n\x1a\n", rb"tEXtSoftware\x00clearsweep "),
+    ".pdf": (b"%PDF-", rb"/Creator \(clearsweep "),
+    ".svg": (b"<?xml", rb"<dc:creator>\s*<cc:Agent>\s*<dc:title>clearsweep "),
+}
+#: Bytes read from each end of a figure when looking for its creator (PNG and SVG hold it
+#: near the start, PDF near the end).
+_FIGURE_READ_BYTES = 1 << 20
+
+
+#: What to do about an existing file that clearsweep did not write.
+OVERWRITE_REMEDY = "pass --overwrite to replace it, or choose another output file"
+#: The same where --resume is given and --overwrite would delete the parts that it keeps.
+RESUME_REMEDY = ("move it away and run again (--overwrite would also delete the finished parts "
+                 "that --resume keeps)")
+
+
+class OutputError(ValueError):
+    """An output path that is an input of the command, or an existing file clearsweep did not write."""
+
+
+def figure_metadata(fmt: str) -> dict[str, str]:
+    """matplotlib ``savefig(metadata=...)`` that marks a figure of format ``fmt`` (``"png"``
+    or ``".png"``, ``pdf``, ``svg``) as drawn by clearsweep."""
+    key = "Software" if fmt.lower().lstrip(".") == "png" else "Creator"
+    return {key: FIGURE_CREATOR}
+
+
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether ``a`` and ``b`` name one file: one inode where both exist (symbolic or hard
+    links), otherwise one path once symbolic links are resolved."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _starts_with(path: Path, signatures: Iterable[bytes]) -> bool:
+    try:
+        with open(path, "rb") as f:
+            head = f.read(16)
+    except OSError:
+        return False
+    return any(head.startswith(s) for s in signatures)
+
+
+def is_results_file(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a netCDF file that clearsweep wrote (global attribute ``source``
+    equal to :data:`RESULTS_SOURCE`)."""
+    path = Path(path)
+    if not _starts_with(path, NETCDF_SIGNATURES):
+        return False
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path, "r") as nc:
+            return getattr(nc, "source", None) == RESULTS_SOURCE
+    except (OSError, RuntimeError, ValueError):
+        return False
+
+
+def is_own_figure(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a figure clearsweep drew: a PNG, PDF or SVG file (as its suffix
+    says) whose creator is :data:`FIGURE_CREATOR` of any version."""
+    path = Path(path)
+    mark = _FIGURE_MARKS.get(path.suffix.lower())
+    if mark is None or not _starts_with(path, [mark[0]]):
+        return False
+    try:
+        with open(path, "rb") as f:
+            head = f.read(_FIGURE_READ_BYTES)
+            f.seek(max(os.fstat(f.fileno()).st_size - _FIGURE_READ_BYTES, len(head)))
+            tail = f.read()
+    except OSError:
+        return False
+    return re.search(mark[1], head + tail) is not None
+
+
+def check_output(path: str | os.PathLike, option: str,
+                 inputs: Iterable[tuple[str, str | os.PathLike | None]], *, overwrite: bool,
+                 replaceable: Callable[[Path], bool] = is_results_file,
+                 what: str = "a clearsweep results file", remedy: str = OVERWRITE_REMEDY) -> None:
+    """Refuse to write ``path`` over an input, or over an existing file that is not ``replaceable``.
+
+    Parameters
+    ----------
+    path
+        The output file.
+    option
+        How the user gave it, named in the message (``"-o/--out"``).
+    inputs
+        ``(description, path)`` of every file the command reads (``("the config file",
+        "a.yaml")``); ``None`` paths are skipped.
+    overwrite
+        ``--overwrite``: an existing file that is not ``replaceable`` may be replaced.
+    replaceable
+        Which existing files are the command's own output, replaced without ``--overwrite``:
+        :func:`is_results_file` or :func:`is_own_figure`.
+    what
+        Those files, in words, for the message.
+    remedy
+        What the user can do about an existing file that is not ``replaceable``.
+
+    Raises
+    ------
+    OutputError
+        ``path`` is one of ``inputs`` or an existing non-regular file (a device such as
+        ``/dev/null``, a pipe), whatever ``overwrite``; or an existing file that is not
+        ``replaceable`` and ``overwrite`` is false.
+    """
+    path = Path(path)
+    for description, source in inputs:
+        if source is not None and same_file(path, source):
+            how = ("is" if os.path.abspath(path) == os.path.abspath(source)
+                   else "resolves to" if os.path.realpath(path) == os.path.realpath(source)
+                   else "is a hard link to")
+            raise OutputError(f"{option} {path} {how} {description} {source}, which this command "
+                              "reads; an output never replaces an input: choose another output file")
+    if path.exists() and not path.is_file():
+        # the write renames a new file into place: it would replace the device or pipe itself
+        raise OutputError(f"{option} {path} is not a regular file (a device, a pipe, a socket); "
+                          "an output is written to a file: choose one")
+    if path.exists() and not overwrite and not replaceable(path):
+        raise OutputError(f"{option} {path} exists and is not {what}; {remedy}")
