@@ -40,11 +40,12 @@ def format_bytes(n: float) -> str:
     return f"{n:.3g} PiB"      # pragma: no cover
 
 
-#: Wall time of one output-grid RK4 step on one core of this project's 2-core x86-64 machine
-#: [s], for the time estimates that ``validate`` and ``--dry-run`` print, measured on whole
-#: sweeps (benchmarks/README.md, "Time estimates"): it includes the contact sub-steps, the
-#: wear map and the writing of each case's results, not only the bare step.
-SECONDS_PER_STEP = 3e-6
+#: Wall time of one output-grid RK4 step per worker on this project's 2-core x86-64 machine
+#: [s], for the time estimates that ``sweep``, ``validate`` and ``--dry-run`` print, measured
+#: on whole sweeps (benchmarks/README.md, "Time estimates": the main job 9.2-12 us, the
+#: shipped ensemble 10.4-15 us): it counts the contact sub-steps, the wear map, each case's
+#: start and the writing of its results, not only the bare step (2.8 us).
+SECONDS_PER_STEP = 1e-5
 
 
 def duration_text(seconds: float) -> str:

@@ -71,10 +71,11 @@ def error_line(exc: click.ClickException) -> str:
     return f"clearsweep: {kind}: {message}"
 
 
-class _Group(click.Group):
-    """Group that reports every error as one line on stderr with its exit code: click's own
-    usage errors (exit 2), a ``ConfigError`` whichever command raises it (exit 2), a
-    :class:`CommandFailed` (its code) and Ctrl-C (exit 130)."""
+class _Command(click.Command):
+    """A command that reports every error as one line on stderr with its exit code: click's own usage
+    errors (exit 2), a ``ConfigError`` whichever command raises it (exit 2), a
+    :class:`CommandFailed` (its code) and Ctrl-C (exit 130), whether it runs under the group
+    or on its own (a script or a test may call one): click runs in non-standalone mode."""
 
     def invoke(self, ctx: click.Context):
         try:
@@ -99,6 +100,12 @@ class _Group(click.Group):
             click.echo(error_line(CommandFailed("stopped by Ctrl-C", 130)), err=True)
             code = 130
         sys.exit(code if isinstance(code, int) else 0)
+
+
+class _Group(_Command, click.Group):
+    """The ``clearsweep`` group: its commands are :class:`_Command`, as it is."""
+
+    command_class = _Command
 
 
 _allow_large = click.option(

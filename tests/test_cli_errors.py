@@ -71,6 +71,9 @@ def test_every_command_has_help_quiet_and_one_line_usage_errors(command):
     assert "--output" not in helped.stdout          # -o/--out names every output file
     assert_error(invoke(command, "--no-such-option"), 2, "no such option '--no-such-option'",
                  f"(see 'clearsweep {command} --help')")
+    # the command called on its own (a script, a test) reports the same way
+    alone = CliRunner().invoke(main.commands[command], ["--no-such-option"], prog_name=command)
+    assert_error(alone, 2, "no such option '--no-such-option'", f"(see '{command} --help')")
 
 
 # (args, exit code, words of the error line); files from the `files` fixture

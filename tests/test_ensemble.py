@@ -138,9 +138,9 @@ def test_a_sweep_cannot_vary_the_member_index():
         expand(doc)
 
 
-def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path):
+def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path, process_pool):
     one = run_sweep(sweep_doc(3), tmp_path / "one.nc", workers=1, progress=False)
-    two = run_sweep(sweep_doc(3), tmp_path / "two.nc", workers=2, progress=False)
+    two = run_sweep(sweep_doc(3), tmp_path / "two.nc", client=process_pool, progress=False)
     with one, two:
         xr.testing.assert_identical(drop_timing(one).load(), drop_timing(two).load())
         assert list(one["members_ok"].values) == [3, 3]

@@ -171,18 +171,19 @@ def test_skip_rules_and_shipped_configs():
 
 # ---------------------------------------------------------------------------- running
 
-def test_serial_processes_and_dask_give_identical_results(tmp_path):
-    from distributed import Client, LocalCluster
+def test_serial_processes_and_dask_give_identical_results(tmp_path, process_pool, dask_cluster):
+    """One process, the session's warm pool, a Dask client and a scheduler address
+    (tests/conftest.py); test_a_worker_that_dies_once_is_retried_on_a_fresh_one runs a
+    sweep on a pool of its own."""
+    from distributed import Client
 
     cfg = write_sweep(tmp_path, SMALL)
     serial = run_sweep(cfg, tmp_path / "serial.nc", workers=1, progress=False)
-    pool = run_sweep(cfg, tmp_path / "pool.nc", workers=2, progress=False)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
-        with Client(cluster) as client:
-            dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
-        by_address = run_sweep(cfg, tmp_path / "address.nc", client=cluster.scheduler_address,
-                               progress=False)
+    pool = run_sweep(cfg, tmp_path / "pool.nc", client=process_pool, progress=False)
+    with Client(dask_cluster) as client:
+        dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
+    by_address = run_sweep(cfg, tmp_path / "address.nc", client=dask_cluster.scheduler_address,
+                           progress=False)
     with serial, pool, dask, by_address:
         assert (serial["status"] == "ok").all()
         assert serial.attrs["sweep_dims"] == "B_coating clearance_joints"
