@@ -36,6 +36,15 @@ def dask_cluster():
 
 
 @pytest.fixture(scope="session")
+def two_clearances_1s():
+    """One crank turn (the default 1 s) with 0.25 mm clearance at A and B, everything else
+    the defaults: test_engine_clearance and test_statistics both check it."""
+    from clearsweep.simulation import simulate
+
+    return simulate({"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}})
+
+
+@pytest.fixture(scope="session")
 def short_life_cli(tmp_path_factory):
     """``clearsweep life`` of tests/test_service_life.py's SHORT_LIFE run, once per session:
     ``(output file, click result)``. test_service_life and test_report_summary read it."""

@@ -420,6 +420,7 @@ def test_two_runs_of_an_ensemble_on_one_output_refuse_in_one_line(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_sigint_stops_a_run_of_an_ensemble_with_130_and_the_resume_command(tmp_path):
     """Ctrl-C printed "Aborted!" and exited 1, and the next run recomputed every member."""
     import os

@@ -142,6 +142,7 @@ def test_a_life_figure_keeps_its_text_apart(life_ds):
     assert layout_problems(figure(life_ds, "life")) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("b10", [False, True])
 def test_a_reliability_figure_keeps_its_text_apart(reliability_ds, b10):
     assert layout_problems(figure(reliability_ds, "reliability", b10=b10)) == []

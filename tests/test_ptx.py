@@ -59,6 +59,7 @@ def report():
     return ptx.ptxas_report(ptx.compile_run_cases_ptx())
 
 
+@pytest.mark.slow
 def test_run_cases_compiles_and_assembles_for_sm_90(report, record_property, capsys):
     record_property("ptxas", report.line())
     with capsys.disabled():

@@ -111,6 +111,7 @@ def small_sweep(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 def test_a_reliability_sweep_is_bit_identical_on_one_and_two_workers(tmp_path, small_sweep,
                                                                      process_pool):
     with xr.open_dataset(small_sweep) as one, \
@@ -226,6 +227,7 @@ def test_cli_bad_reliability_input_is_one_line_and_exit_2(tmp_path):
 
 # ---------------------------------------------------------------------------- motion error
 
+@pytest.mark.slow
 def test_motion_error_is_zero_for_the_ideal_mechanism_and_read_from_the_settled_rows():
     from clearsweep.config import resolve_materials
     from clearsweep.params import PRESETS, ideal_slider_x, pack

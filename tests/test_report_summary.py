@@ -139,6 +139,7 @@ def test_a_failed_case_is_left_out_of_best_and_worst():
     assert math.isfinite(float(lowest.split()[1]))
 
 
+@pytest.mark.slow
 def test_a_life_run_says_nothing_of_an_ideal_uncoated_joint(short_life_cli):
     """configs/one_clearance.yaml: A ideal and uncoated; the life run printed "max depth
     (A, B) nan, ..." per block and "coating of A: not worn through"."""

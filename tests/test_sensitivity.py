@@ -158,6 +158,7 @@ def test_sensitivity_command_warns_on_stderr_when_the_inputs_cannot_be_ranked(tm
         assert lines == []
 
 
+@pytest.mark.slow
 def test_the_shipped_sensitivity_example_is_a_saltelli_design_over_four_inputs():
     config = Path(__file__).resolve().parent.parent / "configs" / "sensitivity.yaml"
     spec = yaml.safe_load(config.read_text())["sweep"]["sample"]

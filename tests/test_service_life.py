@@ -82,6 +82,7 @@ def short_life(short_life_cli):
     return xr.load_dataset(short_life_cli[0])
 
 
+@pytest.mark.slow
 def test_volume_conserved_across_blocks_and_jumps(short_life):
     ds = short_life
     assert ds.sizes["cycle"] >= 3 and float(ds.jump_revolutions.sum()) > 0
@@ -129,6 +130,7 @@ def test_life_agrees_with_a_direct_simulation():
     assert h_life == pytest.approx(h_direct, rel=0.2)       # measured +12.7 %
 
 
+@pytest.mark.slow
 def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life_cli, short_life):
     from click.testing import CliRunner
 
@@ -156,6 +158,7 @@ def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life_c
     assert f"  B at the end: max depth {depth:.4g} m" in report.stdout
 
 
+@pytest.mark.slow
 def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
     """store: life runs every case as a life run and keeps revolutions to each limit and the
     final wear per design; the MoS2 design is the short life run above, bit for bit."""

@@ -171,6 +171,7 @@ def test_skip_rules_and_shipped_configs():
 
 # ---------------------------------------------------------------------------- running
 
+@pytest.mark.slow
 def test_serial_processes_and_dask_give_identical_results(tmp_path, process_pool, dask_cluster):
     """One process, the session's warm pool, a Dask client and a scheduler address
     (tests/conftest.py); test_a_worker_that_dies_once_is_retried_on_a_fresh_one runs a
@@ -358,6 +359,7 @@ def test_cli_prints_the_size_first_and_needs_yes_above_the_limit(tmp_path, monke
     assert "on 1 worker " in first and "results up to " in first
 
 
+@pytest.mark.slow
 def test_cli_dask_local_cluster(tmp_path):
     out = tmp_path / "d.nc"
     result = cli(write_sweep(tmp_path, SMALL), "-o", out, "--dask-local", "2", "--no-progress")
@@ -457,6 +459,7 @@ def die_once_on_ptfe(cfg):
     return simulate(cfg)
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_every_time_fails_its_case_and_the_sweep_goes_on(tmp_path):
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE", "MoS2"]}})
     out = tmp_path / "w.nc"
@@ -471,6 +474,7 @@ def test_a_worker_that_dies_every_time_fails_its_case_and_the_sweep_goes_on(tmp_
         assert ds.attrs["sweep_failed"] == 1
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_once_is_retried_on_a_fresh_one(tmp_path):
     base = {**BASE, "name": str(tmp_path / "case")}
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE", "lead"]}}, base=base)
@@ -483,6 +487,7 @@ def test_a_worker_that_dies_once_is_retried_on_a_fresh_one(tmp_path):
     assert len(attempts) == 2 and attempts[0] != attempts[1]
 
 
+@pytest.mark.slow
 def test_a_dying_worker_of_the_callers_pool_stops_the_sweep_and_keeps_finished_cases(tmp_path):
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]}})
     out = tmp_path / "w.nc"
@@ -525,6 +530,7 @@ SLOW = {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]},
 SLOW_BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.4}}
 
 
+@pytest.mark.slow
 def test_resume_after_sigkill_runs_every_case_once(tmp_path):
     cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
     out = tmp_path / "k.nc"
@@ -563,6 +569,7 @@ def test_resume_after_sigkill_runs_every_case_once(tmp_path):
         xr.testing.assert_identical(drop_timing(reference.load()), drop_timing(resumed_ds.load()))
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
     cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
     out = tmp_path / "c.nc"
