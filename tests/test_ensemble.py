@@ -307,14 +307,14 @@ def test_shipped_coating_ensemble_expands_to_192_members():
 
 
 @pytest.mark.slow
-def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path):
+def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path, process_pool):
     from click.testing import CliRunner
 
     from clearsweep.cli import report_command
 
     out = tmp_path / "coating_ensemble.nc"
     # shortened to 0.1 s per member: the verdicts come from the spread, not from the length
-    run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, workers=2, progress=False,
+    run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, client=process_pool, progress=False,
               overrides=["solver.duration=0.1"]).close()
     report = CliRunner().invoke(report_command, [str(out), "--full"], catch_exceptions=False)
     assert "+- 95% CI" in report.output and " not distinguishable" in report.output

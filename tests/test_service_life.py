@@ -159,7 +159,7 @@ def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life_c
 
 
 @pytest.mark.slow
-def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
+def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life, process_pool):
     """store: life runs every case as a life run and keeps revolutions to each limit and the
     final wear per design; the MoS2 design is the short life run above, bit for bit."""
     from clearsweep.config import load_config
@@ -168,7 +168,7 @@ def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
     base = load_config(CASE, SHORT_LIFE).to_dict()
     doc = {"name": "life_sweep", "store": "life", "base": base,
            "sweep": {"grid": {"joints.B.coating": ["MoS2", "PTFE"]}}}
-    with run_sweep(doc, tmp_path / "life_sweep.nc", workers=1, progress=False) as ds:
+    with run_sweep(doc, tmp_path / "life_sweep.nc", client=process_pool, progress=False) as ds:
         assert list(ds.status.values) == ["ok", "ok"]
         assert "time" not in ds.dims and "cycle" not in ds.dims
         mos2 = ds.sel(B_coating="MoS2")
