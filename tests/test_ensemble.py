@@ -155,6 +155,7 @@ def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path, process_poo
         assert one.attrs["ensemble_confidence_level"] == CONFIDENCE_LEVEL
 
 
+@pytest.mark.slow
 def test_another_seed_gives_other_members(tmp_path):
     a = run_sweep(sweep_doc(3, seed=1), workers=1, progress=False)
     b = run_sweep(sweep_doc(3, seed=2), workers=1, progress=False)

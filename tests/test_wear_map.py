@@ -112,6 +112,7 @@ def test_max_depth_converges_as_the_grid_is_refined(refinement):
         assert (np.abs(d[2] - d[1]) < np.abs(d[1] - d[0])).all()
 
 
+@pytest.mark.slow
 def test_worn_volume_does_not_depend_on_the_grid(refinement):
     v = {k: ds.wear_volume.values for k, ds in refinement.items()}
     for n in (72, 288):
