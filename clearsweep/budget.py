@@ -40,6 +40,36 @@ def format_bytes(n: float) -> str:
     return f"{n:.3g} PiB"      # pragma: no cover
 
 
+#: Wall time of one output-grid RK4 step per worker on this project's 2-core x86-64 machine
+#: [s], for the time estimates that ``sweep``, ``validate`` and ``--dry-run`` print, measured
+#: on whole sweeps (benchmarks/README.md, "Time estimates": the main job 9.2-12 us, the
+#: shipped ensemble 10.4-15 us): it counts the contact sub-steps, the wear map, each case's
+#: start and the writing of its results, not only the bare step (2.8 us).
+SECONDS_PER_STEP = 1e-5
+
+
+def duration_text(seconds: float) -> str:
+    """``seconds`` in the largest unit that keeps it at least 1 (``2.5 min``)."""
+    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.2g} s"
+
+
+def time_text(steps: float, workers: int | None = None) -> str:
+    """The estimated wall time of ``steps`` RK4 steps shared by ``workers`` cores
+    (``None``: one core), with the cost per step it assumes."""
+    where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
+    return (f"about {duration_text(steps * SECONDS_PER_STEP / (workers or 1))} {where} "
+            f"(at {SECONDS_PER_STEP * 1e6:g} us per step)")
+
+
+def case_plan_text(source: str, est: Estimate) -> str:
+    """What ``clearsweep run CONFIG --dry-run`` prints for one case."""
+    return (f"{source}: one case, {est.steps:,} RK4 steps, memory up to {est.describe()}; "
+            f"{time_text(est.steps)}; nothing run (--dry-run)")
+
+
 def _per_row_output_values() -> int:
     """float64 per saved row in the output variables (every variable with a time dimension)."""
     from .variables import AXES, CASE_VARIABLES, JOINTS

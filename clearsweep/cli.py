@@ -5,15 +5,18 @@ or ``clearsweep validate`` does not load Numba, xarray or matplotlib; an import
 that fails (a broken matplotlib) is reported by the command that needs it, as
 an error, not hidden as an unknown command.
 
-Every :class:`~clearsweep.config.ConfigError`, whichever subcommand raises it,
-is reported on stderr as ``clearsweep: error: <message>`` with exit code 2,
-and no output file is written. A run whose status is not ``ok`` writes its
-results, reports the status on stderr and exits with 1; so does a run, a sweep
-or a plot whose output file cannot be written (a full disk, a read-only
-folder: one ``clearsweep: error: cannot write ...`` line, nothing left at its
-path). An output that is one of the command's inputs, or an existing file that
-clearsweep did not write (without ``--overwrite``), is refused before any work
-with exit 2 (:mod:`clearsweep.outputs`).
+Every error, click's usage errors included, is one line on stderr,
+``clearsweep: error: <message>`` (``clearsweep: interrupted: ...`` on Ctrl-C), formatted
+in one place (:func:`error_line`), with the exit code: 2 for bad input or options (a
+:class:`~clearsweep.config.ConfigError` from any subcommand, an unknown option, a missing
+argument), 1 for failed work (a run, a life run or ensemble members that stop with a status
+other than ``ok``, failed sweep cases, an output file that cannot be written: nothing left
+at its path), 130 on interrupt. stdout carries what a command prints as its result (a
+summary, a table, a plan); stderr carries progress, notes and ``clearsweep: wrote PATH``.
+An output that is one of the command's inputs, or an existing file that clearsweep did not
+write (without ``--overwrite``), is refused before any work with exit 2
+(:mod:`clearsweep.outputs`).
+Every command takes ``-q``; ``run``, ``sweep`` and ``life`` take ``--dry-run``.
 """
 
 from __future__ import annotations
@@ -24,14 +27,14 @@ import shlex
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 
 if TYPE_CHECKING:
     import xarray as xr
 
-from .budget import check_budget
+from .budget import case_plan_text, check_budget
 from .choices import (
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -49,16 +52,64 @@ from .variables import JOINTS
 from .version import __version__
 
 
-class _Group(click.Group):
-    """Group that reports ``ConfigError`` and ``OutputError``, whichever command raises
-    them, with exit 2."""
+class CommandFailed(click.ClickException):
+    """A command that cannot finish: ``message`` becomes one ``clearsweep: error: ...`` line
+    (``clearsweep: interrupted: ...`` for exit 130) and the process exits with ``exit_code``:
+    2 bad input or options, 1 failed work, 130 interrupted."""
+
+    def __init__(self, message: str, exit_code: int = 1) -> None:
+        super().__init__(message)
+        self.exit_code = exit_code  # type: ignore[misc]  # click's class default is 1
+
+
+def error_line(exc: click.ClickException) -> str:
+    """The one stderr line of ``exc``, whichever command or click itself raised it: the only
+    place that formats an error (a usage error names the help that lists the options)."""
+    message = exc.format_message().replace("\n", " ").strip()
+    if isinstance(exc, click.UsageError):
+        if message[:1].isupper() and message[1:2].islower():   # click's "No such option: ..."
+            message = message[0].lower() + message[1:]
+        if exc.ctx is not None:
+            message = f"{message.removesuffix('.')} (see '{exc.ctx.command_path} --help')"
+    kind = "interrupted" if exc.exit_code == 130 else "error"
+    return f"clearsweep: {kind}: {message}"
+
+
+class _Command(click.Command):
+    """A command that reports every error as one line on stderr with its exit code: click's own usage
+    errors (exit 2), a ``ConfigError`` or ``OutputError`` whichever command raises it (exit 2), a
+    :class:`CommandFailed` (its code) and Ctrl-C (exit 130), whether it runs under the group
+    or on its own (a script or a test may call one): click runs in non-standalone mode."""
 
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
         except (ConfigError, OutputError) as exc:
-            click.echo(f"clearsweep: error: {exc}", err=True)
-            ctx.exit(2)
+            raise CommandFailed(str(exc), 2) from None
+        except KeyboardInterrupt:
+            raise CommandFailed("stopped by Ctrl-C", 130) from None
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, False, **extra)
+        try:
+            code = super().main(args, prog_name, complete_var, False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:   # bare `clearsweep`: its help
+            click.echo(exc.ctx.get_help() if exc.ctx else "")
+            code = 0
+        except click.ClickException as exc:
+            click.echo(error_line(exc), err=True)
+            code = exc.exit_code
+        except click.Abort:
+            click.echo(error_line(CommandFailed("stopped by Ctrl-C", 130)), err=True)
+            code = 130
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+class _Group(_Command, click.Group):
+    """The ``clearsweep`` group: its commands are :class:`_Command`, as it is."""
+
+    command_class = _Command
 
 
 _allow_large = click.option(
@@ -98,7 +149,7 @@ def _cap_workers(workers: int | None, option: str = "--workers") -> int | None:
     return workers
 
 
-def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
+def _write_or_exit(ds: Any, out: str | Path) -> Path:
     """Write ``ds`` to ``out`` atomically; an unwritable path is one error line and exit 1."""
     from .dataset import write_netcdf_atomic
 
@@ -106,8 +157,7 @@ def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
     try:
         write_netcdf_atomic(ds, path)
     except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
-        ctx.exit(1)
+        _fail(f"cannot write {path}: {exc.strerror or exc}", 1)
     return path
 
 
@@ -133,13 +183,27 @@ def _check_figure(path: str, option: str, inputs, overwrite: bool) -> None:
                  what="a figure clearsweep drew")
 
 
+def _wrote(path: str | Path, quiet: bool, detail: str = "") -> None:
+    """Say on stderr which file a command wrote (stdout carries what it prints as its result:
+    a summary, a table, a plan), unless ``quiet``."""
+    if not quiet:
+        click.echo(f"clearsweep: wrote {path}{detail}", err=True)
+
+
+_quiet = click.option("-q", "--quiet", is_flag=True,
+                      help="Print nothing but errors and warnings.")
+_dry_run = click.option("--dry-run", is_flag=True,
+                        help="Print the plan (cases, RK4 steps, memory, time estimate) and exit, "
+                             "simulating nothing and writing no file.")
+
+
 _overrides = click.option(
     "--set", "overrides", multiple=True, metavar="KEY=VALUE",
     help="Override a config value, VALUE in YAML (e.g. joints.B.coating=PTFE, "
          "solver.baumgarte=[50,50]); repeatable.")
 
 
-@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group("clearsweep", cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="clearsweep")
 def main() -> None:
     """Dynamics and wear of the RSSP mechanism with clearance and coated spherical joints."""
@@ -151,7 +215,8 @@ def main() -> None:
               help="Output netCDF file [default: <config stem>.nc in the current folder].")
 @_overrides
 @_allow_large
-@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@_quiet
+@_dry_run
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Worker processes for the members of an ensemble [default: all cores].")
 @click.option("--resume", is_flag=True,
@@ -162,23 +227,30 @@ def main() -> None:
 @click.option("--discard-parts", is_flag=True,
               help="Ensemble: delete the parts in OUT.parts/ that belong to another sweep or "
                    "config; without it such parts make the run refuse.")
-@click.pass_context
-def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-        allow_large: bool, quiet: bool, workers: int | None, resume: bool, overwrite: bool,
+def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: bool,
+        quiet: bool, dry_run: bool, workers: int | None, resume: bool, overwrite: bool,
         discard_parts: bool) -> None:
     """Simulate one case described by CONFIG (YAML) and write its results; with
     ``ensemble.members > 1``, every member (a ``member`` dimension) and the ensemble
     statistics, run as a sweep: finished members are kept in OUT.parts/ until OUT is
     written, and an interrupted run continues with --resume (exit 130 on interrupt)."""
     cfg = load_config(config, overrides)
-    check_budget(cfg, allow_large=allow_large, source=config)
+    est = check_budget(cfg, allow_large=allow_large, source=config)
     if cfg.ensemble.members <= 1 and (resume or discard_parts):
         raise click.UsageError("--resume and --discard-parts act on the parts of an ensemble "
                                "(ensemble.members > 1); this config runs one case")
-    out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite, resume)
+    if dry_run:
+        out = out or Path(config).stem + ".nc"
+    else:
+        out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite,
+                         resume)
     if cfg.ensemble.members > 1:
-        _run_ensemble(ctx, config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
-                      resume=resume, overwrite=overwrite, discard_parts=discard_parts)
+        _run_ensemble(config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
+                      resume=resume, overwrite=overwrite, discard_parts=discard_parts,
+                      dry_run=dry_run)
+        return
+    if dry_run:
+        click.echo(case_plan_text(config, est))
         return
     from .simulation import simulate
 
@@ -191,18 +263,17 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
         # A check on the resolved config (the step bound): name the file it came from.
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
                           exc.got) from None
-    path = _write_or_exit(ctx, ds, out)
+    path = _write_or_exit(ds, out)
     if not quiet:
         from .analysis import run_summary_text
 
         click.echo(run_summary_text(ds))
-        click.echo(f"wrote {path}")
+    _wrote(path, quiet)
     status = str(ds["status"].values)
     if status != "ok":
         hint = ds.attrs.get("status_hint")
-        click.echo(f"clearsweep: run stopped: {status} (results so far in {path})"
-                   + (f"; {hint}" if hint else ""), err=True)
-        ctx.exit(1)
+        _fail(f"run stopped: {status} (results so far in {path})" + (f"; {hint}" if hint else ""),
+              1)
 
 
 @main.command("life")
@@ -211,7 +282,8 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
               help="Output netCDF file [default: <config stem>_life.nc in the current folder].")
 @_overrides
 @_allow_large
-@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@_quiet
+@_dry_run
 @click.option("--resume", is_flag=True,
               help="Continue an interrupted life run from its checkpoint OUT.life-checkpoint.")
 @click.option("--discard-checkpoint", is_flag=True,
@@ -220,9 +292,8 @@ def run(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, 
                    "without it such a checkpoint makes the run refuse.")
 @click.option("--overwrite", is_flag=True,
               help="Replace an existing OUT that is not a clearsweep results file.")
-@click.pass_context
-def life_command(ctx: click.Context, config: str, out: str | None, overrides: tuple[str, ...],
-                 allow_large: bool, quiet: bool, resume: bool, discard_checkpoint: bool,
+def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow_large: bool,
+                 quiet: bool, dry_run: bool, resume: bool, discard_checkpoint: bool,
                  overwrite: bool) -> None:
     """Service life of CONFIG by cycle jumps (its `life:` section; docs/service_life.md):
     clearance growth, coating wear-through and vibration against revolutions.
@@ -237,9 +308,13 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
         LifeState,
         checkpoint_path_for,
         life,
+        life_plan_text,
         life_summary_text,
     )
 
+    if dry_run:
+        click.echo(life_plan_text(cfg, config, allow_large=allow_large))
+        return
     out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite)
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
@@ -261,30 +336,29 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
         ds = life(cfg, allow_large=allow_large, progress=progress, checkpoint=checkpoint,
                   resume=resume, discard_checkpoint=discard_checkpoint, resumed=resumed)
     except CheckpointError as exc:
-        _fail(f"error: {exc}", 2)
+        _fail(str(exc), 2)
     except LifeInterrupted as exc:
-        _fail(f"interrupted: {exc.blocks} finished blocks are kept in {checkpoint}; continue "
+        _fail(f"{exc.blocks} finished blocks are kept in {checkpoint}; continue "
               f"with: {_resume_command('life', config, out, overrides)}" if exc.blocks
-              else "interrupted before a block finished", 130)
+              else "before a block finished", 130)
     except OSError as exc:
-        _fail(f"error: cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
-    path = _write_or_exit(ctx, ds, out)
+        _fail(f"cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
+    path = _write_or_exit(ds, out)
     checkpoint.unlink(missing_ok=True)
     if not quiet:
         click.echo(life_summary_text(ds))
-        click.echo(f"wrote {path}")
+    _wrote(path, quiet)
     if str(ds["stop_reason"].values).startswith("block_status:"):
-        click.echo(f"clearsweep: life run stopped: {ds['stop_reason'].values} (results so far in "
-                   f"{path})", err=True)
+        _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})", 1)
 
 
-def _run_ensemble(ctx: click.Context, config: str, cfg, out: str,
-                  overrides: tuple[str, ...], allow_large: bool, quiet: bool, workers: int | None,
-                  *, resume: bool, overwrite: bool, discard_parts: bool) -> None:
+def _run_ensemble(config: str, cfg, out: str, overrides: tuple[str, ...],
+                  allow_large: bool, quiet: bool, workers: int | None, *, resume: bool,
+                  overwrite: bool, discard_parts: bool, dry_run: bool) -> None:
     """``run`` of an ensemble: its members as a sweep of one design (all in one file), under
-    the sweep's rules for its parts."""
+    the sweep's rules for its parts and failures (:func:`_run_sweep_or_fail`)."""
     from .analysis import format_ensemble_report
-    from .sweeping import StoreError, SweepFailed, SweepInterrupted, expand, run_sweep
+    from .sweeping import expand
 
     if resume and overwrite:
         raise click.UsageError("--resume keeps the finished members and --overwrite deletes "
@@ -297,31 +371,54 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str,
     except ConfigError as exc:   # the members' count: name the file it came from
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion, exc.got) from None
     plan.source, plan.command = config, "run"
+    if dry_run:
+        click.echo(plan.plan_text(_plan_workers(plan, workers)))
+        return
     announce_compile(quiet, [cfg.solver.method])
-    try:
-        ds = run_sweep(plan, path, workers=workers, progress=not quiet, allow_large=allow_large,
-                       resume=resume, overwrite=overwrite, discard_parts=discard_parts)
-    except StoreError as exc:
-        _fail(f"error: {exc}", 2)
-    except SweepInterrupted as exc:
-        _interrupted(exc, "run", config, str(path), overrides)
-    except KeyboardInterrupt:
-        _fail("interrupted before any member ran", 130)
-    except SweepFailed as exc:
-        _fail(f"error: {exc}", 1)
-    except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
-        ctx.exit(1)
+    ds = _run_sweep_or_fail(plan, str(path), "run", config, overrides, workers=workers,
+                            progress=not quiet, allow_large=allow_large, resume=resume,
+                            overwrite=overwrite, discard_parts=discard_parts)
     with ds:
         if not quiet:
             click.echo(format_ensemble_report(ds))
-            click.echo(f"wrote {path}")
         failed = int(ds.attrs["sweep_failed"])
         n = int(ds.attrs["sweep_cases"])
+    _wrote(path, quiet)
     if failed:
-        click.echo(f"clearsweep: {failed} of {n} members stopped with a status other than ok "
-                   f"(see the status and message variables in {path})", err=True)
-        ctx.exit(1)
+        _fail(f"{failed} of {n} members stopped with a status other than ok (see the status and "
+              f"message variables in {path})", 1)
+
+
+def _plan_workers(plan, workers: int | None) -> int:
+    """The cores a plan's cases share: ``workers`` (all cores by default), at most one per case."""
+    return min(workers or os.cpu_count() or 1, max(len(plan.runnable()), 1))
+
+
+def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tuple[str, ...],
+                       **options: Any) -> xr.Dataset:
+    """:func:`clearsweep.sweeping.run_sweep` of ``plan`` for ``sweep`` and an ensemble ``run``,
+    its failures each one error line: exit 2 for a bad config or foreign parts, 1 for failed
+    work or an unwritable output (naming the finished cases kept), 130 on interrupt (with the
+    command that continues)."""
+    from .sweeping import PartStore, StoreError, SweepFailed, SweepInterrupted, parts_dir_for, run_sweep
+
+    try:
+        return run_sweep(plan, out, **options)
+    except (ConfigError, StoreError) as exc:
+        _fail(str(exc), 2)
+    except SweepInterrupted as exc:
+        _fail(f"{exc.finished} of {exc.total} cases are finished and kept in {exc.parts_dir}; "
+              f"continue with: {_resume_command(command, config, out, overrides)}", 130)
+    except KeyboardInterrupt:
+        _fail("before any case finished", 130)
+    except SweepFailed as exc:
+        _fail(str(exc), 1)
+    except OSError as exc:
+        parts = parts_dir_for(out)
+        kept = PartStore(parts).finished() if parts.is_dir() else set()
+        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
+                "with --resume" if kept else "")
+        _fail(f"cannot write {exc.filename or out}: {exc.strerror or exc}{note}", 1)
 
 
 @main.command()
@@ -330,12 +427,15 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str,
 @_allow_large
 @click.option("-y", "--yes", is_flag=True,
               help=f"Sweep file: check a sweep of more than {MAX_CASES:,} cases (refused without it).")
-def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bool) -> None:
+@_quiet
+def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bool,
+             quiet: bool) -> None:
     """Check CONFIG and the work and memory it implies, running nothing.
 
     A case config is printed resolved as YAML (its steps, memory and time on
     stderr); a sweep file is checked case by case, and its dimensions, case
-    count, steps, memory and time estimate are printed.
+    count, steps, memory and time estimate are printed. With -q, only the exit status
+    (and an error) tells whether it is valid.
     """
     if file_kind(read_yaml(config, config)) == "sweep":
         from .sweeping import expand
@@ -343,23 +443,29 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES,
                       too_many_hint="clearsweep validate --yes checks them all")
-        click.echo(plan.plan_text(min(os.cpu_count() or 1, max(len(plan.runnable()), 1))))
+        if not quiet:
+            click.echo(plan.plan_text(_plan_workers(plan, None)))
         return
     cfg = load_config(config, overrides)
     est = check_budget(cfg, allow_large=allow_large, source=config)
-    click.echo(dump_config(cfg), nl=False)
-    click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory up to "
-               f"{est.describe()}; run it with `clearsweep run {config}`", err=True)
+    if not quiet:
+        click.echo(dump_config(cfg), nl=False)
+        click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory "
+                   f"up to {est.describe()}; run it with `clearsweep run {config}`", err=True)
 
 
 @main.command()
 @click.option("-m", "--materials-file", type=click.Path(dir_okay=False),
               help="User materials YAML that adds or overrides materials.")
-def materials(materials_file: str | None) -> None:
-    """List the materials, their properties and the source of every value."""
+@_quiet
+def materials(materials_file: str | None, quiet: bool) -> None:
+    """List the materials, their properties and the source of every value (with -q, only
+    check the materials file)."""
     from .materials import format_materials, load_materials
 
-    click.echo(format_materials(load_materials(materials_file)))
+    text = format_materials(load_materials(materials_file))
+    if not quiet:
+        click.echo(text)
 
 
 def open_input(path: str) -> xr.Dataset:
@@ -388,8 +494,9 @@ def open_input(path: str) -> xr.Dataset:
 @click.option("--full", is_flag=True,
               help="Sweep: print every case's tables after the summary (csv and json always "
                    "give them).")
+@_quiet
 def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None,
-                   full: bool) -> None:
+                   full: bool, quiet: bool) -> None:
     """Print the every-step statistics (settled first) and the wear table (paper Tables
     4-5) of a results file PATH (csv and json: the wear table alone).
 
@@ -403,6 +510,10 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     each design's mean -+ the 95 % confidence half-width and the design
     comparisons, each "distinguishable" or "not distinguishable" (--reference
     then picks the designs compared against).
+
+    A life run, a life sweep and a reliability sweep are printed as text: --format other
+    than text, --reference and --full are refused for them (and --metric for a life run).
+    With -q, nothing is printed: only the exit status says whether PATH can be reported.
     """
     from .analysis import (
         SelectionError,
@@ -419,20 +530,17 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     if reference and metric:
         raise click.UsageError("--reference and --metric print different tables; give one of them")
     with open_input(path) as ds:
-        if "cycle" in ds.dims and "stop_reason" in ds:
-            from .service_life import life_summary_text
-
-            click.echo(life_summary_text(ds))
-            return
-        if ds.attrs.get("sweep_store") == "reliability" and not metric and "b10" in ds:
-            from .reliability import reliability_text
-
-            click.echo(reliability_text(ds))
-            return
-        if ds.attrs.get("sweep_store") == "life" and not metric:
-            from .service_life import life_sweep_text
-
-            click.echo(life_sweep_text(ds))
+        text_only = _text_only_report(ds, metric)
+        if text_only is not None:
+            kind, text_of = text_only
+            given = [name for name, on in ((f"--format {fmt}", fmt != "text"),
+                                           ("--reference", bool(reference)),
+                                           ("--metric", bool(metric)), ("--full", full)) if on]
+            if given:
+                raise click.UsageError(f"{given[0]}: {path} is {kind}, which report prints as "
+                                       "text only")
+            if not quiet:
+                click.echo(text_of(ds))
             return
         try:
             summary = (format_sweep_summary(ds, fmt) if fmt in ("text", "markdown")
@@ -453,14 +561,33 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         except SelectionError as exc:
             raise click.UsageError(str(exc)) from exc
         except ValueError as exc:
-            raise click.ClickException(f"{path}: {exc}") from exc
-    click.echo(text)
+            _fail(f"{path}: {exc}", 2)
+    if not quiet:
+        click.echo(text)
+
+
+def _text_only_report(ds: xr.Dataset, metric: str | None):
+    """``(what the file is, its text report)`` for the files ``report`` prints as text only:
+    a life run, a reliability sweep and a life sweep (unless --metric asks for a table)."""
+    if "cycle" in ds.dims and "stop_reason" in ds:
+        from .service_life import life_summary_text
+
+        return "a life run", life_summary_text
+    if ds.attrs.get("sweep_store") == "reliability" and not metric and "b10" in ds:
+        from .reliability import reliability_text
+
+        return "a reliability sweep", reliability_text
+    if ds.attrs.get("sweep_store") == "life" and not metric:
+        from .service_life import life_sweep_text
+
+        return "a life sweep", life_sweep_text
+    return None
 
 
 @main.command("plot")
 @click.argument("path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+@click.option("-o", "--out", required=True, type=click.Path(dir_okay=False),
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Draw only the sweep cases with this coordinate value (repeatable).")
@@ -473,28 +600,30 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 @click.option("--b10", is_flag=True, help="--kind reliability: draw each design's B10 with its "
                                           "interval as error bars instead of R(N).")
 @click.option("--overwrite", is_flag=True,
-              help="Replace an existing OUTPUT that is not a figure clearsweep drew.")
-@click.pass_context
-def plot_command(ctx: click.Context, path: str, kind: str, output: str,
-                 select_items: tuple[str, ...], x_axis: str, metric: str | None, dpi: int,
-                 b10: bool, overwrite: bool) -> None:
+              help="Replace an existing OUT that is not a figure clearsweep drew.")
+@_quiet
+def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], x_axis: str,
+                 metric: str | None, dpi: int, b10: bool, overwrite: bool, quiet: bool) -> None:
     """Draw a figure from the results file PATH."""
     from .analysis import SelectionError
     from .plotting import PlotError, plot
 
-    if Path(output).suffix.lower() not in OUTPUT_SUFFIXES:
-        raise click.BadParameter(f"{output!r}: the suffix must be one of "
-                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'-o' / '--output'")
-    _check_figure(output, "-o/--output", [("the results file", path)], overwrite)
+    _check_figure_suffix(out, "'-o' / '--out'")
+    _check_figure(out, "-o/--out", [("the results file", path)], overwrite)
     with open_input(path) as ds:
         try:
-            plot(ds, kind, output, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
+            plot(ds, kind, out, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
         except (SelectionError, PlotError) as exc:
             raise click.UsageError(str(exc)) from exc
         except OSError as exc:      # as `run`: an output that cannot be written exits 1
-            click.echo(f"clearsweep: error: cannot write {output}: {exc.strerror or exc}", err=True)
-            ctx.exit(1)
-    click.echo(f"wrote {output}")
+            _fail(f"cannot write {out}: {exc.strerror or exc}", 1)
+    _wrote(out, quiet)
+
+
+def _check_figure_suffix(path: str, option: str) -> None:
+    if Path(path).suffix.lower() not in OUTPUT_SUFFIXES:
+        raise click.BadParameter(f"{path!r}: the suffix must be one of "
+                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint=option)
 
 
 def _series_selection(text: str | None) -> str | tuple[int, ...]:
@@ -512,17 +641,18 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
 
 @main.command("sensitivity")
 @click.argument("path", type=click.Path(exists=True, dir_okay=False))
-@click.option("--output", "output", required=True, metavar="VAR",
+@click.option("--metric", required=True, metavar="NAME",
               help="Summary variable to analyse (the ensemble mean where the file is an ensemble).")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
-              help="Fix another dimension of VAR (e.g. joint=B); repeatable.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Fix another dimension of NAME (e.g. joint=B); repeatable.")
+@click.option("-o", "--out", "plot_path", type=click.Path(dir_okay=False), default=None,
               help="Also draw the indices with their intervals to this file (.png, .pdf, .svg).")
 @click.option("--overwrite", is_flag=True,
-              help="Replace an existing --plot file that is not a figure clearsweep drew.")
-def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
-                        plot_path: str | None, overwrite: bool) -> None:
-    """First-order and total Sobol' indices of VAR over the inputs of the Saltelli sampling
+              help="Replace an existing -o/--out file that is not a figure clearsweep drew.")
+@_quiet
+def sensitivity_command(path: str, metric: str, select_items: tuple[str, ...],
+                        plot_path: str | None, overwrite: bool, quiet: bool) -> None:
+    """First-order and total Sobol' indices of --metric over the inputs of the Saltelli sampling
     sweep PATH (``sweep: sample: method: saltelli``), with 95 % confidence intervals (SALib),
     the inputs ranked by ST. Warns on stderr, with a larger n to try, when an influential
     input's interval overlaps the next one's (too wide to rank them)."""
@@ -535,32 +665,34 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
         sweep_indices,
     )
 
-    if plot_path and Path(plot_path).suffix.lower() not in OUTPUT_SUFFIXES:
-        raise click.BadParameter(f"{plot_path!r}: the suffix must be one of "
-                                 f"{', '.join(OUTPUT_SUFFIXES)}", param_hint="'--plot'")
     if plot_path:
-        _check_figure(plot_path, "--plot", [("the results file", path)], overwrite)
+        _check_figure_suffix(plot_path, "'-o' / '--out'")
+        _check_figure(plot_path, "-o/--out", [("the results file", path)], overwrite)
     elif overwrite:
-        raise click.UsageError("--overwrite acts on the --plot file; give --plot")
+        raise click.UsageError("--overwrite acts on the -o/--out figure; give -o")
     with open_input(path) as ds:
         try:
-            result = sweep_indices(ds, output, select_items)
+            result = sweep_indices(ds, metric, select_items)
         except SelectionError as exc:
             raise click.UsageError(str(exc)) from exc
         except SensitivityError as exc:
-            raise click.ClickException(f"{path}: {exc}") from exc
-    click.echo(format_indices(result))
+            _fail(f"{path}: {exc}", 2)
+    if not quiet:
+        click.echo(format_indices(result))
     warning = result.ranking_warning()
     if warning:
         click.echo(f"clearsweep: warning: {path}: {warning}", err=True)
     if plot_path:
-        save_figure(indices_figure(result), plot_path)
-        click.echo(f"wrote {plot_path}")
+        try:
+            save_figure(indices_figure(result), plot_path)
+        except OSError as exc:
+            _fail(f"cannot write {plot_path}: {exc.strerror or exc}", 1)
+        _wrote(plot_path, quiet)
 
 
-def _fail(message: str, code: int):
-    click.echo(f"clearsweep: {message}", err=True)
-    sys.exit(code)
+def _fail(message: str, code: int) -> NoReturn:
+    """Stop the command: one error line on stderr (:func:`error_line`) and exit ``code``."""
+    raise CommandFailed(message, code)
 
 
 def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
@@ -568,13 +700,6 @@ def _resume_command(command: str, config: str, out: str, overrides: tuple[str, .
     part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
     return shlex.join(["clearsweep", command, config, "-o", out, "--resume",
                        *(a for o in overrides for a in ("--set", o))])
-
-
-def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str, ...]):
-    """Exit 130 with the command that continues an interrupted sweep (or ensemble ``run``)."""
-    _fail(f"interrupted: {exc.finished} of {exc.total} cases are finished and kept in "
-          f"{exc.parts_dir}; continue with: {_resume_command(command, config, out, overrides)}",
-          130)
 
 
 @main.command("sweep")
@@ -602,6 +727,8 @@ def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str,
               help="Run cases beyond the bounds on one case's work and memory (4 GiB of arrays, "
                    "1e9 RK4 steps).")
 @click.option("--no-progress", is_flag=True, help="Do not show the progress bar.")
+@_quiet
+@_dry_run
 @click.option("-y", "--yes", is_flag=True,
               help=f"Run a sweep of more than {MAX_CASES:,} cases (refused without it).")
 @click.option("--backend", type=click.Choice(SWEEP_BACKENDS), default="processes", show_default=True,
@@ -614,8 +741,8 @@ def _interrupted(exc, command: str, config: str, out: str, overrides: tuple[str,
                    "(0-based).")
 def sweep_command(config: str, out: str | None, workers: int | None, resume: bool, overwrite: bool,
                   discard_parts: bool, scheduler: str | None, dask_local: int | None, overrides: tuple[str, ...],
-                  keep_parts: bool, allow_large: bool, no_progress: bool, yes: bool, backend: str,
-                  keep_series: str | None) -> None:
+                  keep_parts: bool, allow_large: bool, no_progress: bool, quiet: bool, dry_run: bool,
+                  yes: bool, backend: str, keep_series: str | None) -> None:
     """Run the parameter sweep described by CONFIG (YAML) and write one netCDF file.
 
     Exit status: 0 all cases ok (or skipped), 1 some cases failed (their
@@ -623,15 +750,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     2 invalid config or options,
     130 interrupted (finished cases kept; rerun with --resume).
     """
-    from .sweeping import (
-        PartStore,
-        StoreError,
-        SweepFailed,
-        SweepInterrupted,
-        expand,
-        parts_dir_for,
-        run_sweep,
-    )
+    from .sweeping import expand
 
     if scheduler and dask_local:
         raise click.UsageError("--scheduler and --dask-local both choose the Dask cluster; give one")
@@ -650,23 +769,30 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     dask_local = _cap_workers(dask_local, "--dask-local")
     given, out = out, out or f"{Path(config).stem}.nc"
     cluster = local_client = None
+    if dry_run:
+        plan = expand(config, overrides, allow_large=allow_large,
+                      max_cases=None if yes else MAX_CASES)
+        click.echo(plan.plan_text(dask_local or _plan_workers(plan, workers)))
+        return
     if backend == "cuda":
         from .gpu import NoCudaDevice, device_name
 
         try:
-            click.echo(f"clearsweep: CUDA device: {device_name()}", err=True)
+            name = device_name()
         except NoCudaDevice as exc:
             _fail(str(exc), 2)
+        if not quiet:
+            click.echo(f"clearsweep: CUDA device: {name}", err=True)
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
         _check_out(given, out, plan.input_files(), overwrite, resume)
-        cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
-                                                          max(len(plan.runnable()), 1)))
-        click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
+        cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
+        if not quiet:
+            click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
         if not scheduler and (backend != "cuda" or series):
             # compile once here so that the workers load the cached kernel
-            announce_compile(methods=[c.solver.method for c in plan.runnable().values()])
+            announce_compile(quiet, [c.solver.method for c in plan.runnable().values()])
         client: Any = scheduler
         if dask_local:
             from distributed import Client, LocalCluster
@@ -674,36 +800,23 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
             cluster = LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address=None)
             client = local_client = Client(cluster)
-        ds = run_sweep(plan, out, workers=workers, client=client, resume=resume,
-                       overrides=overrides, progress=not no_progress, overwrite=overwrite,
-                       keep_parts=keep_parts, discard_parts=discard_parts, allow_large=allow_large,
-                       backend=backend, keep_series=series)
+        ds = _run_sweep_or_fail(plan, out, "sweep", config, overrides, workers=workers,
+                                client=client, resume=resume, progress=not (no_progress or quiet),
+                                overwrite=overwrite, keep_parts=keep_parts,
+                                discard_parts=discard_parts, allow_large=allow_large,
+                                backend=backend, keep_series=series)
         with ds:
             n, failed = ds.attrs["sweep_cases"], ds.attrs["sweep_failed"]
             skipped = ds.attrs["sweep_skipped"]
-    except (ConfigError, StoreError) as exc:
-        _fail(f"error: {exc}", 2)
-    except SweepInterrupted as exc:
-        _interrupted(exc, "sweep", config, out, overrides)
-    except KeyboardInterrupt:
-        _fail("interrupted before any case ran", 130)
-    except SweepFailed as exc:
-        _fail(f"error: {exc}", 1)
-    except OSError as exc:
-        parts = parts_dir_for(out)
-        kept = PartStore(parts).finished() if parts.is_dir() else set()
-        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
-                "with --resume" if kept else "")
-        _fail(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}{note}", 1)
     finally:
         if local_client is not None:
             local_client.close()
         if cluster is not None:
             cluster.close()
     note = f" ({skipped} skipped)" if skipped else ""
+    _wrote(out, quiet, f": {n} cases{note}")
     if failed:
         _fail(f"{failed} of {n} cases failed{note}; see the status and message variables in {out}", 1)
-    click.echo(f"clearsweep: wrote {out}: {n} cases{note}", err=True)
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ import numpy as np
 if TYPE_CHECKING:
     import xarray as xr
 
+from .budget import check_budget, time_text
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
@@ -55,6 +56,27 @@ def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
     ``n_block`` up to ``most``, so that saving rows never lengthens the block (the kernel
     rounds the steps up to whole rows). The steps and statistics do not depend on it."""
     return next(s for s in range(min(most, n_block), 0, -1) if n_block % s == 0)
+
+
+def block_config(cfg: Config) -> Config:
+    """The config of one dynamic block of a life run: ``life.block_revolutions`` revolutions
+    in whole RK4 steps, with rows every few steps (the motion error is read from them)."""
+    period = 60.0 / cfg.mechanism.speed_rpm
+    n_block = int(math.ceil(cfg.life.block_revolutions * period / cfg.solver.dt - 1e-9))
+    return cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
+                          "solver__save_every": row_stride(n_block)})
+
+
+def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> str:
+    """What ``clearsweep life CONFIG --dry-run`` prints: the blocks, their RK4 steps and
+    memory, and the time of the longest run (``life.max_blocks`` blocks); nothing runs."""
+    lc = cfg.life
+    est = check_budget(block_config(cfg), allow_large=allow_large, source=source)
+    steps = lc.max_blocks * est.steps
+    return (f"{source}: a life run to {lc.cycles:.4g} revolutions, at most {lc.max_blocks:,} "
+            f"blocks of {lc.block_revolutions:g} revolutions ({est.steps:,} RK4 steps each, "
+            f"memory up to {est.describe()}): at most {steps:.3g} RK4 steps, at most "
+            f"{time_text(steps)}; it stops sooner at a limit; nothing run (--dry-run)")
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
@@ -446,10 +468,7 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     """:func:`life` from ``earlier`` (None: from block 0)."""
     lc = cfg.life
     period = 60.0 / cfg.mechanism.speed_rpm
-    n_block = int(math.ceil(lc.block_revolutions * period / cfg.solver.dt - 1e-9))
-    # rows every few steps: the motion error is read from them
-    block_cfg = cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
-                               "solver__save_every": row_stride(n_block)})
+    block_cfg = block_config(cfg)
     packed = preflight(block_cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
     prepare_kernel(cfg.solver.method)

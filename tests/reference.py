@@ -244,11 +244,9 @@ def normal_force(delta, ddot, c, ew, ri, kappa):
 
 
 def friction_factor(vt, v0, v1):
-    if vt < v0:
-        return 0.0
-    if vt > v1:
-        return 1.0
-    return (vt - v0) / (v1 - v0)
+    """c_d of docs/physics.md section 3.3 as the piecewise-linear curve through its corners
+    (v0, 0) and (v1, 1), held flat outside them: np.interp, not the kernel's branches."""
+    return float(np.interp(vt, [v0, v1], [0.0, 1.0]))
 
 
 @dataclass

@@ -80,21 +80,67 @@ CASES = {
 }
 
 
+#: Runs every case of CASES, each in its own folder, in one process under the address-space
+#: limit (one interpreter start instead of one per case): the entry point as the console
+#: script calls it, its exit status, stderr and seconds per case, as JSON on stdout.
+DRIVER = """
+import contextlib, io, json, os, sys, time
+from clearsweep.cli import main
+results = {}
+for name, folder, argv in json.loads(sys.argv[1]):
+    os.chdir(folder)
+    err = io.StringIO()
+    began = time.perf_counter()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            main(argv, prog_name="clearsweep")
+            code = 0
+        except SystemExit as exc:
+            code = exc.code
+        except BaseException as exc:        # a traceback would have been printed
+            code, err = None, io.StringIO(f"Traceback: {exc!r}")
+    results[name] = (code, err.getvalue(), time.perf_counter() - began)
+print(json.dumps(results))
+"""
+
+
+@pytest.fixture(scope="module")
+def refusals(tmp_path_factory):
+    """name -> (exit status, stderr, seconds, folder) of every case of CASES."""
+    import json
+
+    jobs = []
+    for name, (argv, _) in CASES.items():
+        folder = tmp_path_factory.mktemp("absurd")
+        jobs.append((name, str(folder), argv(folder)))
+    cmd = f"ulimit -v {LIMIT_KB}; exec {sys.executable} -c \"$0\" \"$1\""
+    proc = subprocess.run(["bash", "-c", cmd, DRIVER, json.dumps(jobs)], capture_output=True,
+                          text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    results = json.loads(proc.stdout)
+    return {name: (*results[name], Path(folder)) for name, folder, _ in jobs}
+
+
 @pytest.mark.parametrize("name", list(CASES))
-def test_an_absurd_size_is_refused_before_memory_is_taken(tmp_path, name):
-    argv, expected = CASES[name]
-    proc, seconds = clearsweep(tmp_path, *argv(tmp_path))
-    assert proc.returncode == 2, proc.stderr[-2000:]
-    lines = proc.stderr.strip().splitlines()
-    assert lines[-1].startswith("clearsweep: error: ") and expected in lines[-1], proc.stderr[-2000:]
-    assert "Traceback" not in proc.stderr
-    assert not (tmp_path / "o.nc").exists() and not (tmp_path / "o.nc.parts").exists()
+def test_an_absurd_size_is_refused_before_memory_is_taken(refusals, name):
+    code, stderr, seconds, folder = refusals[name]
+    expected = CASES[name][1]
+    assert code == 2, stderr[-2000:]
+    lines = stderr.strip().splitlines()
+    assert lines[-1].startswith("clearsweep: error: ") and expected in lines[-1], stderr[-2000:]
+    assert "Traceback" not in stderr
+    assert not (folder / "o.nc").exists() and not (folder / "o.nc.parts").exists()
     assert seconds < 15      # seconds in practice (5 s asked); the margin is for a loaded machine
 
 
 def test_workers_beyond_the_cores_are_capped_with_a_note(tmp_path):
+    """The plan (--dry-run) says how many workers the sweep would use: the cores, at most
+    one per case."""
     proc, _ = clearsweep(tmp_path, "sweep", sweep_file(tmp_path, "sweep:\n  grid: {joints.B.coating: [none, PTFE]}\n"),
                          "--set", "solver.duration=0.002", "--workers", "100000", "-o", "o.nc",
-                         "--no-progress")
+                         "--dry-run")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert f"--workers 100000 is more than this machine's {os.cpu_count()} cores" in proc.stderr
+    used = min(os.cpu_count() or 1, 2)
+    assert "2 cases, 2 to simulate, 400 RK4 steps: about " in proc.stdout
+    assert f" s on {used} worker{'s' if used > 1 else ''} (at " in proc.stdout

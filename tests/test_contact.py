@@ -13,6 +13,7 @@ from clearsweep.core.contact import (
     elastic_energy,
     elastic_force,
     episode_impact_velocity,
+    friction_factor,
     normal_force,
 )
 from clearsweep.materials import load_materials
@@ -175,3 +176,11 @@ def test_episode_latch_rule():
     assert episode_impact_velocity(0.0, -0.2, 1e-3) == 1e-3      # grazing onset: the floor
     assert episode_impact_velocity(0.3, 0.1, 1e-3) == 0.3        # slowing: kept
     assert episode_impact_velocity(0.3, 0.4, 1e-3) == 0.4        # faster approach: raised
+
+
+@pytest.mark.parametrize("vt, factor", [(0.0, 0.0), (0.5e-4, 0.0), (1e-4, 0.0), (3.25e-4, 0.25),
+                                        (5.5e-4, 0.5), (1e-3, 1.0), (2e-3, 1.0), (1.0, 1.0)])
+def test_friction_factor_is_the_ramp_of_physics_3_3(vt, factor):
+    """c_d by hand at the default v0 = 1e-4 m/s, v1 = 1e-3 m/s: 0 below v0, linear between,
+    1 above v1 (the reference in tests/reference.py is a separate formulation)."""
+    assert friction_factor(vt, 1e-4, 1e-3) == pytest.approx(factor, abs=1e-15)

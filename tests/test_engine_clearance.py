@@ -28,8 +28,10 @@ def one_clearance():
 
 
 @pytest.fixture(scope="module")
-def two_clearances():
-    return simulate(with_solver(TWO, duration=1.0))
+def two_clearances(two_clearances_1s):
+    """One crank turn with clearance at A and B (tests/conftest.py, shared with
+    test_statistics)."""
+    return two_clearances_1s
 
 
 @pytest.mark.parametrize("name", ["one_clearance", "two_clearances"])

@@ -138,9 +138,9 @@ def test_a_sweep_cannot_vary_the_member_index():
         expand(doc)
 
 
-def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path):
+def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path, process_pool):
     one = run_sweep(sweep_doc(3), tmp_path / "one.nc", workers=1, progress=False)
-    two = run_sweep(sweep_doc(3), tmp_path / "two.nc", workers=2, progress=False)
+    two = run_sweep(sweep_doc(3), tmp_path / "two.nc", client=process_pool, progress=False)
     with one, two:
         xr.testing.assert_identical(drop_timing(one).load(), drop_timing(two).load())
         assert list(one["members_ok"].values) == [3, 3]
@@ -155,6 +155,7 @@ def test_same_seed_is_bit_identical_on_one_and_two_workers(tmp_path):
         assert one.attrs["ensemble_confidence_level"] == CONFIDENCE_LEVEL
 
 
+@pytest.mark.slow
 def test_another_seed_gives_other_members(tmp_path):
     a = run_sweep(sweep_doc(3, seed=1), workers=1, progress=False)
     b = run_sweep(sweep_doc(3, seed=2), workers=1, progress=False)
@@ -307,14 +308,14 @@ def test_shipped_coating_ensemble_expands_to_192_members():
 
 
 @pytest.mark.slow
-def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path):
+def test_shipped_coating_ensemble_report_says_not_distinguishable(tmp_path, process_pool):
     from click.testing import CliRunner
 
     from clearsweep.cli import report_command
 
     out = tmp_path / "coating_ensemble.nc"
     # shortened to 0.1 s per member: the verdicts come from the spread, not from the length
-    run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, workers=2, progress=False,
+    run_sweep(ROOT / "configs" / "coating_ensemble.yaml", out, client=process_pool, progress=False,
               overrides=["solver.duration=0.1"]).close()
     report = CliRunner().invoke(report_command, [str(out), "--full"], catch_exceptions=False)
     assert "+- 95% CI" in report.output and " not distinguishable" in report.output
@@ -420,6 +421,7 @@ def test_two_runs_of_an_ensemble_on_one_output_refuse_in_one_line(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_sigint_stops_a_run_of_an_ensemble_with_130_and_the_resume_command(tmp_path):
     """Ctrl-C printed "Aborted!" and exited 1, and the next run recomputed every member."""
     import os

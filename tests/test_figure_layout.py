@@ -116,6 +116,7 @@ def test_a_single_run_figure_keeps_its_text_apart(case, kind):
 
 @pytest.mark.parametrize("kind, select", SWEEP_SELECTIONS,
                          ids=[f"{k}-{'-'.join(s) if s else 'all'}" for k, s in SWEEP_SELECTIONS])
+@pytest.mark.slow
 def test_a_sweep_figure_keeps_its_text_apart(sweep_ds, kind, select):
     assert layout_problems(figure(sweep_ds, kind, select)) == []
 
@@ -142,6 +143,7 @@ def test_a_life_figure_keeps_its_text_apart(life_ds):
     assert layout_problems(figure(life_ds, "life")) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("b10", [False, True])
 def test_a_reliability_figure_keeps_its_text_apart(reliability_ds, b10):
     assert layout_problems(figure(reliability_ds, "reliability", b10=b10)) == []

@@ -78,6 +78,7 @@ def simulated(tmp_path_factory):
         return cpu, gpu.load()
 
 
+@pytest.mark.slow
 def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     from clearsweep.summary import SUMMARY_ORDER
 
@@ -101,6 +102,7 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     assert "wear_volume" in compared        # kept by the CUDA summaries too
 
 
+@pytest.mark.slow
 def test_simulated_cuda_keeps_series_only_for_the_selected_cases(simulated):
     _, gpu = simulated
     series = [bool(np.isfinite(gpu["slider_acceleration"].isel(variant=i).values).any())

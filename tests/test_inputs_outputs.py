@@ -87,7 +87,7 @@ REFUSED = [
     (["sweep", "sweep.yaml", "--workers", "1", "-o", "OUT", "--overwrite"], "mats.yaml", "same"),
     (["plot", "results.nc", "--kind", "slider", "-o", "OUT", "--overwrite"], "results.nc", "symlink"),
     (["plot", "results.nc", "--kind", "slider", "-o", "OUT"], "results.nc", "hardlink"),
-    (["sensitivity", "sample.nc", "--output", "y", "--plot", "OUT", "--overwrite"], "sample.nc",
+    (["sensitivity", "sample.nc", "--metric", "y", "-o", "OUT", "--overwrite"], "sample.nc",
      "symlink"),
 ]
 
@@ -101,7 +101,7 @@ def test_an_output_that_is_an_input_is_refused(files, args, target, kind):
     suffix = {"plot": ".png", "sensitivity": ".svg"}.get(args[0], ".nc")
     out = _link(files, kind, "out" + suffix, target)
     before = (files / target).read_bytes()
-    option = "--plot" if args[0] == "sensitivity" else "-o/--output" if args[0] == "plot" else "-o/--out"
+    option = "-o/--out"
     result = invoke(*[out if a == "OUT" else a for a in args])
     assert result.exit_code == 2, result.output
     one_error_line(result, f"{option} {out} ", target, "which this command reads")
@@ -128,7 +128,7 @@ WRITERS = [
      is_results_file),
     (["plot", "results.nc", "--kind", "slider", "-o", "OUT"], "out.png", is_own_figure),
     (["plot", "results.nc", "--kind", "slider", "-o", "OUT"], "out.pdf", is_own_figure),
-    (["sensitivity", "sample.nc", "--output", "y", "--plot", "OUT"], "out.svg", is_own_figure),
+    (["sensitivity", "sample.nc", "--metric", "y", "-o", "OUT"], "out.svg", is_own_figure),
 ]
 
 
@@ -184,8 +184,8 @@ def test_files_of_the_same_format_from_elsewhere_are_not_clearsweeps(tmp_path):
 
 
 def test_sensitivity_overwrite_without_plot_is_a_usage_error(files):
-    result = invoke("sensitivity", "sample.nc", "--output", "y", "--overwrite")
-    assert result.exit_code == 2 and "--overwrite acts on the --plot file" in result.output
+    result = invoke("sensitivity", "sample.nc", "--metric", "y", "--overwrite")
+    assert result.exit_code == 2 and "--overwrite acts on the -o/--out figure" in result.output
 
 
 @pytest.mark.parametrize("command", [["run", "ens.yaml", "-q"], ["sweep", "sweep.yaml"]],

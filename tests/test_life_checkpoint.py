@@ -136,6 +136,7 @@ def test_cli_interrupt_exits_130_with_the_resume_command(tmp_path, monkeypatch):
     assert checkpoint_blocks(checkpoint_path_for(out)) == 2 and not out.exists()
 
 
+@pytest.mark.slow
 def test_sigkill_midway_loses_at_most_one_block_and_resume_finishes_the_run(tmp_path, reference):
     out = tmp_path / "k.nc"
     checkpoint = checkpoint_path_for(out)

@@ -176,6 +176,7 @@ def test_cli_bad_suffix_exit_2(tmp_path, sweep_file):
     assert ".png" in result.output
 
 
+@pytest.mark.slow
 def test_short_simulation_renders_every_kind_and_reports(tmp_path):
     """0.02 s of the real simulator through the real sweep driver: two coatings at B, stored
     in full and as summaries; every figure, the three reports and the run summary."""
@@ -237,6 +238,7 @@ def test_cli_dpi_out_of_range_exit_2(tmp_path, sweep_file, dpi):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_many_overlaid_cases_get_a_note_instead_of_a_legend(tmp_path, case):
     many = xr.concat([case] * 13, dim="rep").assign_coords(rep=np.arange(13))
     for kind in ("slider", "forces", "orbit", "wear-polar"):

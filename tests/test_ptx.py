@@ -8,6 +8,8 @@ with the CUDA 12 wheels (clearsweep's ``test`` extra); about a minute on one cor
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from clearsweep import ptx
@@ -50,15 +52,46 @@ def test_signature_matches_the_arrays_the_backend_allocates():
     assert tuple(typeof(a) for a in arrays) == ptx.run_cases_signature()
 
 
+def _build_key(ptxas) -> str:
+    """What the PTX build depends on: every clearsweep source file, the compilers' versions
+    and the ptxas used. The same key builds the same PTX and the same ptxas figures."""
+    import hashlib
+    from importlib import metadata
+    from pathlib import Path
+
+    root = Path(ptx.__file__).resolve().parent
+    digest = hashlib.sha256(str(ptxas).encode())
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes())
+    for dist in ("numba", "numba-cuda", "nvidia-cuda-nvcc-cu12", "nvidia-cuda-nvrtc-cu12"):
+        try:
+            digest.update(f"{dist}={metadata.version(dist)}".encode())
+        except metadata.PackageNotFoundError:
+            digest.update(f"{dist}=none".encode())
+    return digest.hexdigest()
+
+
 @pytest.fixture(scope="module")
-def report():
+def report(request):
+    """ptxas' figures for run_cases, built once per change of what the build depends on
+    (:func:`_build_key`): kept in pytest's cache (.pytest_cache), as Numba keeps its compiled
+    kernels, so a warm run skips the minute of NVVM and ptxas."""
     try:
-        ptx.find_ptxas()
+        ptxas = ptx.find_ptxas()
     except FileNotFoundError as exc:
         pytest.fail(str(exc))
-    return ptx.ptxas_report(ptx.compile_run_cases_ptx())
+    cache = getattr(request.config, "cache", None)        # None under -p no:cacheprovider
+    key = f"clearsweep/ptxas_report/{_build_key(ptxas)}"
+    cached = cache.get(key, None) if cache is not None else None
+    if cached is not None:
+        return ptx.PtxasReport(**cached)
+    built = ptx.ptxas_report(ptx.compile_run_cases_ptx())
+    if cache is not None:
+        cache.set(key, dataclasses.asdict(built))
+    return built
 
 
+@pytest.mark.slow
 def test_run_cases_compiles_and_assembles_for_sm_90(report, record_property, capsys):
     record_property("ptxas", report.line())
     with capsys.disabled():

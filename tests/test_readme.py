@@ -39,6 +39,7 @@ def run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run(CLI + args, cwd=cwd, capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 def test_quick_start_main_job_runs(tmp_path):
     (cmd,) = commands_under("## Quick start")
     assert cmd[:2] == ["sweep", "configs/coating_clearance.yaml"]

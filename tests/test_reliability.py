@@ -111,9 +111,11 @@ def small_sweep(tmp_path_factory):
     return path
 
 
-def test_a_reliability_sweep_is_bit_identical_on_one_and_two_workers(tmp_path, small_sweep):
+@pytest.mark.slow
+def test_a_reliability_sweep_is_bit_identical_on_one_and_two_workers(tmp_path, small_sweep,
+                                                                     process_pool):
     with xr.open_dataset(small_sweep) as one, \
-            run_sweep(SMALL_SWEEP, tmp_path / "two.nc", workers=2, progress=False) as two:
+            run_sweep(SMALL_SWEEP, tmp_path / "two.nc", client=process_pool, progress=False) as two:
         xr.testing.assert_identical(drop_timing(one), drop_timing(two))
         assert one.sizes["member"] == 3 and "b10" in one and "reliability" in one
         assert int(one.members_counted.sel(limit="any")) == 3
@@ -225,6 +227,7 @@ def test_cli_bad_reliability_input_is_one_line_and_exit_2(tmp_path):
 
 # ---------------------------------------------------------------------------- motion error
 
+@pytest.mark.slow
 def test_motion_error_is_zero_for_the_ideal_mechanism_and_read_from_the_settled_rows():
     from clearsweep.config import resolve_materials
     from clearsweep.params import PRESETS, ideal_slider_x, pack

@@ -139,15 +139,11 @@ def test_a_failed_case_is_left_out_of_best_and_worst():
     assert math.isfinite(float(lowest.split()[1]))
 
 
-def test_a_life_run_says_nothing_of_an_ideal_uncoated_joint(tmp_path):
+@pytest.mark.slow
+def test_a_life_run_says_nothing_of_an_ideal_uncoated_joint(short_life_cli):
     """configs/one_clearance.yaml: A ideal and uncoated; the life run printed "max depth
     (A, B) nan, ..." per block and "coating of A: not worn through"."""
-    from tests.test_service_life import CASE, SHORT_LIFE
-
-    out = tmp_path / "life.nc"
-    args = ["life", ROOT / CASE, "-o", out, *[a for o in SHORT_LIFE for a in ("--set", o)]]
-    result = CliRunner().invoke(main, [str(a) for a in args])
-    assert result.exit_code == 0, result.stderr
+    out, result = short_life_cli        # `clearsweep life` of test_service_life's SHORT_LIFE
     blocks = [ln for ln in result.stderr.splitlines() if ln.startswith("  block at")]
     assert blocks and all(": max depth B " in ln and "nan" not in ln for ln in blocks)
     for text in (result.stdout, report(out)):

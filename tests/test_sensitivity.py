@@ -90,16 +90,16 @@ def test_sensitivity_command_on_a_mechanism_sampling_sweep(tmp_path):
     ds = run_sweep(sample_doc(), out, workers=1, progress=False)
     ds.close()
     figure = tmp_path / "sobol.png"
-    result = CliRunner().invoke(main, ["sensitivity", str(out), "--output", "slider_acceleration_rms",
-                                       "--plot", str(figure)], catch_exceptions=False)
+    result = CliRunner().invoke(main, ["sensitivity", str(out), "--metric", "slider_acceleration_rms",
+                                       "-o", str(figure)], catch_exceptions=False)
     assert result.exit_code == 0, result.output
     assert "Sobol' indices of slider_acceleration_rms (16 cases" in result.output
     assert "joints.B.clearance" in result.output and "mechanism.speed_rpm" in result.output
     assert figure.stat().st_size > 0
     # a per-joint output needs its joint chosen
-    joint = CliRunner().invoke(main, ["sensitivity", str(out), "--output", "normal_force_peak"])
+    joint = CliRunner().invoke(main, ["sensitivity", str(out), "--metric", "normal_force_peak"])
     assert joint.exit_code == 2 and "--select joint=" in joint.output
-    ok = CliRunner().invoke(main, ["sensitivity", str(out), "--output", "normal_force_peak",
+    ok = CliRunner().invoke(main, ["sensitivity", str(out), "--metric", "normal_force_peak",
                                    "--select", "joint=B"])
     assert ok.exit_code == 0, ok.output
 
@@ -147,7 +147,7 @@ def test_negligible_inputs_need_no_order_among_themselves():
 def test_sensitivity_command_warns_on_stderr_when_the_inputs_cannot_be_ranked(tmp_path, n, warns):
     path = tmp_path / "linear.nc"
     linear_sample(n).to_netcdf(path)
-    result = CliRunner().invoke(main, ["sensitivity", str(path), "--output", "y"])
+    result = CliRunner().invoke(main, ["sensitivity", str(path), "--metric", "y"])
     assert result.exit_code == 0, result.output
     assert "ranked by ST: x1" in result.stdout
     lines = result.stderr.splitlines()
@@ -158,6 +158,7 @@ def test_sensitivity_command_warns_on_stderr_when_the_inputs_cannot_be_ranked(tm
         assert lines == []
 
 
+@pytest.mark.slow
 def test_the_shipped_sensitivity_example_is_a_saltelli_design_over_four_inputs():
     config = Path(__file__).resolve().parent.parent / "configs" / "sensitivity.yaml"
     spec = yaml.safe_load(config.read_text())["sweep"]["sample"]

@@ -74,10 +74,15 @@ SHORT_LIFE = [*SMALL, "wear.amplification=1000", "life.cycles=30",
 
 
 @pytest.fixture(scope="module")
-def short_life():
-    return life(CASE, SHORT_LIFE)
+def short_life(short_life_cli):
+    """The SHORT_LIFE run, as ``clearsweep life`` wrote it (tests/conftest.py: once per
+    session); the life sweep below checks it bit for bit against the Python call."""
+    import xarray as xr
+
+    return xr.load_dataset(short_life_cli[0])
 
 
+@pytest.mark.slow
 def test_volume_conserved_across_blocks_and_jumps(short_life):
     ds = short_life
     assert ds.sizes["cycle"] >= 3 and float(ds.jump_revolutions.sum()) > 0
@@ -125,28 +130,36 @@ def test_life_agrees_with_a_direct_simulation():
     assert h_life == pytest.approx(h_direct, rel=0.2)       # measured +12.7 %
 
 
-def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life):
+@pytest.mark.slow
+def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life_cli, short_life):
     from click.testing import CliRunner
 
     from clearsweep.cli import main
     from clearsweep.plotting import plot
 
-    out = tmp_path / "life.nc"
-    args = ["life", CASE, "-o", str(out), "-q"] + [a for o in SHORT_LIFE for a in ("--set", o)]
-    result = CliRunner().invoke(main, args)
-    assert result.exit_code == 0, result.output
-    import xarray as xr
-    with xr.open_dataset(out) as ds:
-        # the file holds what the Python call returns
-        np.testing.assert_array_equal(ds.wear_volume.values, short_life.wear_volume.values)
-        fig = plot(ds, "life", tmp_path / "life.png", dpi=40)
-        assert len(fig.axes) >= 2 and (tmp_path / "life.png").stat().st_size > 0
+    out, run = short_life_cli
+    # one progress line per block on stderr, the summary on stdout, the file named last
+    blocks = [ln for ln in run.stderr.splitlines() if ln.startswith("  block at ")]
+    assert len(blocks) == short_life.sizes["cycle"]
+    assert run.stderr.splitlines()[-1] == f"clearsweep: wrote {out}"
+    fig = plot(short_life, "life", tmp_path / "life.png", dpi=40)
+    assert len(fig.axes) >= 2 and (tmp_path / "life.png").stat().st_size > 0
     report = CliRunner().invoke(main, ["report", str(out)])
     assert report.exit_code == 0, report.output
-    assert "revolutions" in report.output or "cycles" in report.output
+    # the report is what `life` printed, and states the run's own numbers
+    assert report.stdout == run.stdout
+    lines = report.stdout.splitlines()
+    assert lines[0] == (f"life run: {short_life.sizes['cycle']} blocks, "
+                        f"{float(short_life.cycle[-1]):.4g} revolutions, "
+                        f"stopped by {short_life.stop_reason.values}")
+    through = float(short_life.wear_through_cycle.sel(joint="B"))
+    assert f"  coating of B worn through at {through:.4g} revolutions" in report.stdout
+    depth = float(short_life.wear_depth_max.isel(cycle=-1).sel(joint="B"))
+    assert f"  B at the end: max depth {depth:.4g} m" in report.stdout
 
 
-def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
+@pytest.mark.slow
+def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life, process_pool):
     """store: life runs every case as a life run and keeps revolutions to each limit and the
     final wear per design; the MoS2 design is the short life run above, bit for bit."""
     from clearsweep.config import load_config
@@ -155,7 +168,7 @@ def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life):
     base = load_config(CASE, SHORT_LIFE).to_dict()
     doc = {"name": "life_sweep", "store": "life", "base": base,
            "sweep": {"grid": {"joints.B.coating": ["MoS2", "PTFE"]}}}
-    with run_sweep(doc, tmp_path / "life_sweep.nc", workers=1, progress=False) as ds:
+    with run_sweep(doc, tmp_path / "life_sweep.nc", client=process_pool, progress=False) as ds:
         assert list(ds.status.values) == ["ok", "ok"]
         assert "time" not in ds.dims and "cycle" not in ds.dims
         mos2 = ds.sel(B_coating="MoS2")

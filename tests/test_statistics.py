@@ -127,10 +127,13 @@ def test_seated_ball_rests_on_the_wall_along_the_ideal_reaction():
     assert (seated.impact_count.values == 0).all()
 
 
-def test_seated_start_has_the_ideal_mechanisms_vibration():
+def test_seated_start_has_the_ideal_mechanisms_vibration(two_clearances_1s):
     """Measured (1 s, realistic preset): whole-run peak slider acceleration 2.48 m/s^2 seated,
     2.39 ideal (3.7%), 79.8 from the centred start."""
-    seated = simulate(case(TWO))
+    from clearsweep.config import dump_config, load_config
+
+    seated = two_clearances_1s        # simulate(case(TWO)), run once (tests/conftest.py)
+    assert seated.attrs["config"] == dump_config(load_config(case(TWO)))
     ideal = simulate(case(IDEAL))
     assert str(seated.status.values) == "ok"
     peak, peak_ideal = float(seated.slider_acceleration_peak), float(ideal.slider_acceleration_peak)

@@ -171,18 +171,20 @@ def test_skip_rules_and_shipped_configs():
 
 # ---------------------------------------------------------------------------- running
 
-def test_serial_processes_and_dask_give_identical_results(tmp_path):
-    from distributed import Client, LocalCluster
+@pytest.mark.slow
+def test_serial_processes_and_dask_give_identical_results(tmp_path, process_pool, dask_cluster):
+    """One process, the session's warm pool, a Dask client and a scheduler address
+    (tests/conftest.py); test_a_worker_that_dies_once_is_retried_on_a_fresh_one runs a
+    sweep on a pool of its own."""
+    from distributed import Client
 
     cfg = write_sweep(tmp_path, SMALL)
     serial = run_sweep(cfg, tmp_path / "serial.nc", workers=1, progress=False)
-    pool = run_sweep(cfg, tmp_path / "pool.nc", workers=2, progress=False)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
-        with Client(cluster) as client:
-            dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
-        by_address = run_sweep(cfg, tmp_path / "address.nc", client=cluster.scheduler_address,
-                               progress=False)
+    pool = run_sweep(cfg, tmp_path / "pool.nc", client=process_pool, progress=False)
+    with Client(dask_cluster) as client:
+        dask = run_sweep(cfg, tmp_path / "dask.nc", client=client, progress=False)
+    by_address = run_sweep(cfg, tmp_path / "address.nc", client=dask_cluster.scheduler_address,
+                           progress=False)
     with serial, pool, dask, by_address:
         assert (serial["status"] == "ok").all()
         assert serial.attrs["sweep_dims"] == "B_coating clearance_joints"
@@ -357,6 +359,7 @@ def test_cli_prints_the_size_first_and_needs_yes_above_the_limit(tmp_path, monke
     assert "on 1 worker " in first and "results up to " in first
 
 
+@pytest.mark.slow
 def test_cli_dask_local_cluster(tmp_path):
     out = tmp_path / "d.nc"
     result = cli(write_sweep(tmp_path, SMALL), "-o", out, "--dask-local", "2", "--no-progress")
@@ -456,6 +459,7 @@ def die_once_on_ptfe(cfg):
     return simulate(cfg)
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_every_time_fails_its_case_and_the_sweep_goes_on(tmp_path):
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE", "MoS2"]}})
     out = tmp_path / "w.nc"
@@ -470,6 +474,7 @@ def test_a_worker_that_dies_every_time_fails_its_case_and_the_sweep_goes_on(tmp_
         assert ds.attrs["sweep_failed"] == 1
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_once_is_retried_on_a_fresh_one(tmp_path):
     base = {**BASE, "name": str(tmp_path / "case")}
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "PTFE", "lead"]}}, base=base)
@@ -482,6 +487,7 @@ def test_a_worker_that_dies_once_is_retried_on_a_fresh_one(tmp_path):
     assert len(attempts) == 2 and attempts[0] != attempts[1]
 
 
+@pytest.mark.slow
 def test_a_dying_worker_of_the_callers_pool_stops_the_sweep_and_keeps_finished_cases(tmp_path):
     cfg = write_sweep(tmp_path, {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]}})
     out = tmp_path / "w.nc"
@@ -524,6 +530,7 @@ SLOW = {"grid": {"joints.B.coating": ["none", "lead", "PTFE"]},
 SLOW_BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.4}}
 
 
+@pytest.mark.slow
 def test_resume_after_sigkill_runs_every_case_once(tmp_path):
     cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
     out = tmp_path / "k.nc"
@@ -562,6 +569,7 @@ def test_resume_after_sigkill_runs_every_case_once(tmp_path):
         xr.testing.assert_identical(drop_timing(reference.load()), drop_timing(resumed_ds.load()))
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path):
     cfg = write_sweep(tmp_path, SLOW, base=SLOW_BASE)
     out = tmp_path / "c.nc"

@@ -97,6 +97,7 @@ def refinement():
     return out
 
 
+@pytest.mark.slow
 def test_max_depth_converges_as_the_grid_is_refined(refinement):
     """Measured (1 s, seated start, no feedback), max depth A / B [m]:
     72x144 2.20e-9 / 1.11e-9; 144x288 2.44e-9 / 1.32e-9; 288x576 2.55e-9 / 1.33e-9.
@@ -111,6 +112,7 @@ def test_max_depth_converges_as_the_grid_is_refined(refinement):
         assert (np.abs(d[2] - d[1]) < np.abs(d[1] - d[0])).all()
 
 
+@pytest.mark.slow
 def test_worn_volume_does_not_depend_on_the_grid(refinement):
     v = {k: ds.wear_volume.values for k, ds in refinement.items()}
     for n in (72, 288):

@@ -20,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from .. import variables
-from ..budget import estimate, format_bytes
+from ..budget import estimate, format_bytes, time_text
 from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
     SWEEP_FILE_KEYS,
@@ -62,9 +62,6 @@ SAMPLE_DIM = "sample"
 TOO_MANY_HINT = "clearsweep sweep --yes runs them all"
 #: Keys of a zip group that are not config keys.
 ZIP_META_KEYS = ("name", "labels")
-#: Rough cost of one RK4 step of the kernel on one warm core [s] (README: 1e5 steps in 0.3 s),
-#: for the estimate printed before a sweep starts; contacts that need sub-steps cost more.
-SECONDS_PER_STEP = 3e-6
 
 
 def _reserved_names() -> set[str]:
@@ -255,20 +252,15 @@ class SweepPlan:
             # a life run simulates up to life.max_blocks blocks of life.block_revolutions
             blocks = sum(cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
                          / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values())
-            seconds = blocks * SECONDS_PER_STEP / (workers or 1)
-            where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
             return (f"sweep {self.name!r}: {len(self.cases):,} life runs, {len(runnable):,} to run: "
-                    f"at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), at most about "
-                    f"{_duration_text(seconds)} {where}; most runs end sooner")
+                    f"at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), at most "
+                    f"{time_text(blocks, workers)}; most runs end sooner")
         steps = sum(e.steps for e in estimates)
-        seconds = steps * SECONDS_PER_STEP / (workers or 1)
         per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes for e in estimates)
         skipped = sum(1 for c in self.cases if c.hash is None)
         counts = f"{len(self.cases):,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
-        where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
         return (f"sweep {self.name!r}: {counts}, {len(runnable):,} to simulate, {steps:.3g} RK4 "
-                f"steps: about {_duration_text(seconds)} {where} (at {SECONDS_PER_STEP * 1e6:g} us "
-                f"per step; contacts that need sub-steps take longer); results up to "
+                f"steps: {time_text(steps, workers)}; results up to "
                 f"{format_bytes(per_case)} before compression")
 
     def plan_text(self, workers: int | None = None) -> str:
@@ -295,13 +287,6 @@ class SweepPlan:
             lines.append(f"  one case: {span} RK4 steps; memory up to {largest.describe()}")
         lines.append("  " + self.describe(workers))
         return "\n".join(lines)
-
-
-def _duration_text(seconds: float) -> str:
-    for unit, size in (("d", 86400.0), ("h", 3600.0), ("min", 60.0)):
-        if seconds >= size:
-            return f"{seconds / size:.3g} {unit}"
-    return f"{seconds:.2g} s"
 
 
 def _read_sweep(config_or_path) -> tuple[dict, str, Path, str]:
