@@ -112,12 +112,18 @@ ANNOTATION_DARK_TEXT_ABOVE = 0.6
 #: A line panel whose data vary by less than ``NEGLIGIBLE_VARIATION`` of their mean magnitude
 #: is drawn on a y-axis ``MIN_RELATIVE_SPAN`` of the mean wide (at least), centred on the
 #: data, so that a negligible change looks negligible; the panel's title says so.
-NEGLIGIBLE_VARIATION = 0.02
+NEGLIGIBLE_VARIATION = 0.05
 MIN_RELATIVE_SPAN = 0.1
 
 #: The life figure draws at most this many wear-map snapshots (the first, the last and
 #: evenly spread ones between); it says which stored snapshots it leaves out.
 LIFE_SNAPSHOT_PANELS = 6
+
+#: Long y-axis labels of line plots are wrapped to lines of at most this many characters.
+AXIS_LABEL_CHARACTERS = 40
+
+#: Figure titles are wrapped to lines of at most this many characters per inch of width.
+TITLE_CHARACTERS_PER_INCH = 10
 
 #: Unit text of dimensionless and categorical quantities.
 DIMENSIONLESS = "-"
@@ -288,7 +294,9 @@ def point_text(obj: xr.Dataset | xr.DataArray, keys: dict) -> str:
 def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
     """A sweep dimension's long name with its name: ``"radial clearance (B_clearance)"``."""
     long_name = obj[dim].attrs.get("long_name") if dim in obj.coords else None
-    return f"{long_name} ({dim})" if long_name and long_name != dim else dim
+    if not long_name or dim in long_name:      # "sweep zip group coating_joints": the name
+        return dim
+    return f"{long_name} ({dim})"
 
 
 def selection_text(ds: xr.Dataset, selection: dict) -> str:
@@ -519,7 +527,12 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
     ax = fig.add_subplot()
     xs, ticks = _category_positions(mean[dims[0]])
     series = tuple(str(d) for d in mean.dims if d != dims[0])
-    lines = list(iter_points(mean, series))
+    lines: list[tuple[dict, xr.DataArray]] = []
+    empty: list[tuple[dict, xr.DataArray]] = []
+    for keys, line in iter_points(mean, series):
+        # an ideal joint's wear (all 0, no spread) or a metric it lacks (NaN): nothing to show
+        values = np.nan_to_num(line.values.astype(float))
+        (empty if not values.any() else lines).append((keys, line))
     step = (np.ptp(xs) if len(xs) > 1 else 1.0) * 0.01
     for k, (keys, line) in enumerate(lines):
         y = line.transpose(dims[0]).values.astype(float)
@@ -533,14 +546,24 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
     if ticks is not None:
         ax.set_xticks(xs, ticks)
     ax.set_xlabel(axis_label(mean[dims[0]]))
-    ax.set_ylabel(axis_label(mean))
+    ax.set_ylabel(wrapped_label(axis_label(mean), AXIS_LABEL_CHARACTERS))
     ax.grid(alpha=0.3)
     _note_span(ax, [low.values, high.values, mean.values])
     if series and len(lines) <= MAX_LEGEND_ENTRIES:
         ax.legend(fontsize="x-small")
     n = ds.sizes[MEMBER_DIM]
+    left_out = f"\n{_left_out_text(mean, [k for k, _ in empty], [k for k, _ in lines])}" if empty else ""
     fig.suptitle(f"{mean.attrs.get('long_name', metric)} over {_dim_name(mean, dims[0])}, "
-                 f"{n} members per design,\nbars: 95% confidence interval of the mean (Student t)")
+                 f"{n} members per design,\nbars: 95% confidence interval of the mean (Student t)"
+                 f"{left_out}")
+
+
+def _left_out_text(obj: xr.DataArray, empty: list[dict], drawn: list[dict]) -> str:
+    """What the lines left out have in common ("joint A"), or their count."""
+    common = {d: v for d, v in empty[0].items()
+              if all(k[d] == v for k in empty) and not any(k[d] == v for k in drawn)}
+    what = point_text(obj, common) if common else f"{len(empty)} line(s)"
+    return f"not drawn: {what}, all 0 or missing"
 
 
 def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
@@ -571,7 +594,7 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         if ticks is not None:
             ax.set_xticks(xs, ticks)
         ax.set_xlabel(axis_label(values[dims[0]]))
-        ax.set_ylabel(label)
+        ax.set_ylabel(wrapped_label(label, AXIS_LABEL_CHARACTERS))
         ax.grid(alpha=0.3)
         _note_span(ax, values.values)
         if inner and len(panels) <= MAX_LEGEND_ENTRIES:
@@ -868,20 +891,33 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         _draw_reliability(fig, ds, b10)
     else:
         _draw_sweep(fig, ds, metric)
-    _name_selection(fig, selection_text(ds, selection))
+    _name_selection(fig, selection_text(ds, selection) or case_text(ds))
     return fig
 
 
 def _name_selection(fig: Figure, line: str) -> None:
-    """Add ``line`` (the ``--select`` slice) to the figure's title, so that two slices never
-    give figures with the same title."""
-    if not line:
-        return
-    for text in fig.texts:
-        if text.get_text() == fig.get_suptitle():
-            text.set_text(f"{text.get_text()}\n{line}")
+    """Add ``line`` (the ``--select`` slice or the case) to the figure's title, so that two
+    slices never give figures with the same title; wrap the title to the figure's width."""
+    title = next((t for t in fig.texts if t.get_text() == fig.get_suptitle()), None)
+    if title is None:
+        if not line:
             return
-    fig.suptitle(line)
+        title = fig.suptitle("")
+    text = "\n".join(filter(None, [title.get_text(), line]))
+    width = int(fig.get_figwidth() * TITLE_CHARACTERS_PER_INCH)
+    title.set_text("\n".join(wrapped for part in text.split("\n")
+                             for wrapped in (textwrap.wrap(part, width) or [""])))
+
+
+def case_text(ds: xr.Dataset) -> str:
+    """``"case: two_clearances"`` for a one-case dataset whose config names it; "" otherwise."""
+    if sweep_dims(ds) or "config" not in ds.attrs:
+        return ""
+    try:
+        name = yaml.safe_load(ds.attrs["config"]).get("name")
+    except (yaml.YAMLError, AttributeError):
+        return ""
+    return f"case: {name}" if isinstance(name, str) and name else ""
 
 
 def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",

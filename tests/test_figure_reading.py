@@ -10,7 +10,7 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.figure import Figure
-from synthetic import sweep_ds  # noqa: F401  (pytest fixture)
+from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
 from test_ensemble import synthetic_ensemble
 from test_figure_layout import layout_problems, life_ds  # noqa: F401  (pytest fixture)
 
@@ -137,3 +137,21 @@ def test_the_ensemble_legend_carries_units():
     texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert texts == ["B_clearance 0.0001 m", "B_clearance 0.00025 m"]
     assert layout_problems(fig) == []
+
+
+def test_a_heat_map_with_the_long_names_of_a_sweep_file_keeps_its_title_inside():
+    """The paper's sweep: two zip groups, a metric with a long name (its title was clipped
+    on both sides)."""
+    ds = heat_map_sweep(np.arange(24.0).reshape(4, 6)).rename(
+        B_coating="coating_joints", B_clearance="clearance_joints")
+    ds["slider_acceleration_peak_settled"].attrs["long_name"] = (
+        "peak absolute slider acceleration after start-up")
+    for dim in ("coating_joints", "clearance_joints"):
+        ds[dim].attrs["long_name"] = f"sweep zip group {dim}"
+    fig = figure(ds, "sweep")
+    assert layout_problems(fig) == []
+    assert "(coating_joints)" not in fig.get_suptitle()
+
+
+def test_a_single_run_figure_names_its_case(case):
+    assert "case: " in figure(case, "slider").get_suptitle()
