@@ -411,7 +411,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     for j, joint in enumerate(joints):
         peak = float(projection.sel(joint=joint).max())
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
-        scales.append(f"joint {value_text(joint)}: {peak:.3g} m" if scale else
+        # a no-break space keeps the value and its unit on one line of the wrapped title
+        scales.append(f"joint {value_text(joint)}: {peak:.3g}\u00a0m" if scale else
                       f"joint {value_text(joint)}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
@@ -906,7 +907,7 @@ def _name_selection(fig: Figure, line: str) -> None:
     text = "\n".join(filter(None, [title.get_text(), line]))
     width = int(fig.get_figwidth() * TITLE_CHARACTERS_PER_INCH)
     title.set_text("\n".join(wrapped for part in text.split("\n")
-                             for wrapped in (textwrap.wrap(part, width) or [""])))
+                             for wrapped in (textwrap.wrap(part, width, break_on_hyphens=False) or [""])))
 
 
 def case_text(ds: xr.Dataset) -> str:
