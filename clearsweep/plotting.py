@@ -45,12 +45,12 @@ from __future__ import annotations
 import re
 import textwrap
 from pathlib import Path
-from typing import cast
 
 import numpy as np
 import xarray as xr
 import yaml
 from matplotlib import colormaps
+from matplotlib.artist import Artist
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
@@ -66,7 +66,7 @@ from .analysis import (
     iter_points,
     label_text,
     metric_table,
-    select_cases,
+    parse_selection,
     sweep_dims,
     value_text,
 )
@@ -110,12 +110,31 @@ ROBUST_FENCE = 1.0
 #: Heat-map annotations turn dark on cells brighter than this (normalised colour value).
 ANNOTATION_DARK_TEXT_ABOVE = 0.6
 
+#: A line panel whose data vary by less than ``NEGLIGIBLE_VARIATION`` of their mean magnitude
+#: is drawn on a y-axis ``MIN_RELATIVE_SPAN`` of the mean wide (at least), centred on the
+#: data, so that a negligible change looks negligible; the panel's title says so.
+NEGLIGIBLE_VARIATION = 0.05
+MIN_RELATIVE_SPAN = 0.1
+
+#: The life figure draws at most this many wear-map snapshots (the first, the last and
+#: evenly spread ones between); it says which stored snapshots it leaves out.
+LIFE_SNAPSHOT_PANELS = 6
+
+#: Long y-axis labels of line plots are wrapped to lines of at most this many characters.
+AXIS_LABEL_CHARACTERS = 40
+
+#: Figure titles are wrapped to lines of at most this many characters per inch of width.
+TITLE_CHARACTERS_PER_INCH = 10
+
 #: Unit text of dimensionless and categorical quantities.
 DIMENSIONLESS = "-"
 
 #: Colour-bar labels are wrapped to lines of at most this many characters, so that the
 #: layout engine can keep them inside a figure of the default size.
 COLOURBAR_LABEL_CHARACTERS = 36
+
+#: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
+_CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
 
 _AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
 _SINGLE_CASE_COLOUR = "tab:red"
@@ -175,8 +194,16 @@ def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
 
 
 def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
-    """``(legend text, case, colour)`` of every case of ``ds``."""
-    cases = list(iter_cases(ds))
+    """``(legend text, case, colour)`` of every case of ``ds`` that ran (skipped grid points
+    have no data to draw). The keys of a zip group are left out of the text: its label
+    names them."""
+    zipped = {str(n) for n, c in ds.coords.items()
+              if c.ndim == 1 and c.dims[0] != n and ds.coords.get(c.dims[0]) is not None
+              and ds[c.dims[0]].attrs.get("config_keys")}
+    cases = [({k: v for k, v in label.items() if k not in zipped}, case)
+             for label, case in iter_cases(ds)
+             if not ("status" in case and case["status"].ndim == 0
+                     and str(case["status"].values) == "skipped")]
     if len(cases) == 1:
         colours = [_SINGLE_CASE_COLOUR]
     elif len(cases) <= MAX_CYCLE_COLOURS:
@@ -218,6 +245,71 @@ def _edges(centres: np.ndarray, lo: float, hi: float) -> np.ndarray:
         return np.array([lo, hi])
     step = centres[1] - centres[0]
     return np.append(centres - step / 2, centres[-1] + step / 2)
+
+
+def keep_relative_span(ax, values) -> str:
+    """Widen ``ax``'s y-axis to at least :data:`MIN_RELATIVE_SPAN` of the mean magnitude of
+    ``values`` (the data drawn), centred on the current view, where they vary by less than
+    :data:`NEGLIGIBLE_VARIATION` of it.
+
+    Returns
+    -------
+    str
+        The note for the panel ("varies by 0.15 % of its mean; axis spans 10 % of it"), or
+        "" where the axis was wide enough already.
+    """
+    data = np.asarray(values, dtype=float).ravel()
+    data = data[np.isfinite(data)]
+    if data.size == 0:
+        return ""
+    scale = abs(float(data.mean()))
+    low, high = ax.get_ylim()
+    if (not scale > 0 or float(np.ptp(data)) >= NEGLIGIBLE_VARIATION * scale
+            or high - low >= MIN_RELATIVE_SPAN * scale):
+        return ""
+    centre, half = 0.5 * (low + high), 0.5 * MIN_RELATIVE_SPAN * scale
+    ax.set_ylim(centre - half, centre + half)
+    return (f"varies by {float(np.ptp(data)) / scale:.2%} of its mean; "
+            f"axis spans {MIN_RELATIVE_SPAN:.0%} of it")
+
+
+def _note_span(ax, values) -> None:
+    """:func:`keep_relative_span`, its note as the panel's (small) title."""
+    note = keep_relative_span(ax, values)
+    if note:
+        ax.set_title(note, fontsize="x-small")
+
+
+def coordinate_text(coord: xr.DataArray, value) -> str:
+    """``"B_clearance 0.00025 m"``: a sweep coordinate's name, value and units (if any)."""
+    unit = coord.attrs.get("units", "")
+    return f"{coord.name} {value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+
+
+def point_text(obj: xr.Dataset | xr.DataArray, keys: dict) -> str:
+    """``"B_coating PTFE, B_clearance 0.00025 m"`` of a point of :func:`iter_points`."""
+    return ", ".join(coordinate_text(obj[d], v) if d in obj.coords else f"{d} {value_text(v)}"
+                     for d, v in keys.items())
+
+
+def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
+    """A sweep dimension's long name with its name: ``"radial clearance (B_clearance)"``."""
+    long_name = obj[dim].attrs.get("long_name") if dim in obj.coords else None
+    if not long_name or dim in long_name:      # "sweep zip group coating_joints": the name
+        return dim
+    return f"{long_name} ({dim})"
+
+
+def selection_text(ds: xr.Dataset, selection: dict) -> str:
+    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB, ..."``;
+    numbers with the coordinate's units."""
+    if not selection:
+        return ""
+    parts = []
+    for name, value in selection.items():
+        unit = ds[name].attrs.get("units", "") if name in ds.coords else ""
+        parts.append(f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else ""))
+    return "selection: " + ", ".join(parts)
 
 
 # --------------------------------------------------------------------------- kinds
@@ -320,7 +412,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     for j, joint in enumerate(joints):
         peak = float(projection.sel(joint=joint).max())
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
-        scales.append(f"joint {value_text(joint)}: {peak:.3g} m" if scale else
+        # a no-break space keeps the value and its unit on one line of the wrapped title
+        scales.append(f"joint {value_text(joint)}: {peak:.3g}\u00a0m" if scale else
                       f"joint {value_text(joint)}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
@@ -374,12 +467,19 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     joints = offset["joint"].values
     configured = configured_clearances(ds)
-    for j, joint in enumerate(joints):
-        clearances: dict[float, str] = {}   # clearance [m] -> where it was read
+    per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
+    for joint in joints:
+        found_here: dict[float, str] = {}
         for _, case, _ in cases:
             found = _clearance(case, str(joint), configured)
             if found is not None:
-                clearances.setdefault(found[0], found[1])
+                found_here.setdefault(found[0], found[1])
+        per_joint.append(found_here)
+    # one style per clearance in the whole figure, so that the legend tells the circles apart
+    radii = sorted({r for found_here in per_joint for r in found_here})
+    styles = {r: (_CIRCLE_STYLES[k % len(_CIRCLE_STYLES)],
+                  str(0.15 + 0.5 * k / max(len(radii) - 1, 1))) for k, r in enumerate(radii)}
+    for j, (joint, clearances) in enumerate(zip(joints, per_joint)):
         for p, (a, b) in enumerate(planes):
             ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
             for text, case, colour in cases:
@@ -387,8 +487,9 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
                 ax.plot(d.sel(axis=a).values, d.sel(axis=b).values, lw=0.6, color=colour,
                         label=_case_label(text, len(cases), "ball centre"))
             for radius, source in sorted(clearances.items()):
-                ax.plot(radius * np.cos(circle), radius * np.sin(circle), ls="--", lw=0.8,
-                        color="0.3", label=f"clearance {radius:.3g} m ({source})")
+                ax.plot(radius * np.cos(circle), radius * np.sin(circle), lw=0.9,
+                        ls=styles[radius][0], color=styles[radius][1],
+                        label=f"joint {value_text(joint)} clearance {radius:.3g} m ({source})")
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(axis_label(offset, f"d_{a}"))
             ax.set_ylabel(axis_label(offset, f"d_{b}"))
@@ -396,8 +497,15 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ideal = "" if clearances else " (ideal joint)"
             ax.set_title(f"joint {value_text(joint)}{ideal}: {a}{b} plane", fontsize="small")
             ax.grid(alpha=0.3)
-            if p == 0:
-                ax.legend(fontsize="x-small", loc="upper right")
+    # one legend below the panels: the cases, then each joint's clearance circles once
+    entries: dict[str, Artist] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                   ncol=min(len(entries), 2 if max(map(len, entries)) > 40 else 3),
+                   fontsize="x-small")
     fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)))
 
 
@@ -421,13 +529,18 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
     ax = fig.add_subplot()
     xs, ticks = _category_positions(mean[dims[0]])
     series = tuple(str(d) for d in mean.dims if d != dims[0])
-    lines = list(iter_points(mean, series))
+    lines: list[tuple[dict, xr.DataArray]] = []
+    empty: list[tuple[dict, xr.DataArray]] = []
+    for keys, line in iter_points(mean, series):
+        # an ideal joint's wear (all 0, no spread) or a metric it lacks (NaN): nothing to show
+        values = np.nan_to_num(line.values.astype(float))
+        (empty if not values.any() else lines).append((keys, line))
     step = (np.ptp(xs) if len(xs) > 1 else 1.0) * 0.01
     for k, (keys, line) in enumerate(lines):
         y = line.transpose(dims[0]).values.astype(float)
         lo = low.sel(keys).transpose(dims[0]).values.astype(float) if keys else low.values
         hi = high.sel(keys).transpose(dims[0]).values.astype(float) if keys else high.values
-        text = ", ".join(f"{d} {value_text(v)}" for d, v in keys.items())
+        text = point_text(mean, keys)
         # nudge the lines apart so that their error bars do not hide each other
         ax.errorbar(xs + (k - 0.5 * (len(lines) - 1)) * step, y, yerr=[y - lo, hi - y], marker="o",
                     capsize=3, linestyle="none" if ticks is not None else "-",
@@ -435,13 +548,24 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
     if ticks is not None:
         ax.set_xticks(xs, ticks)
     ax.set_xlabel(axis_label(mean[dims[0]]))
-    ax.set_ylabel(axis_label(mean))
+    ax.set_ylabel(wrapped_label(axis_label(mean), AXIS_LABEL_CHARACTERS))
     ax.grid(alpha=0.3)
+    _note_span(ax, [low.values, high.values, mean.values])
     if series and len(lines) <= MAX_LEGEND_ENTRIES:
         ax.legend(fontsize="x-small")
     n = ds.sizes[MEMBER_DIM]
-    fig.suptitle(f"{metric} over {dims[0]}: ensemble mean of {n} members,\nbars: 95% confidence "
-                 "interval of the mean (Student t)")
+    left_out = f"\n{_left_out_text(mean, [k for k, _ in empty], [k for k, _ in lines])}" if empty else ""
+    fig.suptitle(f"{mean.attrs.get('long_name', metric)} over {_dim_name(mean, dims[0])}, "
+                 f"{n} members per design,\nbars: 95% confidence interval of the mean (Student t)"
+                 f"{left_out}")
+
+
+def _left_out_text(obj: xr.DataArray, empty: list[dict], drawn: list[dict]) -> str:
+    """What the lines left out have in common ("joint A"), or their count."""
+    common = {d: v for d, v in empty[0].items()
+              if all(k[d] == v for k in empty) and not any(k[d] == v for k in drawn)}
+    what = point_text(obj, common) if common else f"{len(empty)} line(s)"
+    return f"not drawn: {what}, all 0 or missing"
 
 
 def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
@@ -458,9 +582,9 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         raise PlotError(f"--kind sweep draws a metric over one or two sweep dimensions; this "
                         f"dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the others "
                         "with --select DIM=VALUE")
-    panels = [(", ".join(f"{d} {value_text(v)}" for d, v in keys.items()), panel)
-              for keys, panel in iter_points(values, inner)]
+    panels = [(point_text(values, keys), panel) for keys, panel in iter_points(values, inner)]
     label = axis_label(values)
+    title = values.attrs.get("long_name", metric)
     if len(dims) == 1:
         ax = fig.add_subplot()
         xs, ticks = _category_positions(values[dims[0]])
@@ -472,11 +596,13 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         if ticks is not None:
             ax.set_xticks(xs, ticks)
         ax.set_xlabel(axis_label(values[dims[0]]))
-        ax.set_ylabel(label)
+        ax.set_ylabel(wrapped_label(label, AXIS_LABEL_CHARACTERS))
         ax.grid(alpha=0.3)
+        _note_span(ax, values.values)
         if inner and len(panels) <= MAX_LEGEND_ENTRIES:
             ax.legend(fontsize="x-small")
-        fig.suptitle(f"{metric} over {dims[0]}" + (_legend_note(len(panels)) if inner else ""))
+        fig.suptitle(f"{title} over {_dim_name(values, dims[0])}"
+                     + (_legend_note(len(panels)) if inner else ""))
         return
     failed = _failed_cells(ds, values, dims)
     ncols = min(3, len(panels))
@@ -528,7 +654,8 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
     if failed is not None and failed.any():
         note = (f"\nhatched: {int(failed.sum())} case(s) that failed, no value (see the status "
                 "and message variables)")
-    fig.suptitle(f"{metric} over {dims[0]} and {dims[1]}{note}")
+    fig.suptitle(f"{title}\nover {_dim_name(values, dims[0])} and {_dim_name(values, dims[1])}"
+                 f"{note}")
 
 
 def robust_limits(grid: np.ndarray) -> tuple[float, float] | None:
@@ -597,6 +724,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         limit = _life_limit(config, limits.get(name))
         if limit is not None:
             ax.axhline(limit, color="r", linestyle="--", label=limits[name])
+        _note_span(ax, var.values)
         ax.set_xscale("log")
         ax.set_xlabel(xlabel)
         ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name)))
@@ -604,7 +732,8 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
             ax.legend(fontsize="x-small")
     snaps = ds["wear_map_snapshot"]
     joint = "B" if float(snaps.sel(joint="B").max()) >= float(snaps.sel(joint="A").max()) else "A"
-    picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, 6).round().astype(int))
+    picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, LIFE_SNAPSHOT_PANELS)
+                      .round().astype(int))
     maps = snaps.sel(joint=joint)
     peak = float(maps.max())
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
@@ -621,7 +750,26 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
     if mesh is not None:
         fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth"))
-    fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}")
+    fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}\n"
+                 + snapshot_note(ds["snapshot_cycle"].values, picks, joint))
+
+
+def snapshot_note(cycles: np.ndarray, picks: np.ndarray, joint: str) -> str:
+    """Which of the stored wear-map snapshots (at ``cycles`` revolutions) the life figure
+    draws (positions ``picks``).
+
+    >>> snapshot_note(np.array([1.0, 10.0, 100.0]), np.array([0, 1, 2]), "B")
+    'wear maps of joint B: all 3 stored snapshots'
+    >>> snapshot_note(np.array([1.0, 10.0, 100.0]), np.array([0, 2]), "B")
+    'wear maps of joint B: 2 of the 3 stored snapshots (not drawn: 10 revolutions)'
+    """
+    n = len(cycles)
+    if len(picks) == n:
+        return f"wear maps of joint {joint}: all {n} stored snapshots"
+    left = [float(c) for i, c in enumerate(cycles) if i not in set(picks.tolist())]
+    listed = ", ".join(f"{c:.3g}" for c in left[:4]) + (", ..." if len(left) > 4 else "")
+    return (f"wear maps of joint {joint}: {len(picks)} of the {n} stored snapshots "
+            f"(not drawn: {listed} revolutions)")
 
 
 def _life_limit(config: dict, key: str | None) -> float | None:
@@ -726,7 +874,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         raise PlotError("a metric applies to --kind sweep only")
     if b10 and kind != "reliability":
         raise PlotError("--b10 applies to --kind reliability only")
-    ds = cast(xr.Dataset, select_cases(ds, select))   # a dataset in, a dataset out
+    selection = parse_selection(ds, select)
+    ds = ds.sel(selection) if selection else ds
     fig = Figure(figsize=_SIZES[kind], layout="constrained")
     if kind == "slider":
         _draw_slider(fig, ds, x)
@@ -744,7 +893,33 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         _draw_reliability(fig, ds, b10)
     else:
         _draw_sweep(fig, ds, metric)
+    _name_selection(fig, selection_text(ds, selection) or case_text(ds))
     return fig
+
+
+def _name_selection(fig: Figure, line: str) -> None:
+    """Add ``line`` (the ``--select`` slice or the case) to the figure's title, so that two
+    slices never give figures with the same title; wrap the title to the figure's width."""
+    title = next((t for t in fig.texts if t.get_text() == fig.get_suptitle()), None)
+    if title is None:
+        if not line:
+            return
+        title = fig.suptitle("")
+    text = "\n".join(filter(None, [title.get_text(), line]))
+    width = int(fig.get_figwidth() * TITLE_CHARACTERS_PER_INCH)
+    title.set_text("\n".join(wrapped for part in text.split("\n")
+                             for wrapped in (textwrap.wrap(part, width, break_on_hyphens=False) or [""])))
+
+
+def case_text(ds: xr.Dataset) -> str:
+    """``"case: two_clearances"`` for a one-case dataset whose config names it; "" otherwise."""
+    if sweep_dims(ds) or "config" not in ds.attrs:
+        return ""
+    try:
+        name = yaml.safe_load(ds.attrs["config"]).get("name")
+    except (yaml.YAMLError, AttributeError):
+        return ""
+    return f"case: {name}" if isinstance(name, str) and name else ""
 
 
 def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",

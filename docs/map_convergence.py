@@ -38,7 +38,8 @@ CONFIGS = {
     "paper_case": ("paper_case.yaml", "case", ["solver.duration=0.25"], []),
     "coating_clearance": ("coating_clearance.yaml", "sweep", ["solver.duration=0.25"], []),
     "paper": ("paper.yaml", "sweep", ["solver.duration=0.25"], []),
-    "coating_ensemble": ("coating_ensemble.yaml", "sweep", ["ensemble.members=4"], []),
+    "coating_ensemble": ("coating_ensemble.yaml", "sweep", ["ensemble.members=4", "solver.duration=0.25"],
+                         []),
     "life": ("life.yaml", "life", ["life.max_blocks=3"], ["life.max_blocks=12"]),
     # a reliability sweep's members are life runs of its base: member 0's, unperturbed
     "reliability": ("reliability.yaml", "reliability", ["life.max_blocks=3"], ["life.max_blocks=12"]),

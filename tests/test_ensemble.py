@@ -294,8 +294,9 @@ def test_sweep_plot_of_an_ensemble_draws_error_bars(tmp_path):
 
     fig = figure(synthetic_ensemble(), "sweep", metric="wear_depth_max_final")
     ax = fig.axes[0]
-    assert len(ax.containers) == 2          # one errorbar per joint
+    assert len(ax.containers) == 1          # joint B; the ideal joint A (all 0) is left out
     assert "confidence interval" in fig.texts[0].get_text()
+    assert "not drawn: joint A, all 0" in fig.get_suptitle()
 
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]

@@ -108,9 +108,9 @@ def test_sweep_plot_from_summary_only_dataset(tmp_path, sweep_ds):
 
 def test_orbit_circle_uses_the_swept_clearance(tmp_path, sweep_ds):
     fig = plot(sweep_ds, "orbit", tmp_path / "o.png", ["B_coating=none"], dpi=TEST_DPI)
-    joint_b_legend = [t.get_text() for t in fig.axes[3].get_legend().get_texts()]
-    assert "clearance 0.0001 m (swept)" in joint_b_legend
-    assert "clearance 0.00025 m (swept)" in joint_b_legend
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert "joint B clearance 0.0001 m (swept)" in legend
+    assert "joint B clearance 0.00025 m (swept)" in legend
 
 
 def test_one_case_kinds_refuse_several_cases(tmp_path, sweep_ds):
@@ -196,8 +196,8 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
             fig = plot(full, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
             assert_rendered(tmp_path / f"{kind}.png", fig)
         orbit = plot(full, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
-        legend = [t.get_text() for t in orbit.axes[0].get_legend().get_texts()]
-        assert "clearance 0.00025 m (config)" in legend       # the base case of sweep_config
+        legend = [t.get_text() for t in orbit.legends[0].get_texts()]
+        assert "joint B clearance 0.00025 m (config)" in legend  # the base case of sweep_config
     for path in paths.values():
         for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
             result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])

@@ -1,0 +1,157 @@
+"""Figures that a user reads right the first time: a negligible change looks negligible,
+the life figure says which wear-map snapshots it draws, titles name the ``--select`` slice,
+legends tell clearance circles apart and carry units (issue: figures and reports)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from matplotlib.figure import Figure
+from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
+from test_ensemble import synthetic_ensemble
+from test_figure_layout import layout_problems, life_ds  # noqa: F401  (pytest fixture)
+
+from clearsweep.ensemble import ensemble_statistics
+from clearsweep.plotting import (
+    MIN_RELATIVE_SPAN,
+    NEGLIGIBLE_VARIATION,
+    figure,
+    keep_relative_span,
+)
+
+
+def _span(ax) -> float:
+    low, high = ax.get_ylim()
+    return high - low
+
+
+@settings(max_examples=60, deadline=None)
+@given(mean=st.floats(1e-9, 1e6), sign=st.sampled_from([1.0, -1.0]),
+       variation=st.floats(0.0, 0.99 * NEGLIGIBLE_VARIATION),
+       shape=st.lists(st.floats(-0.5, 0.5), min_size=2, max_size=12))
+def test_data_that_vary_negligibly_get_an_axis_wide_relative_to_their_mean(mean, sign, variation,
+                                                                          shape):
+    values = sign * mean * (1.0 + variation * np.asarray(shape))
+    ax = Figure().add_subplot()
+    ax.plot(values)
+    keep_relative_span(ax, values)
+    assert _span(ax) >= (1.0 - 1e-9) * MIN_RELATIVE_SPAN * abs(values.mean())
+    low, high = ax.get_ylim()
+    assert low <= values.min() and values.max() <= high
+
+
+def test_data_that_vary_a_lot_keep_their_axis():
+    values = np.array([1.0, 1.5, 2.0])
+    ax = Figure().add_subplot()
+    ax.plot(values)
+    before = ax.get_ylim()
+    assert keep_relative_span(ax, values) == ""
+    assert ax.get_ylim() == before
+
+
+def _life_panel(fig, ylabel_start: str):
+    return next(ax for ax in fig.axes if ax.get_ylabel().startswith(ylabel_start))
+
+
+def test_the_life_figure_draws_a_015_percent_rms_change_small_and_says_so(life_ds):
+    ds = life_ds.copy()
+    n = ds.sizes["cycle"]
+    ds["slider_acceleration_rms_settled"] = (
+        "cycle", np.linspace(1.4327, 1.4349, n), ds["slider_acceleration_rms_settled"].attrs)
+    fig = figure(ds, "life")
+    ax = _life_panel(fig, "settled RMS slider acceleration")
+    assert _span(ax) >= 0.99 * MIN_RELATIVE_SPAN * 1.4338     # 0.0022 m/s^2 was the whole axis
+    assert "varies by 0.15% of its mean" in ax.get_title()
+    assert layout_problems(fig) == []
+
+
+def test_the_life_figure_says_which_snapshots_it_leaves_out(life_ds):
+    ds = life_ds
+    n = ds.sizes["snapshot"]
+    # seven stored snapshots, one more than the panels
+    extra = 7 - n
+    picks = np.r_[np.arange(n), np.full(max(extra, 0), n - 1)][:7]
+    seven = ds.isel(snapshot=picks)
+    seven = seven.assign(snapshot_cycle=("snapshot", np.arange(1.0, 8.0) * 10.0))
+    title = figure(seven, "life").get_suptitle()
+    assert "6 of the 7 stored snapshots" in title
+    drawn = {float(c) for c in np.round(np.linspace(0, 6, 6)).astype(int) * 10.0 + 10.0}
+    (left,) = set(np.arange(1.0, 8.0) * 10.0) - drawn
+    assert f"not drawn: {left:.3g} revolutions" in title
+    assert "all" in figure(ds.isel(snapshot=[0, n - 1]), "life").get_suptitle()
+
+
+@pytest.mark.parametrize("kind", ["slider", "forces", "wear-polar", "orbit", "sweep"])
+def test_two_slices_never_get_the_same_title(sweep_ds, kind):
+    a = figure(sweep_ds, kind, ["B_coating=none"]).get_suptitle()
+    b = figure(sweep_ds, kind, ["B_coating=PTFE"]).get_suptitle()
+    assert a != b
+    assert "selection: B_coating=PTFE" in b
+
+
+def test_a_sweep_title_uses_long_names(sweep_ds):
+    title = figure(sweep_ds, "sweep", ["B_coating=none"]).get_suptitle()
+    long_name = sweep_ds["slider_acceleration_peak_settled"].attrs["long_name"]
+    assert title.startswith(long_name)
+    assert "slider_acceleration_peak_settled" not in title
+
+
+def test_orbit_clearance_circles_are_told_apart_in_one_legend(sweep_ds):
+    # joint A: 0.25 mm from the config; joint B: 0.1 and 0.25 mm swept
+    fig = figure(sweep_ds, "orbit", ["B_coating=none"])
+    (legend,) = fig.legends
+    circles = {t.get_text(): (str(h.get_linestyle()), str(h.get_color()))
+               for h, t in zip(legend.legend_handles, legend.get_texts())
+               if "clearance " in t.get_text()}
+    assert set(circles) == {"joint A clearance 0.00025 m (config)",
+                            "joint B clearance 0.0001 m (swept)",
+                            "joint B clearance 0.00025 m (swept)"}
+    # one style per radius: the two 0.25 mm circles alike, the 0.1 mm one different
+    assert circles["joint A clearance 0.00025 m (config)"] == circles[
+        "joint B clearance 0.00025 m (swept)"]
+    assert circles["joint B clearance 0.0001 m (swept)"] != circles[
+        "joint B clearance 0.00025 m (swept)"]
+    assert layout_problems(fig) == []
+
+
+def test_orbit_leaves_out_skipped_cases(sweep_ds):
+    ds = sweep_ds.copy()
+    ds["status"] = ds["status"].where(ds["B_clearance"] != ds["B_clearance"][1], "skipped")
+    fig = figure(ds, "orbit", ["B_coating=none"])
+    texts = [t.get_text() for t in fig.legends[0].get_texts()]
+    skipped = f"B_clearance={float(ds['B_clearance'][1]):g}"
+    assert not any(t.startswith(skipped) or f", {skipped}" in t for t in texts)
+
+
+def test_the_ensemble_legend_carries_units():
+    ds = synthetic_ensemble()
+    two = xr.concat([ds[["status", "wear_depth_max_final"]]] * 2, dim="B_clearance")
+    two = two.assign_coords(B_clearance=("B_clearance", [1e-4, 2.5e-4],
+                                         {"units": "m", "long_name": "radial clearance of B"}))
+    two = two.sel(joint="B").transpose("B_coating", "B_clearance", "member")
+    ensemble = xr.merge([two, ensemble_statistics(two)], combine_attrs="override")
+    fig = figure(ensemble, "sweep", metric="wear_depth_max_final")
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert texts == ["B_clearance 0.0001 m", "B_clearance 0.00025 m"]
+    assert layout_problems(fig) == []
+
+
+def test_a_heat_map_with_the_long_names_of_a_sweep_file_keeps_its_title_inside():
+    """The paper's sweep: two zip groups, a metric with a long name (its title was clipped
+    on both sides)."""
+    ds = heat_map_sweep(np.arange(24.0).reshape(4, 6)).rename(
+        B_coating="coating_joints", B_clearance="clearance_joints")
+    ds["slider_acceleration_peak_settled"].attrs["long_name"] = (
+        "peak absolute slider acceleration after start-up")
+    for dim in ("coating_joints", "clearance_joints"):
+        ds[dim].attrs["long_name"] = f"sweep zip group {dim}"
+    fig = figure(ds, "sweep")
+    assert layout_problems(fig) == []
+    assert "(coating_joints)" not in fig.get_suptitle()
+
+
+def test_a_single_run_figure_names_its_case(case):
+    assert "case: " in figure(case, "slider").get_suptitle()
