@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shlex
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -47,7 +49,9 @@ from .version import __version__
 
 
 class _Group(click.Group):
-    """Group that reports ``ConfigError``, whichever command raises it, with exit 2."""
+    """Group that reports ``ConfigError``, whichever command raises it, with exit 2, and
+    click's own errors (a bad option, a usage error a command raises) as the same one
+    ``clearsweep: error:`` line with click's exit code (2 usage, 1 other)."""
 
     def invoke(self, ctx: click.Context):
         try:
@@ -55,6 +59,12 @@ class _Group(click.Group):
         except ConfigError as exc:
             click.echo(f"clearsweep: error: {exc}", err=True)
             ctx.exit(2)
+        except click.ClickException as exc:
+            message = " ".join(exc.format_message().split())
+            if isinstance(exc, click.UsageError) and exc.ctx is not None:
+                message += f" (see {exc.ctx.command_path} --help)"
+            click.echo(f"clearsweep: error: {message}", err=True)
+            ctx.exit(exc.exit_code)
 
 
 _allow_large = click.option(
@@ -206,9 +216,14 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
         LifeState,
         checkpoint_path_for,
         life,
+        life_block,
         life_summary_text,
     )
 
+    if cfg.ensemble.members > 1:    # one life run follows one case: it would run member 0 alone
+        raise ConfigError("ensemble.members", cfg.ensemble.members, "1 with `clearsweep life`; a "
+                          "life run of every member is a sweep file with store: life", config)
+    life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
     out = out or Path(config).stem + "_life.nc"
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
@@ -331,17 +346,42 @@ def materials(materials_file: str | None) -> None:
     click.echo(format_materials(load_materials(materials_file)))
 
 
-def open_input(path: str) -> xr.Dataset:
-    """Open the results file of a ``report`` or ``plot`` command; a file xarray cannot read
-    is a usage error (exit 2), not a traceback."""
+@contextmanager
+def open_input(path: str) -> Iterator[xr.Dataset]:
+    """Open the results file of a ``report``, ``plot`` or ``sensitivity`` command for a
+    ``with`` block: a file xarray cannot read, or one that lacks a variable or dimension
+    the command reads (a file of an older version, or edited since), is a usage error
+    (exit 2), not a traceback."""
     import xarray as xr
 
     try:
-        return xr.open_dataset(path)
+        ds = xr.open_dataset(path)
     except (OSError, ValueError) as exc:
         reason = getattr(exc, "strerror", None) or "no netCDF reader can open it"
         raise click.BadParameter(f"{path!r} is not a results file ({reason})",
                                  param_hint="'PATH'") from None
+    with ds:
+        try:
+            yield ds
+        except KeyError as exc:
+            text = str(exc.args[0]) if exc.args else ""
+            found = re.match(r"No variable named '([^']+)'", text)
+            name = found.group(1) if found else text
+            if name in ds.variables or name in ds.dims:
+                raise       # the file has it: not the file's fault
+            raise click.UsageError(
+                f"{path}: the file has no {name!r}, which this command reads (a results file "
+                "of an older version of clearsweep, or edited since); write it again with the "
+                "command that made it") from None
+
+
+def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
+    """A usage error unless the results file ``ds`` holds ``name``, which ``what`` report
+    reads: the file of an older version (or an edited one) is refused, not misread."""
+    if name not in ds:
+        raise click.UsageError(f"{path}: the file has no {name!r}, which {what} report reads (a "
+                               "results file of an older version of clearsweep, or edited since); "
+                               "write it again with the command that made it")
 
 
 @main.command("report")
@@ -388,12 +428,14 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     if reference and metric:
         raise click.UsageError("--reference and --metric print different tables; give one of them")
     with open_input(path) as ds:
-        if "cycle" in ds.dims and "stop_reason" in ds:
+        if "cycle" in ds.dims and ("stop_reason" in ds or "block_status" in ds):
             from .service_life import life_summary_text
 
+            _needs(ds, path, "stop_reason", "a life run's")
             click.echo(life_summary_text(ds))
             return
-        if ds.attrs.get("sweep_store") == "reliability" and not metric and "b10" in ds:
+        if ds.attrs.get("sweep_store") == "reliability" and not metric:
+            _needs(ds, path, "b10", "a reliability sweep's")
             from .reliability import reliability_text
 
             click.echo(reliability_text(ds))
@@ -507,14 +549,17 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
             result = sweep_indices(ds, output, select_items)
         except SelectionError as exc:
             raise click.UsageError(str(exc)) from exc
-        except SensitivityError as exc:
-            raise click.ClickException(f"{path}: {exc}") from exc
+        except SensitivityError as exc:     # the file is not what the command reads: bad input
+            raise click.UsageError(f"{path}: {exc}") from exc
     click.echo(format_indices(result))
     warning = result.ranking_warning()
     if warning:
         click.echo(f"clearsweep: warning: {path}: {warning}", err=True)
     if plot_path:
-        save_figure(indices_figure(result), plot_path)
+        try:
+            save_figure(indices_figure(result), plot_path)
+        except OSError as exc:      # as `plot`: a figure that cannot be written exits 1
+            _fail(f"error: cannot write {plot_path}: {exc.strerror or exc}", 1)
         click.echo(f"wrote {plot_path}")
 
 
@@ -614,13 +659,14 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         try:
             click.echo(f"clearsweep: CUDA device: {device_name()}", err=True)
         except NoCudaDevice as exc:
-            _fail(str(exc), 2)
+            _fail(f"error: {exc}", 2)
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
         cores = dask_local or (None if scheduler else min(workers or os.cpu_count() or 1,
                                                           max(len(plan.runnable()), 1)))
-        click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
+        kept = PartStore(parts_dir_for(out)).finished() if resume else set()
+        click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):
             # compile once here so that the workers load the cached kernel
             announce_compile(methods=[c.solver.method for c in plan.runnable().values()])

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
-from .params import pack
+from .params import Packed, pack
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .version import __version__
 
@@ -55,6 +55,38 @@ def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
     ``n_block`` up to ``most``, so that saving rows never lengthens the block (the kernel
     rounds the steps up to whole rows). The steps and statistics do not depend on it."""
     return next(s for s in range(min(most, n_block), 0, -1) if n_block % s == 0)
+
+
+def life_block(cfg: Config, *, allow_large: bool = False,
+               source: str = "<config>") -> tuple[Config, Packed]:
+    """The config of one dynamic block of the life run ``cfg`` and its packed inputs, once
+    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`).
+
+    Raises
+    ------
+    ConfigError
+        Naming what the user set, ``life.block_revolutions``, where the block's derived
+        ``solver.duration`` is too long; other keys as :func:`preflight` names them.
+    """
+    lc = cfg.life
+    n_block = int(math.ceil(lc.block_revolutions * 60.0 / cfg.mechanism.speed_rpm
+                            / cfg.solver.dt - 1e-9))
+    # rows every few steps: the motion error is read from them
+    block_cfg = cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
+                               "solver__save_every": row_stride(n_block)})
+    try:
+        return block_cfg, preflight(block_cfg, allow_large=allow_large)
+    except ConfigError as exc:
+        if exc.key not in ("solver.duration", "solver.save_every"):
+            raise ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion,
+                              exc.got) from None
+        raise ConfigError(
+            "life.block_revolutions", lc.block_revolutions,
+            f"{exc.expected.split(';')[0]} per block: fewer life.block_revolutions, a larger "
+            "solver.dt or mechanism.speed_rpm" + ("" if allow_large else ", or --allow-large"),
+            source, got=f"{lc.block_revolutions!r} ({lc.block_revolutions} revolutions at "
+                        f"{cfg.mechanism.speed_rpm:g} r/min with solver.dt = {cfg.solver.dt:g} s "
+                        f"are {n_block:.3g} steps per block)") from None
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
@@ -446,11 +478,7 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     """:func:`life` from ``earlier`` (None: from block 0)."""
     lc = cfg.life
     period = 60.0 / cfg.mechanism.speed_rpm
-    n_block = int(math.ceil(lc.block_revolutions * period / cfg.solver.dt - 1e-9))
-    # rows every few steps: the motion error is read from them
-    block_cfg = cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
-                               "solver__save_every": row_stride(n_block)})
-    packed = preflight(block_cfg, allow_large=allow_large)
+    block_cfg, packed = life_block(cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
     prepare_kernel(cfg.solver.method)
     jp = packed.jp
