@@ -284,6 +284,8 @@ def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
     """
     path = Path(path)
     try:
+        if not zipfile.is_zipfile(path):    # else numpy reads text as pickled data
+            raise ValueError("not a checkpoint archive (empty, truncated or another file)")
         with np.load(path, allow_pickle=False) as data:
             saved = {k: data[k] for k in data.files}
         layout = int(saved["format"])
@@ -332,6 +334,9 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     path = Path(path)
     if not path.exists():
         return None
+    if not path.is_file():
+        raise CheckpointError(f"{path} is where this run keeps its checkpoint, and it is not a "
+                              "file; move it away or write to another output file")
     if resume:
         try:
             return load_checkpoint(path, cfg)

@@ -177,6 +177,14 @@ ROWS = [
      lambda t, f: ["sweep", CONFIGS / "reliability.yaml", "--set", "reliability.members=1",
                    "-o", t / "out.nc"],
      2, "reliability.members: got 1"),
+    ("life checkpoint path a folder (was: 'holds the finished blocks of an earlier run')",
+     lambda t, f: (t / "out.nc.life-checkpoint").mkdir() or
+     ["life", LIFE, *SHORT_LIFE, "-o", t / "out.nc"],
+     2, "is where this run keeps its checkpoint, and it is not a file"),
+    ("life --resume from a text file (was: numpy's 'pickled data' advice)",
+     lambda t, f: (t / "out.nc.life-checkpoint").write_text("garbage\n") and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
+     2, "not a checkpoint archive"),
     # --- fresh round: sampling sweeps
     ("sample range beyond the key's values (was: by the luck of the draw)",
      lambda t, f: ["sweep", sample_file(t, "{method: lhs, n: 4, ranges: {joints.B.clearance: "
@@ -243,7 +251,8 @@ def test_hostile_input_is_one_error_line(tmp_path, files, device, name, argv, co
     lines = result.stderr.strip().splitlines()
     assert lines and lines[-1].startswith("clearsweep: error: ") and words in lines[-1], result.stderr
     assert [line for line in lines if "error" in line] == [lines[-1]]      # one error line
-    assert not list(tmp_path.glob("out*")) and not list(files.glob("out*"))
+    left = [p for p in tmp_path.glob("out*") if not p.name.endswith(".life-checkpoint")]
+    assert not left and not list(files.glob("out*"))
 
 
 def two_case_sweep(tmp: Path) -> str:
@@ -313,3 +322,13 @@ def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, sel
     assert (tmp_path / "w.png").stat().st_size > 0
     suptitle = figures[0].get_suptitle()
     assert suptitle.startswith(title) and ("snapshot" in suptitle) == bool(select)
+
+
+def test_a_reliability_sweeps_b10_is_a_metric(files):
+    """Before: "unknown metric 'b10'; choose from: status, wear_depth_max_final, wall_time"."""
+    result = CliRunner().invoke(main, ["report", str(files / "rel.nc"), "--metric", "b10"])
+    assert result.exit_code == 0, result.output
+    header = result.stdout.splitlines()[2].split()
+    assert header[:2] == ["B_coating", "limit"] and "member" not in header
+    with xr.open_dataset(files / "rel.nc") as ds:     # a row per design and limit
+        assert len(result.stdout.strip().splitlines()) == 3 + ds["b10"].size
