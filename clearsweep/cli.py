@@ -384,6 +384,20 @@ def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
                                "write it again with the command that made it")
 
 
+def _text_report(path: str, what: str, fmt: str, reference: tuple[str, ...], full: bool,
+                 metric: str | None = None) -> None:
+    """Refuse the options that ``what`` report (one text summary) would silently ignore;
+    ``metric`` is given only where the file is no sweep (a sweep's --metric tables it)."""
+    given = [o for o, on in ((f"--format {fmt}", fmt not in ("text", "markdown")),
+                             ("--reference", reference), ("--full", full),
+                             (f"--metric {metric}", metric)) if on]
+    if given:
+        where = ("its variables are in the file" if what == "a life run's"
+                 else "--metric NAME tables one of its variables")
+        raise click.UsageError(f"{path}: {what} report is one text summary; it takes no "
+                               f"{', '.join(given)} ({where})")
+
+
 @main.command("report")
 @click.argument("path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(REPORT_FORMATS), default="text", show_default=True,
@@ -432,10 +446,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             from .service_life import life_summary_text
 
             _needs(ds, path, "stop_reason", "a life run's")
+            _text_report(path, "a life run's", fmt, reference, full, metric)
             click.echo(life_summary_text(ds))
             return
         if ds.attrs.get("sweep_store") == "reliability" and not metric:
             _needs(ds, path, "b10", "a reliability sweep's")
+            _text_report(path, "a reliability sweep's", fmt, reference, full)
             from .reliability import reliability_text
 
             click.echo(reliability_text(ds))
@@ -443,6 +459,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         if ds.attrs.get("sweep_store") == "life" and not metric:
             from .service_life import life_sweep_text
 
+            _text_report(path, "a life sweep's", fmt, reference, full)
             click.echo(life_sweep_text(ds))
             return
         try:

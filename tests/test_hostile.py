@@ -222,6 +222,11 @@ ROWS = [
      2, "needs stop_reason"),
     ("report a reliability file without b10 (was: KeyError)",
      lambda t, f: ["report", f / "old_rel.nc"], 2, "has no 'b10'"),
+    ("report a life run --format json (was: text, exit 0)",
+     lambda t, f: ["report", f / "life.nc", "--format", "json"], 2,
+     "a life run's report is one text summary; it takes no --format json"),
+    ("report a reliability sweep --full (was: ignored)",
+     lambda t, f: ["report", f / "rel.nc", "--full"], 2, "it takes no --full"),
     ("report a run without status (was: KeyError)",
      lambda t, f: ["report", f / "old_run.nc"], 2, "has no 'status'"),
 ]
