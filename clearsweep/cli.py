@@ -16,6 +16,7 @@ path).
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import re
@@ -104,6 +105,13 @@ def _cap_workers(workers: int | None, option: str = "--workers") -> int | None:
     return workers
 
 
+def _reason(exc: OSError) -> str:
+    """Why a write failed, in words: a full disk is named as such."""
+    if exc.errno == errno.ENOSPC:
+        return f"the disk is full ({exc.strerror})"
+    return exc.strerror or str(exc)
+
+
 def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
     """Write ``ds`` to ``out`` atomically; an unwritable path is one error line and exit 1."""
     from .dataset import write_netcdf_atomic
@@ -112,7 +120,7 @@ def _write_or_exit(ctx: click.Context, ds: Any, out: str | Path) -> Path:
     try:
         write_netcdf_atomic(ds, path)
     except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        click.echo(f"clearsweep: error: cannot write {path}: {_reason(exc)}", err=True)
         ctx.exit(1)
     return path
 
@@ -251,7 +259,7 @@ def life_command(ctx: click.Context, config: str, out: str | None, overrides: tu
               f"with: {_resume_command('life', config, out, overrides)}" if exc.blocks
               else "interrupted before a block finished", 130)
     except OSError as exc:
-        _fail(f"error: cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
+        _fail(f"error: cannot write {exc.filename or checkpoint}: {_reason(exc)}", 1)
     path = _write_or_exit(ctx, ds, out)
     checkpoint.unlink(missing_ok=True)
     if not quiet:
@@ -294,7 +302,7 @@ def _run_ensemble(ctx: click.Context, config: str, cfg, out: str | None,
     except SweepFailed as exc:
         _fail(f"error: {exc}", 1)
     except OSError as exc:
-        click.echo(f"clearsweep: error: cannot write {path}: {exc.strerror or exc}", err=True)
+        click.echo(f"clearsweep: error: cannot write {path}: {_reason(exc)}", err=True)
         ctx.exit(1)
     with ds:
         if not quiet:
@@ -517,7 +525,7 @@ def plot_command(ctx: click.Context, path: str, kind: str, output: str,
         except (SelectionError, PlotError) as exc:
             raise click.UsageError(str(exc)) from exc
         except OSError as exc:      # as `run`: an output that cannot be written exits 1
-            click.echo(f"clearsweep: error: cannot write {output}: {exc.strerror or exc}", err=True)
+            click.echo(f"clearsweep: error: cannot write {output}: {_reason(exc)}", err=True)
             ctx.exit(1)
     click.echo(f"wrote {output}")
 
@@ -576,7 +584,7 @@ def sensitivity_command(path: str, output: str, select_items: tuple[str, ...],
         try:
             save_figure(indices_figure(result), plot_path)
         except OSError as exc:      # as `plot`: a figure that cannot be written exits 1
-            _fail(f"error: cannot write {plot_path}: {exc.strerror or exc}", 1)
+            _fail(f"error: cannot write {plot_path}: {_reason(exc)}", 1)
         click.echo(f"wrote {plot_path}")
 
 
@@ -714,7 +722,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         kept = PartStore(parts).finished() if parts.is_dir() else set()
         note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
                 "with --resume" if kept else "")
-        _fail(f"error: cannot write {exc.filename or out}: {exc.strerror or exc}{note}", 1)
+        _fail(f"error: cannot write {exc.filename or out}: {_reason(exc)}{note}", 1)
     finally:
         if local_client is not None:
             local_client.close()

@@ -337,3 +337,22 @@ def test_a_reliability_sweeps_b10_is_a_metric(files):
     assert header[:2] == ["B_coating", "limit"] and "member" not in header
     with xr.open_dataset(files / "rel.nc") as ds:     # a row per design and limit
         assert len(result.stdout.strip().splitlines()) == 3 + ds["b10"].size
+
+
+@pytest.mark.parametrize("command", ["run", "life"])
+def test_a_full_disk_while_writing_the_results_says_the_disk_is_full(tmp_path, monkeypatch, command):
+    """Before: "cannot write OUT: No space left on device", no word of the disk."""
+    import clearsweep.dataset as dataset
+
+    def full(ds, path, *args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(dataset, "write_netcdf_atomic", full)
+    out = tmp_path / "out.nc"
+    argv = (["run", ONE, "--set", "solver.duration=0.002"] if command == "run"
+            else ["life", LIFE, *SHORT_LIFE, "--set", "life.max_blocks=1"])
+    result = CliRunner().invoke(main, [*argv, "-q", "-o", str(out)])
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr.strip().splitlines()[-1] == (
+        f"clearsweep: error: cannot write {out}: the disk is full (No space left on device)")
+    assert not out.exists()
