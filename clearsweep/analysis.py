@@ -342,10 +342,16 @@ def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
         ``metric`` is not a summary variable of ``ds``; the message lists them.
     """
     summary = case_summary(ds)
-    if metric not in summary:
-        names = [str(n) for n in summary.data_vars]
-        raise SelectionError(choice_message("metric", metric, names), name=metric, choices=names)
-    return summary[metric]
+    if metric in summary:
+        return summary[metric]
+    # a life or reliability sweep's own per-case numbers (cycles_reached, b10, ...)
+    dims = set(sweep_dims(ds)) | {"joint"}
+    own = [str(n) for n, v in ds.data_vars.items() if n not in summary and v.dtype.kind in "fiu"
+           and v.dims and set(v.dims) <= dims]
+    if metric in own:
+        return ds[metric]
+    names = [str(n) for n in summary.data_vars] + own
+    raise SelectionError(choice_message("metric", metric, names), name=metric, choices=names)
 
 
 # --------------------------------------------------------------------------- text reports
@@ -680,7 +686,8 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
                      ".6g" if values.dtype.kind == "f" else "")
     inner = tuple(d for d in values.dims if d in CASE_DIMS)
     table = values.to_dataset(name=metric)
-    if "status" in ds and metric != "status":
+    # (a reliability design's b10 has no member dimension: no member's status marks it)
+    if "status" in ds and metric != "status" and set(ds["status"].dims) <= set(values.dims):
         table["status"] = ds["status"]
     # like the wear tables: points a sweep's skip rules left out are not listed
     rows = [{**label, **row}

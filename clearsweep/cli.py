@@ -21,11 +21,14 @@ Every command takes ``-q``; ``run``, ``sweep`` and ``life`` take ``--dry-run``.
 
 from __future__ import annotations
 
+import errno
 import math
 import os
+import re
 import shlex
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -149,6 +152,13 @@ def _cap_workers(workers: int | None, option: str = "--workers") -> int | None:
     return workers
 
 
+def _reason(exc: OSError) -> str:
+    """Why a write failed, in words: a full disk is named as such."""
+    if exc.errno == errno.ENOSPC:
+        return f"the disk is full ({exc.strerror})"
+    return exc.strerror or str(exc)
+
+
 def _write_or_exit(ds: Any, out: str | Path) -> Path:
     """Write ``ds`` to ``out`` atomically; an unwritable path is one error line and exit 1."""
     from .dataset import write_netcdf_atomic
@@ -157,7 +167,7 @@ def _write_or_exit(ds: Any, out: str | Path) -> Path:
     try:
         write_netcdf_atomic(ds, path)
     except OSError as exc:
-        _fail(f"cannot write {path}: {exc.strerror or exc}", 1)
+        _fail(f"cannot write {path}: {_reason(exc)}", 1)
     return path
 
 
@@ -308,13 +318,18 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         LifeState,
         checkpoint_path_for,
         life,
+        life_block,
         life_plan_text,
         life_summary_text,
     )
 
+    if cfg.ensemble.members > 1:    # one life run follows one case: it would run member 0 alone
+        raise ConfigError("ensemble.members", cfg.ensemble.members, "1 with `clearsweep life`; a "
+                          "life run of every member is a sweep file with store: life", config)
     if dry_run:
         click.echo(life_plan_text(cfg, config, allow_large=allow_large))
         return
+    life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
     out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite)
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
@@ -342,7 +357,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
               f"with: {_resume_command('life', config, out, overrides)}" if exc.blocks
               else "before a block finished", 130)
     except OSError as exc:
-        _fail(f"cannot write {exc.filename or checkpoint}: {exc.strerror or exc}", 1)
+        _fail(f"cannot write {exc.filename or checkpoint}: {_reason(exc)}", 1)
     path = _write_or_exit(ds, out)
     checkpoint.unlink(missing_ok=True)
     if not quiet:
@@ -418,7 +433,7 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
         kept = PartStore(parts).finished() if parts.is_dir() else set()
         note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
                 "with --resume" if kept else "")
-        _fail(f"cannot write {exc.filename or out}: {exc.strerror or exc}{note}", 1)
+        _fail(f"cannot write {exc.filename or out}: {_reason(exc)}{note}", 1)
 
 
 @main.command()
@@ -468,17 +483,42 @@ def materials(materials_file: str | None, quiet: bool) -> None:
         click.echo(text)
 
 
-def open_input(path: str) -> xr.Dataset:
-    """Open the results file of a ``report`` or ``plot`` command; a file xarray cannot read
-    is a usage error (exit 2), not a traceback."""
+@contextmanager
+def open_input(path: str) -> Iterator[xr.Dataset]:
+    """Open the results file of a ``report``, ``plot`` or ``sensitivity`` command for a
+    ``with`` block: a file xarray cannot read, or one that lacks a variable or dimension
+    the command reads (a file of an older version, or edited since), is a usage error
+    (exit 2), not a traceback."""
     import xarray as xr
 
     try:
-        return xr.open_dataset(path)
+        ds = xr.open_dataset(path)
     except (OSError, ValueError) as exc:
         reason = getattr(exc, "strerror", None) or "no netCDF reader can open it"
         raise click.BadParameter(f"{path!r} is not a results file ({reason})",
                                  param_hint="'PATH'") from None
+    with ds:
+        try:
+            yield ds
+        except KeyError as exc:
+            text = str(exc.args[0]) if exc.args else ""
+            found = re.match(r"No variable named '([^']+)'", text)
+            name = found.group(1) if found else text
+            if name in ds.variables or name in ds.dims:
+                raise       # the file has it: not the file's fault
+            raise click.UsageError(
+                f"{path}: the file has no {name!r}, which this command reads (a results file "
+                "of an older version of clearsweep, or edited since); write it again with the "
+                "command that made it") from None
+
+
+def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
+    """A usage error unless the results file ``ds`` holds ``name``, which ``what`` report
+    reads: the file of an older version (or an edited one) is refused, not misread."""
+    if name not in ds:
+        raise click.UsageError(f"{path}: the file has no {name!r}, which {what} report reads (a "
+                               "results file of an older version of clearsweep, or edited since); "
+                               "write it again with the command that made it")
 
 
 @main.command("report")
@@ -532,13 +572,15 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     with open_input(path) as ds:
         text_only = _text_only_report(ds, metric)
         if text_only is not None:
-            kind, text_of = text_only
+            kind, text_of, needed = text_only
             given = [name for name, on in ((f"--format {fmt}", fmt != "text"),
                                            ("--reference", bool(reference)),
                                            ("--metric", bool(metric)), ("--full", full)) if on]
             if given:
                 raise click.UsageError(f"{given[0]}: {path} is {kind}, which report prints as "
                                        "text only")
+            if needed:
+                _needs(ds, path, needed, f"{kind}'s")
             if not quiet:
                 click.echo(text_of(ds))
             return
@@ -567,20 +609,20 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
 
 def _text_only_report(ds: xr.Dataset, metric: str | None):
-    """``(what the file is, its text report)`` for the files ``report`` prints as text only:
+    """``(what the file is, its text report, a variable it reads)`` for the files ``report`` prints as text only:
     a life run, a reliability sweep and a life sweep (unless --metric asks for a table)."""
-    if "cycle" in ds.dims and "stop_reason" in ds:
+    if "cycle" in ds.dims and ("stop_reason" in ds or "block_status" in ds):
         from .service_life import life_summary_text
 
-        return "a life run", life_summary_text
-    if ds.attrs.get("sweep_store") == "reliability" and not metric and "b10" in ds:
+        return "a life run", life_summary_text, "stop_reason"
+    if ds.attrs.get("sweep_store") == "reliability" and not metric:
         from .reliability import reliability_text
 
-        return "a reliability sweep", reliability_text
+        return "a reliability sweep", reliability_text, "b10"
     if ds.attrs.get("sweep_store") == "life" and not metric:
         from .service_life import life_sweep_text
 
-        return "a life sweep", life_sweep_text
+        return "a life sweep", life_sweep_text, None
     return None
 
 
@@ -616,7 +658,7 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
         except (SelectionError, PlotError) as exc:
             raise click.UsageError(str(exc)) from exc
         except OSError as exc:      # as `run`: an output that cannot be written exits 1
-            _fail(f"cannot write {out}: {exc.strerror or exc}", 1)
+            _fail(f"cannot write {out}: {_reason(exc)}", 1)
     _wrote(out, quiet)
 
 
@@ -686,7 +728,7 @@ def sensitivity_command(path: str, metric: str, select_items: tuple[str, ...],
         try:
             save_figure(indices_figure(result), plot_path)
         except OSError as exc:
-            _fail(f"cannot write {plot_path}: {exc.strerror or exc}", 1)
+            _fail(f"cannot write {plot_path}: {_reason(exc)}", 1)
         _wrote(plot_path, quiet)
 
 
@@ -750,7 +792,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     2 invalid config or options,
     130 interrupted (finished cases kept; rerun with --resume).
     """
-    from .sweeping import expand
+    from .sweeping import PartStore, expand, parts_dir_for
 
     if scheduler and dask_local:
         raise click.UsageError("--scheduler and --dask-local both choose the Dask cluster; give one")
@@ -788,8 +830,9 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
                       max_cases=None if yes else MAX_CASES)
         _check_out(given, out, plan.input_files(), overwrite, resume)
         cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
+        kept = PartStore(parts_dir_for(out)).finished() if resume else set()
         if not quiet:
-            click.echo(f"clearsweep: {plan.describe(cores)}", err=True)
+            click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):
             # compile once here so that the workers load the cached kernel
             announce_compile(quiet, [c.solver.method for c in plan.runnable().values()])

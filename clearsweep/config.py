@@ -452,12 +452,35 @@ def _resolve(raw: Any, schema: Mapping[str, Any], prefix: str, source: str) -> d
     return out
 
 
+def _check_together(cfg: dict[str, Any], source: str) -> None:
+    """Values each valid alone that together would run nothing useful or be ignored: a
+    dopri5 longest step below its shortest one, perturbations of an ensemble of one."""
+    solver = cfg["solver"]
+    shortest = solver["dt"] / 2 ** solver["max_substep_level"]
+    if solver["method"] == "dopri5" and solver["max_step"] is not None \
+            and solver["max_step"] < shortest:
+        raise ConfigError(
+            "solver.max_step", solver["max_step"],
+            f"null or a number >= solver.dt / 2^solver.max_substep_level ({shortest:.3g} s), the "
+            "shortest step dopri5 may take: a shorter longest step stops every run with "
+            "unstable_step at its first step", source)
+    ensemble = cfg["ensemble"]
+    if ensemble["members"] == 1:
+        for key, value in ensemble["perturb"].items():
+            if value:
+                raise ConfigError(
+                    f"ensemble.perturb.{key}", value,
+                    "0 while ensemble.members is 1 (one perturbed case and no ensemble to "
+                    "average it over); for perturbed members set ensemble.members to 2 or more", source)
+
+
 def _validate(raw: Any, source: str, base_dir: str) -> Config:
     cfg = _resolve(raw, SCHEMA, "", source)
     for key, op, other in _RELATIONS:
         value, bound = get_path(cfg, key), get_path(cfg, other)
         if not _OPS[op](value, bound):
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
+    _check_together(cfg, source)
     for joint, spec in cfg["joints"].items():
         most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
         if spec["clearance"] > most:

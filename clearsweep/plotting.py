@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import re
 import textwrap
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -357,6 +358,33 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     fig.suptitle("Joint forces (global frame)" + _legend_note(len(cases)))
 
 
+def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
+    """The wear map of a life run (``clearsweep life``) as a one-case dataset: the final
+    map, or with ``--select snapshot=K`` its K-th snapshot (0-based, in revolutions order).
+
+    Raises
+    ------
+    SelectionError
+        Any other selection; the message lists the snapshots and their revolutions.
+    """
+    cycles = ds["snapshot_cycle"].values if "snapshot_cycle" in ds else np.full(ds.sizes["snapshot"], np.nan)
+    offer = ", ".join(f"{k} ({float(c):.4g} revolutions)" for k, c in enumerate(cycles))
+    items = list(select.items()) if isinstance(select, Mapping) else \
+        [tuple(str(i).partition("=")[::2]) for i in (select or ())]
+    if not items:
+        return ds[["wear_map"]]
+    name, text = items[0]
+    k = int(text) if str(text).strip().lstrip("-").isdigit() else -1
+    if len(items) > 1 or name != "snapshot" or not 0 <= k < ds.sizes["snapshot"]:
+        raise SelectionError(
+            f"a life run's --kind wear-map draws its final map (no --select) or one snapshot: "
+            f"--select snapshot=K, K one of {offer}", name=str(name), value=str(text),
+            choices=[str(k) for k in range(ds.sizes["snapshot"])])
+    snapshot = ds["wear_map_snapshot"].isel(snapshot=k, drop=True)
+    return xr.Dataset({"wear_map": snapshot.assign_attrs(ds["wear_map"].attrs)},
+                      attrs={"snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
+
+
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     _require(ds, ("wear_map",), "--kind wear-map")
     ds = _one_case(ds, "wear-map")
@@ -398,7 +426,8 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
                       pad=12)
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(
             axis_label(wear, "wear depth"))
-    fig.suptitle("Socket wear depth")
+    snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
+    fig.suptitle("Socket wear depth" + (f", snapshot {snapshot}" if snapshot else ""))
 
 
 def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
@@ -698,7 +727,7 @@ def _failed_cells(ds: xr.Dataset, values: xr.DataArray, dims: tuple) -> np.ndarr
 
 
 def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
-    _require(ds, ("cycle", "wear_depth_max", "wear_map_snapshot"), "--kind life")
+    _require(ds, ("cycle", "wear_depth_max", "wear_map_snapshot", "stop_reason"), "--kind life")
     cycles = ds["cycle"].values
     xlabel = axis_label(ds["cycle"], "crank revolutions")
     limits = {"wear_depth_max": "life.max_clearance_growth",
@@ -707,6 +736,8 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     try:
         config = yaml.safe_load(ds.attrs.get("config") or "") or {}
     except yaml.YAMLError:
+        config = {}
+    if not isinstance(config, dict):     # a config attribute edited into a list or a scalar
         config = {}
     panels = ("wear_depth_max", "clearance_effective", "coating_remaining", "normal_force_peak_settled",
               "slider_acceleration_rms_settled", "impacts_per_revolution")
@@ -874,6 +905,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         raise PlotError("a metric applies to --kind sweep only")
     if b10 and kind != "reliability":
         raise PlotError("--b10 applies to --kind reliability only")
+    if kind == "wear-map" and "wear_map_snapshot" in ds and "snapshot" not in ds.coords:
+        ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
     selection = parse_selection(ds, select)
     ds = ds.sel(selection) if selection else ds
     fig = Figure(figsize=_SIZES[kind], layout="constrained")

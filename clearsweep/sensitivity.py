@@ -118,24 +118,51 @@ def sobol_indices(names: Sequence[str], bounds: Sequence[Sequence[float]], y: np
 def sample_design(ds: xr.Dataset) -> dict[str, Any]:
     """The ``sweep.sample`` section of the sweep that wrote ``ds``; it must be a Saltelli design."""
     text = ds.attrs.get("sweep_config")
-    spec = (yaml.safe_load(text) or {}).get("sweep", {}).get("sample") if text else None
+    try:
+        doc = yaml.safe_load(str(text)) if text else None
+    except yaml.YAMLError as exc:
+        raise SensitivityError(f"its sweep_config attribute is not readable YAML "
+                               f"({getattr(exc, 'problem', None) or type(exc).__name__}): "
+                               "the file was changed after the sweep wrote it") from None
+    sweep = doc.get("sweep") if isinstance(doc, Mapping) else None
+    spec = sweep.get("sample") if isinstance(sweep, Mapping) else None
     if SAMPLE_DIM not in ds.dims or not isinstance(spec, Mapping):
         raise SensitivityError("not a sampling sweep: Sobol' indices need a sweep with "
                                "'sweep: sample: method: saltelli'")
     if spec.get("method") != "saltelli":
         raise SensitivityError(f"the sweep sampled with method {spec.get('method')!r}; Sobol' "
                                "indices need the Saltelli design (sweep.sample.method: saltelli)")
+    ranges, n, seed = spec.get("ranges"), spec.get("n"), spec.get("seed", 0)
+    if (not isinstance(ranges, Mapping) or not ranges or not isinstance(n, int)
+            or not _is_count(n) or not _is_count(seed)
+            or not all(isinstance(b, list) and len(b) == 2
+                       and all(isinstance(v, (int, float)) for v in b) for b in ranges.values())):
+        raise SensitivityError("its sweep_config attribute holds no readable Saltelli design "
+                               "(sweep.sample: n, seed and ranges of [low, high])")
+    points = n * (2 * len(ranges) + 2 if spec.get("second_order") else len(ranges) + 2)
+    if ds.sizes[SAMPLE_DIM] != points:
+        raise SensitivityError(
+            f"the design in its sweep_config (n = {n} base points over {len(ranges)} inputs: "
+            f"{points} points) does not match the {ds.sizes[SAMPLE_DIM]} samples it holds")
     return dict(spec)
+
+
+def _is_count(value: Any) -> bool:
+    """A non-negative integer, not a bool."""
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
 def output_values(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> xr.DataArray:
     """The output over ``sample``: the ensemble mean where the file is an ensemble, other
     dimensions (``joint``) fixed by ``select`` items ``DIM=VALUE``."""
     name = output + "_mean" if MEMBER_DIM in ds.dims and output + "_mean" in ds else output
+    names = [str(n) for n, v in ds.data_vars.items() if v.dims and v.dims[0] == SAMPLE_DIM
+             and v.dtype.kind in "fiu"]
     if name not in ds:
-        names = [str(n) for n, v in ds.data_vars.items() if v.dims and v.dims[0] == SAMPLE_DIM
-                 and v.dtype.kind in "fiu"]
         raise SelectionError(choice_message("output", output, names), name=output, choices=names)
+    if ds[name].dtype.kind not in "fiu":     # status, message: text
+        raise SelectionError(f"output {output!r} is text, not a number; choose from: "
+                             f"{', '.join(names)}", name=output, choices=names)
     values = ds[name]
     chosen: dict[str, Any] = {}
     for item in select:

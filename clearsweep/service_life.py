@@ -32,7 +32,7 @@ from .budget import check_budget, time_text
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
-from .params import pack
+from .params import Packed, pack
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .version import __version__
 
@@ -77,6 +77,35 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
             f"blocks of {lc.block_revolutions:g} revolutions ({est.steps:,} RK4 steps each, "
             f"memory up to {est.describe()}): at most {steps:.3g} RK4 steps, at most "
             f"{time_text(steps)}; it stops sooner at a limit; nothing run (--dry-run)")
+
+
+def life_block(cfg: Config, *, allow_large: bool = False,
+               source: str = "<config>") -> tuple[Config, Packed]:
+    """The config of one dynamic block of the life run ``cfg`` and its packed inputs, once
+    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`).
+
+    Raises
+    ------
+    ConfigError
+        Naming what the user set, ``life.block_revolutions``, where the block's derived
+        ``solver.duration`` is too long; other keys as :func:`preflight` names them.
+    """
+    lc = cfg.life
+    block_cfg = block_config(cfg)
+    n_block = round(block_cfg.solver.duration / cfg.solver.dt)
+    try:
+        return block_cfg, preflight(block_cfg, allow_large=allow_large)
+    except ConfigError as exc:
+        if exc.key not in ("solver.duration", "solver.save_every"):
+            raise ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion,
+                              exc.got) from None
+        raise ConfigError(
+            "life.block_revolutions", lc.block_revolutions,
+            f"{exc.expected.split(';')[0]} per block: fewer life.block_revolutions, a larger "
+            "solver.dt or mechanism.speed_rpm" + ("" if allow_large else ", or --allow-large"),
+            source, got=f"{lc.block_revolutions!r} ({lc.block_revolutions} revolutions at "
+                        f"{cfg.mechanism.speed_rpm:g} r/min with solver.dt = {cfg.solver.dt:g} s "
+                        f"are {n_block:.3g} steps per block)") from None
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
@@ -274,6 +303,8 @@ def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
     """
     path = Path(path)
     try:
+        if not zipfile.is_zipfile(path):    # else numpy reads text as pickled data
+            raise ValueError("not a checkpoint archive (empty, truncated or another file)")
         with np.load(path, allow_pickle=False) as data:
             saved = {k: data[k] for k in data.files}
         layout = int(saved["format"])
@@ -322,6 +353,9 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     path = Path(path)
     if not path.exists():
         return None
+    if not path.is_file():
+        raise CheckpointError(f"{path} is where this run keeps its checkpoint, and it is not a "
+                              "file; move it away or write to another output file")
     if resume:
         try:
             return load_checkpoint(path, cfg)
@@ -468,8 +502,7 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     """:func:`life` from ``earlier`` (None: from block 0)."""
     lc = cfg.life
     period = 60.0 / cfg.mechanism.speed_rpm
-    block_cfg = block_config(cfg)
-    packed = preflight(block_cfg, allow_large=allow_large)
+    block_cfg, packed = life_block(cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
     prepare_kernel(cfg.solver.method)
     jp = packed.jp

@@ -174,7 +174,7 @@ def _sweep_failures():
     return [
         (StoreError("o.parts belongs to another sweep"), 2, ["o.parts belongs to another sweep"]),
         (SweepFailed("every worker died"), 1, ["every worker died"]),
-        (OSError(28, "No space left on device", "o.nc"), 1, ["cannot write o.nc: No space left"]),
+        (OSError(28, "No space left on device", "o.nc"), 1, ["cannot write o.nc: the disk is full"]),
         (KeyboardInterrupt(), 130, ["before any case finished"]),
         (SweepInterrupted(1, 2, Path("o.nc.parts")), 130,
          ["1 of 2 cases are finished and kept in o.nc.parts; continue with: clearsweep "]),

@@ -250,6 +250,11 @@ def _consistent(raw):
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
     # member < members, both inside their bounds
     raw["ensemble"]["member"] = raw["ensemble"]["member"] % raw["ensemble"]["members"]
+    if raw["ensemble"]["members"] == 1:     # perturbations need an ensemble
+        raw["ensemble"]["perturb"] = {k: 0.0 for k in raw["ensemble"]["perturb"]}
+    solver = raw["solver"]      # dopri5's longest step no shorter than its shortest
+    if solver["max_step"] is not None:
+        solver["max_step"] = max(solver["max_step"], solver["dt"] / 2 ** solver["max_substep_level"])
     rel = raw["reliability"]
     rel["member"] = rel["member"] % rel["members"]
     clearances = [j["clearance"] for j in raw["joints"].values() if j["clearance"] > 0.0]

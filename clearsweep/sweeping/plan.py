@@ -11,7 +11,7 @@ import itertools
 import json
 import math
 import os
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ from ..config import (
     set_path,
     short_repr,
 )
+from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
 from .parts import canonical_json, case_hash
@@ -238,29 +239,36 @@ class SweepPlan:
         """The sweep coordinates alone (no data), e.g. to look at a plan before running it."""
         return xr.Dataset(coords={n: (d, v, a) for n, (d, v, a) in self.coords.items()})
 
-    def describe(self, workers: int | None = None) -> str:
+    def describe(self, workers: int | None = None, kept: Collection[str] = ()) -> str:
         """One line: cases, RK4 steps, a rough time and the output size, before the sweep runs.
 
         Parameters
         ----------
         workers
             Cores the cases share; ``None``: the time is given for one core.
+        kept
+            Hashes of the cases finished before (``--resume``): not counted as to run.
         """
-        runnable = self.runnable()
-        estimates = [estimate(cfg) for cfg in runnable.values()]
+        every = self.runnable()
+        runnable = {h: c for h, c in every.items() if h not in kept}
+        done = len(every) - len(runnable)
+        resumed = f" ({done:,} finished before, kept)" if done else ""
+        estimates = {h: estimate(cfg) for h, cfg in every.items()}
         if self.store == "life":
             # a life run simulates up to life.max_blocks blocks of life.block_revolutions
             blocks = sum(cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
                          / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values())
-            return (f"sweep {self.name!r}: {len(self.cases):,} life runs, {len(runnable):,} to run: "
-                    f"at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), at most "
-                    f"{time_text(blocks, workers)}; most runs end sooner")
-        steps = sum(e.steps for e in estimates)
-        per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes for e in estimates)
+            return (f"sweep {self.name!r}: {len(self.cases):,} life runs, {len(runnable):,} to run"
+                    f"{resumed}: at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), "
+                    f"at most {time_text(blocks, workers)}; most runs end sooner")
+        steps = sum(estimates[h].steps for h in runnable)
+        # the file holds the kept cases too
+        per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes
+                       for e in estimates.values())
         skipped = sum(1 for c in self.cases if c.hash is None)
         counts = f"{len(self.cases):,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
-        return (f"sweep {self.name!r}: {counts}, {len(runnable):,} to simulate, {steps:.3g} RK4 "
-                f"steps: {time_text(steps, workers)}; results up to "
+        return (f"sweep {self.name!r}: {counts}, {len(runnable):,} to simulate{resumed}, "
+                f"{steps:.3g} RK4 steps: {time_text(steps, workers)}; results up to "
                 f"{format_bytes(per_case)} before compression")
 
     def plan_text(self, workers: int | None = None) -> str:
@@ -524,6 +532,10 @@ def _parse_sample(spec, base: Config, source: str,
                 or not bounds[0] < bounds[1]):
             raise ConfigError(f"{where}.ranges.{key}", bounds, "[low, high], two numbers with "
                               "low < high", source)
+        _check_range_ends(key, bounds, base, f"{where}.ranges.{key}", source)
+    if second and method != "saltelli":
+        raise ConfigError(f"{where}.second_order", second, f"false with method {method} (second-"
+                          "order indices are drawn by the saltelli design only)", source)
     size = sample_size(method, n, len(ranges), second)
     if size > MAX_SAMPLE_POINTS:
         raise ConfigError(f"{where}.n", n, f"at most {MAX_SAMPLE_POINTS:,} points in all (the "
@@ -533,6 +545,20 @@ def _parse_sample(spec, base: Config, source: str,
         check_count(size)
     points = sample_points(method, n, ranges, seed, second)
     return tuple(ranges), tuple(tuple(float(v) for v in points[:, i]) for i in range(len(ranges)))
+
+
+def _check_range_ends(key: str, bounds: Sequence[float], base: Config, where: str,
+                      source: str) -> None:
+    """Refuse a sample range whose ends are not values ``key`` takes with the base: else a
+    point outside them fails, or not, by the luck of the draw."""
+    for end in bounds:
+        cfg = base.to_dict()
+        set_path(cfg, key, float(end))
+        try:
+            load_config(cfg, source_name=source)
+        except ConfigError as exc:
+            raise ConfigError(where, list(bounds), f"a range of values {key} takes: at {end!r}, "
+                              f"{exc.key} expected {exc.expected}", source) from None
 
 
 def _check_case_count(sizes: Sequence[tuple[int, str]], max_cases: int | None, hint: str,
@@ -576,10 +602,10 @@ def _check_reliability_case(cfg: Config, source: str, allow_large: bool) -> None
 
     check_reliability(cfg, source)
     try:
-        preflight(member_config(cfg), allow_large=allow_large)
+        life_block(member_config(cfg), allow_large=allow_large, source=source)
     except ConfigError as exc:
         raise ConfigError(exc.key, exc.value, f"{exc.expected} (with the draws of reliability "
-                          f"member {cfg.reliability.member})", source, exc.suggestion) from None
+                          f"member {cfg.reliability.member})", source, exc.suggestion, exc.got) from None
 
 
 def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
@@ -627,9 +653,12 @@ def _case_error(exc: ConfigError, assignment: Mapping[str, Any], label: Mapping[
         return ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion, exc.got)
     key = next((k for k in assignment if exc.key and (exc.key == k or exc.key.startswith(k + "."))),
                None)
-    if key is None:     # a relation between two keys (clearance < socket_radius)
-        key = next((k for k in assignment if k in (exc.expected or "")), next(iter(assignment)))
     case = ", ".join(f"{n}={v!r}" for n, v in label.items())
+    if key is None:     # a relation between two keys (clearance < socket_radius)
+        key = next((k for k in assignment if k in (exc.expected or "")), None)
+    if key is None:     # a value of the base (or a --set) that this case cannot take: name it
+        return ConfigError(exc.key, exc.value, f"{exc.expected} (in the sweep case {case})",
+                           source, exc.suggestion, exc.got)
     expected = exc.expected if exc.key == key else (
         f"a value with which {exc.key} = {exc.value!r} is {exc.expected}")
     return ConfigError(key, assignment[key], f"{expected} (in the sweep case {case})", source,
@@ -715,7 +744,10 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             set_path(cfg, key, value)
         try:
             resolved = load_config(cfg, source_name=source)
-            preflight(resolved, allow_large=allow_large)
+            if store == "life":     # each case is a life run: check its blocks, not its duration
+                life_block(resolved, allow_large=allow_large, source=source)
+            elif store != "reliability":
+                preflight(resolved, allow_large=allow_large)
             if store == "reliability":
                 _check_reliability_case(resolved, source, allow_large)
         except ConfigError as exc:

@@ -6,6 +6,8 @@
 from __future__ import annotations
 
 import collections
+import contextlib
+import errno
 import itertools
 import os
 import shutil
@@ -317,15 +319,16 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
     device_name()       # NoCudaDevice before anything runs
     if isinstance(keep_series, str):
         if keep_series != "all":
-            raise ConfigError("keep_series", keep_series, "'all' or case positions", "<sweep>")
+            raise ConfigError("--keep-series", keep_series, "'all' or case positions",
+                              plan.source)
         positions: Iterable[int] = range(len(plan.cases))
     else:
         positions = keep_series
     series = set()
     for i in positions:
         if not 0 <= int(i) < len(plan.cases):
-            raise ConfigError("keep_series", i, f"case positions 0 to {len(plan.cases) - 1}",
-                              "<sweep>")
+            raise ConfigError("--keep-series", i, f"case positions 0 to {len(plan.cases) - 1} "
+                              "(in sweep order, 0-based)", plan.source)
         if plan.cases[int(i)].hash is not None:
             series.add(plan.cases[int(i)].hash)
     return {"window": batch_window(list(plan.runnable().values())), "series": frozenset(series)}
@@ -373,7 +376,12 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         raise SweepInterrupted(done, total, store.directory) from None
     except Exception as exc:
         interrupted = True
-        store.log("failed", error=f"{type(exc).__name__}: {exc}")
+        with contextlib.suppress(OSError):      # the log is on the same (maybe full) disk
+            store.log("failed", error=f"{type(exc).__name__}: {exc}")
+        if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+            raise SweepFailed(f"the disk is full: cannot write in {store.directory} "
+                              f"({exc.strerror}); {done} of the {total} cases are finished and kept "
+                              "there: make room and run again with --resume") from exc
         raise SweepFailed(f"the {backend.label} backend failed ({type(exc).__name__}: {exc}); "
                           f"{done} of {total} cases are kept in {store.directory}; run again "
                           "with --resume to finish the sweep") from exc
