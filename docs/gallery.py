@@ -4,7 +4,7 @@ Run from the repository root: ``.venv/bin/python docs/gallery.py`` (about 3 min 
 once the kernel is compiled; ``--work DIR`` keeps the result files there). It runs the
 shipped configs shortened (a quarter revolution, fewer members, 10^5 revolutions of
 life), prints every command it runs, and writes the figures that ``clearsweep plot`` and
-``clearsweep sensitivity --plot`` make from them. docs/figures/gallery/README.md lists
+``clearsweep sensitivity -o`` make from them. docs/figures/gallery/README.md lists
 the figures with their commands and what was checked in each.
 """
 
@@ -67,8 +67,8 @@ def commands(work: Path) -> list[tuple[str, list[str]]]:
                                  "-o", str(OUT / "reliability_b10.png")]),
         ("sensitivity sample (configs/sensitivity.yaml with n = 32)",
          [*cli, "sweep", f"{w}/sensitivity.yaml", "-o", f"{w}/sensitivity.nc", "--workers", "2"]),
-        ("sensitivity.png", [*cli, "sensitivity", f"{w}/sensitivity.nc", "--output",
-                             "slider_acceleration_rms_settled", "--plot",
+        ("sensitivity.png", [*cli, "sensitivity", f"{w}/sensitivity.nc", "--metric",
+                             "slider_acceleration_rms_settled", "-o",
                              str(OUT / "sensitivity.png")]),
     ]
 

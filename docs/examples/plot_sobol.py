@@ -30,7 +30,7 @@ print(ds.sizes)
 
 # %%
 # Indices of the settled RMS slider acceleration
-# (``clearsweep sensitivity FILE --output slider_acceleration_rms_settled --plot sobol.png``):
+# (``clearsweep sensitivity FILE --metric slider_acceleration_rms_settled -o sobol.png``):
 result = sweep_indices(ds, "slider_acceleration_rms_settled")
 print(format_indices(result))
 sobol = indices_figure(result)
