@@ -50,6 +50,8 @@ class SobolIndices:
     samples: int = 0
     #: base points n of the Saltelli design (``sweep.sample.n``); 0: not known
     base_points: int = 0
+    #: what a figure calls the output: its long name and the slice (``""``: ``output``)
+    output_label: str = ""
 
     def ranking(self) -> list[int]:
         """Input positions by total index ST, largest first."""
@@ -205,8 +207,12 @@ def sweep_indices(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> So
     result = sobol_indices(list(ranges), list(ranges.values()), y,
                            second_order=bool(spec.get("second_order", False)),
                            seed=int(spec.get("seed", 0)))
+    label = str(values.attrs.get("long_name") or output)
+    if select:
+        label += f" ({', '.join(str(item) for item in select)})"
     return SobolIndices(result.names, result.S1, result.S1_conf, result.ST, result.ST_conf,
-                        output=output, samples=result.samples, base_points=int(spec.get("n", 0)))
+                        output=output, samples=result.samples, base_points=int(spec.get("n", 0)),
+                        output_label=label)
 
 
 def format_indices(result: SobolIndices) -> str:
@@ -261,8 +267,8 @@ def indices_figure(result: SobolIndices) -> Figure:
     ax.grid(alpha=0.3, axis="x")
     ax.legend(fontsize="small", loc="lower right")
     cases = f"{result.samples} cases" + (f", n = {result.base_points}" if result.base_points else "")
-    fig.suptitle(f"Sobol' indices of {result.output} ({cases})\nbars: 95% confidence intervals",
-                 fontsize="medium")
+    fig.suptitle(f"Sobol' indices of {result.output_label or result.output} ({cases})\n"
+                 "bars: 95% confidence intervals", fontsize="medium", wrap=True)
     return fig
 
 

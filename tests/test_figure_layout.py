@@ -154,7 +154,8 @@ def test_a_sensitivity_figure_keeps_its_text_apart():
              "mechanism.speed_rpm")
     result = SobolIndices(names, np.array([0.79, 0.01, 0.0, 0.17]), np.full(4, 0.1),
                           np.array([0.78, 0.0, 0.02, 0.17]), np.full(4, 0.08),
-                          output="normal_force_peak_settled", samples=3072, base_points=512)
+                          output="normal_force_peak_settled", samples=3072, base_points=512,
+                          output_label="peak normal force in the settled window (joint=B)")
     assert layout_problems(indices_figure(result)) == []
 
 

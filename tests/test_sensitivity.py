@@ -14,7 +14,13 @@ from click.testing import CliRunner
 
 from clearsweep.cli import main
 from clearsweep.config import ConfigError
-from clearsweep.sensitivity import SensitivityError, format_indices, sobol_indices, sweep_indices
+from clearsweep.sensitivity import (
+    SensitivityError,
+    format_indices,
+    indices_figure,
+    sobol_indices,
+    sweep_indices,
+)
 from clearsweep.sweeping import expand, run_sweep
 from clearsweep.sweeping.plan import sample_points
 
@@ -102,6 +108,12 @@ def test_sensitivity_command_on_a_mechanism_sampling_sweep(tmp_path):
     ok = CliRunner().invoke(main, ["sensitivity", str(out), "--metric", "normal_force_peak",
                                    "--select", "joint=B"])
     assert ok.exit_code == 0, ok.output
+    # the figure's title names the output by its long name and the slice, as plot's titles do
+    with xr.open_dataset(out) as ds:
+        indices = sweep_indices(ds, "normal_force_peak", ["joint=B"])
+        long_name = ds["normal_force_peak"].attrs["long_name"]
+    title = indices_figure(indices)._suptitle.get_text()
+    assert f"{long_name} (joint=B)" in title and "normal_force_peak " not in title
 
 
 def test_sensitivity_needs_a_saltelli_design():
