@@ -225,7 +225,9 @@ def test_cli_unwritable_figure_is_one_error_line_and_no_partial_file(tmp_path, s
     out = tmp_path / "figs" / "s.png"
     result = CliRunner().invoke(main, ["plot", sweep_file, "--kind", "sweep", "-o", str(out)])
     assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
-    assert result.stderr == f"clearsweep: error: cannot write {out}: {os.strerror(error)}\n"
+    reason = (f"the disk is full ({os.strerror(error)})" if error == errno.ENOSPC
+              else os.strerror(error))
+    assert result.stderr == f"clearsweep: error: cannot write {out}: {reason}\n"
     assert list(out.parent.iterdir()) == []
 
 
