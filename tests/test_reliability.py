@@ -2,6 +2,7 @@
 Kaplan-Meier estimate against a closed form, determinism, bad input, the motion error."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -244,3 +245,16 @@ def test_motion_error_is_zero_for_the_ideal_mechanism_and_read_from_the_settled_
     p = PRESETS["realistic"]
     ideal = ideal_slider_x(ds.crank_angle.values, p.crank_length_m, p.rod_length_m, p.slider_height_m)
     assert errors[1] == np.max(np.abs(ds.slider_position.values - ideal))
+
+
+def test_the_plan_of_a_reliability_sweep_counts_every_block_of_every_member():
+    """Each member is a life run of up to life.max_blocks blocks: the plan's steps and time
+    are those of the blocks (the estimate counted one block per member, 16 s for the shipped
+    example that runs minutes)."""
+    config = Path(__file__).resolve().parent.parent / "configs" / "reliability.yaml"
+    plan = expand(str(config))
+    cfg = next(iter(plan.runnable().values()))
+    per_block = cfg.life.block_revolutions * 60.0 / cfg.mechanism.speed_rpm / cfg.solver.dt
+    steps = len(plan.runnable()) * cfg.life.max_blocks * per_block
+    text = plan.describe(2)
+    assert "life runs" in text and f"at most {steps:.3g} RK4 steps" in text, text

@@ -254,7 +254,7 @@ class SweepPlan:
         done = len(every) - len(runnable)
         resumed = f" ({done:,} finished before, kept)" if done else ""
         estimates = {h: estimate(cfg) for h, cfg in every.items()}
-        if self.store == "life":
+        if self.store in ("life", "reliability"):
             # a life run simulates up to life.max_blocks blocks of life.block_revolutions
             blocks = sum(cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
                          / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values())
