@@ -87,6 +87,8 @@ def main(argv: list[str] | None = None) -> None:
         (work / "sensitivity.yaml").write_text(yaml.safe_dump(spec, sort_keys=False))
         env = {**os.environ, "PYTHONPATH": str(ROOT)}
         for what, command in commands(work):
+            if any(arg.startswith(str(OUT)) for arg in command):
+                command = [*command, "--overwrite"]     # this gallery's own figures
             print(f"# {what}\n{shlex.join(command)}", flush=True)
             run = [sys.executable, "-m", "clearsweep.cli", *command[1:]]
             done = subprocess.run(run, env=env, capture_output=True, text=True)
