@@ -13,12 +13,15 @@ when a limit is crossed, or after ``life.max_blocks`` blocks.
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import json
 import math
 import os
 import time
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -483,15 +486,48 @@ def life(config, overrides=(), *, allow_large: bool = False,
     """
     start = time.perf_counter()
     cfg = load_config(config, overrides)
-    earlier = (claim_checkpoint(checkpoint, cfg, resume=resume, discard=discard_checkpoint)
-               if checkpoint is not None else None)
-    if earlier is not None and resumed is not None:
-        resumed(earlier)
+    with checkpoint_lock(checkpoint):
+        earlier = (claim_checkpoint(checkpoint, cfg, resume=resume, discard=discard_checkpoint)
+                   if checkpoint is not None else None)
+        if earlier is not None and resumed is not None:
+            resumed(earlier)
+        try:
+            return _life(cfg, allow_large, progress, checkpoint, earlier, start, stop_rule)
+        except KeyboardInterrupt:
+            kept = checkpoint_blocks(checkpoint) if checkpoint is not None else 0
+            raise LifeInterrupted(kept, Path(checkpoint) if checkpoint is not None else None) from None
+
+
+@contextmanager
+def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
+    """Hold ``CHECKPOINT.lock`` (an exclusive ``flock``) while a life run uses its checkpoint,
+    as a sweep holds its parts folder: a second life run to the same output is refused
+    instead of writing over the first one's checkpoint. The lock file is removed after.
+
+    Raises
+    ------
+    CheckpointError
+        Another life run holds the lock.
+    """
+    if checkpoint is None:
+        yield
+        return
+    lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
-        return _life(cfg, allow_large, progress, checkpoint, earlier, start, stop_rule)
-    except KeyboardInterrupt:
-        kept = checkpoint_blocks(checkpoint) if checkpoint is not None else 0
-        raise LifeInterrupted(kept, Path(checkpoint) if checkpoint is not None else None) from None
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        os.close(fd)
+        if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+            raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
+                                  "output; wait for it to finish or write to another output "
+                                  "file") from None
+        raise
+    try:
+        yield
+    finally:
+        lock.unlink(missing_ok=True)
+        os.close(fd)
 
 
 def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], None] | None,

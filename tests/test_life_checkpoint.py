@@ -174,3 +174,28 @@ def test_the_checkpoint_belongs_to_the_resolved_config():
     a = service_life._config_json(load_config(CASE, QUICK))
     b = service_life._config_json(load_config(CASE, [*QUICK, "life.max_blocks=11"]))
     assert a != b and a == service_life._config_json(load_config(CASE, QUICK))
+
+
+def test_a_second_life_run_to_the_same_output_is_refused_while_the_first_runs(tmp_path):
+    """Two life runs to one output wrote over each other's checkpoint (or the second continued
+    the first's with --resume while the first went on); the second is now refused in one line,
+    with and without --resume, and the first's checkpoint is left as it was."""
+    import fcntl
+
+    out = tmp_path / "l.nc"
+    checkpoint = checkpoint_path_for(out)
+    with pytest.raises(LifeInterrupted):
+        life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(2))
+    before = checkpoint.read_bytes()
+    lock = checkpoint.with_name(checkpoint.name + ".lock")
+    with open(lock, "w") as held:       # the first run, still going
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        for extra in ([], ["--resume"], ["--discard-checkpoint"]):
+            result = _cli("life", CASE, "-o", out, "-q", *sets(QUICK), *extra)
+            assert result.exit_code == 2, result.output
+            (line,) = result.stderr.strip().splitlines()
+            assert line.startswith("clearsweep: error: ") and "in use by another life run" in line
+            assert checkpoint.read_bytes() == before and not out.exists()
+    result = _cli("life", CASE, "-o", out, "-q", "--resume", *sets(QUICK))
+    assert result.exit_code == 0, result.output
+    assert not lock.exists() and not checkpoint.exists() and out.exists()
