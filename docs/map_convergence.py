@@ -46,9 +46,11 @@ CONFIGS = {
 }
 
 
-def _depths(name: str, kind: str, overrides: list[str], workers: int) -> tuple[list[int], np.ndarray]:
+def _depths(name: str, kind: str, overrides: list[str], workers: int,
+            client=None) -> tuple[list[int], np.ndarray]:
     """The config's wear map and the max depth [m] of every case and clearance joint (NaN
-    where the joint is ideal or nothing wore)."""
+    where the joint is ideal or nothing wore); a sweep runs on ``workers`` processes, or on
+    ``client`` (an executor of warm workers, see ``run_sweep``) where given."""
     from clearsweep.config import load_config
 
     path = ROOT / "configs" / CONFIGS[name][0]
@@ -64,13 +66,18 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int) -> tuple[l
         ds = life(cfg)
         shape, depth = cfg.wear.map, ds.wear_depth_max.isel(cycle=-1)
     else:
-        from clearsweep.sweeping import run_sweep
-
-        ds = run_sweep(path, workers=workers, overrides=overrides, progress=False)
-        depth = (ds["wear_depth_max_final_mean"] if "wear_depth_max_final_mean" in ds
-                 else ds["wear_depth_max_final"])
         import yaml
 
+        from clearsweep.sweeping import run_sweep
+
+        # the summary store holds the same wear_depth_max_final as the full one, without
+        # writing every case's series and maps (the sweep file's folder holds no includes)
+        spec = yaml.safe_load(path.read_text())
+        if spec.get("store", "full") == "full":
+            spec["store"] = "summary"
+        ds = run_sweep(spec, workers=workers, client=client, overrides=overrides, progress=False)
+        depth = (ds["wear_depth_max_final_mean"] if "wear_depth_max_final_mean" in ds
+                 else ds["wear_depth_max_final"])
         base = yaml.safe_load(ds.attrs["sweep_config"])["base"]
         shape = base["wear"]["map"]
     values = np.asarray(depth.values, dtype=float).ravel()
@@ -84,13 +91,13 @@ def _sweep_base(path: Path, overrides: list[str]):
     return expand(path).base.replace(*overrides)
 
 
-def measure(name: str, short: bool, workers: int = 1) -> dict:
-    """One row of the table for config ``name``."""
+def measure(name: str, short: bool, workers: int = 1, client=None) -> dict:
+    """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`)."""
     _, kind, short_overrides, full_overrides = CONFIGS[name]
     overrides = short_overrides if short else full_overrides
-    shape, coarse = _depths(name, kind, overrides, workers)
+    shape, coarse = _depths(name, kind, overrides, workers, client)
     fine_shape = [2 * shape[0], 2 * shape[1]]
-    _, fine = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers)
+    _, fine = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers, client)
     with np.errstate(invalid="ignore"):
         ratio = coarse / fine
     return {"config": name, "map": shape, "fine_map": fine_shape,

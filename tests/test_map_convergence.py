@@ -63,7 +63,7 @@ def test_a_short_run_at_twice_the_resolution_agrees():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(TABLE))
-def test_every_shipped_config_within_the_tolerance_in_short_runs(name):
-    row = mc.measure(name, short=True, workers=2)
+def test_every_shipped_config_within_the_tolerance_in_short_runs(name, process_pool):
+    row = mc.measure(name, short=True, client=process_pool)
     assert row["map"] == TABLE[name][0]
     assert row["worst_ratio"] >= 1.0 - mc.TOLERANCE, row

@@ -3,6 +3,7 @@ with --set)."""
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import subprocess
@@ -31,12 +32,29 @@ def commands_under(heading: str, text: str = README) -> list[list[str]]:
     return out
 
 
-def run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+def run(args: list[str], cwd: Path, in_process: bool = False) -> subprocess.CompletedProcess:
+    """The command line ``args`` run in ``cwd``, shortened; as a process of its own, or with
+    ``in_process`` through the same entry point in this process (the commands of a page
+    share one interpreter start: the reproduction page has 18)."""
     args = [str(ROOT / a) if a.startswith("configs/") else a for a in args]
     if args[0] in ("sweep", "run"):
         args += ["--set", "solver.duration=0.02", "--workers", "1"] if args[0] == "sweep" else \
             ["--set", "solver.duration=0.02"]
-    return subprocess.run(CLI + args, cwd=cwd, capture_output=True, text=True, timeout=600)
+    if not in_process:
+        return subprocess.run(CLI + args, cwd=cwd, capture_output=True, text=True, timeout=600)
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        res = CliRunner().invoke(main, args, prog_name="clearsweep")
+    finally:
+        os.chdir(here)
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        raise res.exception
+    return subprocess.CompletedProcess(args, res.exit_code, res.stdout, res.stderr)
 
 
 @pytest.mark.slow
@@ -55,7 +73,7 @@ def test_reproduction_commands_run_as_written(tmp_path):
     cmds = commands_under("## Commands", (DOCS / "reproduction.md").read_text())
     assert cmds[0][:2] == ["sweep", "configs/paper.yaml"] and len(cmds) > 5
     for cmd in cmds:
-        res = run(cmd, tmp_path)
+        res = run(cmd, tmp_path, in_process=True)
         assert res.returncode == 0, (cmd, res.stderr)
     figures = sorted(p.name for p in (tmp_path / "docs" / "figures").iterdir())
     committed = sorted(p.name for p in (ROOT / "docs" / "figures").glob("*.png"))
