@@ -1,8 +1,10 @@
 """Session fixtures shared by the test files: one warm process pool, one small Dask cluster,
 and the reference runs that several files check, each computed once per session.
 
-Tiers: ``python -m pytest -q`` runs everything; ``python -m pytest -m "not slow"`` leaves
-out the long physics runs and builds marked ``slow`` (the fast tier, for development).
+Tiers: ``python -m pytest -q -n auto`` runs everything, spread over the cores by
+pytest-xdist (each of its worker processes has its own session fixtures);
+``python -m pytest -q -n auto -m "not slow"`` leaves out the long physics runs and builds
+marked ``slow`` (the fast tier, for development).
 """
 
 from __future__ import annotations
