@@ -52,6 +52,53 @@ def test_signature_matches_the_arrays_the_backend_allocates():
     assert tuple(typeof(a) for a in arrays) == ptx.run_cases_signature()
 
 
+def test_block_addresses_what_numpy_slices():
+    """run_cases hands advance its fixed-shape slices through core.device.block, built with
+    the kernel's own code generation, here registered for the CPU: the same elements as
+    numpy's slices of the case, for every case and block."""
+    import numpy as np
+    from numba import njit
+    from numba.core.extending import intrinsic
+
+    from clearsweep.core import device
+    from clearsweep.core.layout import N_S, N_Y
+
+    block = intrinsic(device.block_typer)
+
+    @njit
+    def blocks(vec, cstate, mats, ints, i):
+        return (block(vec, i, 0, (N_Y,)).copy(), block(vec, i, 6, (N_Y,)).copy(),
+                block(cstate, i, 1, (2, N_S)).copy(), block(mats, i, 2, (6, 6)).copy(),
+                block(ints, i, 1, (3,)).copy())
+
+    rng = np.random.default_rng(1)
+    vec = rng.random((3, 7, N_Y))
+    cstate = rng.random((3, 2, 2, N_S))
+    mats = rng.random((3, 3, 6, 6))
+    ints = rng.integers(0, 1000, (3, 2, 3))
+    for i in range(3):
+        got = blocks(vec, cstate, mats, ints, i)
+        want = (vec[i, 0], vec[i, 6], cstate[i, 1], mats[i, 2], ints[i, 1])
+        for g, w in zip(got, want):
+            assert g.shape == w.shape and g.dtype == w.dtype
+            assert np.array_equal(g, w)
+
+
+def test_launch_refuses_shapes_that_run_cases_does_not_address():
+    from clearsweep.config import DEFAULTS, resolve_materials
+    from clearsweep.core import device
+    from clearsweep.gpu import _allocate
+    from clearsweep.params import pack
+
+    cfg = DEFAULTS.replace(solver__duration=0.001)
+    arrays = list(_allocate([pack(cfg, resolve_materials(cfg))]))
+    for at, shape in device.FIXED_SHAPES.items():
+        assert arrays[at].shape[1:] == shape
+    arrays[11] = arrays[11][:, :, :-1]
+    with pytest.raises(ValueError, match="argument 11"):
+        device.launch(tuple(arrays))
+
+
 def _build_key(ptxas) -> str:
     """What the PTX build depends on: every clearsweep source file, the compilers' versions
     and the ptxas used. The same key builds the same PTX and the same ptxas figures."""
