@@ -4,13 +4,22 @@ No physics is written here. Numba's CUDA target compiles a CPU ``@njit`` functio
 kernel calls as a device function (``CUDATypingContext.resolve_value_type`` turns the CPU
 dispatcher into a device dispatcher of the same Python source), so :func:`run_cases`
 reaches ``advance``, ``evaluate``, the contact law and the wear map through the very
-functions that ``rk4.integrate`` runs on the CPU.
+functions that ``rk4.integrate`` runs on the CPU. Where a function holds one rule in a
+CPU arrangement and a register-lean one, ``target.on_device`` picks the latter here
+(registered for the CUDA target below).
 
 Every array argument carries the case as its first axis; thread i integrates case i on
 its own slices: inputs (p, jp, y0, n_steps, save_every), results (wmap, proj, wvol,
 info, stats, track) and the work arrays of ``rk4.work_shapes``. No rows are saved on
 the device (``keep_rows`` False): the summaries are the kernel's running statistics, the
 wear map and projections.
+
+Slices whose shape is fixed by the kernel's layout (every work row but the undo buffer and
+the wear scratch, and jp, proj, stats) are handed to advance by :func:`block`, as arrays
+of a compile-time shape at a constant offset from their case's start: their addresses are
+then one base per argument plus constants, rather than a pointer and row lengths per row
+that stay live in registers across every inlined ``evaluate``. :func:`launch` checks the
+shapes.
 
 Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
 numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
@@ -21,15 +30,64 @@ The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
 import numba
-from numba import cuda
+from numba import cuda, types
 
-from .rk4 import PAIR_FIRST, advance
+from .dynamics import VZ_ROWS
+from .layout import N_ANGLE_BINS, N_D, N_JP, N_M, N_S, N_Y
+from .rk4 import PAIR_FIRST, work_shapes
+from .rk4 import advance as _cpu_advance
+from .target import on_device
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
 
 #: Threads per block. The kernel is register- and local-memory-heavy (the right-hand side
 #: keeps its 3-vectors and 3x3 matrices in registers): small blocks keep occupancy even.
 THREADS_PER_BLOCK = 64
+
+#: row of the work array ``pairs`` holding the copy of the first impact times
+PAIR_FIRST_COPY = PAIR_FIRST + 1
+
+
+def block_typer(typingctx, arr, i, k, shape):
+    """Typing and code generation of :func:`block` for ``numba.extending.intrinsic`` (any
+    target: the CUDA one here; tests/test_ptx.py registers it for the CPU to check the
+    addressing against numpy): k and the entries of shape must be literal integers, arr a
+    C-contiguous array."""
+    if not (isinstance(arr, types.Array) and arr.layout == "C"
+            and isinstance(k, types.IntegerLiteral) and isinstance(shape, types.BaseTuple)
+            and len(shape) > 0 and all(isinstance(n, types.IntegerLiteral) for n in shape)):
+        return None     # numba retries with literal arguments
+    dims = tuple(n.literal_value for n in shape)
+    size = 1
+    for n in dims:
+        size *= n
+    start = k.literal_value * size
+    out = types.Array(arr.dtype, len(dims), "C")
+
+    def codegen(context, builder, sig, args):
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        intp = context.get_value_type(types.intp)
+        itemsize = context.get_abi_sizeof(context.get_data_type(arr.dtype))
+        case = args[1]
+        if case.type != intp:
+            case = builder.sext(case, intp)
+        offset = builder.add(builder.mul(case, builder.extract_value(ary.strides, 0)),
+                             intp(start * itemsize))
+        byte_ptr = context.get_value_type(types.voidptr)
+        data = builder.bitcast(builder.gep(builder.bitcast(ary.data, byte_ptr), [offset]),
+                               ary.data.type)
+        strides = []
+        step = itemsize
+        for n in reversed(dims):
+            strides.insert(0, intp(step))
+            step *= n
+        res = context.make_array(out)(context, builder)
+        context.populate_array(res, data=data, shape=[intp(n) for n in dims], strides=strides,
+                               itemsize=intp(itemsize), meminfo=None, parent=None)
+        return res._getvalue()
+
+    return out(arr, i, k, shape), codegen
+
 
 if SIMULATED:
     def _plain(a):
@@ -38,9 +96,28 @@ if SIMULATED:
         return a if inner is None else inner._ary
 
     def _advance(*args):
-        return advance(*(_plain(a) for a in args))
+        return _cpu_advance(*(_plain(a) for a in args))
+
+    def block(arr, i, k, shape):
+        """Block k, of shape ``shape``, of case i's part of arr, as a view: case i's
+        elements k * prod(shape) to (k + 1) * prod(shape), in C order."""
+        size = 1
+        for n in shape:
+            size *= n
+        return _plain(arr[i]).reshape(-1)[k * size:(k + 1) * size].reshape(shape)
 else:
-    _advance = advance
+    from numba.cuda.extending import intrinsic, overload
+
+    @overload(on_device, inline="always")
+    def _on_device_cuda():
+        """The device build: True, a constant (core/target.py)."""
+        return lambda: True
+
+    #: Block k, of the literal shape ``shape``, of case i's part of the C-contiguous arr:
+    #: case i's elements k * prod(shape) to (k + 1) * prod(shape), in C order, as an array
+    #: of that shape known to the compiler.
+    block = intrinsic(block_typer)
+    _advance = _cpu_advance
 
 
 @cuda.jit
@@ -52,19 +129,38 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
     i = cuda.grid(1)
     if i < p.shape[0]:
-        v = vec[i]
-        pr = pairs[i]
-        _advance(p[i], jp[i], y0[i], 0.0, n_steps[i], save_every[i], wmap[i], proj[i], wvol[i],
-                 False, rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i], stats[i], track[i],
-                 pr[PAIR_FIRST], v[0], v[1], v[2], v[3], v[4], v[5], v[6], diag[i, 0],
-                 diag[i, 1], cstate[i, 0], cstate[i, 1], msave[i], pr[0], pr[1], pr[2],
-                 pr[PAIR_FIRST + 1], mats[i, 0], mats[i, 1], mats[i, 2], vz[i], buf_i[i],
-                 buf_v[i], caps[i, 0], caps[i, 1], scratch[i])
+        _advance(p[i], block(jp, i, 0, (2, N_JP)), y0[i], 0.0, n_steps[i], save_every[i],
+                 wmap[i], block(proj, i, 0, (2, 3, N_ANGLE_BINS)), wvol[i], False, rows_t[i],
+                 rows_y[i], rows_d[i], rows_wmax[i], info[i], block(stats, i, 0, (2, N_M)),
+                 track[i], block(pairs, i, PAIR_FIRST, (2,)),
+                 block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)), block(vec, i, 2, (N_Y,)),
+                 block(vec, i, 3, (N_Y,)), block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
+                 block(vec, i, 6, (N_Y,)),
+                 block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
+                 block(cstate, i, 0, (2, N_S)), block(cstate, i, 1, (2, N_S)),
+                 block(msave, i, 0, (2, N_M)),
+                 block(pairs, i, 0, (2,)), block(pairs, i, 1, (2,)), block(pairs, i, 2, (2,)),
+                 block(pairs, i, PAIR_FIRST_COPY, (2,)),
+                 block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)), block(mats, i, 2, (6, 6)),
+                 block(vz, i, 0, (VZ_ROWS, 6)), buf_i[i], buf_v[i],
+                 block(caps, i, 0, (2, 6)), block(caps, i, 1, (2, 6)), scratch[i])
+
+
+#: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument
+#: position: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
+FIXED_SHAPES = {1: (2, N_JP), 6: (2, 3, N_ANGLE_BINS), 9: (2, N_M)}
+FIXED_SHAPES.update({11 + k: shape for k, shape in enumerate(work_shapes(0, 1))
+                     if k not in (7, 8, 10)})
 
 
 def launch(arrays: tuple) -> None:
     """Run :func:`run_cases` over every case of ``arrays`` (its arguments, device or host
-    arrays) and wait for it to finish."""
+    arrays) and wait for it to finish. ValueError if an argument's per-case shape is not
+    the one run_cases addresses it by (FIXED_SHAPES)."""
+    for at, shape in FIXED_SHAPES.items():
+        if tuple(arrays[at].shape[1:]) != shape:
+            raise ValueError(f"run_cases argument {at}: per-case shape {arrays[at].shape[1:]}, "
+                             f"expected {shape}")
     n = arrays[0].shape[0]
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
     run_cases[blocks, THREADS_PER_BLOCK](*arrays)

@@ -104,6 +104,7 @@ from .layout import (
     Y_WORK,
 )
 from .spherical import contact
+from .target import on_device
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
 
@@ -281,6 +282,16 @@ def body_frame(tr, pd):
     """Rotation R and body angular velocity w = G phi_dot [rad/s] of a body from its Euler
     angles' trig(...) and rates pd."""
     return rotation(tr), mv(gmat(tr), pd)
+
+
+@njit(cache=True, inline="always")
+def body_state(y, tr, r_at, phi_at):
+    """(r, v, R, w) of the body whose coordinates start at y[r_at] and y[phi_at], tr its
+    Euler angles' trig(...): centroid position and velocity, rotation, body angular
+    velocity."""
+    r, v, pd = body_motion(y, r_at, phi_at)
+    R, w = body_frame(tr, pd)
+    return r, v, R, w
 
 
 @njit(cache=True, inline="always")
@@ -526,7 +537,10 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     angular velocity and the other products of them are formed again in each part that
     uses them (:func:`body_frame`), from the state and the trig values, rather than all up
     front: few values then stay live across the contacts and the solve, which is what a
-    GPU thread's registers hold (``python -m clearsweep.ptx``).
+    GPU thread's registers hold (``python -m clearsweep.ptx``). The crank's and rod's
+    frames are the exception on a CPU, formed once before the contacts (forming them in each
+    contact cost the CPU about 3 %); a device build (``target.on_device``) forms them in
+    each contact.
     """
     joint_a = 0
     joint_b = 1
@@ -551,12 +565,18 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         clear_contacts(dg)
     fA = zero
     fB = zero
+    # crank and rod frames: once before the contacts on a CPU; in a device build each
+    # contact forms those it uses (few values live across the contacts: a GPU thread's
+    # registers), the rod's twice when both joints have clearance
+    local = on_device()
+    if not local:
+        r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
+        r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
-    r2, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
-    R2, w2 = body_frame(t2, pd2)
-    r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
-    R3, w3 = body_frame(t3, pd3)
     if jp[0, J_CLEARANCE] != 0.0:
+        if local:
+            r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
+            r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3, full)
         fA = cA.force
         F2 = add(F2, fA)
@@ -568,8 +588,9 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             store_contact(dg, joint_a, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
     if jp[1, J_CLEARANCE] != 0.0:
-        r4, v4, pd4 = body_motion(y, Y_R4, Y_PHI4)
-        R4, w4 = body_frame(t4, pd4)
+        if local:
+            r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
+        r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
         cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero, full)
         fB = cB.force
         F3 = add(F3, fB)
