@@ -1,5 +1,6 @@
 """Session fixtures shared by the test files: one warm process pool, one small Dask cluster,
-and the reference runs that several files check, each computed once per session.
+and the reference runs that several files check, each computed once per session (once per
+test run where :func:`made_once` keeps it).
 
 Tiers: ``python -m pytest -q -n auto`` runs everything, spread over the cores by
 pytest-xdist (each of its worker processes has its own session fixtures);
@@ -46,17 +47,48 @@ def two_clearances_1s():
     return simulate({"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}})
 
 
+def made_once(tmp_path_factory, name: str, make) -> Path:
+    """A folder that ``make(folder)`` fills once per test run, even when pytest-xdist runs
+    the tests in several worker processes, each with its own session fixtures: the first
+    worker to ask makes it, under a lock, in the folder the workers share (the parent of
+    each one's base temporary folder); the others wait and read it."""
+    import fcntl
+    import os
+
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    folder = shared / name
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (folder / ".made").exists():
+            folder.mkdir(exist_ok=True)
+            make(folder)
+            (folder / ".made").touch()
+    return folder
+
+
 @pytest.fixture(scope="session")
 def short_life_cli(tmp_path_factory):
-    """``clearsweep life`` of tests/test_service_life.py's SHORT_LIFE run, once per session:
-    ``(output file, click result)``. test_service_life and test_report_summary read it."""
-    from click.testing import CliRunner
+    """``clearsweep life`` of tests/test_service_life.py's SHORT_LIFE run, once per test run
+    (:func:`made_once`): ``(output file, result)``, the result with the command's
+    ``exit_code``, ``stdout`` and ``stderr``. test_service_life and test_report_summary read
+    it."""
+    import json
+    from types import SimpleNamespace
 
-    from clearsweep.cli import main
-    from tests.test_service_life import CASE, SHORT_LIFE
+    def make(folder: Path) -> None:
+        from click.testing import CliRunner
 
-    out = tmp_path_factory.mktemp("life") / "life.nc"
-    args = ["life", str(ROOT / CASE), "-o", str(out), *[a for o in SHORT_LIFE for a in ("--set", o)]]
-    result = CliRunner().invoke(main, args)
-    assert result.exit_code == 0, result.output
-    return out, result
+        from clearsweep.cli import main
+        from tests.test_service_life import CASE, SHORT_LIFE
+
+        args = ["life", str(ROOT / CASE), "-o", str(folder / "life.nc"),
+                *[a for o in SHORT_LIFE for a in ("--set", o)]]
+        result = CliRunner().invoke(main, args)
+        assert result.exit_code == 0, result.output
+        (folder / "result.json").write_text(json.dumps(
+            {"exit_code": result.exit_code, "stdout": result.stdout, "stderr": result.stderr}))
+
+    folder = made_once(tmp_path_factory, "short_life", make)
+    result = SimpleNamespace(**json.loads((folder / "result.json").read_text()))
+    return folder / "life.nc", result

@@ -25,10 +25,11 @@ from clearsweep.simulation import prepare_kernel, run_kernel, simulate
 from clearsweep.sweeping import drop_timing, expand, run_sweep
 
 CASE = "configs/one_clearance.yaml"
-#: Short life runs: 300 r/min (0.2 s blocks), a small map read bilinearly, wear x300, jumps
-#: of 0.1 c, to 70 um of wear: about 4 blocks and a few hundred revolutions a member.
+#: Short life runs: 300 r/min (0.2 s blocks) at the step configs/reliability.yaml takes
+#: (2e-5 s), a small map read bilinearly, wear x300, jumps of 0.1 c, to 70 um of wear: about
+#: 4 blocks and a few hundred revolutions a member.
 TINY = ["mechanism.speed_rpm=300", "metrics.settle_time=0.02", "wear.map=[8,16]",
-        "wear.interpolate=true", "solver.energy_tolerance=0.5", "wear.amplification=300",
+        "solver.dt=2e-5", "wear.interpolate=true", "solver.energy_tolerance=0.5", "wear.amplification=300",
         "life.cycles=1e5", "life.jump_clearance_fraction=0.1", "life.max_clearance_growth=7e-5"]
 #: The wear coefficient's coefficient of variation in the closed-form tests.
 K_CV = 0.5
