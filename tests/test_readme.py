@@ -3,7 +3,6 @@ with --set)."""
 
 from __future__ import annotations
 
-import os
 import re
 import shlex
 import subprocess
@@ -46,12 +45,9 @@ def run(args: list[str], cwd: Path, in_process: bool = False) -> subprocess.Comp
 
     from clearsweep.cli import main
 
-    here = os.getcwd()
-    os.chdir(cwd)
-    try:
+    with pytest.MonkeyPatch.context() as mp:
+        mp.chdir(cwd)
         res = CliRunner().invoke(main, args, prog_name="clearsweep")
-    finally:
-        os.chdir(here)
     if res.exception is not None and not isinstance(res.exception, SystemExit):
         raise res.exception
     return subprocess.CompletedProcess(args, res.exit_code, res.stdout, res.stderr)
