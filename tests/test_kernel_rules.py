@@ -126,3 +126,36 @@ def test_the_flush_spreads_every_waiting_cap_and_keeps_its_volume():
     assert wmap[0].sum() == 0.0
     assert wmax[1] == wmap[1].max() > 0.0
     assert (wmap[1] * bin_areas((36, 72), 0.015)).sum() == pytest.approx(vol, rel=1e-12)
+
+
+def kernel_dispatchers():
+    """{"module.function": dispatcher} of every compiled function defined in clearsweep.core."""
+    import importlib
+    import pkgutil
+
+    from numba.core.registry import CPUDispatcher
+
+    import clearsweep.core as core
+
+    found = {}
+    for info in pkgutil.iter_modules(core.__path__):
+        module = importlib.import_module(f"clearsweep.core.{info.name}")
+        for name, obj in vars(module).items():
+            if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__:
+                found[f"{info.name}.{name}"] = obj
+    return found
+
+
+def test_kernel_functions_are_compiled_without_reference_counting():
+    """The compile options are one rule too (core/compiled.py): every kernel function runs
+    without Numba's runtime, whose atomic reference counts on every call cost half of the run
+    time, except the entry points that allocate their work arrays."""
+    from clearsweep.core.compiled import ALLOCATING
+
+    found = kernel_dispatchers()
+    assert len(found) > 80 and {"dynamics.evaluate", "rk4.advance", "spherical.contact"} <= set(found)
+    assert ALLOCATING <= set(found)
+    with_runtime = sorted(name for name, disp in found.items()
+                          if disp.targetoptions.get("_nrt", True))
+    assert with_runtime == sorted(ALLOCATING)
+

@@ -5,18 +5,17 @@ Pure functions of floats in SI units, and the choice of surface values (coated o
 
 import math
 
-from numba import njit
-
+from .compiled import compiled
 from .layout import J_EW, J_EW_BASE, J_K, J_K_BASE, J_MU, J_MU_BASE
 
 
-@njit(cache=True)
+@compiled
 def stiffness_factor(ew, ri):
     """K = 4 pi E_w R_i / 5 [N/m], the factor of every coated contact stiffness (Table 1)."""
     return 4.0 * math.pi * ew * ri / 5.0
 
 
-@njit(cache=True)
+@compiled
 def elastic_force(delta, c, ew, ri):
     """Elastic part F_el = k_N(delta) delta [N] and its slope dF_el/d delta [N/m].
 
@@ -30,7 +29,7 @@ def elastic_force(delta, c, ew, ri):
     return f, df
 
 
-@njit(cache=True)
+@compiled
 def elastic_energy(delta, c, ew, ri):
     """Elastic energy U [J] whose derivative is F_el (docs/physics.md section 8).
 
@@ -53,13 +52,13 @@ def elastic_energy(delta, c, ew, ri):
     return kk * c * c * u
 
 
-@njit(cache=True)
+@compiled
 def damping_factor(cr, dv0):
     """kappa = 20 (1 - c_r) / (13 c_r delta_dot0) [s/m], so that chi_N = kappa k_N (Table 1)."""
     return 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
 
 
-@njit(cache=True)
+@compiled
 def episode_impact_velocity(dv0, ddot, floor):
     """Impact velocity delta_dot0 [m/s] of a contact episode after an accepted step in contact.
 
@@ -74,7 +73,7 @@ def episode_impact_velocity(dv0, ddot, floor):
     return max(dv0, ddot)
 
 
-@njit(cache=True)
+@compiled
 def normal_force(delta, ddot, c, ew, ri, kappa):
     """Normal force F_N = k_N delta (1 + kappa delta_dot), clamped at 0 [N].
 
@@ -88,7 +87,7 @@ def normal_force(delta, ddot, c, ew, ri, kappa):
     return fn, fel, dfel * fac, kappa * fel
 
 
-@njit(cache=True)
+@compiled
 def friction_factor(vt, v0, v1):
     """Dynamic correction c_d of the improved Coulomb law (docs/physics.md section 3.3)."""
     if vt < v0:
@@ -98,7 +97,7 @@ def friction_factor(vt, v0, v1):
     return (vt - v0) / (v1 - v0)
 
 
-@njit(cache=True)
+@compiled
 def cap_height(pen, e, ri, rj):
     """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
 
@@ -109,20 +108,20 @@ def cap_height(pen, e, ri, rj):
     return pen * (e + rj + ri) / (2.0 * e)
 
 
-@njit(cache=True)
+@compiled
 def contact_area(pen, e, ri, rj):
     """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
     return 2.0 * math.pi * rj * cap_height(pen, e, ri, rj)
 
 
-@njit(cache=True)
+@compiled
 def contact_angle(pen, e, ri, rj):
     """Angle beta of Eq. 11 [rad]: pi - 2 asin(sqrt((1 + cos beta) / 2)), accurate near pi."""
     half = 0.5 * cap_height(pen, e, ri, rj) / rj
     return math.pi - 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
 
 
-@njit(cache=True)
+@compiled
 def stiff_rate(m_eff, k, c):
     """Largest root magnitude |s| of m s^2 + c s + k = 0 [1/s] (docs/physics.md section 4)."""
     if m_eff <= 0.0:
@@ -133,7 +132,7 @@ def stiff_rate(m_eff, k, c):
     return (c + math.sqrt(disc)) / (2.0 * m_eff)
 
 
-@njit(cache=True)
+@compiled
 def contact_damping(dv0, ddot, cr, floor):
     """kappa [s/m] of a contact whose episode impact velocity is ``dv0`` [m/s] (0: the episode
     begins within this step, and the approach rate ``ddot`` of the evaluation, floored at
@@ -143,13 +142,13 @@ def contact_damping(dv0, ddot, cr, floor):
     return damping_factor(cr, dv0)
 
 
-@njit(cache=True)
+@compiled
 def friction_magnitude(mu, fn, vt, v0, v1):
     """|F_t| = mu c_d(|v_t|) F_N [N] of the improved Coulomb law (docs/physics.md section 3.3)."""
     return mu * friction_factor(vt, v0, v1) * fn
 
 
-@njit(cache=True)
+@compiled
 def surface(jp, j, worn):
     """(E_w [Pa], mu [-], k [m^2/N]) that joint j's contact uses: the coated surface's, or the
     base material's where the coating is worn through (``worn``; wear.worn_surface says

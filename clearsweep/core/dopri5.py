@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .compiled import compiled
 from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
@@ -83,7 +84,7 @@ SHRINK_MIN = 0.2
 GROW_MAX = 5.0
 
 
-@njit(cache=True)
+@compiled
 def dense_row(out, row, theta, h, y0, y1, k1, k3, k4, k5, k6, k7):
     """out[row, :] = the continuous extension at t0 + theta h of the step y0 -> y1."""
     t1 = 1.0 - theta
@@ -95,7 +96,7 @@ def dense_row(out, row, theta, h, y0, y1, k1, k3, k4, k5, k6, k7):
         out[row, i] = y0[i] + theta * (dy + t1 * (b + theta * (r4 + t1 * r5)))
 
 
-@njit(cache=True)
+@compiled
 def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
     """RMS over the state of the embedded error estimate, each component scaled by its
     group's atol + rtol * max(|y0|, |y1|); <= 1 accepts the step."""
@@ -114,7 +115,7 @@ def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
     return math.sqrt(acc / y0.shape[0])
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def dopri5_trial(t, h, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap, C, S, L, vz):
     """Stages 2-7 of one trial step of length h from (t, y) with k1 = f(t, y): the 5th-order
     solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1."""
@@ -154,7 +155,7 @@ def dopri5_trial(t, h, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wma
     return evaluate(t + h, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
 
 
-@njit(cache=True)
+@compiled
 def onset_step(p, jp, dg0, dg1, h):
     """0 when no clearance joint's gap closes over the step, or the step is within the
     onset tolerance; else a shorter step that ends just after the estimated onset."""
@@ -204,7 +205,7 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     return kernel_result(track, first)
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
                    out_wmax, info, stats, track, first, y, y1, yt, k1, k2, k3, k4, k5, k6, k7, kt,
                    row, yrow, dg, dg1, dgo, s, ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur,

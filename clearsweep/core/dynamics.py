@@ -18,8 +18,9 @@ Eq. 24).
 import math
 
 import numpy as np
-from numba import njit, types
+from numba import types
 
+from .compiled import compiled
 from .contact import contact_damping, normal_force, stiff_rate, stiffness_factor, surface
 from .kinematics import (
     add,
@@ -108,13 +109,13 @@ from .target import on_device
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
 
-@njit(cache=True)
+@compiled
 def body_moment(R, r, q, f):
     """Body-frame moment of the global force f applied at global point q."""
     return mtv(R, cross(sub(q, r), f))
 
 
-@njit(cache=True)
+@compiled
 def solve_spd(S, vz, b, nc, L):
     """Solve S x = vz[b] in place (vz[b] <- x) by Cholesky; L receives the factor. False if
     singular."""
@@ -133,7 +134,7 @@ def solve_spd(S, vz, b, nc, L):
     return True
 
 
-@njit(cache=True)
+@compiled
 def chol_solve(L, vz, b, nc):
     """Solve L L^T x = vz[b] in place."""
     for i in range(nc):
@@ -148,7 +149,7 @@ def chol_solve(L, vz, b, nc):
         vz[b, i] = acc / L[i, i]
 
 
-@njit(cache=True)
+@compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
     rows of the work array vz)."""
@@ -160,7 +161,7 @@ def minv_apply(minv, mr_inv, vz, v, out):
     vz[out, 5] = minv[1] * vz[v, 5]
 
 
-@njit(cache=True)
+@compiled
 def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
     """vz[w1] = W vz[g], W the constrained inverse mass of the free coordinates (Schur form;
     g, w1, w2, lam: rows of the work array vz)."""
@@ -176,7 +177,7 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
     back_substitute(vz, g, C, lam, nc, minv, mr_inv, w2, w1)
 
 
-@njit(cache=True)
+@compiled
 def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
     """vz[out] = M_zz^-1 (vz[f] - C^T vz[lam]): free accelerations from the multipliers
     (f, lam, tmp, out: rows of the work array vz)."""
@@ -188,7 +189,7 @@ def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
     minv_apply(minv, mr_inv, vz, tmp, out)
 
 
-@njit(cache=True)
+@compiled
 def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     """Mobility W_p of joint j's relative contact motion, a_rel = W_p F for the force pair
     (F on the ball, -F on the socket); symmetric 3x3 as (xx, xy, xz, yy, yz, zz) [1/kg].
@@ -234,7 +235,7 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     return (vz[5, 0], vz[5, 1], vz[5, 2], vz[5, 3], vz[5, 4], vz[5, 5])
 
 
-@njit(cache=True)
+@compiled
 def quad_form(w, u, v):
     """u^T W v for the packed symmetric W."""
     return (u[0] * (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])
@@ -242,7 +243,7 @@ def quad_form(w, u, v):
             + u[2] * (w[2] * v[0] + w[4] * v[1] + w[5] * v[2]))
 
 
-@njit(cache=True)
+@compiled
 def tangent_basis(n):
     """Two unit vectors orthogonal to the unit vector n."""
     if abs(n[0]) < 0.9:
@@ -267,7 +268,7 @@ VZ_WORK2 = 6
 VZ_ROWS = 8
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def body_motion(y, r_at, phi_at):
     """Centroid position [m], velocity [m/s] and Euler-angle rates [rad/s] of the body whose
     coordinates start at y[r_at] (centroid) and y[phi_at] (angles)."""
@@ -277,14 +278,14 @@ def body_motion(y, r_at, phi_at):
             (y[qd + phi_at], y[qd + phi_at + 1], y[qd + phi_at + 2]))
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def body_frame(tr, pd):
     """Rotation R and body angular velocity w = G phi_dot [rad/s] of a body from its Euler
     angles' trig(...) and rates pd."""
     return rotation(tr), mv(gmat(tr), pd)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def body_state(y, tr, r_at, phi_at):
     """(r, v, R, w) of the body whose coordinates start at y[r_at] and y[phi_at], tr its
     Euler angles' trig(...): centroid position and velocity, rotation, body angular
@@ -294,7 +295,7 @@ def body_state(y, tr, r_at, phi_at):
     return r, v, R, w
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def crank_accelerations(t, y, p, t2):
     """Accelerations of the driven crank (revolute O + driver, Baumgarte rows): (pdd2, wd2,
     rdd2), its Euler-angle and body angular accelerations and its centroid acceleration."""
@@ -315,7 +316,7 @@ def crank_accelerations(t, y, p, t2):
     return pdd2, wd2, rdd2
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def fixed_accelerations(y, p, dy):
     """Accelerations that the other single-body constraints fix (Baumgarte rows): the rod's
     spin gamma3 and the slider's y and z (returned: gdd3, ydd4, zdd4) and its angles
@@ -331,7 +332,7 @@ def fixed_accelerations(y, p, dy):
     return gdd3, ydd4, zdd4
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
     """Generalised forces of the free coordinates (x3, y3, z3, alpha3, beta3, x4) into
     vz[VZ_FORCE]; returns (mr_inv, ok): the inverse of the rod's 2x2 rotational mass block
@@ -358,7 +359,7 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
     return (Mr3[4] / det, -Mr3[1] / det, -Mr3[3] / det, Mr3[0] / det), True
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
@@ -421,7 +422,7 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     return nc, cons
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def schur_solve(C, S, L, nc, minv, mr_inv, vz):
     """Free accelerations into vz[VZ_ZDD] and the ideal joints' multipliers into
     vz[VZ_LAMBDA], by the Schur complement S = C M^-1 C^T (Cholesky). False if singular."""
@@ -451,7 +452,7 @@ def schur_solve(C, S, L, nc, minv, mr_inv, vz):
     return True
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def crank_reactions(p, F2, N2, y, t2, pdd2, rdd2):
     """The crank's multipliers from its own equations once the forces on it are known:
     (drive torque [N m], lambda_O [N], the revolute's multiplier on the crank)."""
@@ -475,7 +476,7 @@ def crank_reactions(p, F2, N2, y, t2, pdd2, rdd2):
     return -lam_ang[2], lamO
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def kinetic_energy(p, y, t2, t3, t4):
     """Kinetic energy of crank, rod and slider [J]."""
     m2 = p[P_M2]
@@ -502,7 +503,7 @@ def kinetic_energy(p, y, t2, t3, t4):
 _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
 
@@ -683,7 +684,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     return ST_OK
 
 
-@njit(cache=True)
+@compiled
 def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
@@ -732,7 +733,7 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     return rate
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def clear_contacts(dg):
     """Zero both joints' contact diagnostics (an ideal joint keeps zeros)."""
     for j in range(2):
@@ -749,7 +750,7 @@ def clear_contacts(dg):
         dg[D_DFDD + j] = 0.0
 
 
-@njit(cache=True)
+@compiled
 def store_contact(dg, j, cres):
     """Copy one joint's contact state (a :data:`ContactState`) into the diagnostics vector."""
     fn = cres.fn

@@ -6,7 +6,7 @@ R = Rz(alpha) Ry(beta) Rx(gamma); body angular velocity w' = G(phi) phi_dot.
 
 import math
 
-from numba import njit
+from .compiled import compiled
 
 #: Below this |x| (2^-27) the correctly rounded cos x is 1.0 and sin x is x, to the bit.
 #: Six of the nine Euler angles are held near 0 by constraints (the crank's alpha and beta,
@@ -14,7 +14,7 @@ from numba import njit
 TINY_ANGLE = 2.0 ** -27
 
 
-@njit(cache=True)
+@compiled
 def cos_sin(x):
     """(cos x, sin x), exact for |x| < TINY_ANGLE without calling libm."""
     if abs(x) < TINY_ANGLE:
@@ -22,7 +22,7 @@ def cos_sin(x):
     return math.cos(x), math.sin(x)
 
 
-@njit(cache=True)
+@compiled
 def trig(a, b, g):
     """(cos a, sin a, cos b, sin b, cos g, sin g): computed once per body and evaluation."""
     ca, sa = cos_sin(a)
@@ -31,7 +31,7 @@ def trig(a, b, g):
     return (ca, sa, cb, sb, cg, sg)
 
 
-@njit(cache=True)
+@compiled
 def rotation(tr):
     """R = Rz(a) Ry(b) Rx(g) as a row-major 9-tuple, from trig(a, b, g)."""
     ca, sa, cb, sb, cg, sg = tr
@@ -40,7 +40,7 @@ def rotation(tr):
             -sb, cb * sg, cb * cg)
 
 
-@njit(cache=True)
+@compiled
 def gmat(tr):
     """G(phi) with w' = G phi_dot (body frame), row-major 9-tuple, from trig(a, b, g)."""
     cb, sb, cg, sg = tr[2], tr[3], tr[4], tr[5]
@@ -49,7 +49,7 @@ def gmat(tr):
             cb * cg, -sg, 0.0)
 
 
-@njit(cache=True)
+@compiled
 def gdot_phidot(tr, ad, bd, gd):
     """The velocity-quadratic part of w'_dot: G_dot(phi, phi_dot) phi_dot."""
     cb, sb, cg, sg = tr[2], tr[3], tr[4], tr[5]
@@ -58,7 +58,7 @@ def gdot_phidot(tr, ad, bd, gd):
             (-sb * cg * bd - cb * sg * gd) * ad - cg * gd * bd)
 
 
-@njit(cache=True)
+@compiled
 def mv(m, v):
     """Matrix (9-tuple) times vector."""
     return (m[0] * v[0] + m[1] * v[1] + m[2] * v[2],
@@ -66,7 +66,7 @@ def mv(m, v):
             m[6] * v[0] + m[7] * v[1] + m[8] * v[2])
 
 
-@njit(cache=True)
+@compiled
 def mtv(m, v):
     """Transposed matrix (9-tuple) times vector."""
     return (m[0] * v[0] + m[3] * v[1] + m[6] * v[2],
@@ -74,32 +74,32 @@ def mtv(m, v):
             m[2] * v[0] + m[5] * v[1] + m[8] * v[2])
 
 
-@njit(cache=True)
+@compiled
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True)
+@compiled
 def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True)
+@compiled
 def add(a, b):
     return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
 
 
-@njit(cache=True)
+@compiled
 def sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True)
+@compiled
 def scale(s, a):
     return (s * a[0], s * a[1], s * a[2])
 
 
-@njit(cache=True)
+@compiled
 def rot_mass(j, gm):
     """Rotational mass block G^T J G (symmetric, row-major 9-tuple) for diagonal J."""
     m00 = gm[0] * j[0] * gm[0] + gm[3] * j[1] * gm[3] + gm[6] * j[2] * gm[6]
@@ -111,7 +111,7 @@ def rot_mass(j, gm):
     return (m00, m01, m02, m01, m11, m12, m02, m12, m22)
 
 
-@njit(cache=True)
+@compiled
 def point_jacobian_rot(rm, u, gm):
     """-R u~ G: the 3x3 block d r_P / d phi of a body point at body offset u (row-major).
 
@@ -123,7 +123,7 @@ def point_jacobian_rot(rm, u, gm):
     return (c0[0], c1[0], c2[0], c0[1], c1[1], c2[1], c0[2], c1[2], c2[2])
 
 
-@njit(cache=True)
+@compiled
 def point_state(r, rv, rm, w, u):
     """Position and velocity of the body point at body offset u.
 
@@ -134,7 +134,7 @@ def point_state(r, rv, rm, w, u):
     return add(r, ru), add(rv, mv(rm, cross(w, u)))
 
 
-@njit(cache=True)
+@compiled
 def point_accel_quadratic(rm, w, gdpd, u):
     """Velocity-dependent part of a body point's acceleration: R (Gdot phidot x u + w x (w x u))."""
     return mv(rm, add(cross(gdpd, u), cross(w, cross(w, u))))

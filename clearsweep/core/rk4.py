@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit, types
 
+from .compiled import compiled
 from .contact import contact_angle, contact_area, episode_impact_velocity, surface
 from .dynamics import VZ_ROWS, evaluate
 from .layout import (
@@ -81,7 +82,7 @@ from .wear import deposit, projection_bins
 EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of docs/physics.md section 1 [rad]
 
 
-@njit(cache=True)
+@compiled
 def level_for(rate, h, limit):
     """Smallest k with rate * h / 2^k <= limit."""
     x = rate * h / limit
@@ -90,7 +91,7 @@ def level_for(rate, h, limit):
     return int(math.ceil(math.log2(x) - 1e-12))
 
 
-@njit(cache=True)
+@compiled
 def energy_total(dg):
     return dg[D_KE] + dg[D_PE_GRAV] + dg[D_UEL] + dg[D_UEL + 1]
 
@@ -101,7 +102,7 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
                 "settled": types.int64}
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
     """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place.
 
@@ -138,7 +139,7 @@ WEAR_MERGE_ANGLE = 0.05
 WEAR_MERGE_AREA = 0.05
 
 
-@njit(cache=True)
+@compiled
 def wear_mergeable(pend, cur, j):
     """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
     (rows as in integrate: sum V n, sum V, sum V A, R_i) without moving the cap noticeably."""
@@ -156,7 +157,7 @@ def wear_mergeable(pend, cur, j):
     return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[j, 5] * pend[j, 5])
 
 
-@njit(cache=True)
+@compiled
 def flush_wear(wmap, j, pend, scratch):
     """Spread joint j's waiting wear on its map (volume-weighted mean direction and cap
     area); clear it; return the largest depth written [m]."""
@@ -168,14 +169,14 @@ def flush_wear(wmap, j, pend, scratch):
     return top
 
 
-@njit(cache=True)
+@compiled
 def copy_into(dst, src):
     """dst[:] = src for 1-d arrays, without making a slice view."""
     for i in range(src.shape[0]):
         dst[i] = src[i]
 
 
-@njit(cache=True)
+@compiled
 def zero_rows(a):
     """a[:, :] = 0 for 2-d arrays, without making a slice view."""
     for i in range(a.shape[0]):
@@ -183,7 +184,7 @@ def zero_rows(a):
             a[i, k] = 0.0
 
 
-@njit(cache=True)
+@compiled
 def copy_rows_into(dst, src):
     """dst[:, :] = src for 2-d arrays, without making a slice view."""
     for i in range(src.shape[0]):
@@ -191,14 +192,14 @@ def copy_rows_into(dst, src):
             dst[i, k] = src[i, k]
 
 
-@njit(cache=True)
+@compiled
 def copy_row(dst, row, src):
     """dst[row, :] = src, without making a slice view."""
     for i in range(src.shape[0]):
         dst[row, i] = src[i]
 
 
-@njit(cache=True)
+@compiled
 def record_sample(m, w, dg, jp, weight):
     """Fold one accepted (sub-)step end into window w of the running statistics m.
 
@@ -220,7 +221,7 @@ def record_sample(m, w, dg, jp, weight):
             m[w, M_CONTACT_T + j] += weight
 
 
-@njit(cache=True)
+@compiled
 def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, buf_v, nbuf,
                    ddot_prev):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
@@ -300,7 +301,7 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
     return changed, nbuf
 
 
-@njit(cache=True)
+@compiled
 def step_checks(y, dg, p, jp, status, e0, track):
     """Status after an accepted output-grid step (docs/physics.md section 4): non-finite
     state, Euler-angle limit, penetration, constraint drift, energy residual. ``track``
@@ -348,7 +349,7 @@ MAT_ROWS = 3
 CAP_ROWS = 2
 
 
-@njit(cache=True)
+@compiled
 def undo_rows(max_level):
     """Rows of the undo buffer: one per joint and accepted sub-step of the deepest level."""
     return 2 * (1 << max_level)
@@ -364,7 +365,7 @@ def work_shapes(max_level, npolar):
             (4 * npolar, 3))
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
@@ -402,7 +403,7 @@ def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     return ST_OK
 
 
-@njit(cache=True)
+@compiled
 def merge_wear(wmap, cur, pend, wmax, scratch):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
@@ -418,7 +419,7 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
 
-@njit(cache=True)
+@compiled
 def flush_all_wear(wmap, pend, wmax, scratch):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
@@ -427,7 +428,7 @@ def flush_all_wear(wmap, pend, wmax, scratch):
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
 
-@njit(cache=True)
+@compiled
 def note_first_impact(first, stats, t):
     """Record t as a joint's first impact time when its impact count has just left 0."""
     for j in range(2):
@@ -487,7 +488,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     return kernel_result(track, first)
 
 
-@njit(cache=True, locals=_NOT_LITERAL)
+@compiled(locals=_NOT_LITERAL)
 def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
             out_wmax, info, stats, track, first, y, ysave, k1, k1save, ksum, kst, yt, dg,
             dgsave, s, ssave, msave, ddot_prev, ddot_prev_save, wmax, first_save, C, S, L, vz,

@@ -20,8 +20,7 @@ The kernel composes these; nothing of a joint type's geometry is written elsewhe
 import math
 from collections import namedtuple
 
-from numba import njit
-
+from .compiled import compiled
 from .contact import (
     contact_damping,
     elastic_energy,
@@ -72,7 +71,7 @@ ContactState = namedtuple("ContactState", (
 ))
 
 
-@njit(cache=True)
+@compiled
 def gap(jp, j, wmap, p, pb, ps, Rs):
     """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
     of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta).
@@ -100,33 +99,33 @@ def gap(jp, j, wmap, p, pb, ps, Rs):
     return e, n, d_s, n_s, h, slope, worn, c_eff, e - c_eff
 
 
-@njit(cache=True)
+@compiled
 def contact_points(pb, ps, n, ri, rj):
     """(Q_j on the ball, Q_i on the socket): the surface points along the normal n."""
     return add(pb, scale(rj, n)), add(ps, scale(ri, n))
 
 
-@njit(cache=True)
+@compiled
 def point_velocity(r, v, R, w, q):
     """Velocity of the material point at global position q of a body (centroid r, velocity
     v, rotation R, body-frame angular velocity w)."""
     return add(v, mv(R, cross(w, mtv(R, sub(q, r)))))
 
 
-@njit(cache=True)
+@compiled
 def tangential(v, u):
     """The part v_t of v tangent to the unit vector u, and |v_t|."""
     vt = sub(v, scale(dot(u, v), u))
     return vt, math.sqrt(dot(vt, vt))
 
 
-@njit(cache=True)
+@compiled
 def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
     """v(Q_j) - v(Q_i): the velocity of the ball's point Q_j relative to the socket's Q_i."""
     return sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
 
 
-@njit(cache=True)
+@compiled
 def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     """Contact state and force of clearance joint j (docs/physics.md section 3).
 

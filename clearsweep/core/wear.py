@@ -9,7 +9,7 @@ containing a direction n is read back as h(n) for c_eff(n) = c + h(n).
 
 import math
 
-from numba import njit
+from .compiled import compiled
 
 # 4-point Gauss-Legendre rule on [-1, 1]: nodes and weights
 _GX0 = 0.3399810435848563
@@ -18,7 +18,7 @@ _GW0 = 0.6521451548625461
 _GW1 = 0.3478548451374538
 
 
-@njit(cache=True)
+@compiled
 def map_bin(n, npolar, nazim):
     """Indices (polar, azimuth) of the map bin containing unit direction n (socket frame)."""
     cz = max(-1.0, min(1.0, n[2]))
@@ -33,7 +33,7 @@ def map_bin(n, npolar, nazim):
     return ip, ia
 
 
-@njit(cache=True)
+@compiled
 def map_interp(wmap, j, n):
     """Depth [m] of joint j's map in unit direction n (socket frame), bilinear between the
     bin centres (azimuth periodic, polar clamped at the poles): a worn surface without
@@ -82,7 +82,7 @@ def map_interp(wmap, j, n):
     return h, (a * cz * n[0] - b * n[1], a * cz * n[1] + b * n[0], -a * rho2)
 
 
-@njit(cache=True)
+@compiled
 def bin_area(ip, npolar, nazim, radius):
     """Area of polar row ip's bins on a sphere of the given radius [m^2]."""
     t0 = math.pi * ip / npolar
@@ -90,7 +90,7 @@ def bin_area(ip, npolar, nazim, radius):
     return radius * radius * (math.cos(t0) - math.cos(t1)) * (2.0 * math.pi / nazim)
 
 
-@njit(cache=True)
+@compiled
 def angle_bin(y, x, nbins):
     """One-degree bin of atan2(y, x) over [-180, 180) degrees."""
     i = int((math.atan2(y, x) + math.pi) / (2.0 * math.pi) * nbins)
@@ -101,13 +101,13 @@ def angle_bin(y, x, nbins):
     return i
 
 
-@njit(cache=True)
+@compiled
 def projection_bins(n, nbins):
     """Projection bins about x, y, z: atan2(n_z, n_y), atan2(n_x, n_z), atan2(n_y, n_x)."""
     return (angle_bin(n[2], n[1], nbins), angle_bin(n[0], n[2], nbins), angle_bin(n[1], n[0], nbins))
 
 
-@njit(cache=True)
+@compiled
 def cap_half_width(theta, cos_tc, sin_tc, cos_psi):
     """Azimuthal half-width [rad] of a cap (centre polar angle tc, angular radius psi) at polar
     angle theta: the cap holds the directions with cos(angle to the centre) >= cos psi."""
@@ -125,7 +125,7 @@ def cap_half_width(theta, cos_tc, sin_tc, cos_psi):
     return math.acos(x)
 
 
-@njit(cache=True)
+@compiled
 def _arc_to_bins(wmap, j, ip, phi_c, half, weight, nazim, dmax):
     """Add weight * (overlap of the arc [phi_c - half, phi_c + half] with each azimuth bin,
     in bin widths) to row ip of joint j's map; returns the largest value written (and dmax)."""
@@ -145,7 +145,7 @@ def _arc_to_bins(wmap, j, ip, phi_c, half, weight, nazim, dmax):
     return dmax
 
 
-@njit(cache=True)
+@compiled
 def deposit(wmap, j, n, vol, area, radius, scratch):
     """Spread the worn volume ``vol`` [m^3] over the bins overlapped by the contact cap of
     area ``area`` [m^2] centred on the unit direction n (socket frame), on a sphere of the
@@ -212,7 +212,7 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
     return dmax
 
 
-@njit(cache=True)
+@compiled
 def worn_surface(wmap, j, n, coat, feedback, interp):
     """What joint j's worn socket is in unit direction n (socket frame): (h, grad, worn).
 

@@ -1,0 +1,38 @@
+"""How the kernel's functions are compiled for the CPU: one set of options, written once.
+
+Every kernel function is decorated ``@compiled`` (or ``@compiled(inline="always",
+locals=...)``): ``numba.njit`` with
+
+- ``cache=True``: the machine code is kept on disk, so a new process starts without
+  compiling;
+- Numba's runtime off (its ``_nrt`` option False), that is, no reference counting. The
+  kernel's functions never allocate: they work on arrays that their caller owns for the
+  whole call. With the runtime on, every call of a compiled function that LLVM does not
+  inline increments and decrements the reference count of each array it is handed, an
+  atomic read-modify-write each: on the two-clearance case that was about half of the run
+  time (``perf``: NRT_incref and NRT_decref), and taking it away doubles the steps per
+  second (benchmarks/README.md). No arithmetic changes: results are the same to the bit.
+
+The entry points that allocate their work arrays (``rk4.integrate``, ``rk4.kernel_result``,
+``dopri5.integrate_dopri5``) keep the runtime: they are plain ``njit(cache=True)``, listed
+in :data:`ALLOCATING` (tests/test_kernel_rules.py checks every other kernel function).
+
+The CUDA build compiles the same Python functions with the options copied (numba-cuda's
+device dispatcher), where the runtime is off by default as well.
+"""
+
+from numba import njit
+
+#: Options of every kernel function that does not allocate.
+OPTIONS = {"cache": True, "_nrt": False}
+
+#: Kernel functions that allocate, compiled with Numba's runtime: "module.function".
+ALLOCATING = frozenset({"rk4.integrate", "rk4.kernel_result", "dopri5.integrate_dopri5"})
+
+
+def compiled(func=None, **options):
+    """``@compiled`` or ``@compiled(**options)``: ``numba.njit`` with :data:`OPTIONS` and
+    the given ones (inline, locals, ...)."""
+    if func is None:
+        return njit(**OPTIONS, **options)
+    return njit(func, **OPTIONS, **options)
