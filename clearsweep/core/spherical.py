@@ -132,7 +132,7 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
     ``energy``: also compute the elastic energy (else 0 where not needed). Returns a
     :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint index,
-    never a row of them: a row is a new array view, reference-counted at every call.
+    never a row of them: a row is a new array view, formed at every call.
 
     On a sloped worn surface (bilinear map read, :func:`gap`'s ``slope`` s != 0) the
     penetration delta = e - c - h(n) has the gradient m = n - s, and the contact force

@@ -156,7 +156,7 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
     rounding whatever the grid. A cap smaller than the quadrature resolves falls into the bin
     under its centre. A negative ``vol`` undoes an earlier deposit of the same cap.
     ``wmap`` holds every joint's map (joint, polar, azimuth), j picks one: the whole array
-    is passed, never a view of it (reference-counted at every call).
+    is passed, never a view of it (a new view at every call).
     ``scratch`` is a float64[4 * npolar, 3] work array.
 
     Returns the largest depth of a bin written [m].
