@@ -42,10 +42,10 @@ def format_bytes(n: float) -> str:
 
 #: Wall time of one output-grid RK4 step per worker on this project's 2-core x86-64 machine
 #: [s], for the time estimates that ``sweep``, ``validate`` and ``--dry-run`` print, measured
-#: on whole sweeps (benchmarks/README.md, "Time estimates": the main job 9.2-12 us, the
-#: shipped ensemble 10.4-15 us): it counts the contact sub-steps, the wear map, each case's
-#: start and the writing of its results, not only the bare step (2.8 us).
-SECONDS_PER_STEP = 1e-5
+#: on whole sweeps (benchmarks/README.md, "Time estimates": the main job 4.1 us, the shipped
+#: ensemble 2.6 us, quiet machine): it counts the contact sub-steps, the wear map, each
+#: case's start and the writing of its results, not only the bare step (1.6 us).
+SECONDS_PER_STEP = 4e-6
 
 
 def duration_text(seconds: float) -> str:
