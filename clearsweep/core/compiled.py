@@ -10,8 +10,9 @@ locals=...)``): ``numba.njit`` with
   whole call. With the runtime on, every call of a compiled function that LLVM does not
   inline increments and decrements the reference count of each array it is handed, an
   atomic read-modify-write each: on the two-clearance case that was about half of the run
-  time (``perf``: NRT_incref and NRT_decref), and taking it away doubles the steps per
-  second (benchmarks/README.md). No arithmetic changes: results are the same to the bit.
+  time (``perf``: NRT_incref and NRT_decref), and taking it away gives 1.5-1.9x the steps
+  per second (benchmarks/README.md). No arithmetic changes: results are the same to the
+  bit.
 
 The entry points that allocate their work arrays (``rk4.integrate``, ``rk4.kernel_result``,
 ``dopri5.integrate_dopri5``) keep the runtime: they are plain ``njit(cache=True)``, listed
