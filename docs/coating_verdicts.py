@@ -1,6 +1,6 @@
 """Why the coating ensemble and the single-run wear study disagree about B's wear.
 
-Run from the repository root: ``.venv/bin/python docs/coating_verdicts.py`` (about 5 min on
+Run from the repository root: ``.venv/bin/python docs/coating_verdicts.py`` (about 1.5 min on
 2 cores once the kernel is compiled; ``--members 8`` halves it, ``--only NAME`` runs one
 experiment). ``configs/coating_ensemble.yaml`` at its old settings (0.25 s per member,
 balls started up to half the clearance away from seated) found every coating *deepening*

@@ -1,6 +1,6 @@
 """Draw one figure of every plot kind from short runs: docs/figures/gallery/*.png.
 
-Run from the repository root: ``.venv/bin/python docs/gallery.py`` (about 3 min on 2 cores
+Run from the repository root: ``.venv/bin/python docs/gallery.py`` (about 1 min on 2 cores
 once the kernel is compiled; ``--work DIR`` keeps the result files there). It runs the
 shipped configs shortened (a quarter revolution, fewer members, 10^5 revolutions of
 life), prints every command it runs, and writes the figures that ``clearsweep plot`` and

@@ -3,8 +3,8 @@ and initial clearance, with the shipped wear coefficients and with the what-if o
 docs/data/coatings_k_tenth.yaml (each coating's k a tenth of steel's).
 
 Run from the repository root: ``.venv/bin/python docs/service_life_figure.py`` (two life
-sweeps of configs/life_sweep.yaml on 2 workers, 126-177 s and 63 s measured over two runs
-on a 2-core machine shared with other jobs; ``--shipped FILE`` and ``--tenth FILE`` reuse
+sweeps of configs/life_sweep.yaml on 2 workers, 49 s and 22 s measured on the 2-core
+machine with nothing else running; ``--shipped FILE`` and ``--tenth FILE`` reuse
 sweep files made before). Writes docs/figures/service_life/coatings.png and prints each
 sweep's wall time and the two ranking tables.
 """

@@ -1,6 +1,6 @@
 """Start-up of the two-clearance mechanism: seated vs centred balls, against the ideal mechanism.
 
-Run from the repository root (about 15 s once the kernel is compiled):
+Run from the repository root (about 3 s once the kernel is compiled):
 
     .venv/bin/python docs/startup_figure.py
 

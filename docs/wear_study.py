@@ -1,6 +1,6 @@
 """Uncoated vs PTFE-coated socket at B, and the break-even coating wear coefficient.
 
-Run from the repository root: ``.venv/bin/python docs/wear_study.py`` (about 10 s once the
+Run from the repository root: ``.venv/bin/python docs/wear_study.py`` (about 5 s once the
 kernel is compiled). For each shipped clearance config, with the config's defaults (seated
 start, 144 x 288 wear map spread by the contact-area rule, wear feedback on; docs/physics.md
 sections 1.2 and 5), it runs B's socket uncoated and PTFE-coated with steel's wear

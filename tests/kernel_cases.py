@@ -13,7 +13,7 @@ views into compiled functions, with
     PYTHONPATH=. python tests/kernel_cases.py tests/data/kernel_cases.npz
 
 except ``worn_bilinear``, added later (commit "kernel_cases: the worn-surface normal's
-sloped branch pinned") by ``python tests/kernel_cases.py --add worn_bilinear FILE``, which
+sloped branch pinned") by ``PYTHONPATH=. python tests/kernel_cases.py --add worn_bilinear FILE``, which
 appends one case's arrays and leaves the others' as they are. The restructured kernel's
 merge with the worn-surface normal (31fcdbe) had moved that branch's rounding, which no
 case here covered: the ball centre's velocity is formed from its position rather than its

@@ -159,3 +159,12 @@ def test_kernel_functions_are_compiled_without_reference_counting():
                           if disp.targetoptions.get("_nrt", True))
     assert with_runtime == sorted(ALLOCATING)
 
+
+def test_kernel_functions_are_cached_on_disk():
+    """Both decorators of the kernel cache the machine code (cache=True), so that a new
+    process starts without compiling."""
+    from numba.core.caching import NullCache
+
+    uncached = sorted(name for name, disp in kernel_dispatchers().items()
+                      if isinstance(disp._cache, NullCache))
+    assert uncached == []
