@@ -372,8 +372,7 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     nc = 0
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
-        r2, v2, pd2 = body_motion(y, Y_R2, Y_PHI2)
-        R2, w2 = body_frame(t2, pd2)
+        r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
