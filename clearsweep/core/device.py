@@ -29,6 +29,8 @@ too, when it runs as the Python source that the CUDA compiler sees (tests/test_g
 The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
+import math
+
 import numba
 from numba import cuda, types
 
@@ -58,10 +60,7 @@ def block_typer(typingctx, arr, i, k, shape):
             and len(shape) > 0 and all(isinstance(n, types.IntegerLiteral) for n in shape)):
         return None     # numba retries with literal arguments
     dims = tuple(n.literal_value for n in shape)
-    size = 1
-    for n in dims:
-        size *= n
-    start = k.literal_value * size
+    start = k.literal_value * math.prod(dims)
     out = types.Array(arr.dtype, len(dims), "C")
 
     def codegen(context, builder, sig, args):
@@ -101,9 +100,7 @@ if SIMULATED:
     def block(arr, i, k, shape):
         """Block k, of shape ``shape``, of case i's part of arr, as a view: case i's
         elements k * prod(shape) to (k + 1) * prod(shape), in C order."""
-        size = 1
-        for n in shape:
-            size *= n
+        size = math.prod(shape)
         return _plain(arr[i]).reshape(-1)[k * size:(k + 1) * size].reshape(shape)
 else:
     from numba.cuda.extending import intrinsic, overload
