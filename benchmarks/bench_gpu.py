@@ -8,6 +8,11 @@ motion per case. The CPU backend runs at most ``--cpu-max`` cases per size (its 
 does not depend on the sweep's size; a larger size is reported as not run). Wall time
 covers the whole sweep (planning excluded): device batches, parts and the final file.
 
+For every size run on both backends, a second table gives the agreement of the device's
+summaries with the CPU's: per summary variable, the largest relative difference over the
+cases, and how many cases differ at all (the device contracts multiply-adds into fused
+ones, so last-bit differences are expected, and contact dynamics amplify them over a run).
+
 Without a CUDA device it prints ``no CUDA device`` and exits 0. ``--simulator`` runs the
 CUDA path in numba's CUDA simulator instead (sizes and duration should then be tiny, e.g.
 ``--simulator --sizes 2 --duration 0.002``): a check that the script works, not a figure.
@@ -35,9 +40,10 @@ def sweep_doc(n: int, duration: float) -> dict:
             "overrides": [f"solver.duration={duration}"]}
 
 
-def timed_sweep(n: int, duration: float, **backend) -> tuple[float, int]:
-    """Seconds and failed cases of one sweep of n cases."""
-    from clearsweep.sweeping import expand, run_sweep
+def timed_sweep(n: int, duration: float, **backend):
+    """Seconds, failed cases and the summaries (loaded, timing dropped) of one sweep of n
+    cases."""
+    from clearsweep.sweeping import drop_timing, expand, run_sweep
 
     doc = sweep_doc(n, duration)
     plan = expand({k: v for k, v in doc.items() if k != "overrides"}, doc["overrides"],
@@ -45,8 +51,30 @@ def timed_sweep(n: int, duration: float, **backend) -> tuple[float, int]:
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         with run_sweep(plan, Path(tmp) / "bench.nc", progress=False, **backend) as ds:
-            failed = int(ds.attrs["sweep_failed"])
-        return time.perf_counter() - start, failed
+            seconds = time.perf_counter() - start
+            return seconds, int(ds.attrs["sweep_failed"]), drop_timing(ds.load())
+
+
+def agreement(gpu, cpu) -> list[tuple[str, float, int]]:
+    """Per numeric summary variable: the largest relative difference of the device's values
+    from the CPU's (NaN where both are NaN counts as equal) and the number of cases that
+    differ at all."""
+    import numpy as np
+
+    rows = []
+    for name in cpu.data_vars:
+        a = np.asarray(cpu[name].values)
+        if name not in gpu or a.dtype.kind not in "fiu":
+            continue
+        a = a.astype(float).ravel()
+        b = np.asarray(gpu[name].values, dtype=float).ravel()
+        same = (a == b) | (np.isnan(a) & np.isnan(b))
+        scale = np.maximum(np.abs(a), np.abs(b))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = np.where(same, 0.0, np.abs(a - b) / np.where(scale > 0, scale, 1.0))
+        rel = np.where(np.isnan(rel), np.inf, rel)
+        rows.append((str(name), float(rel.max(initial=0.0)), int((~same).sum())))
+    return rows
 
 
 def main(argv=None) -> int:
@@ -77,15 +105,26 @@ def main(argv=None) -> int:
     print()
     print("| cases | cuda [s] | cuda cases/s | 2-worker CPU [s] | CPU cases/s | ratio |")
     print("|---|---|---|---|---|---|")
+    compared = []
     for n in args.sizes:
-        gpu_s, gpu_failed = timed_sweep(n, args.duration, backend="cuda")
+        gpu_s, gpu_failed, gpu_ds = timed_sweep(n, args.duration, backend="cuda")
         if n <= args.cpu_max:
-            cpu_s, cpu_failed = timed_sweep(n, args.duration, workers=2)
+            cpu_s, cpu_failed, cpu_ds = timed_sweep(n, args.duration, workers=2)
             cpu = f"{cpu_s:.1f} | {n / cpu_s:,.1f} | {cpu_s / gpu_s:.1f}"
+            compared.append((n, agreement(gpu_ds, cpu_ds)))
         else:
             cpu_failed, cpu = 0, "not run | | "
         note = f" ({gpu_failed} / {cpu_failed} failed)" if gpu_failed or cpu_failed else ""
-        print(f"| {n:,}{note} | {gpu_s:.1f} | {n / gpu_s:,.1f} | {cpu} |")
+        print(f"| {n:,}{note} | {gpu_s:.1f} | {n / gpu_s:,.1f} | {cpu} |", flush=True)
+    for n, rows in compared:
+        print()
+        print(f"agreement with the CPU, {n:,} cases: largest relative difference, cases that "
+              "differ")
+        print()
+        print("| summary | largest relative difference | cases differing |")
+        print("|---|---|---|")
+        for name, rel, differ in rows:
+            print(f"| {name} | {rel:.2e} | {differ} of {n:,} |")
     return 0
 
 
