@@ -13,6 +13,12 @@ summaries with the CPU's: per summary variable, the largest relative difference 
 cases, and how many cases differ at all (the device contracts multiply-adds into fused
 ones, so last-bit differences are expected, and contact dynamics amplify them over a run).
 
+``--kernel-only`` times the device kernel alone instead: each size is one launch of
+``gpu.run_packed`` over that many packed cases (no sweep, no parts, no file), the first
+launch (2 cases) compiling outside the clock; it prints RK4 steps/s and the cases' statuses,
+then the three smallest cases' statistics against the CPU kernel's (``simulation.run_kernel``).
+``--kernel-only --sizes 1470 10000 --duration 0.1`` gives the figures in benchmarks/README.
+
 Without a CUDA device it prints ``no CUDA device`` and exits 0. ``--simulator`` runs the
 CUDA path in numba's CUDA simulator instead (sizes and duration should then be tiny, e.g.
 ``--simulator --sizes 2 --duration 0.002``): a check that the script works, not a figure.
@@ -55,6 +61,51 @@ def timed_sweep(n: int, duration: float, **backend):
             return seconds, int(ds.attrs["sweep_failed"]), drop_timing(ds.load())
 
 
+def packed_cases(n: int, duration: float) -> list:
+    """The packed inputs of the n cases of :func:`sweep_doc`."""
+    from clearsweep.config import resolve_materials
+    from clearsweep.params import pack
+    from clearsweep.sweeping import expand
+
+    doc = sweep_doc(n, duration)
+    plan = expand({k: v for k, v in doc.items() if k != "overrides"}, doc["overrides"],
+                  max_cases=None)
+    return [pack(c.config, resolve_materials(c.config)) for c in plan.cases]
+
+
+def kernel_only(sizes: list[int], duration: float) -> None:
+    """RK4 steps/s of one device launch per size, then the device's statistics against the
+    CPU kernel's on three cases."""
+    from collections import Counter
+
+    import numpy as np
+
+    from clearsweep import gpu
+    from clearsweep.simulation import run_kernel
+
+    gpu.run_packed(packed_cases(2, 1.0e-4))           # compiles
+    print("| cases | one launch [s] | RK4 steps/s | statuses |")
+    print("|---|---|---|---|")
+    for n in sizes:
+        packed = packed_cases(n, duration)
+        start = time.perf_counter()
+        runs = gpu.run_packed(packed)
+        seconds = time.perf_counter() - start
+        steps = sum(pk.n_steps for pk in packed)
+        print(f"| {n:,} | {seconds:.2f} | {steps / seconds:.3g} | "
+              f"{dict(Counter(r.status for r in runs))} |", flush=True)
+    print()
+    print("| case | statistic's largest relative difference | worn volume A, B: device / CPU "
+          "[m^3] | energy residual: device / CPU |")
+    print("|---|---|---|---|")
+    packed = packed_cases(3, duration)
+    for k, (pk, dev) in enumerate(zip(packed, gpu.run_packed(packed))):
+        cpu = run_kernel(pk)
+        rel = np.abs(dev.stats - cpu.stats) / np.maximum(np.abs(cpu.stats), 1e-300)
+        print(f"| {k} | {float(rel.max()):.2e} | {dev.wvol} / {cpu.wvol} | "
+              f"{dev.residual_max:.9e} / {cpu.residual_max:.9e} |")
+
+
 def agreement(gpu, cpu) -> list[tuple[str, float, int]]:
     """Per numeric summary variable: the largest relative difference of the device's values
     from the CPU's (NaN where both are NaN counts as equal) and the number of cases that
@@ -83,6 +134,8 @@ def main(argv=None) -> int:
     ap.add_argument("--duration", type=float, default=1.0, help="simulated time per case [s]")
     ap.add_argument("--cpu-max", type=int, default=1000,
                     help="largest sweep run on the CPU backend")
+    ap.add_argument("--kernel-only", action="store_true",
+                    help="time one device launch per size (no sweep, no files)")
     ap.add_argument("--simulator", action="store_true",
                     help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
     args = ap.parse_args(argv)
@@ -98,6 +151,11 @@ def main(argv=None) -> int:
         print(str(exc).split(":")[0])
         return 0
     prepare_kernel()
+    if args.kernel_only:
+        print(f"device: {name}; two_clearances, {args.duration:g} s of motion per case")
+        print()
+        kernel_only(args.sizes, args.duration)
+        return 0
     # compile the device kernel outside the clock: one tiny batch
     timed_sweep(1, 1.0e-4, backend="cuda")
     print(f"device: {name}; CPU: {platform.processor() or platform.machine()}, "

@@ -33,8 +33,12 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
-#: Host memory [bytes] that one batch's arrays and results may take.
-HOST_BATCH_BYTES = 1 << 30
+#: Host memory [bytes] that one batch's arrays and results may take at most: 8 GiB, or a
+#: quarter of the machine's memory where that is less (:func:`host_batch_bytes`). A batch
+#: must hold thousands of cases to fill the device: on an H200, one launch of 1,470 cases
+#: (what 1 GiB held on the default map) ran 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7
+#: (benchmarks/README.md, "CUDA backend").
+HOST_BATCH_BYTES = 8 << 30
 
 #: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
 SIMULATOR_BATCH = 64
@@ -87,11 +91,23 @@ def config_bytes(cfg: Config) -> int:
     return case_bytes(cfg.wear.map, cfg.solver.max_substep_level)
 
 
+def host_batch_bytes() -> int:
+    """Host memory [bytes] one batch may take: :data:`HOST_BATCH_BYTES`, or a quarter of
+    the machine's physical memory where that is less."""
+    import os
+
+    try:
+        physical = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):    # no sysconf: the fixed bound alone
+        return HOST_BATCH_BYTES
+    return min(HOST_BATCH_BYTES, max(int(physical) // 4, 1))
+
+
 def batch_window(configs: Sequence[Config]) -> int:
     """Cases per batch that a sweep hands to :func:`simulate_batch` (host memory bound)."""
     if not configs:
         return 1
-    return max(1, min(len(configs), HOST_BATCH_BYTES // max(config_bytes(c) for c in configs)))
+    return max(1, min(len(configs), host_batch_bytes() // max(config_bytes(c) for c in configs)))
 
 
 def _device_budget() -> int:

@@ -162,3 +162,24 @@ def test_cuda_backend_refuses_what_the_device_does_not_run(tmp_path, store, key)
         run_sweep(doc, tmp_path / "s.nc", backend="cuda", progress=False)
     assert "--backend processes" in str(info.value)
     assert not (tmp_path / "s.nc").exists()
+
+
+def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
+    """A sweep's CUDA window holds as many default-map cases as the host bound allows: at
+    least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
+    (benchmarks/README.md), and never more than a quarter of the machine's memory."""
+    from clearsweep import gpu
+    from clearsweep.config import Config
+
+    cfg = Config()
+    cases = [cfg] * 20_000
+    per_case = gpu.config_bytes(cfg)
+    gib = 1 << 30
+    monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 128 * gib // 4096,
+                                                    "SC_PAGE_SIZE": 4096}[name])
+    assert gpu.batch_window(cases) == gpu.HOST_BATCH_BYTES // per_case
+    assert gpu.batch_window(cases) >= 10_000
+    monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 4 * gib // 4096,
+                                                    "SC_PAGE_SIZE": 4096}[name])
+    assert gpu.batch_window(cases) == gib // per_case        # a quarter of 4 GiB
+    assert gpu.batch_window(cases[:3]) == 3
