@@ -14,14 +14,12 @@ benchmarks/README.md records them).
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
 import re
 import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,17 +56,11 @@ class _StandInDevice:
         self.name = f"sm_{cc[0]}{cc[1]} (no device: compile only)".encode()
 
 
-@contextlib.contextmanager
-def _device_of_capability(cc: tuple[int, int]) -> Iterator[None]:
+def _device_of_capability(cc: tuple[int, int]):
     """numba-cuda's dispatcher sees a device of capability cc (restored on exit)."""
-    from numba.cuda import dispatcher
+    from .core.numba_compat import stand_in_device
 
-    real = dispatcher.get_current_device
-    dispatcher.get_current_device = lambda: _StandInDevice(cc)
-    try:
-        yield
-    finally:
-        dispatcher.get_current_device = real
+    return stand_in_device(_StandInDevice(cc))
 
 
 def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC) -> str:

@@ -5,7 +5,7 @@ locals=...)``): ``numba.njit`` with
 
 - ``cache=True``: the machine code is kept on disk, so a new process starts without
   compiling;
-- Numba's runtime off (its ``_nrt`` option False), that is, no reference counting. The
+- Numba's runtime off (its ``_nrt`` option False: ``numba_compat.NO_RUNTIME``), that is, no reference counting. The
   kernel's functions never allocate: they work on arrays that their caller owns for the
   whole call. With the runtime on, every call of a compiled function that LLVM does not
   inline increments and decrements the reference count of each array it is handed, an
@@ -24,8 +24,10 @@ device dispatcher), where the runtime is off by default as well.
 
 from numba import njit
 
+from .numba_compat import NO_RUNTIME
+
 #: Options of every kernel function that does not allocate.
-OPTIONS = {"cache": True, "_nrt": False}
+OPTIONS = {"cache": True, **NO_RUNTIME}
 
 #: Kernel functions that allocate, compiled with Numba's runtime: "module.function".
 ALLOCATING = frozenset({"rk4.integrate", "rk4.kernel_result", "dopri5.integrate_dopri5"})

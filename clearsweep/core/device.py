@@ -36,6 +36,7 @@ from numba import cuda, types
 
 from .dynamics import VZ_ROWS
 from .layout import N_ANGLE_BINS, N_D, N_JP, N_M, N_S, N_Y
+from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
 from .target import on_device
@@ -89,10 +90,7 @@ def block_typer(typingctx, arr, i, k, shape):
 
 
 if SIMULATED:
-    def _plain(a):
-        """The numpy array behind a simulator kernel argument (or its slice)."""
-        inner = getattr(a, "_item", None)
-        return a if inner is None else inner._ary
+    _plain = simulator_array
 
     def _advance(*args):
         return _cpu_advance(*(_plain(a) for a in args))
