@@ -38,3 +38,8 @@ MAX_MEMBERS = 100_000
 MAX_SNAPSHOTS = 10_000
 #: Most points a ``sample:`` section may draw, --yes or not (the points are drawn in memory).
 MAX_SAMPLE_POINTS = 1_000_000
+
+#: ``contact.damping``'s laws (docs/physics.md section 3.2), in the order of the kernel's law
+#: codes (``core.contact.hysteresis_fraction``): the paper's first, the default.
+DAMPING_LAWS = ("paper", "lankarani_nikravesh", "hunt_crossley", "flores", "gonthier",
+                "carvalho_martins")

@@ -22,7 +22,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
-from .choices import MAX_MEMBERS, MAX_SNAPSHOTS
+from .choices import DAMPING_LAWS, MAX_MEMBERS, MAX_SNAPSHOTS
 from .schema import (  # noqa: F401
     MAX_YAML_ALIASES,
     MAX_YAML_BYTES,
@@ -138,6 +138,15 @@ class ContactConfig(_Section):
                                "double elastic layer rule")
     max_penetration_fraction: float = _setting(
         _positive(0.5), "1", "largest penetration accepted, fraction of the clearance")
+    #: hysteresis damping law (docs/physics.md section 3.2): the paper's or one of the literature's
+    damping: str = _setting(Field("paper", DAMPING_LAWS), None, "contact damping law")
+    #: max: the fastest approach of the contact episode; onset: its value at the episode's first step
+    impact_velocity: str = _setting(Field("max", ("max", "onset")), None,
+                                    "impact velocity of the damping law")
+    #: paper: the coated law of Table 1; hertz: F = K delta^n with n = hertz_exponent
+    elastic: str = _setting(Field("paper", ("paper", "hertz")), None, "elastic contact law")
+    hertz_exponent: float = _setting(Field(1.5, lo=1.0, hi=3.0), "1",
+                                     "exponent n of the power contact law (contact.elastic: hertz)")
 
 
 @dataclass(frozen=True)

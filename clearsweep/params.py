@@ -12,8 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from .choices import DAMPING_LAWS
 from .config import Config, EnsembleConfig, JointConfig
 from .core import layout as L
+from .core.contact import hysteresis_fraction
 
 
 @dataclass(frozen=True)
@@ -148,21 +150,25 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     return y
 
 
-def static_penetration(force_N: float, c: float, ew: float, ri: float) -> float:
+def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float = 0.0,
+                       exponent: float = 0.0) -> float:
     """Penetration delta [m] at which the contact's elastic force equals force_N [N].
 
-    Newton on F_el(delta) = force_N from the small-penetration estimate
-    F_el ~ (2 K / c) delta^2, K = 4 pi E_w R_i / 5; F_el is convex and increasing, so the
-    iteration converges monotonically from above.
+    ``exponent`` 0, the paper's law: Newton on F_el(delta) = force_N from the small-penetration
+    estimate F_el ~ (2 K / c) delta^2, K = 4 pi E_w R_i / 5; F_el is convex and increasing, so
+    the iteration converges monotonically from above. The power law F_el = A c (delta/c)^n
+    (ball radius ``rj``, n = ``exponent``) is inverted in closed form.
     """
-    from .core.contact import elastic_force, stiffness_factor
+    from .core.contact import elastic_force, power_coefficient, stiffness_factor
 
     if force_N <= 0.0:
         return 0.0
+    if exponent != 0.0:
+        return c * (force_N / (power_coefficient(ew, ri, rj) * c)) ** (1.0 / exponent)
     delta = math.sqrt(force_N * c / (2.0 * stiffness_factor(ew, ri)))
     delta *= 1.5  # start above the root
     for _ in range(60):
-        f, df = elastic_force(delta, c, ew, ri)
+        f, df = elastic_force(delta, c, ew, ri, rj, exponent)
         step = (f - force_N) / df
         delta -= step
         if abs(step) <= 1e-15 * delta:
@@ -219,7 +225,7 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
             phi = y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if j == 0 else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3]
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
             c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
-        delta = static_penetration(size, c, ew, jp[j, L.J_RI])
+        delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], p[L.P_EXPONENT])
         offsets[j] = -(c + delta) * f / size
     return offsets[0], offsets[1]
 
@@ -321,6 +327,10 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     p[L.P_CR] = contact.restitution
     p[L.P_DV0_MIN] = contact.min_impact_velocity
     p[L.P_PEN_FRAC] = contact.max_penetration_fraction
+    p[L.P_HYST_NUM], p[L.P_HYST_DEN] = hysteresis_fraction(DAMPING_LAWS.index(contact.damping),
+                                                           contact.restitution)
+    p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
+    p[L.P_EXPONENT] = contact.hertz_exponent if contact.elastic == "hertz" else 0.0
     friction = cfg.friction
     p[L.P_FRICTION] = 1.0 if friction.enabled else 0.0
     p[L.P_V0] = friction.v0

@@ -45,7 +45,8 @@ def check_step(cfg: Config, packed: Packed) -> None:
         if jp[L.J_CLEARANCE] == 0.0:
             continue
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
-        _, stiffness = elastic_force(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI])
+        _, stiffness = elastic_force(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI], jp[L.J_RJ],
+                                     packed.p[L.P_EXPONENT])
         rate = math.sqrt(stiffness / m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)

@@ -5,6 +5,7 @@ import math
 import pathlib
 
 import pytest
+from impacts import RI, RJ, C, impact_restitution
 
 from clearsweep.config import JointConfig
 from clearsweep.core.contact import (
@@ -14,14 +15,13 @@ from clearsweep.core.contact import (
     elastic_force,
     episode_impact_velocity,
     friction_factor,
+    hysteresis_fraction,
     normal_force,
 )
 from clearsweep.materials import load_materials
 from clearsweep.params import equivalent_modulus, oedometric_modulus
 
 MATERIALS = load_materials()
-C = 2.5e-4      # radial clearance [m]
-RI = 0.015      # socket radius [m]
 
 
 def joint(coating="none", coating_thickness=1e-4):
@@ -59,7 +59,7 @@ def test_small_penetration_limit_of_stiffness():
     """F_el -> (8 pi E_w R_i / (5 c)) delta^2 as delta/c -> 0."""
     ew = 1.1e11
     for delta in (1e-12, 1e-10, 1e-9):
-        f, _ = elastic_force(delta, C, ew, RI)
+        f, _ = elastic_force(delta, C, ew, RI, RJ, 0.0)
         limit = 8 * math.pi * ew * RI / (5 * C) * delta ** 2
         assert f == pytest.approx(limit, rel=3 * delta / C)
 
@@ -67,19 +67,19 @@ def test_small_penetration_limit_of_stiffness():
 def test_elastic_slope_and_energy_are_consistent():
     ew = 1.1e11
     for delta in (1e-8, 1e-6, 2e-5):
-        f, df = elastic_force(delta, C, ew, RI)
+        f, df = elastic_force(delta, C, ew, RI, RJ, 0.0)
         h = delta * 1e-5
-        assert df == pytest.approx((elastic_force(delta + h, C, ew, RI)[0]
-                                    - elastic_force(delta - h, C, ew, RI)[0]) / (2 * h), rel=1e-6)
-        assert f == pytest.approx((elastic_energy(delta + h, C, ew, RI)
-                                   - elastic_energy(delta - h, C, ew, RI)) / (2 * h), rel=1e-6)
+        assert df == pytest.approx((elastic_force(delta + h, C, ew, RI, RJ, 0.0)[0]
+                                    - elastic_force(delta - h, C, ew, RI, RJ, 0.0)[0]) / (2 * h), rel=1e-6)
+        assert f == pytest.approx((elastic_energy(delta + h, C, ew, RI, RJ, 0.0)
+                                   - elastic_energy(delta - h, C, ew, RI, RJ, 0.0)) / (2 * h), rel=1e-6)
 
 
 @pytest.mark.parametrize("ddot", [-10.0, -1.0, -1e-3, 0.0, 1e-3, 1.0])
 def test_normal_force_never_pulls(ddot):
-    kappa = damping_factor(0.7, 0.01)
+    kappa = damping_factor(*hysteresis_fraction(0, 0.7), 0.01)
     for delta in (1e-9, 1e-6, 1e-5):
-        fn, *_ = normal_force(delta, ddot, C, 1.1e11, RI, kappa)
+        fn, *_ = normal_force(delta, ddot, C, 1.1e11, RI, RJ, 0.0, kappa)
         assert fn >= 0.0
 
 
@@ -88,40 +88,6 @@ def test_contact_area_is_two_pi_rj_hc():
     e = C + 1e-6
     hc = rj * (1 + (e ** 2 + rj ** 2 - RI ** 2) / (2 * rj * e))
     assert contact_area(1e-6, e, RI, rj) == pytest.approx(2 * math.pi * rj * hc, rel=1e-6)
-
-
-def impact_restitution(cr, v_in, m_eff=1.0, ew=1.1e11, steps=4000, latch_floor=None):
-    """Velocity ratio out/in of one ball-in-socket impact (1-DOF, RK4).
-
-    Without ``latch_floor``: delta_dot0 = v_in throughout. With it: the kernel's discrete
-    latch (``episode_impact_velocity`` after every step in contact; before the first such
-    step each stage uses its own approach rate, as ``dynamics.contact`` does), starting half
-    a step before touching.
-    """
-    dmax = (0.75 * m_eff * v_in ** 2 * C / (4 * math.pi * ew * RI / 5)) ** (1 / 3)
-    omega = math.sqrt(elastic_force(dmax, C, ew, RI)[1] / m_eff)
-    h = 4 * math.pi / omega / steps
-    x, v = (0.0, v_in) if latch_floor is None else (-0.5 * h * v_in, v_in)
-    dv0 = v_in if latch_floor is None else 0.0
-
-    def acc(x, v):
-        if x <= 0:
-            return 0.0
-        kappa = damping_factor(cr, dv0 if dv0 > 0.0 else max(v, latch_floor))
-        return -normal_force(x, v, C, ew, RI, kappa)[0] / m_eff
-
-    for _ in range(20 * steps):
-        k1x, k1v = v, acc(x, v)
-        k2x, k2v = v + 0.5 * h * k1v, acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v)
-        k3x, k3v = v + 0.5 * h * k2v, acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v)
-        k4x, k4v = v + h * k3v, acc(x + h * k3x, v + h * k3v)
-        x += h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x)
-        v += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        if latch_floor is not None:
-            dv0 = episode_impact_velocity(dv0, v, latch_floor) if x > 0 else 0.0
-        if x < 0 and v < 0:
-            return -v / v_in
-    raise AssertionError("ball did not leave the contact")
 
 
 @pytest.mark.parametrize("cr", [0.5, 0.7, 0.9])
@@ -172,10 +138,10 @@ def test_episode_latch_keeps_delivered_restitution(cr, measured):
 
 
 def test_episode_latch_rule():
-    assert episode_impact_velocity(0.0, 0.5, 1e-3) == 0.5        # onset: the approach rate
-    assert episode_impact_velocity(0.0, -0.2, 1e-3) == 1e-3      # grazing onset: the floor
-    assert episode_impact_velocity(0.3, 0.1, 1e-3) == 0.3        # slowing: kept
-    assert episode_impact_velocity(0.3, 0.4, 1e-3) == 0.4        # faster approach: raised
+    assert episode_impact_velocity(0.0, 0.5, 1e-3, False) == 0.5        # onset: the approach rate
+    assert episode_impact_velocity(0.0, -0.2, 1e-3, False) == 1e-3      # grazing onset: the floor
+    assert episode_impact_velocity(0.3, 0.1, 1e-3, False) == 0.3        # slowing: kept
+    assert episode_impact_velocity(0.3, 0.4, 1e-3, False) == 0.4        # faster approach: raised
 
 
 @pytest.mark.parametrize("vt, factor", [(0.0, 0.0), (0.5e-4, 0.0), (1e-4, 0.0), (3.25e-4, 0.25),

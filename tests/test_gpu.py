@@ -25,17 +25,22 @@ from clearsweep.cli import sweep_command
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: Three cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, and
-#: the centred start (impacts); ``store: full`` so that the CPU sweep keeps series too.
+#: Four cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, the
+#: centred start (impacts), and the centred start with contact laws of the literature (Flores
+#: damping on the onset impact velocity, Hertz's elastic law: the kernel's other branches);
+#: ``store: full`` so that the CPU sweep keeps series too.
 SWEEP = {
     "name": "gpu_sim", "store": "full",
     "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
              "wear": {"map": [6, 12], "amplification": 1000.0},
              "metrics": {"settle_time": 0.001},
              "solver": {"duration": 0.003}},
-    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred"],
-                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4],
-                       "initial.joints": ["seated", "seated", "centred"]}]},
+    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws"],
+                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4],
+                       "initial.joints": ["seated", "seated", "centred", "centred"],
+                       "contact.damping": ["paper", "paper", "paper", "flores"],
+                       "contact.impact_velocity": ["max", "max", "max", "onset"],
+                       "contact.elastic": ["paper", "paper", "paper", "hertz"]}]},
 }
 
 SCRIPT = r"""
@@ -83,8 +88,8 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     from clearsweep.summary import SUMMARY_ORDER
 
     cpu, gpu = simulated
-    assert [str(s) for s in cpu["status"].values] == ["ok"] * 3
-    assert [str(s) for s in gpu["status"].values] == ["ok"] * 3
+    assert [str(s) for s in cpu["status"].values] == ["ok"] * 4
+    assert [str(s) for s in gpu["status"].values] == ["ok"] * 4
     compared = []
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
@@ -106,8 +111,8 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
 def test_simulated_cuda_keeps_series_only_for_the_selected_cases(simulated):
     _, gpu = simulated
     series = [bool(np.isfinite(gpu["slider_acceleration"].isel(variant=i).values).any())
-              for i in range(3)]
-    assert series == [False, True, False]
+              for i in range(4)]
+    assert series == [False, True, False, False]
 
 
 def test_cuda_backend_without_a_device_says_so(tmp_path, monkeypatch):

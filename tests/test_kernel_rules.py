@@ -98,7 +98,9 @@ def test_the_seated_start_reads_the_worn_socket_as_the_kernel_does():
     (0.3, 0.05, 0.3),       # an episode under way: its impact velocity
 ])
 def test_damping_of_a_contact(dv0, ddot, expected_dv0):
-    assert contact_damping(dv0, ddot, 0.7, 1e-2) == damping_factor(0.7, expected_dv0)
+    p = packed_case().p
+    assert contact_damping(dv0, ddot, p) == damping_factor(p[L.P_HYST_NUM], p[L.P_HYST_DEN], expected_dv0)
+    assert p[L.P_DV0_MIN] == 1e-2
 
 
 @pytest.mark.parametrize("shape", [(12, 24), (36, 72), (144, 288)])

@@ -120,7 +120,7 @@ def test_seated_ball_rests_on_the_wall_along_the_ideal_reaction():
         assert float(seated.normal_force.sel(joint=name).isel(time=0)) == pytest.approx(
             size, rel=2e-3)
         delta = float(seated.penetration.sel(joint=name).isel(time=0))
-        fel, _ = elastic_force(delta, jp[j, L.J_C], jp[j, L.J_EW], jp[j, L.J_RI])
+        fel, _ = elastic_force(delta, jp[j, L.J_C], jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], 0.0)
         assert fel == pytest.approx(np.linalg.norm(f_ideal), rel=2e-3)
         assert float(seated.eccentricity.sel(joint=name).isel(time=0)) == pytest.approx(
             2.5e-4 + delta, rel=1e-9)

@@ -1,12 +1,15 @@
-"""Coated contact law, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
+"""Contact laws, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
 
 Pure functions of floats in SI units, and the choice of surface values (coated or base).
+The elastic law (``n``: 0.0 the paper's, else the exponent of the power law) and the damping
+law (its hysteresis factor as a fraction, ``params.pack``) are parameters of the case
+(docs/physics.md section 3.2).
 """
 
 import math
 
 from .compiled import compiled
-from .layout import J_EW, J_EW_BASE, J_K, J_K_BASE, J_MU, J_MU_BASE
+from .layout import J_EW, J_EW_BASE, J_K, J_K_BASE, J_MU, J_MU_BASE, P_DV0_MIN, P_HYST_DEN, P_HYST_NUM
 
 
 @compiled
@@ -16,12 +19,25 @@ def stiffness_factor(ew, ri):
 
 
 @compiled
-def elastic_force(delta, c, ew, ri):
-    """Elastic part F_el = k_N(delta) delta [N] and its slope dF_el/d delta [N/m].
+def power_coefficient(ew, ri, rj):
+    """A = 4 E_w sqrt(R_i R_j) / 3 [N/m] of the power law F_el = A c (delta / c)^n: with
+    n = 3/2 Hertz's law of a ball in a conforming socket, K = 4 E_w sqrt(R_i R_j / c) / 3
+    (docs/physics.md section 3.2)."""
+    return 4.0 * ew * math.sqrt(ri * rj) / 3.0
 
-    k_N = K (2 delta c + delta^2) / (c + delta)^2, K = :func:`stiffness_factor`
-    (Table 1, exponent n = 1).
+
+@compiled
+def elastic_force(delta, c, ew, ri, rj, n):
+    """Elastic part F_el [N] and its slope dF_el/d delta [N/m].
+
+    n = 0 (the paper's law): F_el = k_N(delta) delta, k_N = K (2 delta c + delta^2) / (c + delta)^2,
+    K = :func:`stiffness_factor` (Table 1, exponent 1). n > 0: the power law
+    F_el = A c (delta / c)^n, A = :func:`power_coefficient`.
     """
+    if n != 0.0:
+        a = power_coefficient(ew, ri, rj)
+        xp = max(delta / c, 0.0) ** (n - 1.0)
+        return a * delta * xp, n * a * xp
     kk = stiffness_factor(ew, ri)
     cd = c + delta
     f = kk * delta * delta * (2.0 * c + delta) / (cd * cd)
@@ -30,15 +46,18 @@ def elastic_force(delta, c, ew, ri):
 
 
 @compiled
-def elastic_energy(delta, c, ew, ri):
+def elastic_energy(delta, c, ew, ri, rj, n):
     """Elastic energy U [J] whose derivative is F_el (docs/physics.md section 8).
 
+    Power law (n > 0): U = delta F_el / (n + 1). The paper's law (n = 0):
     U = K [delta^2/2 - c^2 ln(1 + delta/c) + c^2 delta/(c + delta)] = K c^2 u(x), x = delta/c,
     u(x) = x^2/2 - log1p(x) + x/(1+x). The leading terms cancel (u ~ 2 x^3 / 3), so small x
     uses the series u = sum_{n>=3} (-1)^(n+1) (n-1)/n x^n.
     """
     if delta <= 0.0:
         return 0.0
+    if n != 0.0:
+        return delta * elastic_force(delta, c, ew, ri, rj, n)[0] / (n + 1.0)
     kk = stiffness_factor(ew, ri)
     x = delta / c
     if x < 1e-2:
@@ -53,33 +72,62 @@ def elastic_energy(delta, c, ew, ri):
 
 
 @compiled
-def damping_factor(cr, dv0):
-    """kappa = 20 (1 - c_r) / (13 c_r delta_dot0) [s/m], so that chi_N = kappa k_N (Table 1)."""
-    return 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
+def hysteresis_fraction(law, cr):
+    """(numerator, denominator) of the hysteresis factor chi_N delta_dot0 / k_N [-] of damping
+    law ``law`` (its index in choices.DAMPING_LAWS) at restitution c_r (docs/physics.md 3.2).
+
+    0 the paper's 20 (1 - c_r) / (13 c_r) (Table 1); 1 Lankarani & Nikravesh 1990,
+    3 (1 - c_r^2) / 4; 2 Hunt & Crossley 1975, 3 (1 - c_r) / 2; 3 Flores et al. 2011,
+    8 (1 - c_r) / (5 c_r); 4 Gonthier et al. 2004, (1 - c_r^2) / c_r; 5 Carvalho & Martins
+    2019, 3 (1 - c_r)(11 - c_r) / (2 (1 + 9 c_r)). Kept as a fraction so that the paper's
+    law rounds as it always has.
+    """
+    if law == 1:
+        return 3.0 * (1.0 - cr) * (1.0 + cr), 4.0
+    if law == 2:
+        return 3.0 * (1.0 - cr), 2.0
+    if law == 3:
+        return 8.0 * (1.0 - cr), 5.0 * cr
+    if law == 4:
+        return (1.0 - cr) * (1.0 + cr), cr
+    if law == 5:
+        return 3.0 * (1.0 - cr) * (11.0 - cr), 2.0 * (1.0 + 9.0 * cr)
+    return 20.0 * (1.0 - cr), 13.0 * cr
 
 
 @compiled
-def episode_impact_velocity(dv0, ddot, floor):
+def damping_factor(num, den, dv0):
+    """kappa = num / (den delta_dot0) [s/m], so that chi_N = kappa k_N: the hysteresis factor
+    num / den of :func:`hysteresis_fraction` over the impact velocity delta_dot0 [m/s]."""
+    return num / (den * dv0)
+
+
+@compiled
+def episode_impact_velocity(dv0, ddot, floor, onset):
     """Impact velocity delta_dot0 [m/s] of a contact episode after an accepted step in contact.
 
     ``dv0`` is the episode's value so far (0 at its onset), ``ddot`` the normal approach rate
-    at the step's end. At the onset: max(ddot, floor); then the fastest approach seen in the
-    episode. With delta_dot <= delta_dot0 the damping term stays below
-    20 (1 - c_r) / (13 c_r) F_el whatever the floor, so the floor only keeps delta_dot0
-    positive; on an isolated impact (approach slowing from the onset) it is the onset value.
+    at the step's end. At the onset: max(ddot, floor); then, ``onset`` false (the default),
+    the fastest approach seen in the episode, or, ``onset`` true, the onset value kept for
+    the whole episode. With delta_dot <= delta_dot0 the damping term stays below
+    the hysteresis factor times F_el whatever the floor, so the floor only keeps delta_dot0
+    positive; on an isolated impact (approach slowing from the onset) both give the onset value.
     """
     if dv0 == 0.0:
         return max(ddot, floor)
+    if onset:
+        return dv0
     return max(dv0, ddot)
 
 
 @compiled
-def normal_force(delta, ddot, c, ew, ri, kappa):
-    """Normal force F_N = k_N delta (1 + kappa delta_dot), clamped at 0 [N].
+def normal_force(delta, ddot, c, ew, ri, rj, n, kappa):
+    """Normal force F_N = F_el (1 + kappa delta_dot), clamped at 0 [N]; F_el of the elastic
+    law ``n`` (:func:`elastic_force`).
 
     Returns (F_N, F_el, dF/d delta, dF/d delta_dot).
     """
-    fel, dfel = elastic_force(delta, c, ew, ri)
+    fel, dfel = elastic_force(delta, c, ew, ri, rj, n)
     fac = 1.0 + kappa * ddot
     fn = fel * fac
     if fn < 0.0:
@@ -133,13 +181,27 @@ def stiff_rate(m_eff, k, c):
 
 
 @compiled
-def contact_damping(dv0, ddot, cr, floor):
+def contact_damping(dv0, ddot, p):
     """kappa [s/m] of a contact whose episode impact velocity is ``dv0`` [m/s] (0: the episode
     begins within this step, and the approach rate ``ddot`` of the evaluation, floored at
-    ``floor``, stands in for it; docs/physics.md section 3.2)."""
+    p[P_DV0_MIN], stands in for it), with the case's damping law (docs/physics.md section 3.2)."""
     if dv0 <= 0.0:
-        dv0 = max(ddot, floor)
-    return damping_factor(cr, dv0)
+        dv0 = max(ddot, p[P_DV0_MIN])
+    return damping_factor(p[P_HYST_NUM], p[P_HYST_DEN], dv0)
+
+
+@compiled
+def reachable_penetration(delta, m_eff, ddot, c, ew, ri, rj, n):
+    """Penetration delta_pred [m] that an approach at ``ddot`` [m/s] > 0 with effective mass
+    ``m_eff`` [kg] can reach from ``delta`` [m], by energy (docs/physics.md section 4.2):
+    the paper's law from U ~ 2 K delta^3 / (3 c), delta_pred^3 = delta^3 + 3 m_eff ddot^2 c / (4 K);
+    the power law from U = A c^(1-n) delta^(n+1) / (n + 1)."""
+    if n != 0.0:
+        a = power_coefficient(ew, ri, rj)
+        top = delta ** (n + 1.0) + 0.5 * (n + 1.0) * m_eff * ddot * ddot * c ** (n - 1.0) / a
+        return top ** (1.0 / (n + 1.0))
+    kk = stiffness_factor(ew, ri)
+    return (delta ** 3 + 0.75 * m_eff * ddot * ddot * c / kk) ** (1.0 / 3.0)
 
 
 @compiled

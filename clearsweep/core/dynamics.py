@@ -21,7 +21,7 @@ import numpy as np
 from numba import types
 
 from .compiled import compiled
-from .contact import contact_damping, normal_force, stiff_rate, stiffness_factor, surface
+from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .kinematics import (
     add,
     cross,
@@ -73,9 +73,8 @@ from .layout import (
     N_S,
     P_BAUM_A,
     P_BAUM_B,
-    P_CR,
     P_DT,
-    P_DV0_MIN,
+    P_EXPONENT,
     P_FRICTION,
     P_G,
     P_J2,
@@ -712,11 +711,12 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     ew, mu, _ = surface(jp, j, dg[D_WORN + j] != 0.0)
     if ddot > 0.0:
         c_eff = dg[D_CEFF + j]
-        kk = stiffness_factor(ew, jp[j, J_RI])
-        delta = max(dg[D_DELTA + j], 0.0)
-        dpred = (delta ** 3 + 0.75 * m_eff * ddot * ddot * c_eff / kk) ** (1.0 / 3.0)
-        kappa = contact_damping(s[j, S_DV0], ddot, p[P_CR], p[P_DV0_MIN])
-        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, jp[j, J_RI], kappa)
+        ri = jp[j, J_RI]
+        rj = jp[j, J_RJ]
+        law = p[P_EXPONENT]
+        dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri, rj, law)
+        kappa = contact_damping(s[j, S_DV0], ddot, p)
+        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
     fn = dg[D_FN + j]
     if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:

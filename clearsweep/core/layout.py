@@ -42,7 +42,14 @@ P_ATOL_V = 41       # absolute tolerance of velocities [m/s | rad/s]
 P_ATOL_E = 42       # absolute tolerance of the energy integrals [J]
 P_HMAX = 43         # longest step [s]
 P_ONSET_TOL = 44    # longest step over which a contact begins [s]
-N_P = 45
+# contact laws (docs/physics.md section 3.2): the damping law's hysteresis factor
+# chi_N delta_dot0 / k_N = P_HYST_NUM / P_HYST_DEN, packed as a fraction so that the paper's
+# law keeps the rounding of 20 (1 - c_r) / (13 c_r delta_dot0)
+P_HYST_NUM = 45     # numerator of the hysteresis factor [-]
+P_HYST_DEN = 46     # denominator of the hysteresis factor [-]
+P_ONSET = 47        # 1.0 = delta_dot0 is the episode's onset value, 0.0 its running maximum
+P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K delta^n
+N_P = 49
 
 # --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal

@@ -57,6 +57,7 @@ from .layout import (
     P_DV0_MIN,
     P_ENERGY_TOL,
     P_MAX_LEVEL,
+    P_ONSET,
     P_PEN_FRAC,
     P_SETTLE,
     P_SLIP,
@@ -277,7 +278,7 @@ def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, 
                 wvol[j] += vol
                 nbuf += 1
             s[j, S_BETA] = beta
-            dv0 = episode_impact_velocity(s[j, S_DV0], ddot, p[P_DV0_MIN])
+            dv0 = episode_impact_velocity(s[j, S_DV0], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
             if s[j, S_DV0] == 0.0:
                 # onset of a contact episode: an impact
                 s[j, S_DV0] = dv0
@@ -391,7 +392,7 @@ def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
         for j in range(2):
             ddot_prev[j] = dg[D_DDOT + j]
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-                s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN])
+                s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
                 s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
                                              jp[j, J_RI], jp[j, J_RJ])
                 seated = True

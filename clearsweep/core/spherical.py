@@ -34,8 +34,7 @@ from .layout import (
     J_COAT,
     J_RI,
     J_RJ,
-    P_CR,
-    P_DV0_MIN,
+    P_EXPONENT,
     P_FEEDBACK,
     P_FRICTION,
     P_INTERP,
@@ -169,9 +168,10 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     if delta <= 0.0:
         return ContactState(zero, zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0,
                             c_eff, h, 0.0, 0.0, worn_flag)
-    kappa = contact_damping(s[j, S_DV0], ddot, p[P_CR], p[P_DV0_MIN])
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, kappa)
-    uel = elastic_energy(delta, c_eff, ew, ri) if (energy or sloped) else 0.0
+    kappa = contact_damping(s[j, S_DV0], ddot, p)
+    law = p[P_EXPONENT]
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, rj, law, kappa)
+    uel = elastic_energy(delta, c_eff, ew, ri, rj, law) if (energy or sloped) else 0.0
     line = n
     if sloped:
         uc = (2.0 * uel - delta * fel) / c_eff       # dU/dc_eff at fixed delta
