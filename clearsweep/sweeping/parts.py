@@ -114,16 +114,20 @@ def _encoding(ds: xr.Dataset) -> dict[str, dict]:
             if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
 
 
-def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset,
-               identity: Mapping[str, Any] | None = None) -> Path:
+def with_identity(part: xr.Dataset, identity: Mapping[str, Any]) -> xr.Dataset:
+    """``part`` carrying its case's ``identity`` (:func:`clearsweep.params.run_identity`) as
+    the attribute :data:`IDENTITY_ATTR`, which :func:`write_part` keeps."""
+    return part.assign_attrs({IDENTITY_ATTR: canonical_json(identity)})
+
+
+def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
     """Write the part of case ``h`` into ``directory`` atomically (temporary file, then rename),
-    marked with its key ``h`` and, where given, its ``identity`` (:func:`clearsweep.params.run_identity`).
+    marked with its key ``h`` (:data:`KEY_ATTR`).
 
     Used by :meth:`PartStore.write` and by pool workers, which write their
     cases themselves.
     """
-    marks = {KEY_ATTR: h, **({IDENTITY_ATTR: canonical_json(identity)} if identity else {})}
-    part = part.assign_attrs(marks)
+    part = part.assign_attrs({KEY_ATTR: h})
     return write_netcdf_atomic(part, Path(directory) / f"{h}{PART_SUFFIX}", encoding=_encoding(part))
 
 
@@ -399,10 +403,10 @@ class PartStore:
         return {p.name[: -len(PART_SUFFIX)] for p in self.directory.glob(f"*{PART_SUFFIX}")
                 if not p.name.startswith(".")}
 
-    def write(self, h: str, part: xr.Dataset, identity: Mapping[str, Any] | None = None) -> Path:
+    def write(self, h: str, part: xr.Dataset) -> Path:
         """Write one finished case atomically (temporary file, then rename), marked with its
-        key ``h`` and its ``identity``."""
-        return write_part(self.directory, h, part, identity)
+        key ``h``."""
+        return write_part(self.directory, h, part)
 
     def read(self, h: str) -> xr.Dataset:
         """The part of case ``h``, loaded into memory."""

@@ -26,7 +26,7 @@ from ..dataset import open_results, remove_stale_temporaries, versions
 from ..params import run_identity
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
-from .parts import NOT_FAILED, PartStore, parts_dir_for
+from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
 from .worker import _receipt, _worker_died
 
@@ -360,7 +360,7 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     def on_result(h: str, result) -> None:
         nonlocal failed, done
         if isinstance(result, xr.Dataset):
-            store.write(h, result, run_identity(runnable[h]))
+            store.write(h, with_identity(result, run_identity(runnable[h])))
             result = _receipt(result)
         store.log("done", hash=h, **result)
         failed += result["status"] not in NOT_FAILED
