@@ -9,7 +9,6 @@ materials values it reads (not the file's path) and the clearsweep version
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -134,10 +133,10 @@ def test_the_materials_files_path_is_not_part_of_the_key(folder):
 def test_parts_of_another_clearsweep_version_are_refused(folder, monkeypatch):
     """Was: a part's name was the hash of the config alone; another version's parts were
     resumed as this version's."""
+    version = params.__version__
     monkeypatch.setattr(params, "__version__", "0.0.1")
     assert sweep("--keep-parts").exit_code == 0
-    monkeypatch.undo()
-    os.chdir(folder)
+    monkeypatch.setattr(params, "__version__", version)
     (folder / "sw.nc").unlink()
     one_error_line(sweep("--resume"), 2, "made with other inputs",
                    f"clearsweep version: '0.0.1' there, '{params.__version__}' here")
@@ -334,3 +333,15 @@ def test_a_results_file_of_another_kind_needs_overwrite(folder, first, second, k
     assert (folder / "life.nc").read_bytes() == before
     assert invoke(*command, "--overwrite").exit_code == 0
     assert invoke(*command).exit_code == 0                 # its own kind: replaced as before
+
+
+def test_a_users_sweep_log_or_lock_file_is_not_taken_for_clearsweeps(tmp_path):
+    """The ledger and the lock are recognised by their content, not their names alone."""
+    d = tmp_path / "o.nc.parts"
+    d.mkdir()
+    (d / "sweep.log").write_text("my own notes on the sweep\n")
+    (d / ".lock").write_text("held by my script\n")
+    with pytest.raises(StoreError, match=r"holds 2 file\(s\) that clearsweep did not write "
+                                         r"\(.lock, sweep.log\)"):
+        PartStore(d).open()
+    assert (d / "sweep.log").read_text() == "my own notes on the sweep\n"

@@ -150,6 +150,22 @@ def read_mark(path: str | os.PathLike) -> tuple[str | None, dict[str, Any] | Non
     return (key if isinstance(key, str) else None), identity
 
 
+def _is_ledger(path: Path) -> bool:
+    """Whether ``path`` is a ledger clearsweep wrote: empty, or its first line one JSON event."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+    if not first:
+        return True
+    try:
+        record = json.loads(first)
+    except json.JSONDecodeError:
+        return False
+    return isinstance(record, dict) and "event" in record
+
+
 class PartStore:
     """The parts folder of one sweep: atomic parts, the event log and the lock.
 
@@ -274,7 +290,11 @@ class PartStore:
         path = self.directory / name
         if path.is_symlink() or not path.is_file():
             return False
-        if name in (LOG_NAME, LOCK_NAME) or _TEMPORARY.fullmatch(name):
+        if name == LOG_NAME:
+            return _is_ledger(path)
+        if name == LOCK_NAME:
+            return path.stat().st_size == 0       # the lock file is never written to
+        if _TEMPORARY.fullmatch(name):
             return True
         if not name.endswith(PART_SUFFIX) or name.startswith("."):
             return False
