@@ -288,8 +288,20 @@ def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall
 
 
 def _unreadable(path: Path, reason: str) -> CheckpointError:
-    return CheckpointError(f"{path} is not a readable life checkpoint ({reason}); pass "
-                           "--discard-checkpoint to delete it")
+    remedy = ("pass --discard-checkpoint to delete it" if _is_checkpoint_archive(path) else
+              "clearsweep deletes only its own files: move it away, or write to another output "
+              "file")
+    return CheckpointError(f"{path} is not a readable life checkpoint ({reason}); {remedy}")
+
+
+def _is_checkpoint_archive(path: Path) -> bool:
+    """Whether ``path`` is an archive that :func:`save_checkpoint` wrote (of any layout): a
+    zip file holding ``format.npy``; only such a file is deleted by ``--discard-checkpoint``."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "format.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
 
 
 def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
@@ -345,7 +357,8 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     parts: the state to continue from, or None to start at block 0.
 
     A checkpoint is never deleted unless ``discard``: without ``resume`` an existing one
-    makes the run refuse; with ``resume`` one of another config (or unreadable) does.
+    makes the run refuse; with ``resume`` one of other inputs (or unreadable) does. A file
+    that is not a checkpoint archive at all is refused, ``discard`` or not, and left alone.
 
     Raises
     ------
@@ -358,6 +371,8 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     if not path.is_file():
         raise CheckpointError(f"{path} is where this run keeps its checkpoint, and it is not a "
                               "file; move it away or write to another output file")
+    if not _is_checkpoint_archive(path):     # not ours: neither read nor deleted
+        raise _unreadable(path, "not a checkpoint archive: empty, truncated or another file")
     if resume:
         try:
             return load_checkpoint(path, cfg)

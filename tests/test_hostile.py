@@ -300,6 +300,12 @@ ROUND4_INTEGRITY = [
      lambda t, f: checkpoint_made_with(t, 1e-13) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
      2, "of other inputs (materials MoS2.wear_coefficient_m2_per_N: 1e-13 there"),
+    ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
+     "exit 0)",
+     lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and
+     ["life", LIFE, *SHORT_LIFE, "--discard-checkpoint", "-o", t / "res.nc"],
+     2, "not a checkpoint archive: empty, truncated or another file); clearsweep deletes only "
+        "its own files: move it away"),
     ("sweep into OUT.parts holding the user's files (was: deleted them, exit 0)",
      lambda t, f: (t / "res.nc.parts").mkdir() or (t / "res.nc.parts" / "thesis.tex").write_text("x")
      and ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4]\n"),
