@@ -177,14 +177,22 @@ def _case_inputs(config: str, cfg) -> list[tuple[str, str | None]]:
 
 
 def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
-               parts_resumed: bool = False) -> str:
-    """``-o/--out`` (or its default), refused where it is an input or a file that is not
-    a clearsweep results file (without --overwrite); returns the path. ``parts_resumed``:
+               parts_resumed: bool = False, *, kind: str) -> str:
+    """``-o/--out`` (or its default), refused where it is an input, a file that is not a
+    clearsweep results file or a results file of another ``kind`` than the command writes
+    (without --overwrite; ``outputs.results_kind``); returns the path. ``parts_resumed``:
     --resume of a sweep or ensemble, which --overwrite cannot join."""
     path = out or str(default)
     check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite,
-                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY)
+                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY, kind=kind)
     return path
+
+
+def _sweep_kind(plan) -> str:
+    """The kind of results file (``outputs.results_kind``) that ``plan`` writes."""
+    if plan.store in ("life", "reliability"):
+        return f"{plan.store} sweep"
+    return "ensemble" if list(plan.dims) == ["member"] else "sweep"
 
 
 def _check_figure(path: str, option: str, inputs, overwrite: bool) -> None:
@@ -253,7 +261,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         out = out or Path(config).stem + ".nc"
     else:
         out = _check_out(out, Path(config).stem + ".nc", _case_inputs(config, cfg), overwrite,
-                         resume)
+                         resume, kind="ensemble" if cfg.ensemble.members > 1 else "run")
     if cfg.ensemble.members > 1:
         _run_ensemble(config, cfg, out, overrides, allow_large, quiet, _cap_workers(workers),
                       resume=resume, overwrite=overwrite, discard_parts=discard_parts,
@@ -330,7 +338,8 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         click.echo(life_plan_text(cfg, config, allow_large=allow_large))
         return
     life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
-    out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite)
+    out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite,
+                     kind="life run")
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
@@ -828,7 +837,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     try:
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES)
-        _check_out(given, out, plan.input_files(), overwrite, resume)
+        _check_out(given, out, plan.input_files(), overwrite, resume, kind=_sweep_kind(plan))
         cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
         kept = PartStore(parts_dir_for(out)).finished() if resume else set()
         if not quiet:

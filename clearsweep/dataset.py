@@ -160,9 +160,13 @@ def replaced_on_success(path: str | os.PathLike):
     new file (``tempfile.mkstemp`` creates it readable by its owner only). Its
     name, ``.NAME.PID.XXXX.tmp``, carries the writer's process id, so that the
     temporary file of a killed writer is recognised and removed by the next
-    write of ``path`` (:func:`remove_stale_temporaries`).
+    write of ``path`` (:func:`remove_stale_temporaries`). A ``path`` that is a symbolic
+    link is followed: the file it points to is written (created, where the link dangles)
+    and the link stays.
     """
     path = Path(path)
+    if path.is_symlink():   # write where the link points, as a shell's `>` does: the link stays
+        path = Path(os.path.realpath(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     remove_stale_temporaries(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)

@@ -13,6 +13,14 @@ work starts:
   ``clearsweep``, as every run, life run and sweep writes it) or, for a figure, a figure
   clearsweep drew (:func:`is_own_figure`: the creator :func:`figure_metadata` writes into
   every figure). Any other existing file needs ``--overwrite``.
+- A results file of another kind than the command writes (:func:`results_kind`: a run, an
+  ensemble, a life run, a sweep, a life sweep, a reliability sweep) is not the command's own
+  output either: ``clearsweep run life.yaml`` does not replace ``life.nc``, the life run of
+  the same config, without ``--overwrite``.
+- An output path that is a symbolic link is followed, as a shell's ``>`` follows it: the
+  file is written where the link points (a dangling link's target is created) and the link
+  stays (:func:`clearsweep.dataset.replaced_on_success`); the checks above apply to that
+  target. A link that never reaches a file (a loop) is refused.
 
 The checks raise :class:`OutputError`, which the CLI reports in one line with exit code 2.
 """
@@ -96,6 +104,38 @@ def is_results_file(path: str | os.PathLike) -> bool:
         return False
 
 
+#: The ``title`` attribute of each kind of results file (``dataset.build_dataset``, the life
+#: dataset, the sweep file) and the kind it names; a sweep is told apart by its ``sweep_store``
+#: and ``sweep_dims`` attributes (:func:`results_kind`).
+_TITLES = {"clearsweep RSSP mechanism simulation": "run",
+           "clearsweep service life by cycle jumps": "life run",
+           "clearsweep RSSP mechanism parameter sweep": "sweep"}
+
+
+def results_kind(path: str | os.PathLike) -> str | None:
+    """The kind of the clearsweep results file at ``path``: ``"run"``, ``"ensemble"`` (the
+    members of one config, from ``run``), ``"life run"``, ``"sweep"``, ``"life sweep"`` or
+    ``"reliability sweep"``; ``"unknown"`` for a results file whose kind its attributes do
+    not tell; None where ``path`` is not a clearsweep results file."""
+    if not is_results_file(path):
+        return None
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path, "r") as nc:
+            attrs = {k: getattr(nc, k, None) for k in ("title", "sweep_store", "sweep_dims")}
+    except (OSError, RuntimeError, ValueError):
+        return None
+    kind = _TITLES.get(str(attrs["title"]), "unknown")
+    if kind == "sweep":
+        store = attrs["sweep_store"]
+        if store in ("life", "reliability"):
+            return f"{store} sweep"
+        if str(attrs["sweep_dims"]).split() == ["member"]:
+            return "ensemble"
+    return kind
+
+
 def is_own_figure(path: str | os.PathLike) -> bool:
     """Whether ``path`` is a figure clearsweep drew: a PNG, PDF or SVG file (as its suffix
     says) whose creator is :data:`FIGURE_CREATOR` of any version."""
@@ -116,7 +156,8 @@ def is_own_figure(path: str | os.PathLike) -> bool:
 def check_output(path: str | os.PathLike, option: str,
                  inputs: Iterable[tuple[str, str | os.PathLike | None]], *, overwrite: bool,
                  replaceable: Callable[[Path], bool] = is_results_file,
-                 what: str = "a clearsweep results file", remedy: str = OVERWRITE_REMEDY) -> None:
+                 what: str = "a clearsweep results file", remedy: str = OVERWRITE_REMEDY,
+                 kind: str | None = None) -> None:
     """Refuse to write ``path`` over an input, or over an existing file that is not ``replaceable``.
 
     Parameters
@@ -137,13 +178,17 @@ def check_output(path: str | os.PathLike, option: str,
         Those files, in words, for the message.
     remedy
         What the user can do about an existing file that is not ``replaceable``.
+    kind
+        The kind of results file the command writes (:func:`results_kind`): an existing
+        results file of another kind is replaced only with ``overwrite``.
 
     Raises
     ------
     OutputError
-        ``path`` is one of ``inputs`` or an existing non-regular file (a device such as
-        ``/dev/null``, a pipe), whatever ``overwrite``; or an existing file that is not
-        ``replaceable`` and ``overwrite`` is false.
+        ``path`` is one of ``inputs``, an existing non-regular file (a device such as
+        ``/dev/null``, a pipe) or a symbolic link that loops, whatever ``overwrite``; or,
+        without ``overwrite``, an existing file that is not ``replaceable`` or a results
+        file of another ``kind``.
     """
     path = Path(path)
     for description, source in inputs:
@@ -153,9 +198,22 @@ def check_output(path: str | os.PathLike, option: str,
                    else "is a hard link to")
             raise OutputError(f"{option} {path} {how} {description} {source}, which this command "
                               "reads; an output never replaces an input: choose another output file")
+    if path.is_symlink() and Path(os.path.realpath(path)).is_symlink():
+        raise OutputError(f"{option} {path} is a symbolic link that never reaches a file (a "
+                          "loop); choose another output file")
     if path.exists() and not path.is_file():
         # the write renames a new file into place: it would replace the device or pipe itself
         raise OutputError(f"{option} {path} is not a regular file (a device, a pipe, a socket); "
                           "an output is written to a file: choose one")
     if path.exists() and not overwrite and not replaceable(path):
         raise OutputError(f"{option} {path} exists and is not {what}; {remedy}")
+    if kind is not None and path.exists() and not overwrite:
+        there = results_kind(path)
+        if there is not None and there != kind:
+            raise OutputError(f"{option} {path} is the results file of a{_n(there)} {there}, and "
+                              f"this command writes a{_n(kind)} {kind}; {remedy}")
+
+
+def _n(word: str) -> str:
+    """``"n"`` before a word that starts with a vowel sound (``an ensemble``)."""
+    return "n" if word[:1] in "aeiou" else ""

@@ -13,9 +13,11 @@ from typing import Any
 import numpy as np
 
 from .choices import DAMPING_LAWS
-from .config import Config, EnsembleConfig, JointConfig
+from .config import Config, EnsembleConfig, JointConfig, resolve_materials
 from .core import layout as L
 from .core.contact import hysteresis_fraction
+from .materials import FIELDS
+from .version import __version__
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,59 @@ def equivalent_modulus(joint: JointConfig, materials: dict, rule: str) -> float:
 def surface_material(joint: JointConfig, materials: dict):
     """The socket surface's material: the coating where coated, else the base."""
     return materials[BASE_MATERIAL if joint.coating == "none" else joint.coating]
+
+
+def run_identity(cfg: Config) -> dict[str, Any]:
+    """Everything that decides the results of ``cfg``'s run, as plain JSON-ready data.
+
+    ``config``: the resolved config without ``materials_file`` (the file's path does not
+    change a result; its values do); ``materials``: the values of every material the run
+    reads (the base and the joints' coatings, as :func:`pack` reads them, sources left
+    out); ``version``: the clearsweep version. Finished work (a sweep's part, a life
+    checkpoint) belongs to a run exactly when their identities are equal.
+    """
+    config = cfg.to_dict()
+    config.pop("materials_file", None)
+    table = resolve_materials(cfg)
+    used = sorted({BASE_MATERIAL, *(j.coating for _, j in cfg.joints.items() if j.coating != "none")})
+    return {"config": config,
+            "materials": {m: {f: getattr(table[m], f) for f in FIELDS} for m in used},
+            "version": __version__}
+
+
+def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
+    if not isinstance(tree, dict):
+        return {prefix: tree}
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def identity_differences(theirs: dict[str, Any], ours: dict[str, Any]) -> list[str]:
+    """The dotted keys at which two :func:`run_identity` values differ: config keys first,
+    then materials values, then the version."""
+    a, b = _flat(theirs), _flat(ours)
+    return sorted((k for k in a.keys() | b.keys() if a.get(k) != b.get(k)),
+                  key=lambda k: ({"config": 0, "materials": 1}.get(k.split(".")[0], 2), k))
+
+
+def identity_changes(theirs: dict[str, Any], ours: dict[str, Any], limit: int = 3) -> str:
+    """What differs between two :func:`run_identity` values, in words: ``KEY: VALUE there,
+    VALUE here`` for the first ``limit`` differences, config keys as dotted paths, materials
+    values as ``materials MATERIAL.FIELD``, and ``clearsweep version``."""
+    a, b = _flat(theirs), _flat(ours)
+    keys = identity_differences(theirs, ours)
+
+    def name(key: str) -> str:
+        section, _, rest = key.partition(".")
+        return {"config": rest, "materials": f"materials {rest}"}.get(section, "clearsweep version")
+
+    def shown(key: str, values: dict[str, Any]) -> str:
+        return repr(values[key]) if key in values else "absent"
+
+    text = "; ".join(f"{name(k)}: {shown(k, a)} there, {shown(k, b)} here" for k in keys[:limit])
+    return text + (f"; and {len(keys) - limit} more" if len(keys) > limit else "")
 
 
 def ideal_slider_x(theta, l2: float, l3: float, zs: float):

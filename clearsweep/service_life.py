@@ -35,7 +35,7 @@ from .budget import check_budget, time_text
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
-from .params import Packed, pack
+from .params import Packed, identity_changes, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .version import __version__
 
@@ -206,8 +206,9 @@ class LifeState:
 
 # --------------------------------------------------------------------------- checkpoints
 
-#: Layout of a checkpoint file; one of another layout is refused.
-CHECKPOINT_FORMAT = 1
+#: Layout of a checkpoint file; one of another layout is refused (2: the materials values
+#: it was made with are kept beside the config).
+CHECKPOINT_FORMAT = 2
 #: A life run writing OUT keeps its checkpoint beside it: ``OUT`` + this suffix.
 CHECKPOINT_SUFFIX = ".life-checkpoint"
 
@@ -239,32 +240,26 @@ def checkpoint_path_for(out: str | os.PathLike) -> Path:
 
 
 def _config_json(cfg: Config) -> str:
-    """What identifies a life run: its resolved config as canonical JSON."""
-    return json.dumps(cfg.to_dict(), sort_keys=True, separators=(",", ":"))
+    """The config part of a life run's identity (:func:`clearsweep.params.run_identity`: the
+    resolved config without the materials file's path) as canonical JSON."""
+    return _canonical(run_identity(cfg)["config"])
 
 
-def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
-    if not isinstance(tree, dict):
-        return {prefix: tree}
-    out: dict[str, Any] = {}
-    for key, value in tree.items():
-        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
-    return out
+def _canonical(value: Any) -> str:
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
 
 
-def _differences(theirs: str, ours: Config, limit: int = 3) -> str:
-    """The first config keys whose values differ, as ``key: VALUE there, VALUE here``."""
-    a, b = _flat(json.loads(theirs)), _flat(ours.to_dict())
-    keys = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
-    text = "; ".join(f"{k}: {a.get(k)!r} there, {b.get(k)!r} here" for k in keys[:limit])
-    return text + (f"; and {len(keys) - limit} more" if len(keys) > limit else "")
+def _materials_json(cfg: Config) -> str:
+    """The materials values a life run reads (:func:`clearsweep.params.run_identity`) as JSON."""
+    return _canonical(run_identity(cfg)["materials"])
 
 
 def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall: float) -> Path:
     """Write ``state`` (after a block and its jump) to ``path`` atomically: a temporary file
     beside it, flushed to disk, renamed into place; a kill leaves the previous checkpoint.
 
-    Holds the config it belongs to, the worn maps and volumes, the cycle count, every row,
+    Holds the config it belongs to, the materials values it read and the clearsweep version
+    (:func:`clearsweep.params.run_identity`), the worn maps and volumes, the cycle count, every row,
     the map snapshots, the wear-through records, each block's worn volume and the wall time
     so far (``wall`` [s] in this session); a life run has no random state (an ensemble
     member's perturbation is drawn from ``(seed, member)`` in the config).
@@ -273,7 +268,8 @@ def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall
     rows = state.rows
     arrays: dict[str, Any] = {
         "format": np.array(CHECKPOINT_FORMAT), "config": np.array(_config_json(cfg)),
-        "version": np.array(__version__), "cycles": np.array(state.cycles),
+        "materials": np.array(_materials_json(cfg)), "version": np.array(__version__),
+        "cycles": np.array(state.cycles),
         "wall": np.array(state.wall_before + wall), "wmap": state.wmap, "wvol": state.wvol,
         "row_keys": np.array(list(rows[0])),
         "snapshot_cycle": np.array([c for c, _ in state.snapshots]),
@@ -292,8 +288,20 @@ def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall
 
 
 def _unreadable(path: Path, reason: str) -> CheckpointError:
-    return CheckpointError(f"{path} is not a readable life checkpoint ({reason}); pass "
-                           "--discard-checkpoint to delete it")
+    remedy = ("pass --discard-checkpoint to delete it" if _is_checkpoint_archive(path) else
+              "clearsweep deletes only its own files: move it away, or write to another output "
+              "file")
+    return CheckpointError(f"{path} is not a readable life checkpoint ({reason}); {remedy}")
+
+
+def _is_checkpoint_archive(path: Path) -> bool:
+    """Whether ``path`` is an archive that :func:`save_checkpoint` wrote (of any layout): a
+    zip file holding ``format.npy``; only such a file is deleted by ``--discard-checkpoint``."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "format.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
 
 
 def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
@@ -302,7 +310,8 @@ def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
     Raises
     ------
     CheckpointError
-        The file is not a readable checkpoint, or it belongs to another config or version.
+        The file is not a readable checkpoint, or it belongs to another config, other
+        materials values or another clearsweep version (the first differences named).
     """
     path = Path(path)
     try:
@@ -311,22 +320,24 @@ def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
         with np.load(path, allow_pickle=False) as data:
             saved = {k: data[k] for k in data.files}
         layout = int(saved["format"])
-        config, version = str(saved["config"]), str(saved["version"])
+        if layout != CHECKPOINT_FORMAT:
+            raise _unreadable(path, f"layout {layout}, this version reads {CHECKPOINT_FORMAT}")
+        saved_identity = {"config": json.loads(str(saved["config"])),
+                          "materials": json.loads(str(saved["materials"])),
+                          "version": str(saved["version"])}
         keys = [str(k) for k in saved["row_keys"]]
         columns = {k: saved[f"row_{k}"] for k in keys}
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
         raise _unreadable(path, f"{type(exc).__name__}: {exc}") from None
-    if layout != CHECKPOINT_FORMAT:
-        raise _unreadable(path, f"layout {layout}, this version reads {CHECKPOINT_FORMAT}")
-    if config != _config_json(cfg):
-        raise CheckpointError(f"{path} holds the blocks of a life run of another config "
-                              f"({_differences(config, cfg)}); run that config to continue it, "
-                              "write to another output file, or pass --discard-checkpoint to "
-                              "delete it")
-    if version != __version__:
-        raise CheckpointError(f"{path} was written by clearsweep {version}, this is "
-                              f"{__version__}: a resumed run would not be the run it began; "
-                              "pass --discard-checkpoint to delete it")
+    identity = run_identity(cfg)
+    if _canonical(saved_identity) != _canonical(identity):
+        what = ("another config" if saved_identity["config"] != identity["config"]
+                else "other inputs")
+        raise CheckpointError(f"{path} holds the blocks of a life run of {what} "
+                              f"({identity_changes(saved_identity, identity)}); a resumed run "
+                              "would mix the results of two inputs: run with those inputs to "
+                              "continue it, write to another output file, or pass "
+                              "--discard-checkpoint to delete it")
 
     def value(column: np.ndarray, i: int) -> Any:
         return column[i].copy() if column.ndim > 1 else column[i].item()
@@ -346,7 +357,8 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     parts: the state to continue from, or None to start at block 0.
 
     A checkpoint is never deleted unless ``discard``: without ``resume`` an existing one
-    makes the run refuse; with ``resume`` one of another config (or unreadable) does.
+    makes the run refuse; with ``resume`` one of other inputs (or unreadable) does. A file
+    that is not a checkpoint archive at all is refused, ``discard`` or not, and left alone.
 
     Raises
     ------
@@ -359,6 +371,8 @@ def claim_checkpoint(path: str | os.PathLike, cfg: Config, *, resume: bool = Fal
     if not path.is_file():
         raise CheckpointError(f"{path} is where this run keeps its checkpoint, and it is not a "
                               "file; move it away or write to another output file")
+    if not _is_checkpoint_archive(path):     # not ours: neither read nor deleted
+        raise _unreadable(path, "not a checkpoint archive: empty, truncated or another file")
     if resume:
         try:
             return load_checkpoint(path, cfg)

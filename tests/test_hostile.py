@@ -4,7 +4,9 @@ is a command line, the exit code it must end with and a substring of its one
 
 Rows of round 3b (issue 22, items 3 and 4) and of the fresh round on the reliability and
 life sections, sampling sweeps, sensitivity, the CUDA backend's options and results files
-of older versions (issue 20, item 6). Before, the rows marked "was:" ended as said there.
+of older versions (issue 20, item 6); round 4's resume integrity and the user's files
+(issue 33, items 1 and 2: ``ROUND4_INTEGRITY``). Before, the rows marked "was:" ended as
+said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
 
@@ -230,6 +232,107 @@ ROWS = [
     ("report a run without status (was: KeyError)",
      lambda t, f: ["report", f / "old_run.nc"], 2, "has no 'status'"),
 ]
+
+
+def parts_made_with(tmp: Path, section: str, key: str, value) -> Path:
+    """A two-case sweep file whose parts folder ``res.nc.parts`` holds the part of its first
+    case as made with ``section.key = value`` in its identity (``run_identity``): other
+    materials values or another clearsweep version. Returns the sweep file."""
+    from clearsweep.params import run_identity
+    from clearsweep.sweeping import expand
+    from clearsweep.sweeping.parts import case_hash, with_identity, write_part
+
+    path = sweep_file(tmp, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n")
+    identity = run_identity(next(iter(expand(path).runnable().values())))
+    if section == "version":
+        identity["version"] = value
+    else:
+        identity[section]["steel"][key] = value
+    (tmp / "res.nc.parts").mkdir()
+    write_part(tmp / "res.nc.parts", case_hash(identity),
+               with_identity(xr.Dataset({"status": ((), "ok")}), identity))
+    return Path(path)
+
+
+def checkpoint_made_with(tmp: Path, wear_coefficient: float) -> Path:
+    """A life checkpoint ``res.nc.life-checkpoint`` of LIFE (SHORT_LIFE) after one block, as
+    made with another MoS2 wear coefficient; returns the checkpoint."""
+    import json
+
+    from clearsweep.config import load_config
+    from clearsweep.service_life import LifeState, checkpoint_path_for, save_checkpoint
+
+    cfg = load_config(LIFE, [o for o in SHORT_LIFE if o != "--set"])
+    path = save_checkpoint(checkpoint_path_for(tmp / "res.nc"), cfg,
+                           LifeState(np.zeros((2, 6, 12)), np.zeros(2), 1.0, [{"cycle": 1.0}]), 0.0)
+    with np.load(path) as data:
+        saved = {k: data[k] for k in data.files}
+    materials = json.loads(str(saved["materials"]))
+    materials["MoS2"]["wear_coefficient_m2_per_N"] = wear_coefficient
+    saved["materials"] = np.array(json.dumps(materials))
+    with open(path, "wb") as f:
+        np.savez(f, **saved)
+    return path
+
+
+def copied(src: Path, dst: Path) -> Path:
+    dst.write_bytes(src.read_bytes())
+    return dst
+
+
+# Round 4, items 1 and 2 (issue 33): a resume never mixes results of different inputs;
+# nothing of the user's is deleted. Outputs are named res.nc here: a refused row leaves the
+# user's folder or file at that name, which the table's "no out* file" check would count.
+# The file-system scenarios (an edited materials file between Ctrl-C and --resume, swapped
+# parts) are in tests/test_resume_integrity.py.
+ROUND4_INTEGRITY = [
+    ("sweep --resume over parts of other materials values (was: parts reused, exit 0, a "
+     "file of two inputs)",
+     lambda t, f: ["sweep", parts_made_with(t, "materials", "wear_coefficient_m2_per_N", 1e-13),
+                   "--resume", "-o", t / "res.nc"],
+     2, "made with other inputs (materials steel.wear_coefficient_m2_per_N: 1e-13 there, "
+        "8e-14 here)"),
+    ("sweep --resume over parts of another version (was: parts reused, exit 0)",
+     lambda t, f: ["sweep", parts_made_with(t, "version", "", "0.0.1"), "--resume",
+                   "-o", t / "res.nc"],
+     2, "clearsweep version: '0.0.1' there"),
+    ("life --resume over a checkpoint of other materials values (was: continued, exit 0)",
+     lambda t, f: checkpoint_made_with(t, 1e-13) and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
+     2, "of other inputs (materials MoS2.wear_coefficient_m2_per_N: 1e-13 there"),
+    ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
+     "exit 0)",
+     lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and
+     ["life", LIFE, *SHORT_LIFE, "--discard-checkpoint", "-o", t / "res.nc"],
+     2, "not a checkpoint archive: empty, truncated or another file); clearsweep deletes only "
+        "its own files: move it away"),
+    ("sweep into OUT.parts holding the user's files (was: deleted them, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or (t / "res.nc.parts" / "thesis.tex").write_text("x")
+     and ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4]\n"),
+          "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (thesis.tex)"),
+    ("sweep --overwrite into OUT.parts holding the user's files (was: deleted them, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or (t / "res.nc.parts" / "notes.txt").write_text("x")
+     and ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4]\n"),
+          "--overwrite", "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (notes.txt)"),
+    ("-o a symbolic link that loops (was: the link replaced by the results file, exit 0)",
+     lambda t, f: (t / "res.nc").symlink_to("res.nc") or
+     ["run", ONE, "--set", "solver.duration=0.002", "-o", t / "res.nc"],
+     2, "res.nc is a symbolic link that never reaches a file"),
+    ("run over a life run's results file (was: replaced, exit 0)",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=0.002",
+                   "-o", copied(f / "life.nc", t / "res.nc")],
+     2, "res.nc is the results file of a life run, and this command writes a run; pass --overwrite"),
+    ("life over a run's results file (was: replaced, exit 0)",
+     lambda t, f: ["life", LIFE, *SHORT_LIFE, "-o", copied(f / "run.nc", t / "res.nc")],
+     2, "res.nc is the results file of a run, and this command writes a life run"),
+    ("sweep over a reliability sweep's results file (was: replaced, exit 0)",
+     lambda t, f: ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4]\n"),
+                   "-o", copied(f / "rel.nc", t / "res.nc")],
+     2, "is the results file of a reliability sweep, and this command writes a sweep"),
+]
+ROWS += ROUND4_INTEGRITY
 
 
 @pytest.fixture

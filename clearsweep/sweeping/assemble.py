@@ -25,6 +25,7 @@ import numpy as np
 from ..dataset import replaced_on_success, write_errors_as_oserror
 from .parts import (
     COMPRESSION,
+    KEY_ATTR,
     MESSAGE_ATTRS,
     NOT_FAILED,
     STATUS_ATTRS,
@@ -127,6 +128,12 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
             raise StoreError(f"case {h} has no part in {store.directory}; run the sweep with "
                              "--resume to compute it")
         with _open_part(store.path(h)) as nc:
+            key = getattr(nc, KEY_ATTR, None)
+            if key != h:
+                raise StoreError(f"{store.path(h)} holds " + (f"the case {key}" if key else
+                                 "no case key") + f", not the case {h} it is filed under "
+                                 "(renamed or swapped); run the sweep again with --resume, "
+                                 "which computes that case again")
             tpl.statuses[h] = str(_values(nc["status"]).ravel()[0])
             for dim, d in nc.dimensions.items():
                 if dim in nc.variables:

@@ -3,17 +3,26 @@
 A sweep writing ``OUT.nc`` keeps its finished cases in the folder
 ``OUT.nc.parts/`` (:func:`parts_dir_for`):
 
-- ``<hash>.nc``: one finished case (:func:`case_hash` of its resolved
-  configuration), written to a temporary file in the same folder and renamed
-  into place (:func:`clearsweep.dataset.write_netcdf_atomic`), so a part that
-  is visible is complete. A killed sweep leaves at most a temporary
-  ``.<hash>.nc.*.tmp`` file, which the next run removes.
-- ``sweep.log``: one JSON line per event (``run``, ``done``, ``interrupted``,
-  ``assembled``), appended by the driver; ``done`` lines carry the case hash,
-  its status and the run id, so a log tells which run computed which case.
+- ``<key>.nc``: one finished case, named by its case key (:func:`case_key`: the
+  hash of everything that decides its results, :func:`clearsweep.params.run_identity`:
+  the resolved config, the materials values it reads and the clearsweep version),
+  written to a temporary file in the same folder and renamed into place
+  (:func:`clearsweep.dataset.write_netcdf_atomic`), so a part that is visible is
+  complete. Each part carries its own key and identity as global attributes
+  (:data:`KEY_ATTR`, :data:`IDENTITY_ATTR`): the mark that clearsweep wrote it, and
+  the proof that it belongs to the case it is filed under. A killed sweep leaves at
+  most a temporary ``.<key>.nc.PID.XXXX.tmp`` file, which the next run removes.
+- ``sweep.log``: the folder's ledger, one JSON line per event (``run``, ``done``,
+  ``interrupted``, ``assembled``), appended by the driver; ``done`` lines carry the
+  case key, its status and the run id, so a log tells which run computed which case.
 - ``.lock``: an exclusive ``flock`` held while a sweep uses the folder, so
   two sweeps cannot write the same parts; the kernel drops it when the
   process ends, however it ends.
+
+clearsweep deletes only these files, and only its own: a part is its own when it
+carries the mark or the ledger names it. A folder that holds anything else (a file the
+user put there, a part of another tool) is refused in one line, whatever the options,
+and after a sweep is written the folder is removed only if nothing else is in it.
 """
 
 from __future__ import annotations
@@ -24,7 +33,7 @@ import fcntl
 import hashlib
 import json
 import os
-import shutil
+import re
 import uuid
 from collections.abc import Collection, Mapping
 from pathlib import Path
@@ -32,16 +41,27 @@ from typing import Any, TextIO
 
 import xarray as xr
 
+from ..config import Config
 from ..dataset import (
     open_results,
     write_netcdf_atomic,
 )
+from ..params import identity_changes, identity_differences, run_identity
 
 PART_SUFFIX = ".nc"
 LOG_NAME = "sweep.log"
 LOCK_NAME = ".lock"
 #: Hex digits of the SHA-256 kept in a part's name.
 HASH_LENGTH = 16
+#: Global attribute of every part: the case key it was written for (the mark of a part
+#: clearsweep wrote, and what the part's name must be).
+KEY_ATTR = "clearsweep_case_key"
+#: Global attribute of a part: the canonical JSON of its case's identity
+#: (:func:`clearsweep.params.run_identity`), to say what changed when it is refused.
+IDENTITY_ATTR = "clearsweep_case_identity"
+#: The temporary file of a part being written (``replaced_on_success``'s naming,
+#: ``.KEY.nc.PID.XXXX.tmp``).
+_TEMPORARY = re.compile(r"\.[^/]+\.nc\.[A-Za-z0-9_.]+\.tmp")
 #: Compression of numeric variables, in parts and in the assembled file.
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.
@@ -67,6 +87,14 @@ def case_hash(cfg: Mapping) -> str:
     return hashlib.sha256(canonical_json(cfg).encode("ascii")).hexdigest()[:HASH_LENGTH]
 
 
+def case_key(cfg: Config) -> str:
+    """The key of a case's part: :func:`case_hash` of its identity
+    (:func:`clearsweep.params.run_identity`: resolved config without the materials file's
+    path, the materials values it reads, the clearsweep version). Editing the materials
+    file, or another version, gives other keys: earlier parts are then not this run's."""
+    return case_hash(run_identity(cfg))
+
+
 def parts_dir_for(out: str | os.PathLike) -> Path:
     """The parts folder of the sweep output ``out``: ``OUT.parts`` beside it."""
     out = Path(out)
@@ -86,13 +114,56 @@ def _encoding(ds: xr.Dataset) -> dict[str, dict]:
             if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
 
 
+def with_identity(part: xr.Dataset, identity: Mapping[str, Any]) -> xr.Dataset:
+    """``part`` carrying its case's ``identity`` (:func:`clearsweep.params.run_identity`) as
+    the attribute :data:`IDENTITY_ATTR`, which :func:`write_part` keeps."""
+    return part.assign_attrs({IDENTITY_ATTR: canonical_json(identity)})
+
+
 def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
-    """Write the part of case ``h`` into ``directory`` atomically (temporary file, then rename).
+    """Write the part of case ``h`` into ``directory`` atomically (temporary file, then rename),
+    marked with its key ``h`` (:data:`KEY_ATTR`).
 
     Used by :meth:`PartStore.write` and by pool workers, which write their
     cases themselves.
     """
+    part = part.assign_attrs({KEY_ATTR: h})
     return write_netcdf_atomic(part, Path(directory) / f"{h}{PART_SUFFIX}", encoding=_encoding(part))
+
+
+def read_mark(path: str | os.PathLike) -> tuple[str | None, dict[str, Any] | None]:
+    """``(key, identity)`` recorded in the part at ``path`` (:func:`write_part`); ``(None, None)``
+    for a file that is not a readable part (truncated, another file, a part of an older
+    version without the mark)."""
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path) as nc:
+            key = getattr(nc, KEY_ATTR, None)
+            text = getattr(nc, IDENTITY_ATTR, None)
+    except (OSError, RuntimeError, ValueError):
+        return None, None
+    try:
+        identity = json.loads(text) if isinstance(text, str) else None
+    except json.JSONDecodeError:
+        identity = None
+    return (key if isinstance(key, str) else None), identity
+
+
+def _is_ledger(path: Path) -> bool:
+    """Whether ``path`` is a ledger clearsweep wrote: empty, or its first line one JSON event."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            first = f.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+    if not first:
+        return True
+    try:
+        record = json.loads(first)
+    except json.JSONDecodeError:
+        return False
+    return isinstance(record, dict) and "event" in record
 
 
 class PartStore:
@@ -119,39 +190,48 @@ class PartStore:
     # ------------------------------------------------------------------ life cycle
     def open(self, *, resume: bool = False, overwrite: bool = False,
              expected: Collection[str] | None = None, discard_foreign: bool = False,
-             sweep: Mapping[str, Any] | None = None) -> set[str]:
+             sweep: Mapping[str, Any] | None = None,
+             configs: Mapping[str, Config] | None = None) -> set[str]:
         """Take the folder for this sweep.
 
         Parameters
         ----------
         resume
-            Keep the parts of an earlier run of this sweep (they are not run again).
+            Keep the parts of an earlier run of this sweep (they are not run again); a
+            kept part whose recorded key is not its name (renamed, swapped) or that cannot
+            be read (truncated) is deleted and its case runs again.
         overwrite
             Delete the parts and log of an earlier run.
         expected
-            Hashes of this sweep's cases. Parts with other hashes belong to
-            another sweep (another sweep file, other ``--set`` values): they
-            are never deleted unless ``overwrite`` or ``discard_foreign``.
+            Keys of this sweep's cases (:func:`case_key`). Parts with other keys belong to
+            another sweep, or to this one run with other inputs (an edited materials
+            file, another clearsweep version): they are never deleted unless
+            ``overwrite`` or ``discard_foreign``.
         discard_foreign
             Delete the parts that are not in ``expected``, keep the others.
         sweep
             This sweep (``name``, ``source``, ``cases``), named in the messages.
+        configs
+            Key -> resolved config of this sweep's cases, to name what changed when
+            parts of other inputs are refused.
 
         Returns
         -------
         set of str
-            Hashes of the parts kept (empty unless ``resume``).
+            Keys of the parts kept (empty unless ``resume``).
 
         Raises
         ------
         StoreError
-            Another sweep holds the folder; it holds parts of another sweep
-            (neither ``overwrite`` nor ``discard_foreign``); or it holds parts
-            of this sweep and neither ``resume`` nor ``overwrite`` was given.
+            The folder holds a file clearsweep did not write (whatever the options);
+            another sweep holds it; it holds parts of another sweep or other inputs
+            (neither ``overwrite`` nor ``discard_foreign``); or it holds parts of this
+            sweep and neither ``resume`` nor ``overwrite`` was given.
         """
         if resume and overwrite:
             raise StoreError("resume and overwrite exclude each other: resume keeps the finished "
                              "cases, overwrite deletes them")
+        self._refuse_strangers()        # before the lock file is made in a folder not ours
         self.directory.mkdir(parents=True, exist_ok=True)
         fd = os.open(self.directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
         try:
@@ -164,13 +244,15 @@ class PartStore:
             raise
         self._lock_fd = fd
         discarded: list[str] = []
+        misfiled: list[str] = []
         try:
+            self._refuse_strangers()    # again, now that no other sweep writes here
             self._remove_temporaries()
             finished = self.finished()
             foreign = finished - set(expected) if expected is not None else set()
             if foreign and not overwrite:
                 if not discard_foreign:
-                    raise StoreError(self._foreign_message(foreign, finished, sweep))
+                    raise StoreError(self._foreign_message(foreign, finished, sweep, configs))
                 for h in sorted(foreign):
                     self.path(h).unlink()
                 discarded = sorted(foreign)
@@ -186,21 +268,94 @@ class PartStore:
                     self.path(h).unlink()
                 (self.directory / LOG_NAME).unlink(missing_ok=True)
                 finished = set()
+            if resume:
+                misfiled = sorted(h for h in finished if read_mark(self.path(h))[0] != h)
+                for h in misfiled:      # its name is not what it holds: run its case again
+                    self.path(h).unlink()
+                finished -= set(misfiled)
         except BaseException:
             self.close()
             raise
         self._log = open(self.directory / LOG_NAME, "a", encoding="utf-8")
         if discarded:
             self.log("discarded", hashes=discarded, reason="parts of another sweep (--discard-parts)")
+        if misfiled:
+            self.log("discarded", hashes=misfiled, reason="the part does not hold the case it is "
+                     "filed under (renamed, swapped or truncated): its case runs again")
         return finished
+
+    def _own(self, name: str, ledger: Collection[str]) -> bool:
+        """Whether the entry ``name`` of the folder is a file clearsweep wrote: the log, the
+        lock, a part's temporary file, or a part that carries the mark or that the ledger names."""
+        path = self.directory / name
+        if path.is_symlink() or not path.is_file():
+            return False
+        if name == LOG_NAME:
+            return _is_ledger(path)
+        if name == LOCK_NAME:
+            return path.stat().st_size == 0       # the lock file is never written to
+        if _TEMPORARY.fullmatch(name):
+            return True
+        if not name.endswith(PART_SUFFIX) or name.startswith("."):
+            return False
+        h = name[: -len(PART_SUFFIX)]
+        return h in ledger or read_mark(path)[0] is not None
+
+    def _ledger(self) -> set[str]:
+        """Keys of the parts the ledger (``sweep.log``) says a sweep wrote here."""
+        return {str(r["hash"]) for r in self.events("done") if r.get("hash")}
+
+    def strangers(self) -> list[str]:
+        """Names of the entries in the folder that clearsweep did not write (sorted)."""
+        try:
+            names = sorted(os.listdir(self.directory))
+        except (FileNotFoundError, NotADirectoryError):
+            return []
+        ledger = self._ledger()
+        return [n for n in names if not self._own(n, ledger)]
+
+    def _refuse_strangers(self) -> None:
+        strangers = self.strangers()
+        if strangers:
+            shown = ", ".join(strangers[:4]) + (f" and {len(strangers) - 4} more"
+                                                if len(strangers) > 4 else "")
+            raise StoreError(f"{self.directory} holds {len(strangers)} file(s) that clearsweep did "
+                             f"not write ({shown}); it keeps a sweep's finished cases in that "
+                             "folder and deletes only its own files there: move them away, or "
+                             "write to another output file")
 
     def owner(self) -> dict[str, Any] | None:
         """The sweep that last used the folder, from its latest ``run`` event (None if unknown)."""
         runs = self.events("run")
         return runs[-1] if runs else None
 
+    def _closest_change(self, foreign: set[str],
+                        configs: Mapping[str, Config] | None) -> tuple[str, bool] | None:
+        """What changed between a foreign part's recorded identity and the nearest case of
+        this sweep, in words, and whether only the inputs besides the config changed (the
+        materials values, the version); None where no part records its identity."""
+        if not configs:
+            return None
+        theirs = next((identity for h in sorted(foreign)[:16]
+                       for identity in [read_mark(self.path(h))[1]] if identity), None)
+        if theirs is None:
+            return None
+        ours = [run_identity(cfg) for cfg in list(configs.values())[:256]]
+        same_config = [i for i in ours if i["config"] == theirs.get("config")]
+        if same_config:
+            return identity_changes(theirs, same_config[0]), True
+        best = min(ours, key=lambda i: len(identity_differences(theirs, i)))
+        return identity_changes(theirs, best), False
+
     def _foreign_message(self, foreign: set[str], finished: set[str],
-                         sweep: Mapping[str, Any] | None) -> str:
+                         sweep: Mapping[str, Any] | None,
+                         configs: Mapping[str, Config] | None = None) -> str:
+        change = self._closest_change(foreign, configs)
+        if change is not None and change[1]:
+            return (f"{self.directory} holds {len(foreign)} finished case(s) of this sweep made "
+                    f"with other inputs ({change[0]}); resuming would mix the results of two "
+                    "inputs: pass --overwrite to delete every part and start again, or "
+                    "--discard-parts to delete those parts")
         owner = self.owner()
         out = self.directory.with_name(self.directory.name[: -len(".parts")])
         def describe(run: Mapping[str, Any]) -> str:
@@ -217,9 +372,10 @@ class PartStore:
             again = (f"; to finish that sweep run: clearsweep {command} {owner['source']} -o {out} "
                      "--resume (with its --set values)" if owner.get("source") else "")
         this = f" {describe(sweep)}" if sweep else ""
+        nearest = f" (nearest case: {change[0]})" if change is not None else ""
         return (f"{self.directory} holds {len(foreign)} finished case(s) of {whose}, which are "
-                f"not cases of this sweep{this}{again}; write to another output file, or pass "
-                "--discard-parts to delete those parts (--overwrite deletes every part)")
+                f"not cases of this sweep{this}{nearest}{again}; write to another output file, "
+                "or pass --discard-parts to delete those parts (--overwrite deletes every part)")
 
     def close(self) -> None:
         """Close the log and release the lock (the parts stay)."""
@@ -231,9 +387,18 @@ class PartStore:
             self._lock_fd = None
 
     def remove(self) -> None:
-        """Delete the folder with everything in it (after a successful assembly)."""
+        """Delete the files clearsweep wrote in the folder, then the folder if nothing else
+        is in it (after a successful assembly): a file put there since is left, with the folder."""
         self.close()
-        shutil.rmtree(self.directory, ignore_errors=True)
+        ledger = self._ledger()
+        for name in sorted(os.listdir(self.directory)) if self.directory.is_dir() else []:
+            if name != LOG_NAME and self._own(name, ledger):
+                (self.directory / name).unlink(missing_ok=True)
+        (self.directory / LOG_NAME).unlink(missing_ok=True)
+        try:
+            self.directory.rmdir()
+        except OSError:
+            pass
 
     def __enter__(self) -> PartStore:
         return self
@@ -243,7 +408,8 @@ class PartStore:
 
     def _remove_temporaries(self) -> None:
         for tmp in self.directory.glob(".*.tmp"):
-            tmp.unlink(missing_ok=True)
+            if _TEMPORARY.fullmatch(tmp.name):
+                tmp.unlink(missing_ok=True)
 
     # ------------------------------------------------------------------ parts
     def path(self, h: str) -> Path:
@@ -258,7 +424,8 @@ class PartStore:
                 if not p.name.startswith(".")}
 
     def write(self, h: str, part: xr.Dataset) -> Path:
-        """Write one finished case atomically (temporary file, then rename)."""
+        """Write one finished case atomically (temporary file, then rename), marked with its
+        key ``h``."""
         return write_part(self.directory, h, part)
 
     def read(self, h: str) -> xr.Dataset:

@@ -39,7 +39,7 @@ from ..config import (
 from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
-from .parts import canonical_json, case_hash
+from .parts import canonical_json, case_key
 
 #: First components of a dotted key that the dimension name leaves out.
 DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver", "ensemble")
@@ -172,7 +172,9 @@ class Case:
 
     @property
     def config_json(self) -> str | None:
-        """The resolved configuration as canonical JSON (what :attr:`hash` is taken of)."""
+        """The resolved configuration as canonical JSON (:attr:`hash` is the case key,
+        :func:`clearsweep.sweeping.parts.case_key`: of this, less the materials file's path,
+        with the materials values it reads and the clearsweep version)."""
         return None if self.config is None else canonical_json(self.config.to_dict())
 
 
@@ -752,7 +754,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
                 _check_reliability_case(resolved, source, allow_large)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
-        cases.append(Case(index, case_hash(resolved.to_dict()), resolved))
+        cases.append(Case(index, case_key(resolved), resolved))
 
     text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
     base_file = doc.get("base")

@@ -23,9 +23,10 @@ import xarray as xr
 
 from ..config import ConfigError
 from ..dataset import open_results, remove_stale_temporaries, versions
+from ..params import run_identity
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
-from .parts import NOT_FAILED, PartStore, parts_dir_for
+from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
 from .worker import _receipt, _worker_died
 
@@ -252,7 +253,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         with _InterruptGuard() as guard:
             runnable = plan.runnable()
             finished = store.open(resume=resume, overwrite=overwrite, expected=set(runnable),
-                                  discard_foreign=discard_parts,
+                                  discard_foreign=discard_parts, configs=runnable,
                                   sweep={"name": plan.name, "source": plan.source,
                                          "cases": len(plan.cases)})
             # OUT is ours while we hold the lock: drop what a killed assembly left beside it
@@ -359,7 +360,7 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     def on_result(h: str, result) -> None:
         nonlocal failed, done
         if isinstance(result, xr.Dataset):
-            store.write(h, result)
+            store.write(h, with_identity(result, run_identity(runnable[h])))
             result = _receipt(result)
         store.log("done", hash=h, **result)
         failed += result["status"] not in NOT_FAILED

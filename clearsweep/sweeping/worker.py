@@ -13,8 +13,9 @@ import numpy as np
 import xarray as xr
 
 from .. import variables
+from ..params import run_identity
 from ..summary import case_summary
-from .parts import MESSAGE_ATTRS, STATUS_ATTRS, write_part
+from .parts import MESSAGE_ATTRS, STATUS_ATTRS, with_identity, write_part
 
 #: How often a pool worker checks that the driver process still exists [s].
 WATCHDOG_PERIOD_S = 1.0
@@ -107,7 +108,7 @@ def _run_and_store(payload: tuple, parts_dir: str, h: str) -> dict[str, Any]:
     while the cases run.
     """
     part = _run_case(payload)
-    write_part(parts_dir, h, part)
+    write_part(parts_dir, h, with_identity(part, run_identity(payload[0])))
     return _receipt(part)
 
 
