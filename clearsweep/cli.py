@@ -737,6 +737,30 @@ def _fail(message: str, code: int) -> NoReturn:
     raise CommandFailed(message, code)
 
 
+#: The address schemes of a Dask scheduler that a sweep can reach from another process.
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def _check_scheduler(address: str) -> None:
+    """Refuse a ``--scheduler`` address that no scheduler can have, before any work: Dask's
+    own ValueError came as a traceback after the plan and the compile."""
+    scheme, sep, rest = address.strip().rpartition("://")
+    scheme = scheme if sep else "tcp"
+    host, colon, port = rest.rpartition(":")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    problem = ("no address" if not address.strip()
+               else f"unknown scheme {scheme!r} (known: {', '.join(SCHEDULER_SCHEMES)})"
+               if scheme not in SCHEDULER_SCHEMES
+               else "no ':PORT' after the host" if not colon
+               else "no host" if not host or any(c.isspace() or c in "/?#@" for c in host)
+               else f"a port of 1 to 65535 after the host, not {port!r}"
+               if not (port.isdecimal() and 0 < int(port) <= 65535) else None)
+    if problem:
+        raise click.BadParameter(f"{address!r}: {problem}; expected [SCHEME://]HOST:PORT, e.g. "
+                                 "tcp://127.0.0.1:8786", param_hint="'--scheduler'")
+
+
 def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
     """The command line that continues interrupted work: the same overrides, as they are
     part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
@@ -794,6 +818,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     """
     from .sweeping import PartStore, expand, parts_dir_for
 
+    if scheduler is not None:
+        _check_scheduler(scheduler)
     if scheduler and dask_local:
         raise click.UsageError("--scheduler and --dask-local both choose the Dask cluster; give one")
     if resume and overwrite:

@@ -32,6 +32,8 @@ from .schema import (  # noqa: F401
     Field,
     close_match,
     dump_yaml,
+    oversized_number,
+    oversized_text,
     parse_yaml,
     read_yaml,
     short_repr,
@@ -630,8 +632,10 @@ def load_config(source: str | os.PathLike | Mapping[str, Any] | Config, override
         return _validate(raw, label, base_dir)
     except ConfigError as exc:
         if exc.key and any(exc.key == k or k.startswith(exc.key + ".") for k in overridden):
+            big = oversized_number(exc.value)
+            shown = short_repr(exc.value) if big is None else oversized_text(big)
             raise ConfigError(exc.key, exc.value, exc.expected, label, exc.suggestion,
-                              f"{short_repr(exc.value)} (from --set)") from None
+                              f"{shown} (from --set)") from None
         raise
 
 

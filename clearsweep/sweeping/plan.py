@@ -36,6 +36,7 @@ from ..config import (
     set_path,
     short_repr,
 )
+from ..schema import OVERSIZED, oversized_number, oversized_text
 from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
@@ -365,6 +366,9 @@ def _check_swept_key(key, base: Config, where: str, source: str) -> str:
 def _check_values(values, where: str, source: str, length: int | None = None) -> tuple:
     if not isinstance(values, list) or not values:
         raise ConfigError(where, values, "a non-empty list of values", source)
+    big = oversized_number(values)
+    if big is not None:
+        raise ConfigError(where, values, OVERSIZED, source, got=oversized_text(big))
     if length is not None and len(values) != length:
         raise ConfigError(where, values, f"a list of {length} values (as long as the group's "
                           "first list: the keys of a zip group vary together)", source,
@@ -511,6 +515,13 @@ def _parse_sample(spec, base: Config, source: str,
     if method not in SAMPLE_METHODS:
         raise ConfigError(f"{where}.method", method, " or ".join(SAMPLE_METHODS), source,
                           close_match(method, SAMPLE_METHODS))
+    for name, value in spec.items():
+        inner = value.items() if name == "ranges" and isinstance(value, Mapping) else [(None, value)]
+        for key, item in inner:
+            big = oversized_number(item)
+            if big is not None:
+                raise ConfigError(f"{where}.{name}" + (f".{key}" if key else ""), item,
+                                  OVERSIZED, source, got=oversized_text(big))
     n = spec.get("n")
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise ConfigError(f"{where}.n", n, "an integer >= 1 (points, or base points of saltelli)",
