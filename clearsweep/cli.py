@@ -177,13 +177,14 @@ def _case_inputs(config: str, cfg) -> list[tuple[str, str | None]]:
 
 
 def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
-               parts_resumed: bool = False) -> str:
+               parts_resumed: bool = False, derived: Iterable[str] = (".parts",)) -> str:
     """``-o/--out`` (or its default), refused where it is an input or a file that is not
-    a clearsweep results file (without --overwrite); returns the path. ``parts_resumed``:
-    --resume of a sweep or ensemble, which --overwrite cannot join."""
+    a clearsweep results file (without --overwrite), or where it or a name ``derived`` from
+    it is too long for the file system; returns the path. ``parts_resumed``: --resume of a
+    sweep or ensemble, which --overwrite cannot join."""
     path = out or str(default)
     check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite,
-                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY)
+                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY, derived=derived)
     return path
 
 
@@ -313,6 +314,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     """
     cfg = load_config(config, overrides)
     from .service_life import (
+        CHECKPOINT_SUFFIX,
         CheckpointError,
         LifeInterrupted,
         LifeState,
@@ -330,7 +332,8 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         click.echo(life_plan_text(cfg, config, allow_large=allow_large))
         return
     life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
-    out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite)
+    out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite,
+                     derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
