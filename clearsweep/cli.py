@@ -501,6 +501,13 @@ def open_input(path: str) -> Iterator[xr.Dataset]:
         raise click.BadParameter(f"{path!r} is not a results file ({reason})",
                                  param_hint="'PATH'") from None
     with ds:
+        from .variables import layout_problem
+
+        problem = layout_problem(ds)
+        if problem:
+            raise click.UsageError(f"{path}: the file is not as clearsweep writes it: {problem} "
+                                   "(edited since, or written by another program); write it "
+                                   "again with the command that made it")
         try:
             yield ds
         except KeyError as exc:
