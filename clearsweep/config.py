@@ -491,12 +491,23 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                 f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.socket_radius "
                 f"({most:.6g}), so that the ball radius R_j = socket_radius - clearance is at "
                 f"least {MIN_BALL_RADIUS_FRACTION:g} * socket_radius", source)
+    # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every
+    # clearance a reliability member can draw: both ends must be clearances this check
+    # admits, so that no seed decides whether the config is valid (docs/reliability.md).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
+        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
         if 0.0 < spec["clearance"] <= tolerance:
             raise ConfigError("reliability.clearance_tolerance", tolerance,
                               f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
                               "every member keeps a clearance", source)
+        if spec["clearance"] > 0.0 and spec["clearance"] + tolerance > most:
+            raise ConfigError(
+                "reliability.clearance_tolerance", tolerance,
+                f"a number <= {most - spec['clearance']:.6g}, so that the band joints.{joint}."
+                f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
+                f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
+                f"socket_radius ({most:.6g} m), whatever member draws it", source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):

@@ -606,12 +606,26 @@ def _check_reliability_base(base: Config, source: str) -> None:
                           "(its members are reliability.members)", source)
 
 
-def _check_reliability_case(cfg: Config, source: str, allow_large: bool) -> None:
+def _check_reliability_case(cfg: Config, source: str, allow_large: bool,
+                            label: Mapping[str, Any] | None = None) -> None:
     """A reliability case: limits that can be reached, and a member config (its draws
-    applied) that the simulator admits."""
+    applied) that the simulator admits.
+
+    A design whose limits can never be reached (wear-through of an uncoated design) refuses
+    the whole sweep before anything runs, its message saying how to run the other designs:
+    a ``sweep.skip`` rule for it. A design the sweep file asks for is never dropped unsaid."""
     from ..reliability import check_reliability, member_config
 
-    check_reliability(cfg, source)
+    try:
+        check_reliability(cfg, source)
+    except ConfigError as exc:
+        design = {n: v for n, v in (label or {}).items() if n != MEMBER_DIM}
+        if not design:
+            raise
+        rule = "{" + ", ".join(f"{n}: {v}" for n, v in design.items()) + "}"
+        raise ConfigError(exc.key, exc.value, f"{exc.expected}; to run the other designs, "
+                          f"skip this one (sweep: skip: [{rule}])", exc.source, exc.suggestion,
+                          exc.got) from None
     try:
         life_block(member_config(cfg), allow_large=allow_large, source=source)
     except ConfigError as exc:
@@ -760,7 +774,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             elif store != "reliability":
                 preflight(resolved, allow_large=allow_large)
             if store == "reliability":
-                _check_reliability_case(resolved, source, allow_large)
+                _check_reliability_case(resolved, source, allow_large, label)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_hash(resolved.to_dict()), resolved))
