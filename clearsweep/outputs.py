@@ -163,6 +163,19 @@ def check_name_lengths(path: str | os.PathLike, option: str, derived: Iterable[s
                           f"{limit - TEMPORARY_NAME_EXTRA - len(longest)} bytes")
 
 
+def check_folder(path: str | os.PathLike, option: str) -> None:
+    """Refuse an output whose folder cannot be made: a part of it is an existing file (``-o
+    one.yaml/out.nc``). Missing folders are made when the output is written; before, this
+    case ran the whole simulation and then failed with "File exists"."""
+    path = Path(path)
+    for folder in (path.parent, *path.parent.parents):
+        if folder.exists() or folder.is_symlink():
+            if not folder.is_dir():
+                raise OutputError(f"{option} {path}: {folder} is a file, not a folder; choose "
+                                  "an output in a folder")
+            return
+
+
 def check_output(path: str | os.PathLike, option: str,
                  inputs: Iterable[tuple[str, str | os.PathLike | None]], *, overwrite: bool,
                  replaceable: Callable[[Path], bool] = is_results_file,
@@ -200,6 +213,7 @@ def check_output(path: str | os.PathLike, option: str,
     """
     path = Path(path)
     check_name_lengths(path, option, derived)
+    check_folder(path, option)
     for description, source in inputs:
         if source is not None and same_file(path, source):
             how = ("is" if os.path.abspath(path) == os.path.abspath(source)
