@@ -27,6 +27,7 @@ import os
 import re
 import shlex
 import sys
+import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -51,6 +52,7 @@ from .choices import (
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
 from .outputs import OVERWRITE_REMEDY, RESUME_REMEDY, OutputError, check_output, is_own_figure
+from .schema import ClearsweepWarning
 from .variables import JOINTS
 from .version import __version__
 
@@ -78,6 +80,19 @@ def error_line(exc: click.ClickException) -> str:
     return f"clearsweep: {kind}: {message}"
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Print a warning as one ``clearsweep: warning: ...`` line on stderr: clearsweep's own
+    in its words, a library's (SALib, scipy, numpy) with where it came from, instead of
+    the library's two raw lines with a source line."""
+    text = " ".join(str(message).split())
+    if not issubclass(category, ClearsweepWarning):
+        parts = Path(filename).parts
+        origin = next((parts[i + 1] for i, p in enumerate(parts[:-1])
+                       if p in ("site-packages", "dist-packages")), Path(filename).stem)
+        text = f"{text} ({category.__name__} from {origin})"
+    click.echo(f"clearsweep: warning: {text}", err=True)
+
+
 class _Command(click.Command):
     """A command that reports every error as one line on stderr with its exit code: click's own usage
     errors (exit 2), a ``ConfigError`` or ``OutputError`` whichever command raises it (exit 2), a
@@ -86,7 +101,9 @@ class _Command(click.Command):
 
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.showwarning = _show_warning
+                return super().invoke(ctx)
         except (ConfigError, OutputError) as exc:
             raise CommandFailed(str(exc), 2) from None
         except KeyboardInterrupt:

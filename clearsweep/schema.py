@@ -28,7 +28,14 @@ import yaml
 
 __all__ = ["ConfigError", "Field", "close_match", "close_matches", "short_repr", "parse_yaml",
            "read_yaml", "dump_yaml", "MAX_YAML_BYTES", "MAX_YAML_ALIASES", "MAX_YAML_DEPTH",
-           "MAX_YAML_VALUES", "MAX_INTEGER", "oversized_number", "oversized_text", "OVERSIZED"]
+           "MAX_YAML_VALUES", "MAX_INTEGER", "oversized_number", "oversized_text", "OVERSIZED",
+           "ClearsweepWarning"]
+
+
+class ClearsweepWarning(UserWarning):
+    """A warning of clearsweep's own, in its words (the CLI prints it as one
+    ``clearsweep: warning: ...`` line); a library's warning that clearsweep explains is
+    replaced by one of these."""
 
 #: Largest integer a config holds (int64, as the results files store it): YAML reads an
 #: integer of any length, and one beyond a float64 (400 digits) stopped ``math.isfinite``

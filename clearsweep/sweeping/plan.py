@@ -11,6 +11,7 @@ import itertools
 import json
 import math
 import os
+import warnings
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,7 +37,7 @@ from ..config import (
     set_path,
     short_repr,
 )
-from ..schema import OVERSIZED, oversized_number, oversized_text
+from ..schema import OVERSIZED, ClearsweepWarning, oversized_number, oversized_text
 from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
@@ -481,17 +482,26 @@ def sample_points(method: str, n: int, ranges: Mapping[str, Sequence[float]], se
     """
     lo = np.array([float(r[0]) for r in ranges.values()])
     hi = np.array([float(r[1]) for r in ranges.values()])
-    if method == "saltelli":
-        from SALib.sample import sobol as saltelli
+    if method in ("sobol", "saltelli") and n & (n - 1):
+        # scipy and SALib say "The balance properties of Sobol' points require n to be a
+        # power of 2" without naming the key: say it once, in clearsweep's words
+        below = 1 << (n.bit_length() - 1)
+        warnings.warn(f"sweep.sample.n: {n} is not a power of 2; Sobol' points (method "
+                      f"{method}) are balanced at n = 2^k only: {below} or {2 * below} keeps "
+                      "that balance", ClearsweepWarning, stacklevel=2)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="The balance properties of Sobol' points")
+        if method == "saltelli":
+            from SALib.sample import sobol as saltelli
 
-        problem = {"num_vars": len(ranges), "names": list(ranges),
-                   "bounds": [[a, b] for a, b in zip(lo, hi)]}
-        return saltelli.sample(problem, n, calc_second_order=second_order, seed=seed)
-    from scipy.stats import qmc
+            problem = {"num_vars": len(ranges), "names": list(ranges),
+                       "bounds": [[a, b] for a, b in zip(lo, hi)]}
+            return saltelli.sample(problem, n, calc_second_order=second_order, seed=seed)
+        from scipy.stats import qmc
 
-    engine = (qmc.Sobol(len(ranges), scramble=True, seed=seed) if method == "sobol"
-              else qmc.LatinHypercube(len(ranges), seed=seed))
-    return qmc.scale(engine.random(n), lo, hi)
+        engine = (qmc.Sobol(len(ranges), scramble=True, seed=seed) if method == "sobol"
+                  else qmc.LatinHypercube(len(ranges), seed=seed))
+        return qmc.scale(engine.random(n), lo, hi)
 
 
 def sample_size(method: str, n: int, dims: int, second_order: bool = False) -> int:
