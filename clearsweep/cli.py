@@ -51,7 +51,14 @@ from .choices import (
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
-from .outputs import OVERWRITE_REMEDY, RESUME_REMEDY, OutputError, check_output, is_own_figure
+from .outputs import (
+    OVERWRITE_REMEDY,
+    RESULTS_SOURCE,
+    RESUME_REMEDY,
+    OutputError,
+    check_output,
+    is_own_figure,
+)
 from .schema import ClearsweepWarning
 from .variables import JOINTS
 from .version import __version__
@@ -520,6 +527,11 @@ def open_input(path: str) -> Iterator[xr.Dataset]:
     with ds:
         from .variables import layout_problem
 
+        if ds.attrs.get("source") != RESULTS_SOURCE and not any(
+                name in ds for name in ("status", "stop_reason", "block_status")):
+            raise click.UsageError(f"{path}: not a clearsweep results file (its source attribute "
+                                   f"is {ds.attrs.get('source')!r}, and it has no status "
+                                   "variable): give a file that run, life or sweep wrote")
         problem = layout_problem(ds)
         if problem:
             raise click.UsageError(f"{path}: the file is not as clearsweep writes it: {problem} "

@@ -789,6 +789,9 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_hash(resolved.to_dict()), resolved))
 
+    if cases and all(c.hash is None for c in cases):
+        raise ConfigError("sweep.skip", (spec or {}).get("skip"), "rules that leave at least one "
+                          "case to run", source, got=f"rules that skip all {len(cases)} cases")
     text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
     base_file = doc.get("base")
     return SweepPlan(name, store, source, text, base, tuple(axes), cases,
