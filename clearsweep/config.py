@@ -570,6 +570,9 @@ def _split_override(text: str, source: str) -> tuple[str, Any]:
     if not sep or not key or any(not part for part in key.split(".")):
         raise ConfigError(None, text, "an override KEY=VALUE with a dotted key, e.g. joints.B.coating=PTFE",
                           source)
+    if not raw.strip():     # YAML reads it as null: say what was typed
+        raise ConfigError(key, raw, "a value after '=' (null for none)", source,
+                          got="an empty value (from --set)")
     try:
         return key, parse_yaml(raw, source)
     except ConfigError as exc:

@@ -334,6 +334,11 @@ def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> C
         if not path.is_file():
             raise ConfigError("base", base, "an inline case config or the path of a case YAML file "
                               f"(relative to the sweep file; looked for {path})", source)
+        doc = read_yaml(path, f"{source}: base {base}")
+        if file_kind(doc) == "sweep":   # load_config's hint would name `clearsweep sweep` of it
+            raise ConfigError("base", base, "the path of a case config (a sweep's base is one "
+                              "case; a sweep file cannot be the base of another)", source,
+                              got=f"{base!r}, a sweep file")
         return load_config(path, overrides, source_name=f"{source}: base {base}")
     if not isinstance(base, Mapping):
         raise ConfigError("base", base, "an inline case config (a mapping) or the path of a case "
