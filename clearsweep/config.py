@@ -494,6 +494,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
     # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every
     # clearance a reliability member can draw: both ends must be clearances this check
     # admits, so that no seed decides whether the config is valid (docs/reliability.md).
+    # A member's own config has its drawn clearance and no band (reliability.member_config).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
         most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
@@ -502,9 +503,11 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                               f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
                               "every member keeps a clearance", source)
         if spec["clearance"] > 0.0 and spec["clearance"] + tolerance > most:
+            room = most - spec["clearance"]     # in full where 6 digits would read as the value
+            shown = f"{room:.6g}" if f"{room:.6g}" != f"{tolerance:.6g}" else repr(room)
             raise ConfigError(
                 "reliability.clearance_tolerance", tolerance,
-                f"a number <= {most - spec['clearance']:.6g}, so that the band joints.{joint}."
+                f"a number <= {shown}, so that the band joints.{joint}."
                 f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
                 f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
                 f"socket_radius ({most:.6g} m), whatever member draws it", source)

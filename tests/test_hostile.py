@@ -1117,3 +1117,138 @@ def test_a_full_disk_while_writing_the_results_says_the_disk_is_full(tmp_path, m
     assert result.stderr.strip().splitlines()[-1] == (
         f"clearsweep: error: cannot write {out}: the disk is full (No space left on device)")
     assert not out.exists()
+
+
+# --- round 4 (issue 33, items 4-6): what the table's one-line rows cannot show
+
+@pytest.mark.parametrize("limit", ["any", "clearance_growth"])
+def test_a_reliability_figure_of_one_limit(tmp_path, files, limit):
+    """Before: --select limit=any stopped with "TypeError: iteration over a 0-d array"."""
+    import clearsweep.plotting as plotting
+
+    figures = []
+    real = plotting.figure
+
+    def keep(*args, **kwargs):
+        figures.append(real(*args, **kwargs))
+        return figures[-1]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(plotting, "figure", keep)
+        result = CliRunner().invoke(main, ["plot", str(files / "rel.nc"), "--kind", "reliability",
+                                           "--select", f"limit={limit}", "-o", str(tmp_path / "r.png")])
+    assert result.exit_code == 0, result.output
+    assert [ax.get_title() for ax in figures[0].axes] == [f"limit: {limit}"]
+
+
+def test_the_tolerance_band_rule_does_not_depend_on_the_seed():
+    """Before: with B's clearance 7.4 mm (bound 7.5 mm) and t = 0.2 mm, seed 1 was accepted
+    and seeds 0, 2 and 3 refused, by the draws of member 1; a band inside the bounds was
+    refused or not by the draws too."""
+    lines = set()
+    for seed in range(4):
+        result = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "joints.B.clearance=7.4e-3",
+                                           "--set", "reliability.clearance_tolerance=2e-4", "--set",
+                                           "reliability.members=2", "--set", f"reliability.seed={seed}"])
+        assert result.exit_code == 2, (seed, result.output)
+        lines.add(result.stderr.strip())
+    assert len(lines) == 1 and "reliability.clearance_tolerance: got 0.0002" in lines.pop()
+    inside = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "joints.B.clearance=7.4e-3",
+                                       "--set", "reliability.clearance_tolerance=0.99e-4"])
+    assert inside.exit_code == 0, inside.output      # c + t < 7.5 mm: every draw admitted
+    # t = 0.2 mm < c = 0.25 mm: every member keeps a clearance. Before, the band was checked
+    # again around each member's drawn clearance: seeds 0-3 and 5 refused it, seed 4 not.
+    for seed in range(6):
+        result = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "reliability.members=4",
+                                           "--set", "reliability.clearance_tolerance=2e-4",
+                                           "--set", f"reliability.seed={seed}"])
+        assert result.exit_code == 0, (seed, result.output)
+
+
+def test_the_skip_rule_the_wear_through_message_names_runs_the_coated_designs(tmp_path):
+    """The rule the refusal names (docs/reliability.md) leaves the other designs valid."""
+    limits = ["--set", "life.max_clearance_growth=null", "--set", "life.max_motion_error=null",
+              "--set", "life.stop_at_wear_through=true"]
+    refused = CliRunner().invoke(main, ["validate", REL, *limits])
+    rule = refused.stderr.split("(sweep: skip: ")[1].split(")")[0]
+    assert rule == "[{B_coating: none}]"
+    text = (CONFIGS / "reliability.yaml").read_text().replace(
+        "    joints.B.coating: [none, MoS2, lead, PTFE]\n",
+        f"    joints.B.coating: [none, MoS2, lead, PTFE]\n  skip: {rule}\n")
+    (tmp_path / "rel.yaml").write_text(text)
+    result = CliRunner().invoke(main, ["validate", str(tmp_path / "rel.yaml"), *limits])
+    assert result.exit_code == 0, result.output
+    assert "64 life runs, 48 to run" in result.stdout      # 16 members of each coated design
+
+
+def test_a_damaged_part_is_named_with_what_to_do(tmp_path):
+    """Before: "cannot write OUT.parts/H.nc: NetCDF: HDF error; ... make room and run again
+    with --resume", and every --resume ended the same way."""
+    config, out = two_case_sweep(tmp_path), tmp_path / "two.nc"
+    argv = ["sweep", config, "-o", str(out), "--workers", "1", "--no-progress"]
+    assert CliRunner().invoke(main, [*argv, "--keep-parts"]).exit_code == 0
+    out.unlink()
+    part = sorted((tmp_path / "two.nc.parts").glob("*.nc"))[0]
+    part.write_bytes(part.read_bytes()[:300])
+    for _ in range(2):
+        result = CliRunner().invoke(main, [*argv, "--resume"])
+        assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+        assert result.stderr.splitlines()[-1] == (
+            f"clearsweep: error: the finished part {part} cannot be read (NetCDF: HDF error): delete "
+            "it and run the same command again with --resume (its case runs again, the other "
+            "finished cases are kept)")
+        assert not out.exists()
+    part.unlink()                                       # what the message says
+    again = CliRunner().invoke(main, [*argv, "--resume"])
+    assert again.exit_code == 0, again.output
+    assert "2 cases, 1 to simulate (1 finished before, kept)" in again.stderr
+
+
+def test_ctrl_c_counts_the_parts_kept_on_disk(tmp_path, monkeypatch):
+    """Before: "1 of 2 cases are finished" while 2 parts were on disk: a worker writes its
+    part before the driver hears of it, and --resume keeps every part."""
+    import clearsweep.sweeping.run as run
+    from clearsweep.sweeping.worker import _run_and_store
+
+    def two_written_one_heard(backend, tasks, on_result, guard):
+        tasks = list(tasks)
+        receipts = [_run_and_store(payload, backend.parts_dir, h) for h, payload in tasks]
+        on_result(tasks[0][0], receipts[0])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "_drive", two_written_one_heard)
+    monkeypatch.setattr(run, "_backend", lambda *a, **k: _Parts(tmp_path / "out.nc.parts"))
+    result = CliRunner().invoke(main, ["sweep", two_case_sweep(tmp_path), "-o", str(tmp_path / "out.nc"),
+                                       "--workers", "2", "--no-progress"])
+    assert result.exit_code == 130, result.output
+    assert "2 of 2 cases are finished and kept in" in result.stderr.splitlines()[-1]
+    assert len(list((tmp_path / "out.nc.parts").glob("*.nc"))) == 2
+
+
+class _Parts:
+    """A stand-in backend whose ``_drive`` the test replaces: it only names the parts folder."""
+
+    label = "stand-in"
+
+    def __init__(self, parts_dir):
+        self.parts_dir = str(parts_dir)
+
+    def close(self, interrupted=False):
+        pass
+
+
+def test_library_warnings_are_one_clearsweep_line(tmp_path, capsys):
+    """Before: scipy's and SALib's two raw lines each ("UserWarning: The balance properties
+    of Sobol' points require n to be a power of 2" and the source line)."""
+    from clearsweep.cli import _show_warning
+
+    config = sample_file(tmp_path, "{method: sobol, n: 5, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}")
+    result = CliRunner().invoke(main, ["validate", config, "-q"])
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        "clearsweep: warning: sweep.sample.n: 5 is not a power of 2; Sobol' points (method sobol) "
+        "are balanced at n = 2^k only: 4 or 8 keeps that balance"]
+    _show_warning(RuntimeWarning("invalid value encountered in divide"), RuntimeWarning,
+                  "/venv/lib/python3.11/site-packages/SALib/analyze/sobol.py", 140)
+    assert capsys.readouterr().err == ("clearsweep: warning: invalid value encountered in divide "
+                                       "(RuntimeWarning from SALib)\n")
