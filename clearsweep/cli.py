@@ -527,11 +527,13 @@ def open_input(path: str) -> Iterator[xr.Dataset]:
     with ds:
         from .variables import layout_problem
 
-        if ds.attrs.get("source") != RESULTS_SOURCE and not any(
-                name in ds for name in ("status", "stop_reason", "block_status")):
+        source = ds.attrs.get("source")
+        ours = (any(name in ds for name in ("status", "stop_reason", "block_status"))
+                or any(name in ds.attrs for name in ("sweep_store", "sweep_config")))
+        if source != RESULTS_SOURCE and (source is not None or not ours):
             raise click.UsageError(f"{path}: not a clearsweep results file (its source attribute "
-                                   f"is {ds.attrs.get('source')!r}, and it has no status "
-                                   "variable): give a file that run, life or sweep wrote")
+                                   f"is {source!r}, not {RESULTS_SOURCE!r}): give a file that "
+                                   "run, life or sweep wrote")
         problem = layout_problem(ds)
         if problem:
             raise click.UsageError(f"{path}: the file is not as clearsweep writes it: {problem} "
