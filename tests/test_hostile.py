@@ -1066,11 +1066,8 @@ def test_the_resume_banner_counts_only_the_cases_left(tmp_path):
     assert again.stderr.split("results up to ")[1].split("\n")[0] == size.split("\n")[0]
 
 
-@pytest.mark.parametrize("select, title", [((), "Socket wear depth"),
-                                           (("--select", "snapshot=1"),
-                                            "Socket wear depth, snapshot 1 at ")])
-def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, select, title):
-    """Before: --kind wear-map on a life file asked for --select on snapshot, then refused it."""
+def drawn(argv: list[str]):
+    """``clearsweep ARGV`` and the matplotlib figures it drew."""
     import clearsweep.plotting as plotting
 
     figures = []
@@ -1082,8 +1079,16 @@ def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, sel
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(plotting, "figure", keep)
-        result = CliRunner().invoke(main, ["plot", str(files / "life.nc"), "--kind", "wear-map",
-                                           *select, "-o", str(tmp_path / "w.png")])
+        return CliRunner().invoke(main, argv), figures
+
+
+@pytest.mark.parametrize("select, title", [((), "Socket wear depth"),
+                                           (("--select", "snapshot=1"),
+                                            "Socket wear depth, snapshot 1 at ")])
+def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, select, title):
+    """Before: --kind wear-map on a life file asked for --select on snapshot, then refused it."""
+    result, figures = drawn(["plot", str(files / "life.nc"), "--kind", "wear-map", *select,
+                             "-o", str(tmp_path / "w.png")])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "w.png").stat().st_size > 0
     suptitle = figures[0].get_suptitle()
@@ -1124,19 +1129,8 @@ def test_a_full_disk_while_writing_the_results_says_the_disk_is_full(tmp_path, m
 @pytest.mark.parametrize("limit", ["any", "clearance_growth"])
 def test_a_reliability_figure_of_one_limit(tmp_path, files, limit):
     """Before: --select limit=any stopped with "TypeError: iteration over a 0-d array"."""
-    import clearsweep.plotting as plotting
-
-    figures = []
-    real = plotting.figure
-
-    def keep(*args, **kwargs):
-        figures.append(real(*args, **kwargs))
-        return figures[-1]
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(plotting, "figure", keep)
-        result = CliRunner().invoke(main, ["plot", str(files / "rel.nc"), "--kind", "reliability",
-                                           "--select", f"limit={limit}", "-o", str(tmp_path / "r.png")])
+    result, figures = drawn(["plot", str(files / "rel.nc"), "--kind", "reliability", "--select",
+                             f"limit={limit}", "-o", str(tmp_path / "r.png")])
     assert result.exit_code == 0, result.output
     assert [ax.get_title() for ax in figures[0].axes] == [f"limit: {limit}"]
 
