@@ -4,7 +4,8 @@ is a command line, the exit code it must end with and a substring of its one
 
 Rows of round 3b (issue 22, items 3 and 4) and of the fresh round on the reliability and
 life sections, sampling sweeps, sensitivity, the CUDA backend's options and results files
-of older versions (issue 20, item 6). Before, the rows marked "was:" ended as said there.
+of older versions (issue 20, item 6); round 4 (issue 33, items 4-6: ROUND4_MESSAGES) and its
+fresh fuzz round (ROUND4_FUZZ). Before, the rows marked "was:" ended as said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
 
