@@ -27,6 +27,7 @@ import os
 import re
 import shlex
 import sys
+import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -50,7 +51,15 @@ from .choices import (
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
-from .outputs import OVERWRITE_REMEDY, RESUME_REMEDY, OutputError, check_output, is_own_figure
+from .outputs import (
+    OVERWRITE_REMEDY,
+    RESULTS_SOURCE,
+    RESUME_REMEDY,
+    OutputError,
+    check_output,
+    is_own_figure,
+)
+from .schema import ClearsweepWarning
 from .variables import JOINTS
 from .version import __version__
 
@@ -78,6 +87,19 @@ def error_line(exc: click.ClickException) -> str:
     return f"clearsweep: {kind}: {message}"
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Print a warning as one ``clearsweep: warning: ...`` line on stderr: clearsweep's own
+    in its words, a library's (SALib, scipy, numpy) with where it came from, instead of
+    the library's two raw lines with a source line."""
+    text = " ".join(str(message).split())
+    if not issubclass(category, ClearsweepWarning):
+        parts = Path(filename).parts
+        origin = next((parts[i + 1] for i, p in enumerate(parts[:-1])
+                       if p in ("site-packages", "dist-packages")), Path(filename).stem)
+        text = f"{text} ({category.__name__} from {origin})"
+    click.echo(f"clearsweep: warning: {text}", err=True)
+
+
 class _Command(click.Command):
     """A command that reports every error as one line on stderr with its exit code: click's own usage
     errors (exit 2), a ``ConfigError`` or ``OutputError`` whichever command raises it (exit 2), a
@@ -86,7 +108,9 @@ class _Command(click.Command):
 
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.showwarning = _show_warning
+                return super().invoke(ctx)
         except (ConfigError, OutputError) as exc:
             raise CommandFailed(str(exc), 2) from None
         except KeyboardInterrupt:
@@ -177,14 +201,17 @@ def _case_inputs(config: str, cfg) -> list[tuple[str, str | None]]:
 
 
 def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
-               parts_resumed: bool = False, *, kind: str) -> str:
+               parts_resumed: bool = False, *, kind: str,
+               derived: Iterable[str] = (".parts",)) -> str:
     """``-o/--out`` (or its default), refused where it is an input, a file that is not a
     clearsweep results file or a results file of another ``kind`` than the command writes
-    (without --overwrite; ``outputs.results_kind``); returns the path. ``parts_resumed``:
-    --resume of a sweep or ensemble, which --overwrite cannot join."""
+    (without --overwrite; ``outputs.results_kind``), or where it or a name ``derived`` from
+    it is too long for the file system; returns the path. ``parts_resumed``: --resume of a
+    sweep or ensemble, which --overwrite cannot join."""
     path = out or str(default)
     check_output(path, "-o/--out" if out else "-o/--out (default)", inputs, overwrite=overwrite,
-                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY, kind=kind)
+                 remedy=RESUME_REMEDY if parts_resumed else OVERWRITE_REMEDY, kind=kind,
+                 derived=derived)
     return path
 
 
@@ -321,6 +348,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     """
     cfg = load_config(config, overrides)
     from .service_life import (
+        CHECKPOINT_SUFFIX,
         CheckpointError,
         LifeInterrupted,
         LifeState,
@@ -339,7 +367,8 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         return
     life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
     out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite,
-                     kind="life run")
+                     kind="life run",
+                     derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
 
@@ -507,6 +536,20 @@ def open_input(path: str) -> Iterator[xr.Dataset]:
         raise click.BadParameter(f"{path!r} is not a results file ({reason})",
                                  param_hint="'PATH'") from None
     with ds:
+        from .variables import layout_problem
+
+        source = ds.attrs.get("source")
+        ours = (any(name in ds for name in ("status", "stop_reason", "block_status"))
+                or any(name in ds.attrs for name in ("sweep_store", "sweep_config")))
+        if source != RESULTS_SOURCE and (source is not None or not ours):
+            raise click.UsageError(f"{path}: not a clearsweep results file (its source attribute "
+                                   f"is {source!r}, not {RESULTS_SOURCE!r}): give a file that "
+                                   "run, life or sweep wrote")
+        problem = layout_problem(ds)
+        if problem:
+            raise click.UsageError(f"{path}: the file is not as clearsweep writes it: {problem} "
+                                   "(edited since, or written by another program); write it "
+                                   "again with the command that made it")
         try:
             yield ds
         except KeyError as exc:
@@ -746,6 +789,30 @@ def _fail(message: str, code: int) -> NoReturn:
     raise CommandFailed(message, code)
 
 
+#: The address schemes of a Dask scheduler that a sweep can reach from another process.
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+
+
+def _check_scheduler(address: str) -> None:
+    """Refuse a ``--scheduler`` address that no scheduler can have, before any work: Dask's
+    own ValueError came as a traceback after the plan and the compile."""
+    scheme, sep, rest = address.strip().rpartition("://")
+    scheme = scheme if sep else "tcp"
+    host, colon, port = rest.rpartition(":")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    problem = ("no address" if not address.strip()
+               else f"unknown scheme {scheme!r} (known: {', '.join(SCHEDULER_SCHEMES)})"
+               if scheme not in SCHEDULER_SCHEMES
+               else "no ':PORT' after the host" if not colon
+               else "no host" if not host or any(c.isspace() or c in "/?#@" for c in host)
+               else f"a port of 1 to 65535 after the host, not {port!r}"
+               if not (port.isdecimal() and 0 < int(port) <= 65535) else None)
+    if problem:
+        raise click.BadParameter(f"{address!r}: {problem}; expected [SCHEME://]HOST:PORT, e.g. "
+                                 "tcp://127.0.0.1:8786", param_hint="'--scheduler'")
+
+
 def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
     """The command line that continues interrupted work: the same overrides, as they are
     part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
@@ -803,6 +870,8 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     """
     from .sweeping import PartStore, expand, parts_dir_for
 
+    if scheduler is not None:
+        _check_scheduler(scheduler)
     if scheduler and dask_local:
         raise click.UsageError("--scheduler and --dask-local both choose the Dask cluster; give one")
     if resume and overwrite:

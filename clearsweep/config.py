@@ -32,6 +32,8 @@ from .schema import (  # noqa: F401
     Field,
     close_match,
     dump_yaml,
+    oversized_number,
+    oversized_text,
     parse_yaml,
     read_yaml,
     short_repr,
@@ -498,12 +500,26 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                 f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.socket_radius "
                 f"({most:.6g}), so that the ball radius R_j = socket_radius - clearance is at "
                 f"least {MIN_BALL_RADIUS_FRACTION:g} * socket_radius", source)
+    # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every
+    # clearance a reliability member can draw: both ends must be clearances this check
+    # admits, so that no seed decides whether the config is valid (docs/reliability.md).
+    # A member's own config has its drawn clearance and no band (reliability.member_config).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
+        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
         if 0.0 < spec["clearance"] <= tolerance:
             raise ConfigError("reliability.clearance_tolerance", tolerance,
                               f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
                               "every member keeps a clearance", source)
+        if spec["clearance"] > 0.0 and spec["clearance"] + tolerance > most:
+            room = most - spec["clearance"]     # in full where 6 digits would read as the value
+            shown = f"{room:.6g}" if f"{room:.6g}" != f"{tolerance:.6g}" else repr(room)
+            raise ConfigError(
+                "reliability.clearance_tolerance", tolerance,
+                f"a number <= {shown}, so that the band joints.{joint}."
+                f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
+                f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
+                f"socket_radius ({most:.6g} m), whatever member draws it", source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):
@@ -566,6 +582,9 @@ def _split_override(text: str, source: str) -> tuple[str, Any]:
     if not sep or not key or any(not part for part in key.split(".")):
         raise ConfigError(None, text, "an override KEY=VALUE with a dotted key, e.g. joints.B.coating=PTFE",
                           source)
+    if not raw.strip():     # YAML reads it as null: say what was typed
+        raise ConfigError(key, raw, "a value after '=' (null for none)", source,
+                          got="an empty value (from --set)")
     try:
         return key, parse_yaml(raw, source)
     except ConfigError as exc:
@@ -639,8 +658,10 @@ def load_config(source: str | os.PathLike | Mapping[str, Any] | Config, override
         return _validate(raw, label, base_dir)
     except ConfigError as exc:
         if exc.key and any(exc.key == k or k.startswith(exc.key + ".") for k in overridden):
+            big = oversized_number(exc.value)
+            shown = short_repr(exc.value) if big is None else oversized_text(big)
             raise ConfigError(exc.key, exc.value, exc.expected, label, exc.suggestion,
-                              f"{short_repr(exc.value)} (from --set)") from None
+                              f"{shown} (from --set)") from None
         raise
 
 

@@ -60,6 +60,13 @@ RESUME_REMEDY = ("move it away and run again (--overwrite would also delete the 
                  "that --resume keeps)")
 
 
+#: Characters an atomic write adds to the name it writes (``dataset.replaced_on_success``'s
+#: temporary file ``.NAME.PID.XXXXXXXX.tmp`` beside it, a process id of up to 7 digits).
+TEMPORARY_NAME_EXTRA = len("." + ".9999999." + "x" * 8 + ".tmp")
+#: File-name length where the file system does not say (Linux, macOS and Windows: 255).
+DEFAULT_NAME_MAX = 255
+
+
 class OutputError(ValueError):
     """An output path that is an input of the command, or an existing file clearsweep did not write."""
 
@@ -153,11 +160,67 @@ def is_own_figure(path: str | os.PathLike) -> bool:
     return re.search(mark[1], head + tail) is not None
 
 
+def _name_max(path: Path) -> int:
+    """The longest file name [bytes] the file system holding ``path`` (or its nearest
+    existing folder) admits."""
+    folder = path.parent
+    while True:
+        try:
+            return int(os.pathconf(folder, "PC_NAME_MAX"))
+        except (OSError, ValueError):
+            if folder == folder.parent:
+                return DEFAULT_NAME_MAX
+            folder = folder.parent
+
+
+def check_name_lengths(path: str | os.PathLike, option: str, derived: Iterable[str] = ()) -> None:
+    """Refuse an output whose name, or a name the command derives from it (``derived``: the
+    suffixes of ``OUT.parts``, ``OUT.life-checkpoint`` and its lock; each written through
+    a temporary file ``.NAME.PID.XXXXXXXX.tmp``), is longer than the file system admits, or
+    that lies under a folder name that is: the write failed with "File name too long" at the
+    end of the work, or a traceback before it.
+
+    Raises
+    ------
+    OutputError
+        Naming the part that is too long, its length and the limit.
+    """
+    path = Path(path)
+    limit = _name_max(path)
+    shown = str(path) if len(str(path)) <= 80 else f"{str(path)[:60]}...{str(path)[-12:]}"
+    for part in path.parent.parts:
+        if len(os.fsencode(part)) > limit:
+            raise OutputError(f"{option} {shown}: the folder name {part[:24]}... is "
+                              f"{len(os.fsencode(part))} bytes long; the file system admits "
+                              f"{limit}: choose a shorter one")
+    size = len(os.fsencode(path.name))
+    longest = max(("", *derived), key=len)
+    if size + len(longest) + TEMPORARY_NAME_EXTRA > limit:
+        made = f"OUT{longest} and temporary files" if longest else "temporary files"
+        raise OutputError(f"{option} {shown}: the name is {size} bytes long, the names written "
+                          f"beside it ({made}) {TEMPORARY_NAME_EXTRA + len(longest)} bytes more, "
+                          f"and the file system admits {limit}: choose a name of at most "
+                          f"{limit - TEMPORARY_NAME_EXTRA - len(longest)} bytes")
+
+
+def check_folder(path: str | os.PathLike, option: str) -> None:
+    """Refuse an output whose folder cannot be made: a part of it is an existing file (``-o
+    one.yaml/out.nc``). Missing folders are made when the output is written; before, this
+    case ran the whole simulation and then failed with "File exists"."""
+    path = Path(path)
+    for folder in (path.parent, *path.parent.parents):
+        if folder.exists() or folder.is_symlink():
+            if not folder.is_dir():
+                raise OutputError(f"{option} {path}: {folder} is a file, not a folder; choose "
+                                  "an output in a folder")
+            return
+
+
 def check_output(path: str | os.PathLike, option: str,
                  inputs: Iterable[tuple[str, str | os.PathLike | None]], *, overwrite: bool,
                  replaceable: Callable[[Path], bool] = is_results_file,
                  what: str = "a clearsweep results file", remedy: str = OVERWRITE_REMEDY,
-                 kind: str | None = None) -> None:
+                 kind: str | None = None, derived: Iterable[str] = ()) -> None:
     """Refuse to write ``path`` over an input, or over an existing file that is not ``replaceable``.
 
     Parameters
@@ -181,6 +244,8 @@ def check_output(path: str | os.PathLike, option: str,
     kind
         The kind of results file the command writes (:func:`results_kind`): an existing
         results file of another kind is replaced only with ``overwrite``.
+    derived
+        Suffixes of the names the command writes beside ``path`` (:func:`check_name_lengths`).
 
     Raises
     ------
@@ -191,6 +256,8 @@ def check_output(path: str | os.PathLike, option: str,
         file of another ``kind``.
     """
     path = Path(path)
+    check_name_lengths(path, option, derived)
+    check_folder(path, option)
     for description, source in inputs:
         if source is not None and same_file(path, source):
             how = ("is" if os.path.abspath(path) == os.path.abspath(source)

@@ -814,6 +814,8 @@ def _life_limit(config: dict, key: str | None) -> float | None:
 def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
     _require(ds, ("reliability", "reliability_ci_low", "reliability_ci_high", "b10"),
              "--kind reliability")
+    if "limit" in ds.coords and "limit" not in ds.dims:    # --select limit=NAME: that limit alone
+        ds = ds.expand_dims("limit")
     limits = [str(v) for v in ds["limit"].values]
     designs = [d for d in ds["b10"].dims if d != "limit"]
     flat = ds.stack(design=designs) if designs else ds.expand_dims(design=[0])

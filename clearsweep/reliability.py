@@ -131,7 +131,10 @@ def member_config(cfg: Config) -> Config:
 
     Sets each clearance joint's ``clearance``, ``coating_thickness`` (coated joints) and
     ``wear_coefficient`` (the socket surface's own times the factor), and
-    ``mechanism.speed_rpm``; values left unscattered are not touched.
+    ``mechanism.speed_rpm``; values left unscattered are not touched. With a clearance
+    tolerance, ``reliability.clearance_tolerance`` is 0 in the member's config: the band
+    was checked on the nominal config (its ends, docs/reliability.md), the member holds
+    one drawn clearance.
     """
     rc = cfg.reliability
     if not rc.any:
@@ -147,6 +150,9 @@ def member_config(cfg: Config) -> Config:
             continue
         if rc.clearance_tolerance > 0.0:
             values[f"joints__{name}__clearance"] = float(draws.clearance[j])
+            # the member is one part, its clearance drawn: no band of its own, else the
+            # band's check around the draw (not the nominal) would let the seed decide
+            values["reliability__clearance_tolerance"] = 0.0
         if rc.wear_coefficient_cv > 0.0:
             k = joint.wear_coefficient
             k = surface_material(joint, materials).wear_coefficient_m2_per_N if k is None else k

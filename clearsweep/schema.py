@@ -28,7 +28,43 @@ import yaml
 
 __all__ = ["ConfigError", "Field", "close_match", "close_matches", "short_repr", "parse_yaml",
            "read_yaml", "dump_yaml", "MAX_YAML_BYTES", "MAX_YAML_ALIASES", "MAX_YAML_DEPTH",
-           "MAX_YAML_VALUES"]
+           "MAX_YAML_VALUES", "MAX_INTEGER", "oversized_number", "oversized_text", "OVERSIZED",
+           "ClearsweepWarning"]
+
+
+class ClearsweepWarning(UserWarning):
+    """A warning of clearsweep's own, in its words (the CLI prints it as one
+    ``clearsweep: warning: ...`` line); a library's warning that clearsweep explains is
+    replaced by one of these."""
+
+#: Largest integer a config holds (int64, as the results files store it): YAML reads an
+#: integer of any length, and one beyond a float64 (400 digits) stopped ``math.isfinite``
+#: with an OverflowError traceback.
+MAX_INTEGER = 2**63 - 1
+
+#: What an oversized number is refused with (the ``expected`` words).
+OVERSIZED = "integers of at most 2^63 - 1 in magnitude (a larger number is written as a float: 1e30)"
+
+
+def oversized_number(value: Any) -> Any:
+    """The first integer in ``value`` (a number, or lists and mappings of them) beyond
+    :data:`MAX_INTEGER` in magnitude, else None: YAML reads integers of any length, and
+    one of 400 digits cannot become a float64 or an int64."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, int):
+        return value if abs(value) > MAX_INTEGER else None
+    if isinstance(value, (list, tuple)):
+        items: Iterable[Any] = value
+    elif isinstance(value, dict):
+        items = [*value.keys(), *value.values()]
+    else:
+        return None
+    for item in items:
+        found = oversized_number(item)
+        if found is not None:
+            return found
+    return None
 
 
 def short_repr(value: Any, limit: int = 80) -> str:
@@ -76,6 +112,12 @@ class ConfigError(ValueError):
         # Survive pickling (process pools): rebuild from the fields, not from the message.
         return (type(self), (self.key, self.value, self.expected, self.source, self.suggestion,
                              self.got, self.line))
+
+
+def oversized_text(value: int) -> str:
+    """An oversized integer in words: its first digits and its length."""
+    text = str(abs(value))
+    return f"{'-' if value < 0 else ''}{text[:12]}... (an integer of {len(text)} digits)"
 
 
 def close_matches(word: Any, options: Iterable[Any], n: int = 1) -> list[str]:
@@ -210,6 +252,11 @@ _Dumper.add_representer(list, lambda dumper, value: dumper.represent_sequence(
 _FLOAT_WITHOUT_DOT = re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$")
 _Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_WITHOUT_DOT, list("-+0123456789."))
 _Dumper.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_WITHOUT_DOT, list("-+0123456789."))
+# No config or materials value is a date: 2020-01-01 reads as text (an error then names
+# '2020-01-01', not datetime.date(2020, 1, 1)).
+_Loader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:timestamp"]
+    for first, resolvers in _Loader.yaml_implicit_resolvers.items()}
 
 
 def dump_yaml(data: Any) -> str:
@@ -320,6 +367,9 @@ class Field:
         """``value`` normalised (``float`` or ``int``, lists as lists); else raise :class:`ConfigError`."""
         if value is None and self.nullable:
             return None
+        if self.kind in (float, int) and oversized_number(value) is not None:
+            raise ConfigError(key, value, f"{self.describe()}; {OVERSIZED}", source,
+                              got=oversized_text(oversized_number(value)))
         items = value if self.size else [value]
         if self.size and not (isinstance(value, (list, tuple)) and len(value) == self.size):
             items = None

@@ -31,6 +31,11 @@ BOOTSTRAP_RESAMPLES = 1000
 #: influential and needs a rank; below it an input explains under 5 % of the output's
 #: variance, a common screening threshold, and the order among such inputs is not asked.
 INFLUENTIAL_ST = 0.05
+#: An output whose spread over the sample is at most this fraction of its largest magnitude
+#: does not vary: rounding error (float64's is 2.2e-16 per operation) is all that moves it,
+#: and SALib turned it into indices of 0.000 +- 0.000 (exactly constant, with a raw
+#: RuntimeWarning) or into noise such as ST = 1.5 +- 0.7 (1e-15 of the value).
+CONSTANT_SPREAD = 1e-12
 
 
 class SensitivityError(ValueError):
@@ -203,6 +208,13 @@ def sweep_indices(ds: xr.Dataset, output: str, select: Sequence[str] = ()) -> So
         raise SensitivityError(f"{bad.size} of {y.size} sample points have no finite {output} "
                                f"(failed cases, e.g. sample {int(bad[0])}); the Sobol' estimators "
                                "need every point of the design")
+    spread, size = float(np.ptp(y)), float(np.max(np.abs(y)))
+    if spread <= CONSTANT_SPREAD * size:
+        how = (f"every one is {y[0]:.6g}" if spread == 0.0 else
+               f"it spans {spread:.3g}, rounding error on values of {size:.3g}")
+        raise SensitivityError(f"{output} does not vary over the {y.size} sample points ({how}): "
+                               "no input changes it, and Sobol' indices, shares of its variance, "
+                               "are undefined; choose an output that varies")
     ranges = spec["ranges"]
     result = sobol_indices(list(ranges), list(ranges.values()), y,
                            second_order=bool(spec.get("second_order", False)),

@@ -304,6 +304,37 @@ def _is_checkpoint_archive(path: Path) -> bool:
         return False
 
 
+def _checkpoint_layout_problem(saved: dict[str, np.ndarray], keys: list[str],
+                               columns: dict[str, np.ndarray], cfg: Config) -> str | None:
+    """What makes the arrays of a checkpoint other than :func:`save_checkpoint` writes them
+    for ``cfg``, in words, or None: an edited or damaged checkpoint stopped a resumed run
+    with numpy's or xarray's traceback, or ran on from an empty or ragged state."""
+    from .variables import JOINTS
+
+    maps = (len(JOINTS), *cfg.wear.map)
+    n_snap = saved["snapshot_cycle"].shape[0] if saved["snapshot_cycle"].ndim == 1 else -1
+    shapes = {"cycles": (), "wall": (), "wmap": maps, "wvol": (len(JOINTS),),
+              "snapshot_cycle": (n_snap,), "snapshot_map": (n_snap, *maps),
+              "wear_through": (len(JOINTS), 3)}
+    for name, shape in shapes.items():
+        array = saved[name]
+        if array.dtype.kind not in "fiu":
+            return f"{name} holds {array.dtype} values, not numbers"
+        if array.shape != shape:
+            return f"{name} has shape {array.shape}, expected {shape}"
+    if not (np.isfinite(saved["cycles"]) and saved["cycles"] >= 0 and np.isfinite(saved["wall"])):
+        return f"cycles {saved['cycles']} and wall {saved['wall']} are not finite numbers >= 0"
+    if not keys:
+        return "no block rows"
+    lengths = {len(c) if c.ndim else -1 for c in columns.values()}
+    if len(lengths) != 1 or min(lengths) < 1:
+        return f"block rows of lengths {sorted(lengths)}, expected one length of at least 1"
+    for key, column in columns.items():
+        if (column.dtype.kind in "US") != (key == "block_status"):
+            return f"row {key} holds {column.dtype} values"
+    return None
+
+
 def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
     """The state saved by :func:`save_checkpoint` at ``path`` for the life run of ``cfg``.
 
@@ -338,6 +369,10 @@ def load_checkpoint(path: str | os.PathLike, cfg: Config) -> LifeState:
                               "would mix the results of two inputs: run with those inputs to "
                               "continue it, write to another output file, or pass "
                               "--discard-checkpoint to delete it")
+
+    problem = _checkpoint_layout_problem(saved, keys, columns, cfg)
+    if problem:
+        raise _unreadable(path, problem)
 
     def value(column: np.ndarray, i: int) -> Any:
         return column[i].copy() if column.ndim > 1 else column[i].item()

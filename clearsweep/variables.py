@@ -245,3 +245,63 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
                                            "earliest joint; NaN if none"),
     "wall_time": VariableSpec((), "s", "wall-clock time of the life run"),
 }
+
+
+#: Text variables of results files and the dims they carry besides the sweep's.
+TEXT_VARIABLES: dict[str, tuple[str, ...]] = {
+    "status": (), "message": (), "stop_reason": (), "block_status": ("cycle",),
+}
+
+#: Dims of a reliability sweep's estimates and member draws besides the design dims
+#: (``reliability.add_reliability_estimate``, ``reliability.reliability_case``).
+RELIABILITY_DIMS: dict[str, tuple[str, ...]] = {
+    **{name: ("limit", "revolutions") for name in
+       ("reliability", "reliability_ci_low", "reliability_ci_high")},
+    **{name: ("limit",) for name in
+       ("b10", "b10_ci_low", "b10_ci_high", "b50", "b50_ci_low", "b50_ci_high", "members_reached",
+        "members_counted")},
+    **{name: ("limit", "input") for name in
+       ("rank_correlation", "rank_correlation_ci_low", "rank_correlation_ci_high", "variance_share")},
+    "revolutions_to_limit": ("member", "limit"), "censored": ("member", "limit"),
+}
+
+
+def layout_problem(ds) -> str | None:
+    """What makes the results file ``ds`` (an xarray Dataset) other than clearsweep writes it,
+    in words, or None: an empty dimension, a registered variable whose dims do not end with
+    its registered dims or hold a dimension that is neither those nor a sweep dimension, a
+    number variable that is not numbers, a text variable that is not text. ``report``,
+    ``plot`` and ``sensitivity`` check it before reading a file (an edited file, or one of
+    another program): such files stopped with numpy's or matplotlib's traceback, or were
+    drawn as nonsense."""
+    for dim, size in ds.sizes.items():
+        if size == 0:
+            return f"its dimension {dim!r} is empty"
+    life_run = "cycle" in ds.dims
+    registry = LIFE_VARIABLES if life_run else {**CASE_VARIABLES, **SUMMARY_VARIABLES}
+    # a leading dim is a sweep's: one that the file names as such, or where it names none
+    # (a file made by hand or by the API), any dim that is not one of a case's
+    case_dims = {d for spec in (*registry.values(), *COORDINATES.values()) for d in spec.dims}
+    named = ds.attrs.get("sweep_dims")
+    sweep_dims = (set(str(named).split()) | {"member", "case", "sample"} if named is not None
+                  else {str(d) for d in ds.dims} - case_dims)
+    for name, da in ds.data_vars.items():
+        name = str(name)
+        dims = tuple(str(d) for d in da.dims)
+        text = name in TEXT_VARIABLES
+        if text:
+            expected = TEXT_VARIABLES[name]
+        elif name in RELIABILITY_DIMS and ds.attrs.get("sweep_store") == "reliability":
+            expected = RELIABILITY_DIMS[name]
+        elif name in registry:
+            expected = registry[name].dims
+        else:
+            continue
+        if dims[len(dims) - len(expected):] != expected or len(dims) < len(expected) or any(
+                d not in sweep_dims for d in dims[:len(dims) - len(expected)]):
+            return (f"its variable {name!r} has dims {dims}; clearsweep writes it with the "
+                    f"sweep's dims followed by {expected}")
+        if text != (da.dtype.kind in "USO"):
+            kind = "text" if text else "numbers"
+            return f"its variable {name!r} holds {da.dtype} values, not {kind}"
+    return None

@@ -1,5 +1,6 @@
 """The command-line interface through its real entry points: exit codes, messages, files."""
 
+import errno
 import shutil
 import subprocess
 import sys
@@ -143,13 +144,28 @@ def test_config_error_from_simulation_exit_2_no_file(tmp_path, fake_run):
     assert list(tmp_path.iterdir()) == [path]
 
 
-def test_unwritable_output_exit_1_without_traceback(tmp_path, fake_run):
+def test_unwritable_output_exit_1_without_traceback(tmp_path, fake_run, monkeypatch):
+    import clearsweep.dataset as dataset
+
+    def read_only(ds, path, *args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied", str(path))
+
+    monkeypatch.setattr(dataset, "write_netcdf_atomic", read_only)
+    result, path, out = run_case(tmp_path, "name: ok\n")
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr.startswith(f"clearsweep: error: cannot write {out}: Permission denied")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
+
+
+def test_an_output_under_a_file_is_refused_before_the_run(tmp_path, fake_run):
+    """Before: the whole run, then "cannot write ...: File exists" (exit 1)."""
     result, path, _ = run_case(tmp_path, "name: ok\n")
     out = path / "r.nc"                         # its folder is a file
     result = invoke(["run", path, "-o", out], tmp_path)
-    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
-    assert result.stderr.startswith(f"clearsweep: error: cannot write {out}: ")
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml", "r.nc"]
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+    assert result.stderr == (f"clearsweep: error: -o/--out {out}: {path} is a file, not a "
+                             "folder; choose an output in a folder\n")
+    assert len(fake_run) == 1           # the first run_case's only: nothing ran for this one
 
 
 def test_config_error_in_any_subcommand_exit_2(monkeypatch):

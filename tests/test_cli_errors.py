@@ -117,7 +117,7 @@ def _life_file(path: Path, **attrs) -> Path:
     """A file that ``report`` recognises as a life run (``attrs`` empty) or as a
     reliability or life sweep (``sweep_store``)."""
     ds = (xr.Dataset({"stop_reason": ((), "cycles"), "x": ("cycle", [1.0])}) if not attrs
-          else xr.Dataset({"b10": ("d", [1.0]), "x": ("d", [1.0])}, attrs=attrs))
+          else xr.Dataset({"b10": (("d", "limit"), [[1.0]]), "x": ("d", [1.0])}, attrs=attrs))
     ds.to_netcdf(path)
     return path
 

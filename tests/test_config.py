@@ -244,7 +244,8 @@ def _configs(schema=SCHEMA):
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
     for joint in raw["joints"].values():
-        joint["socket_radius"] = 2.0 * joint["clearance"] + joint["socket_radius"]
+        # room for the clearance and its tolerance band (at most 1.5 c, below): c + t <= R / 2
+        joint["socket_radius"] = 3.0 * joint["clearance"] + joint["socket_radius"]
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]

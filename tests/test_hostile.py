@@ -5,8 +5,9 @@ is a command line, the exit code it must end with and a substring of its one
 Rows of round 3b (issue 22, items 3 and 4) and of the fresh round on the reliability and
 life sections, sampling sweeps, sensitivity, the CUDA backend's options and results files
 of older versions (issue 20, item 6); round 4's resume integrity and the user's files
-(issue 33, items 1 and 2: ``ROUND4_INTEGRITY``). Before, the rows marked "was:" ended as
-said there.
+(issue 33, items 1 and 2: ``ROUND4_INTEGRITY``), its messages (items 4-6:
+``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``). Before, the rows marked
+"was:" ended as said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
 
@@ -117,9 +118,9 @@ ROWS = [
     ("sensitivity --metric status (was: ValueError)",
      lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "status"],
      2, "output 'status' is text, not a number; choose from: y"),
-    ("sensitivity -o under a file (was: OSError)",
+    ("sensitivity -o under a file (was: OSError; round 4: exit 1 after the analysis)",
      lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "y", "-o", f / "afile" / "out.png"],
-     1, "cannot write"),
+     2, "afile is a file, not a folder"),
     ("sensitivity malformed sweep_config (was: ParserError)",
      lambda t, f: ["sensitivity", f / "samp_bad_yaml.nc", "--metric", "y"],
      2, "sweep_config attribute is not readable YAML"),
@@ -333,6 +334,765 @@ ROUND4_INTEGRITY = [
      2, "is the results file of a reliability sweep, and this command writes a sweep"),
 ]
 ROWS += ROUND4_INTEGRITY
+# --- round 4 (issue 33, items 4-6): one line instead of a traceback, rules that do not
+# depend on luck, messages that say what happened. "was:" how main ended before.
+REL = str(CONFIGS / "reliability.yaml")
+BIG = "1" * 400                 # an integer no float64 holds
+LONG = "a" * 300                # a name longer than any file system's 255 bytes
+NEAR = "b" * 240                # fits, but OUT.parts' and OUT.life-checkpoint's names do not
+
+
+def _edited(f: Path, src: str, name: str, edit) -> Path:
+    """A copy of results file ``src`` in ``f`` changed by ``edit`` (made once per module)."""
+    path = f / name
+    if not path.exists():
+        with xr.open_dataset(f / src) as ds:
+            ds = edit(ds.load())
+        for var in ds.variables.values():
+            var.encoding = {}
+        ds.to_netcdf(path)
+    return path
+
+
+def _replaced(name: str, value):
+    def edit(ds):
+        ds[name] = value(ds) if callable(value) else value
+        return ds
+    return edit
+
+
+def _checkpoint(f: Path, t: Path, **arrays) -> Path:
+    """A life checkpoint of SHORT_LIFE (2 blocks, made once per module) with ``arrays``
+    replaced, where ``life ... -o t/out.nc --resume`` reads it."""
+    from clearsweep.config import load_config
+    from clearsweep.service_life import checkpoint_path_for, life
+
+    good = f / "good.life-checkpoint"
+    if not good.exists():
+        made = checkpoint_path_for(f / "ckpt.nc")
+        life(load_config(LIFE, [a for a in SHORT_LIFE if a != "--set"]), checkpoint=made)
+        made.rename(good)
+    with np.load(good) as data:
+        saved = {k: data[k] for k in data.files}
+    saved.update(arrays)
+    path = t / "out.nc.life-checkpoint"
+    with open(path, "wb") as out:
+        np.savez(out, **saved)
+    return path
+
+
+def _constant_sample(f: Path) -> Path:
+    """A Saltelli sampling file whose output ``y`` is 3.0 at every point."""
+    path = f / "samp_constant.nc"
+    if not path.exists():
+        with xr.open_dataset(saltelli_file(f / "samp_c_src.nc")) as ds:
+            ds = ds.load()
+        ds["y"] = xr.full_like(ds["y"], 3.0)
+        ds.to_netcdf(path)
+    return path
+
+
+def _sweep_text(t: Path, sweep: str, store: str = "summary") -> str:
+    return sweep_file(t, f"sweep: {sweep}\n", store=store)
+
+
+ROUND4_MESSAGES = [
+    # --- item 4: integers too large for a float
+    ("run ensemble.members of 400 digits (was: OverflowError)",
+     lambda t, f: ["run", ONE, "--set", f"ensemble.members={BIG}", "-o", t / "out.nc"],
+     2, "ensemble.members: got 111111111111... (an integer of 400 digits) (from --set)"),
+    ("run ensemble.seed of 400 digits (was: OverflowError)",
+     lambda t, f: ["run", ONE, "--set", f"ensemble.seed={BIG}", "-o", t / "out.nc"],
+     2, "ensemble.seed: got 111111111111... (an integer of 400 digits)"),
+    ("reliability tolerance of 400 digits (was: OverflowError)",
+     lambda t, f: ["sweep", REL, "--set", f"reliability.clearance_tolerance={BIG}", "-o", t / "out.nc"],
+     2, "reliability.clearance_tolerance: got 111111111111..."),
+    ("life cycles of 400 digits (was: OverflowError)",
+     lambda t, f: ["life", LIFE, "--set", f"life.cycles={BIG}", "-o", t / "out.nc"],
+     2, "life.cycles: got 111111111111... (an integer of 400 digits)"),
+    ("run duration of -400 digits (was: OverflowError)",
+     lambda t, f: ["run", ONE, "--set", f"solver.duration=-{BIG}", "-o", t / "out.nc"],
+     2, "integers of at most 2^63 - 1 in magnitude (a larger number is written as a float"),
+    ("sweep grid value of 400 digits (was: OverflowError)",
+     lambda t, f: ["sweep", _sweep_text(t, f"{{grid: {{solver.duration: [0.002, {BIG}]}}}}"),
+                   "-o", t / "out.nc"],
+     2, "sweep.grid.solver.duration: got 111111111111... (an integer of 400 digits)"),
+    ("sample range of 400 digits (was: OverflowError)",
+     lambda t, f: ["sweep", _sweep_text(t, f"{{sample: {{method: lhs, n: 4, ranges: "
+                                           f"{{joints.B.clearance: [0, {BIG}]}}}}}}"),
+                   "-o", t / "out.nc"],
+     2, "sweep.sample.ranges.joints.B.clearance: got 111111111111..."),
+    # --- item 4: output names too long for the file system
+    ("run -o a name of 300 bytes (was: OSError 'File name too long')",
+     lambda t, f: ["run", ONE, "-o", t / f"{LONG}.nc"],
+     2, "the name is 303 bytes long"),
+    ("run -o under a folder name of 300 bytes (was: OSError 'File name too long')",
+     lambda t, f: ["run", ONE, "-o", t / LONG / "out.nc"],
+     2, "is 300 bytes long; the file system admits 255"),
+    ("sweep -o a name of 243 bytes (was: every case ran, then 'cannot write .NAME.PID.tmp')",
+     lambda t, f: ["sweep", two_case_sweep(t), "-o", t / f"{NEAR}.nc"],
+     2, "the names written beside it (OUT.parts and temporary files) 28 bytes more"),
+    ("life -o a name of 243 bytes (was: after the compile, exit 1 'cannot write OUT.life-checkpoint')",
+     lambda t, f: ["life", LIFE, *SHORT_LIFE, "-o", t / f"{NEAR}.nc"],
+     2, "(OUT.life-checkpoint.lock and temporary files) 43 bytes more"),
+    ("plot -o a name of 300 bytes (was: OSError 'File name too long')",
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", t / f"{LONG}.png"],
+     2, "choose a name of at most 233 bytes"),
+    # --- item 4: a malformed --scheduler address, before the plan and the compile
+    ("--scheduler without a port (was: ValueError after the compile)",
+     lambda t, f: ["sweep", two_case_sweep(t), "--scheduler", "::bad::", "-o", t / "out.nc"],
+     2, "invalid value for '--scheduler': '::bad::': a port of 1 to 65535 after the host"),
+    ("--scheduler port not a number (was: ValueError after the compile)",
+     lambda t, f: ["sweep", two_case_sweep(t), "--scheduler", "tcp://host:port", "-o", t / "out.nc"],
+     2, "not 'port'; expected [SCHEME://]HOST:PORT"),
+    ("--scheduler unknown scheme (was: ValueError after the compile)",
+     lambda t, f: ["sweep", two_case_sweep(t), "--scheduler", "foo://1.2.3.4:1", "-o", t / "out.nc"],
+     2, "unknown scheme 'foo'"),
+    ("--scheduler empty (was: ValueError after the compile)",
+     lambda t, f: ["sweep", two_case_sweep(t), "--scheduler", "", "-o", t / "out.nc"],
+     2, "'--scheduler': '': no address"),
+    ("--scheduler port 99999 (was: 30 s to time out, exit 1)",
+     lambda t, f: ["sweep", two_case_sweep(t), "--scheduler", "tcp://127.0.0.1:99999", "-o", t / "out.nc"],
+     2, "a port of 1 to 65535 after the host, not '99999'"),
+    # --- item 4: results files whose arrays have other shapes, dims or dtypes, or none
+    ("report a life file with an empty cycle (was: IndexError)",
+     lambda t, f: ["report", _edited(f, "life.nc", "life_empty.nc", lambda ds: ds.isel(cycle=slice(0, 0)))],
+     2, "its dimension 'cycle' is empty"),
+    ("plot a life file with an empty cycle (was: a blank figure, exit 0)",
+     lambda t, f: ["plot", _edited(f, "life.nc", "life_empty.nc", lambda ds: ds.isel(cycle=slice(0, 0))),
+                   "--kind", "life", "-o", t / "out.png"],
+     2, "its dimension 'cycle' is empty"),
+    ("report a reliability file whose b10 is text (was: exit 0)",
+     lambda t, f: ["report", _edited(f, "rel.nc", "rel_b10_text.nc",
+                                     _replaced("b10", lambda ds: ds["b10"].astype(str)))],
+     2, "its variable 'b10' holds <U"),
+    ("plot a reliability file whose R(N) lost its limit dim (was: exit 0)",
+     lambda t, f: ["plot", _edited(f, "rel.nc", "rel_r_2d.nc", _replaced(
+         "reliability", lambda ds: ds["reliability"].isel(limit=0, drop=True))),
+                   "--kind", "reliability", "-o", t / "out.png"],
+     2, "its variable 'reliability' has dims"),
+    ("report a run whose status is a number (was: exit 0, status '3')",
+     lambda t, f: ["report", _edited(f, "run.nc", "run_status_number.nc",
+                                     _replaced("status", xr.DataArray(3.0)))],
+     2, "its variable 'status' holds float64 values, not text"),
+    ("plot a run whose wear map lost a dim (was: KeyError traceback)",
+     lambda t, f: ["plot", _edited(f, "run.nc", "run_wear_map_2d.nc", _replaced(
+         "wear_map", lambda ds: ds["wear_map"].isel(azimuth=0, drop=True))),
+                   "--kind", "wear-map", "-o", t / "out.png"],
+     2, "its variable 'wear_map' has dims ('joint', 'polar')"),
+    ("report a sweep with a variable on a stray dim (was: exit 0, the dim unread)",
+     lambda t, f: ["report", _edited(f, "rel.nc", "rel_stray_dim.nc", _replaced(
+         "wall_time", lambda ds: ds["wall_time"].expand_dims(extra=2)))],
+     2, "its variable 'wall_time' has dims ('extra', 'B_coating', 'member')"),
+    ("life --resume from a checkpoint of another map shape (was: ValueError traceback)",
+     lambda t, f: _checkpoint(f, t, wmap=np.zeros((2, 3, 12))) and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
+     2, "(wmap has shape (2, 3, 12), expected (2, 6, 12)); pass --discard-checkpoint"),
+    ("life --resume from a checkpoint of ragged rows (was: exit 0, a block lost)",
+     lambda t, f: _checkpoint(f, t, row_cycle=np.array([1.0])) and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
+     2, "block rows of lengths [1, 2]"),
+    ("life --resume from a checkpoint whose cycles is text (was: ValueError traceback)",
+     lambda t, f: _checkpoint(f, t, cycles=np.array("many")) and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
+     2, "cycles holds <U4 values, not numbers"),
+    # --- item 5: rules that do not depend on the draws
+    ("tolerance band past the largest clearance (was: accepted with seed 1, refused with 0, 2, 3)",
+     lambda t, f: ["validate", REL, "--set", "joints.B.clearance=7.4e-3", "--set",
+                   "reliability.clearance_tolerance=2e-4", "--set", "reliability.members=2",
+                   "--set", "reliability.seed=1"],
+     2, "expected a number <= 0.0001, so that the band joints.B.clearance -+ tolerance"),
+    ("wear-through only with an uncoated design (was: no word on running the others)",
+     lambda t, f: ["validate", REL, "--set", "life.max_clearance_growth=null", "--set",
+                   "life.max_motion_error=null", "--set", "life.stop_at_wear_through=true"],
+     2, "to run the other designs, skip this one (sweep: skip: [{B_coating: none}])"),
+    # --- item 6: an output under a file, refused before any work
+    ("run -o under a file (was: the whole run, then 'File exists')",
+     lambda t, f: ["run", ONE, "-o", f / "afile" / "out.nc"], 2, "afile is a file, not a folder"),
+    ("sweep -o under a file (was: exit 1, 'cannot write OUT.parts: Not a directory')",
+     lambda t, f: ["sweep", two_case_sweep(t), "-o", f / "afile" / "out.nc"],
+     2, "afile is a file, not a folder"),
+    ("life -o under a file (was: after the compile, 'cannot write OUT.life-checkpoint.lock')",
+     lambda t, f: ["life", LIFE, *SHORT_LIFE, "-o", f / "afile" / "out.nc"],
+     2, "afile is a file, not a folder"),
+    ("plot -o under a file (was: the figure drawn, then 'File exists')",
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", f / "afile" / "out.png"],
+     2, "afile is a file, not a folder"),
+    # --- item 6: sensitivity of an output that never varies
+    ("sensitivity of a constant output (was: 0.000 +- 0.000, a SALib RuntimeWarning, exit 0)",
+     lambda t, f: ["sensitivity", _constant_sample(f), "--metric", "y"],
+     2, "y does not vary over the 16 sample points (every one is 3)"),
+]
+
+
+# --- round 4, a fresh fuzz round: 203 probes on surfaces the rows above do not cover, every
+# command and option (odd YAML types, NaN and inf, empty lists, unicode and duplicate keys,
+# booleans where numbers go, deep nesting, dates, tags, materials files, the group itself).
+# 195 ended as they do now; the 8 marked "was:" did not (2 tracebacks, 2 exit 0 with
+# nothing to run or a foreign file read as a sweep, 4 lines that named the wrong thing).
+
+
+def _w(t, name, text):
+    p = Path(t) / name
+    p.write_text(text)
+    return p
+
+
+def _bytes(t, name, data):
+    p = Path(t) / name
+    p.write_bytes(data)
+    return p
+
+
+def _case(t, text):
+    return _w(t, "c.yaml", text)
+
+
+def _swp(t, body, store="summary",
+         base="{joints: {B: {clearance: 2.5e-4}}, solver: {duration: 0.002}}"):
+    return _w(t, "s.yaml", f"name: s\nstore: {store}\nbase: {base}\n{body}")
+
+
+def _foreign(f: Path) -> Path:
+    """A netCDF file of another program: no clearsweep source, no status."""
+    path = f / "foreign.nc"
+    if not path.exists():
+        xr.Dataset({"a": ("x", [1.0, 2.0])}, attrs={"source": "elsewhere"}).to_netcdf(path)
+    return path
+
+
+def _setv(cmd, cfg, *kv):
+    argv = [cmd, cfg]
+    for item in kv:
+        argv += ["--set", item]
+    return argv
+
+
+def _run(*kv):
+    return lambda t, f: _setv("run", ONE, *kv) + ["-o", Path(t) / "out.nc"]
+
+
+def _val(*kv):
+    return lambda t, f: _setv("validate", ONE, *kv)
+
+
+def _life(*kv):
+    return lambda t, f: _setv("life", LIFE, *kv) + ["-o", Path(t) / "out.nc"]
+
+
+def _rel(*kv):
+    return lambda t, f: _setv("validate", REL, *kv)
+
+
+
+ROUND4_FUZZ = [
+    # --- run / validate: odd YAML types in --set values
+    ('run solver.dt true', _run("solver.dt=true"),
+     2, 'solver.dt: got True (from --set); expected a number > 0'),
+    ('run solver.dt string', _run("solver.dt=fast"),
+     2, "solver.dt: got 'fast' (from --set); expected a number > 0"),
+    ('run solver.dt list', _run("solver.dt=[1e-5]"),
+     2, 'solver.dt: got [1e-05] (from --set); expected a number > 0'),
+    ('run solver.dt mapping', _run("solver.dt={a: 1}"),
+     2, "solver.dt: got {'a': 1} (from --set); expected a number > 0"),
+    ('run solver.dt null', _run("solver.dt=null"),
+     2, 'solver.dt: got None (from --set); expected a number > 0'),
+    ('run solver.dt .nan', _run("solver.dt=.nan"),
+     2, 'solver.dt: got nan (from --set); expected a number > 0'),
+    ('run solver.dt -.inf', _run("solver.dt=-.inf"),
+     2, 'solver.dt: got -inf (from --set); expected a number > 0'),
+    ("run solver.dt empty (was: 'got None')", _run("solver.dt="),
+     2, "solver.dt: got an empty value (from --set); expected a value after '=' (null for"),
+    ("run solver.dt date (was: 'got datetime.date(2020, 1, 1)')", _run("solver.dt=2020-01-01"),
+     2, "solver.dt: got '2020-01-01' (from --set); expected a number > 0"),
+    ('run solver.dt hex', _run("solver.dt=0x10"),
+     2, 'solver.dt: got 16.0 (from --set); expected a number <= solver.duration (1.0)'),
+    ('run solver.save_every 1.5', _run("solver.save_every=1.5"),
+     2, 'solver.save_every: got 1.5 (from --set); expected an integer >= 1'),
+    ('run solver.save_every true', _run("solver.save_every=true"),
+     2, 'solver.save_every: got True (from --set); expected an integer >= 1'),
+    ('run solver.save_every 1e3 float', _run("solver.save_every=1e3"),
+     2, 'solver.save_every: got 1000.0 (from --set); expected an integer >= 1'),
+    ('run solver.baumgarte empty list', _run("solver.baumgarte=[]"),
+     2, 'solver.baumgarte: got [] (from --set); expected a list of 2 numbers >= 0'),
+    ('run solver.baumgarte nested', _run("solver.baumgarte=[[5, 5], [5, 5]]"),
+     2, 'solver.baumgarte: got [[5, 5], [5, 5]] (from --set); expected a list of 2 number'),
+    ('run solver.baumgarte three', _run("solver.baumgarte=[5, 5, 5]"),
+     2, 'solver.baumgarte: got [5, 5, 5] (from --set); expected a list of 2 numbers >= 0'),
+    ('run solver.baumgarte nan', _run("solver.baumgarte=[.nan, 5]"),
+     2, 'solver.baumgarte: got [nan, 5] (from --set); expected a list of 2 numbers >= 0'),
+    ('run solver.method unknown', _run("solver.method=euler"),
+     2, "solver.method: got 'euler' (from --set); expected one of 'rk4', 'dopri5'"),
+    ('run solver.method number', _run("solver.method=4"),
+     2, "solver.method: got 4 (from --set); expected one of 'rk4', 'dopri5'"),
+    ('run solver.max_substep_level 17', _run("solver.max_substep_level=17"),
+     2, 'solver.max_substep_level: got 17 (from --set); expected an integer with 0 <= x <'),
+    ('run solver.max_substep_level -1', _run("solver.max_substep_level=-1"),
+     2, 'solver.max_substep_level: got -1 (from --set); expected an integer with 0 <= x <'),
+    ('run solver.stability_limit 2.8', _run("solver.stability_limit=2.8"),
+     2, 'solver.stability_limit: got 2.8 (from --set); expected a number with 0 < x < 2.8'),
+    ('run solver.rtol 0', _run("solver.rtol=0"),
+     2, 'solver.rtol: got 0 (from --set); expected a number with 0 < x <= 1'),
+    ('run mechanism.gravity scalar', _run("mechanism.gravity=9.81"),
+     2, 'mechanism.gravity: got 9.81 (from --set); expected a list of 3 numbers'),
+    ('run mechanism.gravity strings', _run("mechanism.gravity=[a, b, c]"),
+     2, "mechanism.gravity: got ['a', 'b', 'c'] (from --set); expected a list of 3 number"),
+    ('run mechanism.gravity inf', _run("mechanism.gravity=[0, 0, .inf]"),
+     2, 'mechanism.gravity: got [0, 0, inf] (from --set); expected a list of 3 numbers'),
+    ('run mechanism.speed_rpm 0', _run("mechanism.speed_rpm=0"),
+     2, 'mechanism.speed_rpm: got 0 (from --set); expected a number > 0'),
+    ('run mechanism.speed_rpm negative', _run("mechanism.speed_rpm=-60"),
+     2, 'mechanism.speed_rpm: got -60 (from --set); expected a number > 0'),
+    ('run mechanism.speed_rpm bool', _run("mechanism.speed_rpm=false"),
+     2, 'mechanism.speed_rpm: got False (from --set); expected a number > 0'),
+    ('run mechanism.theta0 inf', _run("mechanism.theta0=.inf"),
+     2, 'mechanism.theta0: got inf (from --set); expected a number'),
+    ('run mechanism.preset unknown', _run("mechanism.preset=paperr"),
+     2, "mechanism.preset: got 'paperr' (from --set); expected one of 'realistic', 'paper"),
+    ('run mechanism a value', _run("mechanism=1"),
+     2, 'mechanism: got 1 (from --set); expected a mapping with keys preset, speed_rpm, g'),
+    ('run joints.B.coating number', _run("joints.B.coating=1"),
+     2, 'joints.B.coating: got 1 (from --set); expected a string'),
+    ('run joints.B.coating unknown', _run("joints.B.coating=PTFEE"),
+     2, "joints.B.coating: got 'PTFEE' (from --set); expected 'none' or a known material"),
+    ('run joints.B.coating unicode', _run("joints.B.coating=PTFÉ"),
+     2, "joints.B.coating: got 'PTFÉ' (from --set); expected 'none' or a known material ("),
+    ('run joints.B.clearance negative', _run("joints.B.clearance=-1e-4"),
+     2, 'joints.B.clearance: got -0.0001 (from --set); expected a number >= 0'),
+    ('run joints.B.clearance huge', _run("joints.B.clearance=1"),
+     2, 'joints.B.clearance: got 1.0 (from --set); expected a number <= 0.5 * joints.B.so'),
+    ('run joints.C', _run("joints.C.clearance=1e-4"),
+     2, "joints.C: got {'clearance': 0.0001} (from --set); expected one of the keys of jo"),
+    ('run joints.B.unicode key', _run("joints.B.clearancé=1e-4"),
+     2, 'joints.B.clearancé: got 0.0001 (from --set); expected one of the keys of joints.'),
+    ('run joints.B.wear_coefficient negative', _run("joints.B.wear_coefficient=-1"),
+     2, 'joints.B.wear_coefficient: got -1 (from --set); expected null or a number >= 0'),
+    ('run joints.B.coating_thickness 0', _run("joints.B.coating_thickness=0"),
+     2, 'joints.B.coating_thickness: got 0 (from --set); expected a number > 0'),
+    ('run contact.restitution 0', _run("contact.restitution=0"),
+     2, 'contact.restitution: got 0 (from --set); expected a number with 0 < x <= 1'),
+    ('run contact.restitution 1.5', _run("contact.restitution=1.5"),
+     2, 'contact.restitution: got 1.5 (from --set); expected a number with 0 < x <= 1'),
+    ('run contact.layer_rule unknown', _run("contact.layer_rule=parallel"),
+     2, "contact.layer_rule: got 'parallel' (from --set); expected one of 'series', 'pape"),
+    ('run friction.enabled string', _run("friction.enabled=yes please"),
+     2, "friction.enabled: got 'yes please' (from --set); expected true or false"),
+    ('run friction.enabled number', _run("friction.enabled=1"),
+     2, 'friction.enabled: got 1 (from --set); expected true or false'),
+    ('run friction.v1 below v0', _run("friction.v1=1e-5"),
+     2, 'friction.v1: got 1e-05 (from --set); expected a number > friction.v0 (0.0001)'),
+    ('run wear.map one int', _run("wear.map=12"),
+     2, 'wear.map: got 12 (from --set); expected a list of 2 integers >= 1'),
+    ('run wear.map zero', _run("wear.map=[0, 12]"),
+     2, 'wear.map: got [0, 12] (from --set); expected a list of 2 integers >= 1'),
+    ('run wear.map floats', _run("wear.map=[6.5, 12]"),
+     2, 'wear.map: got [6.5, 12] (from --set); expected a list of 2 integers >= 1'),
+    ('run wear.amplification -1', _run("wear.amplification=-1"),
+     2, 'wear.amplification: got -1 (from --set); expected a number >= 0'),
+    ('run metrics.settle_time -1', _run("metrics.settle_time=-1"),
+     2, 'metrics.settle_time: got -1 (from --set); expected a number >= 0'),
+    ('run initial.joints unknown', _run("initial.joints=floating"),
+     2, "initial.joints: got 'floating' (from --set); expected one of 'seated', 'centred'"),
+    ('run name list', _run("name=[a, b]"),
+     2, "name: got ['a', 'b'] (from --set); expected a string"),
+    ('run materials_file missing', _run("materials_file=nowhere.yaml"),
+     2, "materials_file: got 'nowhere.yaml' (from --set); expected an existing YAML file"),
+    ('run materials_file number', _run("materials_file=5"),
+     2, 'materials_file: got 5 (from --set); expected null or a string'),
+    ('run --set no equals', _run("solver.dt"),
+     2, "got 'solver.dt'; expected an override KEY=VALUE with a dotted key, e.g. joints.B"),
+    ('run --set empty key', _run("=1"),
+     2, "got '=1'; expected an override KEY=VALUE with a dotted key, e.g. joints.B.coatin"),
+    ('run --set trailing dot', _run("solver.=1"),
+     2, "got 'solver.=1'; expected an override KEY=VALUE with a dotted key, e.g. joints.B"),
+    ('run --set double dot', _run("solver..dt=1"),
+     2, "got 'solver..dt=1'; expected an override KEY=VALUE with a dotted key, e.g. joint"),
+    ('run --set unknown top', _run("solvr.dt=1e-5"),
+     2, "solvr: got {'dt': 1e-05} (from --set); expected one of the top-level keys (name,"),
+    ('run --set value into section', _run("solver.dt.x=1"),
+     2, 'solver.dt.x: got 1 (from --set); expected a key inside a section, but solver.dt'),
+    ('run --set bad YAML', _run("solver.dt=[1, 2"),
+     2, "solver.dt: got '[1, 2'; expected valid YAML (expected ',' or ']', but got '<stre"),
+    ('run --set tag', _run("solver.dt=!!python/object:os.system x"),
+     2, "solver.dt: got '!!python/object:os.system x'; expected valid YAML (could not det"),
+    ('run --set alias', _run("solver.dt=*a"),
+     2, "solver.dt: got '*a'; expected valid YAML (found undefined alias 'a')"),
+    ('run ensemble.members 0', _run("ensemble.members=0"),
+     2, 'ensemble.members: got 0 (from --set); expected an integer with 1 <= x <= 100000'),
+    ('run ensemble.seed -1', _run("ensemble.seed=-1"),
+     2, 'ensemble.seed: got -1 (from --set); expected an integer >= 0'),
+    ('run ensemble.perturb.ball_offset 2', _run("ensemble.members=2", "ensemble.perturb.ball_offset=2"),
+     2, 'ensemble.perturb.ball_offset: got 2 (from --set); expected a number with 0 <= x'),
+    ('run ensemble.member >= members', _run("ensemble.members=2", "ensemble.member=2"),
+     2, 'ensemble.member: got 2 (from --set); expected a number < ensemble.members (2)'),
+    ('validate solver.duration below dt', _val("solver.duration=1e-6"),
+     2, 'solver.dt: got 1e-05; expected a number <= solver.duration (1e-06)'),
+    ('validate life.snapshots 1', _val("life.snapshots=1"),
+     2, 'life.snapshots: got 1 (from --set); expected an integer with 2 <= x <= 10000'),
+    ('validate reliability.member 99', _val("reliability.member=99"),
+     2, 'reliability.member: got 99 (from --set); expected a number < reliability.members'),
+    # --- config files: odd YAML documents
+    ('validate empty file', lambda t, f: ["validate", _case(t, "")],
+     2, 'got an empty file; expected a mapping with keys name, materials_file, mechanism,'),
+    ('validate comments only', lambda t, f: ["validate", _case(t, "# nothing\n")],
+     2, 'got an empty file; expected a mapping with keys name, materials_file, mechanism,'),
+    ('validate top-level list', lambda t, f: ["validate", _case(t, "- 1\n- 2\n")],
+     2, 'got [1, 2]; expected a mapping with keys name, materials_file, mechanism, initia'),
+    ('validate top-level scalar', lambda t, f: ["validate", _case(t, "42\n")],
+     2, 'got 42; expected a mapping with keys name, materials_file, mechanism, initial, j'),
+    ('validate duplicate key', lambda t, f: ["validate", _case(t, "solver: {dt: 1.0e-5}\nsolver: {dt: 2.0e-5}\n")],
+     2, "line 2: got the key 'solver' a second time (first on line 1); expected each key"),
+    ('validate duplicate nested key', lambda t, f: ["validate", _case(t, "solver: {dt: 1.0e-5, dt: 2.0e-5}\n")],
+     2, "line 1: got the key 'dt' a second time (first on line 1); expected each key once"),
+    ('validate unicode top key', lambda t, f: ["validate", _case(t, "sölver: {dt: 1.0e-5}\n")],
+     2, "sölver: got {'dt': 1e-05}; expected one of the top-level keys (name, materials_f"),
+    ('validate integer key', lambda t, f: ["validate", _case(t, "1: 2\n")],
+     2, '1: got 2; expected one of the top-level keys (name, materials_file, mechanism, i'),
+    ('validate null key', lambda t, f: ["validate", _case(t, "~: 2\n")],
+     2, 'None: got 2; expected one of the top-level keys (name, materials_file, mechanism'),
+    ('validate bool key', lambda t, f: ["validate", _case(t, "true: 2\n")],
+     2, 'True: got 2; expected one of the top-level keys (name, materials_file, mechanism'),
+    ('validate list key', lambda t, f: ["validate", _case(t, "? [a, b]\n: 1\n")],
+     2, "line 1: got '? [a, b]'; expected valid YAML (found unhashable key)"),
+    ('validate deep nesting', lambda t, f: ["validate", _case(t, "solver: " + "[" * 40 + "]" * 40 + "\n")],
+     2, 'line 1: got mappings and lists nested more than 32 deep; expected at most 32 lev'),
+    ('validate tab indentation', lambda t, f: ["validate", _case(t, "solver:\n\tdt: 1.0e-5\n")],
+     2, "line 2: got 'dt: 1.0e-5'; expected valid YAML (found character '\\t' that cannot"),
+    ('validate python tag', lambda t, f: ["validate", _case(t, "solver: !!python/object/apply:os.system [ls]\n")],
+     2, "line 1: got 'solver: !!python/object/apply:os.system [ls]'; expected valid YAML"),
+    ('validate binary value', lambda t, f: ["validate", _case(t, "name: !!binary aGVsbG8=\n")],
+     2, "name: got b'hello'; expected a string"),
+    ('validate not utf-8', lambda t, f: ["validate", _bytes(t, "c.yaml", b"name: \xff\xfe\n")],
+     2, "('utf-8' codec can't decode byte 0xff in position 6: invalid start byte); expect"),
+    ('validate section a list', lambda t, f: ["validate", _case(t, "solver: [1, 2]\n")],
+     2, 'solver: got [1, 2]; expected a mapping with keys dt, duration, save_every, baumg'),
+    ('validate section a string', lambda t, f: ["validate", _case(t, "solver: fast\n")],
+     2, "solver: got 'fast'; expected a mapping with keys dt, duration, save_every, baumg"),
+    ('validate 400-digit integer in the file (was: OverflowError)',
+     lambda t, f: ["validate", _case(t, f"solver: {{duration: {BIG}}}\n")],
+     2, 'solver.duration: got 111111111111... (an integer of 400 digits); expected a numb'),
+    ('validate a folder', lambda t, f: ["validate", t],
+     2, 'is a directory'),
+    ('validate missing file', lambda t, f: ["validate", Path(t) / "none.yaml"],
+     2, '(No such file or directory); expected a readable YAML file'),
+    ('validate .nan in file', lambda t, f: ["validate", _case(t, "solver: {dt: .nan}\n")],
+     2, 'solver.dt: got nan; expected a number > 0'),
+    ('validate merge key', lambda t, f: ["validate", _case(t, "a: &a {dt: 1.0e-5}\nsolver: {<<: *a}\n")],
+     2, "a: got {'dt': 1e-05}; expected one of the top-level keys (name, materials_file,"),
+    # --- sweep files
+    ('sweep grid empty list',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: []}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.grid.joints.B.coating: got []; expected a non-empty list of values'),
+    ('sweep grid value not a list',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: PTFE}}\n"), "-o", Path(t) / "out.nc"],
+     2, "sweep.grid.joints.B.coating: got 'PTFE'; expected a non-empty list of values"),
+    ('sweep grid a list', lambda t, f: ["sweep", _swp(t, "sweep: {grid: [1, 2]}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.grid: got [1, 2]; expected a mapping of dotted config keys to lists of val'),
+    ('sweep grid unknown key',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coatin: [none]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.grid.joints.B.coatin: got no such config key; expected one of the keys of'),
+    ('sweep grid duplicate values',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none, none]}}\n"), "-o", Path(t) / "out.nc"],
+     2, "sweep.grid.joints.B.coating: got 'none' twice; expected distinct values (they la"),
+    ('sweep grid nan value',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.clearance: [.nan, 1.0e-4]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'joints.B.clearance: got nan; expected a number >= 0 (in the sweep case B_clearan'),
+    ('sweep grid bool for number',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.clearance: [true, false]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'joints.B.clearance: got True; expected a number >= 0 (in the sweep case B_cleara'),
+    ('sweep grid unicode key',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {jöints.B.clearance: [1.0e-4]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.grid.jöints.B.clearance: got no such config key; expected one of the top-l'),
+    ('sweep grid mixed types',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none, 1, [2]]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'joints.B.coating: got 1; expected a string (in the sweep case B_coating=1)'),
+    ('sweep zip unequal',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {zip: [{joints.A.clearance: [0.0, 1.0e-4], joints.B.clearance: [1.0e-4]}]}\n"), "-o",
+                   Path(t) / "out.nc"],
+     2, 'sweep.zip[0].joints.B.clearance: got 1 values; expected a list of 2 values (as l'),
+    ('sweep zip not a list',
+     lambda t, f: ["sweep", _swp(t, "sweep: {zip: {joints.A.clearance: [0.0]}}\n"), "-o", Path(t) / "out.nc"],
+     2, "sweep.zip: got {'joints.A.clearance': [0.0]}; expected a list of groups (mapping"),
+    ('sweep skip unknown coordinate',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none, PTFE]}, skip: [{B_coatin: none}]}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.skip[0].B_coatin: got an unknown coordinate; expected a sweep coordinate ('),
+    ('sweep skip value not swept',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none, PTFE]}, skip: [{B_coating: lead}]}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, "sweep.skip[0].B_coating: got 'lead'; expected one of the swept values ['none', '"),
+    ('sweep skip every case (was: a file of 1 skipped case, exit 0)',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}, skip: [{B_coating: none}]}\n"), "-o",
+                   Path(t) / "out.nc"],
+     2, 'sweep.skip: got rules that skip all 1 cases; expected rules that leave at least'),
+    ('sweep store unknown',
+     lambda t, f: ["sweep", _swp(t, "sweep: {}\n", store="everything"), "-o", Path(t) / "out.nc"],
+     2, "store: got 'everything'; expected full or summary or life or reliability"),
+    ('sweep name empty',
+     lambda t, f: ["sweep", _w(t, "s.yaml", "name: ''\nbase: {}\nsweep: {grid: {joints.B.coating: [none]}}\n"), "-o",
+                   Path(t) / "out.nc"],
+     2, "name: got ''; expected a non-empty string"),
+    ('sweep name a list',
+     lambda t, f: ["sweep", _w(t, "s.yaml", "name: [a]\nbase: {}\nsweep: {grid: {joints.B.coating: [none]}}\n"), "-o",
+                   Path(t) / "out.nc"],
+     2, "name: got ['a']; expected a non-empty string"),
+    ('sweep base missing file',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n", base="nowhere.yaml"), "-o",
+                   Path(t) / "out.nc"],
+     2, "base: got 'nowhere.yaml'; expected an inline case config or the path of a case Y"),
+    ("sweep base itself (was: 'run a sweep file with `clearsweep sweep S.yaml: base s.yaml`')",
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n", base="s.yaml"), "-o",
+                   Path(t) / "out.nc"],
+     2, "base: got 's.yaml', a sweep file; expected the path of a case config (a sweep's"),
+    ('sweep base a list',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n", base="[1, 2]"), "-o",
+                   Path(t) / "out.nc"],
+     2, 'base: got [1, 2]; expected an inline case config (a mapping) or the path of a ca'),
+    ('sweep unknown sweep key',
+     lambda t, f: ["sweep", _swp(t, "sweep: {gird: {joints.B.coating: [none]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.gird: got an unknown key; expected one of the keys grid, zip, sample, skip'),
+    ('sweep sample and grid of one key',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {grid: {joints.B.clearance: [1.0e-4]}, sample: {method: lhs, n: 4, "
+                           "ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.joints.B.clearance: got a key swept twice; expected each key in one grid e'),
+    ('sweep sample range reversed',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 4, ranges: {joints.B.clearance: [2.0e-4, 1.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.ranges.joints.B.clearance: got [0.0002, 0.0001]; expected [low, hig'),
+    ('sweep sample n 0',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 0, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.n: got 0; expected an integer >= 1 (points, or base points of salte'),
+    ('sweep sample n 1.5',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 1.5, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.n: got 1.5; expected an integer >= 1 (points, or base points of sal'),
+    ('sweep sample n true',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: true, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.n: got True; expected an integer >= 1 (points, or base points of sa'),
+    ('sweep sample seed -1',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 4, seed: -1, "
+                           "ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.seed: got -1; expected an integer >= 0'),
+    ('sweep sample method null',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: null, n: 4, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.method: got None; expected sobol or lhs or saltelli'),
+    ('sweep sample ranges empty',
+     lambda t, f: ["sweep", _swp(t, "sweep: {sample: {method: lhs, n: 4, ranges: {}}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.ranges: got {}; expected a mapping of dotted config keys to [low, h'),
+    ('sweep sample range nan',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 4, ranges: {joints.B.clearance: [.nan, 2.0e-4]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.ranges.joints.B.clearance: got [nan, 0.0002]; expected [low, high],'),
+    ('sweep sample range inf',
+     lambda t, f: ["sweep",
+                   _swp(t, "sweep: {sample: {method: lhs, n: 4, ranges: {joints.B.clearance: [1.0e-4, .inf]}}}\n"),
+                   "-o", Path(t) / "out.nc"],
+     2, 'sweep.sample.ranges.joints.B.clearance: got [0.0001, inf]; expected a range of v'),
+    ('sweep sample range of a text key',
+     lambda t, f: ["sweep", _swp(t, "sweep: {sample: {method: lhs, n: 4, ranges: {joints.B.coating: [1, 2]}}}\n"), "-o",
+                   Path(t) / "out.nc"],
+     2, 'sweep.sample.ranges.joints.B.coating: got [1, 2]; expected a range of values joi'),
+    ('sweep a case config', lambda t, f: ["sweep", ONE, "-o", Path(t) / "out.nc"],
+     2, 'got a case config (top-level keys name, mechanism, joints, solver); expected a s'),
+    ('sweep --workers 0',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "--workers", "0", "-o",
+                   Path(t) / "out.nc"],
+     2, "invalid value for '--workers': 0 is not in the range x>=1"),
+    ('sweep --dask-local 0',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "--dask-local", "0", "-o",
+                   Path(t) / "out.nc"],
+     2, "invalid value for '--dask-local': 0 is not in the range x>=1"),
+    ('sweep --backend unknown',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "--backend", "tpu", "-o",
+                   Path(t) / "out.nc"],
+     2, "invalid value for '--backend': 'tpu' is not one of 'processes', 'cuda'"),
+    ('sweep --resume --overwrite',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "--resume", "--overwrite", "-o",
+                   Path(t) / "out.nc"],
+     2, '--resume keeps the finished cases and --overwrite deletes them; give one'),
+    ('sweep --set a swept key',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "--set", "joints.B.coating=PTFE",
+                   "-o", Path(t) / "out.nc"],
+     2, "--set: joints.B.coating: got 'joints.B.coating=PTFE'; expected a key that the sw"),
+    ('sweep -o a folder', lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "-o", t],
+     2, 'is a directory'),
+    ('sweep -o the sweep file',
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "-o", Path(t) / "s.yaml"],
+     2, 'which this command reads; an output never replaces an input: choose another outp'),
+    # --- life and reliability sections
+    ('life cycles 0', _life("life.cycles=0"),
+     2, 'life.cycles: got 0 (from --set); expected a number > 0'),
+    ('life cycles nan', _life("life.cycles=.nan"),
+     2, 'life.cycles: got nan (from --set); expected a number > 0'),
+    ('life cycles string', _life("life.cycles=many"),
+     2, "life.cycles: got 'many' (from --set); expected a number > 0"),
+    ('life cycles bool', _life("life.cycles=true"),
+     2, 'life.cycles: got True (from --set); expected a number > 0'),
+    ('life block_revolutions 0', _life("life.block_revolutions=0"),
+     2, 'life.block_revolutions: got 0 (from --set); expected an integer >= 1'),
+    ('life block_revolutions 1.5', _life("life.block_revolutions=1.5"),
+     2, 'life.block_revolutions: got 1.5 (from --set); expected an integer >= 1'),
+    ('life jump_clearance_fraction 0', _life("life.jump_clearance_fraction=0"),
+     2, 'life.jump_clearance_fraction: got 0 (from --set); expected a number with 0 < x <'),
+    ('life jump_coating_fraction 1.5', _life("life.jump_coating_fraction=1.5"),
+     2, 'life.jump_coating_fraction: got 1.5 (from --set); expected a number with 0 < x <'),
+    ('life snapshots huge', _life("life.snapshots=100000"),
+     2, 'life.snapshots: got 100000 (from --set); expected an integer with 2 <= x <= 1000'),
+    ('life max_blocks 0', _life("life.max_blocks=0"),
+     2, 'life.max_blocks: got 0 (from --set); expected an integer >= 1'),
+    ('life max_normal_force 0', _life("life.max_normal_force=0"),
+     2, 'life.max_normal_force: got 0 (from --set); expected null or a number > 0'),
+    ('life max_motion_error -1', _life("life.max_motion_error=-1"),
+     2, 'life.max_motion_error: got -1 (from --set); expected null or a number > 0'),
+    ('life stop_at_wear_through string', _life("life.stop_at_wear_through=maybe"),
+     2, "life.stop_at_wear_through: got 'maybe' (from --set); expected true or false"),
+    ('life a sweep file',
+     lambda t, f: ["life", _swp(t, "sweep: {grid: {joints.B.coating: [none]}}\n"), "-o", Path(t) / "out.nc"],
+     2, 'got a sweep file (top-level keys name, store, base, sweep); expected a case conf'),
+    ('reliability members 0', _rel("reliability.members=0"),
+     2, 'base: reliability.members: got 0 (from --set); expected an integer with 2 <= x <'),
+    ('reliability members over the cap', _rel("reliability.members=100000000"),
+     2, 'base: reliability.members: got 100000000 (from --set); expected an integer with'),
+    ('reliability distribution unknown', _rel("reliability.clearance_distribution=lognormal"),
+     2, "base: reliability.clearance_distribution: got 'lognormal' (from --set); expected"),
+    ('reliability wear cv negative', _rel("reliability.wear_coefficient_cv=-0.1"),
+     2, 'base: reliability.wear_coefficient_cv: got -0.1 (from --set); expected a number'),
+    ('reliability speed cv nan', _rel("reliability.speed_cv=.nan"),
+     2, 'base: reliability.speed_cv: got nan (from --set); expected a number with 0 <= x'),
+    ('reliability coating cv 2', _rel("reliability.coating_thickness_cv=2"),
+     2, 'base: reliability.coating_thickness_cv: got 2 (from --set); expected a number wi'),
+    ('reliability tolerance negative', _rel("reliability.clearance_tolerance=-1e-6"),
+     2, 'base: reliability.clearance_tolerance: got -1e-06 (from --set); expected a numbe'),
+    ('reliability tolerance equal to clearance', _rel("reliability.clearance_tolerance=2.5e-4"),
+     2, 'base: reliability.clearance_tolerance: got 0.00025 (from --set); expected a numb'),
+    ('reliability seed bool', _rel("reliability.seed=true"),
+     2, 'base: reliability.seed: got True (from --set); expected an integer >= 0'),
+    ('reliability with an ensemble', _rel("ensemble.members=2"),
+     2, 'ensemble.members: got 2; expected 1 with store: reliability (its members are rel'),
+    # --- report, plot, sensitivity on odd inputs
+    ('report missing file', lambda t, f: ["report", Path(t) / "none.nc"],
+     2, 'does not exist'),
+    ('report a folder', lambda t, f: ["report", t],
+     2, 'is a directory'),
+    ('report a YAML file', lambda t, f: ["report", ONE],
+     2, 'is not a results file (no netCDF reader can open it)'),
+    ('report an empty file', lambda t, f: ["report", _w(t, "e.nc", "")],
+     2, 'is not a results file (no netCDF reader can open it)'),
+    ('report a netCDF of another program (was: read as a sweep of 2 cases, exit 0)',
+     lambda t, f: ["report", _foreign(f)],
+     2, "not a clearsweep results file (its source attribute is 'elsewhere', not 'clearsweep')"),
+    ('report --format unknown', lambda t, f: ["report", f / "run.nc", "--format", "xml"],
+     2, "invalid value for '--format': 'xml' is not one of 'text', 'markdown', 'csv', 'js"),
+    ('report --metric unknown', lambda t, f: ["report", f / "run.nc", "--metric", "bogus"],
+     2, "unknown metric 'bogus'"),
+    ('report --reference no equals', lambda t, f: ["report", f / "run.nc", "--reference", "joint"],
+     2, "expected DIM=VALUE, got 'joint'"),
+    ('report --reference and --metric',
+     lambda t, f: ["report", f / "run.nc", "--reference", "joint=B", "--metric", "x"],
+     2, '--reference and --metric print different tables; give one of them'),
+    ('plot --kind unknown', lambda t, f: ["plot", f / "run.nc", "--kind", "pie", "-o", Path(t) / "out.png"],
+     2, "invalid value for '--kind': 'pie' is not one of 'slider', 'forces', 'wear-map',"),
+    ('plot -o .txt', lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", Path(t) / "out.txt"],
+     2, 'the suffix must be one of .png, .pdf, .svg'),
+    ('plot -o without suffix', lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", Path(t) / "out"],
+     2, 'the suffix must be one of .png, .pdf, .svg'),
+    ('plot --dpi 0', lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--dpi", "0", "-o", Path(t) / "out.png"],
+     2, "invalid value for '--dpi': 0 is not in the range 10<=x<=1200"),
+    ('plot --dpi huge',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--dpi", "100000", "-o", Path(t) / "out.png"],
+     2, "invalid value for '--dpi': 100000 is not in the range 10<=x<=1200"),
+    ('plot --x unknown',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--x", "space", "-o", Path(t) / "out.png"],
+     2, "invalid value for '--x': 'space' is not one of 'angle', 'time'"),
+    ('plot --select no equals',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--select", "joint", "-o", Path(t) / "out.png"],
+     2, "expected DIM=VALUE, got 'joint'"),
+    ('plot --select unknown dim',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--select", "planet=mars", "-o", Path(t) / "out.png"],
+     2, "unknown sweep dimension 'planet'"),
+    ('plot --kind sweep of a run', lambda t, f: ["plot", f / "run.nc", "--kind", "sweep", "-o", Path(t) / "out.png"],
+     2, '--kind sweep draws a metric over one or two sweep dimensions; this dataset has 0'),
+    ('plot --kind life of a run', lambda t, f: ["plot", f / "run.nc", "--kind", "life", "-o", Path(t) / "out.png"],
+     2, '--kind life needs cycle, wear_map_snapshot, stop_reason, which this dataset lack'),
+    ('plot --kind reliability of a run',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "reliability", "-o", Path(t) / "out.png"],
+     2, '--kind reliability needs reliability, reliability_ci_low, reliability_ci_high, b'),
+    ('plot --b10 with --kind slider',
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "--b10", "-o", Path(t) / "out.png"],
+     2, '--b10 applies to --kind reliability only'),
+    ("plot a netCDF of another program (was: 'needs slider_position ... a summary-only sweep')",
+     lambda t, f: ["plot", _foreign(f), "--kind", "slider", "-o", Path(t) / "out.png"],
+     2, "not a clearsweep results file (its source attribute is 'elsewhere', not 'clearsweep')"),
+    ('plot -o the results file', lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", f / "run.nc"],
+     2, 'the suffix must be one of .png, .pdf, .svg'),
+    ('sensitivity a run file', lambda t, f: ["sensitivity", f / "run.nc", "--metric", "slider_acceleration_peak"],
+     2, "not a sampling sweep: Sobol' indices need a sweep with 'sweep: sample: method: s"),
+    ('sensitivity --metric unknown', lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "bogus"],
+     2, "unknown output 'bogus'"),
+    ('sensitivity --select on a 1-d output',
+     lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "y", "--select", "joint=B"],
+     2, "unknown dimension 'joint'"),
+    ('sensitivity -o .txt', lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "y", "-o", Path(t) / "out.txt"],
+     2, 'the suffix must be one of .png, .pdf, .svg'),
+    ('sensitivity --overwrite without -o', lambda t, f: ["sensitivity", f / "samp.nc", "--metric", "y", "--overwrite"],
+     2, '--overwrite acts on the -o/--out figure; give -o'),
+    # --- materials files
+    ('materials missing file', lambda t, f: ["materials", "-m", Path(t) / "none.yaml"],
+     2, '(No such file or directory); expected a readable YAML file'),
+    ('materials a folder', lambda t, f: ["materials", "-m", t],
+     2, 'is a directory'),
+    ('materials empty file', lambda t, f: ["materials", "-m", _w(t, "m.yaml", "")],
+     2, 'got an empty file; expected a mapping of material names to their fields (youngs_'),
+    ('materials a list', lambda t, f: ["materials", "-m", _w(t, "m.yaml", "- 1\n")],
+     2, 'got [1]; expected a mapping of material names to their fields (youngs_modulus_Pa'),
+    ('materials duplicate name', lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: {}\nX: {}\n")],
+     2, "line 2: got the key 'X' a second time (first on line 1); expected each key once"),
+    ('materials a material a number', lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: 5\n")],
+     2, 'X: got 5; expected a mapping with the fields youngs_modulus_Pa, poisson_ratio, f'),
+    ('materials unknown property', lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: {colour: red}\n")],
+     2, "X.colour: got 'red'; expected one of the fields youngs_modulus_Pa, poisson_ratio"),
+    ('materials negative modulus',
+     lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: {youngs_modulus_Pa: {value: -1, source: s}}\n")],
+     2, 'X.youngs_modulus_Pa.value: got -1; expected a number > 0'),
+    ('materials nan modulus',
+     lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: {youngs_modulus_Pa: {value: .nan, source: s}}\n")],
+     2, 'X.youngs_modulus_Pa.value: got nan; expected a number > 0'),
+    ('materials 400-digit modulus (was: OverflowError)',
+     lambda t, f: ["materials", "-m", _w(t, "m.yaml", f"X: {{youngs_modulus_Pa: {{value: {BIG}, source: s}}}}\n")],
+     2, 'X.youngs_modulus_Pa.value: got 111111111111... (an integer of 400 digits); expec'),
+    ('materials bool modulus',
+     lambda t, f: ["materials", "-m", _w(t, "m.yaml", "X: {youngs_modulus_Pa: {value: true, source: s}}\n")],
+     2, 'X.youngs_modulus_Pa.value: got True; expected a number > 0'),
+    ('materials unicode name',
+     lambda t, f: ["materials", "-m", _w(t, "m.yaml", "Ünï: {youngs_modulus_Pa: {value: 1, source: s}}\n")],
+     2, 'Ünï.poisson_ratio: got nothing; expected a value for every field of a new materi'),
+    # --- the group itself
+    ('unknown command', lambda t, f: ["simulate", ONE],
+     2, "no such command 'simulate'"),
+    ('run with no argument', lambda t, f: ["run"],
+     2, "missing argument 'CONFIG'"),
+    ('run two configs', lambda t, f: ["run", ONE, ONE],
+     2, 'got unexpected extra argument ('),
+    ('run unknown option', lambda t, f: ["run", ONE, "--speed", "60"],
+     2, "no such option '--speed'. Did you mean '--set'?"),
+]
+
+
+ROWS += ROUND4_MESSAGES + ROUND4_FUZZ
 
 
 @pytest.fixture
@@ -408,11 +1168,8 @@ def test_the_resume_banner_counts_only_the_cases_left(tmp_path):
     assert again.stderr.split("results up to ")[1].split("\n")[0] == size.split("\n")[0]
 
 
-@pytest.mark.parametrize("select, title", [((), "Socket wear depth"),
-                                           (("--select", "snapshot=1"),
-                                            "Socket wear depth, snapshot 1 at ")])
-def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, select, title):
-    """Before: --kind wear-map on a life file asked for --select on snapshot, then refused it."""
+def drawn(argv: list[str]):
+    """``clearsweep ARGV`` and the matplotlib figures it drew."""
     import clearsweep.plotting as plotting
 
     figures = []
@@ -424,8 +1181,16 @@ def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, sel
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(plotting, "figure", keep)
-        result = CliRunner().invoke(main, ["plot", str(files / "life.nc"), "--kind", "wear-map",
-                                           *select, "-o", str(tmp_path / "w.png")])
+        return CliRunner().invoke(main, argv), figures
+
+
+@pytest.mark.parametrize("select, title", [((), "Socket wear depth"),
+                                           (("--select", "snapshot=1"),
+                                            "Socket wear depth, snapshot 1 at ")])
+def test_a_life_runs_wear_map_is_drawn_whole_or_by_snapshot(tmp_path, files, select, title):
+    """Before: --kind wear-map on a life file asked for --select on snapshot, then refused it."""
+    result, figures = drawn(["plot", str(files / "life.nc"), "--kind", "wear-map", *select,
+                             "-o", str(tmp_path / "w.png")])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "w.png").stat().st_size > 0
     suptitle = figures[0].get_suptitle()
@@ -459,3 +1224,127 @@ def test_a_full_disk_while_writing_the_results_says_the_disk_is_full(tmp_path, m
     assert result.stderr.strip().splitlines()[-1] == (
         f"clearsweep: error: cannot write {out}: the disk is full (No space left on device)")
     assert not out.exists()
+
+
+# --- round 4 (issue 33, items 4-6): what the table's one-line rows cannot show
+
+@pytest.mark.parametrize("limit", ["any", "clearance_growth"])
+def test_a_reliability_figure_of_one_limit(tmp_path, files, limit):
+    """Before: --select limit=any stopped with "TypeError: iteration over a 0-d array"."""
+    result, figures = drawn(["plot", str(files / "rel.nc"), "--kind", "reliability", "--select",
+                             f"limit={limit}", "-o", str(tmp_path / "r.png")])
+    assert result.exit_code == 0, result.output
+    assert [ax.get_title() for ax in figures[0].axes] == [f"limit: {limit}"]
+
+
+def test_the_tolerance_band_rule_does_not_depend_on_the_seed():
+    """Before: with B's clearance 7.4 mm (bound 7.5 mm) and t = 0.2 mm, seed 1 was accepted
+    and seeds 0, 2 and 3 refused, by the draws of member 1; a band inside the bounds was
+    refused or not by the draws too."""
+    lines = set()
+    for seed in range(4):
+        result = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "joints.B.clearance=7.4e-3",
+                                           "--set", "reliability.clearance_tolerance=2e-4", "--set",
+                                           "reliability.members=2", "--set", f"reliability.seed={seed}"])
+        assert result.exit_code == 2, (seed, result.output)
+        lines.add(result.stderr.strip())
+    assert len(lines) == 1 and "reliability.clearance_tolerance: got 0.0002" in lines.pop()
+    inside = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "joints.B.clearance=7.4e-3",
+                                       "--set", "reliability.clearance_tolerance=0.99e-4"])
+    assert inside.exit_code == 0, inside.output      # c + t < 7.5 mm: every draw admitted
+    # t = 0.2 mm < c = 0.25 mm: every member keeps a clearance. Before, the band was checked
+    # again around each member's drawn clearance: seeds 0-3 and 5 refused it, seed 4 not.
+    for seed in range(6):
+        result = CliRunner().invoke(main, ["validate", REL, "-q", "--set", "reliability.members=4",
+                                           "--set", "reliability.clearance_tolerance=2e-4",
+                                           "--set", f"reliability.seed={seed}"])
+        assert result.exit_code == 0, (seed, result.output)
+
+
+def test_the_skip_rule_the_wear_through_message_names_runs_the_coated_designs(tmp_path):
+    """The rule the refusal names (docs/reliability.md) leaves the other designs valid."""
+    limits = ["--set", "life.max_clearance_growth=null", "--set", "life.max_motion_error=null",
+              "--set", "life.stop_at_wear_through=true"]
+    refused = CliRunner().invoke(main, ["validate", REL, *limits])
+    rule = refused.stderr.split("(sweep: skip: ")[1].split(")")[0]
+    assert rule == "[{B_coating: none}]"
+    text = (CONFIGS / "reliability.yaml").read_text().replace(
+        "    joints.B.coating: [none, MoS2, lead, PTFE]\n",
+        f"    joints.B.coating: [none, MoS2, lead, PTFE]\n  skip: {rule}\n")
+    (tmp_path / "rel.yaml").write_text(text)
+    result = CliRunner().invoke(main, ["validate", str(tmp_path / "rel.yaml"), *limits])
+    assert result.exit_code == 0, result.output
+    assert "64 life runs, 48 to run" in result.stdout      # 16 members of each coated design
+
+
+def test_a_damaged_part_is_named_with_what_to_do(tmp_path):
+    """Before: "cannot write OUT.parts/H.nc: NetCDF: HDF error; ... make room and run again
+    with --resume", and every --resume ended the same way."""
+    config, out = two_case_sweep(tmp_path), tmp_path / "two.nc"
+    argv = ["sweep", config, "-o", str(out), "--workers", "1", "--no-progress"]
+    assert CliRunner().invoke(main, [*argv, "--keep-parts"]).exit_code == 0
+    out.unlink()
+    part = sorted((tmp_path / "two.nc.parts").glob("*.nc"))[0]
+    part.write_bytes(part.read_bytes()[:300])
+    for _ in range(2):
+        result = CliRunner().invoke(main, [*argv, "--resume"])
+        assert result.exit_code == 2 and isinstance(result.exception, SystemExit), result.output
+        assert result.stderr.splitlines()[-1] == (
+            f"clearsweep: error: the finished part {part} cannot be read (NetCDF: HDF error): delete "
+            "it and run the same command again with --resume (its case runs again, the other "
+            "finished cases are kept)")
+        assert not out.exists()
+    part.unlink()                                       # what the message says
+    again = CliRunner().invoke(main, [*argv, "--resume"])
+    assert again.exit_code == 0, again.output
+    assert "2 cases, 1 to simulate (1 finished before, kept)" in again.stderr
+
+
+def test_ctrl_c_counts_the_parts_kept_on_disk(tmp_path, monkeypatch):
+    """Before: "1 of 2 cases are finished" while 2 parts were on disk: a worker writes its
+    part before the driver hears of it, and --resume keeps every part."""
+    import clearsweep.sweeping.run as run
+    from clearsweep.sweeping.worker import _run_and_store
+
+    def two_written_one_heard(backend, tasks, on_result, guard):
+        tasks = list(tasks)
+        receipts = [_run_and_store(payload, backend.parts_dir, h) for h, payload in tasks]
+        on_result(tasks[0][0], receipts[0])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "_drive", two_written_one_heard)
+    monkeypatch.setattr(run, "_backend", lambda *a, **k: _Parts(tmp_path / "out.nc.parts"))
+    result = CliRunner().invoke(main, ["sweep", two_case_sweep(tmp_path), "-o", str(tmp_path / "out.nc"),
+                                       "--workers", "2", "--no-progress"])
+    assert result.exit_code == 130, result.output
+    assert "2 of 2 cases are finished and kept in" in result.stderr.splitlines()[-1]
+    assert len(list((tmp_path / "out.nc.parts").glob("*.nc"))) == 2
+
+
+class _Parts:
+    """A stand-in backend whose ``_drive`` the test replaces: it only names the parts folder."""
+
+    label = "stand-in"
+
+    def __init__(self, parts_dir):
+        self.parts_dir = str(parts_dir)
+
+    def close(self, interrupted=False):
+        pass
+
+
+def test_library_warnings_are_one_clearsweep_line(tmp_path, capsys):
+    """Before: scipy's and SALib's two raw lines each ("UserWarning: The balance properties
+    of Sobol' points require n to be a power of 2" and the source line)."""
+    from clearsweep.cli import _show_warning
+
+    config = sample_file(tmp_path, "{method: sobol, n: 5, ranges: {joints.B.clearance: [1.0e-4, 2.0e-4]}}")
+    result = CliRunner().invoke(main, ["validate", config, "-q"])
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines() == [
+        "clearsweep: warning: sweep.sample.n: 5 is not a power of 2; Sobol' points (method sobol) "
+        "are balanced at n = 2^k only: 4 or 8 keeps that balance"]
+    _show_warning(RuntimeWarning("invalid value encountered in divide"), RuntimeWarning,
+                  "/venv/lib/python3.11/site-packages/SALib/analyze/sobol.py", 140)
+    assert capsys.readouterr().err == ("clearsweep: warning: invalid value encountered in divide "
+                                       "(RuntimeWarning from SALib)\n")

@@ -375,11 +375,14 @@ def test_cli_usage_errors(tmp_path):
     assert result.exit_code == 2 and "give one" in result.stderr
 
 
-def test_cli_unwritable_output_exits_1(tmp_path):
+def test_cli_output_under_a_file_exits_2_before_any_case(tmp_path):
+    """Before: every case ran, then "cannot write .../o.nc.parts: ..." (exit 1)."""
     cfg = write_sweep(tmp_path, SMALL)
     result = cli(cfg, "-o", cfg / "o.nc", "--no-progress")      # its folder is a file
-    assert result.exit_code == 1
-    assert result.stderr.splitlines()[-1].startswith(f"clearsweep: error: cannot write {cfg}/o.nc.parts: ")
+    assert result.exit_code == 2
+    assert result.stderr.splitlines()[-1] == (f"clearsweep: error: -o/--out {cfg}/o.nc: {cfg} is "
+                                              "a file, not a folder; choose an output in a folder")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [cfg.name]
 
 
 def test_full_disk_during_assembly_keeps_the_parts_and_leaves_no_file(tmp_path, monkeypatch):

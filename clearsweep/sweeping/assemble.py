@@ -29,6 +29,7 @@ from .parts import (
     MESSAGE_ATTRS,
     NOT_FAILED,
     STATUS_ATTRS,
+    DamagedPart,
     PartStore,
     StoreError,
     _now,
@@ -74,7 +75,11 @@ _HIDDEN_ATTRS = ("_FillValue", "coordinates", "dtype")
 
 @contextmanager
 def _open_part(path: Path):
-    with netCDF4.Dataset(path) as nc:
+    try:
+        nc = netCDF4.Dataset(path)
+    except (OSError, RuntimeError) as exc:      # truncated or not netCDF: name the part
+        raise DamagedPart(path, getattr(exc, "strerror", None) or str(exc)) from None
+    with nc:
         nc.set_auto_maskandscale(False)
         yield nc
 

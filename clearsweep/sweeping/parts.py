@@ -77,6 +77,18 @@ class StoreError(RuntimeError):
     """A parts folder that cannot be used as asked (earlier parts, another sweep in it)."""
 
 
+class DamagedPart(StoreError):
+    """A finished case's part that cannot be read (truncated, or overwritten by hand): the
+    message names it and what to do; before, it read as a failed write with a full-disk
+    remedy, and --resume failed the same way every time."""
+
+    def __init__(self, path: str | os.PathLike, reason: str):
+        self.path = Path(path)
+        super().__init__(f"the finished part {self.path} cannot be read ({reason}): delete it "
+                         "and run the same command again with --resume (its case runs again, "
+                         "the other finished cases are kept)")
+
+
 def canonical_json(cfg: Mapping) -> str:
     """Canonical JSON text of a resolved configuration (sorted keys, no spaces)."""
     return json.dumps(cfg, sort_keys=True, separators=(",", ":"), ensure_ascii=True)

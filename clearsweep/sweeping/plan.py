@@ -11,6 +11,7 @@ import itertools
 import json
 import math
 import os
+import warnings
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +37,7 @@ from ..config import (
     set_path,
     short_repr,
 )
+from ..schema import OVERSIZED, ClearsweepWarning, oversized_number, oversized_text
 from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
@@ -334,6 +336,11 @@ def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> C
         if not path.is_file():
             raise ConfigError("base", base, "an inline case config or the path of a case YAML file "
                               f"(relative to the sweep file; looked for {path})", source)
+        doc = read_yaml(path, f"{source}: base {base}")
+        if file_kind(doc) == "sweep":   # load_config's hint would name `clearsweep sweep` of it
+            raise ConfigError("base", base, "the path of a case config (a sweep's base is one "
+                              "case; a sweep file cannot be the base of another)", source,
+                              got=f"{base!r}, a sweep file")
         return load_config(path, overrides, source_name=f"{source}: base {base}")
     if not isinstance(base, Mapping):
         raise ConfigError("base", base, "an inline case config (a mapping) or the path of a case "
@@ -367,6 +374,9 @@ def _check_swept_key(key, base: Config, where: str, source: str) -> str:
 def _check_values(values, where: str, source: str, length: int | None = None) -> tuple:
     if not isinstance(values, list) or not values:
         raise ConfigError(where, values, "a non-empty list of values", source)
+    big = oversized_number(values)
+    if big is not None:
+        raise ConfigError(where, values, OVERSIZED, source, got=oversized_text(big))
     if length is not None and len(values) != length:
         raise ConfigError(where, values, f"a list of {length} values (as long as the group's "
                           "first list: the keys of a zip group vary together)", source,
@@ -479,17 +489,26 @@ def sample_points(method: str, n: int, ranges: Mapping[str, Sequence[float]], se
     """
     lo = np.array([float(r[0]) for r in ranges.values()])
     hi = np.array([float(r[1]) for r in ranges.values()])
-    if method == "saltelli":
-        from SALib.sample import sobol as saltelli
+    if method in ("sobol", "saltelli") and n & (n - 1):
+        # scipy and SALib say "The balance properties of Sobol' points require n to be a
+        # power of 2" without naming the key: say it once, in clearsweep's words
+        below = 1 << (n.bit_length() - 1)
+        warnings.warn(f"sweep.sample.n: {n} is not a power of 2; Sobol' points (method "
+                      f"{method}) are balanced at n = 2^k only: {below} or {2 * below} keeps "
+                      "that balance", ClearsweepWarning, stacklevel=2)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="The balance properties of Sobol' points")
+        if method == "saltelli":
+            from SALib.sample import sobol as saltelli
 
-        problem = {"num_vars": len(ranges), "names": list(ranges),
-                   "bounds": [[a, b] for a, b in zip(lo, hi)]}
-        return saltelli.sample(problem, n, calc_second_order=second_order, seed=seed)
-    from scipy.stats import qmc
+            problem = {"num_vars": len(ranges), "names": list(ranges),
+                       "bounds": [[a, b] for a, b in zip(lo, hi)]}
+            return saltelli.sample(problem, n, calc_second_order=second_order, seed=seed)
+        from scipy.stats import qmc
 
-    engine = (qmc.Sobol(len(ranges), scramble=True, seed=seed) if method == "sobol"
-              else qmc.LatinHypercube(len(ranges), seed=seed))
-    return qmc.scale(engine.random(n), lo, hi)
+        engine = (qmc.Sobol(len(ranges), scramble=True, seed=seed) if method == "sobol"
+                  else qmc.LatinHypercube(len(ranges), seed=seed))
+        return qmc.scale(engine.random(n), lo, hi)
 
 
 def sample_size(method: str, n: int, dims: int, second_order: bool = False) -> int:
@@ -513,6 +532,13 @@ def _parse_sample(spec, base: Config, source: str,
     if method not in SAMPLE_METHODS:
         raise ConfigError(f"{where}.method", method, " or ".join(SAMPLE_METHODS), source,
                           close_match(method, SAMPLE_METHODS))
+    for name, value in spec.items():
+        inner = value.items() if name == "ranges" and isinstance(value, Mapping) else [(None, value)]
+        for key, item in inner:
+            big = oversized_number(item)
+            if big is not None:
+                raise ConfigError(f"{where}.{name}" + (f".{key}" if key else ""), item,
+                                  OVERSIZED, source, got=oversized_text(big))
     n = spec.get("n")
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise ConfigError(f"{where}.n", n, "an integer >= 1 (points, or base points of saltelli)",
@@ -597,12 +623,26 @@ def _check_reliability_base(base: Config, source: str) -> None:
                           "(its members are reliability.members)", source)
 
 
-def _check_reliability_case(cfg: Config, source: str, allow_large: bool) -> None:
+def _check_reliability_case(cfg: Config, source: str, allow_large: bool,
+                            label: Mapping[str, Any] | None = None) -> None:
     """A reliability case: limits that can be reached, and a member config (its draws
-    applied) that the simulator admits."""
+    applied) that the simulator admits.
+
+    A design whose limits can never be reached (wear-through of an uncoated design) refuses
+    the whole sweep before anything runs, its message saying how to run the other designs:
+    a ``sweep.skip`` rule for it. A design the sweep file asks for is never dropped unsaid."""
     from ..reliability import check_reliability, member_config
 
-    check_reliability(cfg, source)
+    try:
+        check_reliability(cfg, source)
+    except ConfigError as exc:
+        design = {n: v for n, v in (label or {}).items() if n != MEMBER_DIM}
+        if not design:
+            raise
+        rule = "{" + ", ".join(f"{n}: {v}" for n, v in design.items()) + "}"
+        raise ConfigError(exc.key, exc.value, f"{exc.expected}; to run the other designs, "
+                          f"skip this one (sweep: skip: [{rule}])", exc.source, exc.suggestion,
+                          exc.got) from None
     try:
         life_block(member_config(cfg), allow_large=allow_large, source=source)
     except ConfigError as exc:
@@ -751,11 +791,14 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             elif store != "reliability":
                 preflight(resolved, allow_large=allow_large)
             if store == "reliability":
-                _check_reliability_case(resolved, source, allow_large)
+                _check_reliability_case(resolved, source, allow_large, label)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_key(resolved), resolved))
 
+    if cases and all(c.hash is None for c in cases):
+        raise ConfigError("sweep.skip", (spec or {}).get("skip"), "rules that leave at least one "
+                          "case to run", source, got=f"rules that skip all {len(cases)} cases")
     text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
     base_file = doc.get("base")
     return SweepPlan(name, store, source, text, base, tuple(axes), cases,

@@ -368,13 +368,11 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         bar.set_postfix(failed=failed, refresh=False)
         bar.update()
 
-    interrupted = False
+    interrupted = stopped = False
     try:
         _drive(backend, todo, on_result, guard)
     except KeyboardInterrupt:
-        interrupted = True
-        store.log("interrupted", finished=done, total=total)
-        raise SweepInterrupted(done, total, store.directory) from None
+        interrupted = stopped = True
     except Exception as exc:
         interrupted = True
         with contextlib.suppress(OSError):      # the log is on the same (maybe full) disk
@@ -389,3 +387,9 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     finally:
         bar.close()
         backend.close(interrupted=interrupted)
+    if stopped:
+        # what is kept is what --resume keeps: the parts on disk, counted once the workers
+        # are stopped (a worker writes its part before the driver hears of it)
+        kept_now = len(store.finished() & set(runnable))
+        store.log("interrupted", finished=kept_now, total=total)
+        raise SweepInterrupted(kept_now, total, store.directory)
