@@ -908,7 +908,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
                       max_cases=None if yes else MAX_CASES)
         _check_out(given, out, plan.input_files(), overwrite, resume, kind=_sweep_kind(plan))
         cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
-        kept = PartStore(parts_dir_for(out)).finished() if resume else set()
+        kept = PartStore(parts_dir_for(out)).kept_on_resume() if resume else set()
         if not quiet:
             click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):

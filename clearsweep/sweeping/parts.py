@@ -35,6 +35,7 @@ import json
 import os
 import re
 import uuid
+import warnings
 from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import Any, TextIO
@@ -47,6 +48,7 @@ from ..dataset import (
     write_netcdf_atomic,
 )
 from ..params import identity_changes, identity_differences, run_identity
+from ..schema import ClearsweepWarning
 
 PART_SUFFIX = ".nc"
 LOG_NAME = "sweep.log"
@@ -281,8 +283,12 @@ class PartStore:
                 (self.directory / LOG_NAME).unlink(missing_ok=True)
                 finished = set()
             if resume:
-                misfiled = sorted(h for h in finished if read_mark(self.path(h))[0] != h)
+                misfiled = sorted(finished - self.kept_on_resume(finished))
                 for h in misfiled:      # its name is not what it holds: run its case again
+                    warnings.warn(f"the finished part {self.path(h)} cannot be read or does not "
+                                  "hold the case it is filed under (truncated, renamed or "
+                                  "swapped): deleted, its case runs again", ClearsweepWarning,
+                                  stacklevel=2)
                     self.path(h).unlink()
                 finished -= set(misfiled)
         except BaseException:
@@ -427,6 +433,12 @@ class PartStore:
     def path(self, h: str) -> Path:
         """Path of the part of the case with hash ``h``."""
         return self.directory / f"{h}{PART_SUFFIX}"
+
+    def kept_on_resume(self, finished: Collection[str] | None = None) -> set[str]:
+        """The finished parts (of ``finished``, default all) that ``--resume`` keeps: those
+        that can be read and record the key they are filed under (:func:`read_mark`)."""
+        return {h for h in (self.finished() if finished is None else finished)
+                if read_mark(self.path(h))[0] == h}
 
     def finished(self) -> set[str]:
         """Hashes of the parts in the folder."""
