@@ -564,7 +564,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         format_statistics_table,
         format_sweep_summary,
         format_wear_table,
-        is_ensemble,
+        results_kind,
     )
 
     if reference and metric:
@@ -591,7 +591,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
                 text = summary
             elif metric:
                 text = format_metric_table(ds, metric, fmt)
-            elif is_ensemble(ds):
+            elif results_kind(ds) == "ensemble":
                 text = format_ensemble_report(ds, fmt, reference)
             elif reference:
                 text = format_reduction_table(ds, reference, fmt)
@@ -611,15 +611,18 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 def _text_only_report(ds: xr.Dataset, metric: str | None):
     """``(what the file is, its text report, a variable it reads)`` for the files ``report`` prints as text only:
     a life run, a reliability sweep and a life sweep (unless --metric asks for a table)."""
-    if "cycle" in ds.dims and ("stop_reason" in ds or "block_status" in ds):
+    from .analysis import results_kind
+
+    kind = results_kind(ds)
+    if kind == "life":
         from .service_life import life_summary_text
 
         return "a life run", life_summary_text, "stop_reason"
-    if ds.attrs.get("sweep_store") == "reliability" and not metric:
+    if kind == "reliability" and not metric:
         from .reliability import reliability_text
 
         return "a reliability sweep", reliability_text, "b10"
-    if ds.attrs.get("sweep_store") == "life" and not metric:
+    if kind == "life-sweep" and not metric:
         from .service_life import life_sweep_text
 
         return "a life sweep", life_sweep_text, None

@@ -44,6 +44,8 @@ from ..summary import (  # noqa: F401
 )
 from .selection import (  # noqa: F401
     CASE_DIMS,
+    RESULTS_KINDS,
+    SAMPLE_DIM,
     SelectionError,
     choice_message,
     configured_clearances,
@@ -54,6 +56,7 @@ from .selection import (  # noqa: F401
     joint_clearances,
     label_text,
     parse_selection,
+    results_kind,
     select_cases,
     sweep_dims,
     value_text,

@@ -244,3 +244,46 @@ def design_dims(ds: xr.Dataset) -> tuple[str, ...]:
     """The sweep dimensions of ``ds`` but an ensemble's ``member``: one per design axis."""
     return tuple(d for d in sweep_dims(ds) if d != MEMBER_DIM)
 
+
+
+#: The ``sample`` dimension of a sampling sweep (``sweep: sample:``), one position per point drawn.
+SAMPLE_DIM = "sample"
+
+#: What a results file holds, as :func:`results_kind` names it.
+RESULTS_KINDS = ("run", "life", "reliability", "life-sweep", "ensemble", "sample", "sweep")
+
+
+def results_kind(ds: xr.Dataset) -> str:
+    """What the results file ``ds`` holds, one of :data:`RESULTS_KINDS`; the first that fits:
+
+    ``"life"``
+        a life run (``clearsweep life``): a ``cycle`` dimension and the history of its
+        blocks (``stop_reason``, or ``block_status`` in a file without it);
+    ``"reliability"``, ``"life-sweep"``
+        a sweep with ``store: reliability`` or ``store: life`` (its ``sweep_store``
+        attribute);
+    ``"ensemble"``
+        a sweep with ensemble members and their statistics (:func:`is_ensemble`), a sampling
+        sweep with members included;
+    ``"sample"``
+        a sampling sweep (``sweep: sample:``; a ``sample`` dimension);
+    ``"sweep"``
+        any other sweep (``store: full`` or ``summary``; sweep dimensions or a
+        ``sweep_store`` attribute);
+    ``"run"``
+        one case (``clearsweep run``).
+    """
+    if "cycle" in ds.dims and ("stop_reason" in ds or "block_status" in ds):
+        return "life"
+    store = ds.attrs.get("sweep_store")
+    if store == "reliability":
+        return "reliability"
+    if store == "life":
+        return "life-sweep"
+    if is_ensemble(ds):
+        return "ensemble"
+    if SAMPLE_DIM in ds.dims:
+        return "sample"
+    if store is not None or sweep_dims(ds):
+        return "sweep"
+    return "run"

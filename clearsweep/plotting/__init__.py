@@ -49,7 +49,7 @@ import xarray as xr
 import yaml
 from matplotlib.figure import Figure
 
-from ..analysis import SelectionError, choice_message, parse_selection, sweep_dims
+from ..analysis import SelectionError, choice_message, parse_selection, results_kind, sweep_dims
 from ..choices import (  # noqa: F401
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -136,7 +136,7 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
         raise PlotError("a metric applies to --kind sweep only")
     if b10 and kind != "reliability":
         raise PlotError("--b10 applies to --kind reliability only")
-    if kind == "wear-map" and "wear_map_snapshot" in ds and "snapshot" not in ds.coords:
+    if kind == "wear-map" and results_kind(ds) == "life" and "wear_map_snapshot" in ds:
         ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
     selection = parse_selection(ds, select)
     ds = ds.sel(selection) if selection else ds

@@ -1,0 +1,39 @@
+"""``analysis.results_kind``: the one place that tells what a results file holds (a run, a
+life run, a grid, sampling, ensemble, life or reliability sweep); report and plot ask it."""
+
+import pytest
+import xarray as xr
+
+from clearsweep.analysis import RESULTS_KINDS, results_kind
+
+CASE = {"slider_position": ("time", [0.3, 0.31]), "status": ((), "ok")}
+ENSEMBLE = {"x": (("B_coating", "member"), [[1.0, 2.0]]), "members_ok": ("B_coating", [2]),
+            "x_mean": ("B_coating", [1.5])}
+
+FILES = [
+    ("run", xr.Dataset(CASE, coords={"time": [0.0, 0.1]})),
+    ("life", xr.Dataset({"stop_reason": ((), "cycles"), "wear_depth_max": ("cycle", [1.0])})),
+    # a life file written before stop_reason: its blocks' status says what it is
+    ("life", xr.Dataset({"block_status": ("cycle", ["ok"]), "wear_depth_max": ("cycle", [1.0])})),
+    ("reliability", xr.Dataset({"b10": ("B_coating", [1.0])}, attrs={"sweep_store": "reliability"})),
+    ("life-sweep", xr.Dataset({"cycles_reached": ("B_coating", [1.0])}, attrs={"sweep_store": "life"})),
+    ("ensemble", xr.Dataset(ENSEMBLE, attrs={"sweep_store": "summary"})),
+    # members without their statistics are a grid over member, not an ensemble report
+    ("sweep", xr.Dataset({"x": (("B_coating", "member"), [[1.0, 2.0]])})),
+    ("sample", xr.Dataset({"x": ("sample", [1.0, 2.0])}, attrs={"sweep_store": "summary"})),
+    # a sampling sweep with members is reported as an ensemble
+    ("ensemble", xr.Dataset({"x": (("sample", "member"), [[1.0, 2.0]]), "members_ok": ("sample", [2])})),
+    ("sweep", xr.Dataset({"x": ("B_clearance", [1.0, 2.0])}, attrs={"sweep_store": "full"})),
+    # a one-case sweep keeps its store attribute: a sweep, not a run
+    ("sweep", xr.Dataset(CASE, coords={"time": [0.0, 0.1]}, attrs={"sweep_store": "summary"})),
+]
+
+
+@pytest.mark.parametrize("kind, ds", FILES, ids=[f"{k}-{i}" for i, (k, _) in enumerate(FILES)])
+def test_results_kind_names_each_kind_of_file(kind, ds):
+    assert kind in RESULTS_KINDS
+    assert results_kind(ds) == kind
+
+
+def test_every_kind_is_named_by_some_file():
+    assert {k for k, _ in FILES} == set(RESULTS_KINDS)
