@@ -27,7 +27,7 @@ from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .parts import NOT_FAILED, PartStore, parts_dir_for
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
-from .worker import _receipt, _worker_died
+from .worker import CaseTask, _receipt, _worker_died
 
 #: Variables (and dataset attributes) that change from run to run of the same sweep.
 TIMING_VARIABLES = ("wall_time",)
@@ -54,7 +54,7 @@ class SweepFailed(RuntimeError):
     """The backend failed (a worker died, the scheduler went away); finished cases are kept."""
 
 
-def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str, Any], None],
+def _drive(backend, tasks: Iterable[tuple[str, CaseTask]], on_result: Callable[[str, Any], None],
            guard: _InterruptGuard) -> None:
     """Keep ``backend.window`` cases in flight; hand each result to ``on_result``.
 
@@ -70,7 +70,7 @@ def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str
     """
     tasks = iter(tasks)
     pending: dict[Any, tuple[str, Any]] = {}
-    suspects: collections.deque = collections.deque()   # (hash, payload) to run again, alone
+    suspects: collections.deque = collections.deque()   # (hash, task) to run again, alone
     solo: tuple[str, Any] | None = None                  # the suspect running alone
 
     def refill() -> None:
@@ -81,8 +81,8 @@ def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str
             solo = suspects.popleft()
             pending[backend.submit(*solo)] = solo
             return
-        for h, payload in itertools.islice(tasks, backend.window - len(pending)):
-            pending[backend.submit(h, payload)] = (h, payload)
+        for h, task in itertools.islice(tasks, backend.window - len(pending)):
+            pending[backend.submit(h, task)] = (h, task)
 
     def finished_well(future) -> bool:
         return future.done() and not future.cancelled() and future.exception() is None
@@ -275,7 +275,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
                     simulate_case = simulate_case or reliability_case
                     summarize_case = summarize_case or reliability_summary
                     finish = add_reliability_estimate
-                todo = [(h, (cfg, plan.store, simulate_case, summarize_case))
+                todo = [(h, CaseTask(cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
                 try:
