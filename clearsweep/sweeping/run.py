@@ -27,6 +27,7 @@ from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .parts import NOT_FAILED, PartStore, parts_dir_for
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
+from .stores import STORES
 from .worker import CaseTask, _receipt, _worker_died
 
 #: Variables (and dataset attributes) that change from run to run of the same sweep.
@@ -258,23 +259,11 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             # OUT is ours while we hold the lock: drop what a killed assembly left beside it
             remove_stale_temporaries(out)
             try:
-                simulate_case, summarize_case = _simulate, _summarize
-                finish = add_ensemble_statistics if MEMBER_DIM in plan.dims else None
-                if plan.store == "life":
-                    from ..service_life import life_case, life_summary
-
-                    simulate_case = simulate_case or life_case
-                    summarize_case = summarize_case or life_summary
-                elif plan.store == "reliability":
-                    from ..reliability import (
-                        add_reliability_estimate,
-                        reliability_case,
-                        reliability_summary,
-                    )
-
-                    simulate_case = simulate_case or reliability_case
-                    summarize_case = summarize_case or reliability_summary
-                    finish = add_reliability_estimate
+                functions = STORES[plan.store].functions()
+                simulate_case = _simulate or functions.simulate
+                summarize_case = _summarize or functions.summarize
+                finish = functions.finish or (add_ensemble_statistics if MEMBER_DIM in plan.dims
+                                              else None)
                 todo = [(h, CaseTask(cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
@@ -305,8 +294,9 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
         return None
     if backend != "cuda":
         raise ValueError(f"backend must be 'processes' or 'cuda', got {backend!r}")
-    if plan.store in ("life", "reliability"):
-        raise ConfigError("store", plan.store, "full or summary with --backend cuda (life runs "
+    if not STORES[plan.store].on_cuda:
+        on_cuda = " or ".join(name for name, store in STORES.items() if store.on_cuda)
+        raise ConfigError("store", plan.store, f"{on_cuda} with --backend cuda (life runs "
                           "alternate simulation and jumps on the CPU: use --backend processes)",
                           plan.source)
     methods = {cfg.solver.method for cfg in plan.runnable().values()}

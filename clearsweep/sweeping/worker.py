@@ -17,6 +17,7 @@ from .. import variables
 from ..config import Config
 from ..summary import case_summary
 from .parts import MESSAGE_ATTRS, STATUS_ATTRS, write_part
+from .stores import STORES
 
 #: How often a pool worker checks that the driver process still exists [s].
 WATCHDOG_PERIOD_S = 1.0
@@ -82,7 +83,7 @@ def _part(ds: xr.Dataset, store_mode: str, summarize=case_summary, start: float 
         summary = summarize(ds)
         extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
         # one assign, not a merge per variable (most of a small case's time outside the kernel)
-        return (ds if store_mode == "full" else summary).assign(extra)
+        return (ds if STORES[store_mode].keeps_series else summary).assign(extra)
     if "message" in ds:
         message = _text(ds["message"].values)
     else:

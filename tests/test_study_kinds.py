@@ -1,5 +1,6 @@
-"""``analysis.results_kind``: the one place that tells what a results file holds (a run, a
-life run, a grid, sampling, ensemble, life or reliability sweep); report and plot ask it."""
+"""The study kinds said once: ``analysis.results_kind`` tells what a results file holds (a
+run, a life run, a grid, sampling, ensemble, life or reliability sweep; report and plot ask
+it), and ``sweeping.stores.STORES`` what each sweep ``store:`` does with its cases."""
 
 import pytest
 import xarray as xr
@@ -37,3 +38,13 @@ def test_results_kind_names_each_kind_of_file(kind, ds):
 
 def test_every_kind_is_named_by_some_file():
     assert {k for k, _ in FILES} == set(RESULTS_KINDS)
+
+
+def test_the_store_registry_lists_the_stores_a_sweep_file_takes():
+    from clearsweep.sweeping import STORE_MODES
+    from clearsweep.sweeping.stores import STORES
+
+    assert tuple(STORES) == STORE_MODES
+    # only the time-series store keeps series; the life-run stores cannot run on the device
+    assert [s.name for s in STORES.values() if s.keeps_series] == ["full"]
+    assert [s.name for s in STORES.values() if not s.on_cuda] == ["life", "reliability"]
