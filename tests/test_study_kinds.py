@@ -48,3 +48,10 @@ def test_the_store_registry_lists_the_stores_a_sweep_file_takes():
     # only the time-series store keeps series; the life-run stores cannot run on the device
     assert [s.name for s in STORES.values() if s.keeps_series] == ["full"]
     assert [s.name for s in STORES.values() if not s.on_cuda] == ["life", "reliability"]
+
+
+def test_every_figure_kind_the_cli_offers_is_drawn_by_the_figure_table():
+    from clearsweep.choices import KINDS
+    from clearsweep.plotting import FIGURES
+
+    assert tuple(FIGURES) == KINDS

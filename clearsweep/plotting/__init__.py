@@ -43,6 +43,8 @@ Kinds (``KINDS``):
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import xarray as xr
@@ -94,9 +96,36 @@ from .sweep import (  # noqa: F401
 )
 from .wear import WEAR_POLAR_EXAGGERATION, _draw_wear_map, _draw_wear_polar, _life_wear_map  # noqa: F401
 
-_SIZES = {"life": (16, 10), "reliability": (14, 8), "slider": (8, 8),
-          "forces": (15, 9), "wear-map": (11, 9), "wear-polar": (11, 9.5),
-          "orbit": (12, 8), "sweep": (8, 5)}
+
+@dataclass(frozen=True)
+class FigureKind:
+    """How one figure kind is drawn: its size and its family's drawer."""
+
+    #: Figure size (width, height) [inch].
+    size_inches: tuple[float, float]
+    #: ``draw(fig, ds, *options)``: draws the kind on ``fig``.
+    draw: Callable[..., None]
+    #: The options of :func:`figure` the drawer takes after ``ds``, by name (``x``,
+    #: ``metric``, ``b10``); a ``metric`` or ``b10`` given to a kind without it is refused.
+    options: tuple[str, ...] = ()
+
+
+#: Every figure kind (``KINDS``), said once: :func:`figure` asks this table.
+FIGURES = {
+    "slider": FigureKind((8, 8), _draw_slider, ("x",)),
+    "forces": FigureKind((15, 9), _draw_forces, ("x",)),
+    "wear-map": FigureKind((11, 9), _draw_wear_map),
+    "wear-polar": FigureKind((11, 9.5), _draw_wear_polar),
+    "orbit": FigureKind((12, 8), _draw_orbit),
+    "sweep": FigureKind((8, 5), _draw_sweep, ("metric",)),
+    "life": FigureKind((16, 10), _draw_life),
+    "reliability": FigureKind((14, 8), _draw_reliability, ("b10",)),
+}
+
+
+def _kinds_taking(option: str) -> str:
+    """``"sweep"``: the kinds whose drawer takes ``option``, for a refusal."""
+    return " or ".join(name for name, spec in FIGURES.items() if option in spec.options)
 
 
 def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
@@ -132,31 +161,18 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
     if x not in X_AXES:
         raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
                              choices=X_AXES)
-    if metric is not None and kind != "sweep":
-        raise PlotError("a metric applies to --kind sweep only")
-    if b10 and kind != "reliability":
-        raise PlotError("--b10 applies to --kind reliability only")
+    spec = FIGURES[kind]
+    if metric is not None and "metric" not in spec.options:
+        raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")
+    if b10 and "b10" not in spec.options:
+        raise PlotError(f"--b10 applies to --kind {_kinds_taking('b10')} only")
     if kind == "wear-map" and results_kind(ds) == "life" and "wear_map_snapshot" in ds:
         ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
     selection = parse_selection(ds, select)
     ds = ds.sel(selection) if selection else ds
-    fig = Figure(figsize=_SIZES[kind], layout="constrained")
-    if kind == "slider":
-        _draw_slider(fig, ds, x)
-    elif kind == "forces":
-        _draw_forces(fig, ds, x)
-    elif kind == "wear-map":
-        _draw_wear_map(fig, ds)
-    elif kind == "wear-polar":
-        _draw_wear_polar(fig, ds)
-    elif kind == "orbit":
-        _draw_orbit(fig, ds)
-    elif kind == "life":
-        _draw_life(fig, ds)
-    elif kind == "reliability":
-        _draw_reliability(fig, ds, b10)
-    else:
-        _draw_sweep(fig, ds, metric)
+    fig = Figure(figsize=spec.size_inches, layout="constrained")
+    options = {"x": x, "metric": metric, "b10": b10}
+    spec.draw(fig, ds, *(options[name] for name in spec.options))
     _name_selection(fig, selection_text(ds, selection) or case_text(ds))
     return fig
 
