@@ -205,7 +205,7 @@ def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
                derived: Iterable[str] = (".parts",)) -> str:
     """``-o/--out`` (or its default), refused where it is an input, a file that is not a
     clearsweep results file or a results file of another ``kind`` than the command writes
-    (without --overwrite; ``outputs.results_kind``), or where it or a name ``derived`` from
+    (without --overwrite; ``outputs.file_kind``), or where it or a name ``derived`` from
     it is too long for the file system; returns the path. ``parts_resumed``: --resume of a
     sweep or ensemble, which --overwrite cannot join."""
     path = out or str(default)
@@ -216,10 +216,8 @@ def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
 
 
 def _sweep_kind(plan) -> str:
-    """The kind of results file (``outputs.results_kind``) that ``plan`` writes."""
-    if plan.store in ("life", "reliability"):
-        return f"{plan.store} sweep"
-    return "ensemble" if list(plan.dims) == ["member"] else "sweep"
+    """The kind of results file (``outputs.RESULTS_KINDS``) that ``plan`` writes."""
+    return {"life": "life-sweep", "reliability": "reliability"}.get(plan.store, "sweep")
 
 
 def _check_figure(path: str, option: str, inputs, overwrite: bool) -> None:
@@ -367,7 +365,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         return
     life_block(cfg, allow_large=allow_large, source=config)     # refused before the compile
     out = _check_out(out, Path(config).stem + "_life.nc", _case_inputs(config, cfg), overwrite,
-                     kind="life run",
+                     kind="life",
                      derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
     announce_compile(quiet, [cfg.solver.method])
@@ -616,7 +614,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         format_statistics_table,
         format_sweep_summary,
         format_wear_table,
-        is_ensemble,
+        results_kind,
     )
 
     if reference and metric:
@@ -643,7 +641,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
                 text = summary
             elif metric:
                 text = format_metric_table(ds, metric, fmt)
-            elif is_ensemble(ds):
+            elif results_kind(ds) == "ensemble":
                 text = format_ensemble_report(ds, fmt, reference)
             elif reference:
                 text = format_reduction_table(ds, reference, fmt)
@@ -663,15 +661,18 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 def _text_only_report(ds: xr.Dataset, metric: str | None):
     """``(what the file is, its text report, a variable it reads)`` for the files ``report`` prints as text only:
     a life run, a reliability sweep and a life sweep (unless --metric asks for a table)."""
-    if "cycle" in ds.dims and ("stop_reason" in ds or "block_status" in ds):
+    from .analysis import results_kind
+
+    kind = results_kind(ds)
+    if kind == "life":
         from .service_life import life_summary_text
 
         return "a life run", life_summary_text, "stop_reason"
-    if ds.attrs.get("sweep_store") == "reliability" and not metric:
+    if kind == "reliability" and not metric:
         from .reliability import reliability_text
 
         return "a reliability sweep", reliability_text, "b10"
-    if ds.attrs.get("sweep_store") == "life" and not metric:
+    if kind == "life-sweep" and not metric:
         from .service_life import life_sweep_text
 
         return "a life sweep", life_sweep_text, None

@@ -13,7 +13,7 @@ work starts:
   ``clearsweep``, as every run, life run and sweep writes it) or, for a figure, a figure
   clearsweep drew (:func:`is_own_figure`: the creator :func:`figure_metadata` writes into
   every figure). Any other existing file needs ``--overwrite``.
-- A results file of another kind than the command writes (:func:`results_kind`: a run, an
+- A results file of another kind than the command writes (:func:`file_kind`: a run, an
   ensemble, a life run, a sweep, a life sweep, a reliability sweep) is not the command's own
   output either: ``clearsweep run life.yaml`` does not replace ``life.nc``, the life run of
   the same config, without ``--overwrite``.
@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Collection, Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
 from .version import __version__
 
@@ -111,36 +112,70 @@ def is_results_file(path: str | os.PathLike) -> bool:
         return False
 
 
-#: The ``title`` attribute of each kind of results file (``dataset.build_dataset``, the life
-#: dataset, the sweep file) and the kind it names; a sweep is told apart by its ``sweep_store``
-#: and ``sweep_dims`` attributes (:func:`results_kind`).
-_TITLES = {"clearsweep RSSP mechanism simulation": "run",
-           "clearsweep service life by cycle jumps": "life run",
-           "clearsweep RSSP mechanism parameter sweep": "sweep"}
+#: What a results file holds (:func:`kind_of`), and how a message names it.
+RESULTS_KINDS = {"run": "a run", "life": "a life run", "reliability": "a reliability sweep",
+                 "life-sweep": "a life sweep", "ensemble": "an ensemble",
+                 "sample": "a sampling sweep", "sweep": "a sweep"}
+
+#: Dimensions of one case's arrays; any other dimension is a sweep's.
+CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle")
+
+#: Kinds that one command writes, as :func:`check_output` compares them: a sweep file of
+#: any design (grid, sampling, ensemble) is one family.
+_FAMILY = {"ensemble": "sweep", "sample": "sweep"}
 
 
-def results_kind(path: str | os.PathLike) -> str | None:
-    """The kind of the clearsweep results file at ``path``: ``"run"``, ``"ensemble"`` (the
-    members of one config, from ``run``), ``"life run"``, ``"sweep"``, ``"life sweep"`` or
-    ``"reliability sweep"``; ``"unknown"`` for a results file whose kind its attributes do
-    not tell; None where ``path`` is not a clearsweep results file."""
+def kind_of(attrs: Mapping[str, Any], dims: Collection[str], variables: Collection[str]) -> str:
+    """What a results file holds, from its global attributes, dimensions and variable names:
+    the one rule behind :func:`file_kind` (a file on disk) and
+    ``analysis.results_kind`` (an open dataset). The first that fits:
+
+    ``"life"``
+        a life run (``clearsweep life``): a ``cycle`` dimension and the history of its
+        blocks (``stop_reason``, or ``block_status`` in a file without it);
+    ``"reliability"``, ``"life-sweep"``
+        a sweep with ``store: reliability`` or ``store: life`` (its ``sweep_store``
+        attribute);
+    ``"ensemble"``
+        ensemble members and their statistics (a ``member`` dimension and ``members_ok``),
+        a sampling sweep with members included;
+    ``"sample"``
+        a sampling sweep (``sweep: sample:``; a ``sample`` dimension);
+    ``"sweep"``
+        any other sweep (``store: full`` or ``summary``; a ``sweep_store`` attribute or a
+        dimension that is not a case's, :data:`CASE_DIMS`);
+    ``"run"``
+        one case (``clearsweep run``).
+    """
+    if "cycle" in dims and ("stop_reason" in variables or "block_status" in variables):
+        return "life"
+    store = attrs.get("sweep_store")
+    if store == "reliability":
+        return "reliability"
+    if store == "life":
+        return "life-sweep"
+    if "member" in dims and "members_ok" in variables:
+        return "ensemble"
+    if "sample" in dims:
+        return "sample"
+    if store is not None or any(d not in CASE_DIMS for d in dims):
+        return "sweep"
+    return "run"
+
+
+def file_kind(path: str | os.PathLike) -> str | None:
+    """:func:`kind_of` the clearsweep results file at ``path``, read from its header alone;
+    None where ``path`` is not a clearsweep results file."""
     if not is_results_file(path):
         return None
     import netCDF4
 
     try:
         with netCDF4.Dataset(path, "r") as nc:
-            attrs = {k: getattr(nc, k, None) for k in ("title", "sweep_store", "sweep_dims")}
+            return kind_of({k: nc.getncattr(k) for k in nc.ncattrs()}, set(nc.dimensions),
+                           set(nc.variables))
     except (OSError, RuntimeError, ValueError):
         return None
-    kind = _TITLES.get(str(attrs["title"]), "unknown")
-    if kind == "sweep":
-        store = attrs["sweep_store"]
-        if store in ("life", "reliability"):
-            return f"{store} sweep"
-        if str(attrs["sweep_dims"]).split() == ["member"]:
-            return "ensemble"
-    return kind
 
 
 def is_own_figure(path: str | os.PathLike) -> bool:
@@ -242,8 +277,9 @@ def check_output(path: str | os.PathLike, option: str,
     remedy
         What the user can do about an existing file that is not ``replaceable``.
     kind
-        The kind of results file the command writes (:func:`results_kind`): an existing
-        results file of another kind is replaced only with ``overwrite``.
+        The kind of results file the command writes (a key of :data:`RESULTS_KINDS`): an
+        existing results file of another kind is replaced only with ``overwrite`` (a sweep
+        of any design, grid, sampling or ensemble, counts as one kind).
     derived
         Suffixes of the names the command writes beside ``path`` (:func:`check_name_lengths`).
 
@@ -275,12 +311,7 @@ def check_output(path: str | os.PathLike, option: str,
     if path.exists() and not overwrite and not replaceable(path):
         raise OutputError(f"{option} {path} exists and is not {what}; {remedy}")
     if kind is not None and path.exists() and not overwrite:
-        there = results_kind(path)
-        if there is not None and there != kind:
-            raise OutputError(f"{option} {path} is the results file of a{_n(there)} {there}, and "
-                              f"this command writes a{_n(kind)} {kind}; {remedy}")
-
-
-def _n(word: str) -> str:
-    """``"n"`` before a word that starts with a vowel sound (``an ensemble``)."""
-    return "n" if word[:1] in "aeiou" else ""
+        there = file_kind(path)
+        if there is not None and _FAMILY.get(there, there) != _FAMILY.get(kind, kind):
+            raise OutputError(f"{option} {path} is the results file of {RESULTS_KINDS[there]}, "
+                              f"and this command writes {RESULTS_KINDS[kind]}; {remedy}")

@@ -20,11 +20,9 @@ import xarray as xr
 import yaml
 from matplotlib.figure import Figure
 
-from .analysis import SelectionError, choice_message, value_text
+from .analysis import SAMPLE_DIM, SelectionError, choice_message, value_text
 from .ensemble import CONFIDENCE_LEVEL, MEMBER_DIM
 
-#: The dimension of a sampling sweep (as :data:`clearsweep.sweeping.plan.SAMPLE_DIM`).
-SAMPLE_DIM = "sample"
 #: Bootstrap resamples of SALib's confidence intervals.
 BOOTSTRAP_RESAMPLES = 1000
 #: An input whose total index ST may reach this (the upper end of its 95 % interval) is

@@ -12,7 +12,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..summary import case_summary
-from .worker import _error_part, _part, _run_and_store, _run_case, _worker_init
+from .worker import CaseTask, _error_part, _part, _run_and_store, _run_case, _worker_init
 
 #: Futures kept in flight per worker, so that no worker waits for the driver.
 IN_FLIGHT_PER_WORKER = 2
@@ -75,10 +75,10 @@ class _Serial:
     def __init__(self, guard: _InterruptGuard):
         self.guard = guard
 
-    def submit(self, h: str, payload) -> cf.Future:
+    def submit(self, h: str, task: CaseTask) -> cf.Future:
         future: cf.Future = cf.Future()
         with self.guard.interruptible():
-            part = _run_case(payload)
+            part = _run_case(task)
         future.set_result(part)
         return future
 
@@ -109,11 +109,11 @@ class _Cuda:
 
         self.guard, self.window, self.series = guard, max(1, int(window)), series
         self.label = f"cuda({device_name()}, {self.window} cases per batch)"
-        self._queued: list[tuple[cf.Future, str, tuple]] = []
+        self._queued: list[tuple[cf.Future, str, CaseTask]] = []
 
-    def submit(self, h: str, payload) -> cf.Future:
+    def submit(self, h: str, task: CaseTask) -> cf.Future:
         future: cf.Future = cf.Future()
-        self._queued.append((future, h, payload))
+        self._queued.append((future, h, task))
         return future
 
     def wait(self, futures):
@@ -122,19 +122,19 @@ class _Cuda:
         queued, self._queued = self._queued, []
         on_device = [(f, p) for f, h, p in queued if h not in self.series]
         with self.guard.interruptible():
-            for future, h, payload in queued:
+            for future, h, task in queued:
                 if h in self.series:
-                    future.set_result(_run_case((payload[0], "full", None, payload[3])))
+                    future.set_result(_run_case(task._replace(store="full", simulate=None)))
             started = time.perf_counter()
             try:
-                results = simulate_batch([payload[0] for _, payload in on_device])
+                results = simulate_batch([task.config for _, task in on_device])
             except Exception as exc:     # the device failed: every case of the batch did
                 results = [exc] * len(on_device)
             wall = (time.perf_counter() - started) / max(len(on_device), 1)
-        for (future, payload), result in zip(on_device, results):
+        for (future, task), result in zip(on_device, results):
             try:
                 part = (_error_part(result, wall) if isinstance(result, BaseException)
-                        else _part(result, "summary", payload[3] or case_summary))
+                        else _part(result, "summary", task.summarize or case_summary))
             except Exception as exc:
                 part = _error_part(exc, wall)
             future.set_result(part)
@@ -191,8 +191,8 @@ class _Futures:
     def processes(cls, workers: int, guard: _InterruptGuard, parts_dir: Path) -> _Futures:
         return cls(process_pool(workers), own=True, guard=guard, parts_dir=parts_dir)
 
-    def submit(self, h: str, payload) -> cf.Future:
-        return self.executor.submit(_run_and_store, payload, self.parts_dir, h)
+    def submit(self, h: str, task: CaseTask) -> cf.Future:
+        return self.executor.submit(_run_and_store, task, self.parts_dir, h)
 
     def restart(self) -> str | None:
         """Replace a broken pool of our own by a fresh one; how its workers ended.
@@ -246,8 +246,8 @@ class _Dask:
         self.window = IN_FLIGHT_PER_WORKER * threads
         self.label = f"dask({client.scheduler.address}, {threads} threads)"
 
-    def submit(self, h: str, payload):
-        return self.client.submit(_run_case, payload, pure=False)
+    def submit(self, h: str, task: CaseTask):
+        return self.client.submit(_run_case, task, pure=False)
 
     def wait(self, futures):
         from distributed import wait

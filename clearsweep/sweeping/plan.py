@@ -42,6 +42,7 @@ from ..service_life import life_block
 from ..simulation import preflight
 from .assemble import SweepSlot
 from .parts import canonical_json, case_key
+from .stores import STORES
 
 #: First components of a dotted key that the dimension name leaves out.
 DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver", "ensemble")
@@ -49,11 +50,8 @@ DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solve
 MEMBER_DIM = "member"
 #: Keys that the ensemble section sets for every case and a sweep cannot vary.
 ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members", "reliability.member", "reliability.members")
-#: What a sweep stores per case; ``life``: each case is a service-life run
-#: (``clearsweep life``), stored as its summary (revolutions to each limit, final wear);
-#: ``reliability``: each design is ``reliability.members`` life runs with scatter, stored
-#: as their summaries and the reliability estimate (docs/reliability.md).
-STORE_MODES = ("full", "summary", "life", "reliability")
+#: What a sweep stores per case: the stores of :data:`clearsweep.sweeping.stores.STORES`.
+STORE_MODES = tuple(STORES)
 SWEEP_KEYS = ("grid", "zip", "sample", "skip")
 #: Keys of a ``sample:`` section, and its methods: Sobol' and Latin hypercube points over the
 #: ranges (scipy.stats.qmc), or the Saltelli design that Sobol' indices need (SALib).

@@ -28,7 +28,8 @@ from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
-from .worker import _receipt, _worker_died
+from .stores import STORES
+from .worker import CaseTask, _receipt, _worker_died
 
 #: Variables (and dataset attributes) that change from run to run of the same sweep.
 TIMING_VARIABLES = ("wall_time",)
@@ -55,7 +56,7 @@ class SweepFailed(RuntimeError):
     """The backend failed (a worker died, the scheduler went away); finished cases are kept."""
 
 
-def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str, Any], None],
+def _drive(backend, tasks: Iterable[tuple[str, CaseTask]], on_result: Callable[[str, Any], None],
            guard: _InterruptGuard) -> None:
     """Keep ``backend.window`` cases in flight; hand each result to ``on_result``.
 
@@ -71,7 +72,7 @@ def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str
     """
     tasks = iter(tasks)
     pending: dict[Any, tuple[str, Any]] = {}
-    suspects: collections.deque = collections.deque()   # (hash, payload) to run again, alone
+    suspects: collections.deque = collections.deque()   # (hash, task) to run again, alone
     solo: tuple[str, Any] | None = None                  # the suspect running alone
 
     def refill() -> None:
@@ -82,8 +83,8 @@ def _drive(backend, tasks: Iterable[tuple[str, tuple]], on_result: Callable[[str
             solo = suspects.popleft()
             pending[backend.submit(*solo)] = solo
             return
-        for h, payload in itertools.islice(tasks, backend.window - len(pending)):
-            pending[backend.submit(h, payload)] = (h, payload)
+        for h, task in itertools.islice(tasks, backend.window - len(pending)):
+            pending[backend.submit(h, task)] = (h, task)
 
     def finished_well(future) -> bool:
         return future.done() and not future.cancelled() and future.exception() is None
@@ -259,24 +260,12 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             # OUT is ours while we hold the lock: drop what a killed assembly left beside it
             remove_stale_temporaries(out)
             try:
-                simulate_case, summarize_case = _simulate, _summarize
-                finish = add_ensemble_statistics if MEMBER_DIM in plan.dims else None
-                if plan.store == "life":
-                    from ..service_life import life_case, life_summary
-
-                    simulate_case = simulate_case or life_case
-                    summarize_case = summarize_case or life_summary
-                elif plan.store == "reliability":
-                    from ..reliability import (
-                        add_reliability_estimate,
-                        reliability_case,
-                        reliability_summary,
-                    )
-
-                    simulate_case = simulate_case or reliability_case
-                    summarize_case = summarize_case or reliability_summary
-                    finish = add_reliability_estimate
-                todo = [(h, (cfg, plan.store, simulate_case, summarize_case))
+                functions = STORES[plan.store].functions()
+                simulate_case = _simulate or functions.simulate
+                summarize_case = _summarize or functions.summarize
+                finish = functions.finish or (add_ensemble_statistics if MEMBER_DIM in plan.dims
+                                              else None)
+                todo = [(h, CaseTask(cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
                 try:
@@ -306,8 +295,9 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
         return None
     if backend != "cuda":
         raise ValueError(f"backend must be 'processes' or 'cuda', got {backend!r}")
-    if plan.store in ("life", "reliability"):
-        raise ConfigError("store", plan.store, "full or summary with --backend cuda (life runs "
+    if not STORES[plan.store].on_cuda:
+        on_cuda = " or ".join(name for name, store in STORES.items() if store.on_cuda)
+        raise ConfigError("store", plan.store, f"{on_cuda} with --backend cuda (life runs "
                           "alternate simulation and jumps on the CPU: use --backend processes)",
                           plan.source)
     methods = {cfg.solver.method for cfg in plan.runnable().values()}

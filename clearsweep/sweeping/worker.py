@@ -7,15 +7,18 @@ import os
 import signal
 import threading
 import time
-from typing import Any
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import numpy as np
 import xarray as xr
 
 from .. import variables
+from ..config import Config
 from ..params import run_identity
 from ..summary import case_summary
 from .parts import MESSAGE_ATTRS, STATUS_ATTRS, with_identity, write_part
+from .stores import STORES
 
 #: How often a pool worker checks that the driver process still exists [s].
 WATCHDOG_PERIOD_S = 1.0
@@ -34,26 +37,31 @@ def _failed_part(status: str, message: str, wall_time: float) -> xr.Dataset:
     })
 
 
-def _run_case(payload: tuple) -> xr.Dataset:
-    """Simulate one case and build its part (runs in a worker).
+class CaseTask(NamedTuple):
+    """One case as a worker runs it (pickled to pool and Dask workers)."""
 
-    Parameters
-    ----------
-    payload
-        ``(config, store_mode, simulate, summarize)``, ``config`` a resolved
-        :class:`clearsweep.config.Config` (run as it is); ``None`` for the
-        last two means :func:`clearsweep.simulation.simulate` and
-        :func:`clearsweep.summary.case_summary`.
+    #: The resolved configuration, run as it is.
+    config: Config
+    #: The sweep's ``store``: ``"full"`` keeps the time series in the part.
+    store: str
+    #: Config -> dataset; ``None``: :func:`clearsweep.simulation.simulate`.
+    simulate: Callable[[Config], xr.Dataset] | None = None
+    #: Dataset -> its summaries; ``None``: :func:`clearsweep.summary.case_summary`.
+    summarize: Callable[[xr.Dataset], xr.Dataset] | None = None
+
+
+def _run_case(task: CaseTask) -> xr.Dataset:
+    """Simulate one case and build its part (runs in a worker).
 
     Returns
     -------
     xr.Dataset
         Summaries, ``status`` and ``message``, and the time series unless
-        ``store_mode`` is ``"summary"`` or ``"life"``. A case that raises, or stops with a
+        ``task.store`` is ``"summary"`` or ``"life"``. A case that raises, or stops with a
         status other than ``ok``, gives only ``status``, ``message`` and
         ``wall_time``.
     """
-    config, store_mode, simulate, summarize = payload
+    simulate, summarize = task.simulate, task.summarize
     if simulate is None:
         from ..simulation import simulate as simulate_case
 
@@ -63,7 +71,7 @@ def _run_case(payload: tuple) -> xr.Dataset:
         summarize = case_summary
     start = time.perf_counter()
     try:
-        return _part(simulate(config), store_mode, summarize, start)
+        return _part(simulate(task.config), task.store, summarize, start)
     except Exception as exc:    # a failed case, not a failed sweep
         return _error_part(exc, time.perf_counter() - start)
 
@@ -76,7 +84,7 @@ def _part(ds: xr.Dataset, store_mode: str, summarize=case_summary, start: float 
         summary = summarize(ds)
         extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
         # one assign, not a merge per variable (most of a small case's time outside the kernel)
-        return (ds if store_mode == "full" else summary).assign(extra)
+        return (ds if STORES[store_mode].keeps_series else summary).assign(extra)
     if "message" in ds:
         message = _text(ds["message"].values)
     else:
@@ -101,14 +109,14 @@ def _receipt(part: xr.Dataset) -> dict[str, Any]:
     return {"status": _text(part["status"].values), "wall_time": wall}
 
 
-def _run_and_store(payload: tuple, parts_dir: str, h: str) -> dict[str, Any]:
+def _run_and_store(task: CaseTask, parts_dir: str, h: str) -> dict[str, Any]:
     """Run one case and write its part here, in the worker; return its receipt.
 
     Writing in the worker keeps the driver (which shares the cores) idle
     while the cases run.
     """
-    part = _run_case(payload)
-    write_part(parts_dir, h, with_identity(part, run_identity(payload[0])))
+    part = _run_case(task)
+    write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
     return _receipt(part)
 
 

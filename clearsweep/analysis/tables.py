@@ -1,276 +1,38 @@
-"""Paper-style wear tables (Tables 4-6), per-case summaries and text reports.
-
-Every function here takes a dataset as written by ``dataset.build_dataset``
-(one case) or by the sweep driver (the same variables with extra sweep
-dimensions in front, or only the summary variables for ``store: summary``)
-and reduces over the case dimensions (``time``, ``angle``, ``polar``,
-``azimuth``), so any sweep dimensions simply stay in the results. Units and
-long names come from ``variables.SUMMARY_VARIABLES``.
-
-Conventions (docs/physics.md section 5, paper Tables 4-6):
-
-- Projection angles are the bin centres of ``wear_projection`` on
-  (-180, 180] degrees. The worn bins are those whose depth exceeds
-  ``WEAR_THRESHOLD_FRACTION`` of that axis's maximum; the wear range is the
-  smallest arc on the circle that holds them all, and the minimum and maximum
-  wear angles are its ends going up in angle, so that a worn region that
-  straddles +-180 degrees reads as the few degrees the polar plot shows (the
-  minimum angle then above the maximum), not as nearly 360.
-- A (joint, axis) without any wear has depth 0 and NaN angles and range.
-- Table 6 "reduction" is reference minus case; a negative wear-range
-  reduction means that the range grew. Percentages are relative to the
-  reference.
-"""
+"""Paper-style tables of a results dataset (Tables 4-6, the every-step statistics, one
+metric, an ensemble's statistics and design comparisons), laid out as text, markdown,
+csv or json."""
 
 from __future__ import annotations
 
 import collections
 import csv
 import io
-import itertools
 import json
 import math
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from .choices import REPORT_FORMATS
-from .ensemble import MEMBER_DIM
-from .schema import close_matches
-from .summary import (  # noqa: F401
-    PASS_THROUGH_VARIABLES,
-    STATISTIC_VARIABLES,
-    SUMMARY_ORDER,
-    WEAR_TABLE_VARIABLES,
-    WEAR_THRESHOLD_FRACTION,
-    case_summary,
-    wear_table,
-    with_attrs,
-    worn_arc,
+from ..choices import REPORT_FORMATS
+from ..ensemble import MEMBER_DIM
+from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
+from .selection import (
+    _MISSING_TEXT,
+    CASE_DIMS,
+    SelectionError,
+    _drop_ideal_rows,
+    choice_message,
+    design_dims,
+    iter_cases,
+    iter_points,
+    joint_clearances,
+    label_text,
+    parse_selection,
+    sweep_dims,
+    value_text,
 )
-
-#: Dimensions of one case; every other dimension of a dataset is a sweep dimension.
-CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle")
-
-
-_MISSING_TEXT = "n/a"
-
-
-class SelectionError(ValueError):
-    """A sweep dimension, coordinate value or metric name that the dataset does not have.
-
-    Attributes
-    ----------
-    name, value : str
-        What was asked for.
-    choices : list of str
-        What the dataset offers.
-    """
-
-    def __init__(self, message: str, *, name: str = "", value: str = "", choices: Iterable = ()):
-        super().__init__(message)
-        self.name = name
-        self.value = value
-        self.choices = [str(c) for c in choices]
-
-
-# --------------------------------------------------------------------------- cases and selections
-
-def sweep_dims(obj: xr.Dataset | xr.DataArray) -> tuple[str, ...]:
-    """The sweep dimensions of ``obj``: every dimension that is not a case dimension.
-
-    Ordered as they first appear in the data variables (a dataset's own
-    ``dims`` follow its coordinates, not its variables).
-    """
-    if isinstance(obj, xr.Dataset):
-        ordered = dict.fromkeys(d for v in obj.data_vars.values() for d in v.dims)
-        ordered.update(dict.fromkeys(obj.dims))
-    else:
-        ordered = dict.fromkeys(obj.dims)
-    return tuple(str(d) for d in ordered if d not in CASE_DIMS)
-
-
-def value_text(value) -> str:
-    """Short text of a coordinate value (``0.00025``, ``PTFE``)."""
-    if isinstance(value, bytes):
-        return value.decode()
-    if isinstance(value, (float, np.floating)):
-        return f"{float(value):g}"
-    if isinstance(value, np.generic):
-        return str(value.item())
-    return str(value)
-
-
-def label_text(label: Mapping[str, object]) -> str:
-    """``"B_coating=PTFE, B_clearance=0.00025"`` from a case label."""
-    return ", ".join(f"{k}={value_text(v)}" for k, v in label.items())
-
-
-def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, Any]]:
-    """Yield ``({dim: value}, obj at that point)`` over ``dims``.
-
-    The value is the dimension's coordinate value, or the position along a
-    dimension without a coordinate.
-    """
-    for index in itertools.product(*(range(obj.sizes[d]) for d in dims)):
-        point = obj.isel(dict(zip(dims, index)))
-        yield {d: point[d].values[()] if d in obj.coords else i for d, i in zip(dims, index)}, point
-
-
-def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, object], Any]]:
-    """Yield ``(label, case)`` for every combination of the sweep dimensions.
-
-    ``label`` maps each sweep dimension to the case's coordinate value (its
-    position where the dimension has no coordinate), in dimension order, then
-    every other coordinate that lives on sweep dimensions only (the keys of a
-    zip group, the levels of a stacked case index). A one-case dataset yields
-    itself once with an empty label.
-    """
-    dims = sweep_dims(obj)
-    extra = [str(n) for n, c in obj.coords.items()
-             if n not in dims and c.dims and set(c.dims) <= set(dims)]
-    for label, case in iter_points(obj, dims):
-        yield {**label, **{n: case[n].values[()] for n in extra}}, case
-
-
-def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
-    """``unknown KIND 'x' (did you mean ...?); choose from: ...``"""
-    close = close_matches(wanted, choices, n=3)
-    hint = f" (did you mean {', '.join(close)}?)" if close else ""
-    offer = ", ".join(choices) if choices else "none"
-    return f"unknown {kind} {wanted!r}{hint}; choose from: {offer}"
-
-
-def _match_value(coord: xr.DataArray, name: str, wanted) -> object:
-    """The value of ``coord`` that ``wanted`` (text or value) names: exact text or equal number."""
-    candidates = list(dict.fromkeys(coord.values.ravel().tolist()))
-    text = value_text(wanted).strip()
-    for value in candidates:
-        if value_text(value) == text or str(value) == text:
-            return value
-    try:
-        number = float(text)
-    except ValueError:
-        number = None
-    if number is not None:
-        for value in candidates:
-            if (isinstance(value, (int, float)) and not isinstance(value, bool)
-                    and math.isclose(float(value), number, rel_tol=1e-9, abs_tol=0.0)):
-                return value
-    raise SelectionError(choice_message(f"value for {name}", text, [value_text(v) for v in candidates]),
-                         name=name, value=text, choices=[value_text(v) for v in candidates])
-
-
-def parse_selection(obj: xr.Dataset | xr.DataArray,
-                    items: Mapping[str, object] | Iterable[str] | None, *,
-                    dims_only: bool = False) -> dict[str, object]:
-    """Turn ``DIM=VALUE`` strings (or a mapping) into a validated ``.sel`` dict.
-
-    Parameters
-    ----------
-    obj
-        Dataset (or array) with sweep dimensions.
-    items
-        ``["B_coating=PTFE", "B_clearance=2.5e-4"]`` or ``{"B_coating": "PTFE"}``.
-        Values match a coordinate value by text, or numerically for numbers.
-    dims_only
-        Accept only sweep dimensions, not other indexed coordinates
-        (levels of a stacked ``case`` dimension).
-
-    Returns
-    -------
-    dict
-        Names mapped to coordinate values of ``obj``.
-
-    Raises
-    ------
-    SelectionError
-        Malformed item, unknown name or value; the message lists the choices.
-    """
-    if not items:
-        return {}
-    dims = sweep_dims(obj)
-    names = [d for d in dims if d in obj.coords]
-    if not dims_only:
-        names += [str(n) for n in obj.xindexes
-                  if n not in names and set(obj[n].dims) <= set(dims)]
-    pairs = list(items.items()) if isinstance(items, Mapping) else []
-    if not isinstance(items, Mapping):
-        for item in items:
-            name, sep, text = str(item).partition("=")
-            if not sep:
-                raise SelectionError(f"expected DIM=VALUE, got {item!r}", name=str(item),
-                                     choices=names)
-            pairs.append((name.strip(), text))
-    out = {}
-    for name, wanted in pairs:
-        if name not in names:
-            raise SelectionError(choice_message("sweep dimension", name, names), name=name,
-                                 value=value_text(wanted), choices=names)
-        out[name] = _match_value(obj[name], name, wanted)
-    return out
-
-
-def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataArray:
-    """``obj.sel`` of the cases named by ``items`` (see ``parse_selection``)."""
-    selection = parse_selection(obj, items)
-    return obj.sel(selection) if selection else obj
-
-
-# --------------------------------------------------------------------------- ideal joints
-
-def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
-    """Radial clearance [m] of each joint in the configuration text; empty when there is none.
-
-    A case file holds its resolved config in the ``config`` attribute, a sweep file its
-    base case under ``base`` of ``sweep_config``.
-    """
-    from .schema import ConfigError, parse_yaml
-
-    for attr, section in (("config", None), ("sweep_config", "base")):
-        try:
-            config = parse_yaml(ds.attrs.get(attr) or "", attr) or {}
-            joints = (config[section] if section else config)["joints"]
-            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
-        except (ConfigError, KeyError, TypeError, ValueError, AttributeError):
-            continue
-    return {}
-
-
-def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
-    """Radial clearance [m] of every joint in every case: (sweep dims..., joint), 0 for an
-    ideal joint; ``None`` where the file says neither by a sweep coordinate nor its config.
-
-    A swept clearance (the coordinate whose ``config_key`` is ``joints.<J>.clearance``) wins
-    over the configured one.
-    """
-    if "joint" not in ds.coords:
-        return None
-    configured = configured_clearances(ds)
-    per_joint = []
-    for joint in ds["joint"].values:
-        key = f"joints.{value_text(joint)}.clearance"
-        swept = next((c for c in ds.coords.values() if c.attrs.get("config_key") == key), None)
-        if swept is not None:
-            per_joint.append(xr.DataArray(swept.values.astype(float), dims=swept.dims))
-        elif value_text(joint) in configured:
-            per_joint.append(xr.DataArray(configured[value_text(joint)]))
-        else:
-            return None
-    return xr.concat(per_joint, dim="joint", coords="minimal").assign_coords(joint=ds["joint"])
-
-
-def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:
-    """``rows`` without those of an ideal joint (clearance 0) of the case ``clearance`` is of."""
-    if clearance is None:
-        return rows
-    ideal = {value_text(j) for j in clearance["joint"].values
-             if float(clearance.sel(joint=j)) == 0.0}
-    return [r for r in rows if "joint" not in r or value_text(r["joint"]) not in ideal]
-
 
 # --------------------------------------------------------------------------- tables and summaries
 
@@ -352,75 +114,6 @@ def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
         return ds[metric]
     names = [str(n) for n in summary.data_vars] + own
     raise SelectionError(choice_message("metric", metric, names), name=metric, choices=names)
-
-
-# --------------------------------------------------------------------------- text reports
-
-def _number(case: xr.Dataset, name: str, spec: str) -> str:
-    """``"12.3 m s-2"``, or ``n/a`` when the variable is absent or NaN."""
-    if name not in case:
-        return _MISSING_TEXT
-    value = float(case[name])
-    if not np.isfinite(value):
-        return _MISSING_TEXT
-    units = case[name].attrs.get("units", "")
-    text = format(value, spec)
-    return f"{text} {units}" if units and units != "1" else text
-
-
-def _pair(case: xr.Dataset, name: str, spec: str = ".4g") -> str:
-    """``"settled (whole run)"`` of a statistic and its ``_settled`` twin."""
-    return f"{_number(case, name + '_settled', spec)} ({_number(case, name, spec)})"
-
-
-def run_summary_text(ds: xr.Dataset) -> str:
-    """A few lines on a finished run (one block per case for a sweep).
-
-    Example::
-
-        status: ok
-        every-step statistics, settled (t >= 0.05 s), whole run in brackets:
-          slider acceleration: peak 3 m s-2 (50 m s-2), RMS 3 m s-2 (4.625 m s-2)
-          crank torque: peak 2 N m (2.5 N m)
-          peak normal force: A 40 N (45 N), B 120 N (130 N)
-          impacts: A 3 (4), B 0 (0)
-          contact fraction: A 0.9 (0.91), B 1 (1)
-        sub-steps used: 4
-        energy residual (relative): 2.50e-06
-        wall time: 2 s (40,000 RK4 steps/s, 80,000 steps)
-    """
-    summary = case_summary(ds)
-    blocks = []
-    for label, case in iter_cases(summary):
-        lines = [f"case {label_text(label)}"] if label else []
-        status = value_text(case["status"].values[()]) if "status" in case else _MISSING_TEXT
-        lines.append(f"status: {status}")
-        settle = ds.attrs.get("settle_time_s")
-        window = f"t >= {float(settle):g} s" if settle is not None else "settled"
-        lines.append(f"every-step statistics, settled ({window}), whole run in brackets:")
-        lines.append(
-            f"  slider acceleration: peak {_pair(case, 'slider_acceleration_peak')}, "
-            f"RMS {_pair(case, 'slider_acceleration_rms')}")
-        lines.append(f"  crank torque: peak {_pair(case, 'crank_torque_peak')}")
-        if "normal_force_peak" in case:
-            for heading, name, spec in (("peak normal force", "normal_force_peak", ".4g"),
-                                      ("impacts", "impact_count", ".0f"),
-                                      ("contact fraction", "contact_fraction", ".3f")):
-                if name not in case:
-                    continue
-                values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
-                                   for j in case["joint"].values)
-                lines.append(f"  {heading}: {values}")
-        lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
-        lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
-        wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
-        if "rk4_steps" in case and "wall_time" in case:
-            steps, seconds = float(case["rk4_steps"]), float(case["wall_time"])
-            if np.isfinite(steps) and seconds > 0:
-                wall += f" ({steps / seconds:,.0f} RK4 steps/s, {steps:,.0f} steps)"
-        lines.append(wall)
-        blocks.append("\n".join(lines))
-    return "\n\n".join(blocks)
 
 
 @dataclass(frozen=True)
@@ -699,9 +392,6 @@ def format_metric_table(ds: xr.Dataset, metric: str, fmt: str = "text") -> str:
                    _units(table, (column,)), fmt)
 
 
-# --------------------------------------------------------------------------- command line
-
-
 # --------------------------------------------------------------------------- ensembles
 
 #: Metrics of the ensemble report, in order; the settled statistic is replaced by its
@@ -728,11 +418,6 @@ _COMPARISON_COLUMNS = (
 )
 
 
-def is_ensemble(ds: xr.Dataset) -> bool:
-    """Whether ``ds`` is an ensemble sweep with its statistics."""
-    return MEMBER_DIM in ds.dims and "members_ok" in ds
-
-
 def _present_metric(ds: xr.Dataset, name: str) -> str | None:
     """``name`` if its mean is stored and not all NaN, else its whole-run twin, else None."""
     for candidate in (name, name.removesuffix("_settled")):
@@ -740,11 +425,6 @@ def _present_metric(ds: xr.Dataset, name: str) -> str | None:
         if mean is not None and bool(np.isfinite(mean.values.astype(float)).any()):
             return candidate
     return None
-
-
-def design_dims(ds: xr.Dataset) -> tuple[str, ...]:
-    """The sweep dimensions of ``ds`` but an ensemble's ``member``: one per design axis."""
-    return tuple(d for d in sweep_dims(ds) if d != MEMBER_DIM)
 
 
 def _metric_heading(ds: xr.Dataset, name: str) -> str:
@@ -757,7 +437,7 @@ def format_ensemble_table(ds: xr.Dataset, fmt: str = "text",
                           metrics: Iterable[str] = ENSEMBLE_METRICS) -> str:
     """Ensemble mean -+ the half-width of its 95 % Student t interval, the standard deviation
     and the members counted, per design (and joint), one block per metric."""
-    from .ensemble import CI_METHOD
+    from ..ensemble import CI_METHOD
 
     dims = design_dims(ds)
     # designs that a sweep's skip rules left out are not listed
@@ -805,7 +485,7 @@ def ensemble_comparisons(ds: xr.Dataset, reference=None,
     The reference of a dimension is its ``reference`` value (``DIM=VALUE``), else its first.
     A pair that is equal without spread (an ideal joint's zero wear) is not listed.
     """
-    from .ensemble import distinguishable, welch_interval
+    from ..ensemble import distinguishable, welch_interval
 
     dims = design_dims(ds)
     refs = _reference_values(ds, dims, reference)
@@ -872,163 +552,3 @@ def format_ensemble_report(ds: xr.Dataset, fmt: str = "text", reference=None) ->
         parts.append(format_ensemble_comparisons(ds, fmt, reference))
     return "\n\n".join(p for p in parts if p)
 
-
-# --------------------------------------------------------------------------- sweep summary
-
-#: Headline metrics of a sweep's summary, in order (lower is better for each); a settled
-#: statistic gives way to its whole-run twin where every run ends before the settled window.
-HEADLINE_METRICS = ("slider_acceleration_rms_settled", "slider_acceleration_peak_settled",
-                    "crank_torque_peak_settled", "normal_force_peak_settled",
-                    "wear_depth_max_final", "wear_volume")
-
-
-def _axis_line(ds: xr.Dataset, dim: str) -> str:
-    """``  B_clearance (radial clearance of joint B) [m]: 5e-05, 0.0001 (6 values)``"""
-    coord = ds[dim] if dim in ds.coords else None
-    if coord is None:
-        return f"  {dim}: {ds.sizes[dim]} positions"
-    long_name = coord.attrs.get("long_name", "")
-    units = coord.attrs.get("units", "")
-    head = f"  {dim}" + (f" ({long_name})" if long_name and not long_name.startswith("sweep zip")
-                         else "") + (f" [{units}]" if units else "")
-    values = [value_text(v) for v in coord.values]
-    text = ", ".join(values[:8]) + (f", ... ({len(values)} values)" if len(values) > 8 else "")
-    companions = [n for n, c in ds.coords.items() if n != dim and c.dims == (dim,)]
-    for name in companions:
-        unit = ds[name].attrs.get("units", "")
-        text += (f"; {name}{f' [{unit}]' if unit else ''}: "
-                 + ", ".join(value_text(v) for v in ds[name].values[:8]))
-    return f"{head}: {text}"
-
-
-def _headline_values(ds: xr.Dataset, name: str, ensemble: bool) -> tuple[str, Any, Any] | None:
-    """(variable shown, values, 95 % half-widths or None) of a headline metric, its settled
-    statistic falling back to the whole run's; None when the file lacks both."""
-    source = ds if ensemble else case_summary(ds)
-    for candidate in (name, name.removesuffix("_settled")):
-        if ensemble:
-            if candidate + "_mean" not in ds:
-                continue
-            values = ds[candidate + "_mean"]
-            half = 0.5 * (ds[candidate + "_ci_high"] - ds[candidate + "_ci_low"])
-        else:
-            if candidate not in source:
-                continue
-            values, half = source[candidate], None
-        if bool(np.isfinite(values.values.astype(float)).any()):
-            return candidate, values, half
-    return None
-
-
-def _metric_title(ds: xr.Dataset, shown: str, values: xr.DataArray, joint: str | None) -> str:
-    long_name = (ds[shown].attrs.get("long_name") if shown in ds
-                 else values.attrs.get("long_name")) or shown
-    units = values.attrs.get("units", "")
-    settle = ds.attrs.get("settle_time_s")
-    if shown.endswith("_settled"):
-        where = f", t >= {float(settle):g} s" if settle is not None else ""
-    elif shown + "_settled" in HEADLINE_METRICS:
-        where = ", whole run (the runs end before the settled window)"
-    else:
-        where = ""
-    at = f", joint {joint}" if joint else ""
-    return f"{long_name}{at}{where}" + (f" [{units}]" if units and units != "1" else "")
-
-
-def _ranked(values: xr.DataArray, half: xr.DataArray | None, usable: xr.DataArray,
-            dims: tuple[str, ...]) -> list[tuple[float, float, dict]]:
-    """(value, half-width, design label) of every usable design with a finite value."""
-    out = []
-    for label, point in iter_points(values, dims):
-        index = {d: label[d] for d in dims}
-        if not bool(usable.sel(index) if index else usable):
-            continue
-        value = float(point)
-        if math.isfinite(value):
-            width = float(half.sel(index) if index else half) if half is not None else math.nan
-            out.append((value, width, label))
-    return sorted(out, key=lambda r: r[0])
-
-
-def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
-    """What a sweep answers, first: its design axes and, per headline metric, the lowest
-    (best) and highest (worst) design and their spread; an ensemble's means with the
-    half-width of their 95 % interval, and whether best and worst are distinguishable.
-
-    Per-joint metrics leave out the cases where the joint is ideal (no clearance), and every
-    metric the cases whose status is not ``ok`` (an ensemble: designs without a member ok).
-    """
-    from .ensemble import distinguishable, welch_interval
-
-    ensemble = is_ensemble(ds)
-    dims = design_dims(ds)
-    status = ds["status"].astype(str) if "status" in ds else None
-    n = int(np.prod([ds.sizes[d] for d in dims])) if dims else 1
-    if ensemble:
-        usable = ds["members_ok"] > 0
-        counted = f"{n} designs x {ds.sizes[MEMBER_DIM]} members"
-    else:
-        usable = (status == "ok") if status is not None else xr.DataArray(True)
-        counted = f"{n} cases"
-    if status is not None:
-        tally = collections.Counter(status.values.ravel().tolist())
-        counted += " (" + ", ".join(f"{k} {v}" for k, v in sorted(tally.items(),
-                                                                  key=lambda kv: kv[0] != "ok")) + ")"
-    name = ds.attrs.get("sweep_name", "")
-    lines = [f"Sweep {name + ': ' if name else ''}{counted}; design axes:"]
-    lines += [_axis_line(ds, d) for d in dims]
-    lines.append("")
-    lines.append("Headline metrics, lowest (best) and highest (worst) design"
-                 + (" (ensemble mean +- half-width of its 95% interval)" if ensemble else "") + ":")
-    clearances = joint_clearances(ds)
-    for metric in HEADLINE_METRICS:
-        found = _headline_values(ds, metric, ensemble)
-        if found is None:
-            continue
-        shown, values, half = found
-        joints = [value_text(j) for j in values["joint"].values] if "joint" in values.dims else [None]
-        for joint in joints:
-            v, h, ok = values, half, usable
-            if joint is not None:
-                v = values.sel(joint=joint)
-                h = half.sel(joint=joint) if half is not None else None
-                if clearances is not None:
-                    gap = clearances.sel(joint=joint)
-                    ok = ok & xr.DataArray(gap.values > 0, dims=gap.dims)
-            ranked = _ranked(v, h, ok, dims)
-            if not ranked:
-                continue
-            (low, low_h, low_at), (high, high_h, high_at) = ranked[0], ranked[-1]
-            units = values.attrs.get("units", "")
-            units = "" if units == "1" else f" {units}"
-            spread = f"spread {high - low:.3g}{units}"
-            if low > 0:
-                spread += (f" (highest = {high / low:.3g} x lowest)" if high >= 2.0 * low
-                           else f" ({100.0 * (high - low) / low:.2g} % of the lowest)")
-            if ensemble and len(ranked) > 1:
-                n_low = int(ds["members_ok"].sel({d: low_at[d] for d in dims}))
-                n_high = int(ds["members_ok"].sel({d: high_at[d] for d in dims}))
-                std = ds[shown + "_std"] if joint is None else ds[shown + "_std"].sel(joint=joint)
-                s_low = float(std.sel({d: low_at[d] for d in dims}))
-                s_high = float(std.sel({d: high_at[d] for d in dims}))
-                _, lo, hi = welch_interval(low, s_low, n_low, high, s_high, n_high)
-                verdict = {True: "distinguishable", False: "not distinguishable",
-                           None: "not tested (fewer than 2 members)"}[distinguishable(lo, hi)]
-                spread += f"; lowest vs highest: {verdict}"
-
-            def shown_value(value: float, width: float) -> str:
-                return f"{value:.4g}" + (f" +- {width:.2g}" if math.isfinite(width) else "")
-
-            lines.append(f"- {_metric_title(ds, shown, values, joint)}")
-            if len(ranked) == 1 or low == high:
-                lines.append(f"    all {len(ranked)} equal: {shown_value(low, low_h)}")
-                continue
-            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {label_text(low_at)}")
-            lines.append(f"    highest {shown_value(high, high_h):>16}  {label_text(high_at)}")
-            lines.append(f"    {spread}")
-    lines.append("")
-    lines.append("Every case's tables: --full (text), or --format csv / json.")
-    text = "\n".join(lines)
-    if fmt == "markdown":
-        return "## Summary\n\n```text\n" + text + "\n```"
-    return text

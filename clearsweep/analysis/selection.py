@@ -1,0 +1,257 @@
+"""Cases and selections of a results dataset: its sweep dimensions, the cases over them and
+their labels, ``--select`` / ``--reference`` parsed against its coordinates, and each
+joint's clearance (an ideal joint has none)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable, Iterator, Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..ensemble import MEMBER_DIM
+from ..outputs import CASE_DIMS, kind_of
+from ..outputs import RESULTS_KINDS as _RESULTS_KINDS
+from ..schema import close_matches
+
+_MISSING_TEXT = "n/a"
+
+
+class SelectionError(ValueError):
+    """A sweep dimension, coordinate value or metric name that the dataset does not have.
+
+    Attributes
+    ----------
+    name, value : str
+        What was asked for.
+    choices : list of str
+        What the dataset offers.
+    """
+
+    def __init__(self, message: str, *, name: str = "", value: str = "", choices: Iterable = ()):
+        super().__init__(message)
+        self.name = name
+        self.value = value
+        self.choices = [str(c) for c in choices]
+
+
+# --------------------------------------------------------------------------- cases and selections
+
+def sweep_dims(obj: xr.Dataset | xr.DataArray) -> tuple[str, ...]:
+    """The sweep dimensions of ``obj``: every dimension that is not a case dimension.
+
+    Ordered as they first appear in the data variables (a dataset's own
+    ``dims`` follow its coordinates, not its variables).
+    """
+    if isinstance(obj, xr.Dataset):
+        ordered = dict.fromkeys(d for v in obj.data_vars.values() for d in v.dims)
+        ordered.update(dict.fromkeys(obj.dims))
+    else:
+        ordered = dict.fromkeys(obj.dims)
+    return tuple(str(d) for d in ordered if d not in CASE_DIMS)
+
+
+def value_text(value) -> str:
+    """Short text of a coordinate value (``0.00025``, ``PTFE``)."""
+    if isinstance(value, bytes):
+        return value.decode()
+    if isinstance(value, (float, np.floating)):
+        return f"{float(value):g}"
+    if isinstance(value, np.generic):
+        return str(value.item())
+    return str(value)
+
+
+def label_text(label: Mapping[str, object]) -> str:
+    """``"B_coating=PTFE, B_clearance=0.00025"`` from a case label."""
+    return ", ".join(f"{k}={value_text(v)}" for k, v in label.items())
+
+
+def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, Any]]:
+    """Yield ``({dim: value}, obj at that point)`` over ``dims``.
+
+    The value is the dimension's coordinate value, or the position along a
+    dimension without a coordinate.
+    """
+    for index in itertools.product(*(range(obj.sizes[d]) for d in dims)):
+        point = obj.isel(dict(zip(dims, index)))
+        yield {d: point[d].values[()] if d in obj.coords else i for d, i in zip(dims, index)}, point
+
+
+def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, object], Any]]:
+    """Yield ``(label, case)`` for every combination of the sweep dimensions.
+
+    ``label`` maps each sweep dimension to the case's coordinate value (its
+    position where the dimension has no coordinate), in dimension order, then
+    every other coordinate that lives on sweep dimensions only (the keys of a
+    zip group, the levels of a stacked case index). A one-case dataset yields
+    itself once with an empty label.
+    """
+    dims = sweep_dims(obj)
+    extra = [str(n) for n, c in obj.coords.items()
+             if n not in dims and c.dims and set(c.dims) <= set(dims)]
+    for label, case in iter_points(obj, dims):
+        yield {**label, **{n: case[n].values[()] for n in extra}}, case
+
+
+def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
+    """``unknown KIND 'x' (did you mean ...?); choose from: ...``"""
+    close = close_matches(wanted, choices, n=3)
+    hint = f" (did you mean {', '.join(close)}?)" if close else ""
+    offer = ", ".join(choices) if choices else "none"
+    return f"unknown {kind} {wanted!r}{hint}; choose from: {offer}"
+
+
+def _match_value(coord: xr.DataArray, name: str, wanted) -> object:
+    """The value of ``coord`` that ``wanted`` (text or value) names: exact text or equal number."""
+    candidates = list(dict.fromkeys(coord.values.ravel().tolist()))
+    text = value_text(wanted).strip()
+    for value in candidates:
+        if value_text(value) == text or str(value) == text:
+            return value
+    try:
+        number = float(text)
+    except ValueError:
+        number = None
+    if number is not None:
+        for value in candidates:
+            if (isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and math.isclose(float(value), number, rel_tol=1e-9, abs_tol=0.0)):
+                return value
+    raise SelectionError(choice_message(f"value for {name}", text, [value_text(v) for v in candidates]),
+                         name=name, value=text, choices=[value_text(v) for v in candidates])
+
+
+def parse_selection(obj: xr.Dataset | xr.DataArray,
+                    items: Mapping[str, object] | Iterable[str] | None, *,
+                    dims_only: bool = False) -> dict[str, object]:
+    """Turn ``DIM=VALUE`` strings (or a mapping) into a validated ``.sel`` dict.
+
+    Parameters
+    ----------
+    obj
+        Dataset (or array) with sweep dimensions.
+    items
+        ``["B_coating=PTFE", "B_clearance=2.5e-4"]`` or ``{"B_coating": "PTFE"}``.
+        Values match a coordinate value by text, or numerically for numbers.
+    dims_only
+        Accept only sweep dimensions, not other indexed coordinates
+        (levels of a stacked ``case`` dimension).
+
+    Returns
+    -------
+    dict
+        Names mapped to coordinate values of ``obj``.
+
+    Raises
+    ------
+    SelectionError
+        Malformed item, unknown name or value; the message lists the choices.
+    """
+    if not items:
+        return {}
+    dims = sweep_dims(obj)
+    names = [d for d in dims if d in obj.coords]
+    if not dims_only:
+        names += [str(n) for n in obj.xindexes
+                  if n not in names and set(obj[n].dims) <= set(dims)]
+    pairs = list(items.items()) if isinstance(items, Mapping) else []
+    if not isinstance(items, Mapping):
+        for item in items:
+            name, sep, text = str(item).partition("=")
+            if not sep:
+                raise SelectionError(f"expected DIM=VALUE, got {item!r}", name=str(item),
+                                     choices=names)
+            pairs.append((name.strip(), text))
+    out = {}
+    for name, wanted in pairs:
+        if name not in names:
+            raise SelectionError(choice_message("sweep dimension", name, names), name=name,
+                                 value=value_text(wanted), choices=names)
+        out[name] = _match_value(obj[name], name, wanted)
+    return out
+
+
+def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataArray:
+    """``obj.sel`` of the cases named by ``items`` (see ``parse_selection``)."""
+    selection = parse_selection(obj, items)
+    return obj.sel(selection) if selection else obj
+
+
+# --------------------------------------------------------------------------- ideal joints
+
+def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
+    """Radial clearance [m] of each joint in the configuration text; empty when there is none.
+
+    A case file holds its resolved config in the ``config`` attribute, a sweep file its
+    base case under ``base`` of ``sweep_config``.
+    """
+    from ..schema import ConfigError, parse_yaml
+
+    for attr, section in (("config", None), ("sweep_config", "base")):
+        try:
+            config = parse_yaml(ds.attrs.get(attr) or "", attr) or {}
+            joints = (config[section] if section else config)["joints"]
+            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
+        except (ConfigError, KeyError, TypeError, ValueError, AttributeError):
+            continue
+    return {}
+
+
+def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
+    """Radial clearance [m] of every joint in every case: (sweep dims..., joint), 0 for an
+    ideal joint; ``None`` where the file says neither by a sweep coordinate nor its config.
+
+    A swept clearance (the coordinate whose ``config_key`` is ``joints.<J>.clearance``) wins
+    over the configured one.
+    """
+    if "joint" not in ds.coords:
+        return None
+    configured = configured_clearances(ds)
+    per_joint = []
+    for joint in ds["joint"].values:
+        key = f"joints.{value_text(joint)}.clearance"
+        swept = next((c for c in ds.coords.values() if c.attrs.get("config_key") == key), None)
+        if swept is not None:
+            per_joint.append(xr.DataArray(swept.values.astype(float), dims=swept.dims))
+        elif value_text(joint) in configured:
+            per_joint.append(xr.DataArray(configured[value_text(joint)]))
+        else:
+            return None
+    return xr.concat(per_joint, dim="joint", coords="minimal").assign_coords(joint=ds["joint"])
+
+
+def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:
+    """``rows`` without those of an ideal joint (clearance 0) of the case ``clearance`` is of."""
+    if clearance is None:
+        return rows
+    ideal = {value_text(j) for j in clearance["joint"].values
+             if float(clearance.sel(joint=j)) == 0.0}
+    return [r for r in rows if "joint" not in r or value_text(r["joint"]) not in ideal]
+
+
+def is_ensemble(ds: xr.Dataset) -> bool:
+    """Whether ``ds`` is an ensemble sweep with its statistics."""
+    return MEMBER_DIM in ds.dims and "members_ok" in ds
+
+
+def design_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    """The sweep dimensions of ``ds`` but an ensemble's ``member``: one per design axis."""
+    return tuple(d for d in sweep_dims(ds) if d != MEMBER_DIM)
+
+
+
+#: The ``sample`` dimension of a sampling sweep (``sweep: sample:``), one position per point drawn.
+SAMPLE_DIM = "sample"
+
+#: What a results file holds, as :func:`results_kind` names it.
+RESULTS_KINDS = tuple(_RESULTS_KINDS)
+
+
+def results_kind(ds: xr.Dataset) -> str:
+    """What the results file ``ds`` holds, one of :data:`RESULTS_KINDS`, by the rule of
+    :func:`clearsweep.outputs.kind_of` (which tells a file on disk the same way)."""
+    return kind_of(ds.attrs, {str(d) for d in ds.dims}, {str(v) for v in ds.variables})

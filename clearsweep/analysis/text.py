@@ -1,0 +1,254 @@
+"""Text reports of a results dataset: a finished run's summary lines and a sweep's
+headline summary (its design axes, best and worst design per metric)."""
+
+from __future__ import annotations
+
+import collections
+import math
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from ..ensemble import MEMBER_DIM
+from ..summary import case_summary
+from .selection import (
+    _MISSING_TEXT,
+    design_dims,
+    is_ensemble,
+    iter_cases,
+    iter_points,
+    joint_clearances,
+    label_text,
+    value_text,
+)
+
+# --------------------------------------------------------------------------- text reports
+
+def _number(case: xr.Dataset, name: str, spec: str) -> str:
+    """``"12.3 m s-2"``, or ``n/a`` when the variable is absent or NaN."""
+    if name not in case:
+        return _MISSING_TEXT
+    value = float(case[name])
+    if not np.isfinite(value):
+        return _MISSING_TEXT
+    units = case[name].attrs.get("units", "")
+    text = format(value, spec)
+    return f"{text} {units}" if units and units != "1" else text
+
+
+def _pair(case: xr.Dataset, name: str, spec: str = ".4g") -> str:
+    """``"settled (whole run)"`` of a statistic and its ``_settled`` twin."""
+    return f"{_number(case, name + '_settled', spec)} ({_number(case, name, spec)})"
+
+
+def run_summary_text(ds: xr.Dataset) -> str:
+    """A few lines on a finished run (one block per case for a sweep).
+
+    Example::
+
+        status: ok
+        every-step statistics, settled (t >= 0.05 s), whole run in brackets:
+          slider acceleration: peak 3 m s-2 (50 m s-2), RMS 3 m s-2 (4.625 m s-2)
+          crank torque: peak 2 N m (2.5 N m)
+          peak normal force: A 40 N (45 N), B 120 N (130 N)
+          impacts: A 3 (4), B 0 (0)
+          contact fraction: A 0.9 (0.91), B 1 (1)
+        sub-steps used: 4
+        energy residual (relative): 2.50e-06
+        wall time: 2 s (40,000 RK4 steps/s, 80,000 steps)
+    """
+    summary = case_summary(ds)
+    blocks = []
+    for label, case in iter_cases(summary):
+        lines = [f"case {label_text(label)}"] if label else []
+        status = value_text(case["status"].values[()]) if "status" in case else _MISSING_TEXT
+        lines.append(f"status: {status}")
+        settle = ds.attrs.get("settle_time_s")
+        window = f"t >= {float(settle):g} s" if settle is not None else "settled"
+        lines.append(f"every-step statistics, settled ({window}), whole run in brackets:")
+        lines.append(
+            f"  slider acceleration: peak {_pair(case, 'slider_acceleration_peak')}, "
+            f"RMS {_pair(case, 'slider_acceleration_rms')}")
+        lines.append(f"  crank torque: peak {_pair(case, 'crank_torque_peak')}")
+        if "normal_force_peak" in case:
+            for heading, name, spec in (("peak normal force", "normal_force_peak", ".4g"),
+                                      ("impacts", "impact_count", ".0f"),
+                                      ("contact fraction", "contact_fraction", ".3f")):
+                if name not in case:
+                    continue
+                values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
+                                   for j in case["joint"].values)
+                lines.append(f"  {heading}: {values}")
+        lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
+        lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
+        wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
+        if "rk4_steps" in case and "wall_time" in case:
+            steps, seconds = float(case["rk4_steps"]), float(case["wall_time"])
+            if np.isfinite(steps) and seconds > 0:
+                wall += f" ({steps / seconds:,.0f} RK4 steps/s, {steps:,.0f} steps)"
+        lines.append(wall)
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
+
+
+# --------------------------------------------------------------------------- sweep summary
+
+#: Headline metrics of a sweep's summary, in order (lower is better for each); a settled
+#: statistic gives way to its whole-run twin where every run ends before the settled window.
+HEADLINE_METRICS = ("slider_acceleration_rms_settled", "slider_acceleration_peak_settled",
+                    "crank_torque_peak_settled", "normal_force_peak_settled",
+                    "wear_depth_max_final", "wear_volume")
+
+
+def _axis_line(ds: xr.Dataset, dim: str) -> str:
+    """``  B_clearance (radial clearance of joint B) [m]: 5e-05, 0.0001 (6 values)``"""
+    coord = ds[dim] if dim in ds.coords else None
+    if coord is None:
+        return f"  {dim}: {ds.sizes[dim]} positions"
+    long_name = coord.attrs.get("long_name", "")
+    units = coord.attrs.get("units", "")
+    head = f"  {dim}" + (f" ({long_name})" if long_name and not long_name.startswith("sweep zip")
+                         else "") + (f" [{units}]" if units else "")
+    values = [value_text(v) for v in coord.values]
+    text = ", ".join(values[:8]) + (f", ... ({len(values)} values)" if len(values) > 8 else "")
+    companions = [n for n, c in ds.coords.items() if n != dim and c.dims == (dim,)]
+    for name in companions:
+        unit = ds[name].attrs.get("units", "")
+        text += (f"; {name}{f' [{unit}]' if unit else ''}: "
+                 + ", ".join(value_text(v) for v in ds[name].values[:8]))
+    return f"{head}: {text}"
+
+
+def _headline_values(ds: xr.Dataset, name: str, ensemble: bool) -> tuple[str, Any, Any] | None:
+    """(variable shown, values, 95 % half-widths or None) of a headline metric, its settled
+    statistic falling back to the whole run's; None when the file lacks both."""
+    source = ds if ensemble else case_summary(ds)
+    for candidate in (name, name.removesuffix("_settled")):
+        if ensemble:
+            if candidate + "_mean" not in ds:
+                continue
+            values = ds[candidate + "_mean"]
+            half = 0.5 * (ds[candidate + "_ci_high"] - ds[candidate + "_ci_low"])
+        else:
+            if candidate not in source:
+                continue
+            values, half = source[candidate], None
+        if bool(np.isfinite(values.values.astype(float)).any()):
+            return candidate, values, half
+    return None
+
+
+def _metric_title(ds: xr.Dataset, shown: str, values: xr.DataArray, joint: str | None) -> str:
+    long_name = (ds[shown].attrs.get("long_name") if shown in ds
+                 else values.attrs.get("long_name")) or shown
+    units = values.attrs.get("units", "")
+    settle = ds.attrs.get("settle_time_s")
+    if shown.endswith("_settled"):
+        where = f", t >= {float(settle):g} s" if settle is not None else ""
+    elif shown + "_settled" in HEADLINE_METRICS:
+        where = ", whole run (the runs end before the settled window)"
+    else:
+        where = ""
+    at = f", joint {joint}" if joint else ""
+    return f"{long_name}{at}{where}" + (f" [{units}]" if units and units != "1" else "")
+
+
+def _ranked(values: xr.DataArray, half: xr.DataArray | None, usable: xr.DataArray,
+            dims: tuple[str, ...]) -> list[tuple[float, float, dict]]:
+    """(value, half-width, design label) of every usable design with a finite value."""
+    out = []
+    for label, point in iter_points(values, dims):
+        index = {d: label[d] for d in dims}
+        if not bool(usable.sel(index) if index else usable):
+            continue
+        value = float(point)
+        if math.isfinite(value):
+            width = float(half.sel(index) if index else half) if half is not None else math.nan
+            out.append((value, width, label))
+    return sorted(out, key=lambda r: r[0])
+
+
+def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
+    """What a sweep answers, first: its design axes and, per headline metric, the lowest
+    (best) and highest (worst) design and their spread; an ensemble's means with the
+    half-width of their 95 % interval, and whether best and worst are distinguishable.
+
+    Per-joint metrics leave out the cases where the joint is ideal (no clearance), and every
+    metric the cases whose status is not ``ok`` (an ensemble: designs without a member ok).
+    """
+    from ..ensemble import distinguishable, welch_interval
+
+    ensemble = is_ensemble(ds)
+    dims = design_dims(ds)
+    status = ds["status"].astype(str) if "status" in ds else None
+    n = int(np.prod([ds.sizes[d] for d in dims])) if dims else 1
+    if ensemble:
+        usable = ds["members_ok"] > 0
+        counted = f"{n} designs x {ds.sizes[MEMBER_DIM]} members"
+    else:
+        usable = (status == "ok") if status is not None else xr.DataArray(True)
+        counted = f"{n} cases"
+    if status is not None:
+        tally = collections.Counter(status.values.ravel().tolist())
+        counted += " (" + ", ".join(f"{k} {v}" for k, v in sorted(tally.items(),
+                                                                  key=lambda kv: kv[0] != "ok")) + ")"
+    name = ds.attrs.get("sweep_name", "")
+    lines = [f"Sweep {name + ': ' if name else ''}{counted}; design axes:"]
+    lines += [_axis_line(ds, d) for d in dims]
+    lines.append("")
+    lines.append("Headline metrics, lowest (best) and highest (worst) design"
+                 + (" (ensemble mean +- half-width of its 95% interval)" if ensemble else "") + ":")
+    clearances = joint_clearances(ds)
+    for metric in HEADLINE_METRICS:
+        found = _headline_values(ds, metric, ensemble)
+        if found is None:
+            continue
+        shown, values, half = found
+        joints = [value_text(j) for j in values["joint"].values] if "joint" in values.dims else [None]
+        for joint in joints:
+            v, h, ok = values, half, usable
+            if joint is not None:
+                v = values.sel(joint=joint)
+                h = half.sel(joint=joint) if half is not None else None
+                if clearances is not None:
+                    gap = clearances.sel(joint=joint)
+                    ok = ok & xr.DataArray(gap.values > 0, dims=gap.dims)
+            ranked = _ranked(v, h, ok, dims)
+            if not ranked:
+                continue
+            (low, low_h, low_at), (high, high_h, high_at) = ranked[0], ranked[-1]
+            units = values.attrs.get("units", "")
+            units = "" if units == "1" else f" {units}"
+            spread = f"spread {high - low:.3g}{units}"
+            if low > 0:
+                spread += (f" (highest = {high / low:.3g} x lowest)" if high >= 2.0 * low
+                           else f" ({100.0 * (high - low) / low:.2g} % of the lowest)")
+            if ensemble and len(ranked) > 1:
+                n_low = int(ds["members_ok"].sel({d: low_at[d] for d in dims}))
+                n_high = int(ds["members_ok"].sel({d: high_at[d] for d in dims}))
+                std = ds[shown + "_std"] if joint is None else ds[shown + "_std"].sel(joint=joint)
+                s_low = float(std.sel({d: low_at[d] for d in dims}))
+                s_high = float(std.sel({d: high_at[d] for d in dims}))
+                _, lo, hi = welch_interval(low, s_low, n_low, high, s_high, n_high)
+                verdict = {True: "distinguishable", False: "not distinguishable",
+                           None: "not tested (fewer than 2 members)"}[distinguishable(lo, hi)]
+                spread += f"; lowest vs highest: {verdict}"
+
+            def shown_value(value: float, width: float) -> str:
+                return f"{value:.4g}" + (f" +- {width:.2g}" if math.isfinite(width) else "")
+
+            lines.append(f"- {_metric_title(ds, shown, values, joint)}")
+            if len(ranked) == 1 or low == high:
+                lines.append(f"    all {len(ranked)} equal: {shown_value(low, low_h)}")
+                continue
+            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {label_text(low_at)}")
+            lines.append(f"    highest {shown_value(high, high_h):>16}  {label_text(high_at)}")
+            lines.append(f"    {spread}")
+    lines.append("")
+    lines.append("Every case's tables: --full (text), or --format csv / json.")
+    text = "\n".join(lines)
+    if fmt == "markdown":
+        return "## Summary\n\n```text\n" + text + "\n```"
+    return text
+

@@ -1,0 +1,228 @@
+"""Figures from results datasets (the paper's Figures 9-16), headless.
+
+Figures are built on ``matplotlib.figure.Figure`` directly (no pyplot, no
+global state, no display needed) and saved in the format the output
+file's suffix names. Every axis and colour-bar label carries the units of the
+variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
+or categorical quantity.
+
+Kinds (``KINDS``):
+
+``slider``
+    slider position, velocity and acceleration against the crank angle or
+    time, sweep cases overlaid (Figures 9, 12, 13).
+``forces``
+    reaction at O and the force on the ball of each joint: magnitude and
+    x, y, z components, cases overlaid (Figures 10, 14, 15).
+``wear-map``
+    per joint, the socket wear map (polar x azimuth) and the same map on a
+    sphere (Figures 11, 16); one case.
+``wear-polar``
+    per joint and axis, the projected wear depth as a worn profile on the
+    unit circle, exaggerated (Figures 11, 16); cases overlaid.
+``orbit``
+    ball-centre offset in the socket frame on the xy, xz and yz planes,
+    inside the clearance circle; cases overlaid.
+``sweep``
+    one summary metric (``analysis.case_summary``) over one sweep dimension
+    (lines) or two (heat maps); for an ensemble (a ``member`` dimension), the
+    ensemble mean over one or two design dimensions with its 95 % confidence
+    interval as error bars, one line per value of the second dimension.
+``life``
+    a life run (``clearsweep life``): wear depth, effective clearance, coating
+    remaining, settled peak normal force, RMS slider acceleration and impacts
+    per revolution against revolutions (log axis), the limits that are set, and
+    the wear map's evolution (snapshots, joint B or the worn joint).
+``reliability``
+    a reliability sweep (``store: reliability``): one panel per limit (and "any"),
+    the Kaplan-Meier reliability R(N) of each design against revolutions (log axis)
+    with its 95 % band; with ``b10=True`` (``--b10``), each design's B10 with its
+    interval as error bars instead.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import xarray as xr
+import yaml
+from matplotlib.figure import Figure
+
+from ..analysis import SelectionError, choice_message, parse_selection, results_kind, sweep_dims
+from ..choices import (  # noqa: F401
+    DEFAULT_SWEEP_METRIC,
+    DPI_RANGE,
+    FIGURE_DPI,
+    KINDS,
+    OUTPUT_SUFFIXES,
+    X_AXES,
+)
+from ..dataset import replaced_on_success
+from ..outputs import figure_metadata
+from .common import (  # noqa: F401
+    AXIS_LABEL_CHARACTERS,
+    COLOURBAR_LABEL_CHARACTERS,
+    DIMENSIONLESS,
+    MAX_CYCLE_COLOURS,
+    MAX_LEGEND_ENTRIES,
+    MIN_RELATIVE_SPAN,
+    NEGLIGIBLE_VARIATION,
+    TITLE_CHARACTERS_PER_INCH,
+    PlotError,
+    axis_label,
+    coordinate_text,
+    keep_relative_span,
+    point_text,
+    selection_text,
+    wrapped_label,
+)
+from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
+from .orbit import _draw_orbit
+from .reliability import _draw_reliability
+from .series import _draw_forces, _draw_slider
+from .sweep import (  # noqa: F401
+    ANNOTATION_DARK_TEXT_ABOVE,
+    HEATMAP_PANEL_INCHES,
+    MAX_ANNOTATED_CELLS,
+    MIN_FIGURE_WIDTH_INCHES,
+    ROBUST_FENCE,
+    ROBUST_MIN_CELLS,
+    ROBUST_PERCENTILES,
+    _draw_sweep,
+    robust_limits,
+)
+from .wear import WEAR_POLAR_EXAGGERATION, _draw_wear_map, _draw_wear_polar, _life_wear_map  # noqa: F401
+
+
+@dataclass(frozen=True)
+class FigureKind:
+    """How one figure kind is drawn: its size and its family's drawer."""
+
+    #: Figure size (width, height) [inch].
+    size_inches: tuple[float, float]
+    #: ``draw(fig, ds, *options)``: draws the kind on ``fig``.
+    draw: Callable[..., None]
+    #: The options of :func:`figure` the drawer takes after ``ds``, by name (``x``,
+    #: ``metric``, ``b10``); a ``metric`` or ``b10`` given to a kind without it is refused.
+    options: tuple[str, ...] = ()
+
+
+#: Every figure kind (``KINDS``), said once: :func:`figure` asks this table.
+FIGURES = {
+    "slider": FigureKind((8, 8), _draw_slider, ("x",)),
+    "forces": FigureKind((15, 9), _draw_forces, ("x",)),
+    "wear-map": FigureKind((11, 9), _draw_wear_map),
+    "wear-polar": FigureKind((11, 9.5), _draw_wear_polar),
+    "orbit": FigureKind((12, 8), _draw_orbit),
+    "sweep": FigureKind((8, 5), _draw_sweep, ("metric",)),
+    "life": FigureKind((16, 10), _draw_life),
+    "reliability": FigureKind((14, 8), _draw_reliability, ("b10",)),
+}
+
+
+def _kinds_taking(option: str) -> str:
+    """``"sweep"``: the kinds whose drawer takes ``option``, for a refusal."""
+    return " or ".join(name for name, spec in FIGURES.items() if option in spec.options)
+
+
+def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
+           metric: str | None = None, b10: bool = False) -> Figure:
+    """Build the figure of ``kind`` from ``ds`` (see the module docstring).
+
+    Parameters
+    ----------
+    ds
+        One-case or sweep dataset.
+    kind
+        One of ``KINDS``.
+    select
+        ``["DIM=VALUE", ...]`` or ``{dim: value}``: the cases to draw.
+    x
+        Abscissa of time series: ``"angle"`` (crank angle [degree]) or ``"time"`` [s].
+    metric
+        Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
+    b10
+        ``kind="reliability"``: draw B10 with its interval instead of R(N).
+
+    Raises
+    ------
+    SelectionError
+        Unknown kind, abscissa, sweep dimension, value or metric.
+    PlotError
+        The dataset lacks what the kind draws, or holds several cases where
+        the kind draws one.
+    """
+    if kind not in KINDS:
+        raise SelectionError(choice_message("plot kind", kind, list(KINDS)), name="kind",
+                             value=kind, choices=KINDS)
+    if x not in X_AXES:
+        raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
+                             choices=X_AXES)
+    spec = FIGURES[kind]
+    if metric is not None and "metric" not in spec.options:
+        raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")
+    if b10 and "b10" not in spec.options:
+        raise PlotError(f"--b10 applies to --kind {_kinds_taking('b10')} only")
+    if kind == "wear-map" and results_kind(ds) == "life" and "wear_map_snapshot" in ds:
+        ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
+    selection = parse_selection(ds, select)
+    ds = ds.sel(selection) if selection else ds
+    fig = Figure(figsize=spec.size_inches, layout="constrained")
+    options = {"x": x, "metric": metric, "b10": b10}
+    spec.draw(fig, ds, *(options[name] for name in spec.options))
+    _name_selection(fig, selection_text(ds, selection) or case_text(ds))
+    return fig
+
+
+def _name_selection(fig: Figure, line: str) -> None:
+    """Add ``line`` (the ``--select`` slice or the case) to the figure's title, so that two
+    slices never give figures with the same title; wrap the title to the figure's width."""
+    title = next((t for t in fig.texts if t.get_text() == fig.get_suptitle()), None)
+    if title is None:
+        if not line:
+            return
+        title = fig.suptitle("")
+    text = "\n".join(filter(None, [title.get_text(), line]))
+    width = int(fig.get_figwidth() * TITLE_CHARACTERS_PER_INCH)
+    title.set_text("\n".join(wrapped for part in text.split("\n")
+                             for wrapped in (textwrap.wrap(part, width, break_on_hyphens=False) or [""])))
+
+
+def case_text(ds: xr.Dataset) -> str:
+    """``"case: two_clearances"`` for a one-case dataset whose config names it; "" otherwise."""
+    if sweep_dims(ds) or "config" not in ds.attrs:
+        return ""
+    try:
+        name = yaml.safe_load(ds.attrs["config"]).get("name")
+    except (yaml.YAMLError, AttributeError):
+        return ""
+    return f"case: {name}" if isinstance(name, str) and name else ""
+
+
+def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
+         metric: str | None = None, dpi: int = FIGURE_DPI, b10: bool = False) -> Figure:
+    """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
+
+    Parameters and errors as ``figure``; ``dpi`` sets the raster resolution.
+    Missing parent folders are created. The file appears only once complete
+    (temporary file, then rename); a failed write raises ``OSError``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The saved figure.
+    """
+    out_path = Path(out_path)
+    if out_path.suffix.lower() not in OUTPUT_SUFFIXES:
+        raise SelectionError(choice_message("output suffix", out_path.suffix, list(OUTPUT_SUFFIXES)),
+                             name="output", value=out_path.suffix, choices=OUTPUT_SUFFIXES)
+    fig = figure(ds, kind, select, x=x, metric=metric, b10=b10)
+    # a temporary file renamed into place: a full disk or a kill leaves no partial figure
+    with replaced_on_success(out_path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:],
+                    metadata=figure_metadata(out_path.suffix))
+    return fig
+

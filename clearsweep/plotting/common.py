@@ -1,0 +1,215 @@
+"""Helpers shared by the figure families: labels with units, the cases of a dataset and
+their colours, legends, y-axis spans and title lines."""
+
+from __future__ import annotations
+
+import re
+import textwrap
+
+import numpy as np
+import xarray as xr
+from matplotlib import colormaps
+
+from ..analysis import iter_cases, label_text, sweep_dims, value_text
+
+#: Overlaid cases beyond this many take colours from a continuous colour map.
+MAX_CYCLE_COLOURS = 10
+
+#: Overlaid lines beyond this many get no per-line legend (it would hide the plot); the
+#: title says so and points to --select.
+MAX_LEGEND_ENTRIES = 12
+
+#: A line panel whose data vary by less than ``NEGLIGIBLE_VARIATION`` of their mean magnitude
+#: is drawn on a y-axis ``MIN_RELATIVE_SPAN`` of the mean wide (at least), centred on the
+#: data, so that a negligible change looks negligible; the panel's title says so.
+NEGLIGIBLE_VARIATION = 0.05
+MIN_RELATIVE_SPAN = 0.1
+
+#: Long y-axis labels of line plots are wrapped to lines of at most this many characters.
+AXIS_LABEL_CHARACTERS = 40
+
+#: Figure titles are wrapped to lines of at most this many characters per inch of width.
+TITLE_CHARACTERS_PER_INCH = 10
+
+#: Unit text of dimensionless and categorical quantities.
+DIMENSIONLESS = "-"
+
+#: Colour-bar labels are wrapped to lines of at most this many characters, so that the
+#: layout engine can keep them inside a figure of the default size.
+COLOURBAR_LABEL_CHARACTERS = 36
+
+
+_SINGLE_CASE_COLOUR = "tab:red"
+
+
+class PlotError(ValueError):
+    """The dataset cannot give the figure asked for (missing variables, too many cases)."""
+
+
+def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = None) -> str:
+    """``"text [units]"`` from a variable's attributes.
+
+    Parameters
+    ----------
+    obj
+        Variable or coordinate; its ``long_name`` (or name) and ``units``.
+    text, units
+        Override the attribute values.
+    """
+    name = text or obj.attrs.get("long_name") or str(obj.name)
+    unit = obj.attrs.get("units", "") if units is None else units
+    return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
+
+
+def wrapped_label(label: str, width: int = COLOURBAR_LABEL_CHARACTERS) -> str:
+    """``label`` on lines of at most ``width`` characters; its ``[units]`` never split.
+
+    >>> wrapped_label("peak absolute slider acceleration after start-up [m s-2]")
+    'peak absolute slider acceleration\\nafter start-up [m s-2]'
+    """
+    match = re.fullmatch(r"(.*?)\s*(\[[^\]]*\])", label)
+    name, units = (match.group(1), match.group(2)) if match else (label, "")
+    lines = textwrap.wrap(name, width) or [""]
+    if units:
+        if len(lines[-1]) + 1 + len(units) <= width:
+            lines[-1] = f"{lines[-1]} {units}".strip()
+        else:
+            lines.append(units)
+    return "\n".join(lines)
+
+
+def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
+    """Raise ``PlotError`` unless ``ds`` holds ``names``; ``what`` asked for them (``--kind slider``)."""
+    missing = [n for n in names if n not in ds]
+    if missing:
+        raise PlotError(f"{what} needs {', '.join(missing)}, which this dataset lacks "
+                        "(a summary-only sweep holds no time series or wear maps)")
+
+
+def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
+    dims = sweep_dims(ds)
+    if not dims:
+        return ds
+    offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
+                      if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in dims)
+    raise PlotError(f"--kind {kind} draws one case; choose it with --select DIM=VALUE ({offer})")
+
+
+def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
+    """``(legend text, case, colour)`` of every case of ``ds`` that ran (skipped grid points
+    have no data to draw). The keys of a zip group are left out of the text: its label
+    names them."""
+    zipped = {str(n) for n, c in ds.coords.items()
+              if c.ndim == 1 and c.dims[0] != n and ds.coords.get(c.dims[0]) is not None
+              and ds[c.dims[0]].attrs.get("config_keys")}
+    cases = [({k: v for k, v in label.items() if k not in zipped}, case)
+             for label, case in iter_cases(ds)
+             if not ("status" in case and case["status"].ndim == 0
+                     and str(case["status"].values) == "skipped")]
+    if len(cases) == 1:
+        colours = [_SINGLE_CASE_COLOUR]
+    elif len(cases) <= MAX_CYCLE_COLOURS:
+        colours = [f"C{i}" for i in range(len(cases))]
+    else:
+        colours = list(colormaps["viridis"](np.linspace(0.0, 0.95, len(cases))))
+    return [(label_text(label), case, colour) for (label, case), colour in zip(cases, colours)]
+
+
+def _legend(ax, cases) -> None:
+    if 1 < len(cases) <= MAX_LEGEND_ENTRIES:
+        ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
+
+
+def _legend_note(n: int) -> str:
+    """Title line saying that ``n`` overlaid lines have no legend ("" when they have one)."""
+    if n <= MAX_LEGEND_ENTRIES:
+        return ""
+    return (f"\n{n} cases overlaid, no legend above {MAX_LEGEND_ENTRIES}: choose cases with "
+            "--select DIM=VALUE")
+
+
+def _case_label(text: str, n: int, default: str) -> str:
+    """A line's legend label; hidden (``_nolegend_``) when ``n`` cases are too many to list."""
+    return "_nolegend_" if n > MAX_LEGEND_ENTRIES else (text or default)
+
+
+def _abscissa(ds: xr.Dataset, case: xr.Dataset, x: str) -> tuple[np.ndarray, str]:
+    """Crank angle [degree] or time [s] of a case, and its label."""
+    if x == "time":
+        return case["time"].values, axis_label(ds["time"])
+    _require(ds, ("crank_angle",), "--x angle")
+    return np.degrees(case["crank_angle"].values), axis_label(ds["crank_angle"], units="degree")
+
+
+def _edges(centres: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Edges of equal bins with these centres; one bin spans [lo, hi]."""
+    if len(centres) == 1:
+        return np.array([lo, hi])
+    step = centres[1] - centres[0]
+    return np.append(centres - step / 2, centres[-1] + step / 2)
+
+
+def keep_relative_span(ax, values) -> str:
+    """Widen ``ax``'s y-axis to at least :data:`MIN_RELATIVE_SPAN` of the mean magnitude of
+    ``values`` (the data drawn), centred on the current view, where they vary by less than
+    :data:`NEGLIGIBLE_VARIATION` of it.
+
+    Returns
+    -------
+    str
+        The note for the panel ("varies by 0.15 % of its mean; axis spans 10 % of it"), or
+        "" where the axis was wide enough already.
+    """
+    data = np.asarray(values, dtype=float).ravel()
+    data = data[np.isfinite(data)]
+    if data.size == 0:
+        return ""
+    scale = abs(float(data.mean()))
+    low, high = ax.get_ylim()
+    if (not scale > 0 or float(np.ptp(data)) >= NEGLIGIBLE_VARIATION * scale
+            or high - low >= MIN_RELATIVE_SPAN * scale):
+        return ""
+    centre, half = 0.5 * (low + high), 0.5 * MIN_RELATIVE_SPAN * scale
+    ax.set_ylim(centre - half, centre + half)
+    return (f"varies by {float(np.ptp(data)) / scale:.2%} of its mean; "
+            f"axis spans {MIN_RELATIVE_SPAN:.0%} of it")
+
+
+def _note_span(ax, values) -> None:
+    """:func:`keep_relative_span`, its note as the panel's (small) title."""
+    note = keep_relative_span(ax, values)
+    if note:
+        ax.set_title(note, fontsize="x-small")
+
+
+def coordinate_text(coord: xr.DataArray, value) -> str:
+    """``"B_clearance 0.00025 m"``: a sweep coordinate's name, value and units (if any)."""
+    unit = coord.attrs.get("units", "")
+    return f"{coord.name} {value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+
+
+def point_text(obj: xr.Dataset | xr.DataArray, keys: dict) -> str:
+    """``"B_coating PTFE, B_clearance 0.00025 m"`` of a point of :func:`iter_points`."""
+    return ", ".join(coordinate_text(obj[d], v) if d in obj.coords else f"{d} {value_text(v)}"
+                     for d, v in keys.items())
+
+
+def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
+    """A sweep dimension's long name with its name: ``"radial clearance (B_clearance)"``."""
+    long_name = obj[dim].attrs.get("long_name") if dim in obj.coords else None
+    if not long_name or dim in long_name:      # "sweep zip group coating_joints": the name
+        return dim
+    return f"{long_name} ({dim})"
+
+
+def selection_text(ds: xr.Dataset, selection: dict) -> str:
+    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB, ..."``;
+    numbers with the coordinate's units."""
+    if not selection:
+        return ""
+    parts = []
+    for name, value in selection.items():
+        unit = ds[name].attrs.get("units", "") if name in ds.coords else ""
+        parts.append(f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else ""))
+    return "selection: " + ", ".join(parts)
+

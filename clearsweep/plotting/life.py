@@ -1,0 +1,102 @@
+"""``life``: a life run's histories against revolutions and its wear-map snapshots."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+import yaml
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+
+from ..analysis import value_text
+from .common import _edges, _note_span, _require, axis_label
+
+#: The life figure draws at most this many wear-map snapshots (the first, the last and
+#: evenly spread ones between); it says which stored snapshots it leaves out.
+LIFE_SNAPSHOT_PANELS = 6
+
+
+def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("cycle", "wear_depth_max", "wear_map_snapshot", "stop_reason"), "--kind life")
+    cycles = ds["cycle"].values
+    xlabel = axis_label(ds["cycle"], "crank revolutions")
+    limits = {"wear_depth_max": "life.max_clearance_growth",
+              "normal_force_peak_settled": "life.max_normal_force",
+              "slider_acceleration_rms_settled": "life.max_rms_acceleration"}
+    try:
+        config = yaml.safe_load(ds.attrs.get("config") or "") or {}
+    except yaml.YAMLError:
+        config = {}
+    if not isinstance(config, dict):     # a config attribute edited into a list or a scalar
+        config = {}
+    panels = ("wear_depth_max", "clearance_effective", "coating_remaining", "normal_force_peak_settled",
+              "slider_acceleration_rms_settled", "impacts_per_revolution")
+    grid = fig.add_gridspec(3, 4)
+    for k, name in enumerate(panels):
+        ax = fig.add_subplot(grid[k // 2, k % 2])
+        var = ds[name]
+        if "joint" in var.dims:
+            for joint in var["joint"].values:
+                values = var.sel(joint=joint).values
+                if np.isfinite(values).any():
+                    ax.plot(cycles, values, marker=".", label=f"joint {value_text(joint)}")
+        else:
+            ax.plot(cycles, var.values, marker=".")
+        limit = _life_limit(config, limits.get(name))
+        if limit is not None:
+            ax.axhline(limit, color="r", linestyle="--", label=limits[name])
+        _note_span(ax, var.values)
+        ax.set_xscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name)))
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize="x-small")
+    snaps = ds["wear_map_snapshot"]
+    joint = "B" if float(snaps.sel(joint="B").max()) >= float(snaps.sel(joint="A").max()) else "A"
+    picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, LIFE_SNAPSHOT_PANELS)
+                      .round().astype(int))
+    maps = snaps.sel(joint=joint)
+    peak = float(maps.max())
+    norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
+    polar = _edges(ds["polar"].values, 0.0, 180.0)
+    azimuth = _edges(ds["azimuth"].values, -180.0, 180.0)
+    mesh = None
+    for k, s in enumerate(picks):
+        ax = fig.add_subplot(grid[k // 2, 2 + k % 2])
+        mesh = ax.pcolormesh(azimuth, polar, maps.isel(snapshot=s).values, cmap="viridis", norm=norm,
+                             shading="flat")
+        ax.set_ylim(180.0, 0.0)
+        ax.set_title(f"joint {joint}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
+        ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
+        ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
+    if mesh is not None:
+        fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth"))
+    fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}\n"
+                 + snapshot_note(ds["snapshot_cycle"].values, picks, joint))
+
+
+def snapshot_note(cycles: np.ndarray, picks: np.ndarray, joint: str) -> str:
+    """Which of the stored wear-map snapshots (at ``cycles`` revolutions) the life figure
+    draws (positions ``picks``).
+
+    >>> snapshot_note(np.array([1.0, 10.0, 100.0]), np.array([0, 1, 2]), "B")
+    'wear maps of joint B: all 3 stored snapshots'
+    >>> snapshot_note(np.array([1.0, 10.0, 100.0]), np.array([0, 2]), "B")
+    'wear maps of joint B: 2 of the 3 stored snapshots (not drawn: 10 revolutions)'
+    """
+    n = len(cycles)
+    if len(picks) == n:
+        return f"wear maps of joint {joint}: all {n} stored snapshots"
+    left = [float(c) for i, c in enumerate(cycles) if i not in set(picks.tolist())]
+    listed = ", ".join(f"{c:.3g}" for c in left[:4]) + (", ..." if len(left) > 4 else "")
+    return (f"wear maps of joint {joint}: {len(picks)} of the {n} stored snapshots "
+            f"(not drawn: {listed} revolutions)")
+
+
+def _life_limit(config: dict, key: str | None) -> float | None:
+    """The value of a life limit ``key`` ("life.max_...") in the dataset's config, if set."""
+    if key is None:
+        return None
+    value = config.get("life", {}).get(key.split(".")[1])
+    return None if value is None else float(value)
+

@@ -1,0 +1,85 @@
+"""``orbit``: the ball-centre offset in the socket frame inside the clearance circle."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.artist import Artist
+from matplotlib.figure import Figure
+
+from ..analysis import configured_clearances, value_text
+from .common import _case_label, _cases, _legend_note, _require, axis_label
+
+#: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
+_CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
+
+
+def _clearance(case: xr.Dataset, joint: str, configured: dict[str, float]) -> tuple[float, str] | None:
+    """Radial clearance of ``joint`` in ``case`` [m] and where it came from; None for an ideal joint.
+
+    A swept clearance (sweep coordinate ``{joint}_clearance``, or
+    ``joints_{joint}_clearance`` where the short name was taken) wins over the
+    ``configured`` one; without either, the largest eccentricity stands in.
+    """
+    for name in (f"{joint}_clearance", f"joints_{joint}_clearance"):
+        if name in case.coords and case[name].ndim == 0:
+            swept = float(case[name])
+            return (swept, "swept") if swept > 0 else None
+    if joint in configured:
+        return (configured[joint], "config") if configured[joint] > 0 else None
+    if "eccentricity" in case:
+        largest = float(case["eccentricity"].sel(joint=joint).max())
+        if np.isfinite(largest) and largest > 0:
+            return largest, "max eccentricity"
+    return None
+
+
+def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("ball_offset",), "--kind orbit")
+    offset = ds["ball_offset"]
+    planes = (("x", "y"), ("x", "z"), ("y", "z"))
+    cases = _cases(ds)
+    circle = np.linspace(0.0, 2.0 * np.pi, 361)
+    joints = offset["joint"].values
+    configured = configured_clearances(ds)
+    per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
+    for joint in joints:
+        found_here: dict[float, str] = {}
+        for _, case, _ in cases:
+            found = _clearance(case, str(joint), configured)
+            if found is not None:
+                found_here.setdefault(found[0], found[1])
+        per_joint.append(found_here)
+    # one style per clearance in the whole figure, so that the legend tells the circles apart
+    radii = sorted({r for found_here in per_joint for r in found_here})
+    styles = {r: (_CIRCLE_STYLES[k % len(_CIRCLE_STYLES)],
+                  str(0.15 + 0.5 * k / max(len(radii) - 1, 1))) for k, r in enumerate(radii)}
+    for j, (joint, clearances) in enumerate(zip(joints, per_joint)):
+        for p, (a, b) in enumerate(planes):
+            ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
+            for text, case, colour in cases:
+                d = case["ball_offset"].sel(joint=joint)
+                ax.plot(d.sel(axis=a).values, d.sel(axis=b).values, lw=0.6, color=colour,
+                        label=_case_label(text, len(cases), "ball centre"))
+            for radius, source in sorted(clearances.items()):
+                ax.plot(radius * np.cos(circle), radius * np.sin(circle), lw=0.9,
+                        ls=styles[radius][0], color=styles[radius][1],
+                        label=f"joint {value_text(joint)} clearance {radius:.3g} m ({source})")
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_xlabel(axis_label(offset, f"d_{a}"))
+            ax.set_ylabel(axis_label(offset, f"d_{b}"))
+            ax.ticklabel_format(style="sci", scilimits=(-3, 3))
+            ideal = "" if clearances else " (ideal joint)"
+            ax.set_title(f"joint {value_text(joint)}{ideal}: {a}{b} plane", fontsize="small")
+            ax.grid(alpha=0.3)
+    # one legend below the panels: the cases, then each joint's clearance circles once
+    entries: dict[str, Artist] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                   ncol=min(len(entries), 2 if max(map(len, entries)) > 40 else 3),
+                   fontsize="x-small")
+    fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)))
+

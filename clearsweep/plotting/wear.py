@@ -1,0 +1,139 @@
+"""Socket wear: ``wear-map`` (polar x azimuth and on a sphere) and ``wear-polar`` (the
+worn profile per joint and axis); Figures 11, 16."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import xarray as xr
+from matplotlib import colormaps
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+
+from ..analysis import SelectionError, value_text
+from .common import (
+    DIMENSIONLESS,
+    _case_label,
+    _cases,
+    _edges,
+    _legend_note,
+    _one_case,
+    _require,
+    axis_label,
+)
+
+#: On ``wear-polar`` the largest depth of a joint is drawn as this fraction of the unit radius.
+WEAR_POLAR_EXAGGERATION = 0.3
+
+
+def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
+    """The wear map of a life run (``clearsweep life``) as a one-case dataset: the final
+    map, or with ``--select snapshot=K`` its K-th snapshot (0-based, in revolutions order).
+
+    Raises
+    ------
+    SelectionError
+        Any other selection; the message lists the snapshots and their revolutions.
+    """
+    cycles = ds["snapshot_cycle"].values if "snapshot_cycle" in ds else np.full(ds.sizes["snapshot"], np.nan)
+    offer = ", ".join(f"{k} ({float(c):.4g} revolutions)" for k, c in enumerate(cycles))
+    items = list(select.items()) if isinstance(select, Mapping) else \
+        [tuple(str(i).partition("=")[::2]) for i in (select or ())]
+    if not items:
+        return ds[["wear_map"]]
+    name, text = items[0]
+    k = int(text) if str(text).strip().lstrip("-").isdigit() else -1
+    if len(items) > 1 or name != "snapshot" or not 0 <= k < ds.sizes["snapshot"]:
+        raise SelectionError(
+            f"a life run's --kind wear-map draws its final map (no --select) or one snapshot: "
+            f"--select snapshot=K, K one of {offer}", name=str(name), value=str(text),
+            choices=[str(k) for k in range(ds.sizes["snapshot"])])
+    snapshot = ds["wear_map_snapshot"].isel(snapshot=k, drop=True)
+    return xr.Dataset({"wear_map": snapshot.assign_attrs(ds["wear_map"].attrs)},
+                      attrs={"snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
+
+
+def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("wear_map",), "--kind wear-map")
+    ds = _one_case(ds, "wear-map")
+    wear = ds["wear_map"]
+    polar = np.radians(_edges(wear["polar"].values, 0.0, 180.0))
+    azimuth = np.radians(_edges(wear["azimuth"].values, -180.0, 180.0))
+    grid_p, grid_a = np.meshgrid(polar, azimuth, indexing="ij")
+    sphere = (np.sin(grid_p) * np.cos(grid_a), np.sin(grid_p) * np.sin(grid_a), np.cos(grid_p))
+    cmap = colormaps["viridis"]
+    joints = wear["joint"].values
+    for j, joint in enumerate(joints):
+        depth = wear.sel(joint=joint)
+        peak = float(depth.max())
+        norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
+        ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
+        mesh = ax.pcolormesh(np.degrees(azimuth), np.degrees(polar), depth.values, cmap=cmap,
+                             norm=norm, shading="flat")
+        ax.set_ylim(180.0, 0.0)
+        ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"))
+        ax.set_ylabel(axis_label(ds["polar"], "polar angle from +z"))
+        ax.set_title(f"joint {value_text(joint)}: socket wear map (max {peak:.3g} m)", fontsize="small")
+        fig.colorbar(mesh, ax=ax).set_label(axis_label(wear, "wear depth"))
+        ax3 = fig.add_subplot(len(joints), 2, 2 * j + 2, projection="3d")
+        ax3.plot_surface(*sphere, facecolors=cmap(norm(depth.values)), rstride=1, cstride=1,
+                         shade=False, linewidth=0, antialiased=False)
+        ax3.set_box_aspect((1, 1, 1))
+        if peak > 0:
+            # Look at the most worn bin.
+            ip, ia = np.unravel_index(int(np.nanargmax(depth.values)), depth.shape)
+            ax3.view_init(elev=90.0 - float(depth["polar"][ip]), azim=float(depth["azimuth"][ia]))
+        # the axes name the socket frame's directions; tick labels of the unit sphere would
+        # only crowd the panel title
+        for set_label, set_ticks, name in ((ax3.set_xlabel, ax3.set_xticks, "x"),
+                                           (ax3.set_ylabel, ax3.set_yticks, "y"),
+                                           (ax3.set_zlabel, ax3.set_zticks, "z")):
+            set_ticks([-1.0, 0.0, 1.0], ["", "", ""])
+            set_label(f"{name} [{DIMENSIONLESS}]", labelpad=-12)
+        ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small",
+                      pad=12)
+        fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(
+            axis_label(wear, "wear depth"))
+    snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
+    fig.suptitle("Socket wear depth" + (f", snapshot {snapshot}" if snapshot else ""))
+
+
+def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
+    _require(ds, ("wear_projection",), "--kind wear-polar")
+    projection = ds["wear_projection"]
+    theta = np.radians(projection["angle"].values)
+    closed = np.append(theta, theta[0])
+    cases = _cases(ds)
+    joints, axes_names = projection["joint"].values, projection["axis"].values
+    scales = []
+    for j, joint in enumerate(joints):
+        peak = float(projection.sel(joint=joint).max())
+        scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
+        # a no-break space keeps the value and its unit on one line of the wrapped title
+        scales.append(f"joint {value_text(joint)}: {peak:.3g}\u00a0m" if scale else
+                      f"joint {value_text(joint)}: no wear")
+        for k, axis in enumerate(axes_names):
+            ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
+                                 projection="polar")
+            ax.plot(closed, np.ones_like(closed), ls="--", lw=0.8, color="0.5", label="unworn")
+            for text, case, colour in cases:
+                depth = np.nan_to_num(case["wear_projection"].sel(joint=joint, axis=axis).values)
+                radius = 1.0 + scale * depth
+                ax.plot(closed, np.append(radius, radius[0]), lw=1.0, color=colour,
+                        label=_case_label(text, len(cases), "worn profile"))
+            # a PolarAxes (projection="polar"); matplotlib's stubs type add_subplot as Axes
+            ax.set_thetalim(-np.pi, np.pi)  # type: ignore[attr-defined]
+            ax.set_rlim(  # type: ignore[attr-defined]
+                0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
+            ax.set_yticks([])
+            ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
+            ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
+    handles, labels = fig.axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
+               fontsize="small")
+    fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
+                 f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})"
+                 + _legend_note(len(cases)), fontsize="medium")
+

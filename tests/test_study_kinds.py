@@ -1,0 +1,70 @@
+"""The study kinds said once: ``analysis.results_kind`` tells what a results file holds (a
+run, a life run, a grid, sampling, ensemble, life or reliability sweep; report and plot ask
+it), and ``sweeping.stores.STORES`` what each sweep ``store:`` does with its cases."""
+
+import pytest
+import xarray as xr
+
+from clearsweep.analysis import RESULTS_KINDS, results_kind
+
+CASE = {"slider_position": ("time", [0.3, 0.31]), "status": ((), "ok")}
+ENSEMBLE = {"x": (("B_coating", "member"), [[1.0, 2.0]]), "members_ok": ("B_coating", [2]),
+            "x_mean": ("B_coating", [1.5])}
+
+FILES = [
+    ("run", xr.Dataset(CASE, coords={"time": [0.0, 0.1]})),
+    ("life", xr.Dataset({"stop_reason": ((), "cycles"), "wear_depth_max": ("cycle", [1.0])})),
+    # a life file written before stop_reason: its blocks' status says what it is
+    ("life", xr.Dataset({"block_status": ("cycle", ["ok"]), "wear_depth_max": ("cycle", [1.0])})),
+    ("reliability", xr.Dataset({"b10": ("B_coating", [1.0])}, attrs={"sweep_store": "reliability"})),
+    ("life-sweep", xr.Dataset({"cycles_reached": ("B_coating", [1.0])}, attrs={"sweep_store": "life"})),
+    ("ensemble", xr.Dataset(ENSEMBLE, attrs={"sweep_store": "summary"})),
+    # members without their statistics are a grid over member, not an ensemble report
+    ("sweep", xr.Dataset({"x": (("B_coating", "member"), [[1.0, 2.0]])})),
+    ("sample", xr.Dataset({"x": ("sample", [1.0, 2.0])}, attrs={"sweep_store": "summary"})),
+    # a sampling sweep with members is reported as an ensemble
+    ("ensemble", xr.Dataset({"x": (("sample", "member"), [[1.0, 2.0]]), "members_ok": ("sample", [2])})),
+    ("sweep", xr.Dataset({"x": ("B_clearance", [1.0, 2.0])}, attrs={"sweep_store": "full"})),
+    # a one-case sweep keeps its store attribute: a sweep, not a run
+    ("sweep", xr.Dataset(CASE, coords={"time": [0.0, 0.1]}, attrs={"sweep_store": "summary"})),
+]
+
+
+@pytest.mark.parametrize("kind, ds", FILES, ids=[f"{k}-{i}" for i, (k, _) in enumerate(FILES)])
+def test_results_kind_names_each_kind_of_file(kind, ds):
+    assert kind in RESULTS_KINDS
+    assert results_kind(ds) == kind
+
+
+def test_every_kind_is_named_by_some_file():
+    assert {k for k, _ in FILES} == set(RESULTS_KINDS)
+
+
+def test_the_store_registry_lists_the_stores_a_sweep_file_takes():
+    from clearsweep.sweeping import STORE_MODES
+    from clearsweep.sweeping.stores import STORES
+
+    assert tuple(STORES) == STORE_MODES
+    # only the time-series store keeps series; the life-run stores cannot run on the device
+    assert [s.name for s in STORES.values() if s.keeps_series] == ["full"]
+    assert [s.name for s in STORES.values() if not s.on_cuda] == ["life", "reliability"]
+
+
+def test_every_figure_kind_the_cli_offers_is_drawn_by_the_figure_table():
+    from clearsweep.choices import KINDS
+    from clearsweep.plotting import FIGURES
+
+    assert tuple(FIGURES) == KINDS
+
+
+@pytest.mark.parametrize("kind, ds", FILES, ids=[f"{k}-{i}" for i, (k, _) in enumerate(FILES)])
+def test_a_file_on_disk_is_told_by_the_same_rule_as_an_open_dataset(tmp_path, kind, ds):
+    """``outputs.file_kind`` (the overwrite check, which reads the header alone) and
+    ``results_kind`` (report, plot) name every kind of file alike."""
+    from clearsweep.outputs import RESULTS_SOURCE, file_kind
+
+    path = tmp_path / "f.nc"
+    ds.assign_attrs(source=RESULTS_SOURCE).to_netcdf(path)
+    assert file_kind(path) == kind
+    ds.to_netcdf(tmp_path / "foreign.nc")
+    assert file_kind(tmp_path / "foreign.nc") is None       # not clearsweep's: no kind
