@@ -295,11 +295,15 @@ class Packed:
     method: str = "rk4"
 
 
-def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed:
+def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
+         seat: bool = True) -> Packed:
     """Resolved config (config.load_config) + materials -> kernel vectors (SI).
 
     ``wmap`` (float64[2, npolar, nazim], [m]): a worn socket to start from; the seated
-    start then rests each ball on the worn wall."""
+    start then rests each ball on the worn wall. ``seat=False``: for the checks that plan
+    a run (:func:`clearsweep.simulation.preflight`), which compile nothing: the seated
+    start (``initial.joints: seated``) calls the kernel's compiled functions, so it is
+    left to the run, and ``y0`` is then the centred start, not one to run."""
     preset = PRESETS[cfg.mechanism.preset]
     solver = cfg.solver
     p = np.zeros(L.N_P)
@@ -374,7 +378,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
     theta0 = float(p[L.P_THETA0])
-    if cfg.initial.joints == "seated":
+    if cfg.initial.joints == "seated" and seat:
         offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega, wmap)
     else:
         offset_A, offset_B = np.zeros(3), np.zeros(3)

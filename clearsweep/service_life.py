@@ -85,7 +85,9 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
 def life_block(cfg: Config, *, allow_large: bool = False,
                source: str = "<config>") -> tuple[Config, Packed]:
     """The config of one dynamic block of the life run ``cfg`` and its packed inputs, once
-    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`).
+    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`);
+    nothing is compiled or run: the packed inputs have no seated start (each block packs
+    its own, on the worn sockets).
 
     Raises
     ------
@@ -97,7 +99,7 @@ def life_block(cfg: Config, *, allow_large: bool = False,
     block_cfg = block_config(cfg)
     n_block = round(block_cfg.solver.duration / cfg.solver.dt)
     try:
-        return block_cfg, preflight(block_cfg, allow_large=allow_large)
+        return block_cfg, preflight(block_cfg, allow_large=allow_large, seat=False)
     except ConfigError as exc:
         if exc.key not in ("solver.duration", "solver.save_every"):
             raise ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion,

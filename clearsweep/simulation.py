@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import time
+import types
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -45,7 +46,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
         if jp[L.J_CLEARANCE] == 0.0:
             continue
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
-        _, stiffness = elastic_force(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI])
+        _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI])
         rate = math.sqrt(stiffness / m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
@@ -56,15 +57,31 @@ def check_step(cfg: Config, packed: Packed) -> None:
                           f" sub-steps at most, solver.max_substep_level)")
 
 
-def preflight(cfg: Config, *, allow_large: bool = False) -> Packed:
+def as_python(func):
+    """The kernel function ``func`` run as plain Python, and so every kernel function it
+    calls: a check made while planning (:func:`check_step`) compiles nothing. The same
+    arithmetic in the same order as the compiled function."""
+    py = getattr(func, "py_func", func)
+    calls = {name: as_python(value) for name, value in py.__globals__.items()
+             if name in py.__code__.co_names and hasattr(value, "py_func")}
+    if not calls:
+        return py
+    return types.FunctionType(py.__code__, {**py.__globals__, **calls}, py.__name__,
+                              py.__defaults__, py.__closure__)
+
+
+def preflight(cfg: Config, *, allow_large: bool = False, seat: bool = True) -> Packed:
     """Everything that can be checked before a run: work and memory, materials, packing and
     the step bound.
 
     ``cfg`` is a resolved config; raises ConfigError. Sweeps call it on every case before
     anything runs. ``allow_large`` lifts the bounds of :func:`clearsweep.budget.check_budget`.
+    ``seat=False`` (planning: ``validate``, ``--dry-run``, a sweep's checks) compiles and
+    runs nothing: the seated start is left to the run (:func:`clearsweep.params.pack`), and
+    the packed inputs are for the checks only.
     """
     check_budget(cfg, allow_large=allow_large)
-    packed = pack(cfg, resolve_materials(cfg))
+    packed = pack(cfg, resolve_materials(cfg), seat=seat)
     check_step(cfg, packed)
     return packed
 

@@ -747,7 +747,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             if store == "life":     # each case is a life run: check its blocks, not its duration
                 life_block(resolved, allow_large=allow_large, source=source)
             elif store != "reliability":
-                preflight(resolved, allow_large=allow_large)
+                preflight(resolved, allow_large=allow_large, seat=False)    # the run seats it
             if store == "reliability":
                 _check_reliability_case(resolved, source, allow_large)
         except ConfigError as exc:
