@@ -20,12 +20,17 @@ from dataclasses import dataclass
 
 from .config import DEFAULTS, Config, ConfigError
 
-__all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS"]
+__all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
+           "MAX_READ_BYTES", "largest_variable"]
 
 #: Largest memory for one case's arrays [bytes] without ``allow_large``.
 MAX_OUTPUT_BYTES = 4 * 2 ** 30
 #: Most output-grid RK4 steps of one case without ``allow_large`` (sub-steps come on top).
 MAX_STEPS = 10 ** 9
+#: Largest variable [bytes] that ``report``, ``plot`` and ``sensitivity`` read from a results
+#: file, as its metadata declares it before anything is read: they read whole variables, and
+#: a file may declare sizes that no clearsweep run writes (two billion time rows, 15 GiB).
+MAX_READ_BYTES = MAX_OUTPUT_BYTES
 #: float64 per saved row that the kernel keeps besides N_Y + N_D: time, wear_depth_max (2).
 _KERNEL_EXTRA_PER_ROW = 3
 _FLOAT = 8
@@ -200,3 +205,26 @@ def check_budget(cfg: Config, *, allow_large: bool = False,
                           f"{fix}, {hint}", source,
                           got=f"{value!r} (estimated {est.describe()})")
     return est
+
+
+def largest_variable(path: str) -> tuple[str, dict[str, int], int] | None:
+    """``(name, dims and sizes, bytes)`` of the largest variable the netCDF file ``path``
+    declares, from its metadata alone (nothing of its data is read); None when the netCDF
+    library cannot open it (the reader says why). A text variable counts 8 bytes a value."""
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path) as nc:
+            groups, found = [nc], []
+            while groups:
+                group = groups.pop()
+                groups += list(group.groups.values())
+                for name, var in group.variables.items():
+                    size = getattr(var.dtype, "itemsize", 8) * math.prod(var.shape)
+                    found.append((size, name, dict(zip(var.dimensions, var.shape))))
+    except (OSError, ValueError, RuntimeError):
+        return None
+    if not found:
+        return None
+    size, name, dims = max(found, key=lambda f: f[0])
+    return name, dims, size

@@ -483,14 +483,41 @@ def materials(materials_file: str | None, quiet: bool) -> None:
         click.echo(text)
 
 
+def _check_results_size(path: str) -> None:
+    """Refuse (exit 2) a results file that is not a regular file (a FIFO would be waited on),
+    or whose metadata declares a variable larger than :data:`clearsweep.budget.MAX_READ_BYTES`,
+    before any of it is read."""
+    from .budget import MAX_READ_BYTES, format_bytes, largest_variable
+    from .schema import special_file
+
+    try:
+        kind = special_file(os.stat(path).st_mode)
+    except OSError as exc:
+        raise click.BadParameter(f"{path!r} is not a results file ({exc.strerror})",
+                                 param_hint="'PATH'") from None
+    if kind is not None:
+        raise click.BadParameter(f"{path!r} is {kind}, not a results file (a regular netCDF "
+                                 "file)", param_hint="'PATH'")
+    largest = largest_variable(path)
+    if largest is not None and largest[2] > MAX_READ_BYTES:
+        name, dims, size = largest
+        shape = " x ".join(f"{n:,} {d}" for d, n in dims.items())
+        raise click.BadParameter(
+            f"{path!r} declares a variable {name!r} of {shape} values ({format_bytes(size)}); "
+            f"this command reads whole variables, of at most {format_bytes(MAX_READ_BYTES)}",
+            param_hint="'PATH'")
+
+
 @contextmanager
 def open_input(path: str) -> Iterator[xr.Dataset]:
     """Open the results file of a ``report``, ``plot`` or ``sensitivity`` command for a
     ``with`` block: a file xarray cannot read, or one that lacks a variable or dimension
     the command reads (a file of an older version, or edited since), is a usage error
-    (exit 2), not a traceback."""
+    (exit 2), not a traceback; so is a FIFO or a device, and a file whose metadata declares
+    a variable beyond :data:`clearsweep.budget.MAX_READ_BYTES`, before anything is read."""
     import xarray as xr
 
+    _check_results_size(path)
     try:
         ds = xr.open_dataset(path)
     except (OSError, ValueError) as exc:

@@ -11,6 +11,9 @@ Every row is refused before any simulation, or reads a small results file built 
 from __future__ import annotations
 
 import errno
+import os
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -230,6 +233,79 @@ ROWS = [
     ("report a run without status (was: KeyError)",
      lambda t, f: ["report", f / "old_run.nc"], 2, "has no 'status'"),
 ]
+
+
+def fifo(tmp: Path, name: str) -> Path:
+    """A FIFO that nothing writes to: reading it would wait for ever. So that a reader that
+    waits fails the row instead of hanging the suite, a line of text and an end of file are
+    written after 3 s to whoever still holds it open then."""
+    path = tmp / name
+    os.mkfifo(path)
+
+    def release() -> None:
+        time.sleep(3.0)
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_NONBLOCK)     # ENXIO: no reader waits
+        except OSError:
+            return
+        try:
+            os.write(fd, b"still waiting: 1\n")
+        except OSError:
+            pass
+        os.close(fd)
+
+    threading.Thread(target=release, daemon=True).start()
+    return path
+
+
+def declared_rows(tmp: Path, rows: int = 2_000_000_000) -> Path:
+    """A results file of a few kilobytes whose metadata declares ``rows`` time rows of two
+    float64 variables (chunked and never written: nothing of them is stored)."""
+    import netCDF4
+
+    path = tmp / "declared.nc"
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("time", rows)
+        for name in ("time", "slider_acceleration"):
+            nc.createVariable(name, "f8", ("time",), chunksizes=(1024,))
+        nc.createVariable("status", str, ())
+    return path
+
+
+# --- round 4 (issue 33, item 3): every size and every wait bounded before it is taken
+ROUND4_BOUNDS = [
+    ("validate a FIFO (was: waits for a writer for ever)",
+     lambda t, f: ["validate", fifo(t, "in.yaml")], 2, "in.yaml' (a FIFO, not a regular file)"),
+    ("sweep --dry-run a FIFO (was: waits for ever)",
+     lambda t, f: ["sweep", fifo(t, "in.yaml"), "--dry-run"], 2, "(a FIFO, not a regular file)"),
+    ("run a FIFO (was: waits for ever)",
+     lambda t, f: ["run", fifo(t, "in.yaml"), "-o", t / "out.nc"], 2, "(a FIFO, not a regular file)"),
+    ("materials -m a FIFO (was: waits for ever)",
+     lambda t, f: ["materials", "-m", fifo(t, "m.yaml")], 2, "m.yaml' (a FIFO, not a regular file)"),
+    ("validate /dev/zero (was: read 1 MiB of zeros, 'more than 1048576 bytes')",
+     lambda t, f: ["validate", "/dev/zero"], 2, "'/dev/zero' (a character device, not a regular file)"),
+    ("report a FIFO (was: waits for ever)",
+     lambda t, f: ["report", fifo(t, "in.nc")], 2, "in.nc' is a FIFO, not a results file"),
+    ("plot a FIFO (was: waits for ever)",
+     lambda t, f: ["plot", fifo(t, "in.nc"), "--kind", "slider", "-o", t / "out.png"], 2,
+     "is a FIFO, not a results file"),
+    ("sensitivity a FIFO (was: waits for ever)",
+     lambda t, f: ["sensitivity", fifo(t, "in.nc"), "--metric", "y"], 2,
+     "is a FIFO, not a results file"),
+    ("report a device (was: 'no netCDF reader can open it')",
+     lambda t, f: ["report", "/dev/null"], 2, "'/dev/null' is a character device"),
+    ("report 2e9 declared time rows (was: allocates 15 GiB, _ArrayMemoryError)",
+     lambda t, f: ["report", declared_rows(t)], 2,
+     "declares a variable 'time' of 2,000,000,000 time values (14.9 GiB); this command reads "
+     "whole variables, of at most 4 GiB"),
+    ("plot 2e9 declared time rows (was: allocates 15 GiB)",
+     lambda t, f: ["plot", declared_rows(t), "--kind", "slider", "-o", t / "out.png"], 2,
+     "'time' of 2,000,000,000 time values"),
+    ("sensitivity 2e9 declared time rows (was: allocates 15 GiB)",
+     lambda t, f: ["sensitivity", declared_rows(t), "--metric", "slider_acceleration"], 2,
+     "'time' of 2,000,000,000 time values"),
+]
+ROWS += ROUND4_BOUNDS
 
 
 @pytest.fixture
