@@ -504,7 +504,13 @@ def life(config, overrides=(), *, allow_large: bool = False,
 def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
     """Hold ``CHECKPOINT.lock`` (an exclusive ``flock``) while a life run uses its checkpoint,
     as a sweep holds its parts folder: a second life run to the same output is refused
-    instead of writing over the first one's checkpoint. The lock file is removed after.
+    instead of writing over the first one's checkpoint. The lock file is removed after,
+    while still locked.
+
+    A lock is held only once the file locked is the one at the path: a run that opened the
+    file just before the holder removed it, and locked it after, holds a file no longer
+    there, which a third run could re-create and lock as well; it opens the path again
+    instead. So at most one run holds the lock, whatever the interleaving.
 
     Raises
     ------
@@ -515,16 +521,25 @@ def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
         yield
         return
     lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError as exc:
-        os.close(fd)
-        if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-            raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
-                                  "output; wait for it to finish or write to another output "
-                                  "file") from None
-        raise
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise CheckpointError(f"{checkpoint} is in use by another life run writing the "
+                                      "same output; wait for it to finish or write to another "
+                                      "output file") from None
+            raise
+        try:
+            now, mine = os.stat(lock), os.fstat(fd)
+            held = (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino)
+        except FileNotFoundError:
+            held = False
+        if held:
+            break
+        os.close(fd)        # removed by the run that held it: lock the path's file anew
     try:
         yield
     finally:

@@ -38,3 +38,50 @@ def test_planning_compiles_nothing(tmp_path, argv):
                           text=True, cwd=CONFIGS, env=env, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert compiled_files(cache) == []
+
+
+def test_the_checkpoint_lock_is_held_by_one_run_at_a_time(tmp_path, monkeypatch):
+    """40 life runs start at once, again and again, on one checkpoint: at most one may hold its
+    lock at any moment. Was: the lock file is removed on release, so a run that opened it
+    just before locked the removed file while a third locked a new one (two holders)."""
+    import fcntl
+    import random
+    import threading
+    import time
+    import types
+
+    import clearsweep.service_life as service_life
+    from clearsweep.service_life import CheckpointError, checkpoint_lock
+
+    def slow_flock(fd, operation):     # widen the moment between opening and locking
+        time.sleep(random.uniform(0.0, 0.002))
+        return fcntl.flock(fd, operation)
+
+    monkeypatch.setattr(service_life, "fcntl", types.SimpleNamespace(
+        flock=slow_flock, LOCK_EX=fcntl.LOCK_EX, LOCK_NB=fcntl.LOCK_NB))
+    checkpoint = tmp_path / "out.nc.life-checkpoint"
+    guard, holders, most, held = threading.Lock(), [0], [0], [0]
+    stop = time.monotonic() + 1.5
+
+    def start() -> None:
+        while time.monotonic() < stop:
+            try:
+                with checkpoint_lock(checkpoint):
+                    with guard:
+                        holders[0] += 1
+                        held[0] += 1
+                        most[0] = max(most[0], holders[0])
+                    time.sleep(random.uniform(0.0, 0.002))
+                    with guard:
+                        holders[0] -= 1
+            except CheckpointError:
+                pass
+
+    threads = [threading.Thread(target=start) for _ in range(40)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert held[0] > 10         # the lock was taken, and released, many times
+    assert most[0] == 1
+    assert not (tmp_path / "out.nc.life-checkpoint.lock").exists()
