@@ -273,6 +273,8 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         # A check on the resolved config (the step bound): name the file it came from.
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
                           exc.got) from None
+    except MemoryError as exc:
+        _out_of_memory(exc, est.describe())
     path = _write_or_exit(ds, out)
     if not quiet:
         from .analysis import run_summary_text
@@ -358,6 +360,9 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
               else "before a block finished", 130)
     except OSError as exc:
         _fail(f"cannot write {exc.filename or checkpoint}: {_reason(exc)}", 1)
+    except MemoryError as exc:
+        _out_of_memory(exc, "its blocks and snapshots (see --dry-run)",
+                       f"; the finished blocks are kept in {checkpoint}" if checkpoint.exists() else "")
     path = _write_or_exit(ds, out)
     checkpoint.unlink(missing_ok=True)
     if not quiet:
@@ -757,6 +762,14 @@ def sensitivity_command(path: str, metric: str, select_items: tuple[str, ...],
         except OSError as exc:
             _fail(f"cannot write {plot_path}: {_reason(exc)}", 1)
         _wrote(plot_path, quiet)
+
+
+def _out_of_memory(exc: MemoryError, what: str, note: str = "") -> NoReturn:
+    """A run that this machine could not hold (the estimate passed, with --allow-large or
+    memory taken by others since): one error line, exit 1, no traceback."""
+    detail = f" ({exc})" if str(exc) else ""
+    _fail(f"out of memory: this machine could not hold the arrays of the run, {what}{detail}"
+          f"{note}; free memory, or make the run smaller", 1)
 
 
 def _fail(message: str, code: int) -> NoReturn:

@@ -85,3 +85,23 @@ def test_the_checkpoint_lock_is_held_by_one_run_at_a_time(tmp_path, monkeypatch)
     assert held[0] > 10         # the lock was taken, and released, many times
     assert most[0] == 1
     assert not (tmp_path / "out.nc.life-checkpoint.lock").exists()
+
+
+def test_a_life_runs_snapshots_and_checkpoint_are_counted():
+    """Was: the dry run counted one block's arrays (41 MiB) and no snapshot; the run kept 201
+    maps of 30.5 MiB and rewrote them all after every block."""
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+    from clearsweep.config import load_config
+    from clearsweep.service_life import life_cost
+
+    cfg = load_config(CONFIGS / "life.yaml", ["life.snapshots=10000", "wear.map=[1000, 2000]"])
+    cost = life_cost(cfg)
+    assert cost.snapshots == 201 and cost.map_bytes == 2 * 1000 * 2000 * 8
+    assert cost.memory_bytes > 2 * 201 * cost.map_bytes and cost.checkpoint_bytes > 201 * cost.map_bytes
+    result = CliRunner().invoke(main, ["life", str(CONFIGS / "life.yaml"), "--dry-run"])
+    assert result.exit_code == 0, result.output
+    assert ("up to 13 wear-map snapshots of 162 KiB" in result.stdout
+            and "a checkpoint of up to 2.26 MiB rewritten after every block (up to 453 MiB "
+                "written)" in result.stdout)
