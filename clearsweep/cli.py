@@ -462,7 +462,8 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
 
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES,
-                      too_many_hint="clearsweep validate --yes checks them all")
+                      too_many_hint="clearsweep validate --yes checks them all",
+                      enumerate_cases=False)
         if not quiet:
             click.echo(plan.plan_text(_plan_workers(plan, None)))
         return
@@ -853,7 +854,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     cluster = local_client = None
     if dry_run:
         plan = expand(config, overrides, allow_large=allow_large,
-                      max_cases=None if yes else MAX_CASES)
+                      max_cases=None if yes else MAX_CASES, enumerate_cases=False)
         click.echo(plan.plan_text(dask_local or _plan_workers(plan, workers)))
         return
     if backend == "cuda":

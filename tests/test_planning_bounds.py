@@ -105,3 +105,53 @@ def test_a_life_runs_snapshots_and_checkpoint_are_counted():
     assert ("up to 13 wear-map snapshots of 162 KiB" in result.stdout
             and "a checkpoint of up to 2.26 MiB rewritten after every block (up to 453 MiB "
                 "written)" in result.stdout)
+
+
+@pytest.fixture
+def few_cases_made(monkeypatch):
+    """Fail at once where a plan makes more than 200 cases: a huge plan must be counted."""
+    import clearsweep.sweeping.plan as plan
+
+    real, made = plan.load_config, [0]
+
+    def counting(*args, **kwargs):
+        made[0] += 1
+        if made[0] > 200:
+            raise RuntimeError("the plan was enumerated")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(plan, "load_config", counting)
+    return made
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["validate", "reliability.yaml", "--set", "reliability.members=5000", "--yes"],
+     "20,000 life runs (counted from its dimensions; "),
+    (["sweep", "SAMPLE", "--yes", "--dry-run"],
+     "65,536 cases (counted from its dimensions; "),
+    (["sweep", "SKIPS", "--yes", "--dry-run"],
+     "12,000 cases (6,000 skipped) (counted from its dimensions; "),
+], ids=["reliability members", "saltelli", "skips"])
+def test_a_huge_plan_is_counted_not_enumerated(tmp_path, monkeypatch, few_cases_made, argv, words):
+    """Was: 2e5 reliability members hung in validate, and a 1e6-case Saltelli sample ran past
+    300 s at 1.5 GB with --yes --dry-run: every case was made and checked."""
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    monkeypatch.chdir(CONFIGS)
+    base = CONFIGS / "one_clearance.yaml"
+    sample = tmp_path / "sample.yaml"
+    sample.write_text(f"name: s\nstore: summary\nbase: {base}\nsweep:\n  sample:\n"
+                      "    method: saltelli\n    n: 16384\n    ranges: {joints.B.clearance: "
+                      "[1.0e-4, 4.0e-4], mechanism.speed_rpm: [500, 1500]}\n")
+    skips = tmp_path / "skips.yaml"
+    speeds = ", ".join(str(500 + k) for k in range(6000))
+    skips.write_text(f"name: k\nstore: summary\nbase: {base}\nsweep:\n  grid:\n"
+                     f"    joints.B.coating: [none, PTFE]\n    mechanism.speed_rpm: [{speeds}]\n"
+                     "  skip: [{joints.B.coating: PTFE}]\n")
+    argv = [{"SAMPLE": str(sample), "SKIPS": str(skips)}.get(a, a) for a in argv]
+    result = CliRunner().invoke(main, argv)
+    assert result.exit_code == 0, result.output
+    assert words in result.stdout
+    assert 0 < few_cases_made[0] <= 200
