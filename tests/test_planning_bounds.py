@@ -160,13 +160,18 @@ def test_a_huge_plan_is_counted_not_enumerated(tmp_path, monkeypatch, few_cases_
 def test_the_step_bound_evaluated_as_python_is_the_kernels_to_the_bit():
     """The planning checks run the contact law as plain Python (nothing compiled): the same
     values as the compiled kernel function, so a plan and its run draw the same bound."""
+    import inspect
+
     import numpy as np
 
     from clearsweep.core.contact import elastic_force
     from clearsweep.simulation import as_python
 
     rng = np.random.default_rng(0)
+    names = list(inspect.signature(elastic_force.py_func).parameters)
     for _ in range(500):
-        args = (rng.uniform(1e-9, 1e-4), rng.uniform(1e-6, 1e-3), rng.uniform(1e9, 3e11),
-                rng.uniform(1e-3, 5e-2))
+        c, ri = rng.uniform(1e-6, 1e-3), rng.uniform(1e-3, 5e-2)
+        given = {"delta": rng.uniform(1e-9, 1e-4), "c": c, "ew": rng.uniform(1e9, 3e11),
+                 "ri": ri, "rj": ri - c, "n": rng.choice([0.0, 1.0, 1.5])}
+        args = [float(given[name]) for name in names]
         assert as_python(elastic_force)(*args) == elastic_force(*args)
