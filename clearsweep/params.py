@@ -7,6 +7,7 @@ docs/physics.md section 1.1 (the `realistic` preset replaces the rod's printed i
 from __future__ import annotations
 
 import math
+import types
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -45,6 +46,20 @@ PRESETS: dict[str, Preset] = {
 }
 
 BASE_MATERIAL = "steel"  # socket base and ball (docs/physics.md section 6)
+
+
+def as_python(func):
+    """The kernel function ``func`` run as plain Python, and so every kernel function it
+    calls: what planning evaluates of the kernel (the step bound's contact stiffness,
+    :func:`clearsweep.simulation.check_step`) compiles nothing. The same arithmetic in the
+    same order as the compiled function, to the bit (tests/test_planning_bounds.py)."""
+    py = getattr(func, "py_func", func)
+    calls = {name: as_python(value) for name, value in py.__globals__.items()
+             if name in py.__code__.co_names and hasattr(value, "py_func")}
+    if not calls:
+        return py
+    return types.FunctionType(py.__code__, {**py.__globals__, **calls}, py.__name__,
+                              py.__defaults__, py.__closure__)
 
 
 def oedometric_modulus(youngs_modulus_Pa: float, poisson_ratio: float) -> float:

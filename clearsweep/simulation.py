@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import os
 import time
-import types
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -18,7 +17,7 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
-from .params import PRESETS, Packed, pack
+from .params import PRESETS, Packed, as_python, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -55,19 +54,6 @@ def check_step(cfg: Config, packed: Packed) -> None:
                           f"a step <= {limit:.3g} s (larger steps cannot be made stable: crank "
                           f"rotation per step and contact rate with {2 ** solver.max_substep_level}"
                           f" sub-steps at most, solver.max_substep_level)")
-
-
-def as_python(func):
-    """The kernel function ``func`` run as plain Python, and so every kernel function it
-    calls: a check made while planning (:func:`check_step`) compiles nothing. The same
-    arithmetic in the same order as the compiled function."""
-    py = getattr(func, "py_func", func)
-    calls = {name: as_python(value) for name, value in py.__globals__.items()
-             if name in py.__code__.co_names and hasattr(value, "py_func")}
-    if not calls:
-        return py
-    return types.FunctionType(py.__code__, {**py.__globals__, **calls}, py.__name__,
-                              py.__defaults__, py.__closure__)
 
 
 def preflight(cfg: Config, *, allow_large: bool = False, seat: bool = True) -> Packed:

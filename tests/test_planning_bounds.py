@@ -165,7 +165,7 @@ def test_the_step_bound_evaluated_as_python_is_the_kernels_to_the_bit():
     import numpy as np
 
     from clearsweep.core.contact import elastic_force
-    from clearsweep.simulation import as_python
+    from clearsweep.params import as_python
 
     rng = np.random.default_rng(0)
     names = list(inspect.signature(elastic_force.py_func).parameters)
