@@ -15,17 +15,24 @@ kernel's saved rows, the per-row output variables and the wear maps);
 from __future__ import annotations
 
 import math
+import os
 import sys
 from dataclasses import dataclass
 
 from .config import DEFAULTS, Config, ConfigError
 
-__all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS"]
+__all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
+           "MAX_READ_BYTES", "largest_variable", "machine_memory",
+           "memory_limit"]
 
 #: Largest memory for one case's arrays [bytes] without ``allow_large``.
 MAX_OUTPUT_BYTES = 4 * 2 ** 30
 #: Most output-grid RK4 steps of one case without ``allow_large`` (sub-steps come on top).
 MAX_STEPS = 10 ** 9
+#: Largest variable [bytes] that ``report``, ``plot`` and ``sensitivity`` read from a results
+#: file, as its metadata declares it before anything is read: they read whole variables, and
+#: a file may declare sizes that no clearsweep run writes (two billion time rows, 15 GiB).
+MAX_READ_BYTES = MAX_OUTPUT_BYTES
 #: float64 per saved row that the kernel keeps besides N_Y + N_D: time, wear_depth_max (2).
 _KERNEL_EXTRA_PER_ROW = 3
 _FLOAT = 8
@@ -177,26 +184,87 @@ def check_budget(cfg: Config, *, allow_large: bool = False,
             "solver.save_every", solver.save_every,
             f"an integer <= {est.steps_asked} (the steps in solver.duration / solver.dt; a larger "
             f"one stretches the run to one whole output sample, {est.steps} steps)", source)
-    if allow_large:
-        return est
     hint = "or pass --allow-large (allow_large=True) if the machine can take it"
-    if est.steps > MAX_STEPS:
+    limit = memory_limit(allow_large)
+    if limit is None or (allow_large and est.output_bytes <= limit):
+        return est
+    if allow_large:
+        hint = "--allow-large lifts the bounds of clearsweep, not those of this machine"
+    # of the two that set the rows, name the one that left its usual range
+    row_key = "solver.duration" if solver.duration > DEFAULTS.solver.duration else "solver.dt"
+    if not allow_large and est.steps > MAX_STEPS:
         steps = solver.duration / solver.dt
-        # name the one of the two that left its usual range
-        key = ("solver.duration" if solver.duration > DEFAULTS.solver.duration else "solver.dt")
+        key = row_key
         value = cfg.get(key)
         got = (f"{value!r} (solver.duration / solver.dt = {solver.duration!r}"
                f" s / {solver.dt!r} s = {steps:.3g} steps)")
         raise ConfigError(key, value,
                           f"a run of at most {MAX_STEPS:.3g} RK4 steps; raise solver.dt, shorten "
                           f"solver.duration, {hint}", source, got=got)
-    if est.output_bytes > MAX_OUTPUT_BYTES:
+    if est.output_bytes > limit:
         if est.map_bytes > est.row_bytes:
             key, value, fix = "wear.map", list(cfg.wear.map), "use fewer wear-map bins"
         else:
-            key, value, fix = ("solver.duration", solver.duration,
-                               "shorten solver.duration, raise solver.save_every")
-        raise ConfigError(key, value, f"a case whose arrays fit in {format_bytes(MAX_OUTPUT_BYTES)}; "
-                          f"{fix}, {hint}", source,
-                          got=f"{value!r} (estimated {est.describe()})")
+            key, value, fix = (row_key, cfg.get(row_key), "shorten solver.duration, raise "
+                               "solver.dt or solver.save_every")
+        where = f"this machine's memory ({format_bytes(limit)} free)" if allow_large else \
+            format_bytes(MAX_OUTPUT_BYTES)
+        raise ConfigError(key, value, f"a case whose arrays fit in {where}; {fix}"
+                          f"{'; ' if allow_large else ', '}{hint}",
+                          source, got=f"{value!r} (estimated {est.describe()})")
     return est
+
+
+def memory_limit(allow_large: bool = False) -> int | None:
+    """Most bytes a run's arrays may take: :data:`MAX_OUTPUT_BYTES`, or with ``allow_large``
+    this machine's memory (:func:`machine_memory`; None: unknown, unbounded)."""
+    return machine_memory() if allow_large else MAX_OUTPUT_BYTES
+
+
+def machine_memory() -> int | None:
+    """Memory [bytes] a run can take on this machine now: the kernel's ``MemAvailable``
+    (else the physical memory), and at most the address-space limit (``ulimit -v``);
+    None when neither is known. What ``--allow-large`` is still bounded by: past it, the
+    arrays would end in a MemoryError or the kernel's out-of-memory killer."""
+    import resource
+
+    found = []
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    found.append(int(line.split()[1]) * 1024)
+    except (OSError, ValueError, IndexError):
+        pass
+    if not found:
+        try:
+            found.append(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+        except (OSError, ValueError, AttributeError):
+            pass
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY:
+        found.append(soft)
+    return min(found) if found else None
+
+
+def largest_variable(path: str) -> tuple[str, dict[str, int], int] | None:
+    """``(name, dims and sizes, bytes)`` of the largest variable the netCDF file ``path``
+    declares, from its metadata alone (nothing of its data is read); None when the netCDF
+    library cannot open it (the reader says why). A text variable counts 8 bytes a value."""
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path) as nc:
+            groups, found = [nc], []
+            while groups:
+                group = groups.pop()
+                groups += list(group.groups.values())
+                for name, var in group.variables.items():
+                    size = getattr(var.dtype, "itemsize", 8) * math.prod(var.shape)
+                    found.append((size, name, dict(zip(var.dimensions, var.shape))))
+    except (OSError, ValueError, RuntimeError):
+        return None
+    if not found:
+        return None
+    size, name, dims = max(found, key=lambda f: f[0])
+    return name, dims, size

@@ -36,6 +36,9 @@ SWEEP_BACKENDS = ("processes", "cuda")
 #: (MAX_CASES, lifted by --yes) is checked.
 MAX_MEMBERS = 100_000
 MAX_SNAPSHOTS = 10_000
+#: Most dynamic blocks of a life run (``life.max_blocks``): its checkpoint, rewritten after
+#: every block, grows by a row a block.
+MAX_BLOCKS = 10_000
 #: Most points a ``sample:`` section may draw, --yes or not (the points are drawn in memory).
 MAX_SAMPLE_POINTS = 1_000_000
 

@@ -306,6 +306,8 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         # A check on the resolved config (the step bound): name the file it came from.
         raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion,
                           exc.got) from None
+    except MemoryError as exc:
+        _out_of_memory(exc, est.describe())
     path = _write_or_exit(ds, out)
     if not quiet:
         from .analysis import run_summary_text
@@ -394,6 +396,9 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
               else "before a block finished", 130)
     except OSError as exc:
         _fail(f"cannot write {exc.filename or checkpoint}: {_reason(exc)}", 1)
+    except MemoryError as exc:
+        _out_of_memory(exc, "its blocks and snapshots (see --dry-run)",
+                       f"; the finished blocks are kept in {checkpoint}" if checkpoint.exists() else "")
     path = _write_or_exit(ds, out)
     checkpoint.unlink(missing_ok=True)
     if not quiet:
@@ -493,7 +498,8 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
 
         plan = expand(config, overrides, allow_large=allow_large,
                       max_cases=None if yes else MAX_CASES,
-                      too_many_hint="clearsweep validate --yes checks them all")
+                      too_many_hint="clearsweep validate --yes checks them all",
+                      enumerate_cases=False)
         if not quiet:
             click.echo(plan.plan_text(_plan_workers(plan, None)))
         return
@@ -519,14 +525,41 @@ def materials(materials_file: str | None, quiet: bool) -> None:
         click.echo(text)
 
 
+def _check_results_size(path: str) -> None:
+    """Refuse (exit 2) a results file that is not a regular file (a FIFO would be waited on),
+    or whose metadata declares a variable larger than :data:`clearsweep.budget.MAX_READ_BYTES`,
+    before any of it is read."""
+    from .budget import MAX_READ_BYTES, format_bytes, largest_variable
+    from .schema import special_file
+
+    try:
+        kind = special_file(os.stat(path).st_mode)
+    except OSError as exc:
+        raise click.BadParameter(f"{path!r} is not a results file ({exc.strerror})",
+                                 param_hint="'PATH'") from None
+    if kind is not None:
+        raise click.BadParameter(f"{path!r} is {kind}, not a results file (a regular netCDF "
+                                 "file)", param_hint="'PATH'")
+    largest = largest_variable(path)
+    if largest is not None and largest[2] > MAX_READ_BYTES:
+        name, dims, size = largest
+        shape = " x ".join(f"{n:,} {d}" for d, n in dims.items())
+        raise click.BadParameter(
+            f"{path!r} declares a variable {name!r} of {shape} values ({format_bytes(size)}); "
+            f"this command reads whole variables, of at most {format_bytes(MAX_READ_BYTES)}",
+            param_hint="'PATH'")
+
+
 @contextmanager
 def open_input(path: str) -> Iterator[xr.Dataset]:
     """Open the results file of a ``report``, ``plot`` or ``sensitivity`` command for a
     ``with`` block: a file xarray cannot read, or one that lacks a variable or dimension
     the command reads (a file of an older version, or edited since), is a usage error
-    (exit 2), not a traceback."""
+    (exit 2), not a traceback; so is a FIFO or a device, and a file whose metadata declares
+    a variable beyond :data:`clearsweep.budget.MAX_READ_BYTES`, before anything is read."""
     import xarray as xr
 
+    _check_results_size(path)
     try:
         ds = xr.open_dataset(path)
     except (OSError, ValueError) as exc:
@@ -785,6 +818,14 @@ def sensitivity_command(path: str, metric: str, select_items: tuple[str, ...],
         _wrote(plot_path, quiet)
 
 
+def _out_of_memory(exc: MemoryError, what: str, note: str = "") -> NoReturn:
+    """A run that this machine could not hold (the estimate passed, with --allow-large or
+    memory taken by others since): one error line, exit 1, no traceback."""
+    detail = f" ({exc})" if str(exc) else ""
+    _fail(f"out of memory: this machine could not hold the arrays of the run, {what}{detail}"
+          f"{note}; free memory, or make the run smaller", 1)
+
+
 def _fail(message: str, code: int) -> NoReturn:
     """Stop the command: one error line on stderr (:func:`error_line`) and exit ``code``."""
     raise CommandFailed(message, code)
@@ -892,7 +933,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
     cluster = local_client = None
     if dry_run:
         plan = expand(config, overrides, allow_large=allow_large,
-                      max_cases=None if yes else MAX_CASES)
+                      max_cases=None if yes else MAX_CASES, enumerate_cases=False)
         click.echo(plan.plan_text(dask_local or _plan_workers(plan, workers)))
         return
     if backend == "cuda":

@@ -22,7 +22,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
-from .choices import DAMPING_LAWS, MAX_MEMBERS, MAX_SNAPSHOTS
+from .choices import DAMPING_LAWS, MAX_BLOCKS, MAX_MEMBERS, MAX_SNAPSHOTS
 from .schema import (  # noqa: F401
     MAX_YAML_ALIASES,
     MAX_YAML_BYTES,
@@ -241,7 +241,8 @@ class LifeConfig(_Section):
     stop_at_wear_through: bool = _setting(Field(False, bool), None,
                                           "stop when a coating is first worn through")
     snapshots: int = _setting(Field(12, int, lo=2, hi=MAX_SNAPSHOTS), "1", "wear-map snapshots kept")
-    max_blocks: int = _setting(Field(200, int, lo=1), "1", "most dynamic blocks")
+    max_blocks: int = _setting(Field(200, int, lo=1, hi=MAX_BLOCKS), "1",
+                                  "most dynamic blocks")
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ docs/physics.md section 1.1 (the `realistic` preset replaces the rod's printed i
 from __future__ import annotations
 
 import math
+import types
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -49,6 +50,20 @@ PRESETS: dict[str, Preset] = {
 }
 
 BASE_MATERIAL = "steel"  # socket base and ball (docs/physics.md section 6)
+
+
+def as_python(func):
+    """The kernel function ``func`` run as plain Python, and so every kernel function it
+    calls: what planning evaluates of the kernel (the step bound's contact stiffness,
+    :func:`clearsweep.simulation.check_step`) compiles nothing. The same arithmetic in the
+    same order as the compiled function, to the bit (tests/test_planning_bounds.py)."""
+    py = getattr(func, "py_func", func)
+    calls = {name: as_python(value) for name, value in py.__globals__.items()
+             if name in py.__code__.co_names and hasattr(value, "py_func")}
+    if not calls:
+        return py
+    return types.FunctionType(py.__code__, {**py.__globals__, **calls}, py.__name__,
+                              py.__defaults__, py.__closure__)
 
 
 def oedometric_modulus(youngs_modulus_Pa: float, poisson_ratio: float) -> float:
@@ -356,11 +371,15 @@ class Packed:
     method: str = "rk4"
 
 
-def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed:
+def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
+         seat: bool = True) -> Packed:
     """Resolved config (config.load_config) + materials -> kernel vectors (SI).
 
     ``wmap`` (float64[2, npolar, nazim], [m]): a worn socket to start from; the seated
-    start then rests each ball on the worn wall."""
+    start then rests each ball on the worn wall. ``seat=False``: for the checks that plan
+    a run (:func:`clearsweep.simulation.preflight`), which compile nothing: the seated
+    start (``initial.joints: seated``) calls the kernel's compiled functions, so it is
+    left to the run, and ``y0`` is then the centred start, not one to run."""
     preset = PRESETS[cfg.mechanism.preset]
     solver = cfg.solver
     p = np.zeros(L.N_P)
@@ -382,7 +401,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     p[L.P_CR] = contact.restitution
     p[L.P_DV0_MIN] = contact.min_impact_velocity
     p[L.P_PEN_FRAC] = contact.max_penetration_fraction
-    p[L.P_HYST_NUM], p[L.P_HYST_DEN] = hysteresis_fraction(DAMPING_LAWS.index(contact.damping),
+    p[L.P_HYST_NUM], p[L.P_HYST_DEN] = as_python(hysteresis_fraction)(DAMPING_LAWS.index(contact.damping),
                                                            contact.restitution)
     p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
     p[L.P_EXPONENT] = contact.hertz_exponent if contact.elastic == "hertz" else 0.0
@@ -439,7 +458,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None) -> Packed
     n_raw = int(math.ceil(solver.duration / solver.dt - 1e-9))
     n_steps = max(1, -(-n_raw // save_every)) * save_every
     theta0 = float(p[L.P_THETA0])
-    if cfg.initial.joints == "seated":
+    if cfg.initial.joints == "seated" and seat:
         offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega, wmap)
     else:
         offset_A, offset_B = np.zeros(3), np.zeros(3)

@@ -18,7 +18,9 @@ from __future__ import annotations
 import difflib
 import math
 import numbers
+import os
 import re
+import stat
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +29,7 @@ from typing import Any
 import yaml
 
 __all__ = ["ConfigError", "Field", "close_match", "close_matches", "short_repr", "parse_yaml",
-           "read_yaml", "dump_yaml", "MAX_YAML_BYTES", "MAX_YAML_ALIASES", "MAX_YAML_DEPTH",
+           "read_yaml", "special_file", "dump_yaml", "MAX_YAML_BYTES", "MAX_YAML_ALIASES", "MAX_YAML_DEPTH",
            "MAX_YAML_VALUES", "MAX_INTEGER", "oversized_number", "oversized_text", "OVERSIZED",
            "ClearsweepWarning"]
 
@@ -290,11 +292,41 @@ def parse_yaml(text: str, source: str = "<config>") -> Any:
                           got="nesting too deep to read") from None
 
 
+#: What a file that is not a regular file is, by ``stat.S_IFMT`` of its mode.
+_SPECIAL_FILES = {stat.S_IFIFO: "a FIFO", stat.S_IFCHR: "a character device",
+                  stat.S_IFBLK: "a block device", stat.S_IFSOCK: "a socket",
+                  stat.S_IFDIR: "a folder"}
+
+
+def special_file(mode: int) -> str | None:
+    """What a file of ``st_mode`` ``mode`` is when it is not a regular file (``"a FIFO"``),
+    else None: a command refuses such an input at once, where reading it would wait for a
+    writer (a FIFO) or never end (``/dev/zero``)."""
+    return None if stat.S_ISREG(mode) else _SPECIAL_FILES.get(stat.S_IFMT(mode), "not a regular file")
+
+
+def _open_regular(path: Path):
+    """``path`` opened for reading, refused (OSError) unless it is a regular file: opened
+    without blocking, so that a FIFO with no writer is refused, not waited on."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    try:
+        kind = special_file(os.fstat(fd).st_mode)
+        if kind is not None:
+            raise OSError(f"{kind}, not a regular file")
+        os.set_blocking(fd, True)
+        return os.fdopen(fd, "rb")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
 def read_yaml(path: Any, source: str | None = None) -> Any:
-    """Read and parse a YAML file (at most :data:`MAX_YAML_BYTES`); errors name ``source``."""
+    """Read and parse a YAML file (at most :data:`MAX_YAML_BYTES`; a regular file, not a
+    FIFO or a device); errors name ``source``."""
     source = str(path) if source is None else source
     try:
-        with (path if hasattr(path, "open") else Path(path)).open("rb") as f:
+        with (path.open("rb") if hasattr(path, "open") and not isinstance(path, Path)
+              else _open_regular(Path(path))) as f:
             data = f.read(MAX_YAML_BYTES + 1)
         if len(data) > MAX_YAML_BYTES:
             raise ConfigError(None, str(path), f"a YAML file of at most {MAX_YAML_BYTES} bytes",

@@ -31,7 +31,15 @@ import numpy as np
 if TYPE_CHECKING:
     import xarray as xr
 
-from .budget import check_budget, time_text
+from .budget import (
+    MAX_OUTPUT_BYTES,
+    Estimate,
+    check_budget,
+    estimate,
+    format_bytes,
+    memory_limit,
+    time_text,
+)
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import replaced_on_success
@@ -70,22 +78,106 @@ def block_config(cfg: Config) -> Config:
                           "solver__save_every": row_stride(n_block)})
 
 
+#: Wear maps a life run holds besides its snapshots: the map, the one before the block,
+#: the kernel's, the rate and the one after a jump.
+_WORKING_MAPS = 5
+#: Copies of each snapshot a life run holds at its peak, an upper bound: the list kept,
+#: the array the checkpoint and the dataset stack them into, and the writing. Measured: 2.25
+#: (40 blocks on a 300 x 600 map, 16 snapshots kept: 87 MiB of peak memory above 2 kept,
+#: 2.75 MiB a map).
+_SNAPSHOT_COPIES = 3
+#: float64 of one block's row in a checkpoint (scalars, and two per joint).
+_ROW_VALUES = 32
+
+
+@dataclass(frozen=True)
+class LifeCost:
+    """What a life run holds besides one block's arrays, counted before it runs.
+
+    Attributes
+    ----------
+    snapshots : int
+        Wear-map snapshots kept at most: ``min(life.snapshots, life.max_blocks) + 1``
+        (the final map is always kept).
+    map_bytes : int
+        One wear map of both joints (2 x polar x azimuth float64).
+    memory_bytes : int
+        Its largest memory beyond the block's arrays: the snapshots :data:`_SNAPSHOT_COPIES`
+        times (the list kept, the array the checkpoint and the dataset stack them into, and
+        what writing them takes) and the working maps.
+    checkpoint_bytes : int
+        The checkpoint at its largest: the map, the snapshots and every block's row; it is
+        rewritten after every block.
+    """
+
+    snapshots: int
+    map_bytes: int
+    memory_bytes: int
+    checkpoint_bytes: int
+
+
+def life_cost(cfg: Config) -> LifeCost:
+    """The snapshots, memory and checkpoint of the life run ``cfg`` at ``life.max_blocks``
+    blocks (the map size x the snapshots actually kept x both joints)."""
+    lc = cfg.life
+    polar, azimuth = cfg.wear.map
+    map_bytes = 2 * polar * azimuth * 8
+    kept = min(lc.snapshots, lc.max_blocks) + 1
+    rows = lc.max_blocks * _ROW_VALUES * 8
+    return LifeCost(kept, map_bytes, (_SNAPSHOT_COPIES * kept + _WORKING_MAPS) * map_bytes + rows,
+                    (kept + 1) * map_bytes + rows)
+
+
+def check_life_cost(cfg: Config, block: Estimate, *, allow_large: bool = False,
+                    source: str = "<config>") -> LifeCost:
+    """Refuse a life run whose block arrays and snapshots together pass
+    :data:`clearsweep.budget.MAX_OUTPUT_BYTES` (unless ``allow_large``; then more than this
+    machine's memory), naming ``life.snapshots`` or ``wear.map``."""
+    cost = life_cost(cfg)
+    total = block.output_bytes + cost.memory_bytes
+    limit = memory_limit(allow_large)
+    if limit is None or total <= limit:
+        return cost
+    lc = cfg.life
+    key, value = (("life.snapshots", lc.snapshots) if cost.snapshots > 2 * _WORKING_MAPS
+                  else ("wear.map", list(cfg.wear.map)))
+    where = (f"this machine's memory ({format_bytes(limit)} free)" if allow_large
+             else format_bytes(MAX_OUTPUT_BYTES))
+    raise ConfigError(
+        key, value, f"a life run whose arrays fit in {where}: fewer life.snapshots or "
+        "life.max_blocks, or a coarser "
+        "wear.map" + ("" if allow_large else ", or --allow-large if the machine can take it"),
+        source, got=f"{value!r} ({cost.snapshots:,} snapshots kept of a "
+                    f"{cfg.wear.map[0]} x {cfg.wear.map[1]} wear map of 2 joints, "
+                    f"{format_bytes(cost.map_bytes)} each: {format_bytes(total)} in all, with the "
+                    f"block's {format_bytes(block.output_bytes)})")
+
+
 def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> str:
     """What ``clearsweep life CONFIG --dry-run`` prints: the blocks, their RK4 steps and
-    memory, and the time of the longest run (``life.max_blocks`` blocks); nothing runs."""
+    memory, the snapshots and checkpoint, and the time of the longest run
+    (``life.max_blocks`` blocks); nothing runs."""
     lc = cfg.life
     est = check_budget(block_config(cfg), allow_large=allow_large, source=source)
+    cost = check_life_cost(cfg, est, allow_large=allow_large, source=source)
     steps = lc.max_blocks * est.steps
     return (f"{source}: a life run to {lc.cycles:.4g} revolutions, at most {lc.max_blocks:,} "
             f"blocks of {lc.block_revolutions:g} revolutions ({est.steps:,} RK4 steps each, "
-            f"memory up to {est.describe()}): at most {steps:.3g} RK4 steps, at most "
-            f"{time_text(steps)}; it stops sooner at a limit; nothing run (--dry-run)")
+            f"memory up to {est.describe()}); up to {cost.snapshots:,} wear-map snapshots of "
+            f"{format_bytes(cost.map_bytes)}: memory up to "
+            f"{format_bytes(est.output_bytes + cost.memory_bytes)} in all; a checkpoint of up "
+            f"to {format_bytes(cost.checkpoint_bytes)} rewritten after every block (up to "
+            f"{format_bytes(lc.max_blocks * cost.checkpoint_bytes)} written); at most "
+            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit; "
+            "nothing run (--dry-run)")
 
 
 def life_block(cfg: Config, *, allow_large: bool = False,
                source: str = "<config>") -> tuple[Config, Packed]:
     """The config of one dynamic block of the life run ``cfg`` and its packed inputs, once
-    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`).
+    the block's work and memory are checked (:func:`clearsweep.simulation.preflight`);
+    nothing is compiled or run: the packed inputs have no seated start (each block packs
+    its own, on the worn sockets).
 
     Raises
     ------
@@ -97,7 +189,7 @@ def life_block(cfg: Config, *, allow_large: bool = False,
     block_cfg = block_config(cfg)
     n_block = round(block_cfg.solver.duration / cfg.solver.dt)
     try:
-        return block_cfg, preflight(block_cfg, allow_large=allow_large)
+        packed = preflight(block_cfg, allow_large=allow_large, seat=False)
     except ConfigError as exc:
         if exc.key not in ("solver.duration", "solver.save_every"):
             raise ConfigError(exc.key, exc.value, exc.expected, source, exc.suggestion,
@@ -109,6 +201,8 @@ def life_block(cfg: Config, *, allow_large: bool = False,
             source, got=f"{lc.block_revolutions!r} ({lc.block_revolutions} revolutions at "
                         f"{cfg.mechanism.speed_rpm:g} r/min with solver.dt = {cfg.solver.dt:g} s "
                         f"are {n_block:.3g} steps per block)") from None
+    check_life_cost(cfg, estimate(block_cfg), allow_large=allow_large, source=source)
+    return block_cfg, packed
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
@@ -551,7 +645,13 @@ def life(config, overrides=(), *, allow_large: bool = False,
 def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
     """Hold ``CHECKPOINT.lock`` (an exclusive ``flock``) while a life run uses its checkpoint,
     as a sweep holds its parts folder: a second life run to the same output is refused
-    instead of writing over the first one's checkpoint. The lock file is removed after.
+    instead of writing over the first one's checkpoint. The lock file is removed after,
+    while still locked.
+
+    A lock is held only once the file locked is the one at the path: a run that opened the
+    file just before the holder removed it, and locked it after, holds a file no longer
+    there, which a third run could re-create and lock as well; it opens the path again
+    instead. So at most one run holds the lock, whatever the interleaving.
 
     Raises
     ------
@@ -562,16 +662,25 @@ def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
         yield
         return
     lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
-    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError as exc:
-        os.close(fd)
-        if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-            raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
-                                  "output; wait for it to finish or write to another output "
-                                  "file") from None
-        raise
+    while True:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                raise CheckpointError(f"{checkpoint} is in use by another life run writing the "
+                                      "same output; wait for it to finish or write to another "
+                                      "output file") from None
+            raise
+        try:
+            now, mine = os.stat(lock), os.fstat(fd)
+            held = (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino)
+        except FileNotFoundError:
+            held = False
+        if held:
+            break
+        os.close(fd)        # removed by the run that held it: lock the path's file anew
     try:
         yield
     finally:

@@ -17,7 +17,7 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
-from .params import PRESETS, Packed, pack
+from .params import PRESETS, Packed, as_python, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -45,8 +45,8 @@ def check_step(cfg: Config, packed: Packed) -> None:
         if jp[L.J_CLEARANCE] == 0.0:
             continue
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
-        _, stiffness = elastic_force(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI], jp[L.J_RJ],
-                                     packed.p[L.P_EXPONENT])
+        _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI],
+                                                jp[L.J_RJ], packed.p[L.P_EXPONENT])
         rate = math.sqrt(stiffness / m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
@@ -57,15 +57,18 @@ def check_step(cfg: Config, packed: Packed) -> None:
                           f" sub-steps at most, solver.max_substep_level)")
 
 
-def preflight(cfg: Config, *, allow_large: bool = False) -> Packed:
+def preflight(cfg: Config, *, allow_large: bool = False, seat: bool = True) -> Packed:
     """Everything that can be checked before a run: work and memory, materials, packing and
     the step bound.
 
     ``cfg`` is a resolved config; raises ConfigError. Sweeps call it on every case before
     anything runs. ``allow_large`` lifts the bounds of :func:`clearsweep.budget.check_budget`.
+    ``seat=False`` (planning: ``validate``, ``--dry-run``, a sweep's checks) compiles and
+    runs nothing: the seated start is left to the run (:func:`clearsweep.params.pack`), and
+    the packed inputs are for the checks only.
     """
     check_budget(cfg, allow_large=allow_large)
-    packed = pack(cfg, resolve_materials(cfg))
+    packed = pack(cfg, resolve_materials(cfg), seat=seat)
     check_step(cfg, packed)
     return packed
 

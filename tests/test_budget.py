@@ -20,19 +20,29 @@ TOO_LARGE = [
 ]
 
 
+@pytest.fixture
+def big_machine(monkeypatch):
+    """A machine with memory for any of these (--allow-large is bounded by the real one)."""
+    import clearsweep.budget as budget
+
+    monkeypatch.setattr(budget, "machine_memory", lambda: 1 << 62)
+
+
 @pytest.mark.parametrize("override, key, words", TOO_LARGE, ids=[t[0] for t in TOO_LARGE])
-def test_preflight_refuses_a_case_beyond_the_budget(override, key, words):
+def test_preflight_refuses_a_case_beyond_the_budget(override, key, words, big_machine):
     cfg = load_config(BASE, [override])
     with pytest.raises(ConfigError) as info:
         preflight(cfg)
     assert info.value.key == key and words in str(info.value) and "--allow-large" in str(info.value)
-    preflight(cfg, allow_large=True)            # lifted on request (nothing is allocated here)
+    if override != "solver.dt=1.0e-300":       # 1e298 rows: no machine holds them
+        preflight(cfg, allow_large=True)        # lifted on request (nothing is allocated here)
 
 
 @pytest.mark.parametrize("override, key, words", TOO_LARGE[:2] + TOO_LARGE[3:],
                          ids=[t[0] for t in TOO_LARGE[:2] + TOO_LARGE[3:]])
 @pytest.mark.parametrize("command", ["validate", "run"])
-def test_cli_refuses_a_case_beyond_the_budget(tmp_path, command, override, key, words):
+def test_cli_refuses_a_case_beyond_the_budget(tmp_path, command, override, key, words,
+                                              big_machine):
     path = tmp_path / "c.yaml"
     path.write_text("joints: {B: {clearance: 2.5e-4}}\n")
     out = tmp_path / "o.nc"
@@ -53,7 +63,7 @@ def test_save_every_beyond_the_run_is_refused():
     preflight(load_config(BASE, ["solver.save_every=1000"]))
 
 
-def test_sweep_expansion_checks_every_case():
+def test_sweep_expansion_checks_every_case(big_machine):
     sweep = {"base": BASE, "sweep": {"grid": {"wear.map": [[36, 72], [100000, 100000]]}}}
     with pytest.raises(ConfigError, match=r"wear\.map: got \[100000, 100000\].*map=\[100000, 100000\]"):
         expand(sweep)
@@ -70,3 +80,38 @@ def test_estimate_bounds_the_arrays_of_a_real_case():
     assert ds.sizes["time"] == est.rows
     assert ds.nbytes <= est.output_bytes <= 3 * ds.nbytes
     assert est.output_bytes < MAX_OUTPUT_BYTES
+
+
+@pytest.mark.parametrize("override, key", [("solver.duration=1.0e+3", "solver.duration"),
+                                           ("wear.map=[100000, 100000]", "wear.map")])
+def test_allow_large_is_still_bounded_by_the_machines_memory(monkeypatch, override, key):
+    """Was: --allow-large took any size, and a case beyond the machine's memory ended in a
+    MemoryError traceback (or the out-of-memory killer)."""
+    import clearsweep.budget as budget
+
+    monkeypatch.setattr(budget, "machine_memory", lambda: 2 * 2 ** 30)
+    with pytest.raises(ConfigError) as info:
+        preflight(load_config(BASE, [override]), allow_large=True)
+    assert info.value.key == key
+    assert "fit in this machine's memory (2 GiB free)" in str(info.value)
+    assert "--allow-large lifts the bounds of clearsweep, not those of this machine" in str(info.value)
+
+
+def test_a_memory_error_during_a_run_is_one_line(tmp_path, monkeypatch):
+    """Was: a MemoryError traceback when the arrays did not fit after all."""
+    import clearsweep.cli as cli
+    import clearsweep.simulation as simulation
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError("Unable to allocate 9.97 TiB for an array")
+
+    monkeypatch.setattr(simulation, "simulate", no_memory)
+    monkeypatch.setattr(cli, "announce_compile", lambda *a, **k: None)
+    path = tmp_path / "c.yaml"
+    path.write_text("joints: {B: {clearance: 2.5e-4}}\n")
+    result = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "o.nc")])
+    assert result.exit_code == 1 and isinstance(result.exception, SystemExit), result.output
+    assert "Traceback" not in result.stderr
+    assert result.stderr.strip().splitlines()[-1].startswith(
+        "clearsweep: error: out of memory: this machine could not hold the arrays of the run")
+    assert not (tmp_path / "o.nc").exists()

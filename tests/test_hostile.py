@@ -14,6 +14,9 @@ Every row is refused before any simulation, or reads a small results file built 
 from __future__ import annotations
 
 import errno
+import os
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -953,7 +956,7 @@ ROUND4_FUZZ = [
     ('life snapshots huge', _life("life.snapshots=100000"),
      2, 'life.snapshots: got 100000 (from --set); expected an integer with 2 <= x <= 1000'),
     ('life max_blocks 0', _life("life.max_blocks=0"),
-     2, 'life.max_blocks: got 0 (from --set); expected an integer >= 1'),
+     2, 'life.max_blocks: got 0 (from --set); expected an integer with 1 <= x <= 10000'),
     ('life max_normal_force 0', _life("life.max_normal_force=0"),
      2, 'life.max_normal_force: got 0 (from --set); expected null or a number > 0'),
     ('life max_motion_error -1', _life("life.max_motion_error=-1"),
@@ -1093,6 +1096,96 @@ ROUND4_FUZZ = [
 
 
 ROWS += ROUND4_MESSAGES + ROUND4_FUZZ
+def fifo(tmp: Path, name: str) -> Path:
+    """A FIFO that nothing writes to: reading it would wait for ever. So that a reader that
+    waits fails the row instead of hanging the suite, from 3 s to 20 s after it is made a
+    line of text and an end of file are written to whoever waits on it."""
+    path = tmp / name
+    os.mkfifo(path)
+
+    def release() -> None:
+        time.sleep(3.0)
+        end = time.monotonic() + 17.0
+        while time.monotonic() < end:
+            try:
+                fd = os.open(path, os.O_WRONLY | os.O_NONBLOCK)     # ENXIO: no reader waits
+            except OSError:
+                time.sleep(0.2)
+                continue
+            try:
+                os.write(fd, b"still waiting: 1\n")
+            except OSError:
+                pass
+            os.close(fd)
+
+    threading.Thread(target=release, daemon=True).start()
+    return path
+
+
+def declared_rows(tmp: Path, rows: int = 2_000_000_000) -> Path:
+    """A results file of a few kilobytes whose metadata declares ``rows`` time rows of two
+    float64 variables (chunked and never written: nothing of them is stored)."""
+    import netCDF4
+
+    path = tmp / "declared.nc"
+    with netCDF4.Dataset(path, "w") as nc:
+        nc.createDimension("time", rows)
+        for name in ("time", "slider_acceleration"):
+            nc.createVariable(name, "f8", ("time",), chunksizes=(1024,))
+        nc.createVariable("status", str, ())
+    return path
+
+
+# --- round 4 (issue 33, item 3): every size and every wait bounded before it is taken
+ROUND4_BOUNDS = [
+    ("validate a FIFO (was: waits for a writer for ever)",
+     lambda t, f: ["validate", fifo(t, "in.yaml")], 2, "in.yaml' (a FIFO, not a regular file)"),
+    ("sweep --dry-run a FIFO (was: waits for ever)",
+     lambda t, f: ["sweep", fifo(t, "in.yaml"), "--dry-run"], 2, "(a FIFO, not a regular file)"),
+    ("run a FIFO (was: waits for ever)",
+     lambda t, f: ["run", fifo(t, "in.yaml"), "-o", t / "out.nc"], 2, "(a FIFO, not a regular file)"),
+    ("materials -m a FIFO (was: waits for ever)",
+     lambda t, f: ["materials", "-m", fifo(t, "m.yaml")], 2, "m.yaml' (a FIFO, not a regular file)"),
+    ("validate /dev/zero (was: read 1 MiB of zeros, 'more than 1048576 bytes')",
+     lambda t, f: ["validate", "/dev/zero"], 2, "'/dev/zero' (a character device, not a regular file)"),
+    ("report a FIFO (was: waits for ever)",
+     lambda t, f: ["report", fifo(t, "in.nc")], 2, "in.nc' is a FIFO, not a results file"),
+    ("plot a FIFO (was: waits for ever)",
+     lambda t, f: ["plot", fifo(t, "in.nc"), "--kind", "slider", "-o", t / "out.png"], 2,
+     "is a FIFO, not a results file"),
+    ("sensitivity a FIFO (was: waits for ever)",
+     lambda t, f: ["sensitivity", fifo(t, "in.nc"), "--metric", "y"], 2,
+     "is a FIFO, not a results file"),
+    ("report a device (was: 'no netCDF reader can open it')",
+     lambda t, f: ["report", "/dev/null"], 2, "'/dev/null' is a character device"),
+    ("report 2e9 declared time rows (was: allocates 15 GiB, _ArrayMemoryError)",
+     lambda t, f: ["report", declared_rows(t)], 2,
+     "declares a variable 'time' of 2,000,000,000 time values (14.9 GiB); this command reads "
+     "whole variables, of at most 4 GiB"),
+    ("plot 2e9 declared time rows (was: allocates 15 GiB)",
+     lambda t, f: ["plot", declared_rows(t), "--kind", "slider", "-o", t / "out.png"], 2,
+     "'time' of 2,000,000,000 time values"),
+    ("sensitivity 2e9 declared time rows (was: allocates 15 GiB)",
+     lambda t, f: ["sensitivity", declared_rows(t), "--metric", "slider_acceleration"], 2,
+     "'time' of 2,000,000,000 time values"),
+    ("life snapshots 1e4 of a 1000 x 2000 map (was: dry run 'memory up to 41 MiB'; the run "
+     "died at 3.6 GB with a traceback)",
+     lambda t, f: ["life", LIFE, "--set", "life.snapshots=10000", "--set", "wear.map=[1000,2000]",
+                   "--dry-run"], 2,
+     "life.snapshots: got 10000 (201 snapshots kept of a 1000 x 2000 wear map of 2 joints, "
+     "30.5 MiB each: 18.2 GiB in all"),
+    ("life sweep snapshots 1e4 of a 1000 x 2000 map (was: accepted)",
+     lambda t, f: ["sweep", CONFIGS / "life_sweep.yaml", "--set", "life.snapshots=10000",
+                   "--set", "wear.map=[1000,2000]", "--dry-run"], 2,
+     "life.snapshots: got 10000 (201 snapshots kept"),
+    ("life max_blocks 1e6 (was: accepted, a checkpoint rewritten after each of 1e6 blocks)",
+     lambda t, f: ["life", LIFE, "--set", "life.max_blocks=1000000", "--dry-run"], 2,
+     "life.max_blocks: got 1000000 (from --set); expected an integer with 1 <= x <= 10000"),
+    ("run --allow-large beyond the machine's memory (was: MemoryError traceback)",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=1e6", "--allow-large", "-o", t / "out.nc"],
+     2, "expected a case whose arrays fit in this machine's memory"),
+]
+ROWS += ROUND4_BOUNDS
 
 
 @pytest.fixture

@@ -63,6 +63,11 @@ SAMPLE_DIM = "sample"
 TOO_MANY_HINT = "clearsweep sweep --yes runs them all"
 #: Keys of a zip group that are not config keys.
 ZIP_META_KEYS = ("name", "labels")
+#: A plan of more cases than MAX_CASES that is only looked at (``validate``, ``--dry-run``)
+#: is counted from its dimensions, not enumerated: the cases checked are every dimension's
+#: first value with the others' first, and up to this many more positions of each
+#: dimension (spread evenly, with the smallest and largest value of each key).
+COUNTED_POSITIONS = 16
 
 
 def _reserved_names() -> set[str]:
@@ -197,6 +202,10 @@ class SweepPlan:
     command: str = "sweep"
     #: The case YAML file named by the sweep file's ``base:`` (None: an inline base).
     base_file: str | None = None
+    #: A counted plan (:func:`expand` with ``enumerate_cases=False``): ``(points, skipped)``
+    #: of the whole sweep, while :attr:`cases` holds only the cases checked; None: every
+    #: case is in :attr:`cases`.
+    counted: tuple[int, int] | None = None
 
     @property
     def dims(self) -> dict[str, int]:
@@ -256,20 +265,29 @@ class SweepPlan:
         done = len(every) - len(runnable)
         resumed = f" ({done:,} finished before, kept)" if done else ""
         estimates = {h: estimate(cfg) for h, cfg in every.items()}
+        n_cases, skipped = self.counted or (len(self.cases), sum(c.hash is None for c in self.cases))
+        # a counted plan: its other cases as costly as the costliest one checked
+        scale = ((n_cases - skipped) / max(len(every), 1)) if self.counted else 1.0
+        to_run = round(scale * len(runnable))
+        checked = (f" (counted from its dimensions; {len(self.cases):,} cases checked, the "
+                   "others when it runs)" if self.counted else "")
+
+        def total(values: list[float]) -> float:
+            return max(values, default=0.0) * to_run if self.counted else sum(values)
+
         if self.store in ("life", "reliability"):
             # a life run simulates up to life.max_blocks blocks of life.block_revolutions
-            blocks = sum(cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
-                         / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values())
-            return (f"sweep {self.name!r}: {len(self.cases):,} life runs, {len(runnable):,} to run"
+            blocks = total([cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
+                            / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values()])
+            return (f"sweep {self.name!r}: {n_cases:,} life runs{checked}, {to_run:,} to run"
                     f"{resumed}: at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), "
                     f"at most {time_text(blocks, workers)}; most runs end sooner")
-        steps = sum(estimates[h].steps for h in runnable)
+        steps = total([estimates[h].steps for h in runnable])
         # the file holds the kept cases too
-        per_case = sum(e.output_bytes if self.store == "full" else e.map_bytes
-                       for e in estimates.values())
-        skipped = sum(1 for c in self.cases if c.hash is None)
-        counts = f"{len(self.cases):,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
-        return (f"sweep {self.name!r}: {counts}, {len(runnable):,} to simulate{resumed}, "
+        sizes = [e.output_bytes if self.store == "full" else e.map_bytes for e in estimates.values()]
+        per_case = max(sizes, default=0) * (n_cases - skipped) if self.counted else sum(sizes)
+        counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
+        return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
                 f"{steps:.3g} RK4 steps: {time_text(steps, workers)}; results up to "
                 f"{format_bytes(per_case)} before compression")
 
@@ -717,7 +735,7 @@ def _check_overrides(overrides: Iterable[str], axes: Sequence[Axis], source: str
 
 def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str] = (), *,
            allow_large: bool = False, max_cases: int | None = MAX_CASES,
-           too_many_hint: str = TOO_MANY_HINT) -> SweepPlan:
+           too_many_hint: str = TOO_MANY_HINT, enumerate_cases: bool = True) -> SweepPlan:
     """Read a sweep, validate every case and return the plan; nothing runs.
 
     Parameters
@@ -736,6 +754,11 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         (``--yes``).
     too_many_hint
         What the refusal tells the user to type instead (the command in use).
+    enumerate_cases
+        False (``validate``, ``--dry-run``): a sweep of more than MAX_CASES points is
+        counted from its dimensions, not enumerated: only the cases of
+        :func:`counted_positions` are made and checked, and :attr:`SweepPlan.counted`
+        holds the whole sweep's points and skipped points.
 
     Returns
     -------
@@ -768,8 +791,14 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
 
+    n_points = math.prod(a.size for a in axes)
+    counted = None
+    indices: Iterable[tuple[int, ...]] = itertools.product(*(range(a.size) for a in axes))
+    if not enumerate_cases and n_points > MAX_CASES:
+        indices = counted_positions(axes)
+        counted = (n_points, _count_skipped(axes, skips))
     cases = []
-    for index in itertools.product(*(range(a.size) for a in axes)):
+    for index in indices:
         assignment, label = {}, {}
         for axis, i in zip(axes, index):
             assignment.update(axis.assignment(i))
@@ -787,7 +816,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             if store == "life":     # each case is a life run: check its blocks, not its duration
                 life_block(resolved, allow_large=allow_large, source=source)
             elif store != "reliability":
-                preflight(resolved, allow_large=allow_large)
+                preflight(resolved, allow_large=allow_large, seat=False)    # the run seats it
             if store == "reliability":
                 _check_reliability_case(resolved, source, allow_large, label)
         except ConfigError as exc:
@@ -800,4 +829,36 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
     text = dump_config({"name": name, "store": store, "base": base.to_dict(), "sweep": spec or {}})
     base_file = doc.get("base")
     return SweepPlan(name, store, source, text, base, tuple(axes), cases,
-                     base_file=str(base_dir / base_file) if isinstance(base_file, str) else None)
+                     base_file=str(base_dir / base_file) if isinstance(base_file, str) else None,
+                     counted=counted)
+
+
+def counted_positions(axes: Sequence[Axis], most: int = COUNTED_POSITIONS) -> list[tuple[int, ...]]:
+    """The cases a counted plan checks, in sweep order: every dimension at its first value,
+    and each dimension in turn at up to ``most`` evenly spread positions and at the smallest
+    and largest value of each of its numeric keys, the others at their first."""
+    found = {(0,) * len(axes)}
+    for d, axis in enumerate(axes):
+        spots = set(np.linspace(0, axis.size - 1, min(most, axis.size)).round().astype(int).tolist())
+        for values in axis.values:
+            if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+                spots.update((int(np.argmin(values)), int(np.argmax(values))))
+        for i in spots:
+            found.add(tuple(i if k == d else 0 for k in range(len(axes))))
+    return sorted(found)
+
+
+def _count_skipped(axes: Sequence[Axis], skips: Sequence[Sequence[tuple[str, list]]]) -> int:
+    """Points excluded by the skip rules, counted over the dimensions they name only."""
+    if not skips:
+        return 0
+    names = {n for rule in skips for n, _ in rule}
+    named = [d for d, a in enumerate(axes) if names & {a.dim, *a.names}]
+    others = math.prod(a.size for d, a in enumerate(axes) if d not in named)
+    hits = 0
+    for index in itertools.product(*(range(axes[d].size) for d in named)):
+        label: dict[str, Any] = {}
+        for d, i in zip(named, index):
+            label.update(axes[d].label(i))
+        hits += any(all(label[n] in wanted for n, wanted in rule) for rule in skips)
+    return hits * others
