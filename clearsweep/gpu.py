@@ -80,7 +80,7 @@ def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
     items = (L.N_P + 2 * L.N_JP + L.N_Y + 2        # p, jp, y0, n_steps, save_every
              + 2 * npolar * nazim + 2 * 3 * L.N_ANGLE_BINS + 2   # wmap, proj, wvol
-             + 5 + 2 * L.N_M + 3                   # info, stats, track
+             + L.N_INFO + 2 * L.N_M + L.N_TRACK     # info, stats, track
              + 1 + L.N_Y + L.N_D + 2)              # row placeholders
     items += sum(math.prod(s) for s in work_shapes(max_level, npolar))
     return 8 * items
@@ -127,8 +127,8 @@ def _allocate(group: Sequence[Packed]) -> tuple:
               np.array([pk.n_steps for pk in group], dtype=np.int64),
               np.array([pk.save_every for pk in group], dtype=np.int64))
     results = (np.zeros((n, 2, npolar, nazim)), np.zeros((n, 2, 3, L.N_ANGLE_BINS)),
-               np.zeros((n, 2)), np.zeros((n, 5), dtype=np.int64), np.zeros((n, 2, L.N_M)),
-               np.zeros((n, 3)))
+               np.zeros((n, 2)), np.zeros((n, L.N_INFO), dtype=np.int64), np.zeros((n, 2, L.N_M)),
+               np.zeros((n, L.N_TRACK)))
     shapes = work_shapes(max_level, npolar)
     work = tuple(np.zeros((n,) + s, dtype=np.int64 if k == 7 else np.float64)
                  for k, s in enumerate(shapes))
@@ -185,8 +185,8 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
 def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> KernelRun:
     """One case of a batch as a :class:`~clearsweep.simulation.KernelRun`: one NaN row for
     the series the device does not keep."""
-    return KernelRun.from_counters(pk, info, track[2], track[0], first, wall, t=np.zeros(1),
-                                   y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
+    return KernelRun.from_counters(pk, info, track[L.T_RESIDUAL_MAX], track[L.T_KE_PEAK], first,
+                                   wall, t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
                                    wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol,
                                    stats=stats)
 

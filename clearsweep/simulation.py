@@ -139,9 +139,9 @@ class KernelRun:
         steps done), its energy figures and first impact times (negative or NaN: none),
         and the arrays (t, y, d, wmax, wmap, proj, wvol, stats)."""
         first = np.asarray(first_impact, dtype=float)
-        return cls(status=L.STATUS_NAMES[int(info[0])], n_saved=int(info[1]),
-                   deepest=int(info[2]), rk4_steps=int(info[3]),
-                   t_end=float(info[4]) * float(packed.p[L.P_DT]),
+        return cls(status=L.STATUS_NAMES[int(info[L.I_STATUS])], n_saved=int(info[L.I_SAVED]),
+                   deepest=int(info[L.I_DEEPEST]), rk4_steps=int(info[L.I_SUBSTEPS]),
+                   t_end=float(info[L.I_STEPS]) * float(packed.p[L.P_DT]),
                    residual_max=float(residual_max), ke_peak=float(ke_peak),
                    first_impact=np.where(first >= 0.0, first, np.nan), wall_time=wall_time,
                    **arrays)
@@ -169,16 +169,17 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     out_y = np.full((n_save, L.N_Y), np.nan)
     out_d = np.full((n_save, L.N_D), np.nan)
     out_wmax = np.zeros((n_save, 2))
-    info = np.zeros(5, dtype=np.int64)
+    info = np.zeros(L.N_INFO, dtype=np.int64)
     stats = np.zeros((2, L.N_M))
     t0 = time.perf_counter()
     res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
                     wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info, stats)
     wall = time.perf_counter() - t0
-    out_wmax[int(info[1]):] = np.nan
+    out_wmax[int(info[L.I_SAVED]):] = np.nan
     out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
-    return KernelRun.from_counters(packed, info, res[0], res[1], res[2:4], wall, t=out_t, y=out_y,
-                                   d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
+    return KernelRun.from_counters(packed, info, res[L.R_RESIDUAL_MAX], res[L.R_KE_PEAK],
+                                   res[L.R_FIRST_IMPACT:L.R_FIRST_IMPACT + 2], wall, t=out_t,
+                                   y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
                                    stats=stats)
 
 

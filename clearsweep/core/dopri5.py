@@ -22,9 +22,16 @@ from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
+    I_DEEPEST,
+    I_SAVED,
+    I_STATUS,
+    I_STEPS,
+    I_SUBSTEPS,
     J_CLEARANCE,
     N_D,
+    N_R,
     N_S,
+    N_TRACK,
     N_Y,
     P_ATOL_E,
     P_ATOL_Q,
@@ -37,6 +44,7 @@ from .layout import (
     P_SETTLE,
     ST_OK,
     ST_UNSTABLE_STEP,
+    T_KE_PEAK,
     W_SETTLED,
     W_WHOLE,
     Y_QD,
@@ -182,13 +190,13 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     """Integrate one case to t0 + n_steps * p[P_DT] with adaptive Dormand-Prince 5(4).
 
     Arguments and outputs as :func:`.rk4.integrate`; output rows at the same times
-    (every ``save_every`` grid steps). ``info[2]`` holds the level k of the shortest
-    accepted step (h >= p[P_DT] / 2^k), ``info[3]`` the accepted steps. Steps are bounded by
-    p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error control would make
-    shorter stops the case with ST_UNSTABLE_STEP. Allocates the work arrays and runs
-    :func:`advance_dopri5`.
+    (every ``save_every`` grid steps). ``info[I_DEEPEST]`` holds the level k of the
+    shortest accepted step (h >= p[P_DT] / 2^k), ``info[I_SUBSTEPS]`` the accepted steps.
+    Steps are bounded by p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error
+    control would make shorter stops the case with ST_UNSTABLE_STEP. Allocates the work
+    arrays and runs :func:`advance_dopri5`.
     """
-    track = np.zeros(3)
+    track = np.zeros(N_TRACK)
     first = np.zeros(2)
     ny = N_Y
     advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
@@ -200,8 +208,8 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
                    np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
                    np.zeros((2, 4), dtype=np.int64), np.zeros((2, 4)), np.zeros((2, 6)),
                    np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    if info[1] == 0 and info[0] != ST_OK:
-        return np.full(4, np.nan)
+    if info[I_SAVED] == 0 and info[I_STATUS] != ST_OK:
+        return np.full(N_R, np.nan)
     return kernel_result(track, first)
 
 
@@ -235,18 +243,18 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
         dg[i] = 0.0
         dg1[i] = 0.0
         dgo[i] = 0.0
-    for i in range(3):
+    for i in range(N_TRACK):
         track[i] = 0.0
     first[0] = -1.0
     first[1] = -1.0
 
     status = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
     if status != ST_OK:
-        info[0] = status
-        info[1] = 0
+        info[I_STATUS] = status
+        info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[0] = dg[D_KE]
+    track[T_KE_PEAK] = dg[D_KE]
     out_t[0] = t0
     copy_row(out_y, 0, y)
     copy_row(out_d, 0, dg)
@@ -342,8 +350,8 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
     deepest = 0
     while grid / (1 << deepest) > h_small * (1.0 + 1e-12) and deepest < 62:
         deepest += 1
-    info[0] = status
-    info[1] = n_saved
-    info[2] = deepest
-    info[3] = accepted
-    info[4] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))
+    info[I_STATUS] = status
+    info[I_SAVED] = n_saved
+    info[I_DEEPEST] = deepest
+    info[I_SUBSTEPS] = accepted
+    info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))

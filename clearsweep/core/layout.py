@@ -134,6 +134,26 @@ M_TIME = 13         # duration the window covers [s]
 M_SAMPLES = 14      # step-end samples in the window [-]
 N_M = 15
 
+# --- counters info[:] (int64) of one run ------------------------------------
+I_STATUS = 0        # status code (ST_*)
+I_SAVED = 1         # output rows saved (or that a run keeping rows would save)
+I_DEEPEST = 2       # deepest sub-step level k taken (dopri5: of the shortest step)
+I_SUBSTEPS = 3      # RK4 sub-steps taken (dopri5: accepted steps)
+I_STEPS = 4         # output-grid steps completed, the stopping step included
+N_INFO = 5
+
+# --- energy tracking track[:] (float64) of one run ----------------------------
+T_KE_PEAK = 0       # peak kinetic energy [J]
+T_WORK_MAX = 1      # largest |drive work| [J]
+T_RESIDUAL_MAX = 2  # largest |energy residual| [J]
+N_TRACK = 3
+
+# --- what an integrator returns, r[:] (float64; kernel_result) ---------------
+R_RESIDUAL_MAX = 0  # largest |energy residual| [J]
+R_KE_PEAK = 1       # peak kinetic energy [J]
+R_FIRST_IMPACT = 2  # 2, first impact time per joint [s], NaN where none
+N_R = 4
+
 # --- status codes -----------------------------------------------------------
 ST_OK = 0
 ST_UNSTABLE_STEP = 1

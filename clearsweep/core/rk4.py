@@ -32,6 +32,11 @@ from .layout import (
     D_UEL,
     D_VT,
     D_WORN,
+    I_DEEPEST,
+    I_SAVED,
+    I_STATUS,
+    I_STEPS,
+    I_SUBSTEPS,
     J_C,
     J_CLEARANCE,
     J_RI,
@@ -48,8 +53,11 @@ from .layout import (
     M_VIMP_MAX,
     N_ANGLE_BINS,
     N_D,
+    N_INFO,
     N_M,
+    N_R,
     N_S,
+    N_TRACK,
     N_Y,
     P_AMPL,
     P_CONS_TOL,
@@ -63,6 +71,9 @@ from .layout import (
     P_SLIP,
     P_STAB,
     P_WEAR,
+    R_FIRST_IMPACT,
+    R_KE_PEAK,
+    R_RESIDUAL_MAX,
     S_BETA,
     S_DV0,
     ST_CONSTRAINT,
@@ -72,6 +83,9 @@ from .layout import (
     ST_OK,
     ST_PENETRATION,
     ST_UNSTABLE_STEP,
+    T_KE_PEAK,
+    T_RESIDUAL_MAX,
+    T_WORK_MAX,
     W_SETTLED,
     W_WHOLE,
     Y_DISS,
@@ -316,14 +330,14 @@ def step_checks(y, dg, p, jp, status, e0, track):
     for j in range(2):
         if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
             status = ST_PENETRATION
-    track[0] = max(track[0], dg[D_KE])
-    track[1] = max(track[1], abs(y[Y_WORK]))
+    track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
+    track[T_WORK_MAX] = max(track[T_WORK_MAX], abs(y[Y_WORK]))
     res = energy_total(dg) - y[Y_WORK] + y[Y_DISS] - e0
-    track[2] = max(track[2], abs(res))
+    track[T_RESIDUAL_MAX] = max(track[T_RESIDUAL_MAX], abs(res))
     if status == ST_OK and not (dg[D_CONS] <= p[P_CONS_TOL]):
         status = ST_CONSTRAINT
     if status == ST_OK:
-        throughput = max(track[0], max(track[1], y[Y_DISS]))
+        throughput = max(track[T_KE_PEAK], max(track[T_WORK_MAX], y[Y_DISS]))
         if not (abs(res) <= p[P_ENERGY_TOL] * throughput):
             status = ST_ENERGY
     return status
@@ -441,11 +455,11 @@ def note_first_impact(first, stats, t):
 def kernel_result(track, first):
     """What an integrator returns: (largest |energy residual| [J], peak kinetic energy [J],
     first impact time at A, at B [s], NaN when none)."""
-    out = np.empty(4)
-    out[0] = track[2]
-    out[1] = track[0]
+    out = np.empty(N_R)
+    out[R_RESIDUAL_MAX] = track[T_RESIDUAL_MAX]
+    out[R_KE_PEAK] = track[T_KE_PEAK]
     for j in range(2):
-        out[2 + j] = first[j] if first[j] >= 0.0 else np.nan
+        out[R_FIRST_IMPACT + j] = first[j] if first[j] >= 0.0 else np.nan
     return out
 
 
@@ -475,7 +489,7 @@ def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
     """
     nbuf_max = undo_rows(int(p[P_MAX_LEVEL]))
-    track = np.zeros(3)
+    track = np.zeros(N_TRACK)
     first = np.zeros(2)
     advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
             out_wmax, info, stats, track, first,
@@ -497,9 +511,9 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     """:func:`integrate` without allocation: every work array is an argument (one each, so
     that the CPU path passes no views; the CUDA kernel passes rows of :func:`work_shapes`'
     groups), their contents on entry do not matter. ``keep_rows`` False writes no output rows
-    (out_* are not touched; info[1] still counts the rows a run would save). ``track``
-    (float64[3]) receives the peak kinetic energy, the largest |drive work| and the largest
-    |energy residual| [J]; ``first`` (float64[2]) each joint's first impact time [s] (-1:
+    (out_* are not touched; info[I_SAVED] still counts the rows a run would save). ``track``
+    (float64[N_TRACK]) receives the peak kinetic energy, the largest |drive work| and the
+    largest |energy residual| [J] (layout.T_*); ``first`` (float64[2]) each joint's first impact time [s] (-1:
     none).
 
     Work arrays: y, ysave, k1, k1save, ksum, kst, yt (N_Y each: the state, its copy at the
@@ -546,19 +560,19 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
         first_save[j] = 0.0
     copy_into(y, y0)
     # begin_case clears the statistics and sets the contact state
-    for i in range(3):
+    for i in range(N_TRACK):
         track[i] = 0.0
-    for i in range(2, 5):
+    for i in range(I_DEEPEST, N_INFO):
         info[i] = 0
 
     status = ST_OK
     st = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
     if st != ST_OK:
-        info[0] = st
-        info[1] = 0
+        info[I_STATUS] = st
+        info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[0] = dg[D_KE]
+    track[T_KE_PEAK] = dg[D_KE]
     first[0] = -1.0    # time of each joint's first impact [s]; -1: none yet
     first[1] = -1.0
     if keep_rows:
@@ -662,8 +676,8 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     if keep_rows and status == ST_OK and n_saved > 0:
         out_wmax[n_saved - 1, 0] = wmax[0]
         out_wmax[n_saved - 1, 1] = wmax[1]
-    info[0] = status
-    info[1] = n_saved
-    info[2] = deepest
-    info[3] = total
-    info[4] = steps_done
+    info[I_STATUS] = status
+    info[I_SAVED] = n_saved
+    info[I_DEEPEST] = deepest
+    info[I_SUBSTEPS] = total
+    info[I_STEPS] = steps_done
