@@ -17,6 +17,7 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
+from .core.work import Case, Out
 from .params import PRESETS, Packed, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
@@ -171,9 +172,10 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     out_wmax = np.zeros((n_save, 2))
     info = np.zeros(L.N_INFO, dtype=np.int64)
     stats = np.zeros((2, L.N_M))
+    case = Case(packed.p, packed.jp, packed.y0, wmap, proj, wvol)
+    out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK), np.zeros(2))
     t0 = time.perf_counter()
-    res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
-                    wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info, stats)
+    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out)
     wall = time.perf_counter() - t0
     out_wmax[int(info[L.I_SAVED]):] = np.nan
     out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every

@@ -40,6 +40,7 @@ from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
 from .target import on_device
+from .work import Case, Out, Rk4Work
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
 
@@ -92,8 +93,14 @@ def block_typer(typingctx, arr, i, k, shape):
 if SIMULATED:
     _plain = simulator_array
 
+    def _unwrap(a):
+        """The plain arrays of a simulator array or of a named tuple of them."""
+        if isinstance(a, tuple):
+            return type(a)(*(_plain(x) for x in a))
+        return _plain(a)
+
     def _advance(*args):
-        return _cpu_advance(*(_plain(a) for a in args))
+        return _cpu_advance(*(_unwrap(a) for a in args))
 
     def block(arr, i, k, shape):
         """Block k, of shape ``shape``, of case i's part of arr, as a view: case i's
@@ -124,21 +131,24 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
     i = cuda.grid(1)
     if i < p.shape[0]:
-        _advance(p[i], block(jp, i, 0, (2, N_JP)), y0[i], 0.0, n_steps[i], save_every[i],
-                 wmap[i], block(proj, i, 0, (2, 3, N_ANGLE_BINS)), wvol[i], False, rows_t[i],
-                 rows_y[i], rows_d[i], rows_wmax[i], info[i], block(stats, i, 0, (2, N_M)),
-                 track[i], block(pairs, i, PAIR_FIRST, (2,)),
-                 block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)), block(vec, i, 2, (N_Y,)),
-                 block(vec, i, 3, (N_Y,)), block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
-                 block(vec, i, 6, (N_Y,)),
-                 block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
-                 block(cstate, i, 0, (2, N_S)), block(cstate, i, 1, (2, N_S)),
-                 block(msave, i, 0, (2, N_M)),
-                 block(pairs, i, 0, (2,)), block(pairs, i, 1, (2,)), block(pairs, i, 2, (2,)),
-                 block(pairs, i, PAIR_FIRST_COPY, (2,)),
-                 block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)), block(mats, i, 2, (6, 6)),
-                 block(vz, i, 0, (VZ_ROWS, 6)), buf_i[i], buf_v[i],
-                 block(caps, i, 0, (2, 6)), block(caps, i, 1, (2, 6)), scratch[i])
+        case = Case(p[i], block(jp, i, 0, (2, N_JP)), y0[i], wmap[i],
+                    block(proj, i, 0, (2, 3, N_ANGLE_BINS)), wvol[i])
+        out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
+                  block(stats, i, 0, (2, N_M)), track[i], block(pairs, i, PAIR_FIRST, (2,)))
+        work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
+                       block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
+                       block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
+                       block(vec, i, 6, (N_Y,)),
+                       block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
+                       block(cstate, i, 0, (2, N_S)), block(cstate, i, 1, (2, N_S)),
+                       block(msave, i, 0, (2, N_M)),
+                       block(pairs, i, 0, (2,)), block(pairs, i, 1, (2,)),
+                       block(pairs, i, 2, (2,)), block(pairs, i, PAIR_FIRST_COPY, (2,)),
+                       block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)),
+                       block(mats, i, 2, (6, 6)), block(vz, i, 0, (VZ_ROWS, 6)),
+                       buf_i[i], buf_v[i], block(caps, i, 0, (2, 6)), block(caps, i, 1, (2, 6)),
+                       scratch[i])
+        _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
 #: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument

@@ -65,6 +65,7 @@ from .rk4 import (
     step_checks,
     zero_rows,
 )
+from .work import Dopri5Work, Model, Solve, Wear
 
 # Dormand & Prince (1980) coefficients; E = b5 - b4 (error weights); D: the 4th-order
 # continuous extension of Hairer, Norsett & Wanner, Solving ODEs I, section II.6.
@@ -124,43 +125,55 @@ def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
 
 
 @compiled(locals=_NOT_LITERAL)
-def dopri5_trial(t, h, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap, C, S, L, vz):
+def dopri5_trial(t, h, work, model, solve):
     """Stages 2-7 of one trial step of length h from (t, y) with k1 = f(t, y): the 5th-order
-    solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1."""
+    solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1
+    (y, k1 ... k7, yt, y1, dg1: fields of ``work``, a :data:`work.Dopri5Work`)."""
+    y = work.y
+    k1 = work.k1
+    k2 = work.k2
+    k3 = work.k3
+    k4 = work.k4
+    k5 = work.k5
+    k6 = work.k6
+    k7 = work.k7
+    yt = work.yt
+    y1 = work.y1
+    dg1 = work.dg1
     stage = False
     step_end = True
     n = y.shape[0]
     scratch = dg1
     for i in range(n):
         yt[i] = y[i] + h * A21 * k1[i]
-    st = evaluate(t + C2 * h, yt, p, jp, s, wmap, k2, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C2 * h, yt, model, k2, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    st = evaluate(t + C3 * h, yt, p, jp, s, wmap, k3, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C3 * h, yt, model, k3, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    st = evaluate(t + C4 * h, yt, p, jp, s, wmap, k4, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C4 * h, yt, model, k4, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    st = evaluate(t + C5 * h, yt, p, jp, s, wmap, k5, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C5 * h, yt, model, k5, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
                             + A65 * k5[i])
-    st = evaluate(t + h, yt, p, jp, s, wmap, k6, scratch, stage, C, S, L, vz)
+    st = evaluate(t + h, yt, model, k6, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i]
                             + A76 * k6[i])
-    return evaluate(t + h, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+    return evaluate(t + h, y1, model, k7, dg1, step_end, solve)
 
 
 @compiled
@@ -185,8 +198,7 @@ def onset_step(p, jp, dg0, dg1, h):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y,
-                     out_d, out_wmax, info, stats):
+def integrate_dopri5(case, t0, n_steps, save_every, out):
     """Integrate one case to t0 + n_steps * p[P_DT] with adaptive Dormand-Prince 5(4).
 
     Arguments and outputs as :func:`.rk4.integrate`; output rows at the same times
@@ -196,33 +208,63 @@ def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t
     control would make shorter stops the case with ST_UNSTABLE_STEP. Allocates the work
     arrays and runs :func:`advance_dopri5`.
     """
-    track = np.zeros(N_TRACK)
-    first = np.zeros(2)
     ny = N_Y
-    advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-                   out_wmax, info, stats, track, first,
-                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
-                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
-                   np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D), np.zeros(N_D),
-                   np.zeros(N_D), np.zeros((2, N_S)), np.zeros(2), np.zeros(2),
-                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
-                   np.zeros((2, 4), dtype=np.int64), np.zeros((2, 4)), np.zeros((2, 6)),
-                   np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    if info[I_SAVED] == 0 and info[I_STATUS] != ST_OK:
+    work = Dopri5Work(np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                      np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                      np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D),
+                      np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros(2),
+                      np.zeros(2), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)),
+                      np.zeros((VZ_ROWS, 6)), np.zeros((2, 4), dtype=np.int64),
+                      np.zeros((2, 4)), np.zeros((2, 6)), np.zeros((2, 6)),
+                      np.zeros((4 * case.wmap.shape[1], 3)))
+    advance_dopri5(case, t0, n_steps, save_every, out, work)
+    if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
         return np.full(N_R, np.nan)
-    return kernel_result(track, first)
+    return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-                   out_wmax, info, stats, track, first, y, y1, yt, k1, k2, k3, k4, k5, k6, k7, kt,
-                   row, yrow, dg, dg1, dgo, s, ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur,
-                   pend, scratch):
-    """:func:`integrate_dopri5` without allocation: every work array is an argument (their
-    contents on entry do not matter). ``track`` and ``first`` receive what
-    :func:`.rk4.kernel_result` reports. Every status an evaluation returns stops the case,
-    the dense-output evaluations of the sample rows included.
+def advance_dopri5(case, t0, n_steps, save_every, out, work):
+    """:func:`integrate_dopri5` without allocation: every work array is a field of ``work``
+    (a :data:`work.Dopri5Work`; their contents on entry do not matter). ``out.track`` and
+    ``out.first`` receive what :func:`.rk4.kernel_result` reports. Every status an
+    evaluation returns stops the case, the dense-output evaluations of the sample rows
+    included.
     """
+    p = case.p
+    jp = case.jp
+    wmap = case.wmap
+    out_t = out.t
+    out_y = out.y
+    out_d = out.d
+    out_wmax = out.wmax
+    info = out.info
+    stats = out.stats
+    track = out.track
+    first = out.first
+    y = work.y
+    y1 = work.y1
+    k1 = work.k1
+    k3 = work.k3
+    k4 = work.k4
+    k5 = work.k5
+    k6 = work.k6
+    k7 = work.k7
+    kt = work.kt
+    row = work.row
+    yrow = work.yrow
+    dg = work.dg
+    dg1 = work.dg1
+    dgo = work.dgo
+    s = work.s
+    ddot_prev = work.ddot_prev
+    wmax = work.wmax
+    cur = work.cur
+    pend = work.pend
+    scratch = work.scratch
+    model = Model(p, jp, s, wmap)
+    solve = Solve(work.C, work.S, work.L, work.vz)
+    wear = Wear(case.proj, case.wvol, cur, pend, work.buf_i, work.buf_v, wmax, scratch)
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
@@ -232,9 +274,9 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
     hmin = grid / (1 << int(p[P_MAX_LEVEL]))
     t_end = t0 + n_steps * grid
     ny = N_Y
-    copy_into(y, y0)
-    zero_rows(buf_i)
-    zero_rows(buf_v)
+    copy_into(y, case.y0)
+    zero_rows(work.buf_i)
+    zero_rows(work.buf_v)
     zero_rows(cur)
     zero_rows(pend)
     for j in range(2):
@@ -248,7 +290,7 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
     first[0] = -1.0
     first[1] = -1.0
 
-    status = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
+    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if status != ST_OK:
         info[I_STATUS] = status
         info[I_SAVED] = 0
@@ -270,8 +312,7 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
         if hh < hmin and not last:
             status = ST_UNSTABLE_STEP
             break
-        st = dopri5_trial(t, hh, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap,
-                          C, S, L, vz)
+        st = dopri5_trial(t, hh, work, model, solve)
         if st != ST_OK:
             if hh <= hmin:
                 status = st
@@ -297,11 +338,10 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
         for j in range(2):
             for i in range(6):
                 cur[j, i] = 0.0
-        changed, _ = accept_substep(hh, in_settled, p, jp, s, dg1, stats, proj, wvol, cur,
-                                    buf_i, buf_v, 0, ddot_prev)
+        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
         note_first_impact(first, stats, t + hh)
         if changed:
-            st = evaluate(t + hh, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+            st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
             if st != ST_OK:
                 status = st
                 break
@@ -321,7 +361,7 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
                 dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
                 for i in range(ny):
                     yrow[i] = row[0, i]
-                st = evaluate(ts, yrow, p, jp, s, wmap, kt, dgo, step_end, C, S, L, vz)
+                st = evaluate(ts, yrow, model, kt, dgo, step_end, solve)
                 if st != ST_OK:
                     status = st
                     break

@@ -105,6 +105,7 @@ from .layout import (
 )
 from .spherical import contact
 from .target import on_device
+from .work import Model, Solve
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
 
@@ -502,7 +503,7 @@ _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
 
 
 @compiled(locals=_NOT_LITERAL)
-def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
+def evaluate(t, y, model, dy, dg, full, solve):
     """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
 
     Parameters
@@ -511,12 +512,10 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         Time [s].
     y : float64[38]
         State (layout.Y_*): q, qd, drive work, dissipated energy.
-    p, jp : float64 arrays
-        Packed parameters (layout.P_*, layout.J_*).
-    s : float64[2, 2]
-        Discrete contact state (impact velocity, contact angle) per joint.
-    wmap : float64[2, npolar, nazim]
-        Wear map [m].
+    model : work.Model
+        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[2, N_S], the discrete
+        contact state (impact velocity, contact angle) per joint; wmap: float64[2, npolar,
+        nazim], the wear map [m].
     dy : float64[38]
         Output derivative.
     dg : float64[N_D]
@@ -525,7 +524,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     full : bool
         An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
         dopri5's inner stages need the derivative only.
-    C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, VZ_ROWS x 6).
+    solve : work.Solve
+        The float64 work arrays C, S, L (6x6) and vz (VZ_ROWS x 6).
 
     Returns
     -------
@@ -541,6 +541,12 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     contact cost the CPU about 3 %); a device build (``target.on_device``) forms them in
     each contact.
     """
+    p = model.p
+    jp = model.jp
+    C = solve.C
+    S = solve.S
+    L = solve.L
+    vz = solve.vz
     joint_a = 0
     joint_b = 1
     qd = Y_QD
@@ -576,7 +582,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3, full)
+        cA = contact(joint_a, model, (r2, v2, R2, w2, uA2), (r3, v3, R3, w3, uA3), full)
         fA = cA.force
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
@@ -590,7 +596,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero, full)
+        cB = contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, zero), full)
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
@@ -676,14 +682,14 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
             continue
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-            rate = max(rate, joint_rate(j, jp, s, p, dg, rotation(t3), gmat(t3), r3, C, L, nc,
-                                        minv, mr_inv, vz))
+            rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
+                                        minv, mr_inv))
     dg[D_RATE] = rate
     return ST_OK
 
 
 @compiled
-def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
+def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
@@ -693,6 +699,12 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from U ~ 2 K delta^3 / (3 c)),
     so that an impact that begins and ends inside one step still sets the sub-step.
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    C = solve.C
+    L = solve.L
+    vz = solve.vz
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
     if j == 0:
         # the socket point Q_i on the rod
@@ -792,8 +804,8 @@ def ideal_joint_forces(t, y, p, jp):
     L = np.zeros((6, 6))
     vz = np.zeros((VZ_ROWS, 6))
     out = np.full((2, 3), np.nan)
-    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), p, jp_ideal, s, wmap, dy, dg,
-                True, C, S, L, vz) != ST_OK:
+    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), Model(p, jp_ideal, s, wmap),
+                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
         return out
     for j in range(2):
         for i in range(3):

@@ -93,6 +93,7 @@ from .layout import (
     Y_WORK,
 )
 from .wear import deposit, projection_bins
+from .work import Model, Rk4Work, Solve, Wear
 
 EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of docs/physics.md section 1 [rad]
 
@@ -118,8 +119,9 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
 
 
 @compiled(locals=_NOT_LITERAL)
-def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
-    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place.
+def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
+    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place
+    (``model``, ``solve``: :func:`dynamics.evaluate`'s).
 
     The stage derivatives k2, k3, k4 (at t + c hs, c = 1/2, 1/2, 1) come from one call of
     evaluate in a loop, each into the work array ``kst``; the work array ``ksum`` keeps
@@ -134,7 +136,7 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
         c = 1.0 if i_stage == 2 else 0.5
         for i in range(n):
             yt[i] = y[i] + c * hs * kst[i]
-        st = evaluate(t + c * hs, yt, p, jp, s, wmap, kst, dg, stage, C, S, L, vz)
+        st = evaluate(t + c * hs, yt, model, kst, dg, stage, solve)
         if st != ST_OK:
             return st
         if i_stage == 0:
@@ -237,15 +239,23 @@ def record_sample(m, w, dg, jp, weight):
 
 
 @compiled
-def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, buf_v, nbuf,
-                   ddot_prev):
+def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
-    projections, the worn volume, the waiting cap ``cur`` and the undo buffer at row ``nbuf``),
-    the contact angle and episode impact velocity in ``s``, impact counts and velocities.
+    projections, the worn volume, the step's cap ``cur`` and the undo buffer at row ``nbuf``
+    of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
+    ``model.s``, impact counts and velocities.
 
     Returns (whether the contact state changed, so that the step-end evaluation must be
     redone; the next free undo-buffer row).
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    proj = wear.proj
+    wvol = wear.wvol
+    cur = wear.cur
+    buf_i = wear.buf_i
+    buf_v = wear.buf_v
     wear_on = p[P_WEAR] != 0.0
     paper_slip = p[P_SLIP] != 0.0
     ampl = p[P_AMPL]
@@ -381,10 +391,13 @@ def work_shapes(max_level, npolar):
 
 
 @compiled(locals=_NOT_LITERAL)
-def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
+def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
     recorded. Returns the evaluation's status."""
+    p = model.p
+    jp = model.jp
+    s = model.s
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
@@ -397,7 +410,7 @@ def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
     # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
     # (seated start): it is in contact, not an impact
     for again in range(2):
-        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+        st = evaluate(t0, y, model, k1, dg, step_end, solve)
         if st != ST_OK:
             return st
         if again == 1:
@@ -464,69 +477,99 @@ def kernel_result(track, first):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-              out_wmax, info, stats):
+def integrate(case, t0, n_steps, save_every, out):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
 
     Parameters
     ----------
-    p, jp : packed parameters; y0 : initial state (layout.N_Y); t0 : start time [s].
-    wmap : float64[2, npolar, nazim]   wear map, updated in place [m].
-    proj : float64[2, 3, 360]          paper projections, updated in place [m].
-    wvol : float64[2]                  worn volume, updated in place [m^3].
-    out_t, out_y, out_d, out_wmax : output rows (n_save = n_steps // save_every + 1).
-    info : int64[5] -> (status, saved rows, deepest level, RK4 sub-steps taken,
-        output-grid steps completed, the stopping step included).
-    stats : float64[2, N_M]            running statistics (layout.M_*), whole run and
-        settled window (time >= p[P_SETTLE]), accumulated at every accepted (sub-)step.
+    case : work.Case
+        p, jp : packed parameters; y0 : initial state (layout.N_Y);
+        wmap : float64[2, npolar, nazim]   wear map, updated in place [m];
+        proj : float64[2, 3, 360]          paper projections, updated in place [m];
+        wvol : float64[2]                  worn volume, updated in place [m^3].
+    t0 : float
+        Start time [s].
+    out : work.Out
+        t, y, d, wmax : output rows (n_save = n_steps // save_every + 1);
+        info : int64[N_INFO] (layout.I_*: status, saved rows, deepest level, RK4 sub-steps
+        taken, output-grid steps completed, the stopping step included);
+        stats : float64[2, N_M] running statistics (layout.M_*), whole run and settled
+        window (time >= p[P_SETTLE]), accumulated at every accepted (sub-)step;
+        track : float64[N_TRACK] (layout.T_*); first : float64[2] first impact times.
 
     Returns
     -------
-    float64[4] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
-        at A and at B [s], NaN where none); see kernel_result.
+    float64[N_R] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
+        at A and at B [s], NaN where none; layout.R_*); see kernel_result.
 
     The CPU entry point: allocates every work array on its own (no row views) and runs
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
     """
-    nbuf_max = undo_rows(int(p[P_MAX_LEVEL]))
-    track = np.zeros(N_TRACK)
-    first = np.zeros(2)
-    advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
-            out_wmax, info, stats, track, first,
-            np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
-            np.zeros(N_Y), np.zeros(N_Y),
-            np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
-            np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
-            np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
-            np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-            np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    return kernel_result(track, first)
+    nbuf_max = undo_rows(int(case.p[P_MAX_LEVEL]))
+    work = Rk4Work(np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
+                   np.zeros(N_Y), np.zeros(N_Y),
+                   np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
+                   np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
+                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                   np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
+                   np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((4 * case.wmap.shape[1], 3)))
+    advance(case, t0, n_steps, save_every, True, out, work)
+    return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
-            out_wmax, info, stats, track, first, y, ysave, k1, k1save, ksum, kst, yt, dg,
-            dgsave, s, ssave, msave, ddot_prev, ddot_prev_save, wmax, first_save, C, S, L, vz,
-            buf_i, buf_v, cur, pend, scratch):
-    """:func:`integrate` without allocation: every work array is an argument (one each, so
-    that the CPU path passes no views; the CUDA kernel passes rows of :func:`work_shapes`'
-    groups), their contents on entry do not matter. ``keep_rows`` False writes no output rows
-    (out_* are not touched; info[I_SAVED] still counts the rows a run would save). ``track``
+def advance(case, t0, n_steps, save_every, keep_rows, out, work):
+    """:func:`integrate` without allocation: every work array is a field of ``work`` (a
+    :data:`work.Rk4Work`, one array each, so that the CPU path passes no views; the CUDA
+    kernel passes rows of :func:`work_shapes`' groups), their contents on entry do not
+    matter. ``keep_rows`` False writes no output rows (out.t, out.y, out.d, out.wmax are not
+    touched; info[I_SAVED] still counts the rows a run would save). ``out.track``
     (float64[N_TRACK]) receives the peak kinetic energy, the largest |drive work| and the
-    largest |energy residual| [J] (layout.T_*); ``first`` (float64[2]) each joint's first impact time [s] (-1:
-    none).
-
-    Work arrays: y, ysave, k1, k1save, ksum, kst, yt (N_Y each: the state, its copy at the
-    step's start, the derivative at the (sub-)step's start and its copy, the sum k2 + k3 of
-    the stage derivatives, the stage derivative and the stage state: rk4_substep); dg,
-    dgsave (N_D: diagnostics and copy); s, ssave (2 x N_S: contact state and copy); msave
-    (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax, first_save
-    (2 each: approach rates and copy, the deepest bin written per joint, the first impact
-    times' copy); C, S, L (6 x 6) and vz (VZ_ROWS x 6) of evaluate; buf_i, buf_v (undo_rows
-    x 4: the step's wear, to undo a rejected step); cur, pend (2 x 6: wear of the step being
-    taken, wear waiting to be spread:
-    sum V n (3), sum V, sum V A, R_i); scratch (4 npolar x 3) of wear.deposit.
+    largest |energy residual| [J] (layout.T_*); ``out.first`` (float64[2]) each joint's
+    first impact time [s] (-1: none).
     """
+    p = case.p
+    jp = case.jp
+    y0 = case.y0
+    wmap = case.wmap
+    proj = case.proj
+    wvol = case.wvol
+    out_t = out.t
+    out_y = out.y
+    out_d = out.d
+    out_wmax = out.wmax
+    info = out.info
+    stats = out.stats
+    track = out.track
+    first = out.first
+    y = work.y
+    ysave = work.ysave
+    k1 = work.k1
+    k1save = work.k1save
+    ksum = work.ksum
+    kst = work.kst
+    yt = work.yt
+    dg = work.dg
+    dgsave = work.dgsave
+    s = work.s
+    ssave = work.ssave
+    msave = work.msave
+    ddot_prev = work.ddot_prev
+    ddot_prev_save = work.ddot_prev_save
+    wmax = work.wmax
+    first_save = work.first_save
+    C = work.C
+    S = work.S
+    L = work.L
+    vz = work.vz
+    buf_i = work.buf_i
+    buf_v = work.buf_v
+    cur = work.cur
+    pend = work.pend
+    scratch = work.scratch
+    model = Model(p, jp, s, wmap)
+    solve = Solve(C, S, L, vz)
+    wear = Wear(proj, wvol, cur, pend, buf_i, buf_v, wmax, scratch)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
     settled = W_SETTLED
@@ -566,7 +609,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
         info[i] = 0
 
     status = ST_OK
-    st = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
+    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if st != ST_OK:
         info[I_STATUS] = st
         info[I_SAVED] = 0
@@ -608,9 +651,9 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
-                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz)
+                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                 if st != ST_OK:
                     status = st
                     break
@@ -618,11 +661,11 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
                     need = level_for(dg[D_RATE], h, stab)
                     break
                 in_settled = ts + hs >= settle
-                changed, nbuf = accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol,
-                                               cur, buf_i, buf_v, nbuf, ddot_prev)
+                changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
+                                               ddot_prev)
                 note_first_impact(first, stats, ts + hs)
                 if changed:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                     if st != ST_OK:
                         status = st
                         break

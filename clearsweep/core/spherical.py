@@ -125,13 +125,15 @@ def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
 
 
 @compiled
-def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
+def contact(j, model, ball, socket, energy):
     """Contact state and force of clearance joint j (docs/physics.md section 3).
 
-    Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    ``energy``: also compute the elastic energy (else 0 where not needed). Returns a
-    :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint index,
-    never a row of them: a row is a new array view, formed at every call.
+    ``ball``: the ball's body (centroid rb, velocity vb, rotation Rb, body-frame angular
+    velocity wb) and the ball centre's body offset ub, as the tuple (rb, vb, Rb, wb, ub);
+    ``socket``: (rs, vs, Rs, ws_, us) likewise. ``model`` (a :data:`work.Model`) holds p, jp,
+    s and wmap. ``energy``: also compute the elastic energy (else 0 where not needed).
+    Returns a :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint
+    index, never a row of them: a row is a new array view, formed at every call.
 
     On a sloped worn surface (bilinear map read, :func:`gap`'s ``slope`` s != 0) the
     penetration delta = e - c - h(n) has the gradient m = n - s, and the contact force
@@ -142,6 +144,12 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     velocity as the socket sees it; damping and friction are booked as dissipated.
     A flat surface (s = 0) gives the radial force F = -F_N n of section 3.4.
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    wmap = model.wmap
+    rb, vb, Rb, wb, ub = ball
+    rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     e, n, d_s, n_s, h, slope, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)
