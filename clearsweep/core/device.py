@@ -29,6 +29,7 @@ too, when it runs as the Python source that the CUDA compiler sees (tests/test_g
 The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
+import inspect
 import math
 
 import numba
@@ -151,22 +152,33 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
-#: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument
-#: position: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
-FIXED_SHAPES = {1: (2, N_JP), 6: (2, 3, N_ANGLE_BINS), 9: (2, N_M)}
-FIXED_SHAPES.update({11 + k: shape for k, shape in enumerate(work_shapes(0, 1))
-                     if k not in (7, 8, 10)})
+#: run_cases' arguments by name, in launch order (inputs, results, the work arrays of
+#: ``rk4.work_shapes``, the row placeholders): :func:`launch` takes them by name.
+ARGS = tuple(inspect.signature(run_cases.py_func).parameters)
+
+#: The arguments that hold what a batch gives back: the results, and the work array
+#: ``pairs`` (its row PAIR_FIRST holds the first impact times).
+RESULTS = ("wmap", "proj", "wvol", "info", "stats", "track", "pairs")
+
+#: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument name:
+#: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
+FIXED_SHAPES = {"jp": (2, N_JP), "proj": (2, 3, N_ANGLE_BINS), "stats": (2, N_M)}
+FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
+                     if name not in ("buf_i", "buf_v", "scratch")})
 
 
-def launch(arrays: tuple) -> None:
-    """Run :func:`run_cases` over every case of ``arrays`` (its arguments, device or host
-    arrays) and wait for it to finish. ValueError if an argument's per-case shape is not
-    the one run_cases addresses it by (FIXED_SHAPES)."""
-    for at, shape in FIXED_SHAPES.items():
-        if tuple(arrays[at].shape[1:]) != shape:
-            raise ValueError(f"run_cases argument {at}: per-case shape {arrays[at].shape[1:]}, "
-                             f"expected {shape}")
-    n = arrays[0].shape[0]
+def launch(arrays: dict) -> None:
+    """Run :func:`run_cases` over every case of ``arrays`` (its arguments by name, device or
+    host arrays) and wait for it to finish. ValueError if an argument is missing or unknown,
+    or if its per-case shape is not the one run_cases addresses it by (FIXED_SHAPES)."""
+    if set(arrays) != set(ARGS):
+        raise ValueError(f"run_cases arguments: missing {sorted(set(ARGS) - set(arrays))}, "
+                         f"unknown {sorted(set(arrays) - set(ARGS))}")
+    for name, shape in FIXED_SHAPES.items():
+        if tuple(arrays[name].shape[1:]) != shape:
+            raise ValueError(f"run_cases argument {name}: per-case shape "
+                             f"{arrays[name].shape[1:]}, expected {shape}")
+    n = arrays["p"].shape[0]
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-    run_cases[blocks, THREADS_PER_BLOCK](*arrays)
+    run_cases[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()

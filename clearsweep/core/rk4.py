@@ -380,14 +380,19 @@ def undo_rows(max_level):
     return 2 * (1 << max_level)
 
 
+#: The grouped work arrays whose entries are int64 (the rest are float64).
+INT_WORK = frozenset({"buf_i"})
+
+
 def work_shapes(max_level, npolar):
-    """Shapes of the grouped work arrays (vec, diag, cstate, msave, pairs, mats, vz, buf_i,
-    buf_v, caps, scratch) for a case of the given sub-step level cap and wear-map polar bins;
-    buf_i is int64, the rest float64."""
+    """Shapes of the grouped work arrays by name (vec, diag, cstate, msave, pairs, mats, vz,
+    buf_i, buf_v, caps, scratch: the order of run_cases' arguments) for a case of the given
+    sub-step level cap and wear-map polar bins; those in :data:`INT_WORK` are int64."""
     nbuf_max = undo_rows(max_level)
-    return ((VEC_ROWS, N_Y), (DIAG_ROWS, N_D), (CSTATE_ROWS, 2, N_S), (2, N_M), (PAIR_ROWS, 2),
-            (MAT_ROWS, 6, 6), (VZ_ROWS, 6), (nbuf_max, 4), (nbuf_max, 4), (CAP_ROWS, 2, 6),
-            (4 * npolar, 3))
+    return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, 2, N_S),
+            "msave": (2, N_M), "pairs": (PAIR_ROWS, 2), "mats": (MAT_ROWS, 6, 6),
+            "vz": (VZ_ROWS, 6), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
+            "caps": (CAP_ROWS, 2, 6), "scratch": (4 * npolar, 3)}
 
 
 @compiled(locals=_NOT_LITERAL)
