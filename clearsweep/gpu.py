@@ -78,10 +78,11 @@ def device_name() -> str:
 def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
     """Device memory [bytes] that one case of a batch takes (inputs, results, work)."""
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
-    items = (L.N_P + 2 * L.N_JP + L.N_Y + 2        # p, jp, y0, n_steps, save_every
-             + 2 * npolar * nazim + 2 * 3 * L.N_ANGLE_BINS + 2   # wmap, proj, wvol
-             + L.N_INFO + 2 * L.N_M + L.N_TRACK     # info, stats, track
-             + 1 + L.N_Y + L.N_D + 2)              # row placeholders
+    nj = L.N_JOINTS
+    items = (L.N_P + nj * L.N_JP + L.N_Y + 2       # p, jp, y0, n_steps, save_every
+             + nj * npolar * nazim + nj * 3 * L.N_ANGLE_BINS + nj   # wmap, proj, wvol
+             + L.N_INFO + L.N_WINDOWS * L.N_M + L.N_TRACK     # info, stats, track
+             + 1 + L.N_Y + L.N_D + nj)             # row placeholders
     items += sum(math.prod(s) for s in work_shapes(max_level, npolar).values())
     return 8 * items
 
@@ -127,14 +128,15 @@ def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
               "y0": np.stack([pk.y0 for pk in group]),
               "n_steps": np.array([pk.n_steps for pk in group], dtype=np.int64),
               "save_every": np.array([pk.save_every for pk in group], dtype=np.int64),
-              "wmap": np.zeros((n, 2, npolar, nazim)),
-              "proj": np.zeros((n, 2, 3, L.N_ANGLE_BINS)), "wvol": np.zeros((n, 2)),
+              "wmap": np.zeros((n, L.N_JOINTS, npolar, nazim)),
+              "proj": np.zeros((n, L.N_JOINTS, 3, L.N_ANGLE_BINS)),
+              "wvol": np.zeros((n, L.N_JOINTS)),
               "info": np.zeros((n, L.N_INFO), dtype=np.int64),
-              "stats": np.zeros((n, 2, L.N_M)), "track": np.zeros((n, L.N_TRACK))}
+              "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK))}
     for name, shape in work_shapes(max_level, npolar).items():
         arrays[name] = np.zeros((n,) + shape, dtype=np.int64 if name in INT_WORK else np.float64)
     arrays.update(rows_t=np.zeros((n, 1)), rows_y=np.zeros((n, 1, L.N_Y)),
-                  rows_d=np.zeros((n, 1, L.N_D)), rows_wmax=np.zeros((n, 1, 2)))
+                  rows_d=np.zeros((n, 1, L.N_D)), rows_wmax=np.zeros((n, 1, L.N_JOINTS)))
     return arrays
 
 

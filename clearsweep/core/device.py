@@ -36,7 +36,7 @@ import numba
 from numba import cuda, types
 
 from .dynamics import VZ_ROWS
-from .layout import N_ANGLE_BINS, N_D, N_JP, N_M, N_S, N_Y
+from .layout import N_ANGLE_BINS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
@@ -132,23 +132,25 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
     i = cuda.grid(1)
     if i < p.shape[0]:
-        case = Case(p[i], block(jp, i, 0, (2, N_JP)), y0[i], wmap[i],
-                    block(proj, i, 0, (2, 3, N_ANGLE_BINS)), wvol[i])
+        case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
+                    block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS)), wvol[i])
         out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
-                  block(stats, i, 0, (2, N_M)), track[i], block(pairs, i, PAIR_FIRST, (2,)))
+                  block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)))
         work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
                        block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
                        block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
                        block(vec, i, 6, (N_Y,)),
                        block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
-                       block(cstate, i, 0, (2, N_S)), block(cstate, i, 1, (2, N_S)),
-                       block(msave, i, 0, (2, N_M)),
-                       block(pairs, i, 0, (2,)), block(pairs, i, 1, (2,)),
-                       block(pairs, i, 2, (2,)), block(pairs, i, PAIR_FIRST_COPY, (2,)),
+                       block(cstate, i, 0, (N_JOINTS, N_S)),
+                       block(cstate, i, 1, (N_JOINTS, N_S)),
+                       block(msave, i, 0, (N_WINDOWS, N_M)),
+                       block(pairs, i, 0, (N_JOINTS,)), block(pairs, i, 1, (N_JOINTS,)),
+                       block(pairs, i, 2, (N_JOINTS,)),
+                       block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
                        block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)),
                        block(mats, i, 2, (6, 6)), block(vz, i, 0, (VZ_ROWS, 6)),
-                       buf_i[i], buf_v[i], block(caps, i, 0, (2, 6)), block(caps, i, 1, (2, 6)),
-                       scratch[i])
+                       buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
+                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i])
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
@@ -162,7 +164,8 @@ RESULTS = ("wmap", "proj", "wvol", "info", "stats", "track", "pairs")
 
 #: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument name:
 #: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
-FIXED_SHAPES = {"jp": (2, N_JP), "proj": (2, 3, N_ANGLE_BINS), "stats": (2, N_M)}
+FIXED_SHAPES = {"jp": (N_JOINTS, N_JP), "proj": (N_JOINTS, 3, N_ANGLE_BINS),
+                "stats": (N_WINDOWS, N_M)}
 FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
                      if name not in ("buf_i", "buf_v", "scratch")})
 

@@ -29,6 +29,7 @@ from .layout import (
     I_SUBSTEPS,
     J_CLEARANCE,
     N_D,
+    N_JOINTS,
     N_R,
     N_S,
     N_TRACK,
@@ -184,7 +185,7 @@ def onset_step(p, jp, dg0, dg1, h):
     if h <= tol:
         return 0.0
     shorter = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         d0 = dg0[D_DELTA + j]     # signed: the gap is -delta before contact
@@ -212,10 +213,11 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
     work = Dopri5Work(np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
                       np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
                       np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D),
-                      np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros(2),
-                      np.zeros(2), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)),
-                      np.zeros((VZ_ROWS, 6)), np.zeros((2, 4), dtype=np.int64),
-                      np.zeros((2, 4)), np.zeros((2, 6)), np.zeros((2, 6)),
+                      np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
+                      np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((6, 6)),
+                      np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                      np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
+                      np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
                       np.zeros((4 * case.wmap.shape[1], 3)))
     advance_dopri5(case, t0, n_steps, save_every, out, work)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
@@ -279,7 +281,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     zero_rows(work.buf_v)
     zero_rows(cur)
     zero_rows(pend)
-    for j in range(2):
+    for j in range(N_JOINTS):
         wmax[j] = 0.0
     for i in range(N_D):
         dg[i] = 0.0
@@ -287,8 +289,8 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         dgo[i] = 0.0
     for i in range(N_TRACK):
         track[i] = 0.0
-    first[0] = -1.0
-    first[1] = -1.0
+    for j in range(N_JOINTS):
+        first[j] = -1.0
 
     status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if status != ST_OK:
@@ -335,7 +337,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             continue
         # ---- accepted: the same per-step rules as RK4 ----
         in_settled = t + hh >= settle
-        for j in range(2):
+        for j in range(N_JOINTS):
             for i in range(6):
                 cur[j, i] = 0.0
         changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
@@ -368,8 +370,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
                 copy_row(out_y, n_saved, yrow)
                 copy_row(out_d, n_saved, dgo)
             out_t[n_saved] = ts
-            out_wmax[n_saved, 0] = wmax[0]
-            out_wmax[n_saved, 1] = wmax[1]
+            copy_row(out_wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
@@ -385,8 +386,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         h = min(hh * grow, hmax)
     flush_all_wear(wmap, pend, wmax, scratch)
     if status == ST_OK and n_saved > 0:
-        out_wmax[n_saved - 1, 0] = wmax[0]
-        out_wmax[n_saved - 1, 1] = wmax[1]
+        copy_row(out_wmax, n_saved - 1, wmax)
     deepest = 0
     while grid / (1 << deepest) > h_small * (1.0 + 1e-12) and deepest < 62:
         deepest += 1

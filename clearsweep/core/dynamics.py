@@ -69,6 +69,7 @@ from .layout import (
     J_RI,
     J_RJ,
     N_D,
+    N_JOINTS,
     N_Q,
     N_S,
     P_BAUM_A,
@@ -677,7 +678,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
     cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         delta = dg[D_DELTA + j]
@@ -747,7 +748,7 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
 @compiled(inline="always")
 def clear_contacts(dg):
     """Zero both joints' contact diagnostics (an ideal joint keeps zeros)."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         dg[D_FN + j] = 0.0
         dg[D_FT + j] = 0.0
         dg[D_DELTA + j] = 0.0
@@ -795,19 +796,19 @@ def ideal_joint_forces(t, y, p, jp):
     jp_ideal = jp.copy()
     jp_ideal[0, J_CLEARANCE] = 0.0
     jp_ideal[1, J_CLEARANCE] = 0.0
-    s = np.zeros((2, N_S))
-    wmap = np.zeros((2, 1, 1))
+    s = np.zeros((N_JOINTS, N_S))
+    wmap = np.zeros((N_JOINTS, 1, 1))
     dy = np.zeros(y.shape[0])
     dg = np.zeros(N_D)
     C = np.zeros((6, 6))
     S = np.zeros((6, 6))
     L = np.zeros((6, 6))
     vz = np.zeros((VZ_ROWS, 6))
-    out = np.full((2, 3), np.nan)
+    out = np.full((N_JOINTS, 3), np.nan)
     if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), Model(p, jp_ideal, s, wmap),
                 dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
         return out
-    for j in range(2):
+    for j in range(N_JOINTS):
         for i in range(3):
             out[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
     return out

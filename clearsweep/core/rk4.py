@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, types
 
 from .compiled import compiled
-from .contact import contact_angle, contact_area, episode_impact_velocity, surface
+from .contact import episode_impact_velocity, surface
 from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_CONS,
@@ -54,10 +54,12 @@ from .layout import (
     N_ANGLE_BINS,
     N_D,
     N_INFO,
+    N_JOINTS,
     N_M,
     N_R,
     N_S,
     N_TRACK,
+    N_WINDOWS,
     N_Y,
     P_AMPL,
     P_CONS_TOL,
@@ -92,6 +94,7 @@ from .layout import (
     Y_ROD_BETA,
     Y_WORK,
 )
+from .spherical import contact_angle, contact_area
 from .wear import deposit, projection_bins
 from .work import Model, Rk4Work, Solve, Wear
 
@@ -109,7 +112,10 @@ def level_for(rate, h, limit):
 
 @compiled
 def energy_total(dg):
-    return dg[D_KE] + dg[D_PE_GRAV] + dg[D_UEL] + dg[D_UEL + 1]
+    e = dg[D_KE] + dg[D_PE_GRAV]
+    for j in range(N_JOINTS):
+        e += dg[D_UEL + j]
+    return e
 
 
 #: Local variables that Numba must type as plain values: a constant argument would otherwise
@@ -229,7 +235,7 @@ def record_sample(m, w, dg, jp, weight):
     m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], abs(dg[D_TORQUE]))
     m[w, M_TIME] += weight
     m[w, M_SAMPLES] += 1.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], dg[D_FN + j])
@@ -260,7 +266,7 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     paper_slip = p[P_SLIP] != 0.0
     ampl = p[P_AMPL]
     changed = False
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         ddot = dg[D_DDOT + j]
@@ -337,7 +343,7 @@ def step_checks(y, dg, p, jp, status, e0, track):
             status = ST_NONFINITE
     if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
         status = ST_EULER
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
             status = ST_PENETRATION
     track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
@@ -377,7 +383,7 @@ CAP_ROWS = 2
 @compiled
 def undo_rows(max_level):
     """Rows of the undo buffer: one per joint and accepted sub-step of the deepest level."""
-    return 2 * (1 << max_level)
+    return N_JOINTS * (1 << max_level)
 
 
 #: The grouped work arrays whose entries are int64 (the rest are float64).
@@ -389,10 +395,10 @@ def work_shapes(max_level, npolar):
     buf_i, buf_v, caps, scratch: the order of run_cases' arguments) for a case of the given
     sub-step level cap and wear-map polar bins; those in :data:`INT_WORK` are int64."""
     nbuf_max = undo_rows(max_level)
-    return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, 2, N_S),
-            "msave": (2, N_M), "pairs": (PAIR_ROWS, 2), "mats": (MAT_ROWS, 6, 6),
+    return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, N_JOINTS, N_S),
+            "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, 6, 6),
             "vz": (VZ_ROWS, 6), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
-            "caps": (CAP_ROWS, 2, 6), "scratch": (4 * npolar, 3)}
+            "caps": (CAP_ROWS, N_JOINTS, 6), "scratch": (4 * npolar, 3)}
 
 
 @compiled(locals=_NOT_LITERAL)
@@ -406,10 +412,10 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
-    for w in range(2):
+    for w in range(N_WINDOWS):
         for i in range(N_M):
             stats[w, i] = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         s[j, S_DV0] = 0.0
         s[j, S_BETA] = math.pi
     # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
@@ -421,7 +427,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
         if again == 1:
             break
         seated = False
-        for j in range(2):
+        for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
                 s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
@@ -441,7 +447,7 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
     without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m]."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if cur[j, 3] > 0.0:
             if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
                 wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
@@ -456,7 +462,7 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
 def flush_all_wear(wmap, pend, wmax, scratch):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
@@ -464,7 +470,7 @@ def flush_all_wear(wmap, pend, wmax, scratch):
 @compiled
 def note_first_impact(first, stats, t):
     """Record t as a joint's first impact time when its impact count has just left 0."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if first[j] < 0.0 and stats[W_WHOLE, M_IMPACTS + j] > 0.0:
             first[j] = t
 
@@ -476,7 +482,7 @@ def kernel_result(track, first):
     out = np.empty(N_R)
     out[R_RESIDUAL_MAX] = track[T_RESIDUAL_MAX]
     out[R_KE_PEAK] = track[T_KE_PEAK]
-    for j in range(2):
+    for j in range(N_JOINTS):
         out[R_FIRST_IMPACT + j] = first[j] if first[j] >= 0.0 else np.nan
     return out
 
@@ -513,11 +519,13 @@ def integrate(case, t0, n_steps, save_every, out):
     nbuf_max = undo_rows(int(case.p[P_MAX_LEVEL]))
     work = Rk4Work(np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
                    np.zeros(N_Y), np.zeros(N_Y),
-                   np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
-                   np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
+                   np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
+                   np.zeros((N_JOINTS, N_S)), np.zeros((N_WINDOWS, N_M)), np.zeros(N_JOINTS),
+                   np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS),
                    np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-                   np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((4 * case.wmap.shape[1], 3)))
+                   np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
+                   np.zeros((4 * case.wmap.shape[1], 3)))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -602,7 +610,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     for i in range(N_D):
         dg[i] = 0.0
         dgsave[i] = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
         first_save[j] = 0.0
@@ -621,8 +629,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         return
     e0 = energy_total(dg)
     track[T_KE_PEAK] = dg[D_KE]
-    first[0] = -1.0    # time of each joint's first impact [s]; -1: none yet
-    first[1] = -1.0
+    for j in range(N_JOINTS):
+        first[j] = -1.0    # time of each joint's first impact [s]; -1: none yet
     if keep_rows:
         out_t[0] = t0
         copy_row(out_y, 0, y)
@@ -651,7 +659,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             hs = h / nsub
             nbuf = 0
             need = -1
-            for j in range(2):
+            for j in range(N_JOINTS):
                 for i in range(6):
                     cur[j, i] = 0.0
             for sub in range(nsub):
@@ -699,7 +707,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 # the stopping attempt's wear stays in the projections and the worn
                 # volume: keep the map holding the same volume (an unstable step's last
                 # attempt was rejected and undone)
-                for j in range(2):
+                for j in range(N_JOINTS):
                     for i in range(5):
                         pend[j, i] += cur[j, i]
                     if cur[j, 3] > 0.0:
@@ -715,15 +723,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 out_t[n_saved] = t + h
                 copy_row(out_y, n_saved, y)
                 copy_row(out_d, n_saved, dg)
-                out_wmax[n_saved, 0] = wmax[0]
-                out_wmax[n_saved, 1] = wmax[1]
+                copy_row(out_wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
     if keep_rows and status == ST_OK and n_saved > 0:
-        out_wmax[n_saved - 1, 0] = wmax[0]
-        out_wmax[n_saved - 1, 1] = wmax[1]
+        copy_row(out_wmax, n_saved - 1, wmax)
     info[I_STATUS] = status
     info[I_SAVED] = n_saved
     info[I_DEEPEST] = deepest

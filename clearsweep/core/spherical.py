@@ -44,6 +44,9 @@ from .layout import (
 )
 from .wear import worn_surface
 
+#: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
+JOINT_TYPE = "spherical"
+
 #: What :func:`contact` returns for one clearance joint (Numba compiles a namedtuple as a
 #: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
 #: named ``_socket``.
@@ -122,6 +125,30 @@ def tangential(v, u):
 def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
     """v(Q_j) - v(Q_i): the velocity of the ball's point Q_j relative to the socket's Q_i."""
     return sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
+
+
+@compiled
+def cap_height(pen, e, ri, rj):
+    """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
+
+    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e); the first factor is the
+    penetration against the unworn radii, ``pen`` = delta + h, passed in rather than
+    formed as a difference of radii (which would lose all digits for small delta).
+    """
+    return pen * (e + rj + ri) / (2.0 * e)
+
+
+@compiled
+def contact_area(pen, e, ri, rj):
+    """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
+    return 2.0 * math.pi * rj * cap_height(pen, e, ri, rj)
+
+
+@compiled
+def contact_angle(pen, e, ri, rj):
+    """Angle beta of Eq. 11 [rad]: pi - 2 asin(sqrt((1 + cos beta) / 2)), accurate near pi."""
+    half = 0.5 * cap_height(pen, e, ri, rj) / rj
+    return math.pi - 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
 
 
 @compiled
