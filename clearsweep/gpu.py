@@ -186,7 +186,7 @@ def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -
     the series the device does not keep."""
     return KernelRun.from_counters(pk, info, track[L.T_RESIDUAL_MAX], track[L.T_KE_PEAK], first,
                                    wall, t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
-                                   wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol,
+                                   wmax=np.full((1, L.N_JOINTS), np.nan), wmap=wmap, proj=proj, wvol=wvol,
                                    stats=stats)
 
 

@@ -55,6 +55,7 @@ from .rk4 import (
     _NOT_LITERAL,
     accept_substep,
     begin_case,
+    case_views,
     copy_into,
     copy_row,
     energy_total,
@@ -66,7 +67,7 @@ from .rk4 import (
     step_checks,
     zero_rows,
 )
-from .work import Dopri5Work, Model, Solve, Wear
+from .work import Dopri5Work
 
 # Dormand & Prince (1980) coefficients; E = b5 - b4 (error weights); D: the 4th-order
 # continuous extension of Hairer, Norsett & Wanner, Solving ODEs I, section II.6.
@@ -233,17 +234,11 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     evaluation returns stops the case, the dense-output evaluations of the sample rows
     included.
     """
+    model, solve, wear = case_views(case, work)
     p = case.p
     jp = case.jp
     wmap = case.wmap
-    out_t = out.t
-    out_y = out.y
-    out_d = out.d
-    out_wmax = out.wmax
-    info = out.info
     stats = out.stats
-    track = out.track
-    first = out.first
     y = work.y
     y1 = work.y1
     k1 = work.k1
@@ -258,15 +253,11 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     dg = work.dg
     dg1 = work.dg1
     dgo = work.dgo
-    s = work.s
     ddot_prev = work.ddot_prev
     wmax = work.wmax
     cur = work.cur
     pend = work.pend
     scratch = work.scratch
-    model = Model(p, jp, s, wmap)
-    solve = Solve(work.C, work.S, work.L, work.vz)
-    wear = Wear(case.proj, case.wvol, cur, pend, work.buf_i, work.buf_v, wmax, scratch)
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
@@ -288,22 +279,22 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         dg1[i] = 0.0
         dgo[i] = 0.0
     for i in range(N_TRACK):
-        track[i] = 0.0
+        out.track[i] = 0.0
     for j in range(N_JOINTS):
-        first[j] = -1.0
+        out.first[j] = -1.0
 
     status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if status != ST_OK:
-        info[I_STATUS] = status
-        info[I_SAVED] = 0
+        out.info[I_STATUS] = status
+        out.info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[T_KE_PEAK] = dg[D_KE]
-    out_t[0] = t0
-    copy_row(out_y, 0, y)
-    copy_row(out_d, 0, dg)
+    out.track[T_KE_PEAK] = dg[D_KE]
+    out.t[0] = t0
+    copy_row(out.y, 0, y)
+    copy_row(out.d, 0, dg)
     n_saved = 1
-    n_save = out_t.shape[0]
+    n_save = out.t.shape[0]
     accepted = 0
     h_small = hmax
     t = t0
@@ -341,7 +332,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             for i in range(6):
                 cur[j, i] = 0.0
         changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
-        note_first_impact(first, stats, t + hh)
+        note_first_impact(out.first, stats, t + hh)
         if changed:
             st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
             if st != ST_OK:
@@ -357,8 +348,8 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             ts = t0 + (n_saved * save_every) * grid
             theta = (ts - t) / hh
             if theta >= 1.0 - 1e-12:
-                copy_row(out_y, n_saved, y1)
-                copy_row(out_d, n_saved, dg1)
+                copy_row(out.y, n_saved, y1)
+                copy_row(out.d, n_saved, dg1)
             else:
                 dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
                 for i in range(ny):
@@ -367,10 +358,10 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
                 if st != ST_OK:
                     status = st
                     break
-                copy_row(out_y, n_saved, yrow)
-                copy_row(out_d, n_saved, dgo)
-            out_t[n_saved] = ts
-            copy_row(out_wmax, n_saved, wmax)
+                copy_row(out.y, n_saved, yrow)
+                copy_row(out.d, n_saved, dgo)
+            out.t[n_saved] = ts
+            copy_row(out.wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
@@ -381,17 +372,17 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         accepted += 1
         if not last:
             h_small = min(h_small, hh)
-        status = step_checks(y, dg, p, jp, status, e0, track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track)
         grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
         h = min(hh * grow, hmax)
     flush_all_wear(wmap, pend, wmax, scratch)
     if status == ST_OK and n_saved > 0:
-        copy_row(out_wmax, n_saved - 1, wmax)
+        copy_row(out.wmax, n_saved - 1, wmax)
     deepest = 0
     while grid / (1 << deepest) > h_small * (1.0 + 1e-12) and deepest < 62:
         deepest += 1
-    info[I_STATUS] = status
-    info[I_SAVED] = n_saved
-    info[I_DEEPEST] = deepest
-    info[I_SUBSTEPS] = accepted
-    info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))
+    out.info[I_STATUS] = status
+    out.info[I_SAVED] = n_saved
+    out.info[I_DEEPEST] = deepest
+    out.info[I_SUBSTEPS] = accepted
+    out.info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))

@@ -401,6 +401,15 @@ def work_shapes(max_level, npolar):
             "caps": (CAP_ROWS, N_JOINTS, 6), "scratch": (4 * npolar, 3)}
 
 
+@compiled(inline="always")
+def case_views(case, work):
+    """The :data:`work.Model`, :data:`work.Solve` and :data:`work.Wear` of a case and the work
+    arrays of either integrator (:data:`work.Rk4Work`, :data:`work.Dopri5Work`)."""
+    return (Model(case.p, case.jp, work.s, case.wmap), Solve(work.C, work.S, work.L, work.vz),
+            Wear(case.proj, case.wvol, work.cur, work.pend, work.buf_i, work.buf_v, work.wmax,
+                 work.scratch))
+
+
 @compiled(locals=_NOT_LITERAL)
 def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
@@ -547,14 +556,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     wmap = case.wmap
     proj = case.proj
     wvol = case.wvol
-    out_t = out.t
-    out_y = out.y
-    out_d = out.d
-    out_wmax = out.wmax
-    info = out.info
     stats = out.stats
-    track = out.track
-    first = out.first
     y = work.y
     ysave = work.ysave
     k1 = work.k1
@@ -580,9 +582,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     cur = work.cur
     pend = work.pend
     scratch = work.scratch
-    model = Model(p, jp, s, wmap)
-    solve = Solve(C, S, L, vz)
-    wear = Wear(proj, wvol, cur, pend, buf_i, buf_v, wmax, scratch)
+    model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
     settled = W_SETTLED
@@ -617,24 +617,24 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     copy_into(y, y0)
     # begin_case clears the statistics and sets the contact state
     for i in range(N_TRACK):
-        track[i] = 0.0
+        out.track[i] = 0.0
     for i in range(I_DEEPEST, N_INFO):
-        info[i] = 0
+        out.info[i] = 0
 
     status = ST_OK
     st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if st != ST_OK:
-        info[I_STATUS] = st
-        info[I_SAVED] = 0
+        out.info[I_STATUS] = st
+        out.info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[T_KE_PEAK] = dg[D_KE]
+    out.track[T_KE_PEAK] = dg[D_KE]
     for j in range(N_JOINTS):
-        first[j] = -1.0    # time of each joint's first impact [s]; -1: none yet
+        out.first[j] = -1.0    # time of each joint's first impact [s]; -1: none yet
     if keep_rows:
-        out_t[0] = t0
-        copy_row(out_y, 0, y)
-        copy_row(out_d, 0, dg)
+        out.t[0] = t0
+        copy_row(out.y, 0, y)
+        copy_row(out.d, 0, dg)
     n_saved = 1
     deepest = 0
     total = 0
@@ -649,7 +649,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         copy_into(dgsave, dg)
         copy_rows_into(ssave, s)
         copy_rows_into(msave, stats)
-        copy_into(first_save, first)
+        copy_into(first_save, out.first)
         copy_into(ddot_prev_save, ddot_prev)
         while True:
             if level > max_level:
@@ -676,7 +676,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 in_settled = ts + hs >= settle
                 changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
                                                ddot_prev)
-                note_first_impact(first, stats, ts + hs)
+                note_first_impact(out.first, stats, ts + hs)
                 if changed:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                     if st != ST_OK:
@@ -699,7 +699,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             copy_into(dg, dgsave)
             copy_rows_into(s, ssave)
             copy_rows_into(stats, msave)
-            copy_into(first, first_save)
+            copy_into(out.first, first_save)
             copy_into(ddot_prev, ddot_prev_save)
             level = max(level + 1, need)
         if status != ST_OK:
@@ -717,21 +717,21 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         deepest = max(deepest, level)
         merge_wear(wmap, cur, pend, wmax, scratch)
 
-        status = step_checks(y, dg, p, jp, status, e0, track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track)
         if (step + 1) % save_every == 0:
             if keep_rows:
-                out_t[n_saved] = t + h
-                copy_row(out_y, n_saved, y)
-                copy_row(out_d, n_saved, dg)
-                copy_row(out_wmax, n_saved, wmax)
+                out.t[n_saved] = t + h
+                copy_row(out.y, n_saved, y)
+                copy_row(out.d, n_saved, dg)
+                copy_row(out.wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
     if keep_rows and status == ST_OK and n_saved > 0:
-        copy_row(out_wmax, n_saved - 1, wmax)
-    info[I_STATUS] = status
-    info[I_SAVED] = n_saved
-    info[I_DEEPEST] = deepest
-    info[I_SUBSTEPS] = total
-    info[I_STEPS] = steps_done
+        copy_row(out.wmax, n_saved - 1, wmax)
+    out.info[I_STATUS] = status
+    out.info[I_SAVED] = n_saved
+    out.info[I_DEEPEST] = deepest
+    out.info[I_SUBSTEPS] = total
+    out.info[I_STEPS] = steps_done
