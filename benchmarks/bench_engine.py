@@ -155,6 +155,7 @@ def rhs_ns(packed, n=200_000) -> float:
 
     from clearsweep.core import layout as L
     from clearsweep.core.dynamics import evaluate
+    from clearsweep.core.work import Model, Solve
 
     @njit
     def loop(y, p, jp, n):
@@ -168,7 +169,7 @@ def rhs_ns(packed, n=200_000) -> float:
         vz = np.zeros((8, 6))
         acc = 0.0
         for i in range(n):
-            evaluate(1e-3 * (i % 7), y, p, jp, s, wmap, dy, dg, False, C, S, Lm, vz)
+            evaluate(1e-3 * (i % 7), y, Model(p, jp, s, wmap), dy, dg, False, Solve(C, S, Lm, vz))
             acc += dy[30]
         return acc
 
@@ -187,6 +188,7 @@ def step_breakdown(overrides, repeats=3, n=200_000) -> dict[str, float]:
 
     from clearsweep.core import layout as L
     from clearsweep.core.dynamics import VZ_ROWS, evaluate
+    from clearsweep.core.work import Model, Solve
     from clearsweep.simulation import run_kernel
 
     @njit
@@ -201,7 +203,7 @@ def step_breakdown(overrides, repeats=3, n=200_000) -> dict[str, float]:
         vz = np.zeros((VZ_ROWS, 6))
         acc = 0.0
         for i in range(n):
-            evaluate(1e-3 * (i % 7), y, p, jp, s, wmap, dy, dg, full, C, S, Lm, vz)
+            evaluate(1e-3 * (i % 7), y, Model(p, jp, s, wmap), dy, dg, full, Solve(C, S, Lm, vz))
             acc += dy[30]
         return acc
 
@@ -235,6 +237,7 @@ def solve_ivp_rate(packed, duration) -> tuple[float, int, float]:
 
     from clearsweep.core import layout as L
     from clearsweep.core.dynamics import evaluate
+    from clearsweep.core.work import Model, Solve
 
     s = np.zeros((2, L.N_S))
     wmap = np.zeros((2, 36, 72))
@@ -244,9 +247,12 @@ def solve_ivp_rate(packed, duration) -> tuple[float, int, float]:
     Lm = np.zeros((6, 6))
     vz = np.zeros((8, 6))
 
+    model = Model(packed.p, packed.jp, s, wmap)
+    solve = Solve(C, S, Lm, vz)
+
     def f(t, y):
         dy = np.empty(L.N_Y)
-        evaluate(t, y, packed.p, packed.jp, s, wmap, dy, dg, False, C, S, Lm, vz)
+        evaluate(t, y, model, dy, dg, False, solve)
         return dy
 
     f(0.0, packed.y0)

@@ -23,7 +23,7 @@ import numpy as np
 
 from .config import Config, resolve_materials
 from .core import layout as L
-from .core.rk4 import PAIR_FIRST, work_shapes
+from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
 from .params import Packed, pack
 from .simulation import KernelRun, check_step
 
@@ -78,11 +78,12 @@ def device_name() -> str:
 def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
     """Device memory [bytes] that one case of a batch takes (inputs, results, work)."""
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
-    items = (L.N_P + 2 * L.N_JP + L.N_Y + 2        # p, jp, y0, n_steps, save_every
-             + 2 * npolar * nazim + 2 * 3 * L.N_ANGLE_BINS + 2   # wmap, proj, wvol
-             + 5 + 2 * L.N_M + 3                   # info, stats, track
-             + 1 + L.N_Y + L.N_D + 2)              # row placeholders
-    items += sum(math.prod(s) for s in work_shapes(max_level, npolar))
+    nj = L.N_JOINTS
+    items = (L.N_P + nj * L.N_JP + L.N_Y + 2       # p, jp, y0, n_steps, save_every
+             + nj * npolar * nazim + nj * 3 * L.N_ANGLE_BINS + nj   # wmap, proj, wvol
+             + L.N_INFO + L.N_WINDOWS * L.N_M + L.N_TRACK     # info, stats, track
+             + 1 + L.N_Y + L.N_D + nj)             # row placeholders
+    items += sum(math.prod(s) for s in work_shapes(max_level, npolar).values())
     return 8 * items
 
 
@@ -117,46 +118,44 @@ def _device_budget() -> int:
     return int(DEVICE_MEMORY_FRACTION * free)
 
 
-def _allocate(group: Sequence[Packed]) -> tuple:
-    """Host arrays of run_cases' arguments for one batch of cases of one map shape."""
+def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
+    """Host arrays of run_cases' arguments, by name (``core.device.ARGS``), for one batch of
+    cases of one map shape."""
     n = len(group)
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
-    inputs = (np.stack([pk.p for pk in group]), np.stack([pk.jp for pk in group]),
-              np.stack([pk.y0 for pk in group]),
-              np.array([pk.n_steps for pk in group], dtype=np.int64),
-              np.array([pk.save_every for pk in group], dtype=np.int64))
-    results = (np.zeros((n, 2, npolar, nazim)), np.zeros((n, 2, 3, L.N_ANGLE_BINS)),
-               np.zeros((n, 2)), np.zeros((n, 5), dtype=np.int64), np.zeros((n, 2, L.N_M)),
-               np.zeros((n, 3)))
-    shapes = work_shapes(max_level, npolar)
-    work = tuple(np.zeros((n,) + s, dtype=np.int64 if k == 7 else np.float64)
-                 for k, s in enumerate(shapes))
-    rows = (np.zeros((n, 1)), np.zeros((n, 1, L.N_Y)), np.zeros((n, 1, L.N_D)),
-            np.zeros((n, 1, 2)))
-    return inputs + results + work + rows
+    arrays = {"p": np.stack([pk.p for pk in group]), "jp": np.stack([pk.jp for pk in group]),
+              "y0": np.stack([pk.y0 for pk in group]),
+              "n_steps": np.array([pk.n_steps for pk in group], dtype=np.int64),
+              "save_every": np.array([pk.save_every for pk in group], dtype=np.int64),
+              "wmap": np.zeros((n, L.N_JOINTS, npolar, nazim)),
+              "proj": np.zeros((n, L.N_JOINTS, 3, L.N_ANGLE_BINS)),
+              "wvol": np.zeros((n, L.N_JOINTS)),
+              "info": np.zeros((n, L.N_INFO), dtype=np.int64),
+              "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK))}
+    for name, shape in work_shapes(max_level, npolar).items():
+        arrays[name] = np.zeros((n,) + shape, dtype=np.int64 if name in INT_WORK else np.float64)
+    arrays.update(rows_t=np.zeros((n, 1)), rows_y=np.zeros((n, 1, L.N_Y)),
+                  rows_d=np.zeros((n, 1, L.N_D)), rows_wmax=np.zeros((n, 1, L.N_JOINTS)))
+    return arrays
 
 
-#: Position of the work array ``pairs`` in run_cases' arguments: after the 5 inputs, the 6
-#: results and the 4 work arrays before it (rk4.work_shapes order).
-_PAIRS_ARG = 5 + 6 + 4
-
-
-def _run_on_device(args: tuple) -> tuple:
-    """Launch one batch; the result arrays (wmap, proj, wvol, info, stats, track) and the
-    work array ``pairs`` (which holds the first impact times) on the host."""
+def _run_on_device(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Launch one batch; the arrays it gives back (``core.device.RESULTS``: wmap, proj,
+    wvol, info, stats, track and the work array ``pairs``, which holds the first impact
+    times) on the host, by name."""
     from .core import device
 
     if simulated():
-        device.launch(args)
-        return args[5:11] + (args[_PAIRS_ARG],)
+        device.launch(arrays)
+        return {name: arrays[name] for name in device.RESULTS}
     from numba import cuda
 
     stream = cuda.stream()
-    on_device = tuple(cuda.to_device(a, stream=stream) for a in args)
+    on_device = {name: cuda.to_device(a, stream=stream) for name, a in arrays.items()}
     stream.synchronize()
     device.launch(on_device)
-    return tuple(a.copy_to_host() for a in on_device[5:11] + (on_device[_PAIRS_ARG],))
+    return {name: on_device[name].copy_to_host() for name in device.RESULTS}
 
 
 def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
@@ -173,21 +172,21 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
         for start in range(0, len(members), size):
             batch = members[start:start + size]
             began = time.perf_counter()
-            wmap, proj, wvol, info, stats, track, pairs = _run_on_device(
-                _allocate([packed[i] for i in batch]))
+            res = _run_on_device(_allocate([packed[i] for i in batch]))
             wall = (time.perf_counter() - began) / len(batch)
             for k, i in enumerate(batch):
-                out[i] = _raw(packed[i], wmap[k], proj[k], wvol[k], info[k], stats[k], track[k],
-                              pairs[k][PAIR_FIRST], wall)
+                out[i] = _raw(packed[i], res["wmap"][k], res["proj"][k], res["wvol"][k],
+                              res["info"][k], res["stats"][k], res["track"][k],
+                              res["pairs"][k][PAIR_FIRST], wall)
     return [r for r in out if r is not None]
 
 
 def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> KernelRun:
     """One case of a batch as a :class:`~clearsweep.simulation.KernelRun`: one NaN row for
     the series the device does not keep."""
-    return KernelRun.from_counters(pk, info, track[2], track[0], first, wall, t=np.zeros(1),
-                                   y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
-                                   wmax=np.full((1, 2), np.nan), wmap=wmap, proj=proj, wvol=wvol,
+    return KernelRun.from_counters(pk, info, track[L.T_RESIDUAL_MAX], track[L.T_KE_PEAK], first,
+                                   wall, t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
+                                   wmax=np.full((1, L.N_JOINTS), np.nan), wmap=wmap, proj=proj, wvol=wvol,
                                    stats=stats)
 
 

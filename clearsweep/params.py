@@ -17,6 +17,7 @@ from .choices import DAMPING_LAWS
 from .config import Config, EnsembleConfig, JointConfig, resolve_materials
 from .core import layout as L
 from .core.contact import hysteresis_fraction
+from .core.joints import JOINTS
 from .materials import FIELDS
 from .version import __version__
 
@@ -371,6 +372,12 @@ class Packed:
     method: str = "rk4"
 
 
+def joint_configs(cfg: Config) -> list[tuple[str, JointConfig]]:
+    """The config's joint sections in the joint table's order (``core.joints.JOINTS``, the
+    order of the kernel's per-joint rows): ``[(name, its JointConfig), ...]``."""
+    return [(joint.name, getattr(cfg.joints, joint.name)) for joint in JOINTS]
+
+
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
          seat: bool = True) -> Packed:
     """Resolved config (config.load_config) + materials -> kernel vectors (SI).
@@ -428,8 +435,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     p[L.P_HMAX] = 10.0 * solver.dt if solver.max_step is None else solver.max_step
     p[L.P_ONSET_TOL] = solver.onset_tolerance
     p[L.P_INTERP] = 1.0 if wear.interpolate else 0.0
-    jp = np.zeros((2, L.N_JP))
-    for j, (_, joint) in enumerate(cfg.joints.items()):
+    jp = np.zeros((L.N_JOINTS, L.N_JP))
+    for j, (_, joint) in enumerate(joint_configs(cfg)):
         surface = surface_material(joint, materials)
         c = joint.clearance
         jp[j, L.J_CLEARANCE] = 1.0 if c > 0.0 else 0.0

@@ -27,24 +27,28 @@ from pathlib import Path
 DEFAULT_CC = (9, 0)
 
 
+#: Dimensions of run_cases' arguments (the case first) but the work arrays', by name.
+_NDIM = {"p": 2, "jp": 3, "y0": 2, "n_steps": 1, "save_every": 1, "wmap": 4, "proj": 4,
+         "wvol": 2, "info": 2, "stats": 3, "track": 2, "rows_t": 2, "rows_y": 3, "rows_d": 3,
+         "rows_wmax": 3}
+#: run_cases' int64 arguments but the work arrays' (``rk4.INT_WORK``).
+_INT = frozenset({"n_steps", "save_every", "info"})
+
+
 def run_cases_signature() -> tuple:
-    """Numba types of ``run_cases``' arguments, in order (C-contiguous arrays with the case
-    as first axis, as ``gpu._allocate`` builds them): p, jp, y0, n_steps, save_every; the
-    results wmap, proj, wvol, info, stats, track; the work arrays of ``rk4.work_shapes``
-    (vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch); the row
-    placeholders rows_t, rows_y, rows_d, rows_wmax."""
+    """Numba types of ``run_cases``' arguments, in order (``core.device.ARGS``: C-contiguous
+    arrays with the case as first axis, as ``gpu._allocate`` builds them): p, jp, y0,
+    n_steps, save_every; the results wmap, proj, wvol, info, stats, track; the work arrays
+    of ``rk4.work_shapes``; the row placeholders rows_t, rows_y, rows_d, rows_wmax."""
     from numba import types
 
-    def arr(ndim, dtype=types.float64):
-        return types.Array(dtype, ndim, "C")
+    from .core.device import ARGS
+    from .core.rk4 import INT_WORK, work_shapes
 
-    i64 = types.int64
-    inputs = (arr(2), arr(3), arr(2), arr(1, i64), arr(1, i64))
-    results = (arr(4), arr(4), arr(2), arr(2, i64), arr(3), arr(2))
-    work = (arr(3), arr(3), arr(4), arr(3), arr(3), arr(4), arr(3), arr(3, i64), arr(3),
-            arr(4), arr(3))
-    rows = (arr(2), arr(3), arr(3), arr(3))
-    return inputs + results + work + rows
+    ndim = dict(_NDIM, **{name: 1 + len(shape) for name, shape in work_shapes(0, 1).items()})
+    ints = _INT | INT_WORK
+    return tuple(types.Array(types.int64 if name in ints else types.float64, ndim[name], "C")
+                 for name in ARGS)
 
 
 class _StandInDevice:

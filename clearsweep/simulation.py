@@ -17,6 +17,7 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import layout as L
 from .core.contact import elastic_force
+from .core.work import Case, Out
 from .params import PRESETS, Packed, as_python, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
@@ -142,9 +143,9 @@ class KernelRun:
         steps done), its energy figures and first impact times (negative or NaN: none),
         and the arrays (t, y, d, wmax, wmap, proj, wvol, stats)."""
         first = np.asarray(first_impact, dtype=float)
-        return cls(status=L.STATUS_NAMES[int(info[0])], n_saved=int(info[1]),
-                   deepest=int(info[2]), rk4_steps=int(info[3]),
-                   t_end=float(info[4]) * float(packed.p[L.P_DT]),
+        return cls(status=L.STATUS_NAMES[int(info[L.I_STATUS])], n_saved=int(info[L.I_SAVED]),
+                   deepest=int(info[L.I_DEEPEST]), rk4_steps=int(info[L.I_SUBSTEPS]),
+                   t_end=float(info[L.I_STEPS]) * float(packed.p[L.P_DT]),
                    residual_max=float(residual_max), ke_peak=float(ke_peak),
                    first_impact=np.where(first >= 0.0, first, np.nan), wall_time=wall_time,
                    **arrays)
@@ -162,26 +163,29 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     """
     integrate = _kernel(packed.method)
     n_save = packed.n_steps // packed.save_every + 1
-    wmap = np.zeros((2,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
-    if wmap.shape != (2,) + tuple(packed.map_shape):
+    wmap = np.zeros((L.N_JOINTS,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
+    if wmap.shape != (L.N_JOINTS,) + tuple(packed.map_shape):
         raise ValueError(f"wmap0 has shape {wmap.shape}, the config's map needs "
-                         f"{(2,) + tuple(packed.map_shape)}")
-    proj = np.zeros((2, 3, L.N_ANGLE_BINS))
-    wvol = np.zeros(2) if wvol0 is None else np.array(wvol0, dtype=float)
+                         f"{(L.N_JOINTS,) + tuple(packed.map_shape)}")
+    proj = np.zeros((L.N_JOINTS, 3, L.N_ANGLE_BINS))
+    wvol = np.zeros(L.N_JOINTS) if wvol0 is None else np.array(wvol0, dtype=float)
     out_t = np.full(n_save, np.nan)
     out_y = np.full((n_save, L.N_Y), np.nan)
     out_d = np.full((n_save, L.N_D), np.nan)
-    out_wmax = np.zeros((n_save, 2))
-    info = np.zeros(5, dtype=np.int64)
-    stats = np.zeros((2, L.N_M))
+    out_wmax = np.zeros((n_save, L.N_JOINTS))
+    info = np.zeros(L.N_INFO, dtype=np.int64)
+    stats = np.zeros((L.N_WINDOWS, L.N_M))
+    case = Case(packed.p, packed.jp, packed.y0, wmap, proj, wvol)
+    out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK),
+              np.zeros(L.N_JOINTS))
     t0 = time.perf_counter()
-    res = integrate(packed.p, packed.jp, packed.y0, 0.0, packed.n_steps, packed.save_every,
-                    wmap, proj, wvol, out_t, out_y, out_d, out_wmax, info, stats)
+    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out)
     wall = time.perf_counter() - t0
-    out_wmax[int(info[1]):] = np.nan
+    out_wmax[int(info[L.I_SAVED]):] = np.nan
     out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
-    return KernelRun.from_counters(packed, info, res[0], res[1], res[2:4], wall, t=out_t, y=out_y,
-                                   d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
+    return KernelRun.from_counters(packed, info, res[L.R_RESIDUAL_MAX], res[L.R_KE_PEAK],
+                                   res[L.R_FIRST_IMPACT:L.N_R], wall, t=out_t,
+                                   y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
                                    stats=stats)
 
 
@@ -279,7 +283,7 @@ def statistics_from_raw(stats: np.ndarray, clearance: np.ndarray) -> dict[str, n
         out["impact_velocity_max" + suffix] = joint(L.M_VIMP_MAX)
         fraction = joint(L.M_CONTACT_T) / duration if duration > 0 else np.full(2, np.nan)
         out["contact_fraction" + suffix] = fraction
-        out["impact_count" + suffix] = m[L.M_IMPACTS:L.M_IMPACTS + 2].astype(np.int32)
+        out["impact_count" + suffix] = m[L.M_IMPACTS:L.M_IMPACTS + L.N_JOINTS].astype(np.int32)
     return out
 
 
@@ -329,8 +333,8 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     clearance = packed.jp[:, L.J_CLEARANCE] != 0.0
     joint_force = d[:, L.D_JOINT_FORCE:L.D_JOINT_FORCE + 6].reshape(-1, 2, 3)
     offset = d[:, L.D_OFFSET:L.D_OFFSET + 6].reshape(-1, 2, 3)
-    penetration = d[:, L.D_DELTA:L.D_DELTA + 2].copy()
-    ecc = d[:, L.D_ECC:L.D_ECC + 2].copy()
+    penetration = d[:, L.D_DELTA:L.D_DELTA + L.N_JOINTS].copy()
+    ecc = d[:, L.D_ECC:L.D_ECC + L.N_JOINTS].copy()
     penetration[:, ~clearance] = 0.0
     offset[:, ~clearance, :] = 0.0
     ecc[:, ~clearance] = 0.0
@@ -349,8 +353,8 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
         "crank_torque": d[:, L.D_TORQUE],
         "reaction_O": d[:, L.D_REACTION_O:L.D_REACTION_O + 3],
         "joint_force": joint_force,
-        "normal_force": d[:, L.D_FN:L.D_FN + 2],
-        "friction_force": d[:, L.D_FT:L.D_FT + 2],
+        "normal_force": d[:, L.D_FN:L.D_FN + L.N_JOINTS],
+        "friction_force": d[:, L.D_FT:L.D_FT + L.N_JOINTS],
         "penetration": penetration,
         "eccentricity": ecc,
         "ball_offset": offset,

@@ -9,7 +9,6 @@ from impacts import RI, RJ, C, impact_restitution
 
 from clearsweep.config import JointConfig
 from clearsweep.core.contact import (
-    contact_area,
     damping_factor,
     elastic_energy,
     elastic_force,
@@ -18,6 +17,7 @@ from clearsweep.core.contact import (
     hysteresis_fraction,
     normal_force,
 )
+from clearsweep.core.spherical import contact_area
 from clearsweep.materials import load_materials
 from clearsweep.params import equivalent_modulus, oedometric_modulus
 

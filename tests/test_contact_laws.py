@@ -25,6 +25,7 @@ from clearsweep.core.contact import (
     reachable_penetration,
 )
 from clearsweep.core.rk4 import accept_substep
+from clearsweep.core.work import Model, Wear
 from clearsweep.params import pack, static_penetration
 from clearsweep.simulation import simulate
 
@@ -175,14 +176,15 @@ def latched(mode, rates):
     s = np.zeros((2, L.N_S))
     dg = np.zeros(L.N_D)
     stats = np.zeros((2, L.N_M))
-    args = (np.zeros((2, 3, L.N_ANGLE_BINS)), np.zeros(2), np.zeros((2, 6)), np.zeros((4, 4), np.int64),
-            np.zeros((4, 4)))
+    model = Model(pk.p, pk.jp, s, np.zeros((2, 1, 1)))
+    wear = Wear(np.zeros((2, 3, L.N_ANGLE_BINS)), np.zeros(2), np.zeros((2, 6)), np.zeros((2, 6)),
+                np.zeros((4, 4), np.int64), np.zeros((4, 4)), np.zeros(2), np.zeros((4, 3)))
     ddot_prev = np.zeros(2)
     for rate in rates:
         dg[L.D_DELTA + 1] = 1e-7
         dg[L.D_ECC + 1] = C + 1e-7
         dg[L.D_DDOT + 1] = rate
-        accept_substep(1e-5, False, pk.p, pk.jp, s, dg, stats, *args, 0, ddot_prev)
+        accept_substep(1e-5, False, model, dg, stats, wear, 0, ddot_prev)
     return s[1, L.S_DV0], stats[L.W_WHOLE, L.M_IMPACTS + 1]
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from clearsweep.config import ConfigError
-from clearsweep.core.contact import contact_angle, contact_area
+from clearsweep.core.spherical import contact_angle, contact_area
 from clearsweep.core.wear import bin_area, map_bin, projection_bins
 from clearsweep.simulation import simulate
 

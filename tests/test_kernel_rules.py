@@ -170,3 +170,16 @@ def test_kernel_functions_are_cached_on_disk():
     uncached = sorted(name for name, disp in kernel_dispatchers().items()
                       if isinstance(disp._cache, NullCache))
     assert uncached == []
+
+
+#: The most arguments a kernel function takes: its arrays go by name in named tuples
+#: (core/work.py), not one argument each (advance took 43 before).
+MAX_KERNEL_ARGUMENTS = 12
+
+
+def test_kernel_functions_take_their_arrays_by_name():
+    import inspect
+
+    wide = sorted(f"{name} ({n})" for name, disp in kernel_dispatchers().items()
+                  if (n := len(inspect.signature(disp.py_func).parameters)) > MAX_KERNEL_ARGUMENTS)
+    assert wide == [], f"more than {MAX_KERNEL_ARGUMENTS} arguments: {wide}"

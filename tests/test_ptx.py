@@ -49,8 +49,11 @@ def test_signature_matches_the_arrays_the_backend_allocates():
     from clearsweep.params import pack
 
     cfg = DEFAULTS.replace(solver__duration=0.001)
+    from clearsweep.core.device import ARGS
+
     arrays = _allocate([pack(cfg, resolve_materials(cfg))])
-    assert tuple(typeof(a) for a in arrays) == ptx.run_cases_signature()
+    assert list(arrays) == list(ARGS)
+    assert tuple(typeof(arrays[name]) for name in ARGS) == ptx.run_cases_signature()
 
 
 def test_block_addresses_what_numpy_slices():
@@ -92,12 +95,15 @@ def test_launch_refuses_shapes_that_run_cases_does_not_address():
     from clearsweep.params import pack
 
     cfg = DEFAULTS.replace(solver__duration=0.001)
-    arrays = list(_allocate([pack(cfg, resolve_materials(cfg))]))
-    for at, shape in device.FIXED_SHAPES.items():
-        assert arrays[at].shape[1:] == shape
-    arrays[11] = arrays[11][:, :, :-1]
-    with pytest.raises(ValueError, match="argument 11"):
-        device.launch(tuple(arrays))
+    arrays = _allocate([pack(cfg, resolve_materials(cfg))])
+    for name, shape in device.FIXED_SHAPES.items():
+        assert arrays[name].shape[1:] == shape
+    arrays["vec"] = arrays["vec"][:, :, :-1]
+    with pytest.raises(ValueError, match="argument vec"):
+        device.launch(arrays)
+    del arrays["vec"]
+    with pytest.raises(ValueError, match="missing \\['vec'\\]"):
+        device.launch(arrays)
 
 
 def _build_key(ptxas) -> str:

@@ -34,6 +34,7 @@ from clearsweep.config import load_config, resolve_materials
 from clearsweep.core import layout as L
 from clearsweep.core.dynamics import evaluate, point_mobility
 from clearsweep.core.kinematics import gmat, mtv, mv, point_jacobian_rot, rot_mass, rotation, trig
+from clearsweep.core.work import Model, Solve
 from clearsweep.params import pack
 from clearsweep.simulation import run_kernel
 
@@ -65,8 +66,8 @@ def run_evaluate(t, y, p, jp, dv0=(0.0, 0.0)):
     work = dict(wmap=np.zeros((2, 36, 72)), dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D),
                 C=np.zeros((6, 6)), S=np.zeros((6, 6)), L=np.zeros((6, 6)),
                 vz=np.zeros((8, 6)))
-    st = evaluate(t, np.array(y, float), p, jp, s, work["wmap"], work["dy"], work["dg"], True,
-                  work["C"], work["S"], work["L"], work["vz"])
+    st = evaluate(t, np.array(y, float), Model(p, jp, s, work["wmap"]), work["dy"], work["dg"],
+                  True, Solve(work["C"], work["S"], work["L"], work["vz"]))
     assert st == L.ST_OK
     return work
 

@@ -146,30 +146,6 @@ def friction_factor(vt, v0, v1):
 
 
 @compiled
-def cap_height(pen, e, ri, rj):
-    """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
-
-    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e); the first factor is the
-    penetration against the unworn radii, ``pen`` = delta + h, passed in rather than
-    formed as a difference of radii (which would lose all digits for small delta).
-    """
-    return pen * (e + rj + ri) / (2.0 * e)
-
-
-@compiled
-def contact_area(pen, e, ri, rj):
-    """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
-    return 2.0 * math.pi * rj * cap_height(pen, e, ri, rj)
-
-
-@compiled
-def contact_angle(pen, e, ri, rj):
-    """Angle beta of Eq. 11 [rad]: pi - 2 asin(sqrt((1 + cos beta) / 2)), accurate near pi."""
-    half = 0.5 * cap_height(pen, e, ri, rj) / rj
-    return math.pi - 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
-
-
-@compiled
 def stiff_rate(m_eff, k, c):
     """Largest root magnitude |s| of m s^2 + c s + k = 0 [1/s] (docs/physics.md section 4)."""
     if m_eff <= 0.0:

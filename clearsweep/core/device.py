@@ -29,17 +29,19 @@ too, when it runs as the Python source that the CUDA compiler sees (tests/test_g
 The build for a device is checked without one by ``python -m clearsweep.ptx``.
 """
 
+import inspect
 import math
 
 import numba
 from numba import cuda, types
 
 from .dynamics import VZ_ROWS
-from .layout import N_ANGLE_BINS, N_D, N_JP, N_M, N_S, N_Y
+from .layout import N_ANGLE_BINS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
 from .target import on_device
+from .work import Case, Out, Rk4Work
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
 
@@ -92,8 +94,14 @@ def block_typer(typingctx, arr, i, k, shape):
 if SIMULATED:
     _plain = simulator_array
 
+    def _unwrap(a):
+        """The plain arrays of a simulator array or of a named tuple of them."""
+        if isinstance(a, tuple):
+            return type(a)(*(_plain(x) for x in a))
+        return _plain(a)
+
     def _advance(*args):
-        return _cpu_advance(*(_plain(a) for a in args))
+        return _cpu_advance(*(_unwrap(a) for a in args))
 
     def block(arr, i, k, shape):
         """Block k, of shape ``shape``, of case i's part of arr, as a view: case i's
@@ -124,39 +132,56 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
     i = cuda.grid(1)
     if i < p.shape[0]:
-        _advance(p[i], block(jp, i, 0, (2, N_JP)), y0[i], 0.0, n_steps[i], save_every[i],
-                 wmap[i], block(proj, i, 0, (2, 3, N_ANGLE_BINS)), wvol[i], False, rows_t[i],
-                 rows_y[i], rows_d[i], rows_wmax[i], info[i], block(stats, i, 0, (2, N_M)),
-                 track[i], block(pairs, i, PAIR_FIRST, (2,)),
-                 block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)), block(vec, i, 2, (N_Y,)),
-                 block(vec, i, 3, (N_Y,)), block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
-                 block(vec, i, 6, (N_Y,)),
-                 block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
-                 block(cstate, i, 0, (2, N_S)), block(cstate, i, 1, (2, N_S)),
-                 block(msave, i, 0, (2, N_M)),
-                 block(pairs, i, 0, (2,)), block(pairs, i, 1, (2,)), block(pairs, i, 2, (2,)),
-                 block(pairs, i, PAIR_FIRST_COPY, (2,)),
-                 block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)), block(mats, i, 2, (6, 6)),
-                 block(vz, i, 0, (VZ_ROWS, 6)), buf_i[i], buf_v[i],
-                 block(caps, i, 0, (2, 6)), block(caps, i, 1, (2, 6)), scratch[i])
+        case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
+                    block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS)), wvol[i])
+        out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
+                  block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)))
+        work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
+                       block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
+                       block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
+                       block(vec, i, 6, (N_Y,)),
+                       block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
+                       block(cstate, i, 0, (N_JOINTS, N_S)),
+                       block(cstate, i, 1, (N_JOINTS, N_S)),
+                       block(msave, i, 0, (N_WINDOWS, N_M)),
+                       block(pairs, i, 0, (N_JOINTS,)), block(pairs, i, 1, (N_JOINTS,)),
+                       block(pairs, i, 2, (N_JOINTS,)),
+                       block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
+                       block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)),
+                       block(mats, i, 2, (6, 6)), block(vz, i, 0, (VZ_ROWS, 6)),
+                       buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
+                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i])
+        _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
-#: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument
-#: position: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
-FIXED_SHAPES = {1: (2, N_JP), 6: (2, 3, N_ANGLE_BINS), 9: (2, N_M)}
-FIXED_SHAPES.update({11 + k: shape for k, shape in enumerate(work_shapes(0, 1))
-                     if k not in (7, 8, 10)})
+#: run_cases' arguments by name, in launch order (inputs, results, the work arrays of
+#: ``rk4.work_shapes``, the row placeholders): :func:`launch` takes them by name.
+ARGS = tuple(inspect.signature(run_cases.py_func).parameters)
+
+#: The arguments that hold what a batch gives back: the results, and the work array
+#: ``pairs`` (its row PAIR_FIRST holds the first impact times).
+RESULTS = ("wmap", "proj", "wvol", "info", "stats", "track", "pairs")
+
+#: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument name:
+#: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.
+FIXED_SHAPES = {"jp": (N_JOINTS, N_JP), "proj": (N_JOINTS, 3, N_ANGLE_BINS),
+                "stats": (N_WINDOWS, N_M)}
+FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
+                     if name not in ("buf_i", "buf_v", "scratch")})
 
 
-def launch(arrays: tuple) -> None:
-    """Run :func:`run_cases` over every case of ``arrays`` (its arguments, device or host
-    arrays) and wait for it to finish. ValueError if an argument's per-case shape is not
-    the one run_cases addresses it by (FIXED_SHAPES)."""
-    for at, shape in FIXED_SHAPES.items():
-        if tuple(arrays[at].shape[1:]) != shape:
-            raise ValueError(f"run_cases argument {at}: per-case shape {arrays[at].shape[1:]}, "
-                             f"expected {shape}")
-    n = arrays[0].shape[0]
+def launch(arrays: dict) -> None:
+    """Run :func:`run_cases` over every case of ``arrays`` (its arguments by name, device or
+    host arrays) and wait for it to finish. ValueError if an argument is missing or unknown,
+    or if its per-case shape is not the one run_cases addresses it by (FIXED_SHAPES)."""
+    if set(arrays) != set(ARGS):
+        raise ValueError(f"run_cases arguments: missing {sorted(set(ARGS) - set(arrays))}, "
+                         f"unknown {sorted(set(arrays) - set(ARGS))}")
+    for name, shape in FIXED_SHAPES.items():
+        if tuple(arrays[name].shape[1:]) != shape:
+            raise ValueError(f"run_cases argument {name}: per-case shape "
+                             f"{arrays[name].shape[1:]}, expected {shape}")
+    n = arrays["p"].shape[0]
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-    run_cases[blocks, THREADS_PER_BLOCK](*arrays)
+    run_cases[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()

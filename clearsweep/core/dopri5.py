@@ -22,9 +22,17 @@ from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
+    I_DEEPEST,
+    I_SAVED,
+    I_STATUS,
+    I_STEPS,
+    I_SUBSTEPS,
     J_CLEARANCE,
     N_D,
+    N_JOINTS,
+    N_R,
     N_S,
+    N_TRACK,
     N_Y,
     P_ATOL_E,
     P_ATOL_Q,
@@ -37,6 +45,7 @@ from .layout import (
     P_SETTLE,
     ST_OK,
     ST_UNSTABLE_STEP,
+    T_KE_PEAK,
     W_SETTLED,
     W_WHOLE,
     Y_QD,
@@ -46,6 +55,7 @@ from .rk4 import (
     _NOT_LITERAL,
     accept_substep,
     begin_case,
+    case_views,
     copy_into,
     copy_row,
     energy_total,
@@ -57,6 +67,7 @@ from .rk4 import (
     step_checks,
     zero_rows,
 )
+from .work import Dopri5Work
 
 # Dormand & Prince (1980) coefficients; E = b5 - b4 (error weights); D: the 4th-order
 # continuous extension of Hairer, Norsett & Wanner, Solving ODEs I, section II.6.
@@ -116,43 +127,55 @@ def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
 
 
 @compiled(locals=_NOT_LITERAL)
-def dopri5_trial(t, h, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap, C, S, L, vz):
+def dopri5_trial(t, h, work, model, solve):
     """Stages 2-7 of one trial step of length h from (t, y) with k1 = f(t, y): the 5th-order
-    solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1."""
+    solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1
+    (y, k1 ... k7, yt, y1, dg1: fields of ``work``, a :data:`work.Dopri5Work`)."""
+    y = work.y
+    k1 = work.k1
+    k2 = work.k2
+    k3 = work.k3
+    k4 = work.k4
+    k5 = work.k5
+    k6 = work.k6
+    k7 = work.k7
+    yt = work.yt
+    y1 = work.y1
+    dg1 = work.dg1
     stage = False
     step_end = True
     n = y.shape[0]
     scratch = dg1
     for i in range(n):
         yt[i] = y[i] + h * A21 * k1[i]
-    st = evaluate(t + C2 * h, yt, p, jp, s, wmap, k2, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C2 * h, yt, model, k2, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    st = evaluate(t + C3 * h, yt, p, jp, s, wmap, k3, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C3 * h, yt, model, k3, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    st = evaluate(t + C4 * h, yt, p, jp, s, wmap, k4, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C4 * h, yt, model, k4, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    st = evaluate(t + C5 * h, yt, p, jp, s, wmap, k5, scratch, stage, C, S, L, vz)
+    st = evaluate(t + C5 * h, yt, model, k5, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
                             + A65 * k5[i])
-    st = evaluate(t + h, yt, p, jp, s, wmap, k6, scratch, stage, C, S, L, vz)
+    st = evaluate(t + h, yt, model, k6, scratch, stage, solve)
     if st != ST_OK:
         return st
     for i in range(n):
         y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i]
                             + A76 * k6[i])
-    return evaluate(t + h, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+    return evaluate(t + h, y1, model, k7, dg1, step_end, solve)
 
 
 @compiled
@@ -163,7 +186,7 @@ def onset_step(p, jp, dg0, dg1, h):
     if h <= tol:
         return 0.0
     shorter = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         d0 = dg0[D_DELTA + j]     # signed: the gap is -delta before contact
@@ -177,44 +200,64 @@ def onset_step(p, jp, dg0, dg1, h):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y,
-                     out_d, out_wmax, info, stats):
+def integrate_dopri5(case, t0, n_steps, save_every, out):
     """Integrate one case to t0 + n_steps * p[P_DT] with adaptive Dormand-Prince 5(4).
 
     Arguments and outputs as :func:`.rk4.integrate`; output rows at the same times
-    (every ``save_every`` grid steps). ``info[2]`` holds the level k of the shortest
-    accepted step (h >= p[P_DT] / 2^k), ``info[3]`` the accepted steps. Steps are bounded by
-    p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error control would make
-    shorter stops the case with ST_UNSTABLE_STEP. Allocates the work arrays and runs
-    :func:`advance_dopri5`.
+    (every ``save_every`` grid steps). ``info[I_DEEPEST]`` holds the level k of the
+    shortest accepted step (h >= p[P_DT] / 2^k), ``info[I_SUBSTEPS]`` the accepted steps.
+    Steps are bounded by p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error
+    control would make shorter stops the case with ST_UNSTABLE_STEP. Allocates the work
+    arrays and runs :func:`advance_dopri5`.
     """
-    track = np.zeros(3)
-    first = np.zeros(2)
     ny = N_Y
-    advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-                   out_wmax, info, stats, track, first,
-                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
-                   np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
-                   np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D), np.zeros(N_D),
-                   np.zeros(N_D), np.zeros((2, N_S)), np.zeros(2), np.zeros(2),
-                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
-                   np.zeros((2, 4), dtype=np.int64), np.zeros((2, 4)), np.zeros((2, 6)),
-                   np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    if info[1] == 0 and info[0] != ST_OK:
-        return np.full(4, np.nan)
-    return kernel_result(track, first)
+    work = Dopri5Work(np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                      np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
+                      np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D),
+                      np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
+                      np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((6, 6)),
+                      np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                      np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
+                      np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
+                      np.zeros((4 * case.wmap.shape[1], 3)))
+    advance_dopri5(case, t0, n_steps, save_every, out, work)
+    if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
+        return np.full(N_R, np.nan)
+    return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-                   out_wmax, info, stats, track, first, y, y1, yt, k1, k2, k3, k4, k5, k6, k7, kt,
-                   row, yrow, dg, dg1, dgo, s, ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur,
-                   pend, scratch):
-    """:func:`integrate_dopri5` without allocation: every work array is an argument (their
-    contents on entry do not matter). ``track`` and ``first`` receive what
-    :func:`.rk4.kernel_result` reports. Every status an evaluation returns stops the case,
-    the dense-output evaluations of the sample rows included.
+def advance_dopri5(case, t0, n_steps, save_every, out, work):
+    """:func:`integrate_dopri5` without allocation: every work array is a field of ``work``
+    (a :data:`work.Dopri5Work`; their contents on entry do not matter). ``out.track`` and
+    ``out.first`` receive what :func:`.rk4.kernel_result` reports. Every status an
+    evaluation returns stops the case, the dense-output evaluations of the sample rows
+    included.
     """
+    model, solve, wear = case_views(case, work)
+    p = case.p
+    jp = case.jp
+    wmap = case.wmap
+    stats = out.stats
+    y = work.y
+    y1 = work.y1
+    k1 = work.k1
+    k3 = work.k3
+    k4 = work.k4
+    k5 = work.k5
+    k6 = work.k6
+    k7 = work.k7
+    kt = work.kt
+    row = work.row
+    yrow = work.yrow
+    dg = work.dg
+    dg1 = work.dg1
+    dgo = work.dgo
+    ddot_prev = work.ddot_prev
+    wmax = work.wmax
+    cur = work.cur
+    pend = work.pend
+    scratch = work.scratch
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
@@ -224,34 +267,34 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
     hmin = grid / (1 << int(p[P_MAX_LEVEL]))
     t_end = t0 + n_steps * grid
     ny = N_Y
-    copy_into(y, y0)
-    zero_rows(buf_i)
-    zero_rows(buf_v)
+    copy_into(y, case.y0)
+    zero_rows(work.buf_i)
+    zero_rows(work.buf_v)
     zero_rows(cur)
     zero_rows(pend)
-    for j in range(2):
+    for j in range(N_JOINTS):
         wmax[j] = 0.0
     for i in range(N_D):
         dg[i] = 0.0
         dg1[i] = 0.0
         dgo[i] = 0.0
-    for i in range(3):
-        track[i] = 0.0
-    first[0] = -1.0
-    first[1] = -1.0
+    for i in range(N_TRACK):
+        out.track[i] = 0.0
+    for j in range(N_JOINTS):
+        out.first[j] = -1.0
 
-    status = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
+    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if status != ST_OK:
-        info[0] = status
-        info[1] = 0
+        out.info[I_STATUS] = status
+        out.info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[0] = dg[D_KE]
-    out_t[0] = t0
-    copy_row(out_y, 0, y)
-    copy_row(out_d, 0, dg)
+    out.track[T_KE_PEAK] = dg[D_KE]
+    out.t[0] = t0
+    copy_row(out.y, 0, y)
+    copy_row(out.d, 0, dg)
     n_saved = 1
-    n_save = out_t.shape[0]
+    n_save = out.t.shape[0]
     accepted = 0
     h_small = hmax
     t = t0
@@ -262,8 +305,7 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
         if hh < hmin and not last:
             status = ST_UNSTABLE_STEP
             break
-        st = dopri5_trial(t, hh, y, k1, k2, k3, k4, k5, k6, k7, yt, y1, dg1, p, jp, s, wmap,
-                          C, S, L, vz)
+        st = dopri5_trial(t, hh, work, model, solve)
         if st != ST_OK:
             if hh <= hmin:
                 status = st
@@ -286,14 +328,13 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
             continue
         # ---- accepted: the same per-step rules as RK4 ----
         in_settled = t + hh >= settle
-        for j in range(2):
+        for j in range(N_JOINTS):
             for i in range(6):
                 cur[j, i] = 0.0
-        changed, _ = accept_substep(hh, in_settled, p, jp, s, dg1, stats, proj, wvol, cur,
-                                    buf_i, buf_v, 0, ddot_prev)
-        note_first_impact(first, stats, t + hh)
+        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
+        note_first_impact(out.first, stats, t + hh)
         if changed:
-            st = evaluate(t + hh, y1, p, jp, s, wmap, k7, dg1, step_end, C, S, L, vz)
+            st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
             if st != ST_OK:
                 status = st
                 break
@@ -307,21 +348,20 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
             ts = t0 + (n_saved * save_every) * grid
             theta = (ts - t) / hh
             if theta >= 1.0 - 1e-12:
-                copy_row(out_y, n_saved, y1)
-                copy_row(out_d, n_saved, dg1)
+                copy_row(out.y, n_saved, y1)
+                copy_row(out.d, n_saved, dg1)
             else:
                 dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
                 for i in range(ny):
                     yrow[i] = row[0, i]
-                st = evaluate(ts, yrow, p, jp, s, wmap, kt, dgo, step_end, C, S, L, vz)
+                st = evaluate(ts, yrow, model, kt, dgo, step_end, solve)
                 if st != ST_OK:
                     status = st
                     break
-                copy_row(out_y, n_saved, yrow)
-                copy_row(out_d, n_saved, dgo)
-            out_t[n_saved] = ts
-            out_wmax[n_saved, 0] = wmax[0]
-            out_wmax[n_saved, 1] = wmax[1]
+                copy_row(out.y, n_saved, yrow)
+                copy_row(out.d, n_saved, dgo)
+            out.t[n_saved] = ts
+            copy_row(out.wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
@@ -332,18 +372,17 @@ def advance_dopri5(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, 
         accepted += 1
         if not last:
             h_small = min(h_small, hh)
-        status = step_checks(y, dg, p, jp, status, e0, track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track)
         grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
         h = min(hh * grow, hmax)
     flush_all_wear(wmap, pend, wmax, scratch)
     if status == ST_OK and n_saved > 0:
-        out_wmax[n_saved - 1, 0] = wmax[0]
-        out_wmax[n_saved - 1, 1] = wmax[1]
+        copy_row(out.wmax, n_saved - 1, wmax)
     deepest = 0
     while grid / (1 << deepest) > h_small * (1.0 + 1e-12) and deepest < 62:
         deepest += 1
-    info[0] = status
-    info[1] = n_saved
-    info[2] = deepest
-    info[3] = accepted
-    info[4] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))
+    out.info[I_STATUS] = status
+    out.info[I_SAVED] = n_saved
+    out.info[I_DEEPEST] = deepest
+    out.info[I_SUBSTEPS] = accepted
+    out.info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))

@@ -22,6 +22,7 @@ from numba import types
 
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
+from .joints import JOINTS
 from .kinematics import (
     add,
     cross,
@@ -69,6 +70,7 @@ from .layout import (
     J_RI,
     J_RJ,
     N_D,
+    N_JOINTS,
     N_Q,
     N_S,
     P_BAUM_A,
@@ -105,8 +107,28 @@ from .layout import (
 )
 from .spherical import contact
 from .target import on_device
+from .work import Model, Solve
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
+
+#: The packed length that an attachment of the joint table scales (joints.Attachment).
+_LENGTHS = {"l2": P_L2, "l3": P_L3}
+
+
+def _attachment(att):
+    """An attachment of the joint table as a constant tuple: (index of the packed length
+    it scales, 3 factors); index -1: the body's centroid."""
+    return (-1 if att.length is None else _LENGTHS[att.length],) + tuple(map(float, att.factors))
+
+
+_BY_NAME = {joint.name: joint for joint in JOINTS}
+#: Joint A's attachments (the crank pin on the crank, the rod's end in which it sits) and
+#: joint B's (the rod's other end, the slider's centroid), from the joint table.
+A_BALL = _attachment(_BY_NAME["A"].ball)
+A_SOCKET = _attachment(_BY_NAME["A"].socket)
+B_BALL = _attachment(_BY_NAME["B"].ball)
+B_SOCKET = _attachment(_BY_NAME["B"].socket)
+
 
 @compiled
 def body_moment(R, r, q, f):
@@ -285,6 +307,17 @@ def body_frame(tr, pd):
 
 
 @compiled(inline="always")
+def body_point(p, att):
+    """The body-frame point [m] of a joint-table attachment ``att`` (a constant of
+    :func:`_attachment`: a factor 0 gives the constant 0.0, the centroid (0, 0, 0))."""
+    if att[0] < 0:
+        return (0.0, 0.0, 0.0)
+    size = p[att[0]]
+    return (att[1] * size if att[1] != 0.0 else 0.0, att[2] * size if att[2] != 0.0 else 0.0,
+            att[3] * size if att[3] != 0.0 else 0.0)
+
+
+@compiled(inline="always")
 def body_state(y, tr, r_at, phi_at):
     """(r, v, R, w) of the body whose coordinates start at y[r_at] and y[phi_at], tr its
     Euler angles' trig(...): centroid position and velocity, rotation, body angular
@@ -365,9 +398,9 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     rows written and the largest position violation of these joints [m]."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
-    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
-    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
-    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
+    uA2 = body_point(p, A_BALL)
+    uA3 = body_point(p, A_SOCKET)
+    uB3 = body_point(p, B_BALL)
     nc = 0
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
@@ -502,7 +535,7 @@ _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
 
 
 @compiled(locals=_NOT_LITERAL)
-def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
+def evaluate(t, y, model, dy, dg, full, solve):
     """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
 
     Parameters
@@ -511,12 +544,10 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         Time [s].
     y : float64[38]
         State (layout.Y_*): q, qd, drive work, dissipated energy.
-    p, jp : float64 arrays
-        Packed parameters (layout.P_*, layout.J_*).
-    s : float64[2, 2]
-        Discrete contact state (impact velocity, contact angle) per joint.
-    wmap : float64[2, npolar, nazim]
-        Wear map [m].
+    model : work.Model
+        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[2, N_S], the discrete
+        contact state (impact velocity, contact angle) per joint; wmap: float64[2, npolar,
+        nazim], the wear map [m].
     dy : float64[38]
         Output derivative.
     dg : float64[N_D]
@@ -525,7 +556,8 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     full : bool
         An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
         dopri5's inner stages need the derivative only.
-    C, S, L, vz : float64 work arrays (6x6, 6x6, 6x6, VZ_ROWS x 6).
+    solve : work.Solve
+        The float64 work arrays C, S, L (6x6) and vz (VZ_ROWS x 6).
 
     Returns
     -------
@@ -541,15 +573,22 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     contact cost the CPU about 3 %); a device build (``target.on_device``) forms them in
     each contact.
     """
+    p = model.p
+    jp = model.jp
+    C = solve.C
+    S = solve.S
+    L = solve.L
+    vz = solve.vz
     joint_a = 0
     joint_b = 1
     qd = Y_QD
     t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
     t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
     t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
-    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
-    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
-    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
+    uA2 = body_point(p, A_BALL)
+    uA3 = body_point(p, A_SOCKET)
+    uB3 = body_point(p, B_BALL)
+    uB4 = body_point(p, B_SOCKET)
     zero = (0.0, 0.0, 0.0)
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
 
@@ -576,7 +615,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        cA = contact(joint_a, jp, s, wmap, p, r2, v2, R2, w2, uA2, r3, v3, R3, w3, uA3, full)
+        cA = contact(joint_a, model, (r2, v2, R2, w2, uA2), (r3, v3, R3, w3, uA3), full)
         fA = cA.force
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
@@ -590,7 +629,7 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        cB = contact(joint_b, jp, s, wmap, p, r3, v3, R3, w3, uB3, r4, v4, R4, w4, zero, full)
+        cB = contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, uB4), full)
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
@@ -671,19 +710,19 @@ def evaluate(t, y, p, jp, s, wmap, dy, dg, full, C, S, L, vz):
     cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-            rate = max(rate, joint_rate(j, jp, s, p, dg, rotation(t3), gmat(t3), r3, C, L, nc,
-                                        minv, mr_inv, vz))
+            rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
+                                        minv, mr_inv))
     dg[D_RATE] = rate
     return ST_OK
 
 
 @compiled
-def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
+def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
@@ -693,13 +732,19 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
     delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from U ~ 2 K delta^3 / (3 c)),
     so that an impact that begins and ends inside one step still sets the sub-step.
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    C = solve.C
+    L = solve.L
+    vz = solve.vz
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
     if j == 0:
         # the socket point Q_i on the rod
-        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
+        qrod = add(add(r3, mv(R3, body_point(p, A_SOCKET))), scale(jp[j, J_RI], n))
     else:
         # the ball point Q_j on the rod
-        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
+        qrod = add(add(r3, mv(R3, body_point(p, B_BALL))), scale(jp[j, J_RJ], n))
     Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
     wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
     inv_m = quad_form(wp, n, n)
@@ -735,7 +780,7 @@ def joint_rate(j, jp, s, p, dg, R3, G3, r3, C, L, nc, minv, mr_inv, vz):
 @compiled(inline="always")
 def clear_contacts(dg):
     """Zero both joints' contact diagnostics (an ideal joint keeps zeros)."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         dg[D_FN + j] = 0.0
         dg[D_FT + j] = 0.0
         dg[D_DELTA + j] = 0.0
@@ -783,19 +828,19 @@ def ideal_joint_forces(t, y, p, jp):
     jp_ideal = jp.copy()
     jp_ideal[0, J_CLEARANCE] = 0.0
     jp_ideal[1, J_CLEARANCE] = 0.0
-    s = np.zeros((2, N_S))
-    wmap = np.zeros((2, 1, 1))
+    s = np.zeros((N_JOINTS, N_S))
+    wmap = np.zeros((N_JOINTS, 1, 1))
     dy = np.zeros(y.shape[0])
     dg = np.zeros(N_D)
     C = np.zeros((6, 6))
     S = np.zeros((6, 6))
     L = np.zeros((6, 6))
     vz = np.zeros((VZ_ROWS, 6))
-    out = np.full((2, 3), np.nan)
-    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), p, jp_ideal, s, wmap, dy, dg,
-                True, C, S, L, vz) != ST_OK:
+    out = np.full((N_JOINTS, 3), np.nan)
+    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), Model(p, jp_ideal, s, wmap),
+                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
         return out
-    for j in range(2):
+    for j in range(N_JOINTS):
         for i in range(3):
             out[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
     return out

@@ -1,7 +1,11 @@
 """Named indices of the kernel's flat vectors, and status codes.
 
-Plain integers: Numba folds them into the compiled code as constants.
+Plain integers: Numba folds them into the compiled code as constants. Per-joint blocks
+(one value, or 3, per joint, joint-major) are N_JOINTS long: the joint table
+(``joints.JOINTS``) sets how many.
 """
+
+from .joints import N_JOINTS
 
 # --- global parameter vector p (float64) -----------------------------------
 P_L2 = 0            # crank length l2 [m]
@@ -51,7 +55,7 @@ P_ONSET = 47        # 1.0 = delta_dot0 is the episode's onset value, 0.0 its run
 P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K delta^n
 N_P = 49
 
-# --- per-joint parameters jp[j, :] (j = 0: A, 1: B) -----------------------
+# --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
 J_C = 1             # radial clearance c [m]
 J_RI = 2            # socket radius R_i [m]
@@ -85,7 +89,7 @@ Y_WORK = 36         # work done by the drive [J]
 Y_DISS = 37         # energy dissipated by contact damping and friction [J]
 N_Y = 38
 
-# --- discrete contact state s[j, :] -----------------------------------------
+# --- discrete contact state s[j, :] (one row per joint) -----------------------------------------
 S_DV0 = 0           # impact velocity of the current contact, 0 = none [m/s]
 S_BETA = 1          # contact angle beta at the last accepted step [rad]
 N_S = 2
@@ -94,45 +98,67 @@ N_S = 2
 D_SLIDER_ACC = 0
 D_TORQUE = 1
 D_REACTION_O = 2    # 3 values
-D_JOINT_FORCE = 5   # 2 x 3 values, joint-major
-D_FN = 11           # 2
-D_FT = 13           # 2
-D_DELTA = 15        # 2
-D_ECC = 17          # 2
-D_OFFSET = 19       # 2 x 3, ball-centre offset in the socket frame
-D_NORMAL = 25       # 2 x 3, contact normal in the socket frame
-D_DDOT = 31         # 2, normal approach rate
-D_VT = 33           # 2, tangential slip speed
-D_CEFF = 35         # 2, local clearance c_eff
-D_HWEAR = 37        # 2, wear depth under the contact point
-D_UEL = 39          # 2, contact elastic energy
-D_RATE = 41         # largest stiff rate of the system [1/s]
-D_KE = 42
-D_PE_GRAV = 43
-D_CONS = 44         # largest position-constraint violation [m]
-D_PDRIVE = 45
-D_PDISS = 46
-D_NGLOBAL = 47     # 2 x 3, contact normal in the global frame
-D_DFD = 53         # 2, dF_N/d delta [N/m]
-D_DFDD = 55        # 2, dF_N/d delta_dot [N s/m]
-D_WORN = 57        # 2, 1.0 = coating worn through under the contact point (base values used)
-N_D = 59
+D_JOINT_FORCE = 5   # N_JOINTS x 3 values, joint-major
+D_FN = D_JOINT_FORCE + 3 * N_JOINTS     # per joint
+D_FT = D_FN + N_JOINTS                  # per joint
+D_DELTA = D_FT + N_JOINTS               # per joint
+D_ECC = D_DELTA + N_JOINTS              # per joint
+D_OFFSET = D_ECC + N_JOINTS             # N_JOINTS x 3, ball-centre offset in the socket frame
+D_NORMAL = D_OFFSET + 3 * N_JOINTS      # N_JOINTS x 3, contact normal in the socket frame
+D_DDOT = D_NORMAL + 3 * N_JOINTS        # per joint, normal approach rate
+D_VT = D_DDOT + N_JOINTS                # per joint, tangential slip speed
+D_CEFF = D_VT + N_JOINTS                # per joint, local clearance c_eff
+D_HWEAR = D_CEFF + N_JOINTS             # per joint, wear depth under the contact point
+D_UEL = D_HWEAR + N_JOINTS              # per joint, contact elastic energy
+D_RATE = D_UEL + N_JOINTS               # largest stiff rate of the system [1/s]
+D_KE = D_RATE + 1
+D_PE_GRAV = D_KE + 1
+D_CONS = D_PE_GRAV + 1                  # largest position-constraint violation [m]
+D_PDRIVE = D_CONS + 1
+D_PDISS = D_PDRIVE + 1
+D_NGLOBAL = D_PDISS + 1                 # N_JOINTS x 3, contact normal in the global frame
+D_DFD = D_NGLOBAL + 3 * N_JOINTS        # per joint, dF_N/d delta [N/m]
+D_DFDD = D_DFD + N_JOINTS               # per joint, dF_N/d delta_dot [N s/m]
+D_WORN = D_DFDD + N_JOINTS              # per joint, 1.0 = coating worn through under the
+                                        # contact point (base values used)
+N_D = D_WORN + N_JOINTS
 
 # --- running statistics m[w, :] (w = 0: whole run, 1: settled window) ---------
 # Updated at every accepted RK4 (sub-)step end, never from the saved output rows.
 W_WHOLE = 0
 W_SETTLED = 1
-M_FN_PEAK = 0       # 2, peak normal force [N]
-M_PEN_PEAK = 2      # 2, peak penetration [m]
-M_IMPACTS = 4       # 2, contact episodes begun (impacts) [-]
-M_VIMP_MAX = 6      # 2, largest approach velocity at an impact [m/s]
-M_CONTACT_T = 8     # 2, time in contact [s]
-M_ACC_PEAK = 10     # peak |slider acceleration| [m/s^2]
-M_ACC_SQ = 11       # integral of slider acceleration^2 dt [m^2/s^3]
-M_TORQUE_PEAK = 12  # peak |crank torque| [N m]
-M_TIME = 13         # duration the window covers [s]
-M_SAMPLES = 14      # step-end samples in the window [-]
-N_M = 15
+N_WINDOWS = 2
+M_FN_PEAK = 0                       # per joint, peak normal force [N]
+M_PEN_PEAK = M_FN_PEAK + N_JOINTS   # per joint, peak penetration [m]
+M_IMPACTS = M_PEN_PEAK + N_JOINTS   # per joint, contact episodes begun (impacts) [-]
+M_VIMP_MAX = M_IMPACTS + N_JOINTS   # per joint, largest approach velocity at an impact [m/s]
+M_CONTACT_T = M_VIMP_MAX + N_JOINTS  # per joint, time in contact [s]
+M_ACC_PEAK = M_CONTACT_T + N_JOINTS  # peak |slider acceleration| [m/s^2]
+M_ACC_SQ = M_ACC_PEAK + 1           # integral of slider acceleration^2 dt [m^2/s^3]
+M_TORQUE_PEAK = M_ACC_SQ + 1        # peak |crank torque| [N m]
+M_TIME = M_TORQUE_PEAK + 1          # duration the window covers [s]
+M_SAMPLES = M_TIME + 1              # step-end samples in the window [-]
+N_M = M_SAMPLES + 1
+
+# --- counters info[:] (int64) of one run ------------------------------------
+I_STATUS = 0        # status code (ST_*)
+I_SAVED = 1         # output rows saved (or that a run keeping rows would save)
+I_DEEPEST = 2       # deepest sub-step level k taken (dopri5: of the shortest step)
+I_SUBSTEPS = 3      # RK4 sub-steps taken (dopri5: accepted steps)
+I_STEPS = 4         # output-grid steps completed, the stopping step included
+N_INFO = 5
+
+# --- energy tracking track[:] (float64) of one run ----------------------------
+T_KE_PEAK = 0       # peak kinetic energy [J]
+T_WORK_MAX = 1      # largest |drive work| [J]
+T_RESIDUAL_MAX = 2  # largest |energy residual| [J]
+N_TRACK = 3
+
+# --- what an integrator returns, r[:] (float64; kernel_result) ---------------
+R_RESIDUAL_MAX = 0  # largest |energy residual| [J]
+R_KE_PEAK = 1       # peak kinetic energy [J]
+R_FIRST_IMPACT = 2  # per joint, first impact time [s], NaN where none
+N_R = R_FIRST_IMPACT + N_JOINTS
 
 # --- status codes -----------------------------------------------------------
 ST_OK = 0

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, types
 
 from .compiled import compiled
-from .contact import contact_angle, contact_area, episode_impact_velocity, surface
+from .contact import episode_impact_velocity, surface
 from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_CONS,
@@ -32,6 +32,11 @@ from .layout import (
     D_UEL,
     D_VT,
     D_WORN,
+    I_DEEPEST,
+    I_SAVED,
+    I_STATUS,
+    I_STEPS,
+    I_SUBSTEPS,
     J_C,
     J_CLEARANCE,
     J_RI,
@@ -48,8 +53,13 @@ from .layout import (
     M_VIMP_MAX,
     N_ANGLE_BINS,
     N_D,
+    N_INFO,
+    N_JOINTS,
     N_M,
+    N_R,
     N_S,
+    N_TRACK,
+    N_WINDOWS,
     N_Y,
     P_AMPL,
     P_CONS_TOL,
@@ -63,6 +73,9 @@ from .layout import (
     P_SLIP,
     P_STAB,
     P_WEAR,
+    R_FIRST_IMPACT,
+    R_KE_PEAK,
+    R_RESIDUAL_MAX,
     S_BETA,
     S_DV0,
     ST_CONSTRAINT,
@@ -72,13 +85,18 @@ from .layout import (
     ST_OK,
     ST_PENETRATION,
     ST_UNSTABLE_STEP,
+    T_KE_PEAK,
+    T_RESIDUAL_MAX,
+    T_WORK_MAX,
     W_SETTLED,
     W_WHOLE,
     Y_DISS,
     Y_ROD_BETA,
     Y_WORK,
 )
+from .spherical import contact_angle, contact_area
 from .wear import deposit, projection_bins
+from .work import Model, Rk4Work, Solve, Wear
 
 EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of docs/physics.md section 1 [rad]
 
@@ -94,7 +112,10 @@ def level_for(rate, h, limit):
 
 @compiled
 def energy_total(dg):
-    return dg[D_KE] + dg[D_PE_GRAV] + dg[D_UEL] + dg[D_UEL + 1]
+    e = dg[D_KE] + dg[D_PE_GRAV]
+    for j in range(N_JOINTS):
+        e += dg[D_UEL + j]
+    return e
 
 
 #: Local variables that Numba must type as plain values: a constant argument would otherwise
@@ -104,8 +125,9 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
 
 
 @compiled(locals=_NOT_LITERAL)
-def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
-    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place.
+def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
+    """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place
+    (``model``, ``solve``: :func:`dynamics.evaluate`'s).
 
     The stage derivatives k2, k3, k4 (at t + c hs, c = 1/2, 1/2, 1) come from one call of
     evaluate in a loop, each into the work array ``kst``; the work array ``ksum`` keeps
@@ -120,7 +142,7 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz):
         c = 1.0 if i_stage == 2 else 0.5
         for i in range(n):
             yt[i] = y[i] + c * hs * kst[i]
-        st = evaluate(t + c * hs, yt, p, jp, s, wmap, kst, dg, stage, C, S, L, vz)
+        st = evaluate(t + c * hs, yt, model, kst, dg, stage, solve)
         if st != ST_OK:
             return st
         if i_stage == 0:
@@ -213,7 +235,7 @@ def record_sample(m, w, dg, jp, weight):
     m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], abs(dg[D_TORQUE]))
     m[w, M_TIME] += weight
     m[w, M_SAMPLES] += 1.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], dg[D_FN + j])
@@ -223,20 +245,28 @@ def record_sample(m, w, dg, jp, weight):
 
 
 @compiled
-def accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol, cur, buf_i, buf_v, nbuf,
-                   ddot_prev):
+def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
-    projections, the worn volume, the waiting cap ``cur`` and the undo buffer at row ``nbuf``),
-    the contact angle and episode impact velocity in ``s``, impact counts and velocities.
+    projections, the worn volume, the step's cap ``cur`` and the undo buffer at row ``nbuf``
+    of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
+    ``model.s``, impact counts and velocities.
 
     Returns (whether the contact state changed, so that the step-end evaluation must be
     redone; the next free undo-buffer row).
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    proj = wear.proj
+    wvol = wear.wvol
+    cur = wear.cur
+    buf_i = wear.buf_i
+    buf_v = wear.buf_v
     wear_on = p[P_WEAR] != 0.0
     paper_slip = p[P_SLIP] != 0.0
     ampl = p[P_AMPL]
     changed = False
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         ddot = dg[D_DDOT + j]
@@ -313,17 +343,17 @@ def step_checks(y, dg, p, jp, status, e0, track):
             status = ST_NONFINITE
     if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
         status = ST_EULER
-    for j in range(2):
+    for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
             status = ST_PENETRATION
-    track[0] = max(track[0], dg[D_KE])
-    track[1] = max(track[1], abs(y[Y_WORK]))
+    track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
+    track[T_WORK_MAX] = max(track[T_WORK_MAX], abs(y[Y_WORK]))
     res = energy_total(dg) - y[Y_WORK] + y[Y_DISS] - e0
-    track[2] = max(track[2], abs(res))
+    track[T_RESIDUAL_MAX] = max(track[T_RESIDUAL_MAX], abs(res))
     if status == ST_OK and not (dg[D_CONS] <= p[P_CONS_TOL]):
         status = ST_CONSTRAINT
     if status == ST_OK:
-        throughput = max(track[0], max(track[1], y[Y_DISS]))
+        throughput = max(track[T_KE_PEAK], max(track[T_WORK_MAX], y[Y_DISS]))
         if not (abs(res) <= p[P_ENERGY_TOL] * throughput):
             status = ST_ENERGY
     return status
@@ -353,43 +383,60 @@ CAP_ROWS = 2
 @compiled
 def undo_rows(max_level):
     """Rows of the undo buffer: one per joint and accepted sub-step of the deepest level."""
-    return 2 * (1 << max_level)
+    return N_JOINTS * (1 << max_level)
+
+
+#: The grouped work arrays whose entries are int64 (the rest are float64).
+INT_WORK = frozenset({"buf_i"})
 
 
 def work_shapes(max_level, npolar):
-    """Shapes of the grouped work arrays (vec, diag, cstate, msave, pairs, mats, vz, buf_i,
-    buf_v, caps, scratch) for a case of the given sub-step level cap and wear-map polar bins;
-    buf_i is int64, the rest float64."""
+    """Shapes of the grouped work arrays by name (vec, diag, cstate, msave, pairs, mats, vz,
+    buf_i, buf_v, caps, scratch: the order of run_cases' arguments) for a case of the given
+    sub-step level cap and wear-map polar bins; those in :data:`INT_WORK` are int64."""
     nbuf_max = undo_rows(max_level)
-    return ((VEC_ROWS, N_Y), (DIAG_ROWS, N_D), (CSTATE_ROWS, 2, N_S), (2, N_M), (PAIR_ROWS, 2),
-            (MAT_ROWS, 6, 6), (VZ_ROWS, 6), (nbuf_max, 4), (nbuf_max, 4), (CAP_ROWS, 2, 6),
-            (4 * npolar, 3))
+    return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, N_JOINTS, N_S),
+            "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, 6, 6),
+            "vz": (VZ_ROWS, 6), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
+            "caps": (CAP_ROWS, N_JOINTS, 6), "scratch": (4 * npolar, 3)}
+
+
+@compiled(inline="always")
+def case_views(case, work):
+    """The :data:`work.Model`, :data:`work.Solve` and :data:`work.Wear` of a case and the work
+    arrays of either integrator (:data:`work.Rk4Work`, :data:`work.Dopri5Work`)."""
+    return (Model(case.p, case.jp, work.s, case.wmap), Solve(work.C, work.S, work.L, work.vz),
+            Wear(case.proj, case.wvol, work.cur, work.pend, work.buf_i, work.buf_v, work.wmax,
+                 work.scratch))
 
 
 @compiled(locals=_NOT_LITERAL)
-def begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats):
+def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
     recorded. Returns the evaluation's status."""
+    p = model.p
+    jp = model.jp
+    s = model.s
     step_end = True
     whole = W_WHOLE
     settled = W_SETTLED
-    for w in range(2):
+    for w in range(N_WINDOWS):
         for i in range(N_M):
             stats[w, i] = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         s[j, S_DV0] = 0.0
         s[j, S_BETA] = math.pi
     # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
     # (seated start): it is in contact, not an impact
     for again in range(2):
-        st = evaluate(t0, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+        st = evaluate(t0, y, model, k1, dg, step_end, solve)
         if st != ST_OK:
             return st
         if again == 1:
             break
         seated = False
-        for j in range(2):
+        for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
                 s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
@@ -409,7 +456,7 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
     without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m]."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if cur[j, 3] > 0.0:
             if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
                 wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
@@ -424,7 +471,7 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
 def flush_all_wear(wmap, pend, wmax, scratch):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
@@ -432,7 +479,7 @@ def flush_all_wear(wmap, pend, wmax, scratch):
 @compiled
 def note_first_impact(first, stats, t):
     """Record t as a joint's first impact time when its impact count has just left 0."""
-    for j in range(2):
+    for j in range(N_JOINTS):
         if first[j] < 0.0 and stats[W_WHOLE, M_IMPACTS + j] > 0.0:
             first[j] = t
 
@@ -441,78 +488,101 @@ def note_first_impact(first, stats, t):
 def kernel_result(track, first):
     """What an integrator returns: (largest |energy residual| [J], peak kinetic energy [J],
     first impact time at A, at B [s], NaN when none)."""
-    out = np.empty(4)
-    out[0] = track[2]
-    out[1] = track[0]
-    for j in range(2):
-        out[2 + j] = first[j] if first[j] >= 0.0 else np.nan
+    out = np.empty(N_R)
+    out[R_RESIDUAL_MAX] = track[T_RESIDUAL_MAX]
+    out[R_KE_PEAK] = track[T_KE_PEAK]
+    for j in range(N_JOINTS):
+        out[R_FIRST_IMPACT + j] = first[j] if first[j] >= 0.0 else np.nan
     return out
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, out_t, out_y, out_d,
-              out_wmax, info, stats):
+def integrate(case, t0, n_steps, save_every, out):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
 
     Parameters
     ----------
-    p, jp : packed parameters; y0 : initial state (layout.N_Y); t0 : start time [s].
-    wmap : float64[2, npolar, nazim]   wear map, updated in place [m].
-    proj : float64[2, 3, 360]          paper projections, updated in place [m].
-    wvol : float64[2]                  worn volume, updated in place [m^3].
-    out_t, out_y, out_d, out_wmax : output rows (n_save = n_steps // save_every + 1).
-    info : int64[5] -> (status, saved rows, deepest level, RK4 sub-steps taken,
-        output-grid steps completed, the stopping step included).
-    stats : float64[2, N_M]            running statistics (layout.M_*), whole run and
-        settled window (time >= p[P_SETTLE]), accumulated at every accepted (sub-)step.
+    case : work.Case
+        p, jp : packed parameters; y0 : initial state (layout.N_Y);
+        wmap : float64[2, npolar, nazim]   wear map, updated in place [m];
+        proj : float64[2, 3, 360]          paper projections, updated in place [m];
+        wvol : float64[2]                  worn volume, updated in place [m^3].
+    t0 : float
+        Start time [s].
+    out : work.Out
+        t, y, d, wmax : output rows (n_save = n_steps // save_every + 1);
+        info : int64[N_INFO] (layout.I_*: status, saved rows, deepest level, RK4 sub-steps
+        taken, output-grid steps completed, the stopping step included);
+        stats : float64[2, N_M] running statistics (layout.M_*), whole run and settled
+        window (time >= p[P_SETTLE]), accumulated at every accepted (sub-)step;
+        track : float64[N_TRACK] (layout.T_*); first : float64[2] first impact times.
 
     Returns
     -------
-    float64[4] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
-        at A and at B [s], NaN where none); see kernel_result.
+    float64[N_R] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
+        at A and at B [s], NaN where none; layout.R_*); see kernel_result.
 
     The CPU entry point: allocates every work array on its own (no row views) and runs
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
     """
-    nbuf_max = undo_rows(int(p[P_MAX_LEVEL]))
-    track = np.zeros(3)
-    first = np.zeros(2)
-    advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, True, out_t, out_y, out_d,
-            out_wmax, info, stats, track, first,
-            np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
-            np.zeros(N_Y), np.zeros(N_Y),
-            np.zeros(N_D), np.zeros(N_D), np.zeros((2, N_S)), np.zeros((2, N_S)),
-            np.zeros((2, N_M)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2),
-            np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
-            np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-            np.zeros((2, 6)), np.zeros((2, 6)), np.zeros((4 * wmap.shape[1], 3)))
-    return kernel_result(track, first)
+    nbuf_max = undo_rows(int(case.p[P_MAX_LEVEL]))
+    work = Rk4Work(np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
+                   np.zeros(N_Y), np.zeros(N_Y),
+                   np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
+                   np.zeros((N_JOINTS, N_S)), np.zeros((N_WINDOWS, N_M)), np.zeros(N_JOINTS),
+                   np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS),
+                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                   np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
+                   np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
+                   np.zeros((4 * case.wmap.shape[1], 3)))
+    advance(case, t0, n_steps, save_every, True, out, work)
+    return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out_t, out_y, out_d,
-            out_wmax, info, stats, track, first, y, ysave, k1, k1save, ksum, kst, yt, dg,
-            dgsave, s, ssave, msave, ddot_prev, ddot_prev_save, wmax, first_save, C, S, L, vz,
-            buf_i, buf_v, cur, pend, scratch):
-    """:func:`integrate` without allocation: every work array is an argument (one each, so
-    that the CPU path passes no views; the CUDA kernel passes rows of :func:`work_shapes`'
-    groups), their contents on entry do not matter. ``keep_rows`` False writes no output rows
-    (out_* are not touched; info[1] still counts the rows a run would save). ``track``
-    (float64[3]) receives the peak kinetic energy, the largest |drive work| and the largest
-    |energy residual| [J]; ``first`` (float64[2]) each joint's first impact time [s] (-1:
-    none).
-
-    Work arrays: y, ysave, k1, k1save, ksum, kst, yt (N_Y each: the state, its copy at the
-    step's start, the derivative at the (sub-)step's start and its copy, the sum k2 + k3 of
-    the stage derivatives, the stage derivative and the stage state: rk4_substep); dg,
-    dgsave (N_D: diagnostics and copy); s, ssave (2 x N_S: contact state and copy); msave
-    (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax, first_save
-    (2 each: approach rates and copy, the deepest bin written per joint, the first impact
-    times' copy); C, S, L (6 x 6) and vz (VZ_ROWS x 6) of evaluate; buf_i, buf_v (undo_rows
-    x 4: the step's wear, to undo a rejected step); cur, pend (2 x 6: wear of the step being
-    taken, wear waiting to be spread:
-    sum V n (3), sum V, sum V A, R_i); scratch (4 npolar x 3) of wear.deposit.
+def advance(case, t0, n_steps, save_every, keep_rows, out, work):
+    """:func:`integrate` without allocation: every work array is a field of ``work`` (a
+    :data:`work.Rk4Work`, one array each, so that the CPU path passes no views; the CUDA
+    kernel passes rows of :func:`work_shapes`' groups), their contents on entry do not
+    matter. ``keep_rows`` False writes no output rows (out.t, out.y, out.d, out.wmax are not
+    touched; info[I_SAVED] still counts the rows a run would save). ``out.track``
+    (float64[N_TRACK]) receives the peak kinetic energy, the largest |drive work| and the
+    largest |energy residual| [J] (layout.T_*); ``out.first`` (float64[2]) each joint's
+    first impact time [s] (-1: none).
     """
+    p = case.p
+    jp = case.jp
+    y0 = case.y0
+    wmap = case.wmap
+    proj = case.proj
+    wvol = case.wvol
+    stats = out.stats
+    y = work.y
+    ysave = work.ysave
+    k1 = work.k1
+    k1save = work.k1save
+    ksum = work.ksum
+    kst = work.kst
+    yt = work.yt
+    dg = work.dg
+    dgsave = work.dgsave
+    s = work.s
+    ssave = work.ssave
+    msave = work.msave
+    ddot_prev = work.ddot_prev
+    ddot_prev_save = work.ddot_prev_save
+    wmax = work.wmax
+    first_save = work.first_save
+    C = work.C
+    S = work.S
+    L = work.L
+    vz = work.vz
+    buf_i = work.buf_i
+    buf_v = work.buf_v
+    cur = work.cur
+    pend = work.pend
+    scratch = work.scratch
+    model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
     settled = W_SETTLED
@@ -540,31 +610,31 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
     for i in range(N_D):
         dg[i] = 0.0
         dgsave[i] = 0.0
-    for j in range(2):
+    for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
         first_save[j] = 0.0
     copy_into(y, y0)
     # begin_case clears the statistics and sets the contact state
-    for i in range(3):
-        track[i] = 0.0
-    for i in range(2, 5):
-        info[i] = 0
+    for i in range(N_TRACK):
+        out.track[i] = 0.0
+    for i in range(I_DEEPEST, N_INFO):
+        out.info[i] = 0
 
     status = ST_OK
-    st = begin_case(t0, y, p, jp, s, wmap, k1, dg, C, S, L, vz, ddot_prev, stats)
+    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if st != ST_OK:
-        info[0] = st
-        info[1] = 0
+        out.info[I_STATUS] = st
+        out.info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
-    track[0] = dg[D_KE]
-    first[0] = -1.0    # time of each joint's first impact [s]; -1: none yet
-    first[1] = -1.0
+    out.track[T_KE_PEAK] = dg[D_KE]
+    for j in range(N_JOINTS):
+        out.first[j] = -1.0    # time of each joint's first impact [s]; -1: none yet
     if keep_rows:
-        out_t[0] = t0
-        copy_row(out_y, 0, y)
-        copy_row(out_d, 0, dg)
+        out.t[0] = t0
+        copy_row(out.y, 0, y)
+        copy_row(out.d, 0, dg)
     n_saved = 1
     deepest = 0
     total = 0
@@ -579,7 +649,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
         copy_into(dgsave, dg)
         copy_rows_into(ssave, s)
         copy_rows_into(msave, stats)
-        copy_into(first_save, first)
+        copy_into(first_save, out.first)
         copy_into(ddot_prev_save, ddot_prev)
         while True:
             if level > max_level:
@@ -589,14 +659,14 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
             hs = h / nsub
             nbuf = 0
             need = -1
-            for j in range(2):
+            for j in range(N_JOINTS):
                 for i in range(6):
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
-                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, p, jp, s, wmap, dg, C, S, L, vz)
+                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                 if st != ST_OK:
                     status = st
                     break
@@ -604,11 +674,11 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
                     need = level_for(dg[D_RATE], h, stab)
                     break
                 in_settled = ts + hs >= settle
-                changed, nbuf = accept_substep(hs, in_settled, p, jp, s, dg, stats, proj, wvol,
-                                               cur, buf_i, buf_v, nbuf, ddot_prev)
-                note_first_impact(first, stats, ts + hs)
+                changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
+                                               ddot_prev)
+                note_first_impact(out.first, stats, ts + hs)
                 if changed:
-                    st = evaluate(ts + hs, y, p, jp, s, wmap, k1, dg, step_end, C, S, L, vz)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                     if st != ST_OK:
                         status = st
                         break
@@ -629,7 +699,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
             copy_into(dg, dgsave)
             copy_rows_into(s, ssave)
             copy_rows_into(stats, msave)
-            copy_into(first, first_save)
+            copy_into(out.first, first_save)
             copy_into(ddot_prev, ddot_prev_save)
             level = max(level + 1, need)
         if status != ST_OK:
@@ -637,7 +707,7 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
                 # the stopping attempt's wear stays in the projections and the worn
                 # volume: keep the map holding the same volume (an unstable step's last
                 # attempt was rejected and undone)
-                for j in range(2):
+                for j in range(N_JOINTS):
                     for i in range(5):
                         pend[j, i] += cur[j, i]
                     if cur[j, 3] > 0.0:
@@ -647,23 +717,21 @@ def advance(p, jp, y0, t0, n_steps, save_every, wmap, proj, wvol, keep_rows, out
         deepest = max(deepest, level)
         merge_wear(wmap, cur, pend, wmax, scratch)
 
-        status = step_checks(y, dg, p, jp, status, e0, track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track)
         if (step + 1) % save_every == 0:
             if keep_rows:
-                out_t[n_saved] = t + h
-                copy_row(out_y, n_saved, y)
-                copy_row(out_d, n_saved, dg)
-                out_wmax[n_saved, 0] = wmax[0]
-                out_wmax[n_saved, 1] = wmax[1]
+                out.t[n_saved] = t + h
+                copy_row(out.y, n_saved, y)
+                copy_row(out.d, n_saved, dg)
+                copy_row(out.wmax, n_saved, wmax)
             n_saved += 1
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
     if keep_rows and status == ST_OK and n_saved > 0:
-        out_wmax[n_saved - 1, 0] = wmax[0]
-        out_wmax[n_saved - 1, 1] = wmax[1]
-    info[0] = status
-    info[1] = n_saved
-    info[2] = deepest
-    info[3] = total
-    info[4] = steps_done
+        copy_row(out.wmax, n_saved - 1, wmax)
+    out.info[I_STATUS] = status
+    out.info[I_SAVED] = n_saved
+    out.info[I_DEEPEST] = deepest
+    out.info[I_SUBSTEPS] = total
+    out.info[I_STEPS] = steps_done

@@ -44,6 +44,9 @@ from .layout import (
 )
 from .wear import worn_surface
 
+#: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
+JOINT_TYPE = "spherical"
+
 #: What :func:`contact` returns for one clearance joint (Numba compiles a namedtuple as a
 #: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
 #: named ``_socket``.
@@ -125,13 +128,39 @@ def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
 
 
 @compiled
-def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
+def cap_height(pen, e, ri, rj):
+    """h_c = R_j (1 + cos beta) of Eq. 11-12 without cancellation [m].
+
+    1 + cos beta = (e - R_i + R_j)(e + R_j + R_i) / (2 R_j e); the first factor is the
+    penetration against the unworn radii, ``pen`` = delta + h, passed in rather than
+    formed as a difference of radii (which would lose all digits for small delta).
+    """
+    return pen * (e + rj + ri) / (2.0 * e)
+
+
+@compiled
+def contact_area(pen, e, ri, rj):
+    """Contact area A = pi(|cB|^2 + h_c^2) = 2 pi R_j h_c (Eq. 13) [m^2]."""
+    return 2.0 * math.pi * rj * cap_height(pen, e, ri, rj)
+
+
+@compiled
+def contact_angle(pen, e, ri, rj):
+    """Angle beta of Eq. 11 [rad]: pi - 2 asin(sqrt((1 + cos beta) / 2)), accurate near pi."""
+    half = 0.5 * cap_height(pen, e, ri, rj) / rj
+    return math.pi - 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
+
+
+@compiled
+def contact(j, model, ball, socket, energy):
     """Contact state and force of clearance joint j (docs/physics.md section 3).
 
-    Ball: body (rb, vb, Rb, wb) at body offset ub; socket: body (rs, vs, Rs, ws_) at us.
-    ``energy``: also compute the elastic energy (else 0 where not needed). Returns a
-    :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint index,
-    never a row of them: a row is a new array view, formed at every call.
+    ``ball``: the ball's body (centroid rb, velocity vb, rotation Rb, body-frame angular
+    velocity wb) and the ball centre's body offset ub, as the tuple (rb, vb, Rb, wb, ub);
+    ``socket``: (rs, vs, Rs, ws_, us) likewise. ``model`` (a :data:`work.Model`) holds p, jp,
+    s and wmap. ``energy``: also compute the elastic energy (else 0 where not needed).
+    Returns a :data:`ContactState`. The whole arrays jp, s, wmap are passed with the joint
+    index, never a row of them: a row is a new array view, formed at every call.
 
     On a sloped worn surface (bilinear map read, :func:`gap`'s ``slope`` s != 0) the
     penetration delta = e - c - h(n) has the gradient m = n - s, and the contact force
@@ -142,6 +171,12 @@ def contact(j, jp, s, wmap, p, rb, vb, Rb, wb, ub, rs, vs, Rs, ws_, us, energy):
     velocity as the socket sees it; damping and friction are booked as dissipated.
     A flat surface (s = 0) gives the radial force F = -F_N n of section 3.4.
     """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    wmap = model.wmap
+    rb, vb, Rb, wb, ub = ball
+    rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     e, n, d_s, n_s, h, slope, worn, c_eff, delta = gap(jp, j, wmap, p, pb, ps, Rs)

@@ -1,0 +1,58 @@
+"""The mechanism's joints as a table, and the registered joint types (docs/architecture.md,
+"The joint table").
+
+Plain data, read when the kernel is imported: the number of joints :data:`N_JOINTS` sizes
+the per-joint blocks of ``layout`` (``D_*``, ``M_*``), the per-joint work arrays and the
+per-joint loops of ``rk4`` and ``dopri5``; each joint's clearance parameters are its row
+of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one module of
+``core/`` that declares ``JOINT_TYPE`` and provides :data:`PROVIDES`; it is registered in
+:data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
+registration without its module or docs).
+
+The kernel reads the attachment points from the table (``dynamics.body_point``, folded
+into constants when compiled); tests/test_joints.py checks them against the packed initial
+state. What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin
+in the rod) and joint B (rod end in the slider) by name, and removes the crank and the
+slider's guide analytically (six free coordinates, ``dynamics.minv_apply``).
+"""
+
+from collections import namedtuple
+
+#: A body of the mechanism: its name and where its centroid and Euler angles sit in the
+#: state vector (``layout.Y_*``: 3 values each).
+Body = namedtuple("Body", ["name", "y_r", "y_phi"])
+
+#: The bodies, in state order (crank 2, rod 3, slider 4; the ground is body 1).
+BODIES = (Body("crank", 0, 3), Body("rod", 6, 9), Body("slider", 12, 15))
+
+#: A point fixed in a body, in the body's frame [m]: ``length`` names the packed length it
+#: scales (``"l2"``: crank, ``"l3"``: rod, None: the point is the centroid) and
+#: ``factors`` the three multiples of that length.
+Attachment = namedtuple("Attachment", ["body", "length", "factors"])
+
+#: A joint of the mechanism: its name (the config key ``joints.<name>`` and the suffix of
+#: its output variables), its type (a key of :data:`JOINT_TYPES`), where the ball sits
+#: (on which body, at which point) and where the socket sits.
+Joint = namedtuple("Joint", ["name", "type", "ball", "socket"])
+
+#: The mechanism's joints, in the order of the per-joint rows and blocks (jp, s, the
+#: wear maps, the D_* and M_* pairs).
+JOINTS = (
+    Joint("A", "spherical", ball=Attachment("crank", "l2", (0.0, 0.0, -0.5)),
+          socket=Attachment("rod", "l3", (-0.5, 0.0, 0.0))),
+    Joint("B", "spherical", ball=Attachment("rod", "l3", (0.5, 0.0, 0.0)),
+          socket=Attachment("slider", None, (0.0, 0.0, 0.0))),
+)
+
+#: Joints of the mechanism.
+N_JOINTS = len(JOINTS)
+
+#: Registered joint types: type name -> the module of ``clearsweep.core`` that implements
+#: it (that module's ``JOINT_TYPE`` is the name).
+JOINT_TYPES = {"spherical": "spherical"}
+
+#: What a joint-type module provides, compiled in that module (docs/architecture.md,
+#: "Joint types"): the gap geometry, the contact points and their velocities, the contact
+#: composed into a ``ContactState``, and its wear surface's contact angle and area.
+PROVIDES = ("gap", "contact_points", "point_velocity", "contact", "contact_angle",
+            "contact_area")

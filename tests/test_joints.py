@@ -1,0 +1,111 @@
+"""The joint table (core/joints.py) and the joint types' registration: a joint-type module
+that is not registered, a registration without its module, functions or docs, or a table
+that disagrees with the layout, the config or the packed initial state fails here."""
+
+import dataclasses
+import importlib
+import pkgutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba.core.registry import CPUDispatcher
+
+import clearsweep.core as core
+from clearsweep.config import DEFAULTS, JointsConfig, resolve_materials
+from clearsweep.core import joints
+from clearsweep.core import layout as L
+from clearsweep.core.kinematics import mv, rotation, trig
+from clearsweep.params import joint_configs, pack
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def core_modules():
+    return {info.name: importlib.import_module(f"clearsweep.core.{info.name}")
+            for info in pkgutil.iter_modules(core.__path__)}
+
+
+def compiled_here(module, name):
+    obj = getattr(module, name, None)
+    return isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__
+
+
+def test_every_joint_type_module_is_registered():
+    """A module of core/ that declares JOINT_TYPE, or compiles a joint type's gap and
+    contact, is registered under its type name."""
+    for name, module in core_modules().items():
+        declared = getattr(module, "JOINT_TYPE", None)
+        if declared is None and not (compiled_here(module, "gap")
+                                     and compiled_here(module, "contact")):
+            continue
+        assert declared is not None, f"core/{name}.py implements a joint type without JOINT_TYPE"
+        assert joints.JOINT_TYPES.get(declared) == name, (
+            f"joint type {declared!r} of core/{name}.py is not registered in "
+            f"core/joints.py JOINT_TYPES")
+
+
+@pytest.mark.parametrize("type_name, module_name", sorted(joints.JOINT_TYPES.items()))
+def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, module_name):
+    module = importlib.import_module(f"clearsweep.core.{module_name}")
+    assert module.JOINT_TYPE == type_name
+    missing = [f for f in joints.PROVIDES if not compiled_here(module, f)]
+    assert not missing, f"core/{module_name}.py does not compile {missing}"
+    arch = (ROOT / "docs" / "architecture.md").read_text()
+    assert f"`{module_name}.py`" in arch and f"`{type_name}`" in arch, (
+        f"docs/architecture.md does not describe the joint type {type_name}")
+
+
+def test_the_table_names_registered_types_bodies_and_config_sections():
+    names = [j.name for j in joints.JOINTS]
+    assert len(set(names)) == len(names) == joints.N_JOINTS == L.N_JOINTS
+    bodies = {b.name for b in joints.BODIES}
+    for joint in joints.JOINTS:
+        assert joint.type in joints.JOINT_TYPES
+        assert joint.ball.body in bodies and joint.socket.body in bodies
+        assert joint.ball.body != joint.socket.body
+    # the config has one section per joint of the table, read in the table's order
+    assert [f.name for f in dataclasses.fields(JointsConfig)] == names
+    assert [name for name, _ in joint_configs(DEFAULTS)] == names
+
+
+def test_per_joint_blocks_of_the_layout_follow_the_table():
+    """Each per-joint block of the diagnostics and statistics is N_JOINTS (or 3 N_JOINTS)
+    long, and the blocks tile the vectors without gaps or overlaps."""
+    nj = L.N_JOINTS
+    for prefix, total, triples in (("D_", L.N_D, {"D_JOINT_FORCE", "D_OFFSET", "D_NORMAL",
+                                                   "D_NGLOBAL"}),
+                                   ("M_", L.N_M, set())):
+        starts = sorted((v, k) for k, v in vars(L).items() if k.startswith(prefix))
+        ends = [v for v, _ in starts[1:]] + [total]
+        for (start, name), end in zip(starts, ends):
+            width = end - start
+            if name in triples:
+                assert width == 3 * nj, name
+            elif width > 1 and name != "D_REACTION_O":
+                assert width == nj, name
+    assert L.N_R == L.R_FIRST_IMPACT + nj
+
+
+def test_the_table_attachments_meet_at_the_ideal_start():
+    """Each joint's ball point (on its body) and socket point (on the other) coincide at
+    the packed initial state of a mechanism without clearance: the attachments of the
+    table are the ones the state and the kernel are built with."""
+    cfg = DEFAULTS.replace(joints__A__clearance=0.0, joints__B__clearance=0.0)
+    pk = pack(cfg, resolve_materials(cfg))
+    y = pk.y0
+    lengths = {"l2": pk.p[L.P_L2], "l3": pk.p[L.P_L3], None: 0.0}
+    by_name = {b.name: b for b in joints.BODIES}
+
+    def point(att):
+        body = by_name[att.body]
+        R = rotation(trig(*y[body.y_phi:body.y_phi + 3]))
+        u = tuple(lengths[att.length] * f for f in att.factors)
+        return np.asarray(y[body.y_r:body.y_r + 3]) + np.asarray(mv(R, u))
+
+    for joint in joints.JOINTS:
+        ball, socket = point(joint.ball), point(joint.socket)
+        assert np.allclose(ball, socket, rtol=0.0, atol=1e-12), joint.name
+    # and a moved attachment would not meet
+    moved = joints.JOINTS[0].ball._replace(factors=(0.0, 0.0, 0.5))
+    assert not np.allclose(point(moved), point(joints.JOINTS[0].socket), atol=1e-6)
