@@ -14,8 +14,8 @@ import pytest
 
 from clearsweep import ptx
 
-#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 916
-#: (``python -m clearsweep.ptx``; 4,544 before the kernel was reshaped for the GPU, 2,696
+#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 932
+#: (``python -m clearsweep.ptx``; 916 before the contact laws; 4,544 before the kernel was reshaped for the GPU, 2,696
 #: before core/device.py handed advance its fixed-shape rows through ``block`` and
 #: evaluate formed the frames in each contact on the device, see benchmarks/README.md).
 #: The bound is the goal, below 1,024: about 100 bytes of room for ptxas' allocation
