@@ -459,7 +459,7 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
     from .sweeping import PartStore, StoreError, SweepFailed, SweepInterrupted, parts_dir_for, run_sweep
 
     try:
-        return run_sweep(plan, out, **options)
+        return run_sweep(plan, out, report_failures=False, **options)
     except (ConfigError, StoreError) as exc:
         _fail(str(exc), 2)
     except SweepInterrupted as exc:
