@@ -60,7 +60,7 @@ from .outputs import (
     is_own_figure,
 )
 from .schema import ClearsweepWarning
-from .variables import JOINTS
+from .variables import JOINTS, format_length
 from .version import __version__
 
 
@@ -356,6 +356,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         life,
         life_block,
         life_plan_text,
+        life_stop_hint,
         life_summary_text,
     )
 
@@ -375,7 +376,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     def progress(row: dict[str, Any]) -> None:
         if not quiet:
             # the joints with a clearance (an ideal joint's depth is NaN)
-            depth = ", ".join(f"{j} {d:.3g} m" for j, d in zip(JOINTS, row["wear_depth_max"])
+            depth = ", ".join(f"{j} {format_length(d, 3)}" for j, d in zip(JOINTS, row["wear_depth_max"])
                               if math.isfinite(d))
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
                        f"status {row['block_status']}", err=True)
@@ -405,7 +406,9 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         click.echo(life_summary_text(ds))
     _wrote(path, quiet)
     if str(ds["stop_reason"].values).startswith("block_status:"):
-        _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})", 1)
+        hint = life_stop_hint(cfg, str(ds["stop_reason"].values))
+        _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})"
+              + (f"; {hint}" if hint else ""), 1)
 
 
 def _run_ensemble(config: str, cfg, out: str, overrides: tuple[str, ...],
@@ -858,8 +861,20 @@ def _check_scheduler(address: str) -> None:
 def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
     """The command line that continues interrupted work: the same overrides, as they are
     part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
-    return shlex.join(["clearsweep", command, config, "-o", out, "--resume",
+    return shlex.join([*_program(), command, config, "-o", out, "--resume",
                        *(a for o in overrides for a in ("--set", o))])
+
+
+def _program() -> list[str]:
+    """The program as the user invoked it (``.venv/bin/clearsweep`` stays so, and a run by
+    ``python -m clearsweep.cli`` prints that); ``clearsweep`` where it cannot be told."""
+    argv0 = sys.argv[0] if sys.argv else ""
+    name = Path(argv0).name
+    if name.startswith("clearsweep") and not name.endswith(".py"):
+        return [argv0]
+    if Path(argv0).resolve() == Path(__file__).resolve():
+        return ["python", "-m", "clearsweep.cli"]
+    return ["clearsweep"]
 
 
 @main.command("sweep")

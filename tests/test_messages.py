@@ -1,0 +1,104 @@
+"""Messages that diagnose what the user did (issue: a user's first hour, round 2)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+
+from clearsweep import cli
+from clearsweep.analysis.selection import MAX_OFFER_CHARS, choice_message
+from clearsweep.cli import main
+from clearsweep.config import load_config
+from clearsweep.service_life import life, life_stop_hint, life_summary_text
+from clearsweep.variables import format_length
+
+ROOT = Path(__file__).resolve().parents[1]
+LIFE = str(ROOT / "configs" / "life.yaml")
+#: One short block of configs/life.yaml.
+SHORT = ["life.max_blocks=1", "mechanism.speed_rpm=3000", "wear.map=[12, 24]"]
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_validate_of_a_results_file_says_it_is_one_not_a_size_limit(tmp_path):
+    path = tmp_path / "x.nc"
+    xr.Dataset({"a": ("t", [1.0])}).to_netcdf(path, engine="netcdf4")
+    result = invoke("validate", path)
+    assert result.exit_code == 2
+    line = result.stderr.strip()
+    assert line.startswith("clearsweep: error: ") and "\n" not in line
+    assert "netCDF results file" in line and "bytes" not in line
+
+
+@pytest.fixture(scope="module")
+def short_life():
+    return life(LIFE, SHORT)
+
+
+def test_life_limits_never_set_read_not_set(short_life):
+    text = life_summary_text(short_life)
+    assert "revolutions to life.max_normal_force: not set" in text     # configs/life.yaml sets none
+    assert "revolutions to life.max_clearance_growth: not reached" in text  # set, not reached
+
+
+def test_life_report_scales_depths_and_stays_within_100_characters(short_life):
+    text = life_summary_text(short_life)
+    depth = float(short_life.wear_depth_max.isel(cycle=-1).sel(joint="B"))
+    assert f"B at the end: max depth {format_length(depth)}," in text
+    assert " um" in text and "e-0" not in text
+    assert max(len(line) for line in text.splitlines()) <= 100
+
+
+@pytest.mark.parametrize("value, text", [(2.745e-6, "2.745 um"), (1.2e-4, "120 um"),
+                                         (2.5e-4, "250 um"), (1.5e-3, "1.5 mm"), (3e-10, "0.3 nm")])
+def test_lengths_print_in_um_or_mm(value, text):
+    assert format_length(value) == text
+
+
+def test_a_block_that_stops_a_life_run_read_bin_by_bin_hints_at_interpolate():
+    binned = load_config(LIFE, ["wear.interpolate=false"])
+    hint = life_stop_hint(binned, "block_status:energy_residual")
+    assert "wear.interpolate=true" in hint
+    assert life_stop_hint(load_config(LIFE), "block_status:energy_residual") == ""
+    assert life_stop_hint(binned, "max_blocks") == ""
+
+
+def test_the_life_command_prints_that_hint(tmp_path, monkeypatch):
+    import clearsweep.service_life as service_life
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(cli, "announce_compile", lambda *a, **k: None)
+    stopped = xr.Dataset({"stop_reason": ((), "block_status:energy_residual"), "x": ("cycle", [1.0])})
+    monkeypatch.setattr(service_life, "life", lambda cfg, **kwargs: stopped)
+    monkeypatch.setattr(service_life, "life_summary_text", lambda ds: "life summary")
+    result = invoke("life", LIFE, "--set", "wear.interpolate=false", "-o", "l.nc")
+    assert result.exit_code == 1
+    assert "life run stopped: block_status:energy_residual" in result.stderr
+    assert "--set wear.interpolate=true" in result.stderr
+
+
+@pytest.mark.parametrize("argv0, program", [
+    (".venv/bin/clearsweep", ".venv/bin/clearsweep"),
+    ("/usr/local/bin/clearsweep", "/usr/local/bin/clearsweep"),
+    (cli.__file__, "python -m clearsweep.cli"),
+    ("pytest", "clearsweep"),
+])
+def test_resume_commands_are_printed_as_the_program_was_invoked(monkeypatch, argv0, program):
+    monkeypatch.setattr(sys, "argv", [argv0, "sweep"])
+    command = cli._resume_command("sweep", "s.yaml", "s.nc", ("solver.duration=0.1",))
+    assert command == f"{program} sweep s.yaml -o s.nc --resume --set solver.duration=0.1"
+
+
+def test_an_unknown_name_among_hundreds_is_one_short_line():
+    names = [f"metric_number_{i}_settled" for i in range(200)]
+    message = choice_message("metric", "metric_number_7_setled", names)
+    assert "did you mean metric_number_7_settled" in message
+    assert len(message) < MAX_OFFER_CHARS + 200 and message.endswith(" more")
+    short = choice_message("metric", "x", ["a", "b"])
+    assert short.endswith("choose from: a, b")
