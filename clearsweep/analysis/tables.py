@@ -238,6 +238,7 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
     def heading(c: _Column) -> str:
         return f"{c.heading} [{units[c.name]}]" if units.get(c.name) else c.heading
 
+    units_given = units
     scale: dict[str, float] = {}
     if fmt not in ("csv", "json"):      # lengths to read in um or mm; csv and json stay SI
         units = dict(units)
@@ -265,6 +266,26 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
 
     titles = [_KEY_HEADINGS.get(k, k) for k in key_names] + [heading(c) for c in columns]
     n_keys = len(key_names)
+    if fmt == "text" and len(columns) > 1:
+        # too wide even with two-line headings: the columns in parts, each under the row keys
+        def width(i: int, t: str) -> int:
+            values = [len(value_text(r[key_names[i]])) if i < n_keys
+                      else len(_cell(r[columns[i - n_keys].name], columns[i - n_keys].spec,
+                                     scale.get(columns[i - n_keys].name)))
+                      for g in groups for r in g.rows]
+            return max(max(len(x) for x in _two_lines(t)), *values, 0) + 2
+        widths = [width(i, t) for i, t in enumerate(titles)]
+        parts: list[list[_Column]] = [[]]
+        used = sum(widths[:n_keys])
+        for c, w in zip(columns, widths[n_keys:]):
+            if parts[-1] and used + w > REPORT_WIDTH:
+                parts.append([])
+                used = sum(widths[:n_keys])
+            parts[-1].append(c)
+            used += w
+        if len(parts) > 1:
+            return "\n\n".join(_render(title if i == 0 else f"{title}, continued", groups, key_names,
+                                        tuple(part), units_given, fmt) for i, part in enumerate(parts))
     out = [f"## {title}" if fmt == "markdown" else title]
     for group in groups:
         cells = [[value_text(r[k]) for k in key_names]
