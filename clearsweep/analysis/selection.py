@@ -107,7 +107,7 @@ def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
     hint = f" (did you mean {', '.join(close)}?)" if close else ""
     offer = ", ".join(choices) if choices else "none"
     if len(offer) > MAX_OFFER_CHARS:    # a line to read, not a dump: the first names and a count
-        shown = []
+        shown: list[str] = []
         for choice in choices:
             if len(", ".join([*shown, choice])) > MAX_OFFER_CHARS:
                 break
