@@ -624,7 +624,8 @@ def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
 def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None,
                    full: bool, quiet: bool) -> None:
     """Print the every-step statistics (settled first) and the wear table (paper Tables
-    4-5) of a results file PATH (csv and json: the wear table alone).
+    4-5) of a results file PATH (csv and json: one flat table, a row per case, joint and
+    wear direction, with every statistic and the wear table's columns).
 
     A sweep (or an ensemble) prints a summary first: its design axes and, per headline
     metric, the best and worst design and their spread; every case's tables follow with
@@ -683,7 +684,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
                 text = format_reduction_table(ds, reference, fmt)
             else:
                 statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
-                text = "\n\n".join(t for t in (statistics, format_wear_table(ds, fmt)) if t)
+                text = "\n\n".join(t for t in (statistics, format_wear_table(
+                    ds, fmt, with_statistics=fmt in ("csv", "json"))) if t)
             if summary and full:
                 text = f"{summary}\n\n{text}"
         except SelectionError as exc:

@@ -315,7 +315,8 @@ def test_report_cli_every_format(sweep_file, fmt):
     elif fmt == "csv":
         rows = list(csv.reader(io.StringIO(out)))
         assert rows[0][:5] == ["B_coating", "B_clearance", "status", "joint", "axis"]
-        assert rows[0][5] == "Max projected depth [m]"     # csv and json stay SI
+        assert rows[0][5] == "Peak slider acc., settled [m s-2]"   # the statistics, then the wear
+        assert "Max projected depth [m]" in rows[0]     # csv and json stay SI
         assert len(rows) == 1 + 4 * 2 * 3
     elif fmt == "markdown":
         assert out.startswith("## Slider and crank (every-step statistics")
@@ -524,3 +525,25 @@ def test_wear_table_matches_its_xarray_definition_on_a_sweep_with_empty_nan_and_
     xr.testing.assert_identical(wear_table(ds), _wear_table_by_xarray(ds))
     # the angle axis need not be last
     xr.testing.assert_identical(wear_table(ds.transpose("angle", ...)), _wear_table_by_xarray(ds))
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_report_csv_and_json_of_a_sweep_carry_every_headline_metric(sweep_file, fmt):
+    """csv and json of a sweep held only the wear table."""
+    from clearsweep.analysis import HEADLINE_METRICS
+
+    result = invoke(sweep_file, "--format", fmt)
+    assert result.exit_code == 0, result.output
+    if fmt == "json":
+        doc = json.loads(result.output)
+        names = set(doc["columns"])
+        assert all(name in row for row in doc["rows"] for name in HEADLINE_METRICS)
+    else:
+        from clearsweep.analysis import tables
+
+        headings = {n.split(" [")[0] for n in next(csv.reader(io.StringIO(result.output)))}
+        columns = (*tables._MOTION_COLUMNS, *tables._CONTACT_COLUMNS, *tables._FINAL_WEAR_COLUMNS,
+                   *tables._WEAR_COLUMNS)
+        names = {c.name for c in columns if c.heading in headings}
+    assert set(HEADLINE_METRICS) <= names
+    assert "wear_depth_axis_max" in names

@@ -328,7 +328,7 @@ def _with_status(ds: xr.Dataset, table: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
+def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool = False) -> str:
     """Paper Tables 4-5 as text, markdown, csv or json.
 
     Columns per joint and wear direction (axis): max wear depth [m], max wear
@@ -336,12 +336,26 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
     [degree]. Text and markdown print one block per sweep case, headed by its
     coordinates (and its status where not ``ok``); csv and json print one
     flat table with the sweep coordinates and the status as columns.
+
+    ``with_statistics``: every row also carries its case's and joint's every-step
+    statistics and final wear (:func:`format_statistics_table`'s columns, each case's
+    value on each of its rows): the one flat table of ``report --format csv / json``.
     """
-    table = _with_status(ds, wear_table(ds))
+    wear = wear_table(ds)
+    columns = _WEAR_COLUMNS
+    if with_statistics:
+        summary = case_summary(ds)
+        extra = tuple(c for c in (*_MOTION_COLUMNS, *_CONTACT_COLUMNS, *_FINAL_WEAR_COLUMNS)
+                      if c.name in summary)
+        like = wear["wear_depth_axis_max"]
+        wear = wear.assign({c.name: summary[c.name].broadcast_like(like).transpose(*like.dims)
+                            for c in extra})
+        columns = extra + _WEAR_COLUMNS
+    table = _with_status(ds, wear)
     title = (f"Wear prediction (paper Tables 4-5; wear angles: depth > "
              f"{WEAR_THRESHOLD_FRACTION:g} of the axis maximum)")
-    groups = _case_groups(table, _WEAR_COLUMNS, ("joint", "axis"))
-    return _render(title, groups, ("joint", "axis"), _WEAR_COLUMNS, _units(table, _WEAR_COLUMNS), fmt)
+    groups = _case_groups(table, columns, ("joint", "axis"))
+    return _render(title, groups, ("joint", "axis"), columns, _units(table, columns), fmt)
 
 
 _MOTION_COLUMNS = (
