@@ -102,3 +102,14 @@ def test_an_unknown_name_among_hundreds_is_one_short_line():
     assert len(message) < MAX_OFFER_CHARS + 200 and message.endswith(" more")
     short = choice_message("metric", "x", ["a", "b"])
     assert short.endswith("choose from: a, b")
+
+
+def test_a_sampled_design_is_named_by_its_inputs():
+    """The sensitivity sweep's best design read "sample=45", without the values drawn."""
+    from clearsweep.analysis.text import _design_text
+
+    ds = xr.Dataset(coords={"sample": [0, 1], "B_clearance": ("sample", [1e-4, 3.123456e-4]),
+                            "speed_rpm": ("sample", [40.0, 52.34])})
+    assert _design_text(ds, {"sample": 1}) == "sample=1 (B_clearance=0.0003123, speed_rpm=52.34)"
+    grid = xr.Dataset(coords={"B_coating": ["none", "PTFE"]})
+    assert _design_text(grid, {"B_coating": "PTFE"}) == "B_coating=PTFE"
