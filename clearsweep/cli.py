@@ -22,6 +22,7 @@ Every command takes ``-q``; ``run``, ``sweep`` and ``life`` take ``--dry-run``.
 from __future__ import annotations
 
 import errno
+import json
 import math
 import os
 import re
@@ -50,7 +51,7 @@ from .choices import (
     SWEEP_BACKENDS,
     X_AXES,
 )
-from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
+from .config import ConfigError, dump_config, file_kind, load_config, parse_yaml, read_yaml
 from .outputs import (
     OVERWRITE_REMEDY,
     RESULTS_SOURCE,
@@ -215,6 +216,38 @@ def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
     return path
 
 
+def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
+    """``{"dotted.key": value}`` of a nested mapping (lists kept whole)."""
+    if not isinstance(tree, dict):
+        return {prefix: tree}
+    out: dict[str, Any] = {}
+    for key, value in tree.items():
+        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def _replacing(path: str, attr: str, new_text: str) -> str:
+    """What writing ``path`` replaces, for the line that says it was written: ``""`` when
+    nothing is there, else the earlier result's time and the values it was made with that
+    differ (from the resolved config its attribute ``attr`` records), shown as --set."""
+    if not Path(path).is_file():
+        return ""
+    import xarray as xr
+
+    try:
+        with xr.open_dataset(path) as old:
+            old_text, history = old.attrs.get(attr), str(old.attrs.get("history", ""))
+        old_flat, new_flat = _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config"))
+    except Exception:       # not a results file we can read: check_output decided it may go
+        return ""
+    when = history.split(": ", 1)[0] if ": " in history else "earlier"
+    changed = [f"{k}={json.dumps(old_flat.get(k))}" for k in sorted(set(old_flat) | set(new_flat))
+               if k != "name" and old_flat.get(k) != new_flat.get(k)]
+    what = ("made with the same values" if not changed else "made with --set " + " --set ".join(
+        changed[:6]) + (f" and {len(changed) - 6} more differences" if len(changed) > 6 else ""))
+    return f", replacing the result of {when} {what}"
+
+
 def _sweep_kind(plan) -> str:
     """The kind of results file (``outputs.RESULTS_KINDS``) that ``plan`` writes."""
     return {"life": "life-sweep", "reliability": "reliability"}.get(plan.store, "sweep")
@@ -297,6 +330,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         return
     from .simulation import simulate
 
+    replacing = _replacing(out, "config", dump_config(cfg))
     announce_compile(quiet, [cfg.solver.method])
     try:
         ds = simulate(cfg, allow_large=allow_large)
@@ -313,7 +347,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         from .analysis import run_summary_text
 
         click.echo(run_summary_text(ds))
-    _wrote(path, quiet)
+    _wrote(path, quiet, replacing)
     status = str(ds["status"].values)
     if status != "ok":
         hint = ds.attrs.get("status_hint")
@@ -371,6 +405,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
                      kind="life",
                      derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
+    replacing = _replacing(out, "config", dump_config(cfg))
     announce_compile(quiet, [cfg.solver.method])
 
     def progress(row: dict[str, Any]) -> None:
@@ -404,7 +439,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     checkpoint.unlink(missing_ok=True)
     if not quiet:
         click.echo(life_summary_text(ds))
-    _wrote(path, quiet)
+    _wrote(path, quiet, replacing)
     if str(ds["stop_reason"].values).startswith("block_status:"):
         hint = life_stop_hint(cfg, str(ds["stop_reason"].values))
         _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})"
@@ -968,6 +1003,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         _check_out(given, out, plan.input_files(), overwrite, resume, kind=_sweep_kind(plan))
         cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
         kept = PartStore(parts_dir_for(out)).kept_on_resume() if resume else set()
+        replacing = _replacing(out, "sweep_config", plan.text)
         if not quiet:
             click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):
@@ -994,7 +1030,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         if cluster is not None:
             cluster.close()
     note = f" ({skipped} skipped)" if skipped else ""
-    _wrote(out, quiet, f": {n} cases{note}")
+    _wrote(out, quiet, f": {n} cases{note}{replacing}")
     if failed:
         _fail(f"{failed} of {n} cases failed{note}; see the status and message variables in {out}", 1)
 

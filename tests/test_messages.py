@@ -113,3 +113,17 @@ def test_a_sampled_design_is_named_by_its_inputs():
     assert _design_text(ds, {"sample": 1}) == "sample=1 (B_clearance=0.0003123, speed_rpm=52.34)"
     grid = xr.Dataset(coords={"B_coating": ["none", "PTFE"]})
     assert _design_text(grid, {"B_coating": "PTFE"}) == "B_coating=PTFE"
+
+
+def test_a_rerun_that_replaces_a_result_says_what_it_replaced(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    case = str(ROOT / "configs" / "two_clearances.yaml")
+    first = invoke("run", case, "-o", "r.nc", "--set", "solver.duration=0.004", "-q")
+    assert first.exit_code == 0, first.output
+    again = invoke("run", case, "-o", "r.nc", "--set", "solver.duration=0.002")
+    assert again.exit_code == 0, again.output
+    last = again.stderr.strip().splitlines()[-1]
+    assert last.startswith("clearsweep: wrote r.nc, replacing the result of 20")
+    assert last.endswith("made with --set solver.duration=0.004")
+    fresh = invoke("run", case, "-o", "new.nc", "--set", "solver.duration=0.002")
+    assert fresh.stderr.strip().splitlines()[-1] == "clearsweep: wrote new.nc"

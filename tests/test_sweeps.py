@@ -265,7 +265,7 @@ def test_summary_store_keeps_the_worn_volume_of_the_full_store(tmp_path):
     assert report.exit_code == 0, report.output
     assert "- worn volume sum of k F_N dS, joint B [m3]" in report.output     # the summary
     block = report.output.split("Wear at the end of the run")[1]
-    assert "Max wear depth (largest map bin) [m]" in block and "Worn volume [m3]" in block
+    assert "Max depth, largest map bin [nm]" in block and "Worn volume [m3]" in block
 
 
 def test_without_out_the_result_is_in_memory(tmp_path, monkeypatch):
