@@ -779,6 +779,7 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
     _check_figure_suffix(out, "'-o' / '--out'")
     _check_figure(out, "-o/--out", [("the results file", path)], overwrite)
     with open_input(path) as ds:
+        _check_plot_kind(ds, path, kind, metric)
         try:
             plot(ds, kind, out, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
         except (SelectionError, PlotError) as exc:
@@ -786,6 +787,35 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
         except OSError as exc:      # as `run`: an output that cannot be written exits 1
             _fail(f"cannot write {out}: {_reason(exc)}", 1)
     _wrote(out, quiet)
+
+
+#: The figure kinds that draw one run's time series and wear maps.
+_RUN_KINDS = "slider, forces, wear-map, wear-polar or orbit"
+
+
+def _check_plot_kind(ds: xr.Dataset, path: str, kind: str, metric: str | None) -> None:
+    """A usage error where ``--kind`` asks for a figure of another kind of results file
+    than ``path`` is, naming what the file is and the kinds that draw it."""
+    from .analysis import results_kind
+    from .outputs import RESULTS_KINDS
+
+    held = results_kind(ds)
+    problem = None
+    if kind == "sweep" and held == "run":
+        problem = (f"--kind sweep draws a metric across a sweep's designs; {path} is a single "
+                   f"run: draw it with --kind {_RUN_KINDS}")
+    elif kind == "sweep" and held == "life":
+        problem = f"--kind sweep draws a sweep; {path} is a life run: --kind life draws it"
+    elif kind == "sweep" and held == "life-sweep" and metric is None:
+        problem = (f"--kind sweep of {path}, a life sweep, needs --metric: its default, "
+                   f"{DEFAULT_SWEEP_METRIC}, is a dynamics metric a life sweep does not keep "
+                   "(e.g. --metric cycles_reached)")
+    elif kind == "life" and held in ("run", "sweep", "ensemble", "sample", "reliability"):
+        problem = (f"--kind life draws a life run (`clearsweep life CONFIG` writes one); {path} "
+                   f"is {RESULTS_KINDS[held]}" + (f": draw it with --kind {_RUN_KINDS}"
+                                                  if held == "run" else ""))
+    if problem:
+        raise click.UsageError(problem)
 
 
 def _check_figure_suffix(path: str, option: str) -> None:

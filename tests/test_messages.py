@@ -127,3 +127,35 @@ def test_a_rerun_that_replaces_a_result_says_what_it_replaced(tmp_path, monkeypa
     assert last.endswith("made with --set solver.duration=0.004")
     fresh = invoke("run", case, "-o", "new.nc", "--set", "solver.duration=0.002")
     assert fresh.stderr.strip().splitlines()[-1] == "clearsweep: wrote new.nc"
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory):
+    from clearsweep.dataset import write_netcdf_atomic
+    from clearsweep.simulation import simulate
+
+    path = tmp_path_factory.mktemp("run") / "run.nc"
+    write_netcdf_atomic(simulate(str(ROOT / "configs" / "two_clearances.yaml"),
+                                 ["solver.duration=0.002"]), path)
+    return path
+
+
+@pytest.mark.parametrize("kind, wanted, not_said", [
+    ("sweep", "is a single run: draw it with --kind slider", "--select"),
+    ("life", "--kind life draws a life run (`clearsweep life CONFIG` writes one)", "summary-only"),
+])
+def test_plot_of_a_single_run_names_what_the_file_is(run_file, tmp_path, kind, wanted, not_said):
+    result = invoke("plot", run_file, "--kind", kind, "-o", tmp_path / "f.png")
+    assert result.exit_code == 2
+    assert wanted in result.stderr and not_said not in result.stderr
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_plot_sweep_of_a_life_run_points_to_kind_life(short_life, tmp_path):
+    from clearsweep.dataset import write_netcdf_atomic
+
+    write_netcdf_atomic(short_life, tmp_path / "l.nc")
+    result = invoke("plot", tmp_path / "l.nc", "--kind", "sweep", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2
+    assert "is a life run: --kind life draws it" in result.stderr
+    assert "slider_acceleration" not in result.stderr     # no default metric the user never typed

@@ -342,7 +342,7 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
     value on each of its rows): the one flat table of ``report --format csv / json``.
     """
     wear = wear_table(ds)
-    columns = _WEAR_COLUMNS
+    columns: tuple[_Column, ...] = _WEAR_COLUMNS
     if with_statistics:
         summary = case_summary(ds)
         extra = tuple(c for c in (*_MOTION_COLUMNS, *_CONTACT_COLUMNS, *_FINAL_WEAR_COLUMNS)
