@@ -159,3 +159,38 @@ def test_plot_sweep_of_a_life_run_points_to_kind_life(short_life, tmp_path):
     assert result.exit_code == 2
     assert "is a life run: --kind life draws it" in result.stderr
     assert "slider_acceleration" not in result.stderr     # no default metric the user never typed
+
+
+def test_the_sweep_progress_rate_counts_from_the_first_finished_case(tmp_path, monkeypatch):
+    """The first estimate of the time left read 5:28:01: the fixed costs before the first
+    case (pool start, kernel load) counted as the cost of a case."""
+    import time
+
+    import tqdm.auto
+
+    from clearsweep.sweeping import run_sweep
+
+    bars = []
+    real = tqdm.auto.tqdm
+
+    def keep(*args, **kwargs):
+        bars.append(real(*args, **kwargs))
+        return bars[-1]
+
+    monkeypatch.setattr(tqdm.auto, "tqdm", keep)
+    calls = []
+
+    def slow_first(config):
+        from clearsweep.simulation import simulate
+
+        if not calls:
+            time.sleep(1.0)         # the fixed cost of the first case
+        calls.append(time.perf_counter())
+        return simulate(config)
+
+    spec = {"base": str(ROOT / "configs/two_clearances.yaml"),
+            "sweep": {"grid": {"joints.B.coating": ["none", "PTFE", "lead"]}}}
+    run_sweep(spec, workers=1, _simulate=slow_first, overrides=["solver.duration=0.002"])
+    (bar,) = bars
+    assert bar.smoothing == 0 and bar.initial == 1      # the clock restarted at the first case
+    assert bar.start_t >= calls[0]

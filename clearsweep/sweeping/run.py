@@ -387,8 +387,11 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
                           f"{type(exc).__name__}: {exc}") from exc
     store.log("run", name=plan.name, source=plan.source, cases=len(plan.cases), to_run=len(todo), kept=kept,
               backend=backend.label, command=plan.command)
+    # smoothing=0: the rate is the average since the clock's start, which the first finished
+    # case resets (below), so the fixed costs before it (the pool's start, the kernel loaded
+    # from the cache in each worker) do not make the first estimates hours long
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
-               file=sys.stderr, dynamic_ncols=True)
+               file=sys.stderr, dynamic_ncols=True, smoothing=0)
     bar.set_postfix(failed=failed)
     done = kept
 
@@ -402,6 +405,10 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         done += 1
         bar.set_postfix(failed=failed, refresh=False)
         bar.update()
+        if done == kept + 1 and not bar.disable:   # the first case of this run: time from here
+            # shown at the new start, else tqdm's close() would not print the last state
+            bar.initial, bar.start_t = bar.n, bar._time()
+            bar.last_print_t = bar.start_t
 
     interrupted = stopped = False
     try:
