@@ -216,16 +216,6 @@ def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
     return path
 
 
-def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
-    """``{"dotted.key": value}`` of a nested mapping (lists kept whole)."""
-    if not isinstance(tree, dict):
-        return {prefix: tree}
-    out: dict[str, Any] = {}
-    for key, value in tree.items():
-        out.update(_flat(value, f"{prefix}.{key}" if prefix else str(key)))
-    return out
-
-
 def _replacing(path: str, attr: str, new_text: str) -> str:
     """What writing ``path`` replaces, for the line that says it was written: ``""`` when
     nothing is there, else the earlier result's time and the values it was made with that
@@ -233,6 +223,8 @@ def _replacing(path: str, attr: str, new_text: str) -> str:
     if not Path(path).is_file():
         return ""
     import xarray as xr
+
+    from .params import _flat
 
     try:
         with xr.open_dataset(path) as old:
