@@ -28,6 +28,7 @@ import os
 import re
 import shlex
 import sys
+import time
 import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -384,6 +385,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         life_plan_text,
         life_stop_hint,
         life_summary_text,
+        life_time_left,
     )
 
     if cfg.ensemble.members > 1:    # one life run follows one case: it would run member 0 alone
@@ -400,13 +402,17 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     replacing = _replacing(out, "config", dump_config(cfg))
     announce_compile(quiet, [cfg.solver.method])
 
+    started, blocks = time.perf_counter(), [0]
+
     def progress(row: dict[str, Any]) -> None:
+        blocks[0] += 1
         if not quiet:
             # the joints with a clearance (an ideal joint's depth is NaN)
             depth = ", ".join(f"{j} {format_length(d, 3)}" for j, d in zip(JOINTS, row["wear_depth_max"])
                               if math.isfinite(d))
+            left = life_time_left(cfg, float(row["cycle"]), blocks[0], time.perf_counter() - started)
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
-                       f"status {row['block_status']}", err=True)
+                       f"status {row['block_status']}" + (f"; {left}" if left else ""), err=True)
 
     def resumed(state: LifeState) -> None:
         if not quiet:

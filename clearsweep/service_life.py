@@ -35,6 +35,7 @@ from .budget import (
     MAX_OUTPUT_BYTES,
     Estimate,
     check_budget,
+    duration_text,
     estimate,
     format_bytes,
     memory_limit,
@@ -169,7 +170,8 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
             f"{format_bytes(est.output_bytes + cost.memory_bytes)} in all; a checkpoint of up "
             f"to {format_bytes(cost.checkpoint_bytes)} rewritten after every block (up to "
             f"{format_bytes(lc.max_blocks * cost.checkpoint_bytes)} written); at most "
-            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit; "
+            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit "
+            "(each block's progress line gives the time left at the pace so far); "
             "nothing run (--dry-run)")
 
 
@@ -876,6 +878,20 @@ def life_summary_text(ds: xr.Dataset) -> str:
 
 #: Per-joint variables of a life run whose final value a life sweep keeps.
 FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coating_remaining")
+
+
+def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float) -> str:
+    """The expected time left of a life run after ``blocks`` blocks reached ``cycles``
+    revolutions in ``elapsed_s``: at the pace so far in revolutions, capped by the
+    blocks left (``life.max_blocks``) at the time per block so far; ``""`` when done.
+    The pace grows as the jumps lengthen, so the time left is rather too long than short;
+    a limit reached stops the run sooner still."""
+    lc = cfg.life
+    if blocks <= 0 or cycles <= 0.0 or cycles >= lc.cycles or blocks >= lc.max_blocks:
+        return ""
+    by_pace = elapsed_s * (lc.cycles - cycles) / cycles
+    by_blocks = elapsed_s * (lc.max_blocks - blocks) / blocks
+    return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
 
 
 def life_stop_hint(cfg: Config, stop: str) -> str:

@@ -194,3 +194,17 @@ def test_the_sweep_progress_rate_counts_from_the_first_finished_case(tmp_path, m
     (bar,) = bars
     assert bar.smoothing == 0 and bar.initial == 1      # the clock restarted at the first case
     assert bar.start_t >= calls[0]
+
+
+def test_a_life_run_gives_its_expected_time_left_from_the_blocks_so_far():
+    """The plan's "at most about 21.3 min" was the only time a life run gave."""
+    from clearsweep.budget import duration_text
+    from clearsweep.service_life import life_time_left
+
+    cfg = load_config(LIFE, ["life.max_blocks=100", "life.cycles=1000"])
+    # 10 blocks, 10 s, 500 of 1000 revolutions: 10 s more at this pace (90 blocks would be 90 s)
+    assert life_time_left(cfg, 500.0, 10, 10.0) == f"about {duration_text(10.0)} left at this pace"
+    # 10 blocks, 10 s, 1 revolution: the blocks left bound it (90 more at 1 s each)
+    assert life_time_left(cfg, 1.0, 10, 10.0) == f"about {duration_text(90.0)} left at this pace"
+    assert life_time_left(cfg, 1000.0, 10, 10.0) == ""
+    assert life_time_left(cfg, 5.0, 100, 10.0) == ""
