@@ -27,7 +27,7 @@ from clearsweep.cli import sweep_command
 from clearsweep.config import ConfigError
 from clearsweep.dataset import open_results
 from clearsweep.sweeping import backends as sweep_backends
-from clearsweep.sweeping import drop_timing, expand, run_sweep
+from clearsweep.sweeping import CasesFailedWarning, drop_timing, expand, run_sweep
 from clearsweep.sweeping import plan as sweep_plan
 from clearsweep.sweeping import run as sweep_run
 from clearsweep.sweeping.parts import PartStore, parts_dir_for
@@ -653,8 +653,9 @@ def _raise_for_ptfe(cfg):
 
 
 def test_exception_inside_a_case_is_an_error_status_not_a_crash(tmp_path):
-    with run_sweep(write_sweep(tmp_path, SMALL), tmp_path / "e.nc", workers=1, progress=False,
-                   _simulate=_raise_for_ptfe) as ds:
+    with pytest.warns(CasesFailedWarning, match="2 of 4 cases failed"), \
+            run_sweep(write_sweep(tmp_path, SMALL), tmp_path / "e.nc", workers=1, progress=False,
+                      _simulate=_raise_for_ptfe) as ds:
         assert (ds["status"].sel(B_coating="PTFE") == "error").all()
         assert "RuntimeError: boom" in ds["message"].sel(B_coating="PTFE").values.ravel()[0]
         assert (ds["status"].sel(B_coating="none") == "ok").all()
