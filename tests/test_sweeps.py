@@ -26,8 +26,8 @@ from clearsweep import sweeping
 from clearsweep.cli import sweep_command
 from clearsweep.config import ConfigError
 from clearsweep.dataset import open_results
-from clearsweep.sweeping import backends as sweep_backends
 from clearsweep.sweeping import CasesFailedWarning, drop_timing, expand, run_sweep
+from clearsweep.sweeping import backends as sweep_backends
 from clearsweep.sweeping import plan as sweep_plan
 from clearsweep.sweeping import run as sweep_run
 from clearsweep.sweeping.parts import PartStore, parts_dir_for
