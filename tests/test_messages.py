@@ -208,3 +208,12 @@ def test_a_life_run_gives_its_expected_time_left_from_the_blocks_so_far():
     assert life_time_left(cfg, 1.0, 10, 10.0) == f"about {duration_text(90.0)} left at this pace"
     assert life_time_left(cfg, 1000.0, 10, 10.0) == ""
     assert life_time_left(cfg, 5.0, 100, 10.0) == ""
+
+
+def test_plot_sweep_of_a_life_sweep_without_metric_asks_for_one(tmp_path):
+    """It failed on the default metric, a name the user never typed."""
+    path = tmp_path / "ls.nc"
+    xr.Dataset({"cycles_reached": ("d", [1.0, 2.0])}, attrs={"sweep_store": "life"}).to_netcdf(path)
+    result = invoke("plot", path, "--kind", "sweep", "-o", tmp_path / "f.png")
+    assert result.exit_code == 2
+    assert "a life sweep, needs --metric" in result.stderr and "--metric cycles_reached" in result.stderr
