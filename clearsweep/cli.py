@@ -938,7 +938,10 @@ def _program() -> list[str]:
     if name.startswith("clearsweep") and not name.endswith(".py"):
         return [argv0]
     if Path(argv0).resolve() == Path(__file__).resolve():
-        return ["python", "-m", "clearsweep.cli"]
+        # the interpreter as a path from here where it lies below (.venv/bin/python)
+        python = os.path.relpath(sys.executable) if Path(sys.executable).is_relative_to(
+            Path.cwd()) else "python"
+        return [python, "-m", "clearsweep.cli"]
     return ["clearsweep"]
 
 

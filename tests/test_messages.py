@@ -86,13 +86,24 @@ def test_the_life_command_prints_that_hint(tmp_path, monkeypatch):
 @pytest.mark.parametrize("argv0, program", [
     (".venv/bin/clearsweep", ".venv/bin/clearsweep"),
     ("/usr/local/bin/clearsweep", "/usr/local/bin/clearsweep"),
-    (cli.__file__, "python -m clearsweep.cli"),
+    (cli.__file__, "python -m clearsweep.cli"),     # an interpreter outside the current folder
     ("pytest", "clearsweep"),
 ])
-def test_resume_commands_are_printed_as_the_program_was_invoked(monkeypatch, argv0, program):
+def test_resume_commands_are_printed_as_the_program_was_invoked(monkeypatch, tmp_path, argv0,
+                                                                program):
+    monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(sys, "argv", [argv0, "sweep"])
     command = cli._resume_command("sweep", "s.yaml", "s.nc", ("solver.duration=0.1",))
     assert command == f"{program} sweep s.yaml -o s.nc --resume --set solver.duration=0.1"
+
+
+def test_a_resume_command_names_the_interpreter_below_the_current_folder(monkeypatch, tmp_path):
+    python = tmp_path / ".venv" / "bin" / "python"
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "argv", [cli.__file__, "life"])
+    monkeypatch.setattr(sys, "executable", str(python))
+    assert cli._resume_command("life", "l.yaml", "l.nc", ()).startswith(
+        ".venv/bin/python -m clearsweep.cli life l.yaml")
 
 
 def test_an_unknown_name_among_hundreds_is_one_short_line():
