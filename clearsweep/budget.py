@@ -71,6 +71,24 @@ def time_text(steps: float, workers: int | None = None) -> str:
             f"(at {SECONDS_PER_STEP * 1e6:g} us per step)")
 
 
+#: A sweep's fixed cost [s]: the interpreter's start and the compiled kernel loaded from the
+#: cache, in the driver and in each pool worker (benchmarks/README.md, "Time estimates").
+SWEEP_START_S = 6.0
+#: A sweep's cost per case beyond its steps [s]: its part written and copied into the file.
+SECONDS_PER_CASE = 0.05
+
+
+def sweep_time_text(steps: float, cases: int, workers: int | None = None) -> str:
+    """The estimated wall time of a sweep of ``cases`` cases and ``steps`` RK4 steps on
+    ``workers`` cores: :func:`time_text`'s steps plus the fixed costs (start, cache load)
+    and the cost per case (part writing, assembly)."""
+    share = workers or 1
+    seconds = SWEEP_START_S + (cases * SECONDS_PER_CASE + steps * SECONDS_PER_STEP) / share
+    where = f"on {share} worker{'s' if share != 1 else ''}" if workers else "on one core"
+    return (f"about {duration_text(seconds)} {where} (at {SECONDS_PER_STEP * 1e6:g} us per "
+            f"step, {SECONDS_PER_CASE:g} s per case and {SWEEP_START_S:g} s to start)")
+
+
 def case_plan_text(source: str, est: Estimate) -> str:
     """What ``clearsweep run CONFIG --dry-run`` prints for one case."""
     return (f"{source}: one case, {est.steps:,} RK4 steps, memory up to {est.describe()}; "

@@ -22,11 +22,13 @@ Every command takes ``-q``; ``run``, ``sweep`` and ``life`` take ``--dry-run``.
 from __future__ import annotations
 
 import errno
+import json
 import math
 import os
 import re
 import shlex
 import sys
+import time
 import warnings
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -50,7 +52,7 @@ from .choices import (
     SWEEP_BACKENDS,
     X_AXES,
 )
-from .config import ConfigError, dump_config, file_kind, load_config, read_yaml
+from .config import ConfigError, dump_config, file_kind, load_config, parse_yaml, read_yaml
 from .outputs import (
     OVERWRITE_REMEDY,
     RESULTS_SOURCE,
@@ -60,7 +62,7 @@ from .outputs import (
     is_own_figure,
 )
 from .schema import ClearsweepWarning
-from .variables import JOINTS
+from .variables import JOINTS, format_length
 from .version import __version__
 
 
@@ -215,6 +217,30 @@ def _check_out(out: str | None, default: str | Path, inputs, overwrite: bool,
     return path
 
 
+def _replacing(path: str, attr: str, new_text: str) -> str:
+    """What writing ``path`` replaces, for the line that says it was written: ``""`` when
+    nothing is there, else the earlier result's time and the values it was made with that
+    differ (from the resolved config its attribute ``attr`` records), shown as --set."""
+    if not Path(path).is_file():
+        return ""
+    import xarray as xr
+
+    from .params import _flat
+
+    try:
+        with xr.open_dataset(path) as old:
+            old_text, history = old.attrs.get(attr), str(old.attrs.get("history", ""))
+        old_flat, new_flat = _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config"))
+    except Exception:       # not a results file we can read: check_output decided it may go
+        return ""
+    when = history.split(": ", 1)[0] if ": " in history else "earlier"
+    changed = [f"{k}={json.dumps(old_flat.get(k))}" for k in sorted(set(old_flat) | set(new_flat))
+               if k != "name" and old_flat.get(k) != new_flat.get(k)]
+    what = ("made with the same values" if not changed else "made with --set " + " --set ".join(
+        changed[:6]) + (f" and {len(changed) - 6} more differences" if len(changed) > 6 else ""))
+    return f", replacing the result of {when} {what}"
+
+
 def _sweep_kind(plan) -> str:
     """The kind of results file (``outputs.RESULTS_KINDS``) that ``plan`` writes."""
     return {"life": "life-sweep", "reliability": "reliability"}.get(plan.store, "sweep")
@@ -297,6 +323,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         return
     from .simulation import simulate
 
+    replacing = _replacing(out, "config", dump_config(cfg))
     announce_compile(quiet, [cfg.solver.method])
     try:
         ds = simulate(cfg, allow_large=allow_large)
@@ -313,7 +340,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
         from .analysis import run_summary_text
 
         click.echo(run_summary_text(ds))
-    _wrote(path, quiet)
+    _wrote(path, quiet, replacing)
     status = str(ds["status"].values)
     if status != "ok":
         hint = ds.attrs.get("status_hint")
@@ -356,7 +383,9 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         life,
         life_block,
         life_plan_text,
+        life_stop_hint,
         life_summary_text,
+        life_time_left,
     )
 
     if cfg.ensemble.members > 1:    # one life run follows one case: it would run member 0 alone
@@ -370,15 +399,20 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
                      kind="life",
                      derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
+    replacing = _replacing(out, "config", dump_config(cfg))
     announce_compile(quiet, [cfg.solver.method])
 
+    started, blocks = time.perf_counter(), [0]
+
     def progress(row: dict[str, Any]) -> None:
+        blocks[0] += 1
         if not quiet:
             # the joints with a clearance (an ideal joint's depth is NaN)
-            depth = ", ".join(f"{j} {d:.3g} m" for j, d in zip(JOINTS, row["wear_depth_max"])
+            depth = ", ".join(f"{j} {format_length(d, 3)}" for j, d in zip(JOINTS, row["wear_depth_max"])
                               if math.isfinite(d))
+            left = life_time_left(cfg, float(row["cycle"]), blocks[0], time.perf_counter() - started)
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
-                       f"status {row['block_status']}", err=True)
+                       f"status {row['block_status']}" + (f"; {left}" if left else ""), err=True)
 
     def resumed(state: LifeState) -> None:
         if not quiet:
@@ -403,9 +437,11 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     checkpoint.unlink(missing_ok=True)
     if not quiet:
         click.echo(life_summary_text(ds))
-    _wrote(path, quiet)
+    _wrote(path, quiet, replacing)
     if str(ds["stop_reason"].values).startswith("block_status:"):
-        _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})", 1)
+        hint = life_stop_hint(cfg, str(ds["stop_reason"].values))
+        _fail(f"life run stopped: {ds['stop_reason'].values} (results so far in {path})"
+              + (f"; {hint}" if hint else ""), 1)
 
 
 def _run_ensemble(config: str, cfg, out: str, overrides: tuple[str, ...],
@@ -459,7 +495,7 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
     from .sweeping import PartStore, StoreError, SweepFailed, SweepInterrupted, parts_dir_for, run_sweep
 
     try:
-        return run_sweep(plan, out, **options)
+        return run_sweep(plan, out, report_failures=False, **options)
     except (ConfigError, StoreError) as exc:
         _fail(str(exc), 2)
     except SweepInterrupted as exc:
@@ -621,7 +657,8 @@ def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
 def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str | None,
                    full: bool, quiet: bool) -> None:
     """Print the every-step statistics (settled first) and the wear table (paper Tables
-    4-5) of a results file PATH (csv and json: the wear table alone).
+    4-5) of a results file PATH (csv and json: one flat table, a row per case, joint and
+    wear direction, with every statistic and the wear table's columns).
 
     A sweep (or an ensemble) prints a summary first: its design axes and, per headline
     metric, the best and worst design and their spread; every case's tables follow with
@@ -680,7 +717,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
                 text = format_reduction_table(ds, reference, fmt)
             else:
                 statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
-                text = "\n\n".join(t for t in (statistics, format_wear_table(ds, fmt)) if t)
+                text = "\n\n".join(t for t in (statistics, format_wear_table(
+                    ds, fmt, with_statistics=fmt in ("csv", "json"))) if t)
             if summary and full:
                 text = f"{summary}\n\n{text}"
         except SelectionError as exc:
@@ -739,6 +777,7 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
     _check_figure_suffix(out, "'-o' / '--out'")
     _check_figure(out, "-o/--out", [("the results file", path)], overwrite)
     with open_input(path) as ds:
+        _check_plot_kind(ds, path, kind, metric)
         try:
             plot(ds, kind, out, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
         except (SelectionError, PlotError) as exc:
@@ -746,6 +785,35 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
         except OSError as exc:      # as `run`: an output that cannot be written exits 1
             _fail(f"cannot write {out}: {_reason(exc)}", 1)
     _wrote(out, quiet)
+
+
+#: The figure kinds that draw one run's time series and wear maps.
+_RUN_KINDS = "slider, forces, wear-map, wear-polar or orbit"
+
+
+def _check_plot_kind(ds: xr.Dataset, path: str, kind: str, metric: str | None) -> None:
+    """A usage error where ``--kind`` asks for a figure of another kind of results file
+    than ``path`` is, naming what the file is and the kinds that draw it."""
+    from .analysis import results_kind
+    from .outputs import RESULTS_KINDS
+
+    held = results_kind(ds)
+    problem = None
+    if kind == "sweep" and held == "run":
+        problem = (f"--kind sweep draws a metric across a sweep's designs; {path} is a single "
+                   f"run: draw it with --kind {_RUN_KINDS}")
+    elif kind == "sweep" and held == "life":
+        problem = f"--kind sweep draws a sweep; {path} is a life run: --kind life draws it"
+    elif kind == "sweep" and held == "life-sweep" and metric is None:
+        problem = (f"--kind sweep of {path}, a life sweep, needs --metric: its default, "
+                   f"{DEFAULT_SWEEP_METRIC}, is a dynamics metric a life sweep does not keep "
+                   "(e.g. --metric cycles_reached)")
+    elif kind == "life" and held in ("run", "sweep", "ensemble", "sample", "reliability"):
+        problem = (f"--kind life draws a life run (`clearsweep life CONFIG` writes one); {path} "
+                   f"is {RESULTS_KINDS[held]}" + (f": draw it with --kind {_RUN_KINDS}"
+                                                  if held == "run" else ""))
+    if problem:
+        raise click.UsageError(problem)
 
 
 def _check_figure_suffix(path: str, option: str) -> None:
@@ -858,8 +926,23 @@ def _check_scheduler(address: str) -> None:
 def _resume_command(command: str, config: str, out: str, overrides: tuple[str, ...]) -> str:
     """The command line that continues interrupted work: the same overrides, as they are
     part of what identifies it (every sweep case's hash, a life checkpoint's config)."""
-    return shlex.join(["clearsweep", command, config, "-o", out, "--resume",
+    return shlex.join([*_program(), command, config, "-o", out, "--resume",
                        *(a for o in overrides for a in ("--set", o))])
+
+
+def _program() -> list[str]:
+    """The program as the user invoked it (``.venv/bin/clearsweep`` stays so, and a run by
+    ``python -m clearsweep.cli`` prints that); ``clearsweep`` where it cannot be told."""
+    argv0 = sys.argv[0] if sys.argv else ""
+    name = Path(argv0).name
+    if name.startswith("clearsweep") and not name.endswith(".py"):
+        return [argv0]
+    if Path(argv0).resolve() == Path(__file__).resolve():
+        # the interpreter as a path from here where it lies below (.venv/bin/python)
+        python = os.path.relpath(sys.executable) if Path(sys.executable).is_relative_to(
+            Path.cwd()) else "python"
+        return [python, "-m", "clearsweep.cli"]
+    return ["clearsweep"]
 
 
 @main.command("sweep")
@@ -951,6 +1034,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         _check_out(given, out, plan.input_files(), overwrite, resume, kind=_sweep_kind(plan))
         cores = dask_local or (None if scheduler else _plan_workers(plan, workers))
         kept = PartStore(parts_dir_for(out)).kept_on_resume() if resume else set()
+        replacing = _replacing(out, "sweep_config", plan.text)
         if not quiet:
             click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):
@@ -977,7 +1061,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
         if cluster is not None:
             cluster.close()
     note = f" ({skipped} skipped)" if skipped else ""
-    _wrote(out, quiet, f": {n} cases{note}")
+    _wrote(out, quiet, f": {n} cases{note}{replacing}")
     if failed:
         _fail(f"{failed} of {n} cases failed{note}; see the status and message variables in {out}", 1)
 

@@ -320,6 +320,10 @@ def _open_regular(path: Path):
         raise
 
 
+#: The first bytes of a netCDF file (classic, 64-bit offset, netCDF-4/HDF5).
+NETCDF_MAGIC = (b"CDF\x01", b"CDF\x02", b"CDF\x05", b"\x89HDF")
+
+
 def read_yaml(path: Any, source: str | None = None) -> Any:
     """Read and parse a YAML file (at most :data:`MAX_YAML_BYTES`; a regular file, not a
     FIFO or a device); errors name ``source``."""
@@ -328,6 +332,10 @@ def read_yaml(path: Any, source: str | None = None) -> Any:
         with (path.open("rb") if hasattr(path, "open") and not isinstance(path, Path)
               else _open_regular(Path(path))) as f:
             data = f.read(MAX_YAML_BYTES + 1)
+        if data[:4] in NETCDF_MAGIC:
+            raise ConfigError(None, str(path), "a YAML config (this is a netCDF results file: "
+                              "`clearsweep report` and `clearsweep plot` read results)", source,
+                              got=f"{str(path)!r}")
         if len(data) > MAX_YAML_BYTES:
             raise ConfigError(None, str(path), f"a YAML file of at most {MAX_YAML_BYTES} bytes",
                               source, got=f"{str(path)!r} (more than {MAX_YAML_BYTES} bytes)")

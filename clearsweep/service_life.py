@@ -35,6 +35,7 @@ from .budget import (
     MAX_OUTPUT_BYTES,
     Estimate,
     check_budget,
+    duration_text,
     estimate,
     format_bytes,
     memory_limit,
@@ -45,6 +46,7 @@ from .core import layout as L
 from .dataset import replaced_on_success
 from .params import Packed, identity_changes, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
+from .variables import format_length, length_unit
 from .version import __version__
 
 #: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
@@ -168,7 +170,8 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
             f"{format_bytes(est.output_bytes + cost.memory_bytes)} in all; a checkpoint of up "
             f"to {format_bytes(cost.checkpoint_bytes)} rewritten after every block (up to "
             f"{format_bytes(lc.max_blocks * cost.checkpoint_bytes)} written); at most "
-            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit; "
+            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit "
+            "(each block's progress line gives the time left at the pace so far); "
             "nothing run (--dry-run)")
 
 
@@ -839,14 +842,16 @@ def life_summary_text(ds: xr.Dataset) -> str:
     """Text report of a life dataset: revolutions to each limit, wear-through, last block."""
     lines = [f"life run: {ds.sizes['cycle']} blocks, {float(ds.cycle[-1]):.4g} revolutions, "
              f"stopped by {ds['stop_reason'].values}"]
+    try:
+        cfg = load_config(parse_yaml(ds.attrs.get("config") or "", "config") or {})
+    except ConfigError:
+        cfg = None
+    joints = cfg.joints if cfg is not None else None
     for name, (key, _) in CRITERIA.items():
         value = float(ds[f"cycles_to_{name}"])
-        text = f"{value:.4g}" if math.isfinite(value) else "not reached"
+        unset = cfg is not None and getattr(cfg.life, key.split(".", 1)[1]) is None
+        text = f"{value:.4g}" if math.isfinite(value) else "not set" if unset else "not reached"
         lines.append(f"  revolutions to {key}: {text}")
-    try:
-        joints = load_config(parse_yaml(ds.attrs.get("config") or "", "config") or {}).joints
-    except ConfigError:
-        joints = None
     for j, joint in enumerate(ds.joint.values):
         cyc = float(ds.wear_through_cycle[j])
         spec = getattr(joints, str(joint), None) if joints is not None else None
@@ -862,10 +867,10 @@ def life_summary_text(ds: xr.Dataset) -> str:
     for j, joint in enumerate(ds.joint.values):
         depth = float(last.wear_depth_max[j])
         if math.isfinite(depth):
-            lines.append(f"  {joint} at the end: max depth {depth:.4g} m, effective clearance "
-                         f"{float(last.clearance_effective[j]):.4g} m, settled peak normal force "
-                         f"{float(last.normal_force_peak_settled[j]):.4g} N, "
-                         f"{float(last.impacts_per_revolution[j]):.3g} impacts per revolution")
+            lines.append(f"  {joint} at the end: max depth {format_length(depth)}, effective "
+                         f"clearance {format_length(float(last.clearance_effective[j]))},")
+            lines.append(f"    settled peak normal force {float(last.normal_force_peak_settled[j]):.4g}"
+                         f" N, {float(last.impacts_per_revolution[j]):.3g} impacts per revolution")
     lines.append(f"  settled RMS slider acceleration at the end: "
                  f"{float(last.slider_acceleration_rms_settled):.4g} m s-2")
     return "\n".join(lines)
@@ -873,6 +878,30 @@ def life_summary_text(ds: xr.Dataset) -> str:
 
 #: Per-joint variables of a life run whose final value a life sweep keeps.
 FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coating_remaining")
+
+
+def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float) -> str:
+    """The expected time left of a life run after ``blocks`` blocks reached ``cycles``
+    revolutions in ``elapsed_s``: at the pace so far in revolutions, capped by the
+    blocks left (``life.max_blocks``) at the time per block so far; ``""`` when done.
+    The pace grows as the jumps lengthen, so the time left is rather too long than short;
+    a limit reached stops the run sooner still."""
+    lc = cfg.life
+    if blocks <= 0 or cycles <= 0.0 or cycles >= lc.cycles or blocks >= lc.max_blocks:
+        return ""
+    by_pace = elapsed_s * (lc.cycles - cycles) / cycles
+    by_blocks = elapsed_s * (lc.max_blocks - blocks) / blocks
+    return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
+
+
+def life_stop_hint(cfg: Config, stop: str) -> str:
+    """Why a life run whose block stopped (``stop``: ``block_status:<status>``) may have
+    stopped, where the config says it: ``""`` otherwise."""
+    if stop.startswith("block_status:") and cfg.wear.enabled and not cfg.wear.interpolate:
+        return ("hint: the worn socket is read bin by bin (wear.interpolate: false), whose steps "
+                "grow with the wear until a block cannot run; life runs read it smoothly with "
+                "--set wear.interpolate=true (docs/service_life.md, 'Smooth worn surface')")
+    return ""
 
 
 def life_case(config) -> xr.Dataset:
@@ -933,9 +962,12 @@ def life_sweep_text(ds: xr.Dataset) -> str:
     key = ((lambda r: -np.nan_to_num(r[4][0], nan=np.inf)) if limits
            else (lambda r: np.nan_to_num(r[5], nan=np.inf)))
     rows.sort(key=key)
-    head = ["design", "status", "revolutions reached", "stopped by", *limits, "largest final depth [m]"]
+    factor, symbol = length_unit([r[5] for r in rows])
+    head = ["design", "status", "revolutions reached", "stopped by", *limits,
+            f"largest final depth [{symbol}]"]
     table = [head] + [[r[0], r[1], f"{r[2]:.4g}", r[3], *(f"{v:.4g}" if np.isfinite(v) else "not reached"
-                                                         for v in r[4]), f"{r[5]:.3g}"] for r in rows]
+                                                         for v in r[4]), f"{r[5] / factor:.3g}"]
+                      for r in rows]
     widths = [max(len(row[i]) for row in table) for i in range(len(head))]
     lines = ["Service life per design (ranked: " + (f"most revolutions to {limits[0][10:]} first"
                                                  if limits else "least final wear depth first") + ")"]

@@ -305,3 +305,27 @@ def layout_problem(ds) -> str | None:
             kind = "text" if text else "numbers"
             return f"its variable {name!r} holds {da.dtype} values, not {kind}"
     return None
+
+
+#: Length units a report scales metres to, largest first: (factor from metres, symbol).
+LENGTH_UNITS = ((1e-3, "mm"), (1e-6, "um"), (1e-9, "nm"))
+
+
+def length_unit(values_m) -> tuple[float, str]:
+    """The unit (factor from metres, symbol) that prints lengths ``values_m`` [m] with one
+    to three digits before the point: mm, um or nm, from the largest finite magnitude;
+    metres at 1 m and above."""
+    finite = [abs(float(v)) for v in values_m if v == v and abs(float(v)) != float("inf")]
+    largest = max(finite, default=0.0)
+    if largest >= 1.0:
+        return 1.0, "m"
+    for factor, symbol in LENGTH_UNITS:
+        if largest >= factor:
+            return factor, symbol
+    return LENGTH_UNITS[-1]
+
+
+def format_length(value_m: float, digits: int = 4) -> str:
+    """``value_m`` [m] in the unit that suits it (:func:`length_unit`): ``12.7 um``."""
+    factor, symbol = length_unit([value_m])
+    return f"{value_m / factor:.{digits}g} {symbol}"

@@ -264,21 +264,25 @@ def test_metric_table_text_has_a_row_per_case(sweep_ds):
 
 def test_wear_table_text_layout(case):
     text = format_wear_table(case)
-    header = next(ln for ln in text.splitlines() if ln.startswith("Joint"))
-    for heading in ("Max wear depth [m]", "Max wear angle [degree]", "Min wear angle [degree]",
-                    "Wear range [degree]"):
-        assert heading in header
-    b_x = next(ln for ln in text.splitlines() if ln.split()[:2] == ["B", "x"])
-    assert b_x.split()[2:6] == ["8.0000e-11", "40.5", "-10.5", "51.0"]
-    a_z = next(ln for ln in text.splitlines() if ln.split()[:2] == ["A", "z"])
-    assert a_z.split()[2:] == ["0.0000e+00"] + ["n/a"] * 4
+    lines = text.splitlines()
+    at = next(i for i, ln in enumerate(lines) if ln.startswith("Joint"))
+    first, second = lines[at:at + 2]        # headings on two lines (the table <= 100 wide)
+    for heading in ("Max projected", "Max wear angle", "Min wear angle", "Wear range"):
+        assert heading in first
+    assert second.split()[:3] == ["direction", "depth", "[nm]"] and second.count("[degree]") == 4
+    assert max(len(ln) for ln in lines) <= 100
+    b_x = next(ln for ln in lines if ln.split()[:2] == ["B", "x"])
+    assert b_x.split()[2:6] == ["0.08", "40.5", "-10.5", "51.0"]    # depth in nm
+    a_z = next(ln for ln in lines if ln.split()[:2] == ["A", "z"])
+    assert a_z.split()[2:] == ["0"] + ["n/a"] * 4
 
 
 def test_wear_table_sweep_blocks(sweep_ds):
     text = format_wear_table(sweep_ds, "markdown")
     assert text.count("### B_coating=") == 4
     assert "### B_coating=PTFE, B_clearance=0.00025 (status: ok)" in text
-    assert "| B | x | 2.0000e-11 | 40.5 | -20.5 | 61.0 | 20.5 |" in text
+    assert "| Joint | Wear direction | Max projected depth [nm] |" in text
+    assert "| B | x | 0.02 | 40.5 | -20.5 | 61.0 | 20.5 |" in text
 
 
 def test_reduction_text_leaves_out_the_reference(sweep_ds):
@@ -286,8 +290,8 @@ def test_reduction_text_leaves_out_the_reference(sweep_ds):
     assert "B_coating=none, B_clearance" not in text
     assert text.count("B_coating=PTFE") == 2
     b_x = [ln.split() for ln in text.splitlines() if ln.split()[:2] == ["B", "x"]]
-    assert b_x[0][2:] == ["3.000e-11", "75.00", "-10.00", "-19.61"]
-    assert b_x[1][2:] == ["6.000e-11", "75.00", "-10.00", "-19.61"]
+    assert b_x[0][2:] == ["0.03", "75.00", "-10.00", "-19.61"]     # nm
+    assert b_x[1][2:] == ["0.06", "75.00", "-10.00", "-19.61"]
 
 
 @pytest.mark.parametrize("fmt", REPORT_FORMATS)
@@ -311,12 +315,13 @@ def test_report_cli_every_format(sweep_file, fmt):
     elif fmt == "csv":
         rows = list(csv.reader(io.StringIO(out)))
         assert rows[0][:5] == ["B_coating", "B_clearance", "status", "joint", "axis"]
-        assert rows[0][5] == "Max wear depth [m]"
+        assert rows[0][5] == "Peak slider acc., settled [m s-2]"   # the statistics, then the wear
+        assert "Max projected depth [m]" in rows[0]     # csv and json stay SI
         assert len(rows) == 1 + 4 * 2 * 3
     elif fmt == "markdown":
         assert out.startswith("## Slider and crank (every-step statistics")
         assert "\n## Wear prediction" in out
-        assert "| Joint | Wear direction | Max wear depth [m] |" in out
+        assert "| Joint | Wear direction | Max projected depth [nm] |" in out
     else:
         assert out.startswith("Slider and crank (every-step statistics")
         assert "\nWear prediction" in out
@@ -350,7 +355,7 @@ def test_report_cli_one_case(case_file):
     result = invoke(case_file)
     assert result.exit_code == 0, result.output
     assert "status" not in result.output            # one case, status ok: no heading
-    assert "8.0000e-11" in result.output
+    assert "0.08" in result.output and "[nm]" in result.output
 
 
 @pytest.mark.parametrize("args, names", [
@@ -378,7 +383,7 @@ def test_report_cli_summary_only_file(tmp_path, sweep_ds):
     path = write_netcdf_atomic(case_summary(sweep_ds), tmp_path / "summary.nc")
     full = CliRunner().invoke(report_command, [str(path), "--reference", "B_coating=none"])
     assert full.exit_code == 0, full.output
-    assert "6.000e-11" in full.output
+    assert "0.06" in full.output
 
 
 def test_case_dimension_with_zip_coordinates_and_without_coordinates():
@@ -441,8 +446,12 @@ def test_statistics_table_puts_settled_first_with_whole_run_beside(sweep_ds):
     from clearsweep.analysis import format_statistics_table
 
     text = format_statistics_table(sweep_ds)
-    header = next(line for line in text.splitlines() if line.startswith("B_coating"))
-    assert header.index("Peak slider acc., settled") < header.index("whole run")
+    lines = text.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.startswith("B_coating"))
+    first, second = lines[at:at + 2]        # headings on two lines (the table <= 100 wide)
+    assert first.count("Peak slider acc.,") == 2
+    assert second.index("settled") < second.index("whole run")
+    assert max(len(line) for line in lines) <= 100
     assert "settled = t >= 0.05 s" in text
     rows = [line.split() for line in text.splitlines() if line.startswith(("none ", "PTFE "))]
     # settled peak = the coating's acceleration level, whole-run peak = the start-up spike
@@ -516,3 +525,25 @@ def test_wear_table_matches_its_xarray_definition_on_a_sweep_with_empty_nan_and_
     xr.testing.assert_identical(wear_table(ds), _wear_table_by_xarray(ds))
     # the angle axis need not be last
     xr.testing.assert_identical(wear_table(ds.transpose("angle", ...)), _wear_table_by_xarray(ds))
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_report_csv_and_json_of_a_sweep_carry_every_headline_metric(sweep_file, fmt):
+    """csv and json of a sweep held only the wear table."""
+    from clearsweep.analysis import HEADLINE_METRICS
+
+    result = invoke(sweep_file, "--format", fmt)
+    assert result.exit_code == 0, result.output
+    if fmt == "json":
+        doc = json.loads(result.output)
+        names = set(doc["columns"])
+        assert all(name in row for row in doc["rows"] for name in HEADLINE_METRICS)
+    else:
+        from clearsweep.analysis import tables
+
+        headings = {n.split(" [")[0] for n in next(csv.reader(io.StringIO(result.output)))}
+        columns = (*tables._MOTION_COLUMNS, *tables._CONTACT_COLUMNS, *tables._FINAL_WEAR_COLUMNS,
+                   *tables._WEAR_COLUMNS)
+        names = {c.name for c in columns if c.heading in headings}
+    assert set(HEADLINE_METRICS) <= names
+    assert "wear_depth_axis_max" in names

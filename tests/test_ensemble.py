@@ -19,7 +19,7 @@ from clearsweep.ensemble import (
 )
 from clearsweep.params import member_perturbation, pack
 from clearsweep.simulation import simulate
-from clearsweep.sweeping import drop_timing, expand, run_sweep
+from clearsweep.sweeping import CasesFailedWarning, drop_timing, expand, run_sweep
 
 BASE = {"joints": {"B": {"clearance": 2.5e-4}}, "solver": {"duration": 0.01},
         "wear": {"map": [12, 24]}}
@@ -172,7 +172,8 @@ def test_failed_members_are_counted_not_averaged():
             ds["status"] = ((), "penetration")
         return ds
 
-    ds = run_sweep(sweep_doc(3), workers=1, progress=False, _simulate=fake)
+    with pytest.warns(CasesFailedWarning, match="1 of 6 cases failed"):
+        ds = run_sweep(sweep_doc(3), workers=1, progress=False, _simulate=fake)
     assert list(ds["members_ok"].values) == [3, 2]
     ok = ds["slider_acceleration_rms"].sel(B_coating="PTFE", member=[0, 2]).values
     assert float(ds["slider_acceleration_rms_mean"].sel(B_coating="PTFE")) == pytest.approx(ok.mean())

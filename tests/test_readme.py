@@ -120,3 +120,21 @@ def test_benchmarks_are_run_with_the_project_interpreter():
     assert commands and all(c.startswith(".venv/bin/python benchmarks/") for c in commands), commands
     for command in commands:
         assert (ROOT / command.split()[-1]).is_file()
+
+
+def test_the_commands_of_the_readme_and_docs_leave_nothing_untracked():
+    """Every file the README's and the docs' command lines write with -o, run from the
+    repository's root as shown, is ignored by git (with its parts folder and checkpoint)."""
+    import shutil
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    texts = [README, *(p.read_text() for p in DOCS.glob("*.md"))]
+    outs = sorted({o for text in texts
+                   for o in re.findall(r"clearsweep [^`\n]*?-o ([\w.-]+\.[a-z]+)\b", text)})
+    assert "cc.png" in outs and "coating_clearance.nc" in outs
+    paths = [p for o in outs for p in ((o, o + ".parts/x.nc", o + ".life-checkpoint")
+                                       if o.endswith(".nc") else (o,))]
+    res = subprocess.run(["git", "check-ignore", "--no-index", *paths], cwd=ROOT,
+                         capture_output=True, text=True)
+    assert sorted(res.stdout.split()) == sorted(paths)

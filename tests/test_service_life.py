@@ -11,6 +11,7 @@ from clearsweep.core import layout as L
 from clearsweep.params import pack
 from clearsweep.service_life import bin_areas, crossing_cycle, jump_revolutions, life
 from clearsweep.simulation import run_kernel, simulate
+from clearsweep.variables import format_length
 
 CASE = "configs/one_clearance.yaml"
 #: a coarse map read bilinearly, as configs/life.yaml reads its own; the default energy
@@ -155,7 +156,7 @@ def test_life_cli_writes_a_dataset_that_plots_and_reports(tmp_path, short_life_c
     through = float(short_life.wear_through_cycle.sel(joint="B"))
     assert f"  coating of B worn through at {through:.4g} revolutions" in report.stdout
     depth = float(short_life.wear_depth_max.isel(cycle=-1).sel(joint="B"))
-    assert f"  B at the end: max depth {depth:.4g} m" in report.stdout
+    assert f"  B at the end: max depth {format_length(depth)}, " in report.stdout
 
 
 @pytest.mark.slow

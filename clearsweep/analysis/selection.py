@@ -97,11 +97,22 @@ def iter_cases(obj: xr.Dataset | xr.DataArray) -> Iterator[tuple[dict[str, objec
         yield {**label, **{n: case[n].values[()] for n in extra}}, case
 
 
+#: The longest list of choices an error line prints in full [characters].
+MAX_OFFER_CHARS = 300
+
+
 def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
     """``unknown KIND 'x' (did you mean ...?); choose from: ...``"""
     close = close_matches(wanted, choices, n=3)
     hint = f" (did you mean {', '.join(close)}?)" if close else ""
     offer = ", ".join(choices) if choices else "none"
+    if len(offer) > MAX_OFFER_CHARS:    # a line to read, not a dump: the first names and a count
+        shown: list[str] = []
+        for choice in choices:
+            if len(", ".join([*shown, choice])) > MAX_OFFER_CHARS:
+                break
+            shown.append(choice)
+        offer = f"{', '.join(shown)} and {len(choices) - len(shown)} more"
     return f"unknown {kind} {wanted!r}{hint}; choose from: {offer}"
 
 

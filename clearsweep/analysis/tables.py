@@ -18,6 +18,7 @@ import xarray as xr
 from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
 from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
+from ..variables import length_unit
 from .selection import (
     _MISSING_TEXT,
     CASE_DIMS,
@@ -135,7 +136,7 @@ class _Group:
 
 
 _WEAR_COLUMNS = (
-    _Column("wear_depth_axis_max", "Max wear depth", ".4e"),
+    _Column("wear_depth_axis_max", "Max projected depth", ".4e"),
     _Column("wear_angle_max", "Max wear angle", ".1f"),
     _Column("wear_angle_min", "Min wear angle", ".1f"),
     _Column("wear_range", "Wear range", ".1f"),
@@ -161,11 +162,26 @@ def _scalar(value):
     return value
 
 
-def _cell(value, spec: str) -> str:
+#: The widest line a text report prints [characters].
+REPORT_WIDTH = 100
+
+
+def _two_lines(text: str) -> tuple[str, str]:
+    """``text`` split at the space nearest its middle (a column heading on two lines)."""
+    spaces = [i for i, ch in enumerate(text) if ch == " "]
+    if not spaces:
+        return text, ""
+    cut = min(spaces, key=lambda i: abs(i - len(text) / 2))
+    return text[:cut], text[cut + 1:]
+
+
+def _cell(value, spec: str, scale: float | None = None) -> str:
     value = _scalar(value)
     if value is None:
         return _MISSING_TEXT
     if isinstance(value, float):
+        if scale is not None:       # a length in the column's unit: four significant digits
+            return format(value / scale, ".4g")
         return format(value, spec)
     return value_text(value)
 
@@ -222,6 +238,15 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
     def heading(c: _Column) -> str:
         return f"{c.heading} [{units[c.name]}]" if units.get(c.name) else c.heading
 
+    units_given = units
+    scale: dict[str, float] = {}
+    if fmt not in ("csv", "json"):      # lengths to read in um or mm; csv and json stay SI
+        units = dict(units)
+        for c in columns:
+            if units.get(c.name) == "m":
+                scale[c.name], units[c.name] = length_unit(
+                    [v for g in groups for r in g.rows if (v := _scalar(r[c.name])) is not None])
+
     if fmt in ("csv", "json"):
         records = [{**{k: _scalar(v) for k, v in g.keys.items()},
                     **{k: _scalar(r[k]) for k in key_names},
@@ -241,9 +266,30 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
 
     titles = [_KEY_HEADINGS.get(k, k) for k in key_names] + [heading(c) for c in columns]
     n_keys = len(key_names)
+    if fmt == "text" and len(columns) > 1:
+        # too wide even with two-line headings: the columns in parts, each under the row keys
+        def width(i: int, t: str) -> int:
+            values = [len(value_text(r[key_names[i]])) if i < n_keys
+                      else len(_cell(r[columns[i - n_keys].name], columns[i - n_keys].spec,
+                                     scale.get(columns[i - n_keys].name)))
+                      for g in groups for r in g.rows]
+            return max(max(len(x) for x in _two_lines(t)), *values, 0) + 2
+        widths = [width(i, t) for i, t in enumerate(titles)]
+        parts: list[list[_Column]] = [[]]
+        used = sum(widths[:n_keys])
+        for c, w in zip(columns, widths[n_keys:]):
+            if parts[-1] and used + w > REPORT_WIDTH:
+                parts.append([])
+                used = sum(widths[:n_keys])
+            parts[-1].append(c)
+            used += w
+        if len(parts) > 1:
+            return "\n\n".join(_render(title if i == 0 else f"{title}, continued", groups, key_names,
+                                        tuple(part), units_given, fmt) for i, part in enumerate(parts))
     out = [f"## {title}" if fmt == "markdown" else title]
     for group in groups:
-        cells = [[value_text(r[k]) for k in key_names] + [_cell(r[c.name], c.spec) for c in columns]
+        cells = [[value_text(r[k]) for k in key_names]
+                 + [_cell(r[c.name], c.spec, scale.get(c.name)) for c in columns]
                  for r in group.rows]
         if fmt == "markdown":
             out.append(f"\n### {group.heading}\n" if group.heading else "")
@@ -251,14 +297,21 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
             out.append("|" + "|".join("---" if i < n_keys else "---:" for i in range(len(titles))) + "|")
             out.extend("| " + " | ".join(row) + " |" for row in cells)
             continue
-        widths = [max(len(t), *(len(row[i]) for row in cells)) for i, t in enumerate(titles)]
+        # headings on two lines where one would make the table wider than a report line
+        head = [_two_lines(t) if len(t) > max((len(row[i]) for row in cells), default=0)
+                and sum(max(len(t), *(len(r[i]) for r in cells)) + 2 for i, t in enumerate(titles))
+                > REPORT_WIDTH else (t, "") for i, t in enumerate(titles)]
+        widths = [max(len(h[0]), len(h[1]), *(len(row[i]) for row in cells))
+                  for i, h in enumerate(head)]
 
         def line(row: list[str]) -> str:
             return "  ".join(c.ljust(w) if i < n_keys else c.rjust(w)
                              for i, (c, w) in enumerate(zip(row, widths))).rstrip()
 
         out.append(f"\n{group.heading}" if group.heading else "")
-        out.append(line(titles))
+        out.append(line([h[0] for h in head]))
+        if any(h[1] for h in head):
+            out.append(line([h[1] for h in head]))
         out.extend(line(row) for row in cells)
     return "\n".join(out)
 
@@ -275,7 +328,7 @@ def _with_status(ds: xr.Dataset, table: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
+def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool = False) -> str:
     """Paper Tables 4-5 as text, markdown, csv or json.
 
     Columns per joint and wear direction (axis): max wear depth [m], max wear
@@ -283,32 +336,46 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text") -> str:
     [degree]. Text and markdown print one block per sweep case, headed by its
     coordinates (and its status where not ``ok``); csv and json print one
     flat table with the sweep coordinates and the status as columns.
+
+    ``with_statistics``: every row also carries its case's and joint's every-step
+    statistics and final wear (:func:`format_statistics_table`'s columns, each case's
+    value on each of its rows): the one flat table of ``report --format csv / json``.
     """
-    table = _with_status(ds, wear_table(ds))
+    wear = wear_table(ds)
+    columns: tuple[_Column, ...] = _WEAR_COLUMNS
+    if with_statistics:
+        summary = case_summary(ds)
+        extra = tuple(c for c in (*_MOTION_COLUMNS, *_CONTACT_COLUMNS, *_FINAL_WEAR_COLUMNS)
+                      if c.name in summary)
+        like = wear["wear_depth_axis_max"]
+        wear = wear.assign({c.name: summary[c.name].broadcast_like(like).transpose(*like.dims)
+                            for c in extra})
+        columns = extra + _WEAR_COLUMNS
+    table = _with_status(ds, wear)
     title = (f"Wear prediction (paper Tables 4-5; wear angles: depth > "
              f"{WEAR_THRESHOLD_FRACTION:g} of the axis maximum)")
-    groups = _case_groups(table, _WEAR_COLUMNS, ("joint", "axis"))
-    return _render(title, groups, ("joint", "axis"), _WEAR_COLUMNS, _units(table, _WEAR_COLUMNS), fmt)
+    groups = _case_groups(table, columns, ("joint", "axis"))
+    return _render(title, groups, ("joint", "axis"), columns, _units(table, columns), fmt)
 
 
 _MOTION_COLUMNS = (
     _Column("slider_acceleration_peak_settled", "Peak slider acc., settled", ".4g"),
-    _Column("slider_acceleration_peak", "whole run", ".4g"),
+    _Column("slider_acceleration_peak", "Peak slider acc., whole run", ".4g"),
     _Column("slider_acceleration_rms_settled", "RMS slider acc., settled", ".4g"),
-    _Column("slider_acceleration_rms", "whole run", ".4g"),
+    _Column("slider_acceleration_rms", "RMS slider acc., whole run", ".4g"),
     _Column("crank_torque_peak_settled", "Peak crank torque, settled", ".4g"),
-    _Column("crank_torque_peak", "whole run", ".4g"),
+    _Column("crank_torque_peak", "Peak crank torque, whole run", ".4g"),
 )
 _CONTACT_COLUMNS = (
     _Column("normal_force_peak_settled", "Peak normal force, settled", ".4g"),
-    _Column("normal_force_peak", "whole run", ".4g"),
+    _Column("normal_force_peak", "Peak normal force, whole run", ".4g"),
     _Column("impact_count_settled", "Impacts, settled", ""),
-    _Column("impact_count", "whole run", ""),
+    _Column("impact_count", "Impacts, whole run", ""),
     _Column("impact_velocity_max_settled", "Largest impact velocity, settled", ".3g"),
     _Column("contact_fraction_settled", "Contact fraction, settled", ".3f"),
 )
 _FINAL_WEAR_COLUMNS = (
-    _Column("wear_depth_max_final", "Max wear depth (largest map bin)", ".4g"),
+    _Column("wear_depth_max_final", "Max depth, largest map bin", ".4g"),
     _Column("wear_volume", "Worn volume", ".4g"),
 )
 

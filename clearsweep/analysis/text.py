@@ -14,6 +14,7 @@ from ..ensemble import MEMBER_DIM
 from ..summary import case_summary
 from .selection import (
     _MISSING_TEXT,
+    SAMPLE_DIM,
     design_dims,
     is_ensemble,
     iter_cases,
@@ -169,6 +170,23 @@ def _ranked(values: xr.DataArray, half: xr.DataArray | None, usable: xr.DataArra
     return sorted(out, key=lambda r: r[0])
 
 
+def _design_text(ds: xr.Dataset, label: dict) -> str:
+    """A design by its label and, along a dimension whose label is only a position (a
+    ``sample:`` sweep's point number), by the inputs it carries as coordinates:
+    ``sample=45 (B_clearance=0.000312, speed_rpm=52.3)``."""
+    inputs = []
+    for dim, value in label.items():
+        if dim in ds.indexes and dim != SAMPLE_DIM:     # labelled by its values (grid, zip labels)
+            continue
+        at = {dim: value} if dim in ds.indexes else {dim: int(value)}
+        for name, coord in ds.coords.items():
+            if name != dim and coord.dims == (dim,):
+                item = (coord.sel(at) if dim in ds.indexes else coord.isel(at)).values[()]
+                text = f"{item:.4g}" if isinstance(item, float | np.floating) else value_text(item)
+                inputs.append(f"{name}={text}")
+    return label_text(label) + (f" ({', '.join(inputs)})" if inputs else "")
+
+
 def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
     """What a sweep answers, first: its design axes and, per headline metric, the lowest
     (best) and highest (worst) design and their spread; an ensemble's means with the
@@ -242,8 +260,8 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             if len(ranked) == 1 or low == high:
                 lines.append(f"    all {len(ranked)} equal: {shown_value(low, low_h)}")
                 continue
-            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {label_text(low_at)}")
-            lines.append(f"    highest {shown_value(high, high_h):>16}  {label_text(high_at)}")
+            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {_design_text(ds, low_at)}")
+            lines.append(f"    highest {shown_value(high, high_h):>16}  {_design_text(ds, high_at)}")
             lines.append(f"    {spread}")
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")

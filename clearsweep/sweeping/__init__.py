@@ -102,11 +102,12 @@ kept.
 
 from .assemble import SweepSlot, write_sweep_netcdf
 from .backends import process_pool
+from .guard import UnguardedScript
 from .parts import PartStore, StoreError, case_hash, parts_dir_for
 from .plan import STORE_MODES, Axis, Case, SweepPlan, dimension_name, expand
-from .run import TIMING_VARIABLES, SweepFailed, SweepInterrupted, drop_timing, run_sweep
+from .run import TIMING_VARIABLES, CasesFailedWarning, SweepFailed, SweepInterrupted, drop_timing, run_sweep
 
 __all__ = ["Axis", "Case", "SweepPlan", "SweepInterrupted", "SweepFailed", "StoreError",
            "PartStore", "SweepSlot", "expand", "run_sweep", "drop_timing", "dimension_name",
            "process_pool", "parts_dir_for", "case_hash", "write_sweep_netcdf", "STORE_MODES",
-           "TIMING_VARIABLES"]
+           "TIMING_VARIABLES", "CasesFailedWarning", "UnguardedScript"]

@@ -5,14 +5,17 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing
 import os
+import shutil
 import signal
+import tempfile
 import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
 from ..summary import case_summary
-from .worker import CaseTask, _error_part, _part, _run_and_store, _run_case, _worker_init
+from .guard import require_main_guard
+from .worker import SIGNAL_CAUSES, CaseTask, _error_part, _part, _run_and_store, _run_case, _worker_init, crash_report
 
 #: Futures kept in flight per worker, so that no worker waits for the driver.
 IN_FLIGHT_PER_WORKER = 2
@@ -155,7 +158,7 @@ def _mp_context():
     return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
 
 
-def process_pool(workers: int | None = None) -> cf.ProcessPoolExecutor:
+def process_pool(workers: int | None = None, crash_dir: str | None = None) -> cf.ProcessPoolExecutor:
     """A process pool set up as :func:`run_sweep` sets up its own.
 
     Pass it as ``client=`` to run several sweeps on the same warm workers
@@ -165,16 +168,26 @@ def process_pool(workers: int | None = None) -> cf.ProcessPoolExecutor:
     ----------
     workers
         Worker processes (default: ``os.cpu_count()``).
+    crash_dir
+        A folder where each worker writes what it says when it crashes
+        (``<pid>.log``: the fatal error and its Python frames).
 
     Returns
     -------
     concurrent.futures.ProcessPoolExecutor
         ``forkserver`` (or ``spawn``) workers that ignore Ctrl-C (the driver
         handles it) and exit by themselves when the driver process is gone.
+
+    Raises
+    ------
+    clearsweep.sweeping.UnguardedScript
+        Called from a script's top level, outside ``if __name__ == "__main__":``
+        (each worker would re-run the script).
     """
+    require_main_guard(workers or os.cpu_count() or 1)
     return cf.ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1,
                                   mp_context=_mp_context(), initializer=_worker_init,
-                                  initargs=(os.getpid(),))
+                                  initargs=(os.getpid(), crash_dir))
 
 
 class _Futures:
@@ -186,10 +199,14 @@ class _Futures:
         workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
         self.window = IN_FLIGHT_PER_WORKER * workers
         self.label = f"{type(executor).__name__}({workers})"
+        self.crash_dir: str | None = None
 
     @classmethod
     def processes(cls, workers: int, guard: _InterruptGuard, parts_dir: Path) -> _Futures:
-        return cls(process_pool(workers), own=True, guard=guard, parts_dir=parts_dir)
+        crash_dir = tempfile.mkdtemp(prefix="clearsweep-workers-")
+        futures = cls(process_pool(workers, crash_dir), own=True, guard=guard, parts_dir=parts_dir)
+        futures.crash_dir = crash_dir
+        return futures
 
     def submit(self, h: str, task: CaseTask) -> cf.Future:
         return self.executor.submit(_run_and_store, task, self.parts_dir, h)
@@ -202,11 +219,11 @@ class _Futures:
         if not self.own:
             return None
         processes = list((getattr(self.executor, "_processes", None) or {}).values())
-        ends = sorted({_exit_text(p.exitcode) for p in processes
-                       if p.exitcode is not None and p.exitcode != 0})
+        ends = sorted({_exit_text(p.exitcode, crash_report(self.crash_dir, p.pid))
+                       for p in processes if p.exitcode is not None and p.exitcode != 0})
         self.executor.shutdown(wait=False, cancel_futures=True)
         workers = getattr(self.executor, "_max_workers", None)
-        self.executor = process_pool(workers)
+        self.executor = process_pool(workers, self.crash_dir)
         return ", ".join(ends) or "ended abruptly"
 
     def wait(self, futures):
@@ -220,6 +237,13 @@ class _Futures:
     def close(self, interrupted: bool = False) -> None:
         if not self.own:
             return
+        try:
+            self._close(interrupted)
+        finally:
+            if self.crash_dir is not None:
+                shutil.rmtree(self.crash_dir, ignore_errors=True)
+
+    def _close(self, interrupted: bool) -> None:
         if not interrupted:
             self.executor.shutdown(wait=True)
             return
@@ -286,10 +310,14 @@ def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, 
     return _Serial(guard) if workers <= 1 else _Futures.processes(workers, guard, parts_dir)
 
 
-def _exit_text(exitcode: int) -> str:
+def _exit_text(exitcode: int, said: str = "") -> str:
+    """How a worker ended: its exit status, and what it wrote when it crashed (``said``), or
+    what the status alone tells."""
     if exitcode < 0:
         try:
-            return f"killed by {signal.Signals(-exitcode).name}"
+            name = signal.Signals(-exitcode).name
         except ValueError:
-            return f"killed by signal {-exitcode}"
-    return f"exit code {exitcode}"
+            name = f"signal {-exitcode}"
+        said = said or SIGNAL_CAUSES.get(name, "")
+        return f"killed by {name}" + (f" ({said})" if said else "")
+    return f"exit code {exitcode}" + (f" ({said})" if said else "")

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from .. import variables
-from ..budget import estimate, format_bytes, time_text
+from ..budget import estimate, format_bytes, sweep_time_text, time_text
 from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
     SWEEP_FILE_KEYS,
@@ -288,7 +288,7 @@ class SweepPlan:
         per_case = max(sizes, default=0) * (n_cases - skipped) if self.counted else sum(sizes)
         counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
-                f"{steps:.3g} RK4 steps: {time_text(steps, workers)}; results up to "
+                f"{steps:.3g} RK4 steps: {sweep_time_text(steps, to_run, workers)}; results up to "
                 f"{format_bytes(per_case)} before compression")
 
     def plan_text(self, workers: int | None = None) -> str:

@@ -13,6 +13,7 @@ import os
 import shutil
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
@@ -26,6 +27,7 @@ from ..dataset import open_results, remove_stale_temporaries, versions
 from ..params import run_identity
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
+from .guard import require_main_guard
 from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
 from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
 from .stores import STORES
@@ -53,7 +55,32 @@ class SweepInterrupted(KeyboardInterrupt):
 
 
 class SweepFailed(RuntimeError):
-    """The backend failed (a worker died, the scheduler went away); finished cases are kept."""
+    """The backend failed (a worker died, the scheduler went away); finished cases are kept.
+
+    Also raised by :func:`run_sweep` when every case that ran failed (the file, when one
+    was asked for, is written: the ``status`` and ``message`` variables say why).
+    """
+
+
+class CasesFailedWarning(UserWarning):
+    """Some cases of a sweep failed (their ``status`` and ``message`` say why); the others are fine."""
+
+
+def _report_failures(ds: xr.Dataset, out: Path | None) -> None:
+    """Raise :class:`SweepFailed` when every case of ``ds`` that ran failed; warn with the
+    count when some did. Names the first failure's message, and ``out`` where written."""
+    failed, cases = int(ds.attrs["sweep_failed"]), int(ds.attrs["sweep_cases"])
+    ran = cases - int(ds.attrs["sweep_skipped"])
+    if not failed:
+        return
+    statuses, messages = ds["status"].values.ravel(), ds["message"].values.ravel()
+    first = next(f"{s}: {m}" for s, m in zip(statuses, messages) if str(s) not in NOT_FAILED)
+    where = f"; see the status and message variables in {out}" if out is not None else ""
+    if failed == ran:
+        ds.close()
+        raise SweepFailed(f"all {ran} cases failed (the first: {first}){where}")
+    warnings.warn(f"{failed} of {ran} cases failed (the first: {first}){where}",
+                  CasesFailedWarning, stacklevel=3)
 
 
 def _drive(backend, tasks: Iterable[tuple[str, CaseTask]], on_result: Callable[[str, Any], None],
@@ -168,8 +195,8 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
               overrides: Iterable[str] = (), progress: bool = True, *, overwrite: bool = False,
               keep_parts: bool = False, discard_parts: bool = False, allow_large: bool = False,
               max_cases: int | None = MAX_CASES, backend: str | None = None,
-              keep_series: str | Iterable[int] = (), _simulate: Callable | None = None,
-              _summarize: Callable | None = None) -> xr.Dataset:
+              keep_series: str | Iterable[int] = (), report_failures: bool = True,
+              _simulate: Callable | None = None, _summarize: Callable | None = None) -> xr.Dataset:
     """Run a parameter sweep and return its results as one labelled dataset.
 
     Parameters
@@ -219,6 +246,11 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         With ``backend="cuda"``: the cases (positions in sweep order, as in
         ``plan.cases``; ``"all"`` for every one) whose time series are kept; they
         run on the CPU kernel in this process and are stored in full.
+    report_failures
+        Raise :class:`SweepFailed` when every case that ran failed, and warn
+        (:class:`CasesFailedWarning`, with the count and the first message) when
+        some did; ``False``: return the dataset either way (the ``clearsweep``
+        command reports them itself, exit status 1).
 
     Returns
     -------
@@ -239,11 +271,20 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
     SweepInterrupted
         Ctrl-C: pending cases cancelled, finished ones kept for ``resume``.
     SweepFailed
-        The backend failed; finished cases are kept for ``resume``.
+        The backend failed; finished cases are kept for ``resume``. Or every case that
+        ran failed (with ``report_failures``; the file is written).
+    UnguardedScript
+        ``workers`` > 1 asked for from the top level of a script, outside
+        ``if __name__ == "__main__":`` (every worker would re-run the script), before
+        anything runs.
     """
     plan = (config_or_path if isinstance(config_or_path, SweepPlan)
             else expand(config_or_path, overrides, allow_large=allow_large, max_cases=max_cases))
     cuda = _cuda_options(plan, backend, keep_series)
+    if cuda is None and client is None:
+        pool = min((os.cpu_count() or 1) if workers is None else int(workers), len(plan.runnable()))
+        if pool > 1:
+            require_main_guard(pool)
     tmpdir = None
     if out is None:
         tmpdir = tempfile.mkdtemp(prefix="clearsweep-")
@@ -281,9 +322,13 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         if not keep_parts:
             store.remove()
         if tmpdir is None:
-            return open_results(out)
-        with open_results(out) as ds:
-            return ds.load()
+            ds = open_results(out)
+        else:
+            with open_results(out) as opened:
+                ds = opened.load()
+        if report_failures:
+            _report_failures(ds, out if tmpdir is None else None)
+        return ds
     finally:
         if tmpdir is not None:
             shutil.rmtree(tmpdir, ignore_errors=True)
@@ -342,8 +387,11 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
                           f"{type(exc).__name__}: {exc}") from exc
     store.log("run", name=plan.name, source=plan.source, cases=len(plan.cases), to_run=len(todo), kept=kept,
               backend=backend.label, command=plan.command)
+    # smoothing=0: the rate is the average since the clock's start, which the first finished
+    # case resets (below), so the fixed costs before it (the pool's start, the kernel loaded
+    # from the cache in each worker) do not make the first estimates hours long
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
-               file=sys.stderr, dynamic_ncols=True)
+               file=sys.stderr, dynamic_ncols=True, smoothing=0)
     bar.set_postfix(failed=failed)
     done = kept
 
@@ -357,6 +405,10 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         done += 1
         bar.set_postfix(failed=failed, refresh=False)
         bar.update()
+        if done == kept + 1 and not bar.disable:   # the first case of this run: time from here
+            # shown at the new start, else tqdm's close() would not print the last state
+            bar.initial, bar.start_t = bar.n, bar._time()
+            bar.last_print_t = bar.start_t
 
     interrupted = stopped = False
     try:

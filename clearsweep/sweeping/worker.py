@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import faulthandler
 import functools
 import os
 import signal
@@ -134,9 +135,14 @@ def _driver_gone(pid: int) -> bool:
         return False
 
 
-def _worker_init(driver_pid: int) -> None:
-    """Pool worker set-up: leave Ctrl-C to the driver, and end when the driver is gone."""
+def _worker_init(driver_pid: int, crash_dir: str | None = None) -> None:
+    """Pool worker set-up: leave Ctrl-C to the driver, end when the driver is gone, and, with
+    ``crash_dir``, write a fatal error's report (a crash in compiled code: the signal and the
+    Python frames) to ``crash_dir/<pid>.log``, read by :func:`crash_report`."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if crash_dir is not None:
+        # kept open for the process's life: faulthandler writes to its descriptor when it dies
+        faulthandler.enable(open(os.path.join(crash_dir, f"{os.getpid()}.log"), "w"))  # noqa: SIM115
 
     def watch() -> None:
         # A killed driver cannot stop its pool; without this its workers would wait forever.
@@ -147,7 +153,30 @@ def _worker_init(driver_pid: int) -> None:
     threading.Thread(target=watch, name="clearsweep-driver-watch", daemon=True).start()
 
 
+def crash_report(crash_dir: str | None, pid: int | None) -> str:
+    """What the worker ``pid`` wrote when it crashed (:func:`_worker_init`): the fatal
+    error and the innermost Python frame, as one line; ``""`` where it wrote nothing."""
+    if crash_dir is None or pid is None:
+        return ""
+    try:
+        with open(os.path.join(crash_dir, f"{pid}.log"), encoding="utf-8", errors="replace") as f:
+            lines = [line.strip() for line in f if line.strip()]
+    except OSError:
+        return ""
+    error = next((line for line in lines if line.startswith("Fatal Python error")), "")
+    # the crashing thread's frames follow "Current thread ...", innermost first
+    current = next((i for i, line in enumerate(lines) if line.startswith("Current thread")), 0)
+    frame = next((line for line in lines[current:] if line.startswith("File ")), "")
+    return "; ".join(x for x in (error, frame and f"in {frame}") if x)
+
+
+#: What a signal alone says of a worker's end, where the worker could write nothing.
+SIGNAL_CAUSES = {"SIGKILL": "the system's out-of-memory killer or a user stopped it; "
+                            "--dry-run shows the case's memory"}
+
+
 def _worker_died(h: str, how: str) -> xr.Dataset:
-    return _failed_part("error", f"the worker process running this case died twice ({how}), the "
-                        "second time running it alone on a fresh worker: killed, out of memory, or "
-                        "a crash in compiled code", 0.0)
+    """The part of a case that killed its worker twice; ``how``: how the worker ended, with
+    what it wrote when it crashed (:meth:`backends._Futures.restart`)."""
+    return _failed_part("error", f"the worker process running this case died twice, the second "
+                        f"time running it alone on a fresh worker: {how}", 0.0)
