@@ -86,13 +86,59 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
         "title": "clearsweep RSSP mechanism simulation",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
-        "history": f"{now}: created by clearsweep",
+        "history": with_command_line(f"{now}: created by clearsweep"),
         "config": config_text,
     })
     ds.attrs.update(versions())
     if attrs:
         ds.attrs.update(attrs)
     return ds
+
+
+def command_line() -> str | None:
+    """The ``clearsweep`` command line being run (``clearsweep run CONFIG --set KEY=VALUE -o
+    OUT``), rebuilt from click's context: the arguments and the options given on the command
+    line, in the command's order; None outside a command.
+
+    It is rebuilt, not read from ``sys.argv``, so that it is the same under any launcher
+    (``python -m clearsweep``, an entry point, click's test runner).
+    """
+    import shlex
+
+    try:
+        import click
+        from click.core import ParameterSource
+    except ImportError:         # pragma: no cover - click is a dependency
+        return None
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return None
+    words: list[str] = ctx.command_path.split()
+    for param in ctx.command.params:
+        name = param.name
+        if name is None or ctx.get_parameter_source(name) != ParameterSource.COMMANDLINE:
+            continue
+        value = ctx.params.get(name)
+        values = list(value) if isinstance(value, (tuple, list)) else [value]
+        if isinstance(param, click.Argument):
+            words += [str(v) for v in values]
+        elif getattr(param, "is_flag", False) and not getattr(param, "count", False):
+            flag = param.opts[0] if value else (param.secondary_opts or param.opts)[0]
+            words.append(flag)
+        else:
+            for v in values:
+                words += [param.opts[0], str(v)]
+    return shlex.join(words)
+
+
+def with_command_line(history: str) -> str:
+    """``history`` (a CF history attribute) with a line recording the command line that is
+    writing it (:func:`command_line`), when there is one."""
+    line = command_line()
+    if not line:
+        return history
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return "\n".join(filter(None, [history, f"{now}: {line}"]))
 
 
 def _umask() -> int:

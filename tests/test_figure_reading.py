@@ -64,7 +64,7 @@ def test_the_life_figure_draws_a_015_percent_rms_change_small_and_says_so(life_d
     fig = figure(ds, "life")
     ax = _life_panel(fig, "settled RMS slider acceleration")
     assert _span(ax) >= 0.99 * MIN_RELATIVE_SPAN * 1.4338     # 0.0022 m/s^2 was the whole axis
-    assert "varies by 0.15% of its mean" in ax.get_title()
+    assert "varies by 0.15 % of its mean" in ax.get_title()
     assert layout_problems(fig) == []
 
 

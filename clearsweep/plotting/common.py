@@ -41,6 +41,14 @@ COLOURBAR_LABEL_CHARACTERS = 36
 
 _SINGLE_CASE_COLOUR = "tab:red"
 
+#: Display units: a variable in one of these SI units is drawn in the prefixed unit (factor
+#: [SI unit], text) that puts its largest magnitude at 1 or more, the largest such: 250 µm,
+#: 2.37 nm, 3.1 kN; never with offset text ("1e-9") beside the axis.
+DISPLAY_UNITS = {
+    "m": ((1e-9, "nm"), (1e-6, "\u00b5m"), (1e-3, "mm"), (1.0, "m")),
+    "N": ((1.0, "N"), (1e3, "kN"), (1e6, "MN")),
+}
+
 
 class PlotError(ValueError):
     """The dataset cannot give the figure asked for (missing variables, too many cases)."""
@@ -59,6 +67,70 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     name = text or obj.attrs.get("long_name") or str(obj.name)
     unit = obj.attrs.get("units", "") if units is None else units
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
+
+
+def display_scale(values, units: str) -> tuple[float, str]:
+    """(factor, unit text) to draw ``values`` given in ``units`` with (:data:`DISPLAY_UNITS`):
+    draw ``values / factor``.
+
+    >>> display_scale([2.5e-4, 1e-4], "m")
+    (1e-06, '\u00b5m')
+    >>> display_scale([850.0], "N")
+    (1.0, 'N')
+    >>> display_scale([2.0], "m s-2")
+    (1.0, 'm s-2')
+    """
+    steps = DISPLAY_UNITS.get(units)
+    data = np.abs(np.asarray(values, dtype=float).ravel())
+    data = data[np.isfinite(data)]
+    if not steps or data.size == 0 or not data.max() > 0:
+        return 1.0, units
+    peak = float(data.max())
+    factor, text = steps[0]
+    for f, t in steps:
+        if peak >= f * (1.0 - 1e-9):
+            factor, text = f, t
+    return factor, text
+
+
+def scaled(obj: xr.DataArray, values=None) -> tuple[float, str]:
+    """:func:`display_scale` of a variable from its ``units`` attribute and its values (or
+    ``values``, where another selection of it sets the scale)."""
+    return display_scale(obj.values if values is None else values, str(obj.attrs.get("units", "")))
+
+
+def plain_ticks(fig) -> None:
+    """No offset text and no "x 1e-9" multiplier on any linear axis or colour bar of ``fig``:
+    the values drawn are scaled to read directly (:func:`display_scale`)."""
+    from matplotlib.ticker import ScalarFormatter
+
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            formatter = axis.get_major_formatter()
+            if type(formatter) is ScalarFormatter:
+                formatter.set_useOffset(False)
+                formatter.set_scientific(False)
+
+
+def log_ticks(axis, low: float, high: float) -> None:
+    """Labels of a log axis that never run into each other: the decades only, or where the
+    view spans less than two decades, 1, 2 and 5 times them; unlabelled minor ticks."""
+    from matplotlib.ticker import FixedLocator, LogFormatterSciNotation, NullFormatter
+
+    first, last = int(np.floor(np.log10(low))), int(np.ceil(np.log10(high)))
+    subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0)
+    ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
+             if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
+    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_formatter(LogFormatterSciNotation(labelOnlyBase=False))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def percent_text(fraction: float) -> str:
+    """``"1.9 %"``, ``"290 %"``: a fraction as a percentage of two significant digits, never
+    in exponent notation."""
+    value = 100.0 * fraction
+    return f"{value:.0f} %" if value >= 10 else f"{value:.2g} %"
 
 
 def wrapped_label(label: str, width: int = COLOURBAR_LABEL_CHARACTERS) -> str:
@@ -171,7 +243,7 @@ def keep_relative_span(ax, values) -> str:
         return ""
     centre, half = 0.5 * (low + high), 0.5 * MIN_RELATIVE_SPAN * scale
     ax.set_ylim(centre - half, centre + half)
-    return (f"varies by {float(np.ptp(data)) / scale:.2%} of its mean; "
+    return (f"varies by {percent_text(float(np.ptp(data)) / scale)} of its mean; "
             f"axis spans {MIN_RELATIVE_SPAN:.0%} of it")
 
 

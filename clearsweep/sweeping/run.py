@@ -22,7 +22,7 @@ import netCDF4
 import xarray as xr
 
 from ..config import ConfigError
-from ..dataset import open_results, remove_stale_temporaries, versions
+from ..dataset import open_results, remove_stale_temporaries, versions, with_command_line
 from ..params import run_identity
 from .assemble import history_line, write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
@@ -154,7 +154,7 @@ def _attrs(plan: SweepPlan) -> dict[str, Any]:
         "title": "clearsweep RSSP mechanism parameter sweep",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
-        "history": history_line(f"clearsweep sweep {plan.name!r} from {plan.source}"),
+        "history": with_command_line(history_line(f"clearsweep sweep {plan.name!r} from {plan.source}")),
         "sweep_name": plan.name,
         "sweep_store": plan.store,
         "sweep_dims": " ".join(plan.dims),
