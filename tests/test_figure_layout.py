@@ -291,9 +291,13 @@ def test_a_small_spread_on_a_heat_map_is_stated_and_looks_small():
 
 def test_cell_values_are_drawn_only_where_they_fit():
     """Values that need six digits to tell apart (``2.37001e-09``) do not fit a cell of a
-    4 x 6 map: they are left out rather than run over the cell border."""
-    grid = 2.37e-9 * (1.0 + 1e-5 * np.arange(24.0).reshape(4, 6))
-    fig = figure(heat_map_sweep(grid), "sweep")
+    4 x 16 map: they are left out rather than run over each other and the cell border."""
+    grid = 2.37e-9 * (1.0 + 1e-5 * np.arange(64.0).reshape(4, 16))
+    narrow = heat_map_sweep(np.zeros((4, 6))).drop_vars("slider_acceleration_peak_settled")
+    narrow = narrow.assign_coords(B_clearance=np.arange(16) * 1e-5)
+    narrow["slider_acceleration_peak_settled"] = (("B_coating", "B_clearance"), grid,
+                                                  {"units": "m", "long_name": "settled peak"})
+    fig = figure(narrow, "sweep")
     assert layout_problems(fig) == []
     ax = fig.axes[0]
     renderer = fig.canvas.get_renderer()
@@ -324,3 +328,24 @@ def test_the_title_names_the_overrides_and_the_start(case):
     title = " ".join(figure(ds, "slider").get_suptitle().split())
     assert "--set joints.B.coating=PTFE, initial.joints=centred" in title
     assert "start: centred" in title
+
+
+def test_a_run_records_its_command_line_and_its_figure_names_the_overrides(tmp_path):
+    """A PTFE run made with --set read "case: one_clearance": the file's history now records
+    the command line, and the title every --set of it."""
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    out = tmp_path / "run.nc"
+    result = CliRunner().invoke(main, ["run", CONFIG, "--set", "solver.duration=0.004",
+                                       "--set", "joints.B.coating=PTFE", "-o", str(out), "-q"])
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(out) as ds:
+        ds.load()
+    assert ds.attrs["history"].splitlines()[-1].endswith(
+        f"clearsweep run {CONFIG} -o {out} --set solver.duration=0.004 "
+        "--set joints.B.coating=PTFE -q")
+    title = " ".join(figure(ds, "slider").get_suptitle().split())
+    assert "case: one_clearance; start: seated; --set solver.duration=0.004, joints.B.coating=PTFE" \
+        in title

@@ -106,14 +106,14 @@ def test_orbit_clearance_circles_are_told_apart_in_one_legend(sweep_ds):
     circles = {t.get_text(): (str(h.get_linestyle()), str(h.get_color()))
                for h, t in zip(legend.legend_handles, legend.get_texts())
                if "clearance " in t.get_text()}
-    assert set(circles) == {"joint A clearance 0.00025 m (config)",
-                            "joint B clearance 0.0001 m (swept)",
-                            "joint B clearance 0.00025 m (swept)"}
+    assert set(circles) == {"joint A clearance 250 µm (config)",
+                            "joint B clearance 100 µm (swept)",
+                            "joint B clearance 250 µm (swept)"}
     # one style per radius: the two 0.25 mm circles alike, the 0.1 mm one different
-    assert circles["joint A clearance 0.00025 m (config)"] == circles[
-        "joint B clearance 0.00025 m (swept)"]
-    assert circles["joint B clearance 0.0001 m (swept)"] != circles[
-        "joint B clearance 0.00025 m (swept)"]
+    assert circles["joint A clearance 250 µm (config)"] == circles[
+        "joint B clearance 250 µm (swept)"]
+    assert circles["joint B clearance 100 µm (swept)"] != circles[
+        "joint B clearance 250 µm (swept)"]
     assert layout_problems(fig) == []
 
 

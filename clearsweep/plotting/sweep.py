@@ -201,12 +201,12 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
             vmin, vmax = spread[1]
         image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=vmin,
                           vmax=vmax)
-        for axis_dim, set_ticks in zip(dims, (ax.set_yticks, ax.set_xticks)):
-            coord = values[axis_dim]
-            set_ticks(np.arange(coord.size), [value_text(v) for v in coord.values])
+        for axis_dim, set_ticks, set_label in zip(dims, (ax.set_yticks, ax.set_xticks),
+                                                  (ax.set_ylabel, ax.set_xlabel)):
+            ticks, axis_text = _cell_ticks(values[axis_dim])
+            set_ticks(np.arange(len(ticks)), ticks)
+            set_label(axis_text)
         ax.tick_params(axis="x", labelrotation=30)
-        ax.set_ylabel(axis_label(values[dims[0]]))
-        ax.set_xlabel(axis_label(values[dims[1]]))
         if grid.size <= MAX_ANNOTATED_CELLS:
             digits = _cell_digits(grid)
             for (r, c), v in np.ndenumerate(grid):
@@ -245,6 +245,22 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         note += f"\nnot drawn: {', '.join(t or metric for t in empty)}, all 0 or missing"
     fig.suptitle(f"{title}\nover {_dim_name(values, dims[0])} and {_dim_name(values, dims[1])}"
                  f"{note}")
+
+
+#: A heat-map axis labels at most this many of its cells (every k-th where it has more).
+MAX_CELL_TICK_LABELS = 8
+
+
+def _cell_ticks(coord: xr.DataArray) -> tuple[list[str], str]:
+    """Tick labels of a heat-map axis over ``coord``, numbers in display units (250, not
+    0.00025), every k-th left blank where there are more than :data:`MAX_CELL_TICK_LABELS`;
+    and the axis label with those units."""
+    factor, unit = scaled(coord) if coord.dtype.kind in "fiu" else (1.0, None)
+    texts = ([format(float(v) / factor, ".4g") for v in coord.values] if factor != 1.0
+             else [value_text(v) for v in coord.values])
+    step = -(-len(texts) // MAX_CELL_TICK_LABELS)
+    return ([t if k % step == 0 else "" for k, t in enumerate(texts)],
+            axis_label(coord, units=unit))
 
 
 def _spread_note(grid: np.ndarray) -> tuple[str, tuple[float, float] | None]:
