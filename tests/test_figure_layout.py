@@ -17,10 +17,10 @@ import itertools
 
 import numpy as np
 import pytest
+import shipped
 import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
-import shipped
 from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
 from test_ensemble import synthetic_ensemble
 

@@ -115,15 +115,23 @@ def plain_ticks(fig) -> None:
 def log_ticks(axis, low: float, high: float) -> None:
     """Labels of a log axis that never run into each other: the decades only, or where the
     view spans less than two decades, 1, 2 and 5 times them; unlabelled minor ticks."""
-    from matplotlib.ticker import FixedLocator, LogFormatterSciNotation, NullFormatter
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     first, last = int(np.floor(np.log10(low))), int(np.ceil(np.log10(high)))
     subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0)
     ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
              if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
     axis.set_major_locator(FixedLocator(ticks))
-    axis.set_major_formatter(LogFormatterSciNotation(labelOnlyBase=False))
+    axis.set_major_formatter(FuncFormatter(_power_text))
     axis.set_minor_formatter(NullFormatter())
+
+
+def _power_text(value: float, _position=None) -> str:
+    """``"$2\\times10^{5}$"``, ``"$10^{5}$"``: a log-axis tick label."""
+    exponent = int(np.floor(np.log10(value) + 1e-9))
+    mantissa = value / 10.0 ** exponent
+    power = f"10^{{{exponent}}}"
+    return f"${power}$" if round(mantissa) == 1 else f"${mantissa:.0f}\\times{power}$"
 
 
 def percent_text(fraction: float) -> str:

@@ -11,7 +11,6 @@ from matplotlib.figure import Figure
 from ..analysis import value_text
 from .common import MAX_CYCLE_COLOURS, _require, axis_label, log_ticks
 
-
 #: Hatching of the confidence bands, one per design in turn.
 BAND_HATCHES = ("//", "\\\\", "||", "--", "+", "x", ".", "o")
 

@@ -112,6 +112,9 @@ def _draw_sample_scatter(fig: Figure, values: xr.DataArray, panels: list, factor
         raise PlotError("--kind sweep on a sampling sweep draws the metric against its sampled "
                         "inputs, and this dataset has none: use clearsweep sensitivity for its "
                         "Sobol' indices")
+    # a joint without the metric (an ideal joint's wear) gets no points and no legend entry
+    panels = [(text, panel) for text, panel in panels
+              if np.nan_to_num(panel.values.astype(float)).any()] or panels
     ncols = min(2, len(inputs))
     nrows = -(-len(inputs) // ncols)
     fig.set_size_inches(max(4.2 * ncols, MIN_FIGURE_WIDTH_INCHES), 3.2 * nrows + 1.0)
@@ -201,11 +204,12 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
             vmin, vmax = spread[1]
         image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=vmin,
                           vmax=vmax)
-        for axis_dim, set_ticks, set_label in zip(dims, (ax.set_yticks, ax.set_xticks),
-                                                  (ax.set_ylabel, ax.set_xlabel)):
-            ticks, axis_text = _cell_ticks(values[axis_dim])
-            set_ticks(np.arange(len(ticks)), ticks)
-            set_label(axis_text)
+        rows, row_label = _cell_ticks(values[dims[0]])
+        columns, column_label = _cell_ticks(values[dims[1]])
+        ax.set_yticks(np.arange(len(rows)), rows)
+        ax.set_xticks(np.arange(len(columns)), columns)
+        ax.set_ylabel(row_label)
+        ax.set_xlabel(column_label)
         ax.tick_params(axis="x", labelrotation=30)
         if grid.size <= MAX_ANNOTATED_CELLS:
             digits = _cell_digits(grid)
@@ -308,7 +312,7 @@ def fit_cell_values(fig: Figure) -> None:
 
     canvas = fig.canvas if hasattr(fig.canvas, "get_renderer") else FigureCanvasAgg(fig)
     fig.draw_without_rendering()
-    renderer = canvas.get_renderer()  # type: ignore[attr-defined]
+    renderer = canvas.get_renderer()
     for ax, text in texts:
         x, y = text.get_position()
         (x0, y0), (x1, y1) = ax.transData.transform([(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)])
