@@ -328,6 +328,9 @@ def test_the_title_names_the_overrides_and_the_start(case):
     title = " ".join(figure(ds, "slider").get_suptitle().split())
     assert "--set joints.B.coating=PTFE, initial.joints=centred" in title
     assert "start: centred" in title
+    # a sweep's file keeps its config as written: the start is the --set one
+    ds.attrs["config"] = case.attrs["config"]
+    assert "start: centred" in figure(ds, "slider").get_suptitle()
 
 
 def test_a_run_records_its_command_line_and_its_figure_names_the_overrides(tmp_path):

@@ -4,7 +4,10 @@ Figures are built on ``matplotlib.figure.Figure`` directly (no pyplot, no
 global state, no display needed) and saved in the format the output
 file's suffix names. Every axis and colour-bar label carries the units of the
 variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
-or categorical quantity.
+or categorical quantity. Lengths and forces are drawn in the unit that reads
+directly (nm, µm, mm, kN: ``common.DISPLAY_UNITS``), never with offset text. The
+title names the case or ``--select`` slice, the start (seated or centred) and every
+``--set`` override of the command line the file's ``history`` records.
 
 Kinds (``KINDS``):
 
@@ -25,7 +28,8 @@ Kinds (``KINDS``):
     inside the clearance circle; cases overlaid.
 ``sweep``
     one summary metric (``analysis.case_summary``) over one sweep dimension
-    (lines) or two (heat maps); for an ensemble (a ``member`` dimension), the
+    (lines) or two (heat maps, their spread stated, a joint without data left out);
+    on a sampling sweep, against each sampled input (scatter); for an ensemble (a ``member`` dimension), the
     ensemble mean over one or two design dimensions with its 95 % confidence
     interval as error bars, one line per value of the second dimension.
 ``life``
@@ -222,20 +226,26 @@ def _config(ds: xr.Dataset) -> dict:
 
 
 def start_text(ds: xr.Dataset) -> str:
-    """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``),
-    unless a sweep dimension varies it; "" for a file without a config (a life run's snapshot)."""
+    """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``
+    of the config, or of a ``--set`` on the command line; a sweep's file keeps its config as
+    written), unless a sweep dimension varies it; "" for a file without a config (a life
+    run's snapshot)."""
     if not {"config", "sweep_config"} & set(ds.attrs):
         return ""
-    if any(str(d).endswith("initial_joints") or str(d) == "joints" for d in sweep_dims(ds)):
+    if any(str(d).endswith("initial_joints") for d in sweep_dims(ds)):
         return ""
     initial = _config(ds).get("initial")
     start = initial.get("joints") if isinstance(initial, dict) else None
+    for override in _overrides(ds):
+        key, _, value = override.partition("=")
+        if key.strip() == "initial.joints":
+            start = value.strip()
     return f"start: {start if isinstance(start, str) else 'seated'}"
 
 
-def overrides_text(ds: xr.Dataset) -> str:
-    """``"--set joints.B.coating=PTFE"``: the ``--set`` overrides of the command line that made
-    the file (the last one its ``history`` records), every one; "" where none."""
+def _overrides(ds: xr.Dataset) -> list[str]:
+    """The ``--set`` overrides of the command line that made the file: the last ``clearsweep``
+    line of its ``history`` (:func:`clearsweep.dataset.command_line`)."""
     import shlex
 
     sets: list[str] = []
@@ -249,6 +259,13 @@ def overrides_text(ds: xr.Dataset) -> str:
             continue
         sets = [b for a, b in zip(words, words[1:]) if a == "--set"]
         sets += [w.split("=", 1)[1] for w in words if w.startswith("--set=")]
+    return sets
+
+
+def overrides_text(ds: xr.Dataset) -> str:
+    """``"--set joints.B.coating=PTFE"``: every ``--set`` override of the command line that
+    made the file; "" where none."""
+    sets = _overrides(ds)
     return "--set " + ", ".join(sets) if sets else ""
 
 
