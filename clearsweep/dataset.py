@@ -10,6 +10,7 @@ import shutil
 import sys
 import tempfile
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import numpy as np
@@ -95,40 +96,29 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
     return ds
 
 
+#: The ``clearsweep`` command line being run, as typed (:func:`recorded_command_line`).
+_COMMAND_LINE: ContextVar[tuple[str, ...] | None] = ContextVar("clearsweep_command_line",
+                                                               default=None)
+
+
+@contextmanager
+def recorded_command_line(words):
+    """Within: :func:`command_line` is ``words`` (``["clearsweep", "run", CONFIG, ...]``); the
+    command-line interface runs every command inside one."""
+    token = _COMMAND_LINE.set(tuple(str(w) for w in words))
+    try:
+        yield
+    finally:
+        _COMMAND_LINE.reset(token)
+
+
 def command_line() -> str | None:
     """The ``clearsweep`` command line being run (``clearsweep run CONFIG --set KEY=VALUE -o
-    OUT``), rebuilt from click's context: the arguments and the options given on the command
-    line, in the command's order; None outside a command.
-
-    It is rebuilt, not read from ``sys.argv``, so that it is the same under any launcher
-    (``python -m clearsweep``, an entry point, click's test runner).
-    """
+    OUT``), quoted for a shell; None outside a command."""
     import shlex
 
-    try:
-        import click
-        from click.core import ParameterSource
-    except ImportError:         # pragma: no cover - click is a dependency
-        return None
-    ctx = click.get_current_context(silent=True)
-    if ctx is None:
-        return None
-    words: list[str] = ctx.command_path.split()
-    for param in ctx.command.params:
-        name = param.name
-        if name is None or ctx.get_parameter_source(name) != ParameterSource.COMMANDLINE:
-            continue
-        value = ctx.params.get(name)
-        values = list(value) if isinstance(value, (tuple, list)) else [value]
-        if isinstance(param, click.Argument):
-            words += [str(v) for v in values]
-        elif getattr(param, "is_flag", False) and not getattr(param, "count", False):
-            flag = param.opts[0] if value else (param.secondary_opts or param.opts)[0]
-            words.append(flag)
-        else:
-            for v in values:
-                words += [param.opts[0], str(v)]
-    return shlex.join(words)
+    words = _COMMAND_LINE.get()
+    return shlex.join(words) if words else None
 
 
 def with_command_line(history: str) -> str:

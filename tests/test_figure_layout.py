@@ -347,8 +347,19 @@ def test_a_run_records_its_command_line_and_its_figure_names_the_overrides(tmp_p
     with xr.open_dataset(out) as ds:
         ds.load()
     assert ds.attrs["history"].splitlines()[-1].endswith(
-        f"clearsweep run {CONFIG} -o {out} --set solver.duration=0.004 "
-        "--set joints.B.coating=PTFE -q")
+        f"clearsweep run {CONFIG} --set solver.duration=0.004 --set joints.B.coating=PTFE "
+        f"-o {out} -q")
     title = " ".join(figure(ds, "slider").get_suptitle().split())
     assert "case: one_clearance; start: seated; --set solver.duration=0.004, joints.B.coating=PTFE" \
         in title
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["wear-map", "wear-polar", "orbit"])
+def test_a_joint_without_data_gets_no_panel(main_job, kind):
+    """With a clearance at B alone, joint A is ideal: no wear, the ball at the centre."""
+    fig = figure(main_job, kind, ["clearance_joints=B", "coating_joints=none"])
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    assert titles and not any(title.startswith("joint A") for title in titles)
+    assert "joint A" in fig.get_suptitle()
+    assert layout_problems(fig) == []

@@ -114,11 +114,12 @@ def plain_ticks(fig) -> None:
 
 def log_ticks(axis, low: float, high: float) -> None:
     """Labels of a log axis that never run into each other: the decades only, or where the
-    view spans less than two decades, 1, 2 and 5 times them; unlabelled minor ticks."""
+    view spans less than two decades, 1, 2 and 5 times them (and 3 times them within one
+    decade); unlabelled minor ticks."""
     from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
 
     first, last = int(np.floor(np.log10(low))), int(np.ceil(np.log10(high)))
-    subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0)
+    subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0) if high / low > 10 else (1.0, 2.0, 3.0, 5.0)
     ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
              if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
     axis.set_major_locator(FixedLocator(ticks))

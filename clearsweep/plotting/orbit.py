@@ -46,6 +46,8 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
               if np.nan_to_num(offset.sel(joint=j).values).any()] or list(offset["joint"].values)
     empty = [value_text(j) for j in offset["joint"].values if j not in joints]
     factor, unit = scaled(offset)
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 4.8)
     per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
     for joint in joints:
         found_here: dict[float, str] = {}

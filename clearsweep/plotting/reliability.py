@@ -56,6 +56,9 @@ def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
         ax.set_title(f"limit: {limit}", fontsize="medium")
         if b10:
             ax.set_yscale("log")
+            low, high = ax.get_ylim()
+            if low > 0:
+                log_ticks(ax.yaxis, low, high)
             ax.set_xticks(range(len(labels)), labels, rotation=30, ha="right", fontsize="x-small")
             ax.set_ylabel(f"B10 [revolutions], bars: {level:.0%} interval")
         else:

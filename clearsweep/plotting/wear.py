@@ -71,6 +71,8 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     empty = [value_text(j) for j in wear["joint"].values if j not in joints]
     factor, unit = scaled(wear)
     label = axis_label(wear, "wear depth", unit)
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 5.0)
     for j, joint in enumerate(joints):
         depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
@@ -113,8 +115,13 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     theta = np.radians(projection["angle"].values)
     closed = np.append(theta, theta[0])
     cases = _cases(ds)
-    joints, axes_names = projection["joint"].values, projection["axis"].values
-    scales = []
+    axes_names = projection["axis"].values
+    # a joint without wear (an ideal joint) gets no row of unworn circles: the title says so
+    joints = [j for j in projection["joint"].values
+              if np.nan_to_num(projection.sel(joint=j).values).any()] or list(projection["joint"].values)
+    scales = [f"joint {value_text(j)}: no wear" for j in projection["joint"].values if j not in joints]
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):
         peak = float(projection.sel(joint=joint).max())
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
