@@ -9,7 +9,16 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
-from .common import _edges, _note_span, _require, axis_label, log_ticks, scaled
+from .common import (
+    AXIS_LABEL_CHARACTERS,
+    _edges,
+    _note_span,
+    _require,
+    axis_label,
+    log_ticks,
+    scaled,
+    wrapped_label,
+)
 
 #: The life figure draws at most this many wear-map snapshots (the first, the last and
 #: evenly spread ones between); it says which stored snapshots it leaves out.
@@ -35,6 +44,14 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     for k, name in enumerate(panels):
         ax = fig.add_subplot(grid[k // 2, k % 2])
         var = ds[name]
+        if not np.isfinite(var.values.astype(float)).any():
+            # nothing to draw (no coating has no coating remaining): a note, not empty axes
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, wrapped_label(f"{var.attrs.get('long_name', name)}: no data",
+                                            AXIS_LABEL_CHARACTERS),
+                    ha="center", va="center", transform=ax.transAxes, fontsize="small",
+                    color="0.4")
+            continue
         factor, unit = scaled(var)
         if "joint" in var.dims:
             for joint in var["joint"].values:
