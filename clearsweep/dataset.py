@@ -82,12 +82,11 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
     status = arrays.get("status", "ok")
     ds["status"] = ((), str(status), {"long_name": "simulation status",
                                       "description": "ok, or the reason the case stopped"})
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     ds.attrs.update({
         "title": "clearsweep RSSP mechanism simulation",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
-        "history": with_command_line(f"{now}: created by clearsweep"),
+        "history": with_command_line(history_line("created by clearsweep")),
         "config": config_text,
     })
     ds.attrs.update(versions())
@@ -121,14 +120,16 @@ def command_line() -> str | None:
     return shlex.join(words) if words else None
 
 
+def history_line(text: str) -> str:
+    """A CF ``history`` line: UTC time stamp and ``text``."""
+    return f"{_dt.datetime.now(_dt.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')}: {text}"
+
+
 def with_command_line(history: str) -> str:
     """``history`` (a CF history attribute) with a line recording the command line that is
     writing it (:func:`command_line`), when there is one."""
     line = command_line()
-    if not line:
-        return history
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    return "\n".join(filter(None, [history, f"{now}: {line}"]))
+    return "\n".join(filter(None, [history, history_line(line)])) if line else history
 
 
 def _umask() -> int:
