@@ -363,3 +363,14 @@ def test_a_joint_without_data_gets_no_panel(main_job, kind):
     assert titles and not any(title.startswith("joint A") for title in titles)
     assert "joint A" in fig.get_suptitle()
     assert layout_problems(fig) == []
+
+
+def test_a_life_run_records_its_command_line(short_life_cli):
+    from test_service_life import SHORT_LIFE
+
+    out, _ = short_life_cli
+    with xr.open_dataset(out) as ds:
+        history = ds.attrs["history"]
+        title = " ".join(figure(ds.load(), "life").get_suptitle().split())
+    assert history.splitlines()[-1].split(": ", 1)[1].startswith("clearsweep life ")
+    assert "--set " + ", ".join(SHORT_LIFE) in title
