@@ -140,6 +140,14 @@ class _Group(_Command, click.Group):
 
     command_class = _Command
 
+    def main(self, args=None, *rest, **extra):
+        from .dataset import recorded_command_line
+
+        # the command line as typed: the history of a results file it writes records it
+        words = sys.argv[1:] if args is None else shlex.split(args) if isinstance(args, str) else args
+        with recorded_command_line(["clearsweep", *words]):
+            return super().main(args, *rest, **extra)
+
 
 _allow_large = click.option(
     "--allow-large", is_flag=True,

@@ -10,6 +10,7 @@ import shutil
 import sys
 import tempfile
 from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 import numpy as np
@@ -81,18 +82,54 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
     status = arrays.get("status", "ok")
     ds["status"] = ((), str(status), {"long_name": "simulation status",
                                       "description": "ok, or the reason the case stopped"})
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     ds.attrs.update({
         "title": "clearsweep RSSP mechanism simulation",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
-        "history": f"{now}: created by clearsweep",
+        "history": with_command_line(history_line("created by clearsweep")),
         "config": config_text,
     })
     ds.attrs.update(versions())
     if attrs:
         ds.attrs.update(attrs)
     return ds
+
+
+#: The ``clearsweep`` command line being run, as typed (:func:`recorded_command_line`).
+_COMMAND_LINE: ContextVar[tuple[str, ...] | None] = ContextVar("clearsweep_command_line",
+                                                               default=None)
+
+
+@contextmanager
+def recorded_command_line(words):
+    """Within: :func:`command_line` is ``words`` (``["clearsweep", "run", CONFIG, ...]``); the
+    command-line interface runs every command inside one."""
+    token = _COMMAND_LINE.set(tuple(str(w) for w in words))
+    try:
+        yield
+    finally:
+        _COMMAND_LINE.reset(token)
+
+
+def command_line() -> str | None:
+    """The ``clearsweep`` command line being run (``clearsweep run CONFIG --set KEY=VALUE -o
+    OUT``), quoted for a shell; None outside a command."""
+    import shlex
+
+    words = _COMMAND_LINE.get()
+    return shlex.join(words) if words else None
+
+
+def history_line(text: str) -> str:
+    """A CF ``history`` line: UTC time stamp and ``text``."""
+    return f"{_dt.datetime.now(_dt.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')}: {text}"
+
+
+def with_command_line(history: str) -> str:
+    """``history`` (a CF history attribute) with a line recording the command line that is
+    writing it (:func:`command_line`), when there is one."""
+    line = command_line()
+    return "\n".join(filter(None, [history, history_line(line)])) if line else history
 
 
 def _umask() -> int:

@@ -43,7 +43,7 @@ from .budget import (
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
-from .dataset import replaced_on_success
+from .dataset import history_line, replaced_on_success, with_command_line
 from .params import Packed, identity_changes, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import format_length, length_unit
@@ -827,6 +827,7 @@ def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float) -> xr.D
         "title": "clearsweep service life by cycle jumps",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
+        "history": with_command_line(history_line("created by clearsweep life")),
         "config": dump_config(cfg),
         "life_method": "cycle-jump extrapolation with geometry update: dynamic blocks of "
                        "life.block_revolutions revolutions from a seated start on the worn "

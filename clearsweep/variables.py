@@ -310,19 +310,36 @@ def layout_problem(ds) -> str | None:
 #: Length units a report scales metres to, largest first: (factor from metres, symbol).
 LENGTH_UNITS = ((1e-3, "mm"), (1e-6, "um"), (1e-9, "nm"))
 
+#: Units that a value is shown in, by its SI unit, smallest first: the one rule of reports
+#: (:func:`length_unit`) and figures (``plotting.common.display_scale``).
+DISPLAY_UNITS = {
+    "m": ((1e-9, "nm"), (1e-6, "um"), (1e-3, "mm"), (1.0, "m")),
+    "N": ((1.0, "N"), (1e3, "kN"), (1e6, "MN")),
+}
+
+
+def display_unit(values, units: str) -> tuple[float, str] | None:
+    """(factor, symbol) that shows ``values`` [``units``] with one to three digits before
+    the point (:data:`DISPLAY_UNITS`: the largest unit not above the largest finite
+    magnitude, the smallest where all are below it); None where ``units`` has no ladder or
+    no value is finite and non-zero."""
+    steps = DISPLAY_UNITS.get(units)
+    finite = [abs(float(v)) for v in values if v == v and abs(float(v)) != float("inf")]
+    peak = max(finite, default=0.0)
+    if not steps or not peak > 0:
+        return None
+    factor, symbol = steps[0]
+    for f, t in steps:
+        if peak >= f * (1.0 - 1e-9):
+            factor, symbol = f, t
+    return factor, symbol
+
 
 def length_unit(values_m) -> tuple[float, str]:
     """The unit (factor from metres, symbol) that prints lengths ``values_m`` [m] with one
     to three digits before the point: mm, um or nm, from the largest finite magnitude;
-    metres at 1 m and above."""
-    finite = [abs(float(v)) for v in values_m if v == v and abs(float(v)) != float("inf")]
-    largest = max(finite, default=0.0)
-    if largest >= 1.0:
-        return 1.0, "m"
-    for factor, symbol in LENGTH_UNITS:
-        if largest >= factor:
-            return factor, symbol
-    return LENGTH_UNITS[-1]
+    metres at 1 m and above (:func:`display_unit`); nm where none is non-zero."""
+    return display_unit(list(values_m), "m") or LENGTH_UNITS[-1]
 
 
 def format_length(value_m: float, digits: int = 4) -> str:

@@ -1,9 +1,14 @@
 """Every plot kind, drawn at its default size, keeps its text inside the figure and apart.
 
 The layout engine places the texts; this test reads where they went: after
-``fig.canvas.draw()`` each visible text artist's ``get_window_extent`` must lie inside the
-figure and overlap no other text's. Drawn from a single run, a sweep with and without
-``--select``, an ensemble, a life run, a reliability sweep and a Sobol' result.
+``fig.canvas.draw()`` each visible text artist's ``get_window_extent`` (titles, axis labels,
+tick labels, annotations, offset texts, colour-bar labels, legends) must lie inside the
+figure and overlap no other text's, pairwise. Drawn from a single run, a sweep with and
+without ``--select``, an ensemble, a life run, a reliability sweep and a Sobol' result, and
+from results with the structure of the shipped examples (the main job ``configs/paper.yaml``,
+the reliability example, ``configs/life_sweep.yaml`` and the sensitivity example): the
+same dimensions, coordinates and value ranges, but short durations and few members, built
+once per test module (``tests/shipped.py`` says how each differs from the real run).
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ import itertools
 
 import numpy as np
 import pytest
+import shipped
 import xarray as xr
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
@@ -170,3 +176,201 @@ def test_the_check_finds_overlapping_and_escaping_text():
     problems = layout_problems(fig)
     assert any(p.startswith("leaves the figure: 'a title") for p in problems)
     assert "overlap: 'here' and 'there'" in problems
+
+
+# --- results with the shipped examples' structure -------------------------------------------
+
+@pytest.fixture(scope="module")
+def main_job(tmp_path_factory):
+    return shipped.main_job(tmp_path_factory.mktemp("main"))
+
+
+@pytest.fixture(scope="module")
+def reliability_example():
+    return shipped.reliability_example()
+
+
+@pytest.fixture(scope="module")
+def life_sweep(tmp_path_factory):
+    return shipped.life_sweep(tmp_path_factory.mktemp("life_sweep"))
+
+
+@pytest.fixture(scope="module")
+def sensitivity_example(tmp_path_factory):
+    return shipped.sensitivity_example(tmp_path_factory.mktemp("sensitivity"))
+
+
+#: (kind, --select, options) drawn from the main job: the commands of docs/reproduction.md
+#: and the per-joint heat maps.
+MAIN_JOB_FIGURES = [
+    ("slider", ["coating_joints=none"], {}),
+    ("slider", ["clearance_joints=AB"], {}),
+    ("forces", ["clearance_joints=AB", "coating_joints=none"], {}),
+    ("forces", ["clearance_joints=AB", "coating_joints=B"], {}),
+    ("wear-polar", ["clearance_joints=B", "coating_joints=none"], {}),
+    ("wear-polar", ["clearance_joints=AB", "coating_joints=AB"], {}),
+    ("wear-map", ["clearance_joints=AB", "coating_joints=none"], {}),
+    ("wear-map", ["clearance_joints=B", "coating_joints=none"], {}),
+    ("orbit", ["clearance_joints=AB", "coating_joints=none"], {}),
+    ("orbit", ["clearance_joints=B", "coating_joints=B"], {}),
+    ("sweep", None, {"metric": "slider_acceleration_peak_settled"}),
+    ("sweep", None, {"metric": "wear_depth_max_final"}),
+    ("sweep", None, {"metric": "normal_force_peak_settled"}),
+    ("sweep", ["clearance_joints=AB"], {"metric": "wear_depth_max_final"}),
+]
+
+
+def _offset_texts(fig) -> list[str]:
+    return [t for ax in fig.axes for axis in (ax.xaxis, ax.yaxis)
+            if (t := axis.get_offset_text().get_text())]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind, select, options", MAIN_JOB_FIGURES,
+                         ids=[f"{k}-{'-'.join(s) if s else 'all'}-{'-'.join(o.values())}"
+                              for k, s, o in MAIN_JOB_FIGURES])
+def test_a_main_job_figure_keeps_its_text_apart_without_offset_text(main_job, kind, select,
+                                                                    options):
+    fig = figure(main_job, kind, select, **options)
+    assert layout_problems(fig) == []
+    assert _offset_texts(fig) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("b10", [False, True])
+def test_the_reliability_example_figure_keeps_its_text_apart(reliability_example, b10):
+    """The example's revolutions span 5e4 to 6e5: minor tick labels 3x10^5 and 4x10^5 ran
+    into each other."""
+    assert layout_problems(figure(reliability_example, "reliability", b10=b10)) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("metric", ["wear_depth_max_final", "cycles_reached",
+                                    "clearance_effective_final"])
+def test_a_life_sweep_figure_keeps_its_text_apart(life_sweep, metric):
+    fig = figure(life_sweep, "sweep", metric=metric)
+    assert layout_problems(fig) == []
+    assert _offset_texts(fig) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("metric", ["normal_force_peak_settled", "slider_acceleration_rms_settled"])
+def test_a_sampling_sweep_is_drawn_against_its_inputs(sensitivity_example, metric):
+    """3,072 sample points joined by a line over the point number read as a signal: each
+    input gets a scatter panel instead."""
+    fig = figure(sensitivity_example, "sweep", metric=metric)
+    assert layout_problems(fig) == []
+    assert not [line for ax in fig.axes for line in ax.get_lines() if len(line.get_xdata()) > 2]
+    assert [ax.get_xlabel().split(" [")[0] for ax in fig.axes] == \
+        ["B_clearance", "B_coating_thickness", "restitution", "speed_rpm"]
+    assert fig.axes[0].get_xlabel() == "B_clearance [\u00b5m]"
+
+
+def test_the_reliability_bands_are_hatched_and_in_the_legend(reliability_example):
+    from matplotlib.collections import PolyCollection
+
+    fig = figure(reliability_example, "reliability")
+    bands = [c for c in fig.axes[0].collections if isinstance(c, PolyCollection)]
+    assert len(bands) == 4
+    assert len({band.get_hatch() for band in bands}) == 4
+    legend_texts = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    assert sum(text.endswith("95% band") for text in legend_texts) == 4
+
+
+def test_a_small_spread_on_a_heat_map_is_stated_and_looks_small():
+    """Values within 1.9 % of each other: two cells printed alike must not get far-apart
+    colours."""
+    grid = 1.46 + 0.028 * np.linspace(0.0, 1.0, 24).reshape(4, 6)
+    fig = figure(heat_map_sweep(grid), "sweep")
+    ax = fig.axes[0]
+    assert "varies by 1.9 % of its mean" in ax.get_title()
+    low, high = ax.images[0].get_clim()
+    assert high - low >= 0.099 * grid.mean()
+    assert layout_problems(fig) == []
+
+
+def test_cell_values_are_drawn_only_where_they_fit():
+    """Values that need six digits to tell apart (``2.37001e-09``) do not fit a cell of a
+    4 x 16 map: they are left out rather than run over each other and the cell border."""
+    grid = 2.37e-9 * (1.0 + 1e-5 * np.arange(64.0).reshape(4, 16))
+    narrow = heat_map_sweep(np.zeros((4, 6))).drop_vars("slider_acceleration_peak_settled")
+    narrow = narrow.assign_coords(B_clearance=np.arange(16) * 1e-5)
+    narrow["slider_acceleration_peak_settled"] = (("B_coating", "B_clearance"), grid,
+                                                  {"units": "m", "long_name": "settled peak"})
+    fig = figure(narrow, "sweep")
+    assert layout_problems(fig) == []
+    ax = fig.axes[0]
+    renderer = fig.canvas.get_renderer()
+    for text in ax.texts:
+        x, y = text.get_position()
+        (x0, y0), (x1, y1) = ax.transData.transform([(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)])
+        box = text.get_window_extent(renderer)
+        assert x0 <= box.x0 and box.x1 <= x1 and y0 <= box.y0 and box.y1 <= y1, text.get_text()
+    wide = figure(heat_map_sweep(np.arange(24.0).reshape(4, 6) + 1.0), "sweep")
+    assert len(wide.axes[0].texts) == 24          # short values fit and are all drawn
+
+
+def test_a_heat_map_draws_no_panel_for_a_joint_without_data(life_sweep):
+    """Joint A of the life sweep is ideal: no wear anywhere, which drew a flat panel with a
+    made-up -0.1..0.1 colour bar."""
+    assert float(life_sweep["wear_depth_max_final"].sel(joint="A").fillna(0.0).max()) == 0.0
+    fig = figure(life_sweep, "sweep", metric="wear_depth_max_final")
+    assert [ax.get_title().split("\n")[0] for ax in fig.axes if ax.images] == ["joint B"]
+    assert "not drawn: joint A, all 0 or missing" in fig.get_suptitle()
+
+
+def test_the_title_names_the_overrides_and_the_start(case):
+    ds = case.copy()
+    ds.attrs["history"] = ("2026-01-01T00:00:00Z: created by clearsweep\n2026-01-01T00:00:00Z: "
+                           "clearsweep run configs/one_clearance.yaml --set joints.B.coating=PTFE "
+                           "--set initial.joints=centred -o out.nc")
+    ds.attrs["config"] = ds.attrs["config"] + "\ninitial: {joints: centred}\n"
+    title = " ".join(figure(ds, "slider").get_suptitle().split())
+    assert "--set joints.B.coating=PTFE, initial.joints=centred" in title
+    assert "start: centred" in title
+    # a sweep's file keeps its config as written: the start is the --set one
+    ds.attrs["config"] = case.attrs["config"]
+    assert "start: centred" in figure(ds, "slider").get_suptitle()
+
+
+def test_a_run_records_its_command_line_and_its_figure_names_the_overrides(tmp_path):
+    """A PTFE run made with --set read "case: one_clearance": the file's history now records
+    the command line, and the title every --set of it."""
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+
+    out = tmp_path / "run.nc"
+    result = CliRunner().invoke(main, ["run", CONFIG, "--set", "solver.duration=0.004",
+                                       "--set", "joints.B.coating=PTFE", "-o", str(out), "-q"])
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(out) as ds:
+        ds.load()
+    assert ds.attrs["history"].splitlines()[-1].endswith(
+        f"clearsweep run {CONFIG} --set solver.duration=0.004 --set joints.B.coating=PTFE "
+        f"-o {out} -q")
+    title = " ".join(figure(ds, "slider").get_suptitle().split())
+    assert "case: one_clearance; start: seated; --set solver.duration=0.004, joints.B.coating=PTFE" \
+        in title
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["wear-map", "wear-polar", "orbit"])
+def test_a_joint_without_data_gets_no_panel(main_job, kind):
+    """With a clearance at B alone, joint A is ideal: no wear, the ball at the centre."""
+    fig = figure(main_job, kind, ["clearance_joints=B", "coating_joints=none"])
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    assert titles and not any(title.startswith("joint A") for title in titles)
+    assert "joint A" in fig.get_suptitle()
+    assert layout_problems(fig) == []
+
+
+def test_a_life_run_records_its_command_line(short_life_cli):
+    from test_service_life import SHORT_LIFE
+
+    out, _ = short_life_cli
+    with xr.open_dataset(out) as ds:
+        history = ds.attrs["history"]
+        title = " ".join(figure(ds.load(), "life").get_suptitle().split())
+    assert history.splitlines()[-1].split(": ", 1)[1].startswith("clearsweep life ")
+    assert "--set " + ", ".join(SHORT_LIFE) in title

@@ -64,7 +64,7 @@ def test_the_life_figure_draws_a_015_percent_rms_change_small_and_says_so(life_d
     fig = figure(ds, "life")
     ax = _life_panel(fig, "settled RMS slider acceleration")
     assert _span(ax) >= 0.99 * MIN_RELATIVE_SPAN * 1.4338     # 0.0022 m/s^2 was the whole axis
-    assert "varies by 0.15% of its mean" in ax.get_title()
+    assert "varies by 0.15 % of its mean" in ax.get_title()
     assert layout_problems(fig) == []
 
 
@@ -106,14 +106,14 @@ def test_orbit_clearance_circles_are_told_apart_in_one_legend(sweep_ds):
     circles = {t.get_text(): (str(h.get_linestyle()), str(h.get_color()))
                for h, t in zip(legend.legend_handles, legend.get_texts())
                if "clearance " in t.get_text()}
-    assert set(circles) == {"joint A clearance 0.00025 m (config)",
-                            "joint B clearance 0.0001 m (swept)",
-                            "joint B clearance 0.00025 m (swept)"}
+    assert set(circles) == {"joint A clearance 250 µm (config)",
+                            "joint B clearance 100 µm (swept)",
+                            "joint B clearance 250 µm (swept)"}
     # one style per radius: the two 0.25 mm circles alike, the 0.1 mm one different
-    assert circles["joint A clearance 0.00025 m (config)"] == circles[
-        "joint B clearance 0.00025 m (swept)"]
-    assert circles["joint B clearance 0.0001 m (swept)"] != circles[
-        "joint B clearance 0.00025 m (swept)"]
+    assert circles["joint A clearance 250 µm (config)"] == circles[
+        "joint B clearance 250 µm (swept)"]
+    assert circles["joint B clearance 100 µm (swept)"] != circles[
+        "joint B clearance 250 µm (swept)"]
     assert layout_problems(fig) == []
 
 

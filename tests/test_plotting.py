@@ -79,7 +79,7 @@ def test_slider_overlays_cases_with_coordinate_legends(tmp_path, sweep_ds):
     assert legend == ["B_coating=none, B_clearance=0.0001", "B_coating=none, B_clearance=0.00025",
                       "B_coating=PTFE, B_clearance=0.0001", "B_coating=PTFE, B_clearance=0.00025"]
     assert fig.axes[-1].get_xlabel() == "time [s]"
-    assert fig.axes[0].get_ylabel() == "slider position x_B [m]"
+    assert fig.axes[0].get_ylabel() == "slider position x_B [mm]"
 
 
 def test_slider_angle_axis_in_degrees(tmp_path, case):
@@ -91,7 +91,9 @@ def test_slider_angle_axis_in_degrees(tmp_path, case):
 
 def test_sweep_heatmap_and_lines(tmp_path, sweep_ds):
     heat = plot(sweep_ds, "sweep", tmp_path / "h.png", metric="wear_depth_axis_max", dpi=TEST_DPI)
-    assert len([ax for ax in heat.axes if ax.images]) == 6          # joint x axis panels
+    # joint x axis panels; joint A's wear about z is 0 everywhere: no panel, the title says so
+    assert len([ax for ax in heat.axes if ax.images]) == 5
+    assert "not drawn: joint A, axis z, all 0 or missing" in heat.get_suptitle()
     line = plot(sweep_ds, "sweep", tmp_path / "l.png", ["B_coating=PTFE"], dpi=TEST_DPI)
     ax = line.axes[0]
     assert ax.get_xlabel() == "radial clearance of B [m]"
@@ -109,8 +111,8 @@ def test_sweep_plot_from_summary_only_dataset(tmp_path, sweep_ds):
 def test_orbit_circle_uses_the_swept_clearance(tmp_path, sweep_ds):
     fig = plot(sweep_ds, "orbit", tmp_path / "o.png", ["B_coating=none"], dpi=TEST_DPI)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert "joint B clearance 0.0001 m (swept)" in legend
-    assert "joint B clearance 0.00025 m (swept)" in legend
+    assert "joint B clearance 100 µm (swept)" in legend
+    assert "joint B clearance 250 µm (swept)" in legend
 
 
 def test_one_case_kinds_refuse_several_cases(tmp_path, sweep_ds):
@@ -197,7 +199,7 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
             assert_rendered(tmp_path / f"{kind}.png", fig)
         orbit = plot(full, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
         legend = [t.get_text() for t in orbit.legends[0].get_texts()]
-        assert "joint B clearance 0.00025 m (config)" in legend  # the base case of sweep_config
+        assert "joint B clearance 250 µm (config)" in legend  # the base case of sweep_config
     for path in paths.values():
         for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
             result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])

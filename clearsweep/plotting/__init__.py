@@ -4,7 +4,10 @@ Figures are built on ``matplotlib.figure.Figure`` directly (no pyplot, no
 global state, no display needed) and saved in the format the output
 file's suffix names. Every axis and colour-bar label carries the units of the
 variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
-or categorical quantity.
+or categorical quantity. Lengths and forces are drawn in the unit that reads
+directly (nm, µm, mm, kN: ``variables.DISPLAY_UNITS``), never with offset text. The
+title names the case or ``--select`` slice, the start (seated or centred) and every
+``--set`` override of the command line the file's ``history`` records.
 
 Kinds (``KINDS``):
 
@@ -25,7 +28,8 @@ Kinds (``KINDS``):
     inside the clearance circle; cases overlaid.
 ``sweep``
     one summary metric (``analysis.case_summary``) over one sweep dimension
-    (lines) or two (heat maps); for an ensemble (a ``member`` dimension), the
+    (lines) or two (heat maps, their spread stated, a joint without data left out);
+    on a sampling sweep, against each sampled input (scatter); for an ensemble (a ``member`` dimension), the
     ensemble mean over one or two design dimensions with its 95 % confidence
     interval as error bars, one line per value of the second dimension.
 ``life``
@@ -75,6 +79,7 @@ from .common import (  # noqa: F401
     axis_label,
     coordinate_text,
     keep_relative_span,
+    plain_ticks,
     point_text,
     selection_text,
     wrapped_label,
@@ -92,6 +97,7 @@ from .sweep import (  # noqa: F401
     ROBUST_MIN_CELLS,
     ROBUST_PERCENTILES,
     _draw_sweep,
+    fit_cell_values,
     robust_limits,
 )
 from .wear import WEAR_POLAR_EXAGGERATION, _draw_wear_map, _draw_wear_polar, _life_wear_map  # noqa: F401
@@ -173,7 +179,10 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
     fig = Figure(figsize=spec.size_inches, layout="constrained")
     options = {"x": x, "metric": metric, "b10": b10}
     spec.draw(fig, ds, *(options[name] for name in spec.options))
-    _name_selection(fig, selection_text(ds, selection) or case_text(ds))
+    plain_ticks(fig)
+    _name_selection(fig, "; ".join(filter(None, [selection_text(ds, selection) or case_text(ds),
+                                                 start_text(ds), overrides_text(ds)])))
+    fit_cell_values(fig)
     return fig
 
 
@@ -200,6 +209,64 @@ def case_text(ds: xr.Dataset) -> str:
     except (yaml.YAMLError, AttributeError):
         return ""
     return f"case: {name}" if isinstance(name, str) and name else ""
+
+
+def _config(ds: xr.Dataset) -> dict:
+    """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable."""
+    for name in ("config", "sweep_config"):
+        try:
+            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
+        except yaml.YAMLError:
+            continue
+        if isinstance(doc, dict):
+            base = doc.get("base", doc) if name == "sweep_config" else doc
+            if isinstance(base, dict):
+                return base
+    return {}
+
+
+def start_text(ds: xr.Dataset) -> str:
+    """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``
+    of the config, or of a ``--set`` on the command line; a sweep's file keeps its config as
+    written), unless a sweep dimension varies it; "" for a file without a config (a life
+    run's snapshot)."""
+    if not {"config", "sweep_config"} & set(ds.attrs):
+        return ""
+    if any(str(d).endswith("initial_joints") for d in sweep_dims(ds)):
+        return ""
+    initial = _config(ds).get("initial")
+    start = initial.get("joints") if isinstance(initial, dict) else None
+    for override in _overrides(ds):
+        key, _, value = override.partition("=")
+        if key.strip() == "initial.joints":
+            start = value.strip()
+    return f"start: {start if isinstance(start, str) else 'seated'}"
+
+
+def _overrides(ds: xr.Dataset) -> list[str]:
+    """The ``--set`` overrides of the command line that made the file: the last ``clearsweep``
+    line of its ``history`` (:func:`clearsweep.dataset.command_line`)."""
+    import shlex
+
+    sets: list[str] = []
+    for line in str(ds.attrs.get("history", "")).splitlines():
+        _, _, command = line.partition(": ")
+        try:
+            words = shlex.split(command)
+        except ValueError:
+            continue
+        if words[:1] != ["clearsweep"]:
+            continue
+        sets = [b for a, b in zip(words, words[1:]) if a == "--set"]
+        sets += [w.split("=", 1)[1] for w in words if w.startswith("--set=")]
+    return sets
+
+
+def overrides_text(ds: xr.Dataset) -> str:
+    """``"--set joints.B.coating=PTFE"``: every ``--set`` override of the command line that
+    made the file; "" where none."""
+    sets = _overrides(ds)
+    return "--set " + ", ".join(sets) if sets else ""
 
 
 def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",

@@ -11,6 +11,7 @@ import xarray as xr
 from matplotlib import colormaps
 
 from ..analysis import iter_cases, label_text, sweep_dims, value_text
+from ..variables import display_unit
 
 #: Overlaid cases beyond this many take colours from a continuous colour map.
 MAX_CYCLE_COLOURS = 10
@@ -41,7 +42,6 @@ COLOURBAR_LABEL_CHARACTERS = 36
 
 _SINGLE_CASE_COLOUR = "tab:red"
 
-
 class PlotError(ValueError):
     """The dataset cannot give the figure asked for (missing variables, too many cases)."""
 
@@ -59,6 +59,73 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     name = text or obj.attrs.get("long_name") or str(obj.name)
     unit = obj.attrs.get("units", "") if units is None else units
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
+
+
+def display_scale(values, units: str) -> tuple[float, str]:
+    """(factor, unit text) to draw ``values`` given in ``units``: draw ``values / factor``.
+    The rule reports use too (``variables.display_unit``), with µm for um.
+
+    >>> display_scale([2.5e-4, 1e-4], "m")
+    (1e-06, '\u00b5m')
+    >>> display_scale([850.0], "N")
+    (1.0, 'N')
+    >>> display_scale([2.0], "m s-2")
+    (1.0, 'm s-2')
+    """
+    found = display_unit(np.asarray(values, dtype=float).ravel(), units)
+    if found is None:
+        return 1.0, units
+    factor, symbol = found
+    return factor, symbol.replace("um", "\u00b5m")
+
+
+def scaled(obj: xr.DataArray, values=None) -> tuple[float, str]:
+    """:func:`display_scale` of a variable from its ``units`` attribute and its values (or
+    ``values``, where another selection of it sets the scale)."""
+    return display_scale(obj.values if values is None else values, str(obj.attrs.get("units", "")))
+
+
+def plain_ticks(fig) -> None:
+    """No offset text and no "x 1e-9" multiplier on any linear axis or colour bar of ``fig``:
+    the values drawn are scaled to read directly (:func:`display_scale`)."""
+    from matplotlib.ticker import ScalarFormatter
+
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            formatter = axis.get_major_formatter()
+            if type(formatter) is ScalarFormatter:
+                formatter.set_useOffset(False)
+                formatter.set_scientific(False)
+
+
+def log_ticks(axis, low: float, high: float) -> None:
+    """Labels of a log axis that never run into each other: the decades only, or where the
+    view spans less than two decades, 1, 2 and 5 times them (and 3 times them within one
+    decade); unlabelled minor ticks."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter
+
+    first, last = int(np.floor(np.log10(low))), int(np.ceil(np.log10(high)))
+    subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0) if high / low > 10 else (1.0, 2.0, 3.0, 5.0)
+    ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
+             if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
+    axis.set_major_locator(FixedLocator(ticks))
+    axis.set_major_formatter(FuncFormatter(_power_text))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def _power_text(value: float, _position=None) -> str:
+    """``"$2\\times10^{5}$"``, ``"$10^{5}$"``: a log-axis tick label."""
+    exponent = int(np.floor(np.log10(value) + 1e-9))
+    mantissa = value / 10.0 ** exponent
+    power = f"10^{{{exponent}}}"
+    return f"${power}$" if round(mantissa) == 1 else f"${mantissa:.0f}\\times{power}$"
+
+
+def percent_text(fraction: float) -> str:
+    """``"1.9 %"``, ``"290 %"``: a fraction as a percentage of two significant digits, never
+    in exponent notation."""
+    value = 100.0 * fraction
+    return f"{value:.0f} %" if value >= 10 else f"{value:.2g} %"
 
 
 def wrapped_label(label: str, width: int = COLOURBAR_LABEL_CHARACTERS) -> str:
@@ -171,7 +238,7 @@ def keep_relative_span(ax, values) -> str:
         return ""
     centre, half = 0.5 * (low + high), 0.5 * MIN_RELATIVE_SPAN * scale
     ax.set_ylim(centre - half, centre + half)
-    return (f"varies by {float(np.ptp(data)) / scale:.2%} of its mean; "
+    return (f"varies by {percent_text(float(np.ptp(data)) / scale)} of its mean; "
             f"axis spans {MIN_RELATIVE_SPAN:.0%} of it")
 
 

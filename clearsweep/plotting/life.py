@@ -9,7 +9,16 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
-from .common import _edges, _note_span, _require, axis_label
+from .common import (
+    AXIS_LABEL_CHARACTERS,
+    _edges,
+    _note_span,
+    _require,
+    axis_label,
+    log_ticks,
+    scaled,
+    wrapped_label,
+)
 
 #: The life figure draws at most this many wear-map snapshots (the first, the last and
 #: evenly spread ones between); it says which stored snapshots it leaves out.
@@ -35,27 +44,39 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     for k, name in enumerate(panels):
         ax = fig.add_subplot(grid[k // 2, k % 2])
         var = ds[name]
+        if not np.isfinite(var.values.astype(float)).any():
+            # nothing to draw (no coating has no coating remaining): a note, not empty axes
+            ax.set_axis_off()
+            ax.text(0.5, 0.5, wrapped_label(f"{var.attrs.get('long_name', name)}: no data",
+                                            AXIS_LABEL_CHARACTERS),
+                    ha="center", va="center", transform=ax.transAxes, fontsize="small",
+                    color="0.4")
+            continue
+        factor, unit = scaled(var)
         if "joint" in var.dims:
             for joint in var["joint"].values:
-                values = var.sel(joint=joint).values
+                values = var.sel(joint=joint).values / factor
                 if np.isfinite(values).any():
                     ax.plot(cycles, values, marker=".", label=f"joint {value_text(joint)}")
         else:
-            ax.plot(cycles, var.values, marker=".")
+            ax.plot(cycles, var.values / factor, marker=".")
         limit = _life_limit(config, limits.get(name))
         if limit is not None:
-            ax.axhline(limit, color="r", linestyle="--", label=limits[name])
-        _note_span(ax, var.values)
+            ax.axhline(limit / factor, color="r", linestyle="--", label=limits[name])
+        _note_span(ax, var.values / factor)
         ax.set_xscale("log")
+        if cycles.size and np.nanmin(cycles) > 0:
+            log_ticks(ax.xaxis, float(np.nanmin(cycles)), float(np.nanmax(cycles)))
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name)))
+        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name), unit))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="x-small")
     snaps = ds["wear_map_snapshot"]
     joint = "B" if float(snaps.sel(joint="B").max()) >= float(snaps.sel(joint="A").max()) else "A"
     picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, LIFE_SNAPSHOT_PANELS)
                       .round().astype(int))
-    maps = snaps.sel(joint=joint)
+    factor, unit = scaled(snaps)
+    maps = snaps.sel(joint=joint) / factor
     peak = float(maps.max())
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
     polar = _edges(ds["polar"].values, 0.0, 180.0)
@@ -70,7 +91,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
         ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
     if mesh is not None:
-        fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth"))
+        fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth", unit))
     fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}\n"
                  + snapshot_note(ds["snapshot_cycle"].values, picks, joint))
 

@@ -8,7 +8,7 @@ from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 
 from ..analysis import configured_clearances, value_text
-from .common import _case_label, _cases, _legend_note, _require, axis_label
+from .common import _case_label, _cases, _legend_note, _require, axis_label, scaled
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
 _CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
@@ -40,8 +40,14 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     planes = (("x", "y"), ("x", "z"), ("y", "z"))
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
-    joints = offset["joint"].values
     configured = configured_clearances(ds)
+    # an ideal joint's ball stays in the centre: no panel of a point at the origin
+    joints = [j for j in offset["joint"].values
+              if np.nan_to_num(offset.sel(joint=j).values).any()] or list(offset["joint"].values)
+    empty = [value_text(j) for j in offset["joint"].values if j not in joints]
+    factor, unit = scaled(offset)
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 4.8)
     per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
     for joint in joints:
         found_here: dict[float, str] = {}
@@ -59,16 +65,17 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
-                ax.plot(d.sel(axis=a).values, d.sel(axis=b).values, lw=0.6, color=colour,
+                ax.plot(d.sel(axis=a).values / factor, d.sel(axis=b).values / factor, lw=0.6,
+                        color=colour,
                         label=_case_label(text, len(cases), "ball centre"))
             for radius, source in sorted(clearances.items()):
-                ax.plot(radius * np.cos(circle), radius * np.sin(circle), lw=0.9,
+                ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
-                        label=f"joint {value_text(joint)} clearance {radius:.3g} m ({source})")
+                        label=f"joint {value_text(joint)} clearance {radius / factor:.3g} {unit} "
+                              f"({source})")
             ax.set_aspect("equal", adjustable="datalim")
-            ax.set_xlabel(axis_label(offset, f"d_{a}"))
-            ax.set_ylabel(axis_label(offset, f"d_{b}"))
-            ax.ticklabel_format(style="sci", scilimits=(-3, 3))
+            ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
+            ax.set_ylabel(axis_label(offset, f"d_{b}", unit))
             ideal = "" if clearances else " (ideal joint)"
             ax.set_title(f"joint {value_text(joint)}{ideal}: {a}{b} plane", fontsize="small")
             ax.grid(alpha=0.3)
@@ -81,5 +88,6 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
         fig.legend(list(entries.values()), list(entries), loc="outside lower center",
                    ncol=min(len(entries), 2 if max(map(len, entries)) > 40 else 3),
                    fontsize="x-small")
-    fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)))
+    left_out = f"\nnot drawn: joint {', '.join(empty)}, ball at the centre (ideal joint)" if empty else ""
+    fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)) + left_out)
 

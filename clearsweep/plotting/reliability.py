@@ -5,10 +5,14 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from matplotlib import colormaps
+from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
-from .common import MAX_CYCLE_COLOURS, _require, axis_label
+from .common import MAX_CYCLE_COLOURS, _require, axis_label, log_ticks
+
+#: Hatching of the confidence bands, one per design in turn.
+BAND_HATCHES = ("//", "\\\\", "||", "--", "+", "x", ".", "o")
 
 
 def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
@@ -43,22 +47,32 @@ def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
                 continue
             n = ds["revolutions"].values
             ax.step(n, one["reliability"].values, where="post", color=colour, label=label)
+            # each band hatched and outlined in its design's colour: where bands overlap, the
+            # hatching tells them apart (a blend of two tints is a colour no legend shows)
             ax.fill_between(n, one["reliability_ci_low"].values, one["reliability_ci_high"].values,
-                            step="post", color=colour, alpha=0.2)
+                            step="post", facecolor=(*to_rgb(colour), 0.08), edgecolor=colour,
+                            hatch=BAND_HATCHES[i % len(BAND_HATCHES)], lw=0.6,
+                            label=f"{label}: {level:.0%} band")
         ax.set_title(f"limit: {limit}", fontsize="medium")
         if b10:
             ax.set_yscale("log")
+            low, high = ax.get_ylim()
+            if low > 0:
+                log_ticks(ax.yaxis, low, high)
             ax.set_xticks(range(len(labels)), labels, rotation=30, ha="right", fontsize="x-small")
             ax.set_ylabel(f"B10 [revolutions], bars: {level:.0%} interval")
         else:
             ax.set_xscale("log")
             ax.set_xlim(float(ds["revolutions"].min()), float(ds["revolutions"].max()))
+            log_ticks(ax.xaxis, *ax.get_xlim())
             ax.set_ylim(-0.02, 1.02)
             ax.axhline(0.9, color="0.5", lw=0.8, ls=":")
             ax.set_xlabel(axis_label(ds["revolutions"], "crank revolutions N"))
             ax.set_ylabel("reliability R(N) [-]")
             if k == 0:
-                ax.legend(fontsize="x-small")
+                handles, texts = ax.get_legend_handles_labels()
+                fig.legend(handles, texts, loc="outside lower center", fontsize="x-small",
+                           ncol=min(len(texts), 4))
         ax.grid(alpha=0.3)
     what = "B10 per design (triangle: beyond the revolutions reached)" if b10 else \
         f"Kaplan-Meier reliability per design, bands: {level:.0%} Greenwood"

@@ -8,18 +8,22 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from ..analysis import CASE_DIMS, MEMBER_DIM, iter_points, metric_table, sweep_dims, value_text
+from ..analysis import CASE_DIMS, MEMBER_DIM, SAMPLE_DIM, iter_points, metric_table, sweep_dims, value_text
 from ..choices import DEFAULT_SWEEP_METRIC
 from .common import (
     AXIS_LABEL_CHARACTERS,
     MAX_LEGEND_ENTRIES,
+    MIN_RELATIVE_SPAN,
+    NEGLIGIBLE_VARIATION,
     PlotError,
     _case_label,
     _dim_name,
     _legend_note,
     _note_span,
     axis_label,
+    percent_text,
     point_text,
+    scaled,
     wrapped_label,
 )
 
@@ -59,7 +63,10 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
         raise PlotError(f"--kind sweep draws an ensemble mean over one or two design dimensions; "
                         f"this dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the "
                         "others with --select DIM=VALUE")
-    low, high = ds[metric + "_ci_low"], ds[metric + "_ci_high"]
+    factor, unit = scaled(mean)
+    mean = mean / factor
+    mean.attrs = {**ds[metric + "_mean"].attrs, "units": unit}
+    low, high = ds[metric + "_ci_low"] / factor, ds[metric + "_ci_high"] / factor
     ax = fig.add_subplot()
     xs, ticks = _category_positions(mean[dims[0]])
     series = tuple(str(d) for d in mean.dims if d != dims[0])
@@ -94,6 +101,39 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
                  f"{left_out}")
 
 
+def _draw_sample_scatter(fig: Figure, values: xr.DataArray, panels: list, factor: float,
+                         label: str, title: str) -> None:
+    """A sampling sweep: the metric against each sampled input (a coordinate along
+    ``sample``), one scatter panel per input, a colour per joint or axis; never a line over
+    the point number."""
+    inputs = [str(name) for name, coord in values.coords.items()
+              if coord.dims == (SAMPLE_DIM,) and name != SAMPLE_DIM and coord.dtype.kind in "fiu"]
+    if not inputs:
+        raise PlotError("--kind sweep on a sampling sweep draws the metric against its sampled "
+                        "inputs, and this dataset has none: use clearsweep sensitivity for its "
+                        "Sobol' indices")
+    # a joint without the metric (an ideal joint's wear) gets no points and no legend entry
+    panels = [(text, panel) for text, panel in panels
+              if np.nan_to_num(panel.values.astype(float)).any()] or panels
+    ncols = min(2, len(inputs))
+    nrows = -(-len(inputs) // ncols)
+    fig.set_size_inches(max(4.2 * ncols, MIN_FIGURE_WIDTH_INCHES), 3.2 * nrows + 1.0)
+    for k, name in enumerate(inputs):
+        ax = fig.add_subplot(nrows, ncols, k + 1)
+        coord = values[name]
+        x_factor, x_unit = scaled(coord)
+        for text, panel in panels:
+            ax.scatter(coord.values / x_factor, panel.transpose(SAMPLE_DIM).values / factor, s=6,
+                       alpha=0.6, label=_case_label(text, len(panels), "sample point"))
+        ax.set_xlabel(axis_label(coord, name, x_unit))
+        ax.set_ylabel(wrapped_label(label, AXIS_LABEL_CHARACTERS) if k % ncols == 0 else "")
+        ax.grid(alpha=0.3)
+        if k == 0 and 1 < len(panels) <= MAX_LEGEND_ENTRIES:
+            ax.legend(fontsize="x-small", markerscale=2)
+    fig.suptitle(f"{title}\nagainst each sampled input, {values.sizes[SAMPLE_DIM]} sample points "
+                 "(Sobol' indices: clearsweep sensitivity)")
+
+
 def _left_out_text(obj: xr.DataArray, empty: list[dict], drawn: list[dict]) -> str:
     """What the lines left out have in common ("joint A"), or their count."""
     common = {d: v for d, v in empty[0].items()
@@ -117,14 +157,18 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
                         f"dataset has {len(dims)} ({', '.join(dims) or 'none'}): fix the others "
                         "with --select DIM=VALUE")
     panels = [(point_text(values, keys), panel) for keys, panel in iter_points(values, inner)]
-    label = axis_label(values)
+    factor, unit = scaled(values)
+    label = axis_label(values, units=unit)
     title = values.attrs.get("long_name", metric)
+    if dims == (SAMPLE_DIM,):
+        _draw_sample_scatter(fig, values, panels, factor, label, title)
+        return
     if len(dims) == 1:
         ax = fig.add_subplot()
         xs, ticks = _category_positions(values[dims[0]])
         for text, panel in panels:
             # categories are not ordered: points, not lines between them
-            ax.plot(xs, panel.transpose(dims[0]).values, marker="o",
+            ax.plot(xs, panel.transpose(dims[0]).values / factor, marker="o",
                     linestyle="none" if ticks is not None else "-",
                     label=_case_label(text, len(panels), metric))
         if ticks is not None:
@@ -132,46 +176,59 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         ax.set_xlabel(axis_label(values[dims[0]]))
         ax.set_ylabel(wrapped_label(label, AXIS_LABEL_CHARACTERS))
         ax.grid(alpha=0.3)
-        _note_span(ax, values.values)
+        _note_span(ax, values.values / factor)
         if inner and len(panels) <= MAX_LEGEND_ENTRIES:
             ax.legend(fontsize="x-small")
         fig.suptitle(f"{title} over {_dim_name(values, dims[0])}"
                      + (_legend_note(len(panels)) if inner else ""))
         return
     failed = _failed_cells(ds, values, dims)
-    ncols = min(3, len(panels))
-    nrows = -(-len(panels) // ncols)
+    factor, unit = scaled(values)
+    label = axis_label(values, units=unit)
+    drawn = [(text, panel) for text, panel in panels
+             if np.nan_to_num(panel.values.astype(float)).any()]
+    empty = [text for text, panel in panels if not np.nan_to_num(panel.values.astype(float)).any()]
+    if not drawn:
+        raise PlotError(f"metric {metric!r} is 0 or missing in every case: nothing to draw")
+    ncols = min(3, len(drawn))
+    nrows = -(-len(drawn) // ncols)
     fig.set_size_inches(max(HEATMAP_PANEL_INCHES[0] * ncols, MIN_FIGURE_WIDTH_INCHES),
                         HEATMAP_PANEL_INCHES[1] * nrows + 0.6)
-    for i, (text, panel) in enumerate(panels):
+    for i, (text, panel) in enumerate(drawn):
         ax = fig.add_subplot(nrows, ncols, i + 1)
-        grid = panel.transpose(*dims).values.astype(float)
+        grid = panel.transpose(*dims).values.astype(float) / factor
         limits = robust_limits(grid)
         vmin, vmax = limits if limits else (None, None)
+        spread = _spread_note(grid)
+        if limits is None and spread[1] is not None:
+            vmin, vmax = spread[1]
         image = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=vmin,
                           vmax=vmax)
-        for axis_dim, set_ticks in zip(dims, (ax.set_yticks, ax.set_xticks)):
-            coord = values[axis_dim]
-            set_ticks(np.arange(coord.size), [value_text(v) for v in coord.values])
+        rows, row_label = _cell_ticks(values[dims[0]])
+        columns, column_label = _cell_ticks(values[dims[1]])
+        ax.set_yticks(np.arange(len(rows)), rows)
+        ax.set_xticks(np.arange(len(columns)), columns)
+        ax.set_ylabel(row_label)
+        ax.set_xlabel(column_label)
         ax.tick_params(axis="x", labelrotation=30)
-        ax.set_ylabel(axis_label(values[dims[0]]))
-        ax.set_xlabel(axis_label(values[dims[1]]))
         if grid.size <= MAX_ANNOTATED_CELLS:
+            digits = _cell_digits(grid)
             for (r, c), v in np.ndenumerate(grid):
-                if failed is not None and failed[r, c]:
+                if (failed is not None and failed[r, c]) or not np.isfinite(v):
                     continue
                 bright = float(image.norm(v)) > ANNOTATION_DARK_TEXT_ABOVE  # type: ignore[arg-type]  # a scalar in, a scalar out
-                ax.text(c, r, format(v, ".3g"), ha="center", va="center", fontsize="x-small",
-                        color="black" if bright else "white")
+                ax.text(c, r, format(v, f".{digits}g"), ha="center", va="center",
+                        fontsize="x-small", color="black" if bright else "white",
+                        gid=CELL_VALUE_GID)
         if failed is not None:
             for r, c in zip(*np.nonzero(failed)):
                 ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1.0, 1.0, fill=False, hatch="xx",
                                        edgecolor="0.4", lw=0.0))
-                ax.text(c, r, "failed", ha="center", va="center", fontsize="x-small", color="0.2")
-        if text:
-            ax.set_title(text, fontsize="small")
+                ax.text(c, r, "failed", ha="center", va="center", fontsize="x-small", color="0.2",
+                        gid=CELL_VALUE_GID)
+        ax.set_title("\n".join(filter(None, [text, spread[0]])), fontsize="small")
         if limits is None:
-            fig.colorbar(image, ax=ax).set_label(wrapped_label(label))
+            fig.colorbar(image, ax=ax).set_label(wrapped_label(label, COLOURBAR_CHARACTERS))
             continue
         below, above = grid < limits[0], grid > limits[1]
         for r, c in zip(*np.nonzero(below | above)):
@@ -182,14 +239,86 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         stops = " and ".join(f"{q:g}th" for q, side in zip(ROBUST_PERCENTILES, (below, above))
                              if side.any())
         fig.colorbar(image, ax=ax, extend=extend).set_label(
-            f"{wrapped_label(label)}\nscale stops at the {stops} percentile;\n"
-            f"red outline: {int((below | above).sum())} outlying cell(s)")
+            f"{wrapped_label(label, COLOURBAR_CHARACTERS)}\nscale stops at the {stops} "
+            f"percentile;\nred outline: {int((below | above).sum())} outlying cell(s)")
     note = ""
     if failed is not None and failed.any():
         note = (f"\nhatched: {int(failed.sum())} case(s) that failed, no value (see the status "
                 "and message variables)")
+    if empty:
+        note += f"\nnot drawn: {', '.join(t or metric for t in empty)}, all 0 or missing"
     fig.suptitle(f"{title}\nover {_dim_name(values, dims[0])} and {_dim_name(values, dims[1])}"
                  f"{note}")
+
+
+#: A heat-map axis labels at most this many of its cells (every k-th where it has more).
+MAX_CELL_TICK_LABELS = 8
+
+
+def _cell_ticks(coord: xr.DataArray) -> tuple[list[str], str]:
+    """Tick labels of a heat-map axis over ``coord``, numbers in display units (250, not
+    0.00025), every k-th left blank where there are more than :data:`MAX_CELL_TICK_LABELS`;
+    and the axis label with those units."""
+    factor, unit = scaled(coord) if coord.dtype.kind in "fiu" else (1.0, None)
+    texts = ([format(float(v) / factor, ".4g") for v in coord.values] if factor != 1.0
+             else [value_text(v) for v in coord.values])
+    step = -(-len(texts) // MAX_CELL_TICK_LABELS)
+    return ([t if k % step == 0 else "" for k, t in enumerate(texts)],
+            axis_label(coord, units=unit))
+
+
+def _spread_note(grid: np.ndarray) -> tuple[str, tuple[float, float] | None]:
+    """How much a heat map's values vary ("varies by 1.9 % of its mean"), and the colour
+    limits that keep a spread below :data:`NEGLIGIBLE_VARIATION` of the mean from filling
+    the colour scale (:data:`MIN_RELATIVE_SPAN` of the mean, centred on the values), or None.
+    """
+    values = grid[np.isfinite(grid)]
+    scale = abs(float(values.mean())) if values.size else 0.0
+    if values.size < 2 or not scale > 0:
+        return "", None
+    spread = float(np.ptp(values)) / scale
+    note = f"varies by {percent_text(spread)} of its mean"
+    if spread >= NEGLIGIBLE_VARIATION:
+        return note, None
+    centre, half = 0.5 * (values.min() + values.max()), 0.5 * MIN_RELATIVE_SPAN * scale
+    return f"{note}; colours span {MIN_RELATIVE_SPAN:.0%} of it", (centre - half, centre + half)
+
+
+def _cell_digits(grid: np.ndarray) -> int:
+    """Significant digits of heat-map cell values: 3, or more where two different values
+    would print alike (at most 6)."""
+    values = np.unique(grid[np.isfinite(grid)])
+    for digits in range(3, 7):
+        if len({format(v, f".{digits}g") for v in values}) == values.size:
+            return digits
+    return 6
+
+
+#: ``gid`` of the value texts of heat-map cells: :func:`fit_cell_values` removes those that do
+#: not fit their cell.
+CELL_VALUE_GID = "heat-map cell value"
+
+#: Colour-bar labels of heat maps are wrapped to lines of at most this many characters.
+COLOURBAR_CHARACTERS = 28
+
+
+def fit_cell_values(fig: Figure) -> None:
+    """Remove the heat-map cell values (:data:`CELL_VALUE_GID`) wider or taller than their
+    cell, so that no value runs over its neighbour or the cell border; the colour says it."""
+    texts = [(ax, t) for ax in fig.axes for t in ax.texts if t.get_gid() == CELL_VALUE_GID]
+    if not texts:
+        return
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = fig.canvas if hasattr(fig.canvas, "get_renderer") else FigureCanvasAgg(fig)
+    fig.draw_without_rendering()
+    renderer = canvas.get_renderer()
+    for ax, text in texts:
+        x, y = text.get_position()
+        (x0, y0), (x1, y1) = ax.transData.transform([(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)])
+        box = text.get_window_extent(renderer)
+        if box.width > 0.92 * abs(x1 - x0) or box.height > 0.92 * abs(y1 - y0):
+            text.remove()
 
 
 def robust_limits(grid: np.ndarray) -> tuple[float, float] | None:

@@ -22,6 +22,8 @@ from .common import (
     _one_case,
     _require,
     axis_label,
+    display_scale,
+    scaled,
 )
 
 #: On ``wear-polar`` the largest depth of a joint is drawn as this fraction of the unit radius.
@@ -64,9 +66,15 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     grid_p, grid_a = np.meshgrid(polar, azimuth, indexing="ij")
     sphere = (np.sin(grid_p) * np.cos(grid_a), np.sin(grid_p) * np.sin(grid_a), np.cos(grid_p))
     cmap = colormaps["viridis"]
-    joints = wear["joint"].values
+    # a joint without wear (an ideal joint) gets no panel: its map would be one flat colour
+    joints = [j for j in wear["joint"].values if np.nan_to_num(wear.sel(joint=j).values).any()]
+    empty = [value_text(j) for j in wear["joint"].values if j not in joints]
+    factor, unit = scaled(wear)
+    label = axis_label(wear, "wear depth", unit)
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 5.0)
     for j, joint in enumerate(joints):
-        depth = wear.sel(joint=joint)
+        depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
         ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
@@ -75,8 +83,9 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_ylim(180.0, 0.0)
         ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"))
         ax.set_ylabel(axis_label(ds["polar"], "polar angle from +z"))
-        ax.set_title(f"joint {value_text(joint)}: socket wear map (max {peak:.3g} m)", fontsize="small")
-        fig.colorbar(mesh, ax=ax).set_label(axis_label(wear, "wear depth"))
+        ax.set_title(f"joint {value_text(joint)}: socket wear map (max {peak:.3g} {unit})",
+                     fontsize="small")
+        fig.colorbar(mesh, ax=ax).set_label(label)
         ax3 = fig.add_subplot(len(joints), 2, 2 * j + 2, projection="3d")
         ax3.plot_surface(*sphere, facecolors=cmap(norm(depth.values)), rstride=1, cstride=1,
                          shade=False, linewidth=0, antialiased=False)
@@ -94,10 +103,10 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
             set_label(f"{name} [{DIMENSIONLESS}]", labelpad=-12)
         ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small",
                       pad=12)
-        fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(
-            axis_label(wear, "wear depth"))
+        fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(label)
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
-    fig.suptitle("Socket wear depth" + (f", snapshot {snapshot}" if snapshot else ""))
+    left_out = f"\nnot drawn: joint {', '.join(empty)}, no wear" if empty else ""
+    fig.suptitle("Socket wear depth" + (f", snapshot {snapshot}" if snapshot else "") + left_out)
 
 
 def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
@@ -106,13 +115,19 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     theta = np.radians(projection["angle"].values)
     closed = np.append(theta, theta[0])
     cases = _cases(ds)
-    joints, axes_names = projection["joint"].values, projection["axis"].values
-    scales = []
+    axes_names = projection["axis"].values
+    # a joint without wear (an ideal joint) gets no row of unworn circles: the title says so
+    joints = [j for j in projection["joint"].values
+              if np.nan_to_num(projection.sel(joint=j).values).any()] or list(projection["joint"].values)
+    scales = [f"joint {value_text(j)}: no wear" for j in projection["joint"].values if j not in joints]
+    if len(joints) == 1:        # one row of panels: no empty band where the other was
+        fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):
         peak = float(projection.sel(joint=joint).max())
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
+        factor, unit = display_scale([peak], "m")
         # a no-break space keeps the value and its unit on one line of the wrapped title
-        scales.append(f"joint {value_text(joint)}: {peak:.3g}\u00a0m" if scale else
+        scales.append(f"joint {value_text(joint)}: {peak / factor:.3g}\u00a0{unit}" if scale else
                       f"joint {value_text(joint)}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,

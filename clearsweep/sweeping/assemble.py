@@ -32,7 +32,6 @@ from .parts import (
     DamagedPart,
     PartStore,
     StoreError,
-    _now,
 )
 
 
@@ -423,6 +422,3 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     return counts
 
 
-def history_line(text: str) -> str:
-    """A CF ``history`` line: UTC time stamp and ``text``."""
-    return f"{_now()}: {text}"

@@ -23,9 +23,15 @@ import netCDF4
 import xarray as xr
 
 from ..config import ConfigError
-from ..dataset import open_results, remove_stale_temporaries, versions
+from ..dataset import (
+    history_line,
+    open_results,
+    remove_stale_temporaries,
+    versions,
+    with_command_line,
+)
 from ..params import run_identity
-from .assemble import history_line, write_sweep_netcdf
+from .assemble import write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .guard import require_main_guard
 from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
@@ -181,7 +187,8 @@ def _attrs(plan: SweepPlan) -> dict[str, Any]:
         "title": "clearsweep RSSP mechanism parameter sweep",
         "Conventions": "CF-1.8",
         "source": "clearsweep",
-        "history": history_line(f"clearsweep sweep {plan.name!r} from {plan.source}"),
+        "history": with_command_line(
+            history_line(f"clearsweep sweep {plan.name!r} from {plan.source}")),
         "sweep_name": plan.name,
         "sweep_store": plan.store,
         "sweep_dims": " ".join(plan.dims),
