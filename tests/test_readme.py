@@ -32,13 +32,14 @@ def commands_under(heading: str, text: str = README) -> list[list[str]]:
 
 
 def run(args: list[str], cwd: Path, in_process: bool = False) -> subprocess.CompletedProcess:
-    """The command line ``args`` run in ``cwd``, shortened; as a process of its own, or with
-    ``in_process`` through the same entry point in this process (the commands of a page
-    share one interpreter start: the reproduction page has 18)."""
+    """The command line ``args`` run in ``cwd``, shortened (0.02 s of motion, settled from
+    0.01 s, so that the settled statistics the figures draw exist); as a process of its
+    own, or with ``in_process`` through the same entry point in this process (the commands
+    of a page share one interpreter start: the reproduction page has 18)."""
     args = [str(ROOT / a) if a.startswith("configs/") else a for a in args]
+    short = ["--set", "solver.duration=0.02", "--set", "metrics.settle_time=0.01"]
     if args[0] in ("sweep", "run"):
-        args += ["--set", "solver.duration=0.02", "--workers", "1"] if args[0] == "sweep" else \
-            ["--set", "solver.duration=0.02"]
+        args += short + ["--workers", "1"] if args[0] == "sweep" else short
     if not in_process:
         return subprocess.run(CLI + args, cwd=cwd, capture_output=True, text=True, timeout=600)
     from click.testing import CliRunner
