@@ -278,3 +278,25 @@ def test_sweep_coordinates_round_trip(tmp_path_factory, labels, numbers):
             assert ds["m"].values.tolist() == labels
             assert ds["v"].values.tolist() == numbers
             assert ds.sel(m=labels[-1], v=numbers[0])["status"].item() == "ok"
+
+
+@pytest.mark.parametrize("store", ["full", "summary"])
+def test_a_cases_part_is_its_dataset_and_summaries_whatever_their_coordinates(store):
+    """The worker's part (bare variables assigned, not DataArrays aligned): the time series
+    (full store), every summary with its attributes, an empty message; a summary with a
+    coordinate of its own keeps it."""
+    from clearsweep.sweeping.worker import _part as case_part
+
+    ds = _part().assign(status=((), "ok"))
+
+    def summarize(d):
+        return xr.Dataset({"x_peak": ("joint", d["x"].max("time").values, {"units": "m"}),
+                           "y_peak": ("band", [1.0, 2.0])},
+                          coords={"joint": d["joint"], "band": ("band", ["lo", "hi"])})
+
+    for summary in (summarize, lambda d: summarize(d).drop_vars(["y_peak", "band"])):
+        got = case_part(ds, store, summary)
+        expected = (ds if store == "full" else summary(ds)).assign(
+            {**summary(ds).data_vars, "message": ((), "", P.MESSAGE_ATTRS)})
+        xr.testing.assert_identical(got, expected)
+        assert list(got.variables) == list(expected.variables)
