@@ -246,7 +246,9 @@ class _Dask:
         self.client, self.own, self.guard = client, own, guard
         threads = sum(client.nthreads().values()) or 1
         self.window = IN_FLIGHT_PER_WORKER * threads
-        self.parts_dir = str(parts_dir) if parts_dir is not None and _local_cluster(client) else None
+        # absolute: a worker's working folder is the one the cluster started in
+        self.parts_dir = (os.path.abspath(parts_dir) if parts_dir is not None
+                          and _local_cluster(client) else None)
         self.label = f"dask({client.scheduler.address}, {threads} threads)"
 
     def submit(self, h: str, task: CaseTask):
