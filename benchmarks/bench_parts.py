@@ -16,6 +16,8 @@ compression, h5netcdf with gzip level 1 and shuffle, and h5netcdf without compre
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import sys
 import tempfile
 import time
@@ -30,10 +32,18 @@ def _chunked(ds, compression: dict) -> dict:
             if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
 
 
-#: name -> (engine, encoding of a dataset)
+def _parts_encoding(ds) -> dict:
+    from clearsweep.sweeping.parts import _encoding
+
+    return _encoding(ds)
+
+
+#: name -> (engine, encoding of a dataset); engine "npz": numpy.savez + JSON attributes
 FORMATS = {
     "netcdf4, zlib 1 + shuffle": ("netcdf4", lambda ds: _chunked(
         ds, {"zlib": True, "complevel": 1, "shuffle": True})),
+    "netcdf4, zlib 1 + shuffle, small arrays contiguous": ("netcdf4", _parts_encoding),
+    "npz + JSON attributes": ("npz", lambda ds: {}),
     "netcdf4, uncompressed": ("netcdf4", lambda ds: {}),
     "h5netcdf, gzip 1 + shuffle": ("h5netcdf", lambda ds: _chunked(
         ds, {"compression": "gzip", "compression_opts": 1, "shuffle": True})),
@@ -46,14 +56,44 @@ def parts() -> dict:
     import yaml
 
     from clearsweep.sweeping import expand
-    from clearsweep.sweeping.worker import _run_case
+    from clearsweep.sweeping.worker import CaseTask, _run_case
 
     doc = yaml.safe_load((ROOT / "configs" / "coating_clearance.yaml").read_text())
     doc["base"] = str(ROOT / "configs" / doc["base"]) if isinstance(doc.get("base"), str) \
         else doc.get("base")
     plan = expand(doc, [], max_cases=None)
     cfg = next(c.config for c in plan.cases if c.config is not None)
-    return {store: _run_case((cfg, store, None, None)) for store in ("summary", "full")}
+    return {store: _run_case(CaseTask(cfg, store)) for store in ("summary", "full")}
+
+
+def _write_npz(part, path: Path) -> None:
+    """The values as one .npz (strings as unicode arrays) and the attributes as JSON, each
+    written to a temporary file and renamed."""
+    import numpy as np
+
+    values = {name: np.asarray(var.values, dtype=str) if var.dtype.kind == "O" else var.values
+              for name, var in part.variables.items()}
+    meta = {"attrs": {k: str(v) for k, v in part.attrs.items()},
+            "variables": {name: {"dims": list(var.dims), "attrs": {k: str(v) for k, v in
+                                                                   var.attrs.items()}}
+                          for name, var in part.variables.items()}}
+    tmp = path.with_name(f".{path.name}.tmp")
+    with open(tmp, "wb") as f:
+        np.savez(f, **values)
+    os.replace(tmp, path)
+    json_path = path.with_suffix(".json")
+    json_path.with_name(f".{json_path.name}.tmp").write_text(json.dumps(meta))
+    os.replace(json_path.with_name(f".{json_path.name}.tmp"), json_path)
+
+
+def _read_npz(path: Path):
+    import numpy as np
+    import xarray as xr
+
+    meta = json.loads(path.with_suffix(".json").read_text())
+    with np.load(path, allow_pickle=False) as z:
+        return xr.Dataset({name: (v["dims"], z[name], v["attrs"])
+                           for name, v in meta["variables"].items()}, attrs=meta["attrs"])
 
 
 def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tuple[float, float, int]:
@@ -63,15 +103,23 @@ def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tupl
     paths = [folder / f"{k}.nc" for k in range(n)]
     start = time.perf_counter()
     for path in paths:
-        write_netcdf_atomic(part, path, encoding=encoding, engine=engine)
+        if engine == "npz":
+            _write_npz(part, path)
+        else:
+            write_netcdf_atomic(part, path, encoding=encoding, engine=engine)
     written = time.perf_counter()
     for path in paths:
+        if engine == "npz":
+            _read_npz(path)
+            continue
         with open_results(path, engine=engine) as ds:
             ds.load()
     read = time.perf_counter()
-    size = paths[0].stat().st_size
+    size = paths[0].stat().st_size + (paths[0].with_suffix(".json").stat().st_size
+                                      if engine == "npz" else 0)
     for path in paths:
         path.unlink()
+        path.with_suffix(".json").unlink(missing_ok=True)
     return (written - start) / n, (read - written) / n, size
 
 

@@ -165,6 +165,7 @@ def test_assembly_layout_fill_and_outer_join(tmp_path, parts):
 
 def test_chunk_copy_equals_decoded_copy(tmp_path, parts, monkeypatch):
     """Whole-case arrays copied as compressed bytes read back as the values written."""
+    monkeypatch.setattr(P, "SMALL_ARRAY_BYTES", 0)     # these tiny arrays as one chunk each
     parts.write("a", _part(offset=1.0))
     parts.write("b", _part(offset=2.0))
     slots, dims = [A.SweepSlot("a"), A.SweepSlot("b")], {"k": 2}
@@ -182,6 +183,43 @@ def test_chunk_copy_equals_decoded_copy(tmp_path, parts, monkeypatch):
     with open_results(fast) as a, open_results(slow) as b:
         xr.testing.assert_identical(a.load(), b.load())
         np.testing.assert_array_equal(a["x"].isel(k=1).values, parts.read("b")["x"].values)
+
+
+def test_small_arrays_are_contiguous_in_parts_and_chunked_in_the_sweep(tmp_path, parts):
+    """A part stores arrays under SMALL_ARRAY_BYTES as they are (an HDF5 chunk and its filters
+    cost more than their values); the sweep file compresses them one case per chunk all the same."""
+    parts.write("a", _part(n_time=P.SMALL_ARRAY_BYTES // 16 + 1))
+    with netCDF4.Dataset(parts.path("a")) as nc:
+        assert nc["peak"].chunking() == "contiguous" and not nc["peak"].filters()["zlib"]
+        assert nc["x"].chunking() == list(nc["x"].shape) and nc["x"].filters()["zlib"]
+    out, _ = _assemble(tmp_path, parts, [A.SweepSlot("a")], {"k": 1},
+                       {"k": ("k", np.array([0]), {})})
+    with netCDF4.Dataset(out) as nc:
+        assert nc["peak"].chunking() == [1, 2] and nc["peak"].filters()["zlib"]
+        assert nc["peak"].filters()["shuffle"]
+
+
+def test_assembly_opens_each_part_once_and_the_same_without_the_scan_cache(tmp_path, parts,
+                                                                           monkeypatch):
+    """The scan keeps what the copy pass needs of each part (was: every part opened twice by
+    netCDF4); past SCAN_CACHE_BYTES parts are opened again, and the file is the same."""
+    for k, offset in enumerate((1.0, 2.0, 3.0)):
+        parts.write(f"p{k}", _part(offset=offset, n_time=4 + k))
+    slots, dims = [A.SweepSlot(f"p{k}") for k in range(3)], {"k": 3}
+    coords = {"k": ("k", np.array([0, 1, 2]), {})}
+    opened = []
+    real = A._open_part
+    monkeypatch.setattr(A, "_open_part", lambda path: (opened.append(path), real(path))[1])
+    cached, _ = _assemble(tmp_path, parts, slots, dims, coords)
+    assert sorted(opened) == sorted(parts.path(f"p{k}") for k in range(3))
+    opened.clear()
+    monkeypatch.setattr(A, "SCAN_CACHE_BYTES", 0)
+    reopened = tmp_path / "reopened.nc"
+    A.write_sweep_netcdf(reopened, sweep_dims=dims, sweep_coords=coords, slots=slots, store=parts,
+                         attrs={"title": "t"})
+    assert len(opened) == 6
+    with open_results(cached) as a, open_results(reopened) as b:
+        xr.testing.assert_identical(a.load(), b.load())
 
 
 def test_assembly_refuses_missing_part(tmp_path, parts):
@@ -240,3 +278,25 @@ def test_sweep_coordinates_round_trip(tmp_path_factory, labels, numbers):
             assert ds["m"].values.tolist() == labels
             assert ds["v"].values.tolist() == numbers
             assert ds.sel(m=labels[-1], v=numbers[0])["status"].item() == "ok"
+
+
+@pytest.mark.parametrize("store", ["full", "summary"])
+def test_a_cases_part_is_its_dataset_and_summaries_whatever_their_coordinates(store):
+    """The worker's part (bare variables assigned, not DataArrays aligned): the time series
+    (full store), every summary with its attributes, an empty message; a summary with a
+    coordinate of its own keeps it."""
+    from clearsweep.sweeping.worker import _part as case_part
+
+    ds = _part().assign(status=((), "ok"))
+
+    def summarize(d):
+        return xr.Dataset({"x_peak": ("joint", d["x"].max("time").values, {"units": "m"}),
+                           "y_peak": ("band", [1.0, 2.0])},
+                          coords={"joint": d["joint"], "band": ("band", ["lo", "hi"])})
+
+    for summary in (summarize, lambda d: summarize(d).drop_vars(["y_peak", "band"])):
+        got = case_part(ds, store, summary)
+        expected = (ds if store == "full" else summary(ds)).assign(
+            {**summary(ds).data_vars, "message": ((), "", P.MESSAGE_ATTRS)})
+        xr.testing.assert_identical(got, expected)
+        assert list(got.variables) == list(expected.variables)

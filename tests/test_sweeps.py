@@ -194,6 +194,28 @@ def test_serial_processes_and_dask_give_identical_results(tmp_path, process_pool
     assert not parts_dir_for(tmp_path / "pool.nc").exists()
 
 
+@pytest.mark.slow
+def test_local_dask_workers_write_their_parts(tmp_path, dask_cluster, monkeypatch):
+    """Workers of a LocalCluster share this file system: they write their parts, as pool
+    workers do (was: every case sent back and compressed by the driver, one at a time); a
+    client by address leaves the writing to the driver, which cannot know where they run."""
+    from distributed import Client
+
+    cfg = write_sweep(tmp_path, SMALL)
+    written = []
+    real = PartStore.write
+    monkeypatch.setattr(PartStore, "write",
+                        lambda self, h, part: (written.append(h), real(self, h, part))[1])
+    with Client(dask_cluster) as client:
+        local = run_sweep(cfg, tmp_path / "local.nc", client=client, progress=False)
+    assert written == []
+    by_address = run_sweep(cfg, tmp_path / "address.nc", client=dask_cluster.scheduler_address,
+                           progress=False)
+    with local, by_address:
+        assert len(written) == local.attrs["sweep_cases"] == 4
+        xr.testing.assert_identical(drop_timing(local.load()), drop_timing(by_address.load()))
+
+
 def test_results_open_with_both_engines_and_select_by_material(tmp_path):
     out = tmp_path / "r.nc"
     run_sweep(write_sweep(tmp_path, SMALL), out, workers=1, progress=False).close()

@@ -11,6 +11,7 @@ case and the coordinates, never the sweep.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from collections.abc import Callable, Mapping, Sequence
@@ -55,6 +56,63 @@ class _VarInfo:
     is_coord: bool
 
 
+#: Bytes of part values the scan keeps for the copy pass, in all: parts beyond it are
+#: opened a second time, so that memory stays bounded whatever the sweep's size.
+SCAN_CACHE_BYTES = 64 << 20
+
+
+class _VariableCopy:
+    """What the copy pass reads of a part's variable (:func:`_copy_case`), taken by the scan
+    while the part is open: its layout and, unless its chunk is copied as bytes, its values."""
+
+    def __init__(self, var, values: np.ndarray | None):
+        self.dimensions, self.shape, self.dtype = var.dimensions, var.shape, var.dtype
+        self._endian, self._chunking, self._filters = var.endian(), var.chunking(), var.filters()
+        self._values = values
+
+    def endian(self) -> str:
+        return self._endian
+
+    def chunking(self):
+        return self._chunking
+
+    def filters(self):
+        return self._filters
+
+    def __getitem__(self, key) -> np.ndarray:
+        if self._values is None:
+            raise _NeedsFile
+        return self._values
+
+
+class _NeedsFile(Exception):
+    """A variable's values were not kept by the scan: the copy pass opens the part."""
+
+
+class _PartCopy:
+    """A part as :func:`_copy_case` reads it, from the scan (the part is not opened again)."""
+
+    def __init__(self, nc):
+        # the values of everything but whole-case chunks, and of the case coordinates
+        self.dimensions = dict.fromkeys(nc.dimensions)
+        self.variables = {name: _VariableCopy(var, _values(var) if name in nc.dimensions
+                                              or not _whole_chunk(var) else None)
+                          for name, var in nc.variables.items()}
+
+    def __getitem__(self, name: str) -> _VariableCopy:
+        return self.variables[name]
+
+    @property
+    def nbytes(self) -> int:
+        return sum(v._values.nbytes for v in self.variables.values() if v._values is not None)
+
+
+def _whole_chunk(var) -> bool:
+    """Whether a part's variable is one compressed chunk (copied as bytes if the sweep file's
+    layout matches, :func:`_chunk_copyable`)."""
+    return bool(var.shape) and var.dtype is not str and var.chunking() == list(var.shape)
+
+
 @dataclass
 class _Template:
     """What the parts hold: variables in first-seen order and each case dimension's coordinate."""
@@ -64,6 +122,9 @@ class _Template:
     dim_attrs: dict[str, dict] = field(default_factory=dict)
     dim_sizes: dict[str, int] = field(default_factory=dict)
     statuses: dict[str, str] = field(default_factory=dict)
+    #: Part key -> what the copy pass needs of it, read by the scan (:class:`_PartCopy`);
+    #: a part missing here is opened again.
+    copies: dict[str, _PartCopy] = field(default_factory=dict)
 
 
 # Parts are read through netCDF4 without xarray: the writer needs the raw arrays (and the
@@ -125,8 +186,11 @@ def _union(old: np.ndarray | None, new: np.ndarray) -> np.ndarray:
 
 
 def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
-    """First pass: variables, dtypes, attributes and case coordinates of every part (no data)."""
+    """First pass: variables, dtypes, attributes and case coordinates of every part, and
+    what the copy pass needs of each (:class:`_PartCopy`: all but the whole-case chunks),
+    within :data:`SCAN_CACHE_BYTES`."""
     tpl = _Template()
+    budget = SCAN_CACHE_BYTES
     for h in dict.fromkeys(s.hash for s in slots if s.hash is not None):
         if not store.path(h).exists():
             raise StoreError(f"case {h} has no part in {store.directory}; run the sweep with "
@@ -159,6 +223,11 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
                                      f"{info.dims} in an earlier part")
                 if not (_is_text(info.dtype) and _is_text(_dtype(var))):
                     info.dtype = np.result_type(info.dtype, _dtype(var))
+            if budget > 0:
+                copy = _PartCopy(nc)
+                budget -= copy.nbytes
+                if budget >= 0:
+                    tpl.copies[h] = copy
     for dim, values in tpl.dim_values.items():
         tpl.dim_sizes[dim] = len(values)
     return tpl
@@ -386,10 +455,12 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     (NaN for floats). Cases without a variable (failed or skipped ones) read
     as fill values.
 
-    Three passes over the parts, each holding one case at most: the headers
-    (variables, dtypes, case coordinates), then netCDF4 writes of everything
-    but whole-case arrays stored as one chunk, then an h5py copy of those
-    arrays' compressed chunks as bytes (:func:`_copy_chunks`).
+    Three passes over the parts: the headers (variables, dtypes, case coordinates) and
+    every value but the whole-case arrays stored as one chunk (kept up to
+    :data:`SCAN_CACHE_BYTES`, so that a part is opened once), then netCDF4 writes of those
+    values, then an h5py copy of the whole-case arrays' compressed chunks as bytes
+    (:func:`_copy_chunks`). Memory holds one case, the coordinates and at most
+    :data:`SCAN_CACHE_BYTES` of small values.
     """
     shape = tuple(sweep_dims.values())
     if int(np.prod(shape)) != len(slots):
@@ -412,8 +483,13 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                     _write_values(variables["status"], where, "skipped", True)
                     _write_values(variables["message"], where, slot.message, True)
                     continue
-                with _open_part(store.path(slot.hash)) as part:
-                    names = _copy_case(part, where, variables, tpl)
+                names = None
+                if slot.hash in tpl.copies:
+                    with contextlib.suppress(_NeedsFile):
+                        names = _copy_case(tpl.copies[slot.hash], where, variables, tpl)
+                if names is None:
+                    with _open_part(store.path(slot.hash)) as part:
+                        names = _copy_case(part, where, variables, tpl)
                 if names:
                     raw.append((where, store.path(slot.hash), names))
         _copy_chunks(Path(tmp), raw, check)

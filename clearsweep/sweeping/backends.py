@@ -260,17 +260,24 @@ class _Futures:
 class _Dask:
     """A ``distributed.Client`` (given, or connected here to a scheduler address).
 
-    Workers may run on other machines: they send each finished case back and
-    the driver writes its part.
+    Workers of a local cluster (``LocalCluster``: this machine, this file system) write
+    their cases' parts themselves, as pool workers do, and send back a receipt; workers
+    that may run on other machines send each finished case back and the driver writes its
+    part (compressing it: the driver's time, not the workers').
     """
 
-    def __init__(self, client, own: bool, guard: _InterruptGuard):
+    def __init__(self, client, own: bool, guard: _InterruptGuard, parts_dir: Path | None = None):
         self.client, self.own, self.guard = client, own, guard
         threads = sum(client.nthreads().values()) or 1
         self.window = IN_FLIGHT_PER_WORKER * threads
+        # absolute: a worker's working folder is the one the cluster started in
+        self.parts_dir = (os.path.abspath(parts_dir) if parts_dir is not None
+                          and _local_cluster(client) else None)
         self.label = f"dask({client.scheduler.address}, {threads} threads)"
 
     def submit(self, h: str, task: CaseTask):
+        if self.parts_dir is not None:
+            return self.client.submit(_run_and_store, task, self.parts_dir, h, pure=False)
         return self.client.submit(_run_case, task, pure=False)
 
     def wait(self, futures):
@@ -301,13 +308,20 @@ def _backend(workers: int | None, client, n_cases: int, guard: _InterruptGuard, 
         if isinstance(client, str):
             from distributed import Client
 
-            return _Dask(Client(client), own=True, guard=guard)
-        return _Dask(client, own=False, guard=guard)
+            return _Dask(Client(client), own=True, guard=guard, parts_dir=parts_dir)
+        return _Dask(client, own=False, guard=guard, parts_dir=parts_dir)
     workers = (os.cpu_count() or 1) if workers is None else int(workers)
     if workers < 1:
         raise ValueError(f"workers must be >= 1, got {workers}")
     workers = min(workers, n_cases)
     return _Serial(guard) if workers <= 1 else _Futures.processes(workers, guard, parts_dir)
+
+
+def _local_cluster(client) -> bool:
+    """Whether ``client``'s workers are those of a ``distributed.LocalCluster`` (this machine)."""
+    from distributed import LocalCluster
+
+    return isinstance(getattr(client, "cluster", None), LocalCluster)
 
 
 def _exit_text(exitcode: int, said: str = "") -> str:

@@ -119,13 +119,21 @@ def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def _encoding(ds: xr.Dataset) -> dict[str, dict]:
-    """Every numeric array of a part compressed as one chunk, exactly as a case of the sweep file.
+#: Arrays of a part smaller than this [bytes] are stored contiguous and uncompressed: a
+#: chunked, compressed HDF5 dataset costs more to write and to copy than its few values
+#: (benchmarks/README.md, "Part files"); assembly compresses them into the sweep file.
+SMALL_ARRAY_BYTES = 16 * 1024
 
-    Strings and scalars are stored as they are.
+
+def _encoding(ds: xr.Dataset) -> dict[str, dict]:
+    """Every numeric array of a part of at least :data:`SMALL_ARRAY_BYTES` compressed as one
+    chunk, exactly as a case of the sweep file (assembly copies it as compressed bytes).
+
+    Strings, scalars and small arrays are stored as they are.
     """
     return {str(name): {**COMPRESSION, "chunksizes": var.shape} for name, var in ds.variables.items()
-            if var.ndim and var.dtype.kind in "biuf" and all(var.shape)}
+            if var.ndim and var.dtype.kind in "biuf" and all(var.shape)
+            and var.nbytes >= SMALL_ARRAY_BYTES}
 
 
 def with_identity(part: xr.Dataset, identity: Mapping[str, Any]) -> xr.Dataset:

@@ -83,9 +83,15 @@ def _part(ds: xr.Dataset, store_mode: str, summarize=case_summary, start: float 
     status = _text(ds["status"].values)
     if status == "ok":
         summary = summarize(ds)
-        extra = {**summary.data_vars, "message": ((), "", MESSAGE_ATTRS)}
-        # one assign, not a merge per variable (most of a small case's time outside the kernel)
-        return (ds if STORES[store_mode].keeps_series else summary).assign(extra)
+        no_message = xr.Variable((), "", MESSAGE_ATTRS)
+        if not STORES[store_mode].keeps_series:
+            return summary.assign(message=no_message)
+        if set(summary.coords) - set(ds.coords):
+            return ds.assign({**summary.data_vars, "message": no_message})
+        # one assign of bare variables: DataArrays would be aligned on every coordinate
+        # (the most of a small case's time outside the kernel, before)
+        return ds.assign({name: var.variable for name, var in summary.data_vars.items()}
+                         | {"message": no_message})
     if "message" in ds:
         message = _text(ds["message"].values)
     else:
