@@ -449,7 +449,8 @@ def test_sigint_stops_a_run_of_an_ensemble_with_130_and_the_resume_command(tmp_p
     process.send_signal(signal.SIGINT)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 130, err
-    assert f"continue with: clearsweep run {config} -o {out} --resume" in err
+    # run as `python -m clearsweep.cli` from outside the interpreter's tree: said so again
+    assert f"continue with: python -m clearsweep.cli run {config} -o {out} --resume" in err
     with PartStore(parts) as store:
         kept = store.finished()
     assert 1 <= len(kept) < 4 and not out.exists()
