@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import errno
+import fcntl
 import os
 import re
 import shutil
@@ -215,6 +216,38 @@ def replaced_on_success(path: str | os.PathLike):
         Path(tmp).unlink(missing_ok=True)
         raise
     os.replace(tmp, path)
+
+
+def lock_exclusively(path: str | os.PathLike) -> int | None:
+    """Open ``path`` (created, with its folder, where missing) and take an exclusive
+    ``flock`` on it without waiting; the descriptor, or None where another process holds it.
+
+    The lock counts only once the file locked is still the one at ``path``: a process that
+    opened the file just before its holder removed it (holders remove their lock file while
+    still holding it) and locked it after, holds a file no longer there, which a third could
+    re-create and lock as well; it opens the path again instead. So at most one process
+    holds the lock, whatever the interleaving (tests/test_planning_bounds.py)."""
+    path = Path(path)
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except FileNotFoundError:       # the folder was removed by the holder: make it again
+            path.parent.mkdir(parents=True, exist_ok=True)
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                return None
+            raise
+        try:
+            now, mine = os.stat(path), os.fstat(fd)
+            if (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino):
+                return fd
+        except FileNotFoundError:
+            pass
+        os.close(fd)        # removed by the process that held it: lock the path's file anew
 
 
 #: Free space below which a failed write is reported as a full disk [bytes].

@@ -13,8 +13,6 @@ when a limit is crossed, or after ``life.max_blocks`` blocks.
 
 from __future__ import annotations
 
-import errno
-import fcntl
 import json
 import math
 import os
@@ -43,7 +41,7 @@ from .budget import (
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
-from .dataset import history_line, replaced_on_success, with_command_line
+from .dataset import history_line, lock_exclusively, replaced_on_success, with_command_line
 from .params import Packed, identity_changes, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import format_length, length_unit
@@ -665,25 +663,10 @@ def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
         yield
         return
     lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
-    while True:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
-            os.close(fd)
-            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                raise CheckpointError(f"{checkpoint} is in use by another life run writing the "
-                                      "same output; wait for it to finish or write to another "
-                                      "output file") from None
-            raise
-        try:
-            now, mine = os.stat(lock), os.fstat(fd)
-            held = (now.st_dev, now.st_ino) == (mine.st_dev, mine.st_ino)
-        except FileNotFoundError:
-            held = False
-        if held:
-            break
-        os.close(fd)        # removed by the run that held it: lock the path's file anew
+    fd = lock_exclusively(lock)
+    if fd is None:
+        raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
+                              "output; wait for it to finish or write to another output file")
     try:
         yield
     finally:

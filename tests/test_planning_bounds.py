@@ -50,14 +50,14 @@ def test_the_checkpoint_lock_is_held_by_one_run_at_a_time(tmp_path, monkeypatch)
     import time
     import types
 
-    import clearsweep.service_life as service_life
+    import clearsweep.dataset as dataset
     from clearsweep.service_life import CheckpointError, checkpoint_lock
 
     def slow_flock(fd, operation):     # widen the moment between opening and locking
         time.sleep(random.uniform(0.0, 0.002))
         return fcntl.flock(fd, operation)
 
-    monkeypatch.setattr(service_life, "fcntl", types.SimpleNamespace(
+    monkeypatch.setattr(dataset, "fcntl", types.SimpleNamespace(
         flock=slow_flock, LOCK_EX=fcntl.LOCK_EX, LOCK_NB=fcntl.LOCK_NB))
     checkpoint = tmp_path / "out.nc.life-checkpoint"
     guard, holders, most, held = threading.Lock(), [0], [0], [0]

@@ -28,8 +28,6 @@ and after a sweep is written the folder is removed only if nothing else is in it
 from __future__ import annotations
 
 import datetime as _dt
-import errno
-import fcntl
 import hashlib
 import json
 import os
@@ -44,6 +42,7 @@ import xarray as xr
 
 from ..config import Config
 from ..dataset import (
+    lock_exclusively,
     open_results,
     write_netcdf_atomic,
 )
@@ -255,15 +254,10 @@ class PartStore:
                              "cases, overwrite deletes them")
         self._refuse_strangers()        # before the lock file is made in a folder not ours
         self.directory.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
-            os.close(fd)
-            if exc.errno in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                raise StoreError(f"{self.directory} is in use by another sweep; wait for it to "
-                                 "finish or write to another output file") from None
-            raise
+        fd = lock_exclusively(self.directory / LOCK_NAME)
+        if fd is None:
+            raise StoreError(f"{self.directory} is in use by another sweep; wait for it to "
+                             "finish or write to another output file")
         self._lock_fd = fd
         discarded: list[str] = []
         misfiled: list[str] = []
@@ -414,13 +408,19 @@ class PartStore:
 
     def remove(self) -> None:
         """Delete the files clearsweep wrote in the folder, then the folder if nothing else
-        is in it (after a successful assembly): a file put there since is left, with the folder."""
-        self.close()
+        is in it (after a successful assembly): a file put there since is left, with the folder.
+        The lock file goes last, while still locked (``dataset.lock_exclusively``)."""
+        if self._log is not None:
+            self._log.close()
+            self._log = None
         ledger = self._ledger()
         for name in sorted(os.listdir(self.directory)) if self.directory.is_dir() else []:
-            if name != LOG_NAME and self._own(name, ledger):
+            if name not in (LOG_NAME, LOCK_NAME) and self._own(name, ledger):
                 (self.directory / name).unlink(missing_ok=True)
         (self.directory / LOG_NAME).unlink(missing_ok=True)
+        if self._lock_fd is not None or self._own(LOCK_NAME, ledger):
+            (self.directory / LOCK_NAME).unlink(missing_ok=True)
+        self.close()
         try:
             self.directory.rmdir()
         except OSError:
