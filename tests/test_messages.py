@@ -228,3 +228,23 @@ def test_plot_sweep_of_a_life_sweep_without_metric_asks_for_one(tmp_path):
     result = invoke("plot", path, "--kind", "sweep", "-o", tmp_path / "f.png")
     assert result.exit_code == 2
     assert "a life sweep, needs --metric" in result.stderr and "--metric cycles_reached" in result.stderr
+
+
+def test_a_missing_series_is_blamed_on_the_summary_store_only_where_it_is_one():
+    """Was: every dataset lacking a series got "(a summary-only sweep holds no time series or
+    wear maps)", a single run and a life run too."""
+    import xarray as xr
+
+    from clearsweep.plotting.common import PlotError, _require
+
+    def message(ds):
+        with pytest.raises(PlotError) as exc:
+            _require(ds, ("slider_acceleration",), "--kind slider")
+        return str(exc.value)
+
+    run = xr.Dataset({"status": ((), "ok")})
+    summary = xr.Dataset({"x": ("B_clearance", [1.0])}, attrs={"sweep_store": "summary"})
+    assert message(run) == ("--kind slider needs slider_acceleration, which this dataset lacks")
+    assert "summary-only sweep" in message(summary) and "store: full" in message(summary)
+    assert "summary-only" not in message(
+        xr.Dataset({"x": ("B_clearance", [1.0])}, attrs={"sweep_store": "full"}))

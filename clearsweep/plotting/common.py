@@ -10,7 +10,8 @@ import numpy as np
 import xarray as xr
 from matplotlib import colormaps
 
-from ..analysis import iter_cases, label_text, sweep_dims, value_text
+from ..analysis import iter_cases, label_text, results_kind, sweep_dims, value_text
+from ..outputs import RESULTS_KINDS
 from ..variables import display_unit
 
 #: Overlaid cases beyond this many take colours from a continuous colour map.
@@ -149,8 +150,12 @@ def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
     """Raise ``PlotError`` unless ``ds`` holds ``names``; ``what`` asked for them (``--kind slider``)."""
     missing = [n for n in names if n not in ds]
     if missing:
-        raise PlotError(f"{what} needs {', '.join(missing)}, which this dataset lacks "
-                        "(a summary-only sweep holds no time series or wear maps)")
+        kind = results_kind(ds)
+        why = {"sweep": (" (a summary-only sweep holds no time series or wear maps: keep them "
+                         "with store: full)") if ds.attrs.get("sweep_store") != "full" else "",
+               "run": "", "life": " (a life run keeps its blocks' summaries and wear maps)"}
+        raise PlotError(f"{what} needs {', '.join(missing)}, which this dataset lacks"
+                        + why.get(kind, f" (a file of {RESULTS_KINDS[kind]})"))
 
 
 def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
