@@ -22,7 +22,6 @@ from numba import types
 
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .joints import JOINTS
 from .kinematics import (
     add,
     cross,
@@ -110,25 +109,6 @@ from .target import on_device
 from .work import Model, Solve
 
 NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
-
-#: The packed length that an attachment of the joint table scales (joints.Attachment).
-_LENGTHS = {"l2": P_L2, "l3": P_L3}
-
-
-def _attachment(att):
-    """An attachment of the joint table as a constant tuple: (index of the packed length
-    it scales, 3 factors); index -1: the body's centroid."""
-    return (-1 if att.length is None else _LENGTHS[att.length],) + tuple(map(float, att.factors))
-
-
-_BY_NAME = {joint.name: joint for joint in JOINTS}
-#: Joint A's attachments (the crank pin on the crank, the rod's end in which it sits) and
-#: joint B's (the rod's other end, the slider's centroid), from the joint table.
-A_BALL = _attachment(_BY_NAME["A"].ball)
-A_SOCKET = _attachment(_BY_NAME["A"].socket)
-B_BALL = _attachment(_BY_NAME["B"].ball)
-B_SOCKET = _attachment(_BY_NAME["B"].socket)
-
 
 @compiled
 def body_moment(R, r, q, f):
@@ -307,17 +287,6 @@ def body_frame(tr, pd):
 
 
 @compiled(inline="always")
-def body_point(p, att):
-    """The body-frame point [m] of a joint-table attachment ``att`` (a constant of
-    :func:`_attachment`: a factor 0 gives the constant 0.0, the centroid (0, 0, 0))."""
-    if att[0] < 0:
-        return (0.0, 0.0, 0.0)
-    size = p[att[0]]
-    return (att[1] * size if att[1] != 0.0 else 0.0, att[2] * size if att[2] != 0.0 else 0.0,
-            att[3] * size if att[3] != 0.0 else 0.0)
-
-
-@compiled(inline="always")
 def body_state(y, tr, r_at, phi_at):
     """(r, v, R, w) of the body whose coordinates start at y[r_at] and y[phi_at], tr its
     Euler angles' trig(...): centroid position and velocity, rotation, body angular
@@ -398,9 +367,9 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     rows written and the largest position violation of these joints [m]."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
-    uA2 = body_point(p, A_BALL)
-    uA3 = body_point(p, A_SOCKET)
-    uB3 = body_point(p, B_BALL)
+    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
+    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
+    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
     if jp[0, J_CLEARANCE] == 0.0:
@@ -585,10 +554,9 @@ def evaluate(t, y, model, dy, dg, full, solve):
     t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
     t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
     t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
-    uA2 = body_point(p, A_BALL)
-    uA3 = body_point(p, A_SOCKET)
-    uB3 = body_point(p, B_BALL)
-    uB4 = body_point(p, B_SOCKET)
+    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
+    uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
+    uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     zero = (0.0, 0.0, 0.0)
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
 
@@ -629,7 +597,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        cB = contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, uB4), full)
+        cB = contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, zero), full)
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
@@ -741,10 +709,10 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
     if j == 0:
         # the socket point Q_i on the rod
-        qrod = add(add(r3, mv(R3, body_point(p, A_SOCKET))), scale(jp[j, J_RI], n))
+        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
     else:
         # the ball point Q_j on the rod
-        qrod = add(add(r3, mv(R3, body_point(p, B_BALL))), scale(jp[j, J_RJ], n))
+        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
     Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
     wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
     inv_m = quad_form(wp, n, n)

@@ -9,11 +9,11 @@ of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one
 :data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
 registration without its module or docs).
 
-The kernel reads the attachment points from the table (``dynamics.body_point``, folded
-into constants when compiled); tests/test_joints.py checks them against the packed initial
-state. What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin
-in the rod) and joint B (rod end in the slider) by name, and removes the crank and the
-slider's guide analytically (six free coordinates, ``dynamics.minv_apply``).
+What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin in
+the rod) and joint B (rod end in the slider) by name, with the attachment points written
+there as in :data:`JOINTS`, and removes the crank and the slider's guide analytically
+(six free coordinates, ``dynamics.minv_apply``); tests/test_joints.py checks the table's
+attachments against the packed initial state.
 """
 
 from collections import namedtuple
