@@ -27,11 +27,10 @@ from collections.abc import Iterable
 import numpy as np
 import xarray as xr
 
+from .outputs import MEMBER_DIM  # noqa: F401  (the ensemble's dimension, re-exported)
 from .summary import PASS_THROUGH_VARIABLES, SUMMARY_ORDER
 from .variables import attrs_for
 
-#: The ensemble's dimension (as :data:`clearsweep.sweeping.plan.MEMBER_DIM`).
-MEMBER_DIM = "member"
 #: Confidence level of every interval.
 CONFIDENCE_LEVEL = 0.95
 #: Suffixes of the statistics of a summary variable, in storage order.

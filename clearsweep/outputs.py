@@ -119,6 +119,10 @@ RESULTS_KINDS = {"run": "a run", "life": "a life run", "reliability": "a reliabi
 
 #: Dimensions of one case's arrays; any other dimension is a sweep's.
 CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle")
+#: The dimension of an ensemble's members (after the sweep's own dimensions) and of a
+#: sampling sweep's points (``sweep: sample:``), as results files carry them.
+MEMBER_DIM = "member"
+SAMPLE_DIM = "sample"
 
 #: Kinds that one command writes, as :func:`check_output` compares them: a sweep file of
 #: any design (grid, sampling, ensemble) is one family.
@@ -154,9 +158,9 @@ def kind_of(attrs: Mapping[str, Any], dims: Collection[str], variables: Collecti
         return "reliability"
     if store == "life":
         return "life-sweep"
-    if "member" in dims and "members_ok" in variables:
+    if MEMBER_DIM in dims and "members_ok" in variables:
         return "ensemble"
-    if "sample" in dims:
+    if SAMPLE_DIM in dims:
         return "sample"
     if store is not None or any(d not in CASE_DIMS for d in dims):
         return "sweep"

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from ..choices import REPORT_FORMATS  # noqa: F401
 from ..ensemble import MEMBER_DIM  # noqa: F401
+from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..schema import close_matches  # noqa: F401
 from ..summary import (  # noqa: F401
     PASS_THROUGH_VARIABLES,
@@ -45,7 +46,6 @@ from ..summary import (  # noqa: F401
 from .selection import (  # noqa: F401
     CASE_DIMS,
     RESULTS_KINDS,
-    SAMPLE_DIM,
     SelectionError,
     choice_message,
     configured_clearances,

@@ -255,9 +255,6 @@ def design_dims(ds: xr.Dataset) -> tuple[str, ...]:
 
 
 
-#: The ``sample`` dimension of a sampling sweep (``sweep: sample:``), one position per point drawn.
-SAMPLE_DIM = "sample"
-
 #: What a results file holds, as :func:`results_kind` names it.
 RESULTS_KINDS = tuple(_RESULTS_KINDS)
 

@@ -11,10 +11,10 @@ import numpy as np
 import xarray as xr
 
 from ..ensemble import MEMBER_DIM
+from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..summary import case_summary
 from .selection import (
     _MISSING_TEXT,
-    SAMPLE_DIM,
     design_dims,
     is_ensemble,
     iter_cases,

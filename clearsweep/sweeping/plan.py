@@ -37,6 +37,7 @@ from ..config import (
     set_path,
     short_repr,
 )
+from ..outputs import MEMBER_DIM, SAMPLE_DIM  # noqa: F401  (also read as plan.MEMBER_DIM, plan.SAMPLE_DIM)
 from ..schema import OVERSIZED, ClearsweepWarning, oversized_number, oversized_text
 from ..service_life import life_block
 from ..simulation import preflight
@@ -46,8 +47,6 @@ from .stores import STORES
 
 #: First components of a dotted key that the dimension name leaves out.
 DROPPED_SECTIONS = ("joints", "mechanism", "contact", "friction", "wear", "solver", "ensemble")
-#: The ensemble's dimension: one index per member, after the sweep's own dimensions.
-MEMBER_DIM = "member"
 #: Keys that the ensemble section sets for every case and a sweep cannot vary.
 ENSEMBLE_KEYS = ("ensemble.member", "ensemble.members", "reliability.member", "reliability.members")
 #: What a sweep stores per case: the stores of :data:`clearsweep.sweeping.stores.STORES`.
@@ -57,8 +56,6 @@ SWEEP_KEYS = ("grid", "zip", "sample", "skip")
 #: ranges (scipy.stats.qmc), or the Saltelli design that Sobol' indices need (SALib).
 SAMPLE_KEYS = ("method", "n", "seed", "ranges", "second_order")
 SAMPLE_METHODS = ("sobol", "lhs", "saltelli")
-#: The dimension of a sampling sweep.
-SAMPLE_DIM = "sample"
 #: What a refusal of too many cases tells the user to type (``expand``'s default: a sweep).
 TOO_MANY_HINT = "clearsweep sweep --yes runs them all"
 #: Keys of a zip group that are not config keys.
