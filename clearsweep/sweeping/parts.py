@@ -28,6 +28,7 @@ and after a sweep is written the folder is removed only if nothing else is in it
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import hashlib
 import json
 import os
@@ -155,20 +156,31 @@ def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
 def read_mark(path: str | os.PathLike) -> tuple[str | None, dict[str, Any] | None]:
     """``(key, identity)`` recorded in the part at ``path`` (:func:`write_part`); ``(None, None)``
     for a file that is not a readable part (truncated, another file, a part of an older
-    version without the mark)."""
-    import netCDF4
-
+    version without the mark). A resume reads each kept part's mark twice (the plan's count,
+    then the folder's opening): the header is read once per file version (its inode, size
+    and modification time; parts are replaced by rename, never rewritten in place)."""
     try:
-        with netCDF4.Dataset(path) as nc:
-            key = getattr(nc, KEY_ATTR, None)
-            text = getattr(nc, IDENTITY_ATTR, None)
-    except (OSError, RuntimeError, ValueError):
+        st = os.stat(path)
+    except OSError:
         return None, None
+    key, text = _mark_attributes(os.fspath(path), st.st_ino, st.st_size, st.st_mtime_ns)
     try:
         identity = json.loads(text) if isinstance(text, str) else None
     except json.JSONDecodeError:
         identity = None
     return (key if isinstance(key, str) else None), identity
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _mark_attributes(path: str, inode: int, size: int, mtime_ns: int) -> tuple[Any, Any]:
+    """The raw key and identity attributes of one version of the part at ``path``."""
+    import netCDF4
+
+    try:
+        with netCDF4.Dataset(path) as nc:
+            return getattr(nc, KEY_ATTR, None), getattr(nc, IDENTITY_ATTR, None)
+    except (OSError, RuntimeError, ValueError):
+        return None, None
 
 
 def _is_ledger(path: Path) -> bool:
