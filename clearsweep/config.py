@@ -40,7 +40,7 @@ from .schema import (  # noqa: F401
 )
 
 __all__ = [
-    "ConfigError", "Field", "Config", "JointConfig", "EnsembleConfig", "PerturbConfig",
+    "ConfigError", "Field", "Config", "JointConfig", "RevoluteJointConfig", "EnsembleConfig", "PerturbConfig",
     "ReliabilityConfig", "SCHEMA",
     "DEFAULTS", "load_config",
     "apply_override", "dump_config",
@@ -100,13 +100,49 @@ class JointConfig(_Section):
 
 
 @dataclass(frozen=True)
+class RevoluteJointConfig(_Section):
+    """The crank's revolute joint O: a journal in a bearing; ``clearance == 0`` (the default)
+    makes it ideal. Radial clearance only: axial play and tilt stay ideal."""
+
+    clearance: float = _setting(Field(0.0, lo=0.0), "m", "radial clearance of joint O")
+    bearing_radius: float = _setting(_positive(0.01), "m", "bearing radius of joint O")
+    length: float = _setting(_positive(0.02), "m", "bearing length of joint O")
+    coating: str = _setting(Field("none", str), None, "bearing coating of joint O")
+    coating_thickness: float = _setting(_positive(1.0e-4), "m", "coating thickness of joint O")
+    base_thickness: float = _setting(_positive(4.9e-3), "m", "bearing base thickness of joint O")
+    #: None: the surface material's own coefficient
+    wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
+                                              "Archard wear coefficient of joint O's bearing")
+
+    @property
+    def socket_radius(self) -> float:
+        """The outer surface's radius R_i [m]: the bearing's."""
+        return self.bearing_radius
+
+    @property
+    def ball_radius_m(self) -> float:
+        """Journal radius R_j = bearing_radius - clearance [m]."""
+        return self.bearing_radius - self.clearance
+
+
+#: The key of each joint section's outer radius (socket or bearing).
+RADIUS_KEYS = ("socket_radius", "bearing_radius")
+
+
+def radius_key(spec: Mapping[str, Any]) -> str:
+    """The key of a joint section's outer radius R_i: ``socket_radius`` or ``bearing_radius``."""
+    return next(k for k in RADIUS_KEYS if k in spec)
+
+
+@dataclass(frozen=True)
 class JointsConfig(_Section):
     A: JointConfig = _section(JointConfig)
     B: JointConfig = _section(JointConfig)
+    O: RevoluteJointConfig = _section(RevoluteJointConfig)
 
-    def items(self) -> tuple[tuple[str, JointConfig], ...]:
-        """``(("A", joint A), ("B", joint B))``, in kernel order."""
-        return (("A", self.A), ("B", self.B))
+    def items(self) -> tuple[tuple[str, JointConfig | RevoluteJointConfig], ...]:
+        """``(("A", joint A), ("B", joint B), ("O", joint O))``, in kernel order."""
+        return (("A", self.A), ("B", self.B), ("O", self.O))
 
 
 @dataclass(frozen=True)
@@ -351,7 +387,9 @@ def _info_of(cls: type, prefix: str = "") -> dict[str, tuple[str | None, str]]:
     for f in fields(cls):
         if f.default_factory is not MISSING:
             sub = f.default_factory
-            out.update(_info_of(sub, "joints.X." if sub is JointConfig else f"{prefix}{f.name}."))  # type: ignore[arg-type]
+            sub_prefix = ("joints.X." if sub is JointConfig else "joints.O." if sub is RevoluteJointConfig
+                          else f"{prefix}{f.name}.")
+            out.update(_info_of(sub, sub_prefix))  # type: ignore[arg-type]
         else:
             out[prefix + f.name] = (f.metadata["units"], f.metadata["long_name"])
     return out
@@ -494,20 +532,23 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     for joint, spec in cfg["joints"].items():
-        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
+        radius = radius_key(spec)
+        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
         if spec["clearance"] > most:
             raise ConfigError(
                 f"joints.{joint}.clearance", spec["clearance"],
-                f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.socket_radius "
-                f"({most:.6g}), so that the ball radius R_j = socket_radius - clearance is at "
-                f"least {MIN_BALL_RADIUS_FRACTION:g} * socket_radius", source)
+                f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.{radius} "
+                f"({most:.6g}), so that the {'ball' if radius == 'socket_radius' else 'journal'} "
+                f"radius R_j = {radius} - clearance is at "
+                f"least {MIN_BALL_RADIUS_FRACTION:g} * {radius}", source)
     # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every
     # clearance a reliability member can draw: both ends must be clearances this check
     # admits, so that no seed decides whether the config is valid (docs/reliability.md).
     # A member's own config has its drawn clearance and no band (reliability.member_config).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
-        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec["socket_radius"]
+        radius = radius_key(spec)
+        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
         if 0.0 < spec["clearance"] <= tolerance:
             raise ConfigError("reliability.clearance_tolerance", tolerance,
                               f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
@@ -520,7 +561,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                 f"a number <= {shown}, so that the band joints.{joint}."
                 f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
                 f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
-                f"socket_radius ({most:.6g} m), whatever member draws it", source)
+                f"{radius} ({most:.6g} m), whatever member draws it", source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):

@@ -14,12 +14,15 @@ from typing import Any
 import numpy as np
 
 from .choices import DAMPING_LAWS
-from .config import Config, EnsembleConfig, JointConfig, resolve_materials
+from .config import Config, EnsembleConfig, JointConfig, RevoluteJointConfig, resolve_materials
 from .core import layout as L
 from .core.contact import hysteresis_fraction
 from .core.joints import JOINTS
 from .materials import FIELDS
 from .version import __version__
+
+#: A joint section of the config: a spherical joint (A, B) or the revolute joint O.
+AnyJoint = JointConfig | RevoluteJointConfig
 
 
 @dataclass(frozen=True)
@@ -95,7 +98,7 @@ def layer_modulus(surface, base, coating_thickness_m: float, base_thickness_m: f
     return ex, (surface.poisson_ratio if coated else base.poisson_ratio)
 
 
-def equivalent_modulus(joint: JointConfig, materials: dict, rule: str) -> float:
+def equivalent_modulus(joint: AnyJoint, materials: dict, rule: str) -> float:
     """E_w [Pa]: 1/E_w = (1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j, socket i (maybe coated), ball j."""
     base = materials[BASE_MATERIAL]
     coated = joint.coating != "none"
@@ -107,7 +110,7 @@ def equivalent_modulus(joint: JointConfig, materials: dict, rule: str) -> float:
     return 1.0 / ((1.0 - nui ** 2) / ei + (1.0 - nuj ** 2) / ej)
 
 
-def surface_material(joint: JointConfig, materials: dict):
+def surface_material(joint: AnyJoint, materials: dict):
     """The socket surface's material: the coating where coated, else the base."""
     return materials[BASE_MATERIAL if joint.coating == "none" else joint.coating]
 
@@ -171,14 +174,16 @@ def ideal_slider_x(theta, l2: float, l3: float, zs: float):
 
 
 def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
-                  offset_B=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray, float]:
+                  offset_B=(0.0, 0.0, 0.0), offset_O=(0.0, 0.0, 0.0)
+                  ) -> tuple[np.ndarray, np.ndarray, float]:
     """Rod end points a, b [m] and slider position x4 [m] at crank angle theta [rad], with
     ball-centre offsets d = ball centre - socket centre (global frame [m]) held at A (ball:
-    crank pin, socket: rod end) and B (ball: rod end, socket: slider centre)."""
+    crank pin, socket: rod end), B (ball: rod end, socket: slider centre) and O (ball: the
+    crank's journal, socket: the bearing at the origin; in its y-z plane)."""
     l2, l3, zs = preset.crank_length_m, preset.rod_length_m, preset.slider_height_m
     d_a = np.asarray(offset_A, float)
     d_b = np.asarray(offset_B, float)
-    a = np.array([0.0, l2 * math.sin(theta), -l2 * math.cos(theta)]) - d_a
+    a = np.array([0.0, l2 * math.sin(theta), -l2 * math.cos(theta)]) + np.asarray(offset_O, float) - d_a
     # b = (x4, 0, z_s) + d_b with |b - a| = l3, the root with the slider beyond the crank
     dy = d_b[1] - a[1]
     dz = zs + d_b[2] - a[2]
@@ -188,7 +193,7 @@ def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
 
 
 def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.0, 0.0),
-                  offset_B=(0.0, 0.0, 0.0)) -> np.ndarray:
+                  offset_B=(0.0, 0.0, 0.0), offset_O=(0.0, 0.0, 0.0)) -> np.ndarray:
     """State at crank angle theta0 moving at omega [rad/s], the ball-centre offsets (global
     frame [m], zero = centred ball) held fixed; velocities from the kinematics with the
     offsets held, so that no ball moves relative to its socket at the start."""
@@ -199,10 +204,11 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     r2, g2, r3, ph3, r4 = L.Y_R2, L.Y_CRANK_ANGLE, L.Y_R3, L.Y_PHI3, L.Y_R4
     qd = L.Y_QD
     y[r2:r2 + 3] = (0.0, 0.5 * l2 * st, -0.5 * l2 * ct)
+    y[r2:r2 + 3] += np.asarray(offset_O, float)
     y[g2] = theta0
     y[qd + r2:qd + r2 + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
     y[qd + g2] = omega
-    a, b, x4 = rod_endpoints(preset, theta0, offset_A, offset_B)
+    a, b, x4 = rod_endpoints(preset, theta0, offset_A, offset_B, offset_O)
     va = np.array([0.0, l2 * ct, l2 * st]) * omega
     # |b - a| = l3 with b moving along X only: (b - a) . (vb - va) = 0
     vb = np.array([(b - a) @ va / (b - a)[0], 0.0, 0.0])
@@ -256,49 +262,63 @@ def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.nda
     bilinear, ``wear.interpolate``; feedback on or off) and ``contact.surface`` switches to
     the base material where the coating is worn through.
     """
+    from .core import revolute
     from .core.contact import surface
     from .core.wear import worn_surface
 
     n = tuple(float(v) for v in normal_socket)
-    h, _, worn = worn_surface(np.ascontiguousarray(wmap, dtype=np.float64), j, n,
-                           float(jp[j, L.J_COAT]), bool(p[L.P_FEEDBACK] != 0.0),
-                           bool(p[L.P_INTERP] != 0.0))
+    wmap = np.ascontiguousarray(wmap, dtype=np.float64)
+    if JOINTS[j].type == "revolute":     # the bearing map: one row around the bearing
+        h = revolute.map_read(wmap, j, n, bool(p[L.P_INTERP] != 0.0))[0] if p[L.P_FEEDBACK] != 0.0 else 0.0
+        worn = revolute.worn_through(wmap, j, n, float(jp[j, L.J_COAT]))
+    else:
+        h, _, worn = worn_surface(wmap, j, n, float(jp[j, L.J_COAT]), bool(p[L.P_FEEDBACK] != 0.0),
+                                  bool(p[L.P_INTERP] != 0.0))
     ew, _, _ = surface(jp, j, worn)
     return float(jp[j, L.J_C] + h), float(ew)
 
 
 def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
-                   omega: float, wmap: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Ball-centre offsets [m] (global frame, A and B) of a seated start.
+                   omega: float, wmap: np.ndarray | None = None) -> np.ndarray:
+    """Ball-centre offsets [m] (N_JOINTS x 3, global frame, in the table's order) of a
+    seated start.
 
     Each clearance joint's ball rests on the socket wall along the ideal mechanism's joint
     reaction at t = 0: the force F on the ball is carried by a contact whose normal n points
     along -F, at the eccentricity c + delta_s where the elastic force equals ``|F|``. With a
     wear map (a socket worn by an earlier run), c is the local worn clearance c_eff(n) and
-    the modulus the one the contact law uses there.
+    the modulus the one the contact law uses there. The journal of O leans along the
+    reaction's part in the bearing's plane (y, z), with the journal's law.
     """
     from .core.dynamics import ideal_joint_forces
     from .core.kinematics import rotation, trig
+    from .core.revolute import journal_law
 
     y_ideal = initial_state(preset, theta0, omega)
     forces = ideal_joint_forces(0.0, y_ideal, p, jp)
-    offsets = np.zeros((2, 3))
-    for j in range(2):
+    offsets = np.zeros((L.N_JOINTS, 3))
+    for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
-        f = forces[j]
+        f = forces[j].copy()
+        law = p[L.P_EXPONENT]
+        if joint.type == "revolute":
+            f[0] = 0.0          # axial: ideal
+            law = journal_law(p)
         size = float(np.linalg.norm(f))
         if not (math.isfinite(size) and size > 0.0):
             continue  # no load to lean on: the ball stays centred
         c, ew = jp[j, L.J_C], jp[j, L.J_EW]
         if wmap is not None:
-            # the socket body: the rod for A, the slider for B
-            phi = y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if j == 0 else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3]
+            # the socket body: the rod for A, the slider for B, the ground for O
+            socket = joint.socket.body
+            phi = (y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if socket == "rod"
+                   else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3] if socket == "slider" else np.zeros(3))
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
             c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
-        delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], p[L.P_EXPONENT])
+        delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
         offsets[j] = -(c + delta) * f / size
-    return offsets[0], offsets[1]
+    return offsets
 
 
 @dataclass(frozen=True)
@@ -310,11 +330,11 @@ class MemberPerturbation:
     crank_phase_rad : float
         Added to theta0 [rad].
     ball_offset : np.ndarray
-        (2, 3) per joint (A, B): ball-centre displacement from the nominal start, as a
-        fraction of that joint's clearance (global frame), inside the ball of radius
-        ``perturb.ball_offset``.
+        (N_JOINTS, 3) per joint (A, B, O): ball-centre displacement from the nominal start,
+        as a fraction of that joint's clearance (global frame), inside the ball of radius
+        ``perturb.ball_offset`` (O's axial part is dropped where it is applied).
     wear_factor : np.ndarray
-        (2,) per joint: multiplies the wear coefficient k (lognormal, mean 1).
+        (N_JOINTS,) per joint: multiplies the wear coefficient k (lognormal, mean 1).
     """
 
     crank_phase_rad: float
@@ -328,16 +348,17 @@ def member_perturbation(ensemble: EnsembleConfig) -> MemberPerturbation:
     The generator is ``np.random.SeedSequence(seed, spawn_key=(member,))`` (the member-th
     child of ``SeedSequence(seed)``), so a member's draw does not depend on the other members,
     the workers or the order cases finish. Every draw is made whatever the amplitudes, in a
-    fixed order (phase, then per joint A, B: direction, radius, wear), so switching one
-    perturbation on or off leaves the others' values unchanged.
+    fixed order (phase, then per joint A, B, O: direction, radius, wear), so switching one
+    perturbation on or off leaves the others' values unchanged (and A's and B's as they were
+    before joint O existed).
     """
     rng = np.random.default_rng(np.random.SeedSequence(ensemble.seed, spawn_key=(ensemble.member,)))
     pert = ensemble.perturb
     phase = rng.uniform(-1.0, 1.0)
-    offsets = np.zeros((2, 3))
-    factors = np.ones(2)
+    offsets = np.zeros((L.N_JOINTS, 3))
+    factors = np.ones(L.N_JOINTS)
     sigma = math.sqrt(math.log1p(pert.wear_coefficient_cv ** 2))
-    for j in range(2):
+    for j in range(L.N_JOINTS):
         direction = rng.standard_normal(3)
         radius = rng.random() ** (1.0 / 3.0)        # uniform in the unit ball
         z = rng.standard_normal()
@@ -372,7 +393,7 @@ class Packed:
     method: str = "rk4"
 
 
-def joint_configs(cfg: Config) -> list[tuple[str, JointConfig]]:
+def joint_configs(cfg: Config) -> list[tuple[str, AnyJoint]]:
     """The config's joint sections in the joint table's order (``core.joints.JOINTS``, the
     order of the kernel's per-joint rows): ``[(name, its JointConfig), ...]``."""
     return [(joint.name, getattr(cfg.joints, joint.name)) for joint in JOINTS]
@@ -455,6 +476,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
+        jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
     perturb = cfg.ensemble.perturb
     member = member_perturbation(cfg.ensemble) if perturb.any else None
     if member is not None:      # unperturbed: the nominal case, bit for bit
@@ -466,12 +488,16 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     n_steps = max(1, -(-n_raw // save_every)) * save_every
     theta0 = float(p[L.P_THETA0])
     if cfg.initial.joints == "seated" and seat:
-        offset_A, offset_B = seated_offsets(preset, p, jp, theta0, omega, wmap)
+        offsets = seated_offsets(preset, p, jp, theta0, omega, wmap)
     else:
-        offset_A, offset_B = np.zeros(3), np.zeros(3)
+        offsets = np.zeros((L.N_JOINTS, 3))
     if member is not None and perturb.ball_offset > 0.0:
-        offset_A, offset_B = (perturbed_offset(d, member.ball_offset[j], float(jp[j, L.J_C]))
-                              for j, d in enumerate((offset_A, offset_B)))
-    y0 = initial_state(preset, theta0, omega, offset_A, offset_B)
+        for j, row in enumerate(JOINTS):
+            shift = member.ball_offset[j].copy()
+            if row.type == "revolute":
+                shift[0] = 0.0      # the journal moves in the bearing's plane only
+            offsets[j] = perturbed_offset(offsets[j], shift, float(jp[j, L.J_C]))
+    by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
+    y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"])
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
                   map_shape=(wear.map[0], wear.map[1]), method=solver.method)

@@ -106,13 +106,18 @@ def member_draws(cfg: Config) -> MemberDraws:
     The generator is ``np.random.SeedSequence(seed, spawn_key=(member,))``, so a member's
     draw depends on neither the other members, the workers nor the order cases finish.
     Every draw is made whatever the amplitudes, in a fixed order (per joint A, B: clearance
-    uniform, clearance normal, wear, coating; then the speed), so switching one scatter on
-    or off leaves the others' values unchanged.
+    uniform, clearance normal, wear, coating; then the speed; then joint O likewise), so
+    switching one scatter on or off leaves the others' values unchanged, and a member of a
+    mechanism with spherical clearance only draws as it did before joint O existed.
     """
     rc = cfg.reliability
     rng = np.random.default_rng(np.random.SeedSequence(rc.seed, spawn_key=(rc.member,)))
-    clearance, wear, coating = np.zeros(2), np.ones(2), np.ones(2)
-    for j, (_, joint) in enumerate(cfg.joints.items()):
+    items = cfg.joints.items()
+    clearance, wear, coating = np.zeros(len(items)), np.ones(len(items)), np.ones(len(items))
+    speed = 1.0
+    for j, (name, joint) in enumerate(items):
+        if name == "O":
+            speed = lognormal_factor(rc.speed_cv, rng.standard_normal())
         u, z_c, z_k, z_t = rng.uniform(-1.0, 1.0), rng.standard_normal(), rng.standard_normal(), \
             rng.standard_normal()
         shift = u if rc.clearance_distribution == "uniform" else (
@@ -121,7 +126,6 @@ def member_draws(cfg: Config) -> MemberDraws:
             clearance[j] = joint.clearance + rc.clearance_tolerance * shift
             wear[j] = lognormal_factor(rc.wear_coefficient_cv, z_k)
             coating[j] = lognormal_factor(rc.coating_thickness_cv, z_t)
-    speed = lognormal_factor(rc.speed_cv, rng.standard_normal())
     return MemberDraws(clearance, wear, coating, speed)
 
 
@@ -392,10 +396,13 @@ def rank_correlation(x: np.ndarray, y: np.ndarray, level: float = CONFIDENCE_LEV
 INPUTS = (
     ("clearance_A", "member_clearance", 0, "reliability.clearance_tolerance"),
     ("clearance_B", "member_clearance", 1, "reliability.clearance_tolerance"),
+    ("clearance_O", "member_clearance", 2, "reliability.clearance_tolerance"),
     ("wear_coefficient_A", "member_wear_factor", 0, "reliability.wear_coefficient_cv"),
     ("wear_coefficient_B", "member_wear_factor", 1, "reliability.wear_coefficient_cv"),
+    ("wear_coefficient_O", "member_wear_factor", 2, "reliability.wear_coefficient_cv"),
     ("coating_thickness_A", "member_coating_thickness", 0, "reliability.coating_thickness_cv"),
     ("coating_thickness_B", "member_coating_thickness", 1, "reliability.coating_thickness_cv"),
+    ("coating_thickness_O", "member_coating_thickness", 2, "reliability.coating_thickness_cv"),
     ("speed", "member_speed", None, "reliability.speed_cv"),
 )
 

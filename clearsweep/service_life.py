@@ -245,7 +245,7 @@ def jump_revolutions(depth: np.ndarray, rate: np.ndarray, clearance: np.ndarray,
     wear-through finite (a bin crosses it within a few jumps). inf when nothing wears.
     """
     dn = math.inf
-    for j in range(2):
+    for j in range(len(clearance)):
         grows = rate[j] > 0.0
         if clearance[j] <= 0.0 or not grows.any():
             continue
@@ -293,7 +293,7 @@ class LifeState:
     cycles: float = 0.0
     rows: list[dict[str, Any]] = field(default_factory=list)
     snapshots: list[tuple[float, np.ndarray]] = field(default_factory=list)
-    wear_through: list[tuple[float, int, int] | None] = field(default_factory=lambda: [None, None])
+    wear_through: list[tuple[float, int, int] | None] = field(default_factory=lambda: [None] * L.N_JOINTS)
     block_volumes: list[np.ndarray] = field(default_factory=list)
     #: Wall time [s] of the earlier sessions of a resumed run.
     wall_before: float = 0.0
@@ -534,9 +534,9 @@ def _block_row(cfg: Config, raw: KernelRun, state: LifeState, revs: float, jp: n
     coat = jp[:, L.J_COAT]
     stats = statistics_from_raw(raw.stats, clearance > 0.0)
     settled_revs = raw.stats[L.W_SETTLED, L.M_TIME] * cfg.mechanism.speed_rpm / 60.0
-    depth_max = state.wmap.reshape(2, -1).max(axis=1)
-    mean = np.zeros(2)
-    for j in range(2):
+    depth_max = state.wmap.reshape(L.N_JOINTS, -1).max(axis=1)
+    mean = np.zeros(L.N_JOINTS)
+    for j in range(L.N_JOINTS):
         worn = state.wmap[j] > WORN_FRACTION * depth_max[j]
         if worn.any():
             areas = bin_areas(state.wmap.shape[1:], jp[j, L.J_RI])
@@ -561,7 +561,7 @@ def _block_row(cfg: Config, raw: KernelRun, state: LifeState, revs: float, jp: n
                                      else np.nan),
         "jump_revolutions": 0.0,
     }
-    for j in range(2):
+    for j in range(L.N_JOINTS):
         if ideal[j]:
             row["wear_depth_max"][j] = row["wear_depth_mean"][j] = np.nan
     return row
@@ -690,7 +690,7 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     coat = np.where(clearance > 0.0, jp[:, L.J_COAT], math.inf)
     revs = packed.n_steps * packed.p[L.P_DT] / period
     state = (earlier if earlier is not None
-             else LifeState(wmap=np.zeros((2,) + packed.map_shape), wvol=np.zeros(2)))
+             else LifeState(wmap=np.zeros((L.N_JOINTS,) + packed.map_shape), wvol=np.zeros(L.N_JOINTS)))
     stop = "cycles"
     first_cycle = revs
     while True:
@@ -741,7 +741,7 @@ def _note_wear_through(state: LifeState, before: np.ndarray, after: np.ndarray, 
                        cycle0: float, span: float) -> None:
     """Record the first wear-through of each coated joint between two maps ``span``
     revolutions apart, starting at ``cycle0`` (linear in between)."""
-    for j in range(2):
+    for j in range(len(coat)):
         if state.wear_through[j] is not None or not math.isfinite(coat[j]):
             continue
         hit = first_crossing(before[j], after[j], coat[j])

@@ -41,7 +41,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
     half = 0.5 * preset.rod_length_m
     m_ref = min(preset.rod_mass_kg, preset.slider_mass_kg,
                 min(preset.rod_inertia_kgm2[1:]) / half ** 2)
-    for j in range(2):
+    for j in range(L.N_JOINTS):
         jp = packed.jp[j]
         if jp[L.J_CLEARANCE] == 0.0:
             continue
@@ -267,9 +267,9 @@ def statistics_from_raw(stats: np.ndarray, clearance: np.ndarray) -> dict[str, n
         duration = m[L.M_TIME]
 
         def joint(i: int) -> np.ndarray:
-            v = m[i:i + 2].astype(float).copy()
+            v = m[i:i + L.N_JOINTS].astype(float).copy()
             v[~clearance] = np.nan
-            return np.full(2, np.nan) if empty else v
+            return np.full(L.N_JOINTS, np.nan) if empty else v
 
         def scalar(v: float) -> np.float64:
             return np.float64(np.nan if empty else v)
@@ -281,7 +281,7 @@ def statistics_from_raw(stats: np.ndarray, clearance: np.ndarray) -> dict[str, n
         out["normal_force_peak" + suffix] = joint(L.M_FN_PEAK)
         out["penetration_peak" + suffix] = joint(L.M_PEN_PEAK)
         out["impact_velocity_max" + suffix] = joint(L.M_VIMP_MAX)
-        fraction = joint(L.M_CONTACT_T) / duration if duration > 0 else np.full(2, np.nan)
+        fraction = joint(L.M_CONTACT_T) / duration if duration > 0 else np.full(L.N_JOINTS, np.nan)
         out["contact_fraction" + suffix] = fraction
         out["impact_count" + suffix] = m[L.M_IMPACTS:L.M_IMPACTS + L.N_JOINTS].astype(np.int32)
     return out
@@ -331,15 +331,18 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     y, d = raw.y, raw.d
     qd = L.Y_QD
     clearance = packed.jp[:, L.J_CLEARANCE] != 0.0
-    joint_force = d[:, L.D_JOINT_FORCE:L.D_JOINT_FORCE + 6].reshape(-1, 2, 3)
-    offset = d[:, L.D_OFFSET:L.D_OFFSET + 6].reshape(-1, 2, 3)
+    nj = L.N_JOINTS
+    joint_force = d[:, L.D_JOINT_FORCE:L.D_JOINT_FORCE + 3 * nj].reshape(-1, nj, 3)
+    offset = d[:, L.D_OFFSET:L.D_OFFSET + 3 * nj].reshape(-1, nj, 3)
     penetration = d[:, L.D_DELTA:L.D_DELTA + L.N_JOINTS].copy()
     ecc = d[:, L.D_ECC:L.D_ECC + L.N_JOINTS].copy()
     penetration[:, ~clearance] = 0.0
     offset[:, ~clearance, :] = 0.0
     ecc[:, ~clearance] = 0.0
     ke = d[:, L.D_KE]
-    pe = d[:, L.D_PE_GRAV] + d[:, L.D_UEL] + d[:, L.D_UEL + 1]
+    pe = d[:, L.D_PE_GRAV].copy()
+    for j in range(nj):
+        pe += d[:, L.D_UEL + j]
     work = y[:, L.Y_WORK]
     diss = y[:, L.Y_DISS]
     residual = ke + pe - work + diss - (ke[0] + pe[0])

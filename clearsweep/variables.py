@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .core.joints import JOINTS as JOINT_TABLE
+
 
 @dataclass(frozen=True)
 class VariableSpec:
@@ -18,7 +20,8 @@ class VariableSpec:
     cell_methods: str = ""
 
 
-JOINTS = ("A", "B")
+#: The mechanism's joints, in the joint table's order (the ``joint`` dimension).
+JOINTS = tuple(joint.name for joint in JOINT_TABLE)
 AXES = ("x", "y", "z")
 
 #: Per-case variables (docs/physics.md section 8), plus the diagnostics the kernel keeps.
@@ -31,7 +34,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
     "crank_torque": VariableSpec(("time",), "N m", "driving torque on the crank about X"),
     "reaction_O": VariableSpec(("time", "axis"), "N", "reaction of the ground on the crank at O",
                                "global frame"),
-    "joint_force": VariableSpec(("time", "joint", "axis"), "N", "force on the ball of the spherical joint",
+    "joint_force": VariableSpec(("time", "joint", "axis"), "N",
+                                "force on the ball of the joint (O: on the crank's journal)",
                                 "global frame; constraint reaction (ideal joint) or contact force "
                                 "(clearance joint) acting on the ball"),
     "normal_force": VariableSpec(("time", "joint"), "N", "normal contact force F_N",
@@ -113,7 +117,7 @@ CASE_VARIABLES.update(STATISTICS)
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
     "time": VariableSpec(("time",), "s", "time"),
-    "joint": VariableSpec(("joint",), "", "spherical joint (A: crank-rod, B: rod-slider)"),
+    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank bearing, revolute)"),
     "axis": VariableSpec(("axis",), "", "Cartesian axis"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre",
                           "measured from the socket frame's +z axis"),
@@ -186,7 +190,7 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
 LIFE_VARIABLES: dict[str, VariableSpec] = {
     "cycle": VariableSpec(("cycle",), "1", "crank revolutions at the end of the block",
                           "cumulative revolutions, simulated and jumped"),
-    "joint": VariableSpec(("joint",), "", "spherical joint"),
+    "joint": VariableSpec(("joint",), "", "joint (A, B: spherical; O: revolute)"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre"),
     "azimuth": VariableSpec(("azimuth",), "degree", "azimuth of the wear-map bin centre"),
     "block_revolutions": VariableSpec(("cycle",), "1", "revolutions simulated in the block"),

@@ -20,6 +20,8 @@ What the tests may rely on (all set by the constants below):
   of it at the farther end, all other bins hold ``SUB_THRESHOLD_DEPTH``
   (below 1e-3 of the peak, so not counted as worn), and the z axis of joint
   A has no wear at all.
+- Joint O (the crank's revolute joint) is ideal: no contact, no wear, its statistics NaN
+  (counts 0) as the kernel stores an ideal joint's, its joint force the bearing's reaction.
 """
 
 from __future__ import annotations
@@ -44,11 +46,13 @@ ACC_HALF_PERIOD_S = 0.02
 ACC_SPIKE = 50.0                     # [m s-2]
 ACC_SPIKE_TIME_S = 0.01
 SETTLE_TIME_S = 0.05
-NORMAL_FORCE_PEAK = {"A": 40.0, "B": 120.0}          # [N]
+NORMAL_FORCE_PEAK = {"A": 40.0, "B": 120.0, "O": 0.0}   # [N]
+#: The ideal joints of the synthetic case.
+IDEAL = ("O",)
 NORMAL_FORCE_PEAK_TIME_S = 0.1
 WEAR_MAP_SHAPE = (36, 72)
-WEAR_MAP_PEAK = {"A": 3.0e-11, "B": 9.0e-11}         # [m]
-WEAR_MAP_PEAK_BIN = {"A": (10, 20), "B": (25, 50)}
+WEAR_MAP_PEAK = {"A": 3.0e-11, "B": 9.0e-11, "O": 0.0}   # [m]
+WEAR_MAP_PEAK_BIN = {"A": (10, 20), "B": (25, 50), "O": (0, 0)}
 N_ANGLE = 360
 SUB_THRESHOLD_DEPTH = 1.0e-15        # [m], < 1e-3 of every peak below
 
@@ -122,6 +126,10 @@ def statistics(t: np.ndarray, acceleration: np.ndarray, torque: np.ndarray,
         out["impact_count" + suffix] = touching.sum(axis=0).astype(np.int32)
         out["impact_velocity_max" + suffix] = np.where(touching.any(axis=0), 0.01, 0.0)
         out["contact_fraction" + suffix] = (touching * w[:, None]).sum(axis=0) / w.sum()
+    ideal = np.array([j in IDEAL for j in JOINTS])
+    for name, value in out.items():
+        if np.ndim(value) == 1 and value.dtype.kind == "f":
+            value[ideal] = np.nan
     return out
 
 
@@ -143,8 +151,9 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         normal[spike, j] = NORMAL_FORCE_PEAK[joint]
     swing = np.stack([np.cos(theta), np.sin(theta), 0.2 * np.cos(2 * theta)], axis=-1)
     # (time, joint, axis), scaled with the acceleration level so that sweep cases differ
-    force = np.stack([50.0 * swing, 80.0 * swing], axis=1) * acc_level / ACC_LEVEL
-    radius = ORBIT_FRACTION * np.array([CLEARANCE_M, clearance_b])
+    force = np.stack([50.0 * swing, 80.0 * swing, 100.0 * swing], axis=1) * acc_level / ACC_LEVEL
+    clearances = np.array([CLEARANCE_M, clearance_b, 0.0])
+    radius = ORBIT_FRACTION * clearances
     offset = np.stack([np.cos(3 * theta), np.sin(3 * theta), 0.3 * np.sin(5 * theta)], axis=-1)
     offset = offset / np.linalg.norm(offset, axis=-1, keepdims=True)
     offset = offset[:, None, :] * radius[None, :, None]
@@ -173,7 +182,7 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         "joint_force": force,
         "normal_force": normal,
         "friction_force": 0.1 * normal,
-        "penetration": eccentricity - np.array([CLEARANCE_M, clearance_b]),
+        "penetration": np.where(clearances > 0.0, eccentricity - clearances, 0.0),
         "eccentricity": eccentricity,
         "ball_offset": offset,
         "wear_depth_max": growth * np.array([WEAR_MAP_PEAK[j] for j in JOINTS]),
@@ -185,7 +194,7 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         "constraint_violation": np.full(n, 1e-9),
         "wear_map": wear_map,
         "wear_projection": projection,
-        "wear_volume": np.array([1e-15, 2e-15]),
+        "wear_volume": np.array([1e-15, 2e-15, 0.0]),
         "substeps_used": np.int64(4),
         "rk4_steps": np.int64(80_000),
         "energy_residual_max": 1e-7,

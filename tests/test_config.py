@@ -23,6 +23,7 @@ from clearsweep.config import (
     get_path,
     load_config,
     parse_yaml,
+    radius_key,
     resolve_materials,
     set_path,
 )
@@ -245,7 +246,8 @@ def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
     for joint in raw["joints"].values():
         # room for the clearance and its tolerance band (at most 1.5 c, below): c + t <= R / 2
-        joint["socket_radius"] = 3.0 * joint["clearance"] + joint["socket_radius"]
+        radius = radius_key(joint)
+        joint[radius] = 3.0 * joint["clearance"] + joint[radius]
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
@@ -288,6 +290,12 @@ BAD = [
     # a ball of 0.1 mm in a 15 mm socket used to run "ok" while penetrating 590 radii deep
     ("joints:\n  B:\n    clearance: 0.0149\n", "joints.B.clearance", 0.0149,
      "the ball radius R_j = socket_radius - clearance is at least 0.5 * socket_radius"),
+    ("joints:\n  O:\n    clearance: 0.009\n", "joints.O.clearance", 0.009,
+     "the journal radius R_j = bearing_radius - clearance is at least 0.5 * bearing_radius"),
+    ("joints:\n  O:\n    length: 0\n", "joints.O.length", 0, "a number > 0"),
+    ("joints:\n  O:\n    bearing_radius: -0.01\n", "joints.O.bearing_radius", -0.01, "a number > 0"),
+    ("joints:\n  O:\n    socket_radius: 0.01\n", "joints.O.socket_radius", 0.01, "bearing_radius"),
+    ("joints:\n  O:\n    coating: teflon\n", "joints.O.coating", "teflon", "a known material"),
     ("solver:\n  dt: 0\n", "solver.dt", 0, "a number > 0"),
     ("solver:\n  dt: -1.0e-5\n", "solver.dt", -1e-5, "a number > 0"),
     ("solver:\n  dt: 2.0\n", "solver.dt", 2.0, "<= solver.duration (1.0)"),

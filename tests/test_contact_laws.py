@@ -173,13 +173,14 @@ def latched(mode, rates):
     through the kernel's accept_substep on a packed case."""
     cfg = load_config(dict(TWO, contact={"impact_velocity": mode}, wear={"enabled": False}))
     pk = pack(cfg, resolve_materials(cfg))
-    s = np.zeros((2, L.N_S))
+    nj = L.N_JOINTS
+    s = np.zeros((nj, L.N_S))
     dg = np.zeros(L.N_D)
     stats = np.zeros((2, L.N_M))
-    model = Model(pk.p, pk.jp, s, np.zeros((2, 1, 1)))
-    wear = Wear(np.zeros((2, 3, L.N_ANGLE_BINS)), np.zeros(2), np.zeros((2, 6)), np.zeros((2, 6)),
-                np.zeros((4, 4), np.int64), np.zeros((4, 4)), np.zeros(2), np.zeros((4, 3)))
-    ddot_prev = np.zeros(2)
+    model = Model(pk.p, pk.jp, s, np.zeros((nj, 1, 1)))
+    wear = Wear(np.zeros((nj, 3, L.N_ANGLE_BINS)), np.zeros(nj), np.zeros((nj, 6)), np.zeros((nj, 6)),
+                np.zeros((4, 4), np.int64), np.zeros((4, 4)), np.zeros(nj), np.zeros((4, 3)))
+    ddot_prev = np.zeros(nj)
     for rate in rates:
         dg[L.D_DELTA + 1] = 1e-7
         dg[L.D_ECC + 1] = C + 1e-7

@@ -490,7 +490,7 @@ ROUND4_MESSAGES = [
     ("life --resume from a checkpoint of another map shape (was: ValueError traceback)",
      lambda t, f: _checkpoint(f, t, wmap=np.zeros((2, 3, 12))) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
-     2, "(wmap has shape (2, 3, 12), expected (2, 6, 12)); pass --discard-checkpoint"),
+     2, "(wmap has shape (2, 3, 12), expected (3, 6, 12)); pass --discard-checkpoint"),
     ("life --resume from a checkpoint of ragged rows (was: exit 0, a block lost)",
      lambda t, f: _checkpoint(f, t, row_cycle=np.array([1.0])) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],

@@ -99,8 +99,10 @@ def test_the_table_attachments_meet_at_the_ideal_start():
 
     def point(att):
         body = by_name[att.body]
-        R = rotation(trig(*y[body.y_phi:body.y_phi + 3]))
         u = tuple(lengths[att.length] * f for f in att.factors)
+        if body.y_r is None:        # the ground: at the origin, unrotated
+            return np.asarray(u)
+        R = rotation(trig(*y[body.y_phi:body.y_phi + 3]))
         return np.asarray(y[body.y_r:body.y_r + 3]) + np.asarray(mv(R, u))
 
     for joint in joints.JOINTS:

@@ -114,15 +114,15 @@ def test_bins_tile_the_sphere(shape):
 
 
 def test_the_flush_spreads_every_waiting_cap_and_keeps_its_volume():
-    wmap = np.zeros((2, 36, 72))
-    pend = np.zeros((2, 6))
+    wmap = np.zeros((L.N_JOINTS, 36, 72))
+    pend = np.zeros((L.N_JOINTS, 6))
     vol = 3e-15
     n = np.array([0.0, 0.6, 0.8])
     pend[1, :3] = vol * n           # sum V n
     pend[1, 3] = vol                # sum V
     pend[1, 4] = vol * 2e-7         # sum V A: a cap of 0.2 mm^2
     pend[1, 5] = 0.015              # R_i
-    wmax = np.zeros(2)
+    wmax = np.zeros(L.N_JOINTS)
     flush_all_wear(wmap, pend, wmax, np.zeros((4 * 36, 3)))
     assert not pend.any()
     assert wmap[0].sum() == 0.0

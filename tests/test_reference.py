@@ -32,7 +32,7 @@ import reference as ref_mod
 
 from clearsweep.config import load_config, resolve_materials
 from clearsweep.core import layout as L
-from clearsweep.core.dynamics import evaluate, point_mobility
+from clearsweep.core.dynamics import NZ, VZ_ROWS, evaluate, point_mobility
 from clearsweep.core.kinematics import gmat, mtv, mv, point_jacobian_rot, rot_mass, rotation, trig
 from clearsweep.core.work import Model, Solve
 from clearsweep.params import pack
@@ -61,11 +61,11 @@ def packed_case(joints, preset="realistic", **sections):
 
 def run_evaluate(t, y, p, jp, dv0=(0.0, 0.0)):
     """One kernel right-hand side with fresh work arrays (as rk4.integrate allocates them)."""
-    s = np.zeros((2, L.N_S))
-    s[:, L.S_DV0] = dv0
-    work = dict(wmap=np.zeros((2, 36, 72)), dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D),
-                C=np.zeros((6, 6)), S=np.zeros((6, 6)), L=np.zeros((6, 6)),
-                vz=np.zeros((8, 6)))
+    s = np.zeros((L.N_JOINTS, L.N_S))
+    s[:len(dv0), L.S_DV0] = dv0
+    work = dict(wmap=np.zeros((L.N_JOINTS, 36, 72)), dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D),
+                C=np.zeros((NZ, NZ)), S=np.zeros((NZ, NZ)), L=np.zeros((NZ, NZ)),
+                vz=np.zeros((VZ_ROWS, NZ)))
     st = evaluate(t, np.array(y, float), Model(p, jp, s, work["wmap"]), work["dy"], work["dg"],
                   True, Solve(work["C"], work["S"], work["L"], work["vz"]))
     assert st == L.ST_OK
@@ -303,7 +303,7 @@ def kernel_point_mobility(k, y, pk, j):
     mr = rot_mass(tuple(p[L.P_J3:L.P_J3 + 3]), g3)
     det = mr[0] * mr[4] - mr[1] * mr[3]
     mr_inv = (mr[4] / det, -mr[1] / det, -mr[3] / det, mr[0] / det)
-    minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4])
+    minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4], 0.0)     # O ideal: the crank held
     nc = 3 * int(sum(jp[i, L.J_CLEARANCE] == 0.0 for i in range(2)))
     dg = k["dg"]
     n = np.array(dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3])
@@ -313,7 +313,7 @@ def kernel_point_mobility(k, y, pk, j):
     else:
         qrod = r3 + np.array(mv(r3m, (0.5 * p[L.P_L3], 0.0, 0.0))) + jp[j, L.J_RJ] * n
     jr = point_jacobian_rot(r3m, mtv(r3m, tuple(qrod - r3)), g3)
-    w = point_mobility(j, jr, k["C"], k["L"], nc, minv, mr_inv, np.zeros((8, 6)))
+    w = point_mobility(j, jr, k["C"], k["L"], nc, minv, mr_inv, np.zeros((VZ_ROWS, NZ)))
     xx, xy, xz, yy, yz, zz = w
     return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
 

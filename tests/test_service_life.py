@@ -49,13 +49,13 @@ def test_bad_life_value_names_the_key():
 def _kernel(overrides, wmap):
     cfg = load_config(CASE, [*SMALL, "solver.duration=0.1", *overrides])
     packed = pack(cfg, resolve_materials(cfg), wmap)
-    return packed, run_kernel(packed, wmap, np.zeros(2))
+    return packed, run_kernel(packed, wmap, np.zeros(L.N_JOINTS))
 
 
 def test_worn_through_coating_contacts_as_the_base_material():
     """A PTFE socket worn through everywhere (feedback off, so the geometry is the unworn
     one) behaves exactly as the uncoated steel socket."""
-    worn = np.full((2, 36, 72), 2e-4)
+    worn = np.full((L.N_JOINTS, 36, 72), 2e-4)
     packed, coated = _kernel(["joints.B.coating=PTFE", "wear.feedback=false"], worn)
     assert packed.jp[1, L.J_EW_BASE] > packed.jp[1, L.J_EW]
     _, steel = _kernel(["wear.feedback=false"], worn)

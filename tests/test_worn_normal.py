@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from clearsweep.config import load_config
+from clearsweep.core import layout as L
 from clearsweep.core.wear import map_interp
 from clearsweep.simulation import case_dataset, preflight, prepare_kernel, run_kernel
 
@@ -57,7 +58,7 @@ def run_groove(depth, duration=0.2):
                        "solver": {"duration": duration}})
     packed = preflight(cfg)
     prepare_kernel()
-    wmap0 = np.zeros((2, 36, 72))
+    wmap0 = np.zeros((L.N_JOINTS, 36, 72))
     wmap0[1] = smooth_map(36, 72, depth)
     return case_dataset(cfg, packed, run_kernel(packed, wmap0=wmap0))
 

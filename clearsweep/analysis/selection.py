@@ -198,15 +198,18 @@ def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
     """Radial clearance [m] of each joint in the configuration text; empty when there is none.
 
     A case file holds its resolved config in the ``config`` attribute, a sweep file its
-    base case under ``base`` of ``sweep_config``.
+    base case under ``base`` of ``sweep_config``. A joint the text leaves out has its
+    default, no clearance (joint O in a file written before it existed).
     """
     from ..schema import ConfigError, parse_yaml
+    from ..variables import JOINTS
 
     for attr, section in (("config", None), ("sweep_config", "base")):
         try:
             config = parse_yaml(ds.attrs.get(attr) or "", attr) or {}
             joints = (config[section] if section else config)["joints"]
-            return {str(j): float(spec["clearance"]) for j, spec in joints.items()}
+            return {**{name: 0.0 for name in JOINTS},
+                    **{str(j): float(spec["clearance"]) for j, spec in joints.items()}}
         except (ConfigError, KeyError, TypeError, ValueError, AttributeError):
             continue
     return {}

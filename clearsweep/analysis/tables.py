@@ -106,15 +106,27 @@ def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
     """
     summary = case_summary(ds)
     if metric in summary:
-        return summary[metric]
+        return without_ideal_joints(summary[metric], ds)
     # a life or reliability sweep's own per-case numbers (cycles_reached, b10, ...)
     dims = set(sweep_dims(ds)) | {"joint"}
     own = [str(n) for n, v in ds.data_vars.items() if n not in summary and v.dtype.kind in "fiu"
            and v.dims and set(v.dims) <= dims]
     if metric in own:
-        return ds[metric]
+        return without_ideal_joints(ds[metric], ds)
     names = [str(n) for n in summary.data_vars] + own
     raise SelectionError(choice_message("metric", metric, names), name=metric, choices=names)
+
+
+def without_ideal_joints(values: xr.DataArray, ds: xr.Dataset) -> xr.DataArray:
+    """``values`` without the joints that are ideal in every case of ``ds`` (joint O of a
+    mechanism with spherical clearance only): their per-joint metrics are n/a throughout,
+    so a table has no row and a figure no panel for them. All of them where every joint is
+    ideal (the ideal mechanism), or where ``ds`` does not say which joints have clearance."""
+    clearances = joint_clearances(ds) if "joint" in values.dims else None
+    if clearances is None:
+        return values
+    kept = [j for j in values["joint"].values if float(clearances.sel(joint=j).max()) > 0.0]
+    return values.sel(joint=kept) if kept else values
 
 
 @dataclass(frozen=True)

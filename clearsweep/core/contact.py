@@ -1,15 +1,35 @@
-"""Contact laws, friction, contact area (docs/physics.md section 3, 5; paper Table 1, Eq. 11-13).
+"""Contact laws, friction, and the contact response of a clearance joint (docs/physics.md section 3).
 
-Pure functions of floats in SI units, and the choice of surface values (coated or base).
+Pure functions of floats in SI units, the choice of surface values (coated or base), and
+:func:`respond`: from a joint type's gap geometry to the force pair, the composition that
+every joint type (``spherical``, ``revolute``) ends its ``contact`` with.
 The elastic law (``n``: 0.0 the paper's, else the exponent of the power law) and the damping
 law (its hysteresis factor as a fraction, ``params.pack``) are parameters of the case
 (docs/physics.md section 3.2).
 """
 
 import math
+from collections import namedtuple
 
 from .compiled import compiled
-from .layout import J_EW, J_EW_BASE, J_K, J_K_BASE, J_MU, J_MU_BASE, P_DV0_MIN, P_HYST_DEN, P_HYST_NUM
+from .kinematics import add, cross, dot, mtv, mv, scale, sub
+from .layout import (
+    J_EW,
+    J_EW_BASE,
+    J_K,
+    J_K_BASE,
+    J_MU,
+    J_MU_BASE,
+    J_RI,
+    J_RJ,
+    P_DV0_MIN,
+    P_FRICTION,
+    P_HYST_DEN,
+    P_HYST_NUM,
+    P_V0,
+    P_V1,
+    S_DV0,
+)
 
 
 @compiled
@@ -194,3 +214,135 @@ def surface(jp, j, worn):
     if worn:
         return jp[j, J_EW_BASE], jp[j, J_MU_BASE], jp[j, J_K_BASE]
     return jp[j, J_EW], jp[j, J_MU], jp[j, J_K]
+
+
+#: What a joint type's ``contact`` (:func:`respond`) returns for one clearance joint (Numba compiles a namedtuple as a
+#: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
+#: named ``_socket``.
+ContactState = namedtuple("ContactState", (
+    "force",            # force on the ball [N]
+    "force_normal",     # its normal part (the force without friction) [N]
+    "q_ball",           # contact point Q_j on the ball
+    "q_socket",         # contact point Q_i on the socket
+    "fn",               # normal force F_N [N]
+    "dfn_ddelta",       # dF_N / d delta [N/m]
+    "dfn_dddot",        # dF_N / d delta_dot [N s/m]
+    "delta",            # penetration delta = e - c_eff [m] (negative: a gap)
+    "ddot",             # normal approach rate delta_dot [m/s]
+    "ecc",              # eccentricity e [m]
+    "normal",           # line of the normal force (n on a flat surface)
+    "offset_socket",    # ball-centre offset d in the socket frame [m]
+    "normal_socket",    # n in the socket frame
+    "slip_speed",       # tangential slip speed |v_t| [m/s]
+    "c_eff",            # local clearance c + h [m]
+    "wear_depth",       # wear depth h under the contact point [m]
+    "elastic_energy",   # elastic energy U_el [J] (0 unless asked for)
+    "diss_power",       # power dissipated by damping and friction [W]
+    "worn_through",     # 1.0: coating worn through under the contact, base values used
+))
+
+
+@compiled
+def contact_points(pb, ps, n, ri, rj):
+    """(Q_j on the ball, Q_i on the socket): the surface points along the normal n."""
+    return add(pb, scale(rj, n)), add(ps, scale(ri, n))
+
+
+@compiled
+def point_velocity(r, v, R, w, q):
+    """Velocity of the material point at global position q of a body (centroid r, velocity
+    v, rotation R, body-frame angular velocity w)."""
+    return add(v, mv(R, cross(w, mtv(R, sub(q, r)))))
+
+
+@compiled
+def tangential(v, u):
+    """The part v_t of v tangent to the unit vector u, and |v_t|."""
+    vt = sub(v, scale(dot(u, v), u))
+    return vt, math.sqrt(dot(vt, vt))
+
+
+@compiled
+def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
+    """v(Q_j) - v(Q_i): the velocity of the ball's point Q_j relative to the socket's Q_i."""
+    return sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
+
+
+@compiled
+def respond(j, model, ball, socket, pb, ps, geo, law, energy):
+    """Contact state and force of clearance joint j from its gap geometry ``geo`` (what a
+    joint type's ``gap`` returns: e, n, d_s, n_s, h, slope, worn, c_eff, delta) at ball
+    centre pb and socket centre ps, with the elastic law ``law`` (:func:`elastic_force`'s
+    n): the composition that every joint type's ``contact`` ends with (docs/physics.md
+    section 3).
+
+    ``ball``: the ball's body (centroid rb, velocity vb, rotation Rb, body-frame angular
+    velocity wb) and the ball centre's body offset ub, as the tuple (rb, vb, Rb, wb, ub);
+    ``socket``: (rs, vs, Rs, ws_, us) likewise. ``model`` (a :data:`work.Model`) holds p, jp
+    and s. ``energy``: also compute the elastic energy (else 0 where not needed).
+    Returns a :data:`ContactState`. The whole arrays jp and s are passed with the joint
+    index, never a row of them: a row is a new array view, formed at every call.
+
+    On a sloped worn surface (bilinear map read, the gap's ``slope`` s != 0) the
+    penetration delta = e - c - h(n) has the gradient m = n - s, and the contact force
+    derives from the elastic potential U(delta, c_eff) (docs/physics.md 3.5):
+    F = -F_N m - X s on the ball, X = dU/dc_eff at fixed delta while F_N > 0 (0 otherwise),
+    acting along its own line through the ball centre, so that its power is exactly
+    -F_N delta_dot - X h_dot with delta_dot = m . w, h_dot = s . w, w the ball centre's
+    velocity as the socket sees it; damping and friction are booked as dissipated.
+    A flat surface (s = 0) gives the radial force F = -F_N n of section 3.4.
+    """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    rb, vb, Rb, wb, _ = ball
+    rs, vs, Rs, ws_, _ = socket
+    e, n, d_s, n_s, h, slope, worn, c_eff, delta = geo
+    ew, mu, _ = surface(jp, j, worn)
+    worn_flag = 1.0 if worn else 0.0
+    ri = jp[j, J_RI]
+    rj = jp[j, J_RJ]
+    zero = (0.0, 0.0, 0.0)
+    sloped = slope[0] != 0.0 or slope[1] != 0.0 or slope[2] != 0.0
+    hdot = 0.0
+    if sloped:
+        # the ball centre's velocity relative to the socket, in the socket's rotating frame
+        # (the centres' velocities formed here, not kept live across the flat path)
+        w = sub(sub(point_velocity(rb, vb, Rb, wb, pb), point_velocity(rs, vs, Rs, ws_, ps)),
+                cross(mv(Rs, ws_), sub(pb, ps)))
+        hdot = dot(slope, w)
+        ddot = dot(n, w) - hdot
+        qj, qi = contact_points(pb, pb, n, rj - delta, rj)
+        v = zero
+    else:
+        qj, qi = contact_points(pb, ps, n, ri, rj)
+        v = relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi)
+        ddot = dot(n, v)
+    if delta <= 0.0:
+        return ContactState(zero, zero, qj, qi, 0.0, 0.0, 0.0, delta, ddot, e, n, d_s, n_s, 0.0,
+                            c_eff, h, 0.0, 0.0, worn_flag)
+    kappa = contact_damping(s[j, S_DV0], ddot, p)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, ri, rj, law, kappa)
+    uel = elastic_energy(delta, c_eff, ew, ri, rj, law) if (energy or sloped) else 0.0
+    line = n
+    if sloped:
+        uc = (2.0 * uel - delta * fel) / c_eff       # dU/dc_eff at fixed delta
+        x = uc if fn > 0.0 else 0.0
+        force = add(scale(-fn, n), scale(fn - x, slope))
+        pdiss = (fn - fel) * ddot + (x - uc) * hdot
+        size = math.sqrt(dot(force, force))
+        if size > 0.0:
+            line = scale(-1.0 / size, force)
+        qj, qi = contact_points(pb, pb, line, rj - delta, rj)
+        v = relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi)
+    else:
+        force = scale(-fn, n)
+        pdiss = (fn - fel) * ddot
+    force_normal = force
+    vt, vtn = tangential(v, line)
+    if p[P_FRICTION] != 0.0 and vtn > 0.0:
+        ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1])
+        force = add(force, scale(-ft / vtn, vt))
+        pdiss += ft * vtn
+    return ContactState(force, force_normal, qj, qi, fn, dfd, dfdd, delta, ddot, e, line, d_s, n_s, vtn, c_eff,
+                        h, uel if energy else 0.0, pdiss, worn_flag)

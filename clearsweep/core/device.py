@@ -35,7 +35,7 @@ import math
 import numba
 from numba import cuda, types
 
-from .dynamics import VZ_ROWS
+from .dynamics import NZ, VZ_ROWS
 from .layout import N_ANGLE_BINS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
@@ -147,8 +147,8 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
                        block(pairs, i, 0, (N_JOINTS,)), block(pairs, i, 1, (N_JOINTS,)),
                        block(pairs, i, 2, (N_JOINTS,)),
                        block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
-                       block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)),
-                       block(mats, i, 2, (6, 6)), block(vz, i, 0, (VZ_ROWS, 6)),
+                       block(mats, i, 0, (NZ, NZ)), block(mats, i, 1, (NZ, NZ)),
+                       block(mats, i, 2, (NZ, NZ)), block(vz, i, 0, (VZ_ROWS, NZ)),
                        buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
                        block(caps, i, 1, (N_JOINTS, 6)), scratch[i])
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)

@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .compiled import compiled
-from .dynamics import VZ_ROWS, evaluate
+from .dynamics import NZ, VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
@@ -215,8 +215,8 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
                       np.zeros(ny), np.zeros((1, ny)), np.zeros(ny), np.zeros(N_D),
                       np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
-                      np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((6, 6)),
-                      np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                      np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((NZ, NZ)),
+                      np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
                       np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
                       np.zeros((4 * case.wmap.shape[1], 3)))

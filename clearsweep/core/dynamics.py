@@ -7,12 +7,14 @@ The Baumgarte-stabilised augmented system
 
 is solved exactly by exploiting its structure. Every constraint except the ideal spherical
 joints acts on one body only and fixes a coordinate's acceleration directly (crank: revolute
-O + driver, 6 rows on 6 coordinates; rod spin gamma3 = 0; slider: y, z and three angles).
-The remaining free coordinates z = [r3, alpha3, beta3, x4] carry a block-diagonal mass
-matrix and at most six rows (ideal A, ideal B), solved through the Schur complement
-S = C M^-1 C^T. The crank's multipliers (torque, reaction at O) follow from its own
-equations once the joint forces are known. Implemented: gamma3 = 0 as published (paper
-Eq. 24).
+O + driver, 6 rows on 6 coordinates, or 4 where O has clearance: the driver, the two tilts
+and the axial position; rod spin gamma3 = 0; slider: y, z and three angles). The remaining
+free coordinates z = [r3, alpha3, beta3, x4, y2, z2] carry a block-diagonal mass matrix and
+at most six rows (ideal A, ideal B), solved through the Schur complement S = C M^-1 C^T; the
+crank's y2, z2 (its centroid in the bearing's plane) are free only where O has clearance,
+and otherwise carry a zero inverse mass and zero columns, which leave every product as it
+was. The crank's multipliers (torque, reaction at O) follow from its own equations once the
+joint forces are known. Implemented: gamma3 = 0 as published (paper Eq. 24).
 """
 
 import math
@@ -20,8 +22,10 @@ import math
 import numpy as np
 from numba import types
 
+from . import revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
+from .joints import INDEX
 from .kinematics import (
     add,
     cross,
@@ -104,11 +108,20 @@ from .layout import (
     Y_R4,
     Y_WORK,
 )
-from .spherical import contact
 from .target import on_device
 from .work import Model, Solve
 
-NZ = 6  # free coordinates: x3, y3, z3, alpha3, beta3, x4
+NZ = 8  # free coordinates: x3, y3, z3, alpha3, beta3, x4, y2, z2
+NC_MAX = 6  # constraint rows of the Schur solve: ideal A and ideal B, 3 each
+
+#: The joints' rows (joints.JOINTS), as constants of the compiled code.
+JOINT_A = INDEX["A"]
+JOINT_B = INDEX["B"]
+JOINT_O = INDEX["O"]
+
+#: The ground's body state (r, v, R, w): the bearing of joint O.
+GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+          (0.0, 0.0, 0.0))
 
 @compiled
 def body_moment(R, r, q, f):
@@ -153,13 +166,16 @@ def chol_solve(L, vz, b, nc):
 @compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
-    rows of the work array vz)."""
+    rows of the work array vz; minv: 1/m3, 1/m4 and 1/m2, the last 0 where the crank is held
+    in its bearing)."""
     vz[out, 0] = minv[0] * vz[v, 0]
     vz[out, 1] = minv[0] * vz[v, 1]
     vz[out, 2] = minv[0] * vz[v, 2]
     vz[out, 3] = mr_inv[0] * vz[v, 3] + mr_inv[1] * vz[v, 4]
     vz[out, 4] = mr_inv[2] * vz[v, 3] + mr_inv[3] * vz[v, 4]
     vz[out, 5] = minv[1] * vz[v, 5]
+    vz[out, 6] = minv[2] * vz[v, 6]
+    vz[out, 7] = minv[2] * vz[v, 7]
 
 
 @compiled
@@ -195,11 +211,17 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     """Mobility W_p of joint j's relative contact motion, a_rel = W_p F for the force pair
     (F on the ball, -F on the socket); symmetric 3x3 as (xx, xy, xz, yy, yz, zz) [1/kg].
 
-    The rod carries one side (A's socket, B's ball; Jr its rotation Jacobian block); the
-    crank is driven (immobile); B's socket moves with the slider along X only. With no
-    ideal joint left (nc = 0) W_p = I/m3 + A Mr^-1 A^T (+ e_x e_x^T / m4 at B) in closed form.
+    The rod carries one side of A and B (A's socket, B's ball; Jr its rotation Jacobian
+    block); the crank's rotation is driven, its centroid free in the bearing's plane (y, z)
+    where O has clearance (minv[2] = 1/m2, else 0: immobile); B's socket moves with the
+    slider along X only; O's bearing is the ground. With no ideal joint left (nc = 0)
+    W_p = I/m3 + A Mr^-1 A^T (+ e_x e_x^T / m4 at B, + (e_y e_y^T + e_z e_z^T) / m2 at A) in
+    closed form, and (e_y e_y^T + e_z e_z^T) / m2 at O.
     """
-    xs = minv[1] if j == 1 else 0.0
+    xs = minv[1] if j == JOINT_B else 0.0
+    cs = minv[2] if j != JOINT_B else 0.0
+    if j == JOINT_O and nc == 0:
+        return (0.0, 0.0, 0.0, cs, 0.0, cs)
     if nc == 0:
         im = minv[0]
         a0 = (Jr[0], Jr[3], Jr[6])
@@ -209,17 +231,21 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
         b1 = (mr_inv[2] * a0[0] + mr_inv[3] * a1[0], mr_inv[2] * a0[1] + mr_inv[3] * a1[1],
               mr_inv[2] * a0[2] + mr_inv[3] * a1[2])
         return (im + xs + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
-                a0[0] * b0[2] + a1[0] * b1[2], im + a0[1] * b0[1] + a1[1] * b1[1],
-                a0[1] * b0[2] + a1[1] * b1[2], im + a0[2] * b0[2] + a1[2] * b1[2])
+                a0[0] * b0[2] + a1[0] * b1[2], im + cs + a0[1] * b0[1] + a1[1] * b1[1],
+                a0[1] * b0[2] + a1[1] * b1[2], im + cs + a0[2] * b0[2] + a1[2] * b1[2])
     # general case: g_k = J^T e_k, W_p[a, b] = g_a . (W g_b)
     # rows of vz: 0-2 g_k, 3-4 work, 5 the result (xx, xy, xz, yy, yz, zz), 6 W g_b
+    rod = 0.0 if j == JOINT_O else 1.0
+    crank = 1.0 if j == JOINT_O else (-1.0 if j == JOINT_A else 0.0)
     for k in range(3):
-        vz[k, 0] = 1.0 if k == 0 else 0.0
-        vz[k, 1] = 1.0 if k == 1 else 0.0
-        vz[k, 2] = 1.0 if k == 2 else 0.0
-        vz[k, 3] = Jr[3 * k]
-        vz[k, 4] = Jr[3 * k + 1]
-        vz[k, 5] = -1.0 if (j == 1 and k == 0) else 0.0
+        vz[k, 0] = rod if k == 0 else 0.0
+        vz[k, 1] = rod if k == 1 else 0.0
+        vz[k, 2] = rod if k == 2 else 0.0
+        vz[k, 3] = rod * Jr[3 * k]
+        vz[k, 4] = rod * Jr[3 * k + 1]
+        vz[k, 5] = -1.0 if (j == JOINT_B and k == 0) else 0.0
+        vz[k, 6] = crank if k == 1 else 0.0
+        vz[k, 7] = crank if k == 2 else 0.0
     for b in range(3):
         constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
         for a in range(b + 1):
@@ -364,7 +390,9 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
 def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
-    rows written and the largest position violation of these joints [m]."""
+    rows written and the largest position violation of these joints [m]. Where O has
+    clearance the crank's centroid acceleration in the bearing's plane (rdd2's y, z) is
+    free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
@@ -372,7 +400,10 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
-    if jp[0, J_CLEARANCE] == 0.0:
+    if jp[JOINT_A, J_CLEARANCE] == 0.0:
+        o_free = jp[JOINT_O, J_CLEARANCE] != 0.0
+        if o_free:
+            rdd2 = (rdd2[0], 0.0, 0.0)
         r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
@@ -392,11 +423,13 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
             C[nc + i, i] = 1.0
             C[nc + i, 3] = JrA[3 * i]
             C[nc + i, 4] = JrA[3 * i + 1]
+            if o_free and i > 0:
+                C[nc + i, 5 + i] = -1.0
             vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
                                   - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
         nc += 3
-    if jp[1, J_CLEARANCE] == 0.0:
+    if jp[JOINT_B, J_CLEARANCE] == 0.0:
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
@@ -500,7 +533,7 @@ def kinetic_energy(p, y, t2, t3, t4):
 
 #: Local variables that Numba must type as plain int64: a constant argument would otherwise
 #: compile the callee once per value (a Literal specialisation).
-_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64}
+_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64}
 
 
 @compiled(locals=_NOT_LITERAL)
@@ -514,9 +547,9 @@ def evaluate(t, y, model, dy, dg, full, solve):
     y : float64[38]
         State (layout.Y_*): q, qd, drive work, dissipated energy.
     model : work.Model
-        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[2, N_S], the discrete
-        contact state (impact velocity, contact angle) per joint; wmap: float64[2, npolar,
-        nazim], the wear map [m].
+        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[N_JOINTS, N_S], the
+        discrete contact state (impact velocity, contact angle) per joint; wmap:
+        float64[N_JOINTS, npolar, nazim], the wear maps [m].
     dy : float64[38]
         Output derivative.
     dg : float64[N_D]
@@ -526,7 +559,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
         dopri5's inner stages need the derivative only.
     solve : work.Solve
-        The float64 work arrays C, S, L (6x6) and vz (VZ_ROWS x 6).
+        The float64 work arrays C, S, L (NZ x NZ) and vz (VZ_ROWS x NZ).
 
     Returns
     -------
@@ -548,8 +581,10 @@ def evaluate(t, y, model, dy, dg, full, solve):
     S = solve.S
     L = solve.L
     vz = solve.vz
-    joint_a = 0
-    joint_b = 1
+    joint_a = JOINT_A
+    joint_b = JOINT_B
+    joint_o = JOINT_O
+    o_free = jp[JOINT_O, J_CLEARANCE] != 0.0
     qd = Y_QD
     t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
     t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
@@ -557,6 +592,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
     uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
+    uO2 = (0.0, 0.0, 0.5 * p[P_L2])
     zero = (0.0, 0.0, 0.0)
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
 
@@ -571,6 +607,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         clear_contacts(dg)
     fA = zero
     fB = zero
+    fO = zero
     # crank and rod frames: once before the contacts on a CPU; in a device build each
     # contact forms those it uses (few values live across the contacts: a GPU thread's
     # registers), the rod's twice when both joints have clearance
@@ -579,11 +616,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
         r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
-    if jp[0, J_CLEARANCE] != 0.0:
+    if jp[JOINT_A, J_CLEARANCE] != 0.0:
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        cA = contact(joint_a, model, (r2, v2, R2, w2, uA2), (r3, v3, R3, w3, uA3), full)
+        cA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2), (r3, v3, R3, w3, uA3),
+                               full)
         fA = cA.force
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
@@ -593,11 +631,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
         if full:
             store_contact(dg, joint_a, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
-    if jp[1, J_CLEARANCE] != 0.0:
+    if jp[JOINT_B, J_CLEARANCE] != 0.0:
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        cB = contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, zero), full)
+        cB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, zero),
+                               full)
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
@@ -605,6 +644,19 @@ def evaluate(t, y, model, dy, dg, full, solve):
         pdiss += cB.diss_power
         if full:
             store_contact(dg, joint_b, cB)
+    # joint O: ball = crank journal, socket = the ground's bearing (socket frame: global)
+    if o_free:
+        if local:
+            r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
+        gr, gv, gR, gw = GROUND
+        cO = revolute.contact(joint_o, model, (r2, v2, R2, w2, uO2), (gr, gv, gR, gw, zero),
+                              full)
+        fO = cO.force
+        F2 = add(F2, fO)
+        N2 = add(N2, body_moment(R2, r2, cO.q_ball, fO))
+        pdiss += cO.diss_power
+        if full:
+            store_contact(dg, joint_o, cO)
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
@@ -615,12 +667,18 @@ def evaluate(t, y, model, dy, dg, full, solve):
     mr_inv, ok = rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz)
     if not ok:
         return ST_SINGULAR
-    minv = (1.0 / p[P_M3], 1.0 / p[P_M4])
+    # the crank's centroid in the bearing's plane: free where O has clearance (forces
+    # gravity, O's contact and A's contact, inverse mass 1/m2), else held (zero, 0)
+    vz[VZ_FORCE, 6] = F2[1] if o_free else 0.0
+    vz[VZ_FORCE, 7] = F2[2] if o_free else 0.0
+    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free else 0.0)
     nc, cons = ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
     zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
            vz[VZ_ZDD, 5])
+    if o_free:
+        rdd2 = (rdd2[0], vz[VZ_ZDD, 6], vz[VZ_ZDD, 7])
 
     # ---- assemble qdd ----
     for k in range(N_Q):
@@ -643,7 +701,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
-    if jp[0, J_CLEARANCE] == 0.0:
+    if jp[JOINT_A, J_CLEARANCE] == 0.0:
         fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
         r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
@@ -651,8 +709,9 @@ def evaluate(t, y, model, dy, dg, full, solve):
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
-    if jp[1, J_CLEARANCE] == 0.0:
+    if jp[JOINT_B, J_CLEARANCE] == 0.0:
         fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
+    # with O's clearance, lamO keeps the axial reaction only (its y, z vanish to rounding)
     torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
     dy[Y_WORK] = torque * y[qd + Y_PHI2 + 2]
     dy[Y_DISS] = pdiss
@@ -662,9 +721,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
     dg[D_SLIDER_ACC] = zdd[5]
     dg[D_TORQUE] = torque
     for i in range(3):
-        dg[D_REACTION_O + i] = -lamO[i]
-        dg[D_JOINT_FORCE + i] = fA[i]
-        dg[D_JOINT_FORCE + 3 + i] = fB[i]
+        # the bearing's force on the crank: the ideal revolute's reaction, or O's contact
+        # force and the axial reaction
+        dg[D_REACTION_O + i] = fO[i] - lamO[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_O + i] = fO[i] - lamO[i]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
     dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
@@ -673,8 +735,11 @@ def evaluate(t, y, model, dy, dg, full, solve):
     r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
     dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
     R2 = rotation(t2)
-    pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
-    cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
+    pO = add(r2, mv(R2, uO2))
+    if o_free:
+        cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
+    else:
+        cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
     cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
@@ -707,11 +772,11 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
     L = solve.L
     vz = solve.vz
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
-    if j == 0:
+    if j == JOINT_A:
         # the socket point Q_i on the rod
         qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
     else:
-        # the ball point Q_j on the rod
+        # the ball point Q_j on the rod (O: unused, the rod carries neither side)
         qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
     Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
     wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
@@ -726,7 +791,7 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
         c_eff = dg[D_CEFF + j]
         ri = jp[j, J_RI]
         rj = jp[j, J_RJ]
-        law = p[P_EXPONENT]
+        law = revolute.journal_law(p) if j == JOINT_O else p[P_EXPONENT]
         dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri, rj, law)
         kappa = contact_damping(s[j, S_DV0], ddot, p)
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
@@ -787,23 +852,23 @@ def store_contact(dg, j, cres):
 
 
 def ideal_joint_forces(t, y, p, jp):
-    """Forces on the balls [N] (2 x 3, global frame) of the mechanism with both spherical
-    joints ideal, at state y and time t: the reactions a seated start leans the balls on.
+    """Forces on the balls [N] (N_JOINTS x 3, global frame; O's: on the crank's journal) of
+    the mechanism with every joint ideal, at state y and time t: the reactions a seated
+    start leans the balls on.
 
     Plain Python around the compiled :func:`evaluate` (the argument types that
     rk4.integrate uses): a compiled wrapper would optimise evaluate's code once more.
     """
     jp_ideal = jp.copy()
-    jp_ideal[0, J_CLEARANCE] = 0.0
-    jp_ideal[1, J_CLEARANCE] = 0.0
+    jp_ideal[:, J_CLEARANCE] = 0.0
     s = np.zeros((N_JOINTS, N_S))
     wmap = np.zeros((N_JOINTS, 1, 1))
     dy = np.zeros(y.shape[0])
     dg = np.zeros(N_D)
-    C = np.zeros((6, 6))
-    S = np.zeros((6, 6))
-    L = np.zeros((6, 6))
-    vz = np.zeros((VZ_ROWS, 6))
+    C = np.zeros((NZ, NZ))
+    S = np.zeros((NZ, NZ))
+    L = np.zeros((NZ, NZ))
+    vz = np.zeros((VZ_ROWS, NZ))
     out = np.full((N_JOINTS, 3), np.nan)
     if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), Model(p, jp_ideal, s, wmap),
                 dy, dg, True, Solve(C, S, L, vz)) != ST_OK:

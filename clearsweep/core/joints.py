@@ -10,10 +10,12 @@ of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one
 registration without its module or docs).
 
 What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin in
-the rod) and joint B (rod end in the slider) by name, with the attachment points written
-there as in :data:`JOINTS`, and removes the crank and the slider's guide analytically
-(six free coordinates, ``dynamics.minv_apply``); tests/test_joints.py checks the table's
-attachments against the packed initial state.
+the rod), joint B (rod end in the slider) and joint O (crank journal in the ground's
+bearing) by name, with the attachment points written there as in :data:`JOINTS`, and
+removes the crank's rotation and the slider's guide analytically (eight free coordinates,
+the crank's two in the bearing plane counting only where O has clearance,
+``dynamics.minv_apply``); tests/test_joints.py checks the table's attachments against the
+packed initial state.
 """
 
 from collections import namedtuple
@@ -22,8 +24,10 @@ from collections import namedtuple
 #: state vector (``layout.Y_*``: 3 values each).
 Body = namedtuple("Body", ["name", "y_r", "y_phi"])
 
-#: The bodies, in state order (crank 2, rod 3, slider 4; the ground is body 1).
-BODIES = (Body("crank", 0, 3), Body("rod", 6, 9), Body("slider", 12, 15))
+#: The bodies, in state order (crank 2, rod 3, slider 4); the ground (body 1) has no state
+#: (``y_r``, ``y_phi`` None: it stays at the origin, unrotated).
+BODIES = (Body("crank", 0, 3), Body("rod", 6, 9), Body("slider", 12, 15),
+          Body("ground", None, None))
 
 #: A point fixed in a body, in the body's frame [m]: ``length`` names the packed length it
 #: scales (``"l2"``: crank, ``"l3"``: rod, None: the point is the centroid) and
@@ -42,17 +46,24 @@ JOINTS = (
           socket=Attachment("rod", "l3", (-0.5, 0.0, 0.0))),
     Joint("B", "spherical", ball=Attachment("rod", "l3", (0.5, 0.0, 0.0)),
           socket=Attachment("slider", None, (0.0, 0.0, 0.0))),
+    # the crank's journal (its "ball": the crank end on the crank axis) in the ground's
+    # bearing at the origin, axis along global x
+    Joint("O", "revolute", ball=Attachment("crank", "l2", (0.0, 0.0, 0.5)),
+          socket=Attachment("ground", None, (0.0, 0.0, 0.0))),
 )
 
 #: Joints of the mechanism.
 N_JOINTS = len(JOINTS)
 
+#: Each joint's row by name (``INDEX["O"]``: the revolute joint's row of jp, s, the maps).
+INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
+
 #: Registered joint types: type name -> the module of ``clearsweep.core`` that implements
 #: it (that module's ``JOINT_TYPE`` is the name).
-JOINT_TYPES = {"spherical": "spherical"}
+JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute"}
 
 #: What a joint-type module provides, compiled in that module (docs/architecture.md,
-#: "Joint types"): the gap geometry, the contact points and their velocities, the contact
-#: composed into a ``ContactState``, and its wear surface's contact angle and area.
-PROVIDES = ("gap", "contact_points", "point_velocity", "contact", "contact_angle",
-            "contact_area")
+#: "Joint types"): the gap geometry, the contact composed into a ``contact.ContactState``
+#: (by ``contact.respond``, shared by every type), and its wear surface's contact angle and
+#: area.
+PROVIDES = ("gap", "contact", "contact_angle", "contact_area")

@@ -68,7 +68,8 @@ J_EW_BASE = 7       # equivalent modulus E_w of the uncoated pair [Pa]
 J_MU_BASE = 8       # friction coefficient of the base [-]
 J_K_BASE = 9        # wear coefficient of the base [m^2/N]
 J_COAT = 10         # coating thickness [m]; inf = no coating to wear through
-N_JP = 11
+J_LENGTH = 11       # bearing length L [m] (revolute joints; 0 for a spherical one)
+N_JP = 12
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.

@@ -13,9 +13,10 @@ import math
 import numpy as np
 from numba import njit, types
 
+from . import revolute
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
-from .dynamics import VZ_ROWS, evaluate
+from .dynamics import JOINT_O, NZ, VZ_ROWS, evaluate
 from .layout import (
     D_CONS,
     D_DDOT,
@@ -39,6 +40,7 @@ from .layout import (
     I_SUBSTEPS,
     J_C,
     J_CLEARANCE,
+    J_LENGTH,
     J_RI,
     J_RJ,
     M_ACC_PEAK,
@@ -165,7 +167,8 @@ WEAR_MERGE_AREA = 0.05
 @compiled
 def wear_mergeable(pend, cur, j):
     """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
-    (rows as in integrate: sum V n, sum V, sum V A, R_i) without moving the cap noticeably."""
+    (rows as in integrate: sum V n, sum V, sum V A, and the surface's scale: R_i on a
+    sphere, R_i L on a bearing) without moving the cap noticeably."""
     ap = pend[j, 4] / pend[j, 3]
     ac = cur[j, 4] / cur[j, 3]
     if abs(ac - ap) > WEAR_MERGE_AREA * ap:
@@ -176,6 +179,10 @@ def wear_mergeable(pend, cur, j):
     for i in range(3):
         d = pend[j, i] / np_ - cur[j, i] / nc
         d2 += d * d
+    if j == JOINT_O:
+        # the strip's half-angle psi = A / (2 R_i L)
+        half = 0.5 * ap / pend[j, 5]
+        return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * half * half
     # cap angular radius^2 ~ A / (pi R^2) for small caps
     return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[j, 5] * pend[j, 5])
 
@@ -186,7 +193,10 @@ def flush_wear(wmap, j, pend, scratch):
     area); clear it; return the largest depth written [m]."""
     size = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
     n = (pend[j, 0] / size, pend[j, 1] / size, pend[j, 2] / size)
-    top = deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
+    if j == JOINT_O:
+        top = revolute.deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5])
+    else:
+        top = deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
     for i in range(6):
         pend[j, i] = 0.0
     return top
@@ -276,32 +286,41 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
             rj = jp[j, J_RJ]
             e = dg[D_ECC + j]
             pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
-            # the contact angle matters to the paper's slip rule only
-            beta = contact_angle(pen, e, ri, rj) if paper_slip else math.pi
+            bearing = j == JOINT_O
+            # the contact angle matters to the paper's slip rule only, a spherical joint's
+            beta = contact_angle(pen, e, ri, rj) if (paper_slip and not bearing) else math.pi
             if wear_on and fn > 0.0:
-                if not paper_slip:
+                if bearing or not paper_slip:
                     ds = dg[D_VT + j] * hs
                 else:
                     ds = ri * abs(beta - s[j, S_BETA])
                 _, _, k_wear = surface(jp, j, dg[D_WORN + j] != 0.0)
                 vol = ampl * k_wear * fn * ds
-                area = contact_area(pen, e, ri, rj)
                 nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
                        dg[D_NORMAL + 3 * j + 2])
+                if bearing:
+                    # the strip 2 psi R_i L, its depth projected about the bearing's axis
+                    area = revolute.contact_area(pen, e, ri, rj, jp[j, J_LENGTH])
+                    wx, wy, wz = 1.0, 0.0, 0.0
+                    scale_j = ri * jp[j, J_LENGTH]
+                else:
+                    area = contact_area(pen, e, ri, rj)
+                    wx, wy, wz = abs(nrm[0]), abs(nrm[1]), abs(nrm[2])
+                    scale_j = ri
                 bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
                 buf_i[nbuf, 0] = j
                 buf_i[nbuf, 1] = bx
                 buf_i[nbuf, 2] = by
                 buf_i[nbuf, 3] = bz
                 buf_v[nbuf, 0] = vol
-                buf_v[nbuf, 1] = vol * abs(nrm[0]) / area
-                buf_v[nbuf, 2] = vol * abs(nrm[1]) / area
-                buf_v[nbuf, 3] = vol * abs(nrm[2]) / area
+                buf_v[nbuf, 1] = vol * wx / area
+                buf_v[nbuf, 2] = vol * wy / area
+                buf_v[nbuf, 3] = vol * wz / area
                 for i in range(3):
                     cur[j, i] += vol * nrm[i]
                 cur[j, 3] += vol
                 cur[j, 4] += vol * area
-                cur[j, 5] = ri
+                cur[j, 5] = scale_j
                 proj[j, 0, bx] += buf_v[nbuf, 1]
                 proj[j, 1, by] += buf_v[nbuf, 2]
                 proj[j, 2, bz] += buf_v[nbuf, 3]
@@ -396,8 +415,8 @@ def work_shapes(max_level, npolar):
     sub-step level cap and wear-map polar bins; those in :data:`INT_WORK` are int64."""
     nbuf_max = undo_rows(max_level)
     return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, N_JOINTS, N_S),
-            "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, 6, 6),
-            "vz": (VZ_ROWS, 6), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
+            "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, NZ, NZ),
+            "vz": (VZ_ROWS, NZ), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
             "caps": (CAP_ROWS, N_JOINTS, 6), "scratch": (4 * npolar, 3)}
 
 
@@ -440,8 +459,9 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
             ddot_prev[j] = dg[D_DDOT + j]
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
                 s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
-                s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
-                                             jp[j, J_RI], jp[j, J_RJ])
+                if j != JOINT_O:
+                    s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j],
+                                                 dg[D_ECC + j], jp[j, J_RI], jp[j, J_RJ])
                 seated = True
         if not seated:
             break
@@ -531,7 +551,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros(N_D), np.zeros(N_D), np.zeros((N_JOINTS, N_S)),
                    np.zeros((N_JOINTS, N_S)), np.zeros((N_WINDOWS, N_M)), np.zeros(N_JOINTS),
                    np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS),
-                   np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
+                   np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
                    np.zeros((4 * case.wmap.shape[1], 3)))

@@ -235,5 +235,13 @@ def worn_surface(wmap, j, n, coat, feedback, interp):
                 h, grad = map_interp(wmap, j, n)
             else:
                 h = wmap[j, ip, ia]
-        worn = wmap[j, ip, ia] >= coat
+        worn = coating_worn(wmap[j, ip, ia], coat)
     return h, grad, worn
+
+
+@compiled
+def coating_worn(depth, coat):
+    """Whether a bin worn to ``depth`` [m] has lost its coating of thickness ``coat`` [m]
+    (inf: none to lose): the one place the wear-through rule is written, for every joint
+    type's surface."""
+    return depth >= coat

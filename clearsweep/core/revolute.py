@@ -1,0 +1,175 @@
+"""The revolute clearance joint: the crank's journal in a worn, possibly coated bearing
+(docs/physics.md section 3.6, docs/modelling.md).
+
+A joint type of the shape docs/architecture.md ("Joint types") describes, as
+``spherical.py`` is. The bearing sits in the ground at the origin, its axis along the
+global x axis (the crank's axis of rotation); its frame is the global frame. The journal
+centre moves in the bearing's plane (y, z): radial clearance. Axial play and tilt stay
+ideal (the crank's axial position and its two tilt angles are constrained), so the gap,
+the normal and the contact points lie in that plane:
+
+- :func:`gap`: eccentricity e of the journal centre in the plane, the normal n (in the
+  plane), the penetration against the worn clearance c_eff = c + h(phi) read from the
+  bearing map at the normal's angle phi = atan2(n_z, n_y);
+- the bearing map: one row (``wmap[j, 0, :]``) of ``nazim`` bins around the bearing, the
+  depth uniform along its length (the model does not resolve the length): :func:`map_read`,
+  :func:`deposit`;
+- :func:`contact_angle` and :func:`contact_area`: the half-angle psi of the arc where the
+  journal's circle overlaps the bearing's, and the strip A = 2 psi R_i L;
+- :func:`contact`: the gap composed by ``contact.respond`` with the journal's elastic law,
+  the power law F_el = K delta^n with K = 4 E_w sqrt(R_i R_j / c) / 3 and n = 3/2 unless
+  ``contact.elastic: hertz`` gives another exponent (Flores et al. 2008; docs/physics.md
+  section 3.6).
+"""
+
+import math
+
+from .compiled import compiled
+from .contact import respond
+from .kinematics import point_state
+from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
+from .wear import coating_worn
+
+#: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
+JOINT_TYPE = "revolute"
+
+#: The journal's elastic exponent where the case keeps the paper's (spherical) law.
+JOURNAL_EXPONENT = 1.5
+
+
+@compiled
+def journal_law(p):
+    """The exponent n of the journal's power law F_el = A c (delta / c)^n: the case's Hertz
+    exponent under ``contact.elastic: hertz``, else :data:`JOURNAL_EXPONENT`."""
+    law = p[P_EXPONENT]
+    return law if law != 0.0 else JOURNAL_EXPONENT
+
+
+@compiled
+def bearing_angle(n):
+    """Angle phi = atan2(n_z, n_y) [rad] of an in-plane direction around the bearing."""
+    return math.atan2(n[2], n[1])
+
+
+@compiled
+def map_read(wmap, j, n, interp):
+    """Depth h [m] of joint j's bearing map at the in-plane direction n and its rate
+    dh/dphi [m per rad]: the bin holding phi, or (``interp``) linear between the bin centres,
+    periodic around the bearing."""
+    nazim = wmap.shape[2]
+    v = (bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim
+    if not interp:
+        ia = min(max(int(v), 0), nazim - 1)
+        return wmap[j, 0, ia], 0.0
+    v -= 0.5
+    k = int(math.floor(v))
+    fv = v - k
+    k0 = k % nazim
+    k1 = (k + 1) % nazim
+    w0 = wmap[j, 0, k0]
+    w1 = wmap[j, 0, k1]
+    return (1.0 - fv) * w0 + fv * w1, (w1 - w0) * nazim / (2.0 * math.pi)
+
+
+@compiled
+def worn_through(wmap, j, n, coat):
+    """Whether the coating of thickness ``coat`` [m] (inf: none) is worn through in the bin
+    of the bearing map holding the in-plane direction n."""
+    if not coat < math.inf:
+        return False
+    nazim = wmap.shape[2]
+    ia = min(max(int((bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim), 0), nazim - 1)
+    return coating_worn(wmap[j, 0, ia], coat)
+
+
+@compiled
+def gap(jp, j, wmap, p, pb, ps):
+    """Gap geometry of revolute joint j with journal centre pb and bearing centre ps
+    (global): (e, n, d_s, n_s, h, slope, worn, c_eff, delta), as ``spherical.gap``.
+
+    d = pb - ps in the bearing's plane (its axial part dropped: axial play is ideal);
+    e = |d|; n = d / e (e = 0: the y axis); the bearing frame is the global frame, so
+    d_s = d and n_s = n. h [m] is the bearing map's depth at n (0 without feedback);
+    ``slope`` = (dh/dphi / e) e_phi, e_phi = (0, -n_z, n_y), the gradient of h with respect to
+    the journal centre, so that grad_d delta = n - slope.
+    """
+    d = (0.0, pb[1] - ps[1], pb[2] - ps[2])
+    e = math.sqrt(d[1] * d[1] + d[2] * d[2])
+    if e > 0.0:
+        n = (0.0, d[1] / e, d[2] / e)
+    else:
+        n = (0.0, 1.0, 0.0)
+    h = 0.0
+    slope = (0.0, 0.0, 0.0)
+    if p[P_FEEDBACK] != 0.0:
+        h, dh = map_read(wmap, j, n, p[P_INTERP] != 0.0)
+        if e > 0.0 and dh != 0.0:
+            slope = (0.0, -dh / e * n[2], dh / e * n[1])
+    worn = worn_through(wmap, j, n, jp[j, J_COAT])
+    c_eff = jp[j, J_C] + h
+    return e, n, d, n, h, slope, worn, c_eff, e - c_eff
+
+
+@compiled
+def contact_angle(pen, e, ri, rj):
+    """Half-angle psi [rad] of the arc over which the journal's circle (radius R_j, centre at
+    eccentricity e) lies outside the bearing's (radius R_i): 1 - cos psi =
+    pen (R_i + R_j - e) / (2 R_i e), pen = e - (R_i - R_j) the penetration against the unworn
+    radii, passed in rather than formed as a difference of radii."""
+    half = 0.25 * pen * (ri + rj - e) / (ri * e)
+    return 2.0 * math.asin(math.sqrt(min(1.0, max(0.0, half))))
+
+
+@compiled
+def contact_area(pen, e, ri, rj, length):
+    """Contact strip A = 2 psi R_i L [m^2] on the bearing (:func:`contact_angle`'s psi,
+    bearing length L)."""
+    return 2.0 * contact_angle(pen, e, ri, rj) * ri * length
+
+
+@compiled
+def deposit(wmap, j, n, vol, area, radius_length):
+    """Spread the worn volume ``vol`` [m^3] over the bearing map's bins that the strip of
+    area ``area`` [m^2] centred on the in-plane direction n overlaps (half-angle
+    psi = area / (2 R_i L), ``radius_length`` = R_i L [m^2]); each bin deepens by its share of
+    the volume over its area R_i L dphi, so sum(depth * bin area) = vol to rounding.
+    Returns the largest depth of a bin written [m]."""
+    nazim = wmap.shape[2]
+    dphi = 2.0 * math.pi / nazim
+    phi_c = bearing_angle(n)
+    half = 0.5 * area / radius_length
+    dmax = 0.0
+    if not half * 2.0 > 1e-9 * dphi:
+        ia = min(max(int((phi_c + math.pi) / dphi), 0), nazim - 1)
+        wmap[j, 0, ia] += vol / (radius_length * dphi)
+        return wmap[j, 0, ia]
+    # a bin inside the arc deepens by vol / (2 psi R_i L); one partly inside, by that times
+    # its overlap in bin widths
+    weight = vol / (2.0 * half * radius_length)
+    u0 = (phi_c - half + math.pi) / dphi
+    u1 = (phi_c + half + math.pi) / dphi
+    k = int(math.floor(u0))
+    kend = int(math.floor(u1))
+    while k <= kend:
+        lo = max(float(k), u0)
+        hi = min(float(k + 1), u1)
+        if hi > lo:
+            ia = k % nazim
+            wmap[j, 0, ia] += weight * (hi - lo)
+            dmax = max(dmax, wmap[j, 0, ia])
+        k += 1
+    return dmax
+
+
+@compiled
+def contact(j, model, ball, socket, energy):
+    """Contact state and force (a ``contact.ContactState``) of revolute clearance joint j:
+    the journal centre (``ball``: the crank's (rb, vb, Rb, wb) and the centre's body offset)
+    in the bearing (``socket``: the ground's, all zero and unrotated), composed by
+    ``contact.respond`` with the journal's elastic law (:func:`journal_law`)."""
+    rb, vb, Rb, wb, ub = ball
+    rs, vs, Rs, ws_, us = socket
+    pb, _ = point_state(rb, vb, Rb, wb, ub)
+    ps, _ = point_state(rs, vs, Rs, ws_, us)
+    geo = gap(model.jp, j, model.wmap, model.p, pb, ps)
+    return respond(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
