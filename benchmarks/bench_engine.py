@@ -154,19 +154,19 @@ def rhs_ns(packed, n=200_000) -> float:
     from numba import njit
 
     from clearsweep.core import layout as L
-    from clearsweep.core.dynamics import evaluate
+    from clearsweep.core.dynamics import NZ, VZ_ROWS, evaluate
     from clearsweep.core.work import Model, Solve
 
     @njit
     def loop(y, p, jp, n):
-        s = np.zeros((2, L.N_S))
-        wmap = np.zeros((2, 36, 72))
+        s = np.zeros((L.N_JOINTS, L.N_S))
+        wmap = np.zeros((L.N_JOINTS, 36, 72))
         dy = np.zeros(L.N_Y)
         dg = np.zeros(L.N_D)
-        C = np.zeros((6, 6))
-        S = np.zeros((6, 6))
-        Lm = np.zeros((6, 6))
-        vz = np.zeros((8, 6))
+        C = np.zeros((NZ, NZ))
+        S = np.zeros((NZ, NZ))
+        Lm = np.zeros((NZ, NZ))
+        vz = np.zeros((VZ_ROWS, NZ))
         acc = 0.0
         for i in range(n):
             evaluate(1e-3 * (i % 7), y, Model(p, jp, s, wmap), dy, dg, False, Solve(C, S, Lm, vz))
@@ -187,20 +187,20 @@ def step_breakdown(overrides, repeats=3, n=200_000) -> dict[str, float]:
     from numba import njit
 
     from clearsweep.core import layout as L
-    from clearsweep.core.dynamics import VZ_ROWS, evaluate
+    from clearsweep.core.dynamics import NZ, VZ_ROWS, evaluate
     from clearsweep.core.work import Model, Solve
     from clearsweep.simulation import run_kernel
 
     @njit
     def loop(y, p, jp, n, full, wmap):
-        s = np.zeros((2, L.N_S))
+        s = np.zeros((L.N_JOINTS, L.N_S))
         s[:, 0] = 0.01
         dy = np.zeros(L.N_Y)
         dg = np.zeros(L.N_D)
-        C = np.zeros((6, 6))
-        S = np.zeros((6, 6))
-        Lm = np.zeros((6, 6))
-        vz = np.zeros((VZ_ROWS, 6))
+        C = np.zeros((NZ, NZ))
+        S = np.zeros((NZ, NZ))
+        Lm = np.zeros((NZ, NZ))
+        vz = np.zeros((VZ_ROWS, NZ))
         acc = 0.0
         for i in range(n):
             evaluate(1e-3 * (i % 7), y, Model(p, jp, s, wmap), dy, dg, full, Solve(C, S, Lm, vz))
@@ -210,7 +210,7 @@ def step_breakdown(overrides, repeats=3, n=200_000) -> dict[str, float]:
     def per_call(packed, full):
         raw = run_kernel(packed)
         y = raw.y[raw.n_saved - 1].copy()
-        wmap = np.zeros((2,) + tuple(packed.map_shape))
+        wmap = np.zeros((L.N_JOINTS,) + tuple(packed.map_shape))
         loop(y, packed.p, packed.jp, 10, full, wmap)
         best = math.inf
         for _ in range(repeats):
@@ -236,16 +236,16 @@ def solve_ivp_rate(packed, duration) -> tuple[float, int, float]:
     from scipy.integrate import solve_ivp
 
     from clearsweep.core import layout as L
-    from clearsweep.core.dynamics import evaluate
+    from clearsweep.core.dynamics import NZ, VZ_ROWS, evaluate
     from clearsweep.core.work import Model, Solve
 
-    s = np.zeros((2, L.N_S))
-    wmap = np.zeros((2, 36, 72))
+    s = np.zeros((L.N_JOINTS, L.N_S))
+    wmap = np.zeros((L.N_JOINTS, 36, 72))
     dg = np.zeros(L.N_D)
-    C = np.zeros((6, 6))
-    S = np.zeros((6, 6))
-    Lm = np.zeros((6, 6))
-    vz = np.zeros((8, 6))
+    C = np.zeros((NZ, NZ))
+    S = np.zeros((NZ, NZ))
+    Lm = np.zeros((NZ, NZ))
+    vz = np.zeros((VZ_ROWS, NZ))
 
     model = Model(packed.p, packed.jp, s, wmap)
     solve = Solve(C, S, Lm, vz)

@@ -31,8 +31,13 @@ def check_step(cfg: Config, packed: Packed) -> None:
     Two bounds: the crank may turn at most MAX_ROTATION_PER_STEP_RAD per step, and the
     deepest sub-step h / 2^k_max must resolve the elastic contact rate at the largest
     penetration the run accepts (contact.max_penetration_fraction * c), with the lightest
-    mass a contact can meet (rod, slider, or the rod's end-point rotational mass).
+    mass a contact can meet (rod, slider, or the rod's end-point rotational mass; where O has
+    clearance the crank is free in its bearing's plane, and that mass in series with the
+    crank's), each joint with its own elastic law (the journal's at O).
     """
+    from .core.joints import INDEX
+    from .core.revolute import journal_law
+
     solver = cfg.solver
     dt = solver.dt
     omega = packed.p[L.P_OMEGA]
@@ -41,13 +46,16 @@ def check_step(cfg: Config, packed: Packed) -> None:
     half = 0.5 * preset.rod_length_m
     m_ref = min(preset.rod_mass_kg, preset.slider_mass_kg,
                 min(preset.rod_inertia_kgm2[1:]) / half ** 2)
+    if packed.jp[INDEX["O"], L.J_CLEARANCE] != 0.0:
+        m_ref = 1.0 / (1.0 / m_ref + 1.0 / preset.crank_mass_kg)
     for j in range(L.N_JOINTS):
         jp = packed.jp[j]
         if jp[L.J_CLEARANCE] == 0.0:
             continue
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
+        law = as_python(journal_law)(packed.p) if j == INDEX["O"] else packed.p[L.P_EXPONENT]
         _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI],
-                                                jp[L.J_RJ], packed.p[L.P_EXPONENT])
+                                                jp[L.J_RJ], law)
         rate = math.sqrt(stiffness / m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)

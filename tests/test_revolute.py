@@ -1,0 +1,177 @@
+"""Joint O, the revolute clearance joint at the crank bearing (docs/physics.md 3.6): limiting
+cases, convergence, the bearing map's bookkeeping, the config and the CLI.
+
+The dense reference, the single journal impact against scipy and the worn volume against
+k * sum(F_N |v_t| dt) are in tests/test_revolute_reference.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from clearsweep.cli import main
+from clearsweep.config import ConfigError, load_config
+from clearsweep.core import layout as L
+from clearsweep.core import revolute
+from clearsweep.core.joints import INDEX
+from clearsweep.params import PRESETS, ideal_slider_x
+from clearsweep.simulation import simulate
+
+O = INDEX["O"]
+
+#: Joint O alone with clearance (A and B ideal).
+O_ONLY = {"joints": {"A": {"clearance": 0.0}, "B": {"clearance": 0.0}, "O": {"clearance": 2.5e-4}}}
+
+
+def test_a_tight_bearing_moves_the_slider_as_the_ideal_mechanism():
+    """With a radial clearance of 1 nm at O the journal sits in its bearing to a few nm
+    (clearance plus the Hertz penetration under the crank's load), and the slider follows
+    the closed-form kinematics of the ideal mechanism to 1e-6 relative."""
+    # the Hertz penetration under the crank's load (about 7 nm) is several clearances deep:
+    # the penetration stop (a fraction of c) is lifted
+    ds = simulate({**O_ONLY, "joints": {**O_ONLY["joints"], "O": {"clearance": 1e-9}},
+                   "contact": {"max_penetration_fraction": 100.0},
+                   "solver": {"duration": 0.05, "save_every": 10}})
+    assert str(ds.status.values) == "ok"
+    preset = PRESETS["realistic"]
+    x = ideal_slider_x(ds.crank_angle.values, preset.crank_length_m, preset.rod_length_m,
+                       preset.slider_height_m)
+    np.testing.assert_allclose(ds.slider_position.values, x, rtol=1e-6, atol=0.0)
+    # and the journal is in contact, carrying the crank: a few nm off the bearing centre
+    ecc = ds.eccentricity.sel(joint="O").values
+    assert 1e-9 < ecc.max() < 2e-8
+    assert float(ds.normal_force_peak.sel(joint="O")) > 0.0
+
+
+@pytest.fixture(scope="module")
+def seated_o():
+    return simulate({**O_ONLY, "solver": {"duration": 0.05, "save_every": 10}})
+
+
+def test_a_seated_journal_starts_on_the_wall_without_an_impact(seated_o):
+    """The seated start leans the journal on the bearing wall along the ideal reaction at
+    t = 0 (in the bearing's plane): in contact from the first row, no impact counted, the
+    bearing's force on the crank the ideal one at the start, but for the friction of the
+    journal spinning in its bearing (|F_t| = mu F_N, tangential)."""
+    ds = seated_o
+    assert float(ds.penetration.sel(joint="O")[0]) > 0.0
+    assert int(ds.impact_count.sel(joint="O")) == 0
+    # the reaction at O: the contact force in the plane, the axial reaction along x
+    force = ds.joint_force.sel(joint="O").values
+    np.testing.assert_array_equal(force, ds.reaction_O.values)
+    ideal = simulate({"joints": {"A": {"clearance": 0.0}, "B": {"clearance": 0.0}},
+                      "solver": {"duration": 0.01, "save_every": 10}}).reaction_O.values[0]
+    friction = float(ds.friction_force.sel(joint="O")[0])
+    assert 0.0 < friction < 0.5 * float(ds.normal_force.sel(joint="O")[0])
+    np.testing.assert_allclose(force[0], ideal, rtol=0, atol=1.01 * friction)
+    frictionless = simulate({**O_ONLY, "friction": {"enabled": False},
+                             "solver": {"duration": 0.01, "save_every": 10}})
+    # in the plane: the ideal reaction; along the axis: the rod's pull, whose line the
+    # journal's offset (c + delta = 2.5e-4 m on a 0.14 m crank) turns by about 0.2 %
+    got = frictionless.reaction_O.values[0]
+    np.testing.assert_allclose(got[1:], ideal[1:], rtol=0, atol=1e-6 * np.abs(ideal).max())
+    assert got[0] == pytest.approx(ideal[0], rel=5e-3)
+
+
+def test_the_ideal_bearing_reports_its_reaction_and_no_contact(seated_o):
+    ideal = simulate({"joints": {"A": {"clearance": 0.0}, "B": {"clearance": 0.0}},
+                      "solver": {"duration": 0.01, "save_every": 10}})
+    np.testing.assert_array_equal(ideal.joint_force.sel(joint="O").values, ideal.reaction_O.values)
+    assert np.isnan(float(ideal.normal_force_peak.sel(joint="O")))
+    assert not ideal.wear_map.sel(joint="O").values.any()
+    assert float(ideal.wear_volume.sel(joint="O")) == 0.0
+
+
+def test_the_journal_wears_its_bearing_and_the_map_keeps_the_volume(seated_o):
+    """The journal slides at about R_j omega against the bearing: wear at O, spread over the
+    bearing map's row 0 (uniform along its length), whose depth times bin area R_i L dphi
+    adds up to the worn volume."""
+    ds = seated_o
+    wmap = ds.wear_map.sel(joint="O").values
+    assert wmap[1:].sum() == 0.0 and wmap[0].max() > 0.0
+    cfg = load_config(O_ONLY)
+    r_i, length = cfg.joints.O.bearing_radius, cfg.joints.O.length
+    area = r_i * length * 2.0 * math.pi / wmap.shape[1]
+    assert wmap[0].sum() * area == pytest.approx(float(ds.wear_volume.sel(joint="O")), rel=1e-12)
+
+
+def test_bearing_deposit_keeps_volume_and_wraps_around():
+    """revolute.deposit: a strip straddling phi = +-180 degree, a strip narrower than a bin,
+    the whole volume kept to rounding and the depth inside the strip V / A."""
+    nazim = 72
+    wmap = np.zeros((L.N_JOINTS, 4, nazim))
+    r_l = 0.01 * 0.02
+    bin_area = r_l * 2.0 * math.pi / nazim
+    vol, psi = 3e-15, 0.3                          # a strip of half-angle 0.3 rad
+    area = 2.0 * psi * r_l
+    n = (0.0, -1.0, 1e-3)                          # phi ~ 180 degree: the seam
+    top = revolute.deposit(wmap, O, n, vol, area, r_l)
+    assert wmap[O, 0].sum() * bin_area == pytest.approx(vol, rel=1e-12)
+    assert top == pytest.approx(vol / area, rel=1e-12)
+    assert wmap[O, 0, 0] > 0.0 and wmap[O, 0, -1] > 0.0    # both sides of the seam
+    assert not wmap[O, 1:].any() and not wmap[:O].any()
+    narrow = np.zeros_like(wmap)
+    revolute.deposit(narrow, O, (0.0, 1.0, 0.0), vol, 1e-12 * r_l, r_l)
+    assert narrow[O, 0].sum() * bin_area == pytest.approx(vol, rel=1e-12)
+    assert np.count_nonzero(narrow[O, 0]) <= 2
+
+
+def test_contact_angle_of_the_journal_is_the_circles_overlap():
+    """psi: where the journal's circle (R_j, centre at e) leaves the bearing's (R_i), from
+    the law of cosines, for a small and a large penetration."""
+    ri, rj = 0.01, 0.01 - 2.5e-4
+    for pen in (1e-7, 2e-5):
+        e = ri - rj + pen
+        cos_psi = (ri * ri + e * e - rj * rj) / (2.0 * ri * e)
+        # the circles cross where |x| = R_i and |x - e| = R_j: the bearing's angle seen from
+        # its centre is psi with cos psi = (R_i^2 + e^2 - R_j^2) / (2 R_i e)... for the
+        # journal outside the bearing's circle, on the side of the normal
+        assert revolute.contact_angle(pen, e, ri, rj) == pytest.approx(math.acos(cos_psi), rel=1e-6)
+
+
+@pytest.mark.slow
+def test_halving_the_step_moves_settled_statistics_by_less_than_half_a_percent():
+    """A centred journal (impacts at O) over 0.3 s: the energy residual within the default
+    tolerance, and the settled RMS acceleration, O's contact fraction and worn volume within
+    0.5 % at dt = 1e-5 s and 5e-6 s."""
+    base = {**O_ONLY, "initial": {"joints": "centred"}, "metrics": {"settle_time": 0.1}}
+    runs = [simulate({**base, "solver": {"duration": 0.3, "dt": dt, "save_every": 100}})
+            for dt in (1e-5, 5e-6)]
+    tolerance = load_config(base).solver.energy_tolerance
+    for ds in runs:
+        assert str(ds.status.values) == "ok"
+        assert float(ds.energy_residual_relative) < tolerance
+        assert int(ds.impact_count.sel(joint="O")) > 0
+    for name in ("slider_acceleration_rms_settled", "contact_fraction_settled", "wear_volume"):
+        a, b = (float(ds[name].sel(joint="O")) if "joint" in ds[name].dims else float(ds[name])
+                for ds in runs)
+        assert abs(a - b) <= 5e-3 * abs(b), (name, a, b)
+
+
+@pytest.mark.parametrize("override, key", [
+    ("joints.O.clearance=-1e-4", "joints.O.clearance"),
+    ("joints.O.clearance=0.009", "joints.O.clearance"),
+    ("joints.O.length=0", "joints.O.length"),
+    ("joints.O.bearing_radius=abc", "joints.O.bearing_radius"),
+    ("joints.O.coating=teflon", "joints.O.coating"),
+    ("joints.O.socket_radius=0.01", "joints.O.socket_radius"),
+])
+def test_a_bad_joint_o_value_is_one_error_line_naming_the_key(tmp_path, override, key):
+    out = tmp_path / "o.nc"
+    result = CliRunner().invoke(main, ["run", "configs/one_clearance.yaml", "--set", override,
+                                       "-o", str(out)])
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("clearsweep: error: ") and key in lines[0]
+    assert not out.exists()
+
+
+def test_joint_o_is_sweepable_and_validated_per_case():
+    cfg = load_config(O_ONLY, ["joints.O.coating=PTFE", "joints.O.length=0.03"])
+    assert cfg.joints.O.coating == "PTFE" and cfg.joints.O.length == 0.03
+    with pytest.raises(ConfigError, match="joints.O.clearance"):
+        load_config(O_ONLY, ["joints.O.bearing_radius=1e-4"])
