@@ -37,8 +37,9 @@ CONFIDENCE_LEVEL = 0.95
 SUFFIXES = ("_mean", "_std", "_ci_low", "_ci_high")
 CI_METHOD = ("Student t interval of the mean over the members with status ok and a finite "
              "value: mean -+ t(0.975, n - 1) std / sqrt(n), std with ddof = 1")
-#: Summary variables that describe the run, not the mechanism: no statistics.
-_EXCLUDED = ("status", "wall_time")
+#: Summary variables that describe the run, not the mechanism, or a category (a period in
+#: revolutions, whose mean means nothing): no statistics.
+_EXCLUDED = ("status", "wall_time", "period")
 
 
 def summary_variables(ds: xr.Dataset, dim: str = MEMBER_DIM) -> list[str]:
