@@ -246,7 +246,8 @@ def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
         a = slider_v[index][rows]
         features, scales = [a[:, None]], [np.abs(a).max() if a.size else 1.0]
         if offset_v is not None:
-            d = offset_v[index][rows].reshape(int(rows.sum()), -1)
+            d = offset_v[index][rows]
+            d = d.reshape(d.shape[0], int(np.prod(d.shape[1:])))
             clearance_joints = ~np.isnan(d).all(axis=0)      # NaN: an ideal joint
             features.append(d[:, clearance_joints])
             scales += [1.0] * int(clearance_joints.sum())    # offsets are / clearance

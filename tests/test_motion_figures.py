@@ -1,0 +1,172 @@
+"""The motion's figures and report lines (docs/physics.md section 11): ``--kind spectrum``
+and ``--kind bifurcation`` keep their text apart and read right, a bifurcation diagram
+without a swept key says what it needs, the summaries carry ``period`` and ``chaos_k``
+wherever Poincaré samples exist, and ``report`` names the periodic and chaotic designs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import synthetic as syn
+from click.testing import CliRunner
+from synthetic import case  # noqa: F401  (pytest fixture)
+from test_figure_layout import layout_problems
+
+from clearsweep.analysis import case_summary, format_sweep_summary, run_summary_text
+from clearsweep.cli import main
+from clearsweep.dataset import write_netcdf_atomic
+from clearsweep.dynamics import PERIOD_NONE, PERIOD_UNKNOWN
+from clearsweep.plotting import BIFURCATION_REVOLUTIONS, PlotError, figure
+
+#: r of the logistic map per case of the synthetic bifurcation sweep, and the period of each
+#: (the first case NaN-padded after 30 of its 40 revolutions: 10 settled, still period 1)
+R_VALUES = (2.9, 3.2, 3.5, 3.83, 4.0)
+PERIODS = (1, 2, 4, 3, PERIOD_NONE)
+
+
+@pytest.fixture(scope="module")
+def bifurcation():
+    return syn.bifurcation_sweep(R_VALUES)
+
+
+@pytest.fixture(scope="module")
+def bifurcation_file(tmp_path_factory, bifurcation):
+    return str(write_netcdf_atomic(bifurcation, tmp_path_factory.mktemp("bif") / "bif.nc"))
+
+
+def plot_cli(*args):
+    return CliRunner().invoke(main, ["plot", *map(str, args)])
+
+
+def test_the_summary_has_each_cases_period_over_three_joints(bifurcation):
+    summary = case_summary(bifurcation)
+    assert tuple(int(p) for p in summary["period"].values) == PERIODS
+    assert summary["period"].dtype.kind == "i" and summary["period"].attrs["units"] == "1"
+    # 20 settled revolutions: too few for the 0-1 test
+    assert np.isnan(summary["chaos_k"].values).all()
+    assert summary["chaos_k"].attrs["units"] == "1"
+
+
+def test_the_zero_one_test_reads_the_settled_revolutions_where_there_are_enough():
+    summary = case_summary(syn.bifurcation_sweep((3.5, 4.0), revolutions=600))
+    k = summary["chaos_k"].values
+    assert k[0] < 0.1 and k[1] > 0.9
+
+
+def test_a_run_without_settled_revolutions_has_an_unknown_period(case):
+    ds = syn.with_poincare(case, np.arange(5.0), first_s=-10.0)
+    ds.attrs["settle_time_s"] = 100.0
+    assert int(case_summary(ds)["period"]) == PERIOD_UNKNOWN
+    assert "undetermined" in run_summary_text(ds)
+
+
+def test_the_report_names_the_periodic_and_chaotic_designs():
+    text = format_sweep_summary(syn.bifurcation_sweep((2.9, 3.2, 3.9, 4.0), revolutions=300))
+    lines = text.splitlines()
+    assert "- periodic, period 1: 1 design: speed_rpm=2.9" in lines
+    assert "- periodic, period 2: 1 design: speed_rpm=3.2" in lines
+    assert ("- non-periodic, chaotic by the 0-1 test (K > 0.5): 2 designs: speed_rpm=3.9 "
+            "(K = 0.99), speed_rpm=4 (K = 1.00)") in " ".join(text.split())    # lines wrapped
+    assert max(map(len, lines)) <= 100
+
+
+def test_the_report_of_a_sweep_file_says_which_designs_are_non_periodic(bifurcation_file):
+    result = CliRunner().invoke(main, ["report", bifurcation_file])
+    assert result.exit_code == 0, result.output
+    assert ("- non-periodic (no period up to 8 revolutions), 0-1 test n/a (too few revolutions): "
+            "1 design: speed_rpm=4") in " ".join(result.stdout.split())
+
+
+def test_a_bifurcation_diagram_keeps_its_text_apart(bifurcation):
+    assert layout_problems(figure(bifurcation, "bifurcation")) == []
+
+
+def test_a_bifurcation_diagram_draws_the_last_revolutions_of_each_case_per_clearance_joint(
+        bifurcation):
+    fig = figure(bifurcation, "bifurcation", x="speed_rpm")
+    titles = [ax.get_title() for ax in fig.axes]
+    # the slider and joint B, the only clearance joint of three (A and O ideal: NaN)
+    assert titles == ["slider acceleration at the section",
+                      "joint B: ball-centre offset x (socket frame)"]
+    assert fig.axes[1].get_ylabel() == "offset x / clearance [-]"
+    assert fig.axes[-1].get_xlabel() == "crank speed [min-1]"
+    xs, ys = fig.axes[1].get_lines()[0].get_data()
+    for r, period in zip(R_VALUES, PERIODS):
+        column = ys[(xs == r) & np.isfinite(ys)]
+        assert column.size == BIFURCATION_REVOLUTIONS
+        distinct = np.unique(np.round(column, 6)).size
+        assert distinct == (period if period > 0 else BIFURCATION_REVOLUTIONS)
+    # the padded case's last revolutions with samples: 21-30 of its orbit
+    first = ys[(xs == R_VALUES[0]) & np.isfinite(ys)]
+    assert first == pytest.approx(syn.logistic_orbit(R_VALUES[0], 30)[-BIFURCATION_REVOLUTIONS:])
+
+
+def test_a_bifurcation_diagram_draws_against_a_key_of_a_zip_group(bifurcation):
+    ds = bifurcation.assign_coords(duration=("speed_rpm", 60.0 / np.asarray(R_VALUES),
+                                             {"units": "s", "long_name": "simulated duration"}))
+    fig = figure(ds, "bifurcation", x="duration")
+    xs, _ = fig.axes[0].get_lines()[0].get_data()
+    assert set(np.round(xs, 9)) == set(np.round(60.0 / np.asarray(R_VALUES), 9))
+    assert fig.axes[-1].get_xlabel() == "simulated duration [s]"
+
+
+def test_a_bifurcation_of_a_run_or_of_an_unswept_key_says_what_it_needs(case, bifurcation):
+    with pytest.raises(PlotError, match="this file sweeps none"):
+        figure(case, "bifurcation")
+    with pytest.raises(PlotError, match="--x B_clearance: not a swept key of this file; "
+                                        "--kind bifurcation draws against one of speed_rpm"):
+        figure(bifurcation, "bifurcation", x="B_clearance")
+    with pytest.raises(PlotError, match="needs poincare_time, poincare_slider_acc"):
+        figure(syn.sweep(), "bifurcation", x="B_clearance", select=["B_coating=none"])
+
+
+def test_the_cli_refuses_a_bifurcation_without_a_swept_key_in_one_line(tmp_path, case,
+                                                                       bifurcation_file):
+    run = write_netcdf_atomic(case, tmp_path / "run.nc")
+    for args, message in (
+            ([run], "--kind bifurcation draws a sweep over one parameter against the swept key; "
+                    "this file sweeps none"),
+            ([bifurcation_file, "--x", "time"], "--x time: not a swept key of this file")):
+        result = plot_cli(*args, "--kind", "bifurcation", "-o", tmp_path / "b.png")
+        assert result.exit_code == 2
+        assert message in result.stderr and "Traceback" not in result.output
+        assert len(result.stderr.strip().splitlines()) == 1
+        assert not (tmp_path / "b.png").exists()
+    result = plot_cli(bifurcation_file, "--kind", "bifurcation", "-o", tmp_path / "b.png")
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "b.png").stat().st_size > 0
+    # a swept key is the abscissa of bifurcation only
+    result = plot_cli(run, "--kind", "slider", "--x", "speed_rpm", "-o", tmp_path / "s.png")
+    assert result.exit_code == 2 and "'speed_rpm' is not one of 'angle', 'time'" in result.stderr
+
+
+@pytest.fixture(scope="module")
+def ideal_run():
+    """Eight revolutions of the ideal slider acceleration with the start-up window cut:
+    the spectrum's known answer (tests/test_dynamics.py)."""
+    return syn.ideal_acceleration_case(revolutions=8.0, settle_s=1.0)
+
+
+def test_a_spectrum_keeps_its_text_apart(ideal_run):
+    assert layout_problems(figure(ideal_run, "spectrum")) == []
+
+
+def test_a_spectrum_draws_log_power_against_orders_with_the_summary_in_the_title(ideal_run):
+    fig = figure(ideal_run, "spectrum")
+    ax = fig.axes[0]
+    assert ax.get_yscale() == "log"
+    assert ax.get_xlabel() == "crank order (frequency / crank frequency) [-]"
+    assert ax.get_ylabel() == "power of the slider acceleration [(m s-2)^2]"
+    orders, power = ax.get_lines()[0].get_data()
+    assert orders[np.argmax(power)] == pytest.approx(1.0)
+    # order 2 below order 1 by the closed form's ratio squared (0.3130 / 2.014)^2
+    ratio = power[np.argmin(np.abs(orders - 2.0))] / power.max()
+    assert ratio == pytest.approx((0.31297 / 2.0141) ** 2, rel=1e-3)
+    assert "dominant order 1," in fig.get_suptitle()
+    assert "of the power above order 10" in fig.get_suptitle()
+
+
+def test_a_spectrum_of_a_run_too_short_says_how_long_it_must_be(case):
+    with pytest.raises(PlotError, match="needs at least 2 crank revolutions in the settled "
+                                        "window .* run longer"):
+        figure(case, "spectrum")
