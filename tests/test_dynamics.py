@@ -4,6 +4,8 @@ Duffing oscillator (docs/physics.md section 11)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import synthetic as syn
@@ -167,3 +169,29 @@ def test_the_chaotic_duffing_oscillator_has_no_period_and_k_near_one(y0):
     section = duffing_section(0.5, 600, y0=y0)
     assert detect_period(section[-40:]) == PERIOD_NONE
     assert zero_one_test(section[:, 0]) > 0.8
+
+
+def test_the_spectrum_of_a_real_ideal_run_gives_the_closed_forms_fourier_amplitudes():
+    """The ideal mechanism run by the kernel at 12000 r/min (one revolution every 500 steps
+    of 1e-5 s, every step saved), 5 revolutions, the first cut: 4 settled revolutions, two
+    segments of 2 under Hann windows, so every integer order on a bin and no leakage between
+    them. What remains is the run's own error against the closed form (RK4, constraint
+    stabilisation): measured 1.5e-8 at order 1 and 1.1e-6 at order 7 (1e-4 of order 1)."""
+    from clearsweep.config import load_config
+    from clearsweep.simulation import simulate
+
+    cfg = load_config(Path(__file__).resolve().parents[1] / "configs" / "ideal.yaml", overrides=[
+        "mechanism.speed_rpm=12000", "solver.duration=0.025", "solver.save_every=1",
+        "metrics.settle_time=0.005"])
+    ds = simulate(cfg)
+    t = ds["time"].values
+    omega = cfg.mechanism.omega_rad_s
+    orders, power = order_spectrum(t, ds["slider_acceleration"].values, omega, start=0.005)
+    k = np.arange(1, 8)
+    bins = [int(np.argmin(np.abs(orders - order))) for order in k]
+    np.testing.assert_allclose(orders[bins], k, rtol=1e-9)
+    np.testing.assert_allclose(np.sqrt(2.0 * power[bins]),
+                               closed_form_order_amplitudes(omega, k), rtol=1e-5)
+    summary = case_summary(ds)
+    assert float(summary["slider_acceleration_dominant_order"]) == pytest.approx(1.0)
+    assert float(summary["slider_acceleration_high_order_share"]) < 1e-8
