@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from . import dynamics
+from . import motion
 from .variables import STATISTICS, attrs_for
 
 #: A projection bin counts as worn above this fraction of its axis's maximum (docs/physics.md section 5).
@@ -31,7 +31,7 @@ PASS_THROUGH_VARIABLES = ("first_impact_time", "energy_residual_relative", "subs
 STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + tuple(
     n for n in STATISTICS if not n.endswith("_settled"))
 
-#: The spectrum's and the periodicity's summaries (:func:`dynamics_summary`, docs/physics.md
+#: The spectrum's and the periodicity's summaries (:func:`motion_summary`, docs/physics.md
 #: section 11).
 SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
 PERIODICITY_VARIABLES = ("period", "chaos_k")
@@ -46,6 +46,9 @@ POINCARE_TIME = "poincare_time"
 POINCARE_SLIDER = "poincare_slider_acc"
 POINCARE_OFFSET = "poincare_offset"
 REVOLUTION_DIM = "revolution"
+#: The names a swept ``metrics.settle_time`` takes in a sweep file (clearsweep.sweeping's
+#: naming: ``metrics`` is not a dropped first component).
+SETTLE_TIME_COORDINATES = ("metrics_settle_time", "settle_time")
 
 
 def with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
@@ -159,13 +162,14 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
 
 def settle_time(ds: xr.Dataset) -> float:
     """Start of the settled window [s] (``metrics.settle_time``) of a one-case dataset: the
-    ``settle_time_s`` attribute a run records; in a case of a sweep file, its ``settle_time``
-    coordinate (a swept key) or the sweep's base config (its default where the config does
+    ``settle_time_s`` attribute a run records; in a case of a sweep file, its
+    ``metrics_settle_time`` coordinate (a swept key) or the sweep's base config (its default where the config does
     not set it); 0 for a file without a config."""
     if "settle_time_s" in ds.attrs:
         return float(ds.attrs["settle_time_s"])
-    if "settle_time" in ds.coords and ds["settle_time"].ndim == 0:
-        return float(ds["settle_time"].values)
+    for name in SETTLE_TIME_COORDINATES:
+        if name in ds.coords and ds[name].ndim == 0:
+            return float(ds[name].values)
     import yaml
 
     for name, base in (("config", False), ("sweep_config", True)):
@@ -210,10 +214,10 @@ def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
     dominant = np.full(acc_v.shape[:-1], np.nan)
     share = np.full(acc_v.shape[:-1], np.nan)
     for index in np.ndindex(*acc_v.shape[:-1]):
-        orders, power = dynamics.order_spectrum(t, acc_v[index], crank_speed(t, angle_v[index]),
+        orders, power = motion.order_spectrum(t, acc_v[index], crank_speed(t, angle_v[index]),
                                                 start)
-        dominant[index], share[index] = dynamics.spectrum_summary(orders, power)
-    extra = {"high_order": dynamics.HIGH_ORDER}
+        dominant[index], share[index] = motion.spectrum_summary(orders, power)
+    extra = {"high_order": motion.HIGH_ORDER}
     return {"slider_acceleration_dominant_order":
             xr.Variable(dims, dominant, attrs_for("slider_acceleration_dominant_order")),
             "slider_acceleration_high_order_share":
@@ -239,7 +243,7 @@ def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
     slider_v = slider.transpose(*dims, REVOLUTION_DIM).values
     offset_v = (None if offset is None else
                 offset.transpose(*dims, REVOLUTION_DIM, ...).values)
-    period = np.full(time_v.shape[:-1], dynamics.PERIOD_UNKNOWN, dtype=np.int64)
+    period = np.full(time_v.shape[:-1], motion.PERIOD_UNKNOWN, dtype=np.int64)
     chaos = np.full(time_v.shape[:-1], np.nan)
     for index in np.ndindex(*time_v.shape[:-1]):
         rows = np.isfinite(time_v[index])
@@ -251,16 +255,16 @@ def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
             clearance_joints = ~np.isnan(d).all(axis=0)      # NaN: an ideal joint
             features.append(d[:, clearance_joints])
             scales += [1.0] * int(clearance_joints.sum())    # offsets are / clearance
-        period[index] = dynamics.detect_period(np.concatenate(features, axis=1), np.array(scales))
-        chaos[index] = dynamics.zero_one_test(a)
-    rules = {"period_rtol": dynamics.PERIOD_RTOL, "max_period": dynamics.MAX_PERIOD}
+        period[index] = motion.detect_period(np.concatenate(features, axis=1), np.array(scales))
+        chaos[index] = motion.zero_one_test(a)
+    rules = {"period_rtol": motion.PERIOD_RTOL, "max_period": motion.MAX_PERIOD}
     return {"period": xr.Variable(dims, period, {**attrs_for("period"), **rules}),
             "chaos_k": xr.Variable(dims, chaos, {**attrs_for("chaos_k"),
-                                                 "zero_one_min_samples": dynamics.ZERO_ONE_MIN_SAMPLES,
-                                                 "zero_one_seed": dynamics.ZERO_ONE_SEED})}
+                                                 "zero_one_min_samples": motion.ZERO_ONE_MIN_SAMPLES,
+                                                 "zero_one_seed": motion.ZERO_ONE_SEED})}
 
 
-def dynamics_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
+def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
     """The spectrum's summaries (where ``ds`` holds the slider acceleration's time series)
     and the periodicity's (where it holds Poincaré samples), for every case of ``ds``;
     a summary ``ds`` already holds is not computed again (docs/physics.md section 11)."""
@@ -293,7 +297,7 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         ``wear_depth_max_final(joint)`` [m] (max of ``wear_map``);
         ``wear_volume(joint)`` [m^3] (the worn volume, which unlike a largest bin does not
         depend on the map's grid); the spectrum's and the periodicity's summaries
-        (:func:`dynamics_summary`) where ``ds`` holds the time series or Poincaré samples;
+        (:func:`motion_summary`) where ``ds`` holds the time series or Poincaré samples;
         the ``wear_table`` variables; ``energy_residual_relative``,
         ``substeps_used``, ``rk4_steps``, ``wall_time`` [s]. Dataset
         attributes (provenance) are kept.
@@ -312,7 +316,7 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         out["wear_depth_max_final"] = xr.Variable(dims, values, attrs_for("wear_depth_max_final"))
     if "wear_projection" in ds:
         out.update({str(k): v.variable for k, v in wear_table(ds).data_vars.items()})
-    out.update(dynamics_summary(ds))
+    out.update(motion_summary(ds))
     for name in SUMMARY_ORDER:
         if name not in out and name in ds.data_vars:
             out[name] = ds.variables[name]

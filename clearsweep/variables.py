@@ -179,7 +179,7 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
                                "with another status and are left out"),
     "is_reference": VariableSpec((), "", "reference case of the comparison",
                                  "true for the cases the reduction table compares against"),
-    # docs/physics.md section 11 (clearsweep.dynamics)
+    # docs/physics.md section 11 (clearsweep.motion)
     "slider_acceleration_dominant_order": VariableSpec(
         (), "1", "dominant crank order of the slider acceleration",
         "order (frequency / crank frequency) of the largest bin of the Welch spectrum of "

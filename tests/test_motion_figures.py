@@ -15,7 +15,7 @@ from test_figure_layout import layout_problems
 from clearsweep.analysis import case_summary, format_sweep_summary, run_summary_text
 from clearsweep.cli import main
 from clearsweep.dataset import write_netcdf_atomic
-from clearsweep.dynamics import PERIOD_NONE, PERIOD_UNKNOWN
+from clearsweep.motion import PERIOD_NONE, PERIOD_UNKNOWN
 from clearsweep.plotting import BIFURCATION_REVOLUTIONS, PlotError, figure
 
 #: r of the logistic map per case of the synthetic bifurcation sweep, and the period of each
@@ -116,7 +116,8 @@ def test_a_bifurcation_of_a_run_or_of_an_unswept_key_says_what_it_needs(case, bi
     with pytest.raises(PlotError, match="--x B_clearance: not a swept key of this file; "
                                         "--kind bifurcation draws against one of speed_rpm"):
         figure(bifurcation, "bifurcation", x="B_clearance")
-    with pytest.raises(PlotError, match="needs poincare_time, poincare_slider_acc"):
+    with pytest.raises(PlotError, match=r"needs the Poincaré samples \(poincare_time, "
+                                        r"poincare_slider_acc\), which this file lacks"):
         figure(syn.sweep(), "bifurcation", x="B_clearance", select=["B_coating=none"])
 
 
@@ -143,7 +144,7 @@ def test_the_cli_refuses_a_bifurcation_without_a_swept_key_in_one_line(tmp_path,
 @pytest.fixture(scope="module")
 def ideal_run():
     """Eight revolutions of the ideal slider acceleration with the start-up window cut:
-    the spectrum's known answer (tests/test_dynamics.py)."""
+    the spectrum's known answer (tests/test_motion.py)."""
     return syn.ideal_acceleration_case(revolutions=8.0, settle_s=1.0)
 
 

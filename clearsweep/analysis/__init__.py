@@ -24,14 +24,15 @@ Conventions (docs/physics.md section 5, paper Tables 4-6):
 The package's modules: ``selection`` (sweep dimensions, cases, ``--select``), ``tables``
 (the tables and their text, markdown, csv and json layout) and ``text`` (the run and
 sweep summaries); their public names are importable from here, with those of
-:mod:`clearsweep.dynamics` (spectra, period detection, the 0-1 test for chaos: pure
+:mod:`clearsweep.motion` (spectra, period detection, the 0-1 test for chaos: pure
 functions that the per-case summaries below ``analysis`` call too).
 """
 
 from __future__ import annotations
 
 from ..choices import REPORT_FORMATS  # noqa: F401
-from ..dynamics import (  # noqa: F401
+from ..ensemble import MEMBER_DIM  # noqa: F401
+from ..motion import (  # noqa: F401
     CHAOS_THRESHOLD,
     HIGH_ORDER,
     MAX_PERIOD,
@@ -42,7 +43,6 @@ from ..dynamics import (  # noqa: F401
     spectrum_summary,
     zero_one_test,
 )
-from ..ensemble import MEMBER_DIM  # noqa: F401
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..schema import close_matches  # noqa: F401
 from ..summary import (  # noqa: F401
@@ -55,7 +55,7 @@ from ..summary import (  # noqa: F401
     WEAR_THRESHOLD_FRACTION,
     case_summary,
     crank_speed,
-    dynamics_summary,
+    motion_summary,
     poincare_points,
     settle_time,
     wear_table,

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from ..dynamics import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..ensemble import MEMBER_DIM
+from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..summary import case_summary
 from .selection import (
@@ -83,7 +83,7 @@ def run_summary_text(ds: xr.Dataset) -> str:
                 values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
                                    for j in case["joint"].values)
                 lines.append(f"  {heading}: {values}")
-        lines += _dynamics_lines(case)
+        lines += _run_motion_lines(case)
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
         wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
@@ -104,7 +104,7 @@ def _period_text(period: int) -> str:
     return f"periodic, period {period}"
 
 
-def _dynamics_lines(case: xr.Dataset) -> list[str]:
+def _run_motion_lines(case: xr.Dataset) -> list[str]:
     """A run's spectrum and periodicity lines (docs/physics.md section 11), where it has them."""
     lines = []
     if "slider_acceleration_dominant_order" in case:
@@ -129,7 +129,7 @@ MOTION_DESIGNS_LISTED = 8
 REPORT_LINE_CHARACTERS = 100
 
 
-def _motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, ...]) -> list[str]:
+def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, ...]) -> list[str]:
     """The sweep summary's periodic and chaotic designs, from ``period`` and ``chaos_k``."""
     if "period" not in summary or not dims:
         return []
@@ -337,7 +337,7 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             lines.append(f"    highest {shown_value(high, high_h):>16}  {_design_text(ds, high_at)}")
             lines.append(f"    {spread}")
     if not ensemble:
-        lines += _motion_lines(ds, case_summary(ds), usable, dims)
+        lines += _sweep_motion_lines(ds, case_summary(ds), usable, dims)
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")
     text = "\n".join(lines)

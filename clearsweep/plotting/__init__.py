@@ -94,14 +94,14 @@ from .common import (  # noqa: F401
     selection_text,
     wrapped_label,
 )
-from .dynamics import (  # noqa: F401
+from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
+from .motion import (  # noqa: F401
     BIFURCATION_REVOLUTIONS,
     SPECTRUM_MAX_ORDER,
     _draw_bifurcation,
     _draw_spectrum,
     bifurcation_axis,
 )
-from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
 from .orbit import _draw_orbit
 from .reliability import _draw_reliability
 from .series import _draw_forces, _draw_slider

@@ -1,4 +1,4 @@
-"""Spectra, period detection and the 0-1 test for chaos (clearsweep.dynamics), on systems
+"""Spectra, period detection and the 0-1 test for chaos (clearsweep.motion), on systems
 whose answers are known: the ideal mechanism's closed form, the logistic map and a forced
 Duffing oscillator (docs/physics.md section 11)."""
 
@@ -11,7 +11,7 @@ import pytest
 import synthetic as syn
 
 from clearsweep.analysis import case_summary
-from clearsweep.dynamics import (
+from clearsweep.motion import (
     HIGH_ORDER,
     PERIOD_NONE,
     PERIOD_UNKNOWN,
@@ -195,3 +195,16 @@ def test_the_spectrum_of_a_real_ideal_run_gives_the_closed_forms_fourier_amplitu
     summary = case_summary(ds)
     assert float(summary["slider_acceleration_dominant_order"]) == pytest.approx(1.0)
     assert float(summary["slider_acceleration_high_order_share"]) < 1e-8
+
+
+def test_the_settled_window_of_a_sweep_case_comes_from_its_swept_key_or_the_base_config():
+    import xarray as xr
+
+    from clearsweep.analysis import settle_time
+
+    assert settle_time(xr.Dataset(attrs={"settle_time_s": 0.2})) == 0.2
+    # configs/bifurcation.yaml zips metrics.settle_time with the speed: a coordinate per case
+    assert settle_time(xr.Dataset(coords={"metrics_settle_time": 0.4})) == 0.4
+    assert settle_time(xr.Dataset(attrs={"sweep_config": "base: {metrics: {settle_time: 0.3}}"})) == 0.3
+    assert settle_time(xr.Dataset(attrs={"sweep_config": "base: {name: x}"})) == 0.05   # default
+    assert settle_time(xr.Dataset()) == 0.0

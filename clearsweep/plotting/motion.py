@@ -32,7 +32,7 @@ from .common import (
 #: Highest crank order the spectrum's abscissa shows.
 SPECTRUM_MAX_ORDER = 50.0
 #: Revolutions of each case a bifurcation diagram draws: its last ones with samples. Enough
-#: to show a period up to ``dynamics.MAX_PERIOD`` once over, few enough that a sweep of 20
+#: to show a period up to ``motion.MAX_PERIOD`` once over, few enough that a sweep of 20
 #: revolutions a case draws its second half only (the first is start-up).
 BIFURCATION_REVOLUTIONS = 10
 
@@ -143,7 +143,11 @@ def offset_component(offset: xr.DataArray) -> str:
 
 def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
     x, dim = bifurcation_axis(ds, x)            # a missing sweep is the first thing to say
-    _require(ds, ("poincare_time", "poincare_slider_acc"), "--kind bifurcation")
+    missing = [n for n in ("poincare_time", "poincare_slider_acc") if n not in ds]
+    if missing:
+        raise PlotError(f"--kind bifurcation needs the Poincaré samples ({', '.join(missing)}), "
+                        "which this file lacks: a file of an older version of clearsweep; run "
+                        "the sweep again (every store keeps them)")
     joints = clearance_joints(ds)
     n_rev = BIFURCATION_REVOLUTIONS
     # the last revolutions of each case: (case, n_rev) arrays, NaN where a case has fewer

@@ -22,7 +22,7 @@ import numpy as np
 #: Share of the spectrum's power above this crank order (``slider_acceleration_high_order_share``).
 #: The ideal mechanism's slider acceleration is a smooth periodic function of the crank angle
 #: whose harmonics fall off about as (l2 / l3)^k: above order 10 it holds under 1e-8 of the
-#: power (tests/test_dynamics.py), so what a clearance run has there comes from its impacts.
+#: power (tests/test_motion.py), so what a clearance run has there comes from its impacts.
 HIGH_ORDER = 10.0
 
 #: Fewest whole crank revolutions of a Welch segment: with a periodic Hann window and
