@@ -171,3 +171,16 @@ def test_a_spectrum_of_a_run_too_short_says_how_long_it_must_be(case):
     with pytest.raises(PlotError, match="needs at least 2 crank revolutions in the settled "
                                         "window .* run longer"):
         figure(case, "spectrum")
+
+
+def test_the_report_of_a_run_prints_its_period_and_leaves_out_what_it_lacks(tmp_path, case):
+    ds = syn.with_poincare(case, 10.0 * syn.logistic_orbit(3.2, 30), first_s=-1.0)
+    path = write_netcdf_atomic(ds, tmp_path / "run.nc")
+    result = CliRunner().invoke(main, ["report", str(path)])
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    at = lines.index("Motion: spectrum and periodicity (settled = t >= 0.05 s)")
+    assert "Period in revolutions (0: none, -1: n/a) [1]" in lines[at + 2]
+    assert lines[at + 3].split() == ["2"]
+    # 0.2 s at one revolution a second: no spectrum, and 30 samples: no 0-1 test; not printed
+    assert "Dominant order" not in result.stdout and "0-1 test K" not in result.stdout

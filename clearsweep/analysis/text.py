@@ -125,7 +125,7 @@ def _run_motion_lines(case: xr.Dataset) -> list[str]:
 
 #: Designs a motion line of the sweep summary names before it counts the rest, and the
 #: width its lines are wrapped to.
-MOTION_DESIGNS_LISTED = 8
+MOTION_CASES_LISTED = 8
 REPORT_LINE_CHARACTERS = 100
 
 
@@ -157,8 +157,8 @@ def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple
     lines = ["", "Motion (settled Poincaré samples; periods in crank revolutions):"]
     for order, key in sorted(groups):
         designs = groups[(order, key)]
-        listed = ", ".join(designs[:MOTION_DESIGNS_LISTED])
-        more = len(designs) - MOTION_DESIGNS_LISTED
+        listed = ", ".join(designs[:MOTION_CASES_LISTED])
+        more = len(designs) - MOTION_CASES_LISTED
         line = (f"- {key}: {len(designs)} design{'s' if len(designs) > 1 else ''}: {listed}"
                 + (f" and {more} more" if more > 0 else ""))
         lines += textwrap.wrap(line, REPORT_LINE_CHARACTERS, subsequent_indent="    ",
