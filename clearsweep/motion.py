@@ -92,8 +92,6 @@ def order_spectrum(t: np.ndarray, signal: np.ndarray, omega: float,
         :func:`segment_revolutions` whole revolutions, 50 % overlap, the mean removed.
         Both empty where the window holds fewer than ``MIN_SEGMENT_REVOLUTIONS`` revolutions.
     """
-    from scipy.signal import welch
-
     t = np.asarray(t, dtype=float)
     signal = np.asarray(signal, dtype=float)
     keep = np.isfinite(t) & np.isfinite(signal) & (t >= start - 1e-12)
@@ -107,6 +105,8 @@ def order_spectrum(t: np.ndarray, signal: np.ndarray, omega: float,
     seg = segment_revolutions(revolutions)
     if seg == 0:
         return empty
+    from scipy.signal import welch  # here: a run too short for a spectrum does not import it
+
     nperseg = min(int(round(seg * per_revolution)), signal.size)
     freq, power = welch(signal, fs=1.0 / dt, window="hann", nperseg=nperseg,
                         noverlap=nperseg // 2, detrend="constant", scaling="spectrum")
