@@ -36,15 +36,18 @@ STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + t
 SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
 PERIODICITY_VARIABLES = ("period", "chaos_k")
 
-#: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
-                 "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
-                 *PASS_THROUGH_VARIABLES)
-
 #: The Poincaré samples a periodicity summary reads (one point per crank revolution).
 POINCARE_TIME = "poincare_time"
 POINCARE_SLIDER = "poincare_slider_acc"
 POINCARE_OFFSET = "poincare_offset"
+#: The Poincaré samples, copied into every summary (a few numbers a revolution): a
+#: ``store: summary`` sweep keeps them for its bifurcation diagram.
+POINCARE_VARIABLES = (POINCARE_TIME, POINCARE_SLIDER, POINCARE_OFFSET, "poincare_velocity")
+
+#: Order of the variables in ``case_summary``.
+SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
+                 "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
+                 *PASS_THROUGH_VARIABLES, *POINCARE_VARIABLES)
 REVOLUTION_DIM = "revolution"
 #: The names a swept ``metrics.settle_time`` takes in a sweep file (clearsweep.sweeping's
 #: naming: ``metrics`` is not a dropped first component).
@@ -298,9 +301,9 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         ``wear_volume(joint)`` [m^3] (the worn volume, which unlike a largest bin does not
         depend on the map's grid); the spectrum's and the periodicity's summaries
         (:func:`motion_summary`) where ``ds`` holds the time series or Poincaré samples;
-        the ``wear_table`` variables; ``energy_residual_relative``,
-        ``substeps_used``, ``rk4_steps``, ``wall_time`` [s]. Dataset
-        attributes (provenance) are kept.
+        the ``wear_table`` variables; ``energy_residual_relative``, ``substeps_used``,
+        ``rk4_steps``, ``wall_time`` [s]; the Poincaré samples (``POINCARE_VARIABLES``) as
+        they are. Dataset attributes (provenance) are kept.
     """
     # Built from Variables, not DataArrays: a one-case summary is made for every case of a
     # sweep, and xarray's per-DataArray construction and alignment were most of its cost.

@@ -184,3 +184,39 @@ def test_the_report_of_a_run_prints_its_period_and_leaves_out_what_it_lacks(tmp_
     assert lines[at + 3].split() == ["2"]
     # 0.2 s at one revolution a second: no spectrum, and 30 samples: no 0-1 test; not printed
     assert "Dominant order" not in result.stdout and "0-1 test K" not in result.stdout
+
+
+def test_a_summary_sweep_keeps_the_poincare_samples_and_their_period_for_its_diagram(tmp_path):
+    """Through the sweep machinery (worker, summary, parts, assembly) with the kernel's
+    Poincaré samples stood in for: each case's samples are the logistic map's at an r set
+    by its crank speed, the slowest case with fewer revolutions (NaN-padded in the file)."""
+    from clearsweep.simulation import simulate as real
+    from clearsweep.sweeping import run_sweep
+
+    r_of = {60.0: 3.2, 90.0: 3.5, 120.0: 4.0}
+    revolutions = {60.0: 30, 90.0: 40, 120.0: 40}
+
+    def with_samples(cfg):
+        ds = real(cfg)
+        rpm = cfg.mechanism.speed_rpm
+        x = syn.logistic_orbit(r_of[rpm], revolutions[rpm])
+        offset = np.full((x.size, ds.sizes["joint"]), np.nan)
+        offset[:, -1] = x
+        return syn.with_poincare(ds, 10.0 * x, offset, first_s=-20.0)  # 20 settled or more
+
+    spec = {"store": "summary",
+            "base": {"solver": {"duration": 0.002}, "joints": {"B": {"clearance": 2.5e-4}}},
+            "sweep": {"grid": {"mechanism.speed_rpm": list(r_of)}}}
+    path = tmp_path / "bif.nc"
+    run_sweep(spec, path, workers=1, progress=False, _simulate=with_samples).close()
+    import xarray as xr
+
+    with xr.open_dataset(path) as ds:
+        assert ds.sizes["revolution"] == 40
+        assert np.isnan(ds["poincare_slider_acc"].sel(speed_rpm=60.0).values[30:]).all()
+        assert list(ds["period"].values) == [2, 4, PERIOD_NONE]
+        fig = figure(ds, "bifurcation")
+        xs, ys = fig.axes[1].get_lines()[0].get_data()
+        assert [np.unique(np.round(ys[xs == rpm], 6)).size for rpm in r_of] == [2, 4, 10]
+        text = format_sweep_summary(ds)
+    assert "- periodic, period 4: 1 design: speed_rpm=90" in text.splitlines()
