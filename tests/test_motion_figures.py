@@ -220,3 +220,16 @@ def test_a_summary_sweep_keeps_the_poincare_samples_and_their_period_for_its_dia
         assert [np.unique(np.round(ys[xs == rpm], 6)).size for rpm in r_of] == [2, 4, 10]
         text = format_sweep_summary(ds)
     assert "- periodic, period 4: 1 design: speed_rpm=90" in text.splitlines()
+
+
+def test_a_zip_groups_diagram_is_drawn_against_its_first_key_by_default(bifurcation):
+    """configs/bifurcation.yaml's dimension is a zip group ``speed`` (labels, no units) with
+    the keys speed_rpm, duration and metrics_settle_time along it."""
+    ds = bifurcation.rename(speed_rpm="speed").assign_coords(
+        speed_rpm=("speed", list(R_VALUES), {"units": "min-1", "config_key": "mechanism.speed_rpm",
+                                             "long_name": "crank speed in revolutions per minute"}),
+        duration=("speed", [1.0] * len(R_VALUES), {"units": "s", "config_key": "solver.duration"}))
+    ds["speed"].attrs = {"long_name": "sweep zip group speed",
+                         "config_keys": "mechanism.speed_rpm solver.duration"}
+    fig = figure(ds, "bifurcation")
+    assert fig.axes[-1].get_xlabel() == "crank speed in revolutions per minute [min-1]"

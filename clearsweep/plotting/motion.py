@@ -88,7 +88,8 @@ def _draw_spectrum(fig: Figure, ds: xr.Dataset) -> None:
 def bifurcation_axis(ds: xr.Dataset, x: str | None) -> tuple[str, str]:
     """(the coordinate a bifurcation diagram's abscissa reads, its sweep dimension): ``x``,
     a sweep dimension of ``ds`` or a coordinate along one (a key of a zip group); ``None``:
-    the only sweep dimension. Raises ``PlotError`` saying what is needed."""
+    the only sweep dimension (a zip group's first key). Raises ``PlotError`` saying what is
+    needed."""
     dims = [d for d in sweep_dims(ds) if ds.sizes[d] > 1]
     along = {str(n): str(c.dims[0]) for n, c in ds.coords.items()
              if c.ndim == 1 and str(c.dims[0]) in dims}
@@ -101,7 +102,7 @@ def bifurcation_axis(ds: xr.Dataset, x: str | None) -> tuple[str, str]:
         if len(dims) > 1:
             raise PlotError(f"--kind bifurcation needs --x, the swept key to draw against: one "
                             f"of {', '.join(dims)} (and --select DIM=VALUE for the others)")
-        x = dims[0]
+        x = _first_key(ds, dims[0])
     if x not in along:
         raise PlotError(f"--x {x}: not a swept key of this file; --kind bifurcation draws "
                         f"against one of {', '.join(sorted(along))}")
@@ -113,6 +114,16 @@ def bifurcation_axis(ds: xr.Dataset, x: str | None) -> tuple[str, str]:
                         f"sweeps {', '.join(others)}: choose one value of each with --select "
                         f"DIM=VALUE ({offer})")
     return x, along[x]
+
+
+def _first_key(ds: xr.Dataset, dim: str) -> str:
+    """A sweep dimension's abscissa: a zip group's first key (``speed_rpm``, with its units),
+    not its labels; the dimension itself otherwise."""
+    keys = str(ds[dim].attrs.get("config_keys", "")).split() if dim in ds.coords else []
+    for name, coord in ds.coords.items():
+        if keys and coord.dims == (dim,) and coord.attrs.get("config_key") == keys[0]:
+            return str(name)
+    return dim
 
 
 def last_revolutions(values: np.ndarray, time: np.ndarray,
