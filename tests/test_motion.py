@@ -208,3 +208,23 @@ def test_the_settled_window_of_a_sweep_case_comes_from_its_swept_key_or_the_base
     assert settle_time(xr.Dataset(attrs={"sweep_config": "base: {metrics: {settle_time: 0.3}}"})) == 0.3
     assert settle_time(xr.Dataset(attrs={"sweep_config": "base: {name: x}"})) == 0.05   # default
     assert settle_time(xr.Dataset()) == 0.0
+
+
+def test_the_poincare_samples_of_the_ideal_mechanism_are_one_point_period_one():
+    """Issue 31's check, end to end once the kernel stores the Poincaré samples: the ideal
+    mechanism's motion repeats every revolution, so its samples are one point (period 1;
+    the offsets of its ideal joints NaN)."""
+    from clearsweep.config import load_config
+    from clearsweep.simulation import simulate
+
+    cfg = load_config(Path(__file__).resolve().parents[1] / "configs" / "ideal.yaml", overrides=[
+        "mechanism.speed_rpm=12000", "solver.duration=0.03", "metrics.settle_time=0.005"])
+    ds = simulate(cfg)
+    if "poincare_slider_acc" not in ds:
+        pytest.skip("this kernel stores no Poincaré samples")
+    summary = case_summary(ds)
+    assert int(summary["period"]) == 1
+    assert np.isnan(ds["poincare_offset"].values).all()
+    a = ds["poincare_slider_acc"].values
+    a = a[np.isfinite(a)]
+    assert np.ptp(a[1:]) <= 1e-6 * np.abs(a).max()
