@@ -765,8 +765,9 @@ def _text_only_report(ds: xr.Dataset, metric: str | None):
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Draw only the sweep cases with this coordinate value (repeatable).")
-@click.option("--x", "x_axis", type=click.Choice(X_AXES), default="angle", show_default=True,
-              help="Abscissa of time series: crank angle [degree] or time [s].")
+@click.option("--x", "x_axis", default=None, metavar="AXIS",
+              help="Abscissa of time series: angle (crank angle [degree], the default) or "
+                   "time [s]; of --kind bifurcation, the swept key (default: the only one).")
 @click.option("--metric", default=None, metavar="NAME",
               help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
 @click.option("--dpi", type=click.IntRange(*DPI_RANGE), default=FIGURE_DPI, show_default=True,
@@ -782,6 +783,10 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
     from .analysis import SelectionError
     from .plotting import PlotError, plot
 
+    if kind != "bifurcation" and x_axis is not None and x_axis not in X_AXES:
+        raise click.BadParameter(f"{x_axis!r} is not one of {', '.join(map(repr, X_AXES))}"
+                                 " (a swept key is the abscissa of --kind bifurcation only)",
+                                 param_hint="'--x'")
     _check_figure_suffix(out, "'-o' / '--out'")
     _check_figure(out, "-o/--out", [("the results file", path)], overwrite)
     with open_input(path) as ds:
@@ -796,7 +801,7 @@ def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], 
 
 
 #: The figure kinds that draw one run's time series and wear maps.
-_RUN_KINDS = "slider, forces, wear-map, wear-polar or orbit"
+_RUN_KINDS = "slider, forces, spectrum, wear-map, wear-polar or orbit"
 
 
 def _check_plot_kind(ds: xr.Dataset, path: str, kind: str, metric: str | None) -> None:

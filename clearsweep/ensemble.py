@@ -28,7 +28,7 @@ import numpy as np
 import xarray as xr
 
 from .outputs import MEMBER_DIM  # noqa: F401  (the ensemble's dimension, re-exported)
-from .summary import PASS_THROUGH_VARIABLES, SUMMARY_ORDER
+from .summary import PASS_THROUGH_VARIABLES, POINCARE_VARIABLES, SUMMARY_ORDER
 from .variables import attrs_for
 
 #: Confidence level of every interval.
@@ -37,8 +37,9 @@ CONFIDENCE_LEVEL = 0.95
 SUFFIXES = ("_mean", "_std", "_ci_low", "_ci_high")
 CI_METHOD = ("Student t interval of the mean over the members with status ok and a finite "
              "value: mean -+ t(0.975, n - 1) std / sqrt(n), std with ddof = 1")
-#: Summary variables that describe the run, not the mechanism: no statistics.
-_EXCLUDED = ("status", "wall_time")
+#: Summary variables that describe the run, not the mechanism, a category (a period in
+#: revolutions, whose mean means nothing) or samples (the Poincaré sections): no statistics.
+_EXCLUDED = ("status", "wall_time", "period", *POINCARE_VARIABLES)
 
 
 def summary_variables(ds: xr.Dataset, dim: str = MEMBER_DIM) -> list[str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from . import motion
 from .variables import STATISTICS, attrs_for
 
 #: A projection bin counts as worn above this fraction of its axis's maximum (docs/physics.md section 5).
@@ -30,9 +31,27 @@ PASS_THROUGH_VARIABLES = ("first_impact_time", "energy_residual_relative", "subs
 STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + tuple(
     n for n in STATISTICS if not n.endswith("_settled"))
 
+#: The spectrum's and the periodicity's summaries (:func:`motion_summary`, docs/physics.md
+#: section 11).
+SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
+PERIODICITY_VARIABLES = ("period", "chaos_k")
+
+#: The Poincaré samples a periodicity summary reads (one point per crank revolution).
+POINCARE_TIME = "poincare_time"
+POINCARE_SLIDER = "poincare_slider_acc"
+POINCARE_OFFSET = "poincare_offset"
+#: The Poincaré samples, copied into every summary (a few numbers a revolution): a
+#: ``store: summary`` sweep keeps them for its bifurcation diagram.
+POINCARE_VARIABLES = (POINCARE_TIME, POINCARE_SLIDER, POINCARE_OFFSET, "poincare_velocity")
+
 #: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, "wear_depth_max_final", "wear_volume",
-                 *WEAR_TABLE_VARIABLES, *PASS_THROUGH_VARIABLES)
+SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
+                 "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
+                 *PASS_THROUGH_VARIABLES, *POINCARE_VARIABLES)
+REVOLUTION_DIM = "revolution"
+#: The names a swept ``metrics.settle_time`` takes in a sweep file (clearsweep.sweeping's
+#: naming: ``metrics`` is not a dropped first component).
+SETTLE_TIME_COORDINATES = ("metrics_settle_time", "settle_time")
 
 
 def with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:
@@ -144,6 +163,124 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
     })
 
 
+def settle_time(ds: xr.Dataset) -> float:
+    """Start of the settled window [s] (``metrics.settle_time``) of a one-case dataset: the
+    ``settle_time_s`` attribute a run records; in a case of a sweep file, its
+    ``metrics_settle_time`` coordinate (a swept key) or the sweep's base config (its default where the config does
+    not set it); 0 for a file without a config."""
+    if "settle_time_s" in ds.attrs:
+        return float(ds.attrs["settle_time_s"])
+    for name in SETTLE_TIME_COORDINATES:
+        if name in ds.coords and ds[name].ndim == 0:
+            return float(ds[name].values)
+    import yaml
+
+    for name, base in (("config", False), ("sweep_config", True)):
+        try:
+            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
+            doc = doc.get("base", {}) if base else doc
+            return float(doc["metrics"]["settle_time"])
+        except (yaml.YAMLError, AttributeError, KeyError, TypeError, ValueError):
+            continue
+    if {"config", "sweep_config"} & set(ds.attrs):
+        from .config import MetricsConfig
+
+        return float(MetricsConfig().settle_time)
+    return 0.0
+
+
+def crank_speed(t: np.ndarray, crank_angle: np.ndarray) -> float:
+    """Crank speed omega [rad s-1] of a run's rows: the slope of ``crank_angle`` (theta0 +
+    omega t, driven at constant speed) between its first and last finite rows."""
+    keep = np.isfinite(t) & np.isfinite(crank_angle)
+    if keep.sum() < 2:
+        return float("nan")
+    t, theta = t[keep], crank_angle[keep]
+    return float((theta[-1] - theta[0]) / (t[-1] - t[0]))
+
+
+def _case_dims(var: xr.Variable, own: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(str(d) for d in var.dims if d not in own)
+
+
+def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """The spectrum's summaries of every case of ``ds`` (with ``slider_acceleration`` and
+    ``crank_angle`` on ``time``)."""
+    acc = ds.variables["slider_acceleration"]
+    angle = ds.variables["crank_angle"]
+    dims = _case_dims(acc, ("time",))
+    acc_v = acc.transpose(*dims, "time").values
+    angle_v = angle.transpose(*_case_dims(angle, ("time",)), "time").values
+    angle_v = np.broadcast_to(angle_v, acc_v.shape)
+    t = ds["time"].values.astype(float)
+    start = settle_time(ds)
+    dominant = np.full(acc_v.shape[:-1], np.nan)
+    share = np.full(acc_v.shape[:-1], np.nan)
+    for index in np.ndindex(*acc_v.shape[:-1]):
+        orders, power = motion.order_spectrum(t, acc_v[index], crank_speed(t, angle_v[index]),
+                                                start)
+        dominant[index], share[index] = motion.spectrum_summary(orders, power)
+    extra = {"high_order": motion.HIGH_ORDER}
+    return {"slider_acceleration_dominant_order":
+            xr.Variable(dims, dominant, attrs_for("slider_acceleration_dominant_order")),
+            "slider_acceleration_high_order_share":
+            xr.Variable(dims, share, {**attrs_for("slider_acceleration_high_order_share"), **extra})}
+
+
+def poincare_points(ds: xr.Dataset, start: float | None = None
+                    ) -> tuple[xr.DataArray, xr.DataArray, xr.DataArray | None]:
+    """The settled Poincaré samples of ``ds``: (time, slider acceleration, offsets / clearance
+    or None), each NaN at the revolutions before ``start`` (default: :func:`settle_time`)."""
+    start = settle_time(ds) if start is None else start
+    time = ds[POINCARE_TIME]
+    settled = time >= start - 1e-12
+    offset = ds[POINCARE_OFFSET].where(settled) if POINCARE_OFFSET in ds else None
+    return time.where(settled), ds[POINCARE_SLIDER].where(settled), offset
+
+
+def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """``period`` and ``chaos_k`` of every case of ``ds`` (with the Poincaré samples)."""
+    time, slider, offset = poincare_points(ds)
+    dims = tuple(str(d) for d in time.dims if d != REVOLUTION_DIM)
+    time_v = time.transpose(*dims, REVOLUTION_DIM).values
+    slider_v = slider.transpose(*dims, REVOLUTION_DIM).values
+    offset_v = (None if offset is None else
+                offset.transpose(*dims, REVOLUTION_DIM, ...).values)
+    period = np.full(time_v.shape[:-1], motion.PERIOD_UNKNOWN, dtype=np.int64)
+    chaos = np.full(time_v.shape[:-1], np.nan)
+    for index in np.ndindex(*time_v.shape[:-1]):
+        rows = np.isfinite(time_v[index])
+        a = slider_v[index][rows]
+        features, scales = [a[:, None]], [np.abs(a).max() if a.size else 1.0]
+        if offset_v is not None:
+            d = offset_v[index][rows]
+            d = d.reshape(d.shape[0], int(np.prod(d.shape[1:])))
+            clearance_joints = ~np.isnan(d).all(axis=0)      # NaN: an ideal joint
+            features.append(d[:, clearance_joints])
+            scales += [1.0] * int(clearance_joints.sum())    # offsets are / clearance
+        period[index] = motion.detect_period(np.concatenate(features, axis=1), np.array(scales))
+        chaos[index] = motion.zero_one_test(a)
+    rules = {"period_rtol": motion.PERIOD_RTOL, "max_period": motion.MAX_PERIOD}
+    return {"period": xr.Variable(dims, period, {**attrs_for("period"), **rules}),
+            "chaos_k": xr.Variable(dims, chaos, {**attrs_for("chaos_k"),
+                                                 "zero_one_min_samples": motion.ZERO_ONE_MIN_SAMPLES,
+                                                 "zero_one_seed": motion.ZERO_ONE_SEED})}
+
+
+def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """The spectrum's summaries (where ``ds`` holds the slider acceleration's time series)
+    and the periodicity's (where it holds Poincaré samples), for every case of ``ds``;
+    a summary ``ds`` already holds is not computed again (docs/physics.md section 11)."""
+    out: dict[str, xr.Variable] = {}
+    if ("slider_acceleration" in ds and "crank_angle" in ds and "time" in ds.dims
+            and not all(n in ds for n in SPECTRUM_VARIABLES)):
+        out.update(_spectrum_values(ds))
+    if (POINCARE_TIME in ds and POINCARE_SLIDER in ds
+            and not all(n in ds for n in PERIODICITY_VARIABLES)):
+        out.update(_periodicity_values(ds))
+    return out
+
+
 def case_summary(ds: xr.Dataset) -> xr.Dataset:
     """Per-case scalars (and joint / axis arrays) of a one-case or sweep dataset.
 
@@ -162,9 +299,11 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         run), copied as they are, never recomputed from the saved rows;
         ``wear_depth_max_final(joint)`` [m] (max of ``wear_map``);
         ``wear_volume(joint)`` [m^3] (the worn volume, which unlike a largest bin does not
-        depend on the map's grid); the ``wear_table`` variables; ``energy_residual_relative``,
-        ``substeps_used``, ``rk4_steps``, ``wall_time`` [s]. Dataset
-        attributes (provenance) are kept.
+        depend on the map's grid); the spectrum's and the periodicity's summaries
+        (:func:`motion_summary`) where ``ds`` holds the time series or Poincaré samples;
+        the ``wear_table`` variables; ``energy_residual_relative``, ``substeps_used``,
+        ``rk4_steps``, ``wall_time`` [s]; the Poincaré samples (``POINCARE_VARIABLES``) as
+        they are. Dataset attributes (provenance) are kept.
     """
     # Built from Variables, not DataArrays: a one-case summary is made for every case of a
     # sweep, and xarray's per-DataArray construction and alignment were most of its cost.
@@ -180,6 +319,7 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
         out["wear_depth_max_final"] = xr.Variable(dims, values, attrs_for("wear_depth_max_final"))
     if "wear_projection" in ds:
         out.update({str(k): v.variable for k, v in wear_table(ds).data_vars.items()})
+    out.update(motion_summary(ds))
     for name in SUMMARY_ORDER:
         if name not in out and name in ds.data_vars:
             out[name] = ds.variables[name]

@@ -183,6 +183,26 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
                                "with another status and are left out"),
     "is_reference": VariableSpec((), "", "reference case of the comparison",
                                  "true for the cases the reduction table compares against"),
+    # docs/physics.md section 11 (clearsweep.motion)
+    "slider_acceleration_dominant_order": VariableSpec(
+        (), "1", "dominant crank order of the slider acceleration",
+        "order (frequency / crank frequency) of the largest bin of the Welch spectrum of "
+        "slider_acceleration over the settled window, the mean removed; NaN where the window "
+        "holds fewer than 2 crank revolutions"),
+    "slider_acceleration_high_order_share": VariableSpec(
+        (), "1", "share of the slider acceleration's power above the high_order attribute",
+        "power of the Welch spectrum's bins above crank order high_order over that of every "
+        "bin above order 0, settled window; NaN where it holds fewer than 2 crank revolutions"),
+    "period": VariableSpec(
+        (), "1", "period of the motion in crank revolutions",
+        "smallest n with every settled Poincare sample (slider acceleration, clearance joints' "
+        "offsets) within period_rtol of the one n revolutions before; 0: none up to "
+        "max_period (non-periodic); -1: fewer than 2 settled revolutions"),
+    "chaos_k": VariableSpec(
+        (), "1", "0-1 test for chaos K",
+        "Gottwald and Melbourne (2004, 2009), correlation method, median over random c, on the "
+        "settled Poincare samples of the slider acceleration: near 0 regular, near 1 chaotic; "
+        "NaN for fewer than zero_one_min_samples revolutions"),
 }
 
 

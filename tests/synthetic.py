@@ -259,3 +259,92 @@ def sweep_ds() -> xr.Dataset:
 def sweep_file(tmp_path_factory, sweep_ds) -> str:
     """``sweep()`` written to a netCDF file."""
     return str(write_netcdf_atomic(sweep_ds, tmp_path_factory.mktemp("sweep") / "sweep.nc"))
+
+
+# Poincaré samples (one point per crank revolution), as the kernel stores them: the
+# contract of docs/physics.md section 11.
+
+def logistic_orbit(r: float, n: int, x0: float = 0.3, skip: int = 1000) -> np.ndarray:
+    """``n`` iterates of the logistic map x -> r x (1 - x) after ``skip`` (its attractor):
+    period 2 at r = 3.2, 4 at 3.5, 3 at 3.83; chaotic at 3.9 and 4.0."""
+    x, out = x0, np.empty(n)
+    for i in range(skip + n):
+        x = r * x * (1.0 - x)
+        if i >= skip:
+            out[i - skip] = x
+    return out
+
+
+def with_poincare(ds: xr.Dataset, slider: np.ndarray, offset: np.ndarray | None = None,
+                  period_s: float = 1.0, first_s: float = 0.0) -> xr.Dataset:
+    """``ds`` with Poincaré samples: ``slider`` (revolution,) [m s-2] as
+    ``poincare_slider_acc``; ``offset`` (revolution, joint) -> the offset / clearance of
+    each joint along x (y half of it, z 0; NaN for a joint whose column is NaN: an ideal
+    one), over ``ds``'s joints; sample k at ``first_s + (k - 1) period_s``."""
+    n = slider.size
+    joints = [str(j) for j in ds["joint"].values] if "joint" in ds.coords else list(JOINTS)
+    if offset is None:
+        offset = np.full((n, len(joints)), np.nan)
+    d = np.stack([offset, 0.5 * offset, 0.0 * offset], axis=-1)
+    revolution = np.arange(1, n + 1)
+    return ds.assign(
+        poincare_time=(("revolution",), first_s + (revolution - 1) * period_s,
+                       {"units": "s", "long_name": "time of the Poincare section"}),
+        poincare_slider_acc=(("revolution",), slider.astype(float),
+                             {"units": "m s-2", "long_name": "slider acceleration at the section"}),
+        poincare_offset=(("revolution", "joint", "axis"), d,
+                         {"units": "1", "long_name": "ball-centre offset / clearance at the section"}),
+        poincare_velocity=(("revolution", "joint", "axis"), np.zeros_like(d),
+                           {"units": "s-1", "long_name": "ball-centre velocity / clearance at the section"}),
+    ).assign_coords(revolution=("revolution", revolution), joint=("joint", joints),
+                    axis=("axis", list(AXES)))
+
+
+def bifurcation_sweep(values=(2.9, 3.2, 3.5, 3.83, 4.0), revolutions: int = 40,
+                      dim: str = "speed_rpm", joints=("A", "B", "O")) -> xr.Dataset:
+    """A summary sweep over ``dim`` whose Poincaré samples are the logistic map's attractor
+    at r = each value: slider acceleration 10 x (m s-2), joint B's offset x along x (y half),
+    the other joints ideal (NaN); the first half of the revolutions before the settled
+    window (``settle_time_s`` = revolutions / 2 s at 1 s a revolution), the first case
+    NaN-padded after three quarters of its revolutions (a shorter case)."""
+    cases = []
+    for k, r in enumerate(values):
+        x = logistic_orbit(r, revolutions)
+        offset = np.full((revolutions, len(joints)), np.nan)
+        offset[:, list(joints).index("B")] = x
+        base = xr.Dataset({"status": ((), "ok")}, coords={"joint": ("joint", list(joints))})
+        case = with_poincare(base, 10.0 * x, offset)
+        if k == 0:
+            case = case.where(case["revolution"] <= revolutions * 3 // 4)
+            case["status"] = ((), "ok")
+        cases.append(case)
+    ds = xr.concat(cases, dim=dim, data_vars="all", coords="minimal", compat="override",
+                   join="override", combine_attrs="override")
+    ds = ds.assign_coords({dim: (dim, list(values), {"long_name": "crank speed", "units": "min-1"})})
+    ds.attrs.update(settle_time_s=revolutions / 2.0, sweep_dims=dim, sweep_store="summary",
+                    config=config_text())
+    return ds
+
+
+def ideal_acceleration_case(revolutions: float = 6.0, samples_per_revolution: int = 1000,
+                            omega: float = OMEGA_RAD_S, settle_s: float = 0.0) -> xr.Dataset:
+    """A run's slider acceleration where the mechanism is ideal: the closed form x_B(theta)
+    (``params.ideal_slider_x``, the realistic preset) differentiated twice in time at
+    constant ``omega`` by central differences (relative error (k omega h)^2 / 12 at order k:
+    under 1e-5 up to order 10), sampled ``samples_per_revolution`` times a revolution over
+    ``revolutions``; ``settle_time_s`` = ``settle_s``."""
+    from clearsweep.params import PRESETS, ideal_slider_x
+
+    preset = PRESETS["realistic"]
+    geometry = (preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
+    dt = 2.0 * np.pi / omega / samples_per_revolution
+    t = np.arange(int(round(revolutions * samples_per_revolution)) + 1) * dt
+    h = 1.0e-3 / omega
+    x = [ideal_slider_x(omega * (t + s), *geometry) for s in (-h, 0.0, h)]
+    acceleration = (x[0] - 2.0 * x[1] + x[2]) / h ** 2
+    return xr.Dataset(
+        {"crank_angle": (("time",), omega * t, {"units": "rad", "long_name": "crank angle theta"}),
+         "slider_acceleration": (("time",), acceleration,
+                                 {"units": "m s-2", "long_name": "slider acceleration"})},
+        coords={"time": ("time", t, {"units": "s", "long_name": "time"})},
+        attrs={"settle_time_s": settle_s, "config": config_text()})

@@ -42,8 +42,9 @@ def shipped_map(name: str) -> list[int]:
 def test_every_shipped_config_that_reports_a_depth_is_in_the_table():
     shipped = {p.stem for p in (ROOT / "configs").glob("*.yaml")}
     # ideal has no clearance (no wear); life_sweep runs life.yaml's map; sensitivity asks for
-    # accelerations and forces, no wear depth, on a coarse map that its header states
-    assert shipped - set(mc.CONFIGS) == {"ideal", "life_sweep", "sensitivity"}
+    # accelerations and forces, no wear depth, on a coarse map that its header states;
+    # bifurcation asks for the motion's period and spectrum, no wear depth
+    assert shipped - set(mc.CONFIGS) == {"ideal", "life_sweep", "sensitivity", "bifurcation"}
     assert set(TABLE) == set(mc.CONFIGS)
     assert expand(ROOT / "configs" / "life_sweep.yaml").base.wear.map == tuple(TABLE["life"][0])
 

@@ -23,22 +23,41 @@ Conventions (docs/physics.md section 5, paper Tables 4-6):
 
 The package's modules: ``selection`` (sweep dimensions, cases, ``--select``), ``tables``
 (the tables and their text, markdown, csv and json layout) and ``text`` (the run and
-sweep summaries); their public names are importable from here.
+sweep summaries); their public names are importable from here, with those of
+:mod:`clearsweep.motion` (spectra, period detection, the 0-1 test for chaos: pure
+functions that the per-case summaries below ``analysis`` call too).
 """
 
 from __future__ import annotations
 
 from ..choices import REPORT_FORMATS  # noqa: F401
 from ..ensemble import MEMBER_DIM  # noqa: F401
+from ..motion import (  # noqa: F401
+    CHAOS_THRESHOLD,
+    HIGH_ORDER,
+    MAX_PERIOD,
+    PERIOD_NONE,
+    PERIOD_UNKNOWN,
+    detect_period,
+    order_spectrum,
+    spectrum_summary,
+    zero_one_test,
+)
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..schema import close_matches  # noqa: F401
 from ..summary import (  # noqa: F401
     PASS_THROUGH_VARIABLES,
+    PERIODICITY_VARIABLES,
+    SPECTRUM_VARIABLES,
     STATISTIC_VARIABLES,
     SUMMARY_ORDER,
     WEAR_TABLE_VARIABLES,
     WEAR_THRESHOLD_FRACTION,
     case_summary,
+    crank_speed,
+    motion_summary,
+    poincare_points,
+    settle_time,
     wear_table,
     with_attrs,
     worn_arc,

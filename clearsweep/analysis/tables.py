@@ -17,6 +17,7 @@ import xarray as xr
 
 from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
+from ..motion import HIGH_ORDER
 from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
 from ..variables import length_unit
 from .selection import (
@@ -378,6 +379,13 @@ _MOTION_COLUMNS = (
     _Column("crank_torque_peak_settled", "Peak crank torque, settled", ".4g"),
     _Column("crank_torque_peak", "Peak crank torque, whole run", ".4g"),
 )
+#: The motion's character (docs/physics.md section 11): spectrum and periodicity.
+_CHARACTER_COLUMNS = (
+    _Column("slider_acceleration_dominant_order", "Dominant order of slider acc.", ".3g"),
+    _Column("slider_acceleration_high_order_share", f"Power share above order {HIGH_ORDER:g}", ".3g"),
+    _Column("period", "Period in revolutions (0: none, -1: n/a)", ""),
+    _Column("chaos_k", "0-1 test K", ".2f"),
+)
 _CONTACT_COLUMNS = (
     _Column("normal_force_peak_settled", "Peak normal force, settled", ".4g"),
     _Column("normal_force_peak", "Peak normal force, whole run", ".4g"),
@@ -395,8 +403,9 @@ _FINAL_WEAR_COLUMNS = (
 def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
     """The kernel's every-step statistics: settled window first, whole run beside it.
 
-    Three tables: slider and crank (one row per case), contacts and the wear at the end
-    (largest depth of the wear map beside the worn volume; one row per case and joint).
+    Four tables: slider and crank (one row per case), contacts and the wear at the end
+    (largest depth of the wear map beside the worn volume; one row per case and joint), and
+    the motion's spectrum and periodicity where the file has them (one row per case).
     A file without the statistics gives an empty string.
     """
     summary = case_summary(ds)
@@ -408,7 +417,8 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         (f"Slider and crank ({statistics})", _MOTION_COLUMNS, ()),
         (f"Contacts ({statistics})", _CONTACT_COLUMNS, ("joint",)),
         ("Wear at the end of the run (the worn volume does not depend on the map's grid)",
-         _FINAL_WEAR_COLUMNS, ("joint",)))
+         _FINAL_WEAR_COLUMNS, ("joint",)),
+        (f"Motion: spectrum and periodicity ({window})", _CHARACTER_COLUMNS, ()))
     for heading, wanted, dims in specs:
         # a column with no value in any case (the settled window of runs that end before
         # it) is left out, not printed as a column of n/a

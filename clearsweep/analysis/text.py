@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import collections
 import math
+import textwrap
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from ..ensemble import MEMBER_DIM
+from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..summary import case_summary
 from .selection import (
@@ -81,6 +83,7 @@ def run_summary_text(ds: xr.Dataset) -> str:
                 values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
                                    for j in case["joint"].values)
                 lines.append(f"  {heading}: {values}")
+        lines += _run_motion_lines(case)
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
         wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
@@ -91,6 +94,76 @@ def run_summary_text(ds: xr.Dataset) -> str:
         lines.append(wall)
         blocks.append("\n".join(lines))
     return "\n\n".join(blocks)
+
+
+def _period_text(period: int) -> str:
+    if period == PERIOD_UNKNOWN:
+        return "undetermined (fewer than 2 settled revolutions)"
+    if period == PERIOD_NONE:
+        return f"non-periodic (no period up to {MAX_PERIOD} revolutions)"
+    return f"periodic, period {period}"
+
+
+def _run_motion_lines(case: xr.Dataset) -> list[str]:
+    """A run's spectrum and periodicity lines (docs/physics.md section 11), where it has them."""
+    lines = []
+    if "slider_acceleration_dominant_order" in case:
+        dominant = float(case["slider_acceleration_dominant_order"])
+        share = float(case["slider_acceleration_high_order_share"])
+        lines.append("slider acceleration spectrum (settled): " + (
+            f"dominant crank order {dominant:.3g}, {100.0 * share:.3g} % of the power above "
+            f"order {HIGH_ORDER:g}" if np.isfinite(dominant)
+            else "n/a (fewer than 2 crank revolutions in the settled window)"))
+    if "period" in case:
+        k = float(case["chaos_k"]) if "chaos_k" in case else math.nan
+        test = (f"0-1 test K = {k:.2f}" if np.isfinite(k)
+                else "0-1 test: n/a (fewer settled revolutions than it needs)")
+        lines.append(f"motion (period in crank revolutions): {_period_text(int(case['period']))}; "
+                     f"{test}")
+    return lines
+
+
+#: Designs a motion line of the sweep summary names before it counts the rest, and the
+#: width its lines are wrapped to.
+MOTION_CASES_LISTED = 8
+REPORT_LINE_CHARACTERS = 100
+
+
+def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, ...]) -> list[str]:
+    """The sweep summary's periodic and chaotic designs, from ``period`` and ``chaos_k``."""
+    if "period" not in summary or not dims:
+        return []
+    groups: dict[tuple[int, str], list[str]] = {}
+    for label, point in iter_points(summary["period"], dims):
+        index = {d: label[d] for d in dims}
+        if not bool(usable.sel(index) if index else usable):
+            continue
+        period = int(point)
+        k = float(summary["chaos_k"].sel(index)) if "chaos_k" in summary else math.nan
+        design = _design_text(ds, label)
+        if period == PERIOD_NONE and np.isfinite(k):
+            chaotic = k > CHAOS_THRESHOLD
+            key = (f"non-periodic, {'chaotic' if chaotic else 'regular'} by the 0-1 test "
+                   f"(K {'>' if chaotic else '<='} {CHAOS_THRESHOLD:g})")
+            design += f" (K = {k:.2f})"
+        elif period == PERIOD_NONE:
+            key = _period_text(period) + ", 0-1 test n/a (too few revolutions)"
+        else:
+            key = _period_text(period)
+        order = period if period > 0 else MAX_PERIOD + 2 - period     # periodic first, by n
+        groups.setdefault((order, key), []).append(design)
+    if not groups:
+        return []
+    lines = ["", "Motion (settled Poincaré samples; periods in crank revolutions):"]
+    for order, key in sorted(groups):
+        designs = groups[(order, key)]
+        listed = ", ".join(designs[:MOTION_CASES_LISTED])
+        more = len(designs) - MOTION_CASES_LISTED
+        line = (f"- {key}: {len(designs)} design{'s' if len(designs) > 1 else ''}: {listed}"
+                + (f" and {more} more" if more > 0 else ""))
+        lines += textwrap.wrap(line, REPORT_LINE_CHARACTERS, subsequent_indent="    ",
+                               break_on_hyphens=False)
+    return lines
 
 
 # --------------------------------------------------------------------------- sweep summary
@@ -263,6 +336,8 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             lines.append(f"    lowest  {shown_value(low, low_h):>16}  {_design_text(ds, low_at)}")
             lines.append(f"    highest {shown_value(high, high_h):>16}  {_design_text(ds, high_at)}")
             lines.append(f"    {spread}")
+    if not ensemble:
+        lines += _sweep_motion_lines(ds, case_summary(ds), usable, dims)
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")
     text = "\n".join(lines)

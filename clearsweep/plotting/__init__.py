@@ -42,6 +42,16 @@ Kinds (``KINDS``):
     the Kaplan-Meier reliability R(N) of each design against revolutions (log axis)
     with its 95 % band; with ``b10=True`` (``--b10``), each design's B10 with its
     interval as error bars instead.
+``spectrum``
+    the slider acceleration's Welch power spectrum over the settled window against crank
+    orders (log power), cases overlaid; the dominant order and the share of the power
+    above order ``HIGH_ORDER`` in the title of one case (docs/physics.md section 11).
+``bifurcation``
+    a sweep over one parameter (``x``: the swept key, a sweep dimension or a key of a zip
+    group): the Poincaré samples of each case's last ``BIFURCATION_REVOLUTIONS`` revolutions
+    against the swept value, one panel for the slider acceleration and one per clearance
+    joint (the offset component, scaled by the clearance, along which the samples spread
+    most).
 """
 
 from __future__ import annotations
@@ -85,6 +95,13 @@ from .common import (  # noqa: F401
     wrapped_label,
 )
 from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
+from .motion import (  # noqa: F401
+    BIFURCATION_REVOLUTIONS,
+    SPECTRUM_MAX_ORDER,
+    _draw_bifurcation,
+    _draw_spectrum,
+    bifurcation_axis,
+)
 from .orbit import _draw_orbit
 from .reliability import _draw_reliability
 from .series import _draw_forces, _draw_slider
@@ -126,6 +143,8 @@ FIGURES = {
     "sweep": FigureKind((8, 5), _draw_sweep, ("metric",)),
     "life": FigureKind((16, 10), _draw_life),
     "reliability": FigureKind((14, 8), _draw_reliability, ("b10",)),
+    "spectrum": FigureKind((9, 5.5), _draw_spectrum),
+    "bifurcation": FigureKind((10, 9), _draw_bifurcation, ("x",)),
 }
 
 
@@ -134,7 +153,7 @@ def _kinds_taking(option: str) -> str:
     return " or ".join(name for name, spec in FIGURES.items() if option in spec.options)
 
 
-def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
+def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
            metric: str | None = None, b10: bool = False) -> Figure:
     """Build the figure of ``kind`` from ``ds`` (see the module docstring).
 
@@ -147,7 +166,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
     select
         ``["DIM=VALUE", ...]`` or ``{dim: value}``: the cases to draw.
     x
-        Abscissa of time series: ``"angle"`` (crank angle [degree]) or ``"time"`` [s].
+        Abscissa of time series: ``"angle"`` (crank angle [degree], ``None``'s) or ``"time"``
+        [s]; of ``kind="bifurcation"``, the swept key (``None``: the only one).
     metric
         Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
     b10
@@ -164,9 +184,11 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str = "angle",
     if kind not in KINDS:
         raise SelectionError(choice_message("plot kind", kind, list(KINDS)), name="kind",
                              value=kind, choices=KINDS)
-    if x not in X_AXES:
-        raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
-                             choices=X_AXES)
+    if kind != "bifurcation":
+        x = "angle" if x is None else x
+        if x not in X_AXES:
+            raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
+                                 choices=X_AXES)
     spec = FIGURES[kind]
     if metric is not None and "metric" not in spec.options:
         raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")
@@ -269,7 +291,7 @@ def overrides_text(ds: xr.Dataset) -> str:
     return "--set " + ", ".join(sets) if sets else ""
 
 
-def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str = "angle",
+def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str | None = None,
          metric: str | None = None, dpi: int = FIGURE_DPI, b10: bool = False) -> Figure:
     """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
 
