@@ -268,7 +268,7 @@ def relative_velocity(rb, vb, Rb, wb, rs, vs, Rs, ws_, qj, qi):
     return sub(point_velocity(rb, vb, Rb, wb, qj), point_velocity(rs, vs, Rs, ws_, qi))
 
 
-@compiled
+@compiled(inline="always")
 def respond(j, model, ball, socket, pb, ps, geo, law, energy):
     """Contact state and force of clearance joint j from its gap geometry ``geo`` (what a
     joint type's ``gap`` returns: e, n, d_s, n_s, h, slope, worn, c_eff, delta) at ball
