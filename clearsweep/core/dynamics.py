@@ -592,7 +592,6 @@ def evaluate(t, y, model, dy, dg, full, solve):
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
     uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
-    uO2 = (0.0, 0.0, 0.5 * p[P_L2])
     zero = (0.0, 0.0, 0.0)
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
 
@@ -607,7 +606,6 @@ def evaluate(t, y, model, dy, dg, full, solve):
         clear_contacts(dg)
     fA = zero
     fB = zero
-    fO = zero
     # crank and rod frames: once before the contacts on a CPU; in a device build each
     # contact forms those it uses (few values live across the contacts: a GPU thread's
     # registers), the rod's twice when both joints have clearance
@@ -649,14 +647,17 @@ def evaluate(t, y, model, dy, dg, full, solve):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         gr, gv, gR, gw = GROUND
-        cO = revolute.contact(joint_o, model, (r2, v2, R2, w2, uO2), (gr, gv, gR, gw, zero),
-                              full)
-        fO = cO.force
-        F2 = add(F2, fO)
-        N2 = add(N2, body_moment(R2, r2, cO.q_ball, fO))
+        cO = revolute.contact(joint_o, model, (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                              (gr, gv, gR, gw, zero), full)
+        F2 = add(F2, cO.force)
+        N2 = add(N2, body_moment(R2, r2, cO.q_ball, cO.force))
         pdiss += cO.diss_power
         if full:
             store_contact(dg, joint_o, cO)
+            # the contact force on the journal, completed by the axial reaction below (kept
+            # here rather than live across the solve: a GPU thread's registers)
+            for i in range(3):
+                dg[D_JOINT_FORCE + 3 * JOINT_O + i] = cO.force[i]
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
@@ -722,11 +723,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
     dg[D_TORQUE] = torque
     for i in range(3):
         # the bearing's force on the crank: the ideal revolute's reaction, or O's contact
-        # force and the axial reaction
-        dg[D_REACTION_O + i] = fO[i] - lamO[i]
+        # force (stored with the contact) and the axial reaction
+        f_o = dg[D_JOINT_FORCE + 3 * JOINT_O + i] if o_free else 0.0
+        dg[D_REACTION_O + i] = f_o - lamO[i]
         dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
         dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
-        dg[D_JOINT_FORCE + 3 * JOINT_O + i] = fO[i] - lamO[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
     dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
@@ -735,7 +737,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
     r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
     dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
     R2 = rotation(t2)
-    pO = add(r2, mv(R2, uO2))
+    pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
     if o_free:
         cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
     else:

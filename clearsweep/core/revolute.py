@@ -25,9 +25,10 @@ the normal and the contact points lie in that plane:
 import math
 
 from .compiled import compiled
-from .contact import respond
+from .contact import respond, respond_inline
 from .kinematics import point_state
 from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
+from .target import on_device
 from .wear import coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
@@ -172,4 +173,6 @@ def contact(j, model, ball, socket, energy):
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     geo = gap(model.jp, j, model.wmap, model.p, pb, ps)
-    return respond(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
+    if on_device():
+        return respond(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
+    return respond_inline(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
