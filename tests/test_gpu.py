@@ -25,22 +25,25 @@ from clearsweep.cli import sweep_command
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: Four cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, the
-#: centred start (impacts), and the centred start with contact laws of the literature (Flores
-#: damping on the onset impact velocity, Hertz's elastic law: the kernel's other branches);
-#: ``store: full`` so that the CPU sweep keeps series too.
+#: Five cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, the
+#: centred start (impacts), the centred start with contact laws of the literature (Flores
+#: damping on the onset impact velocity, Hertz's elastic law: the kernel's other branches),
+#: and clearance at the crank's bearing O too (the revolute joint, the crank free in its
+#: bearing's plane, the seated journal sliding on its bearing from the start); ``store:
+#: full`` so that the CPU sweep keeps series too.
 SWEEP = {
     "name": "gpu_sim", "store": "full",
     "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
              "wear": {"map": [6, 12], "amplification": 1000.0},
              "metrics": {"settle_time": 0.001},
              "solver": {"duration": 0.003}},
-    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws"],
-                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4],
-                       "initial.joints": ["seated", "seated", "centred", "centred"],
-                       "contact.damping": ["paper", "paper", "paper", "flores"],
-                       "contact.impact_velocity": ["max", "max", "max", "onset"],
-                       "contact.elastic": ["paper", "paper", "paper", "hertz"]}]},
+    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws", "ABO"],
+                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4, 2.5e-4],
+                       "joints.O.clearance": [0.0, 0.0, 0.0, 0.0, 2.5e-4],
+                       "initial.joints": ["seated", "seated", "centred", "centred", "seated"],
+                       "contact.damping": ["paper", "paper", "paper", "flores", "paper"],
+                       "contact.impact_velocity": ["max", "max", "max", "onset", "max"],
+                       "contact.elastic": ["paper", "paper", "paper", "hertz", "paper"]}]},
 }
 
 SCRIPT = r"""
@@ -88,8 +91,10 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     from clearsweep.summary import SUMMARY_ORDER
 
     cpu, gpu = simulated
-    assert [str(s) for s in cpu["status"].values] == ["ok"] * 4
-    assert [str(s) for s in gpu["status"].values] == ["ok"] * 4
+    assert [str(s) for s in cpu["status"].values] == ["ok"] * 5
+    assert [str(s) for s in gpu["status"].values] == ["ok"] * 5
+    # the bearing case wears its bearing, on both paths
+    assert float(cpu["wear_volume"].sel(variant="ABO", joint="O")) > 0.0
     compared = []
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
