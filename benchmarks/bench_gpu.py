@@ -17,7 +17,9 @@ ones, so last-bit differences are expected, and contact dynamics amplify them ov
 ``gpu.run_packed`` over that many packed cases (no sweep, no parts, no file), the first
 launch (2 cases) compiling outside the clock; it prints RK4 steps/s and the cases' statuses,
 then the three smallest cases' statistics against the CPU kernel's (``simulation.run_kernel``).
-``--kernel-only --sizes 1470 10000 --duration 0.1`` gives the figures in benchmarks/README.
+``--kernel-only --sizes 1470 10000 --duration 0.1`` gives the figures in benchmarks/README;
+``--set KEY=VALUE`` (repeatable) overrides every case's config (``--set joints.O.clearance=2.5e-4``:
+clearance at the crank's bearing too).
 
 Without a CUDA device it prints ``no CUDA device`` and exits 0. ``--simulator`` runs the
 CUDA path in numba's CUDA simulator instead (sizes and duration should then be tiny, e.g.
@@ -37,13 +39,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+#: ``--set KEY=VALUE`` overrides of the base config (e.g. ``joints.O.clearance=2.5e-4``: the
+#: revolute joint at the crank too), applied to every case.
+EXTRA: list[str] = []
+
+
 def sweep_doc(n: int, duration: float) -> dict:
     step = 2.0e-4 / max(n - 1, 1)
     clearances = [1.0e-4 + i * step for i in range(n)]
     return {"name": f"bench_gpu_{n}", "store": "summary",
             "base": str(ROOT / "configs" / "two_clearances.yaml"),
             "sweep": {"grid": {"joints.B.clearance": clearances}},
-            "overrides": [f"solver.duration={duration}"]}
+            "overrides": [f"solver.duration={duration}", *EXTRA]}
 
 
 def timed_sweep(n: int, duration: float, **backend):
@@ -95,7 +102,7 @@ def kernel_only(sizes: list[int], duration: float) -> None:
         print(f"| {n:,} | {seconds:.2f} | {steps / seconds:.3g} | "
               f"{dict(Counter(r.status for r in runs))} |", flush=True)
     print()
-    print("| case | statistic's largest relative difference | worn volume A, B: device / CPU "
+    print("| case | statistic's largest relative difference | worn volume per joint: device / CPU "
           "[m^3] | energy residual: device / CPU |")
     print("|---|---|---|---|")
     packed = packed_cases(3, duration)
@@ -136,9 +143,12 @@ def main(argv=None) -> int:
                     help="largest sweep run on the CPU backend")
     ap.add_argument("--kernel-only", action="store_true",
                     help="time one device launch per size (no sweep, no files)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override of every case's config, e.g. joints.O.clearance=2.5e-4")
     ap.add_argument("--simulator", action="store_true",
                     help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
     args = ap.parse_args(argv)
+    EXTRA[:] = args.set
     if args.simulator:
         os.environ["NUMBA_ENABLE_CUDASIM"] = "1"     # read when numba is first imported
     sys.path.insert(0, str(ROOT))
@@ -152,7 +162,8 @@ def main(argv=None) -> int:
         return 0
     prepare_kernel()
     if args.kernel_only:
-        print(f"device: {name}; two_clearances, {args.duration:g} s of motion per case")
+        print(f"device: {name}; two_clearances{''.join(' --set ' + o for o in EXTRA)}, "
+              f"{args.duration:g} s of motion per case")
         print()
         kernel_only(args.sizes, args.duration)
         return 0
