@@ -22,6 +22,9 @@ class VariableSpec:
 
 #: The mechanism's joints, in the joint table's order (the ``joint`` dimension).
 JOINTS = tuple(joint.name for joint in JOINT_TABLE)
+#: Each joint's type by name: ``spherical`` (a ball in a socket: its map covers the socket's
+#: sphere) or ``revolute`` (a journal in a bearing: one row of its map, around the bearing).
+JOINT_TYPES = {joint.name: joint.type for joint in JOINT_TABLE}
 AXES = ("x", "y", "z")
 
 #: Per-case variables (docs/physics.md section 8), plus the diagnostics the kernel keeps.

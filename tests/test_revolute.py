@@ -175,3 +175,41 @@ def test_joint_o_is_sweepable_and_validated_per_case():
     assert cfg.joints.O.coating == "PTFE" and cfg.joints.O.length == 0.03
     with pytest.raises(ConfigError, match="joints.O.clearance"):
         load_config(O_ONLY, ["joints.O.bearing_radius=1e-4"])
+
+
+@pytest.mark.parametrize("kind", ["wear-map", "orbit", "wear-polar", "forces"])
+def test_figures_of_a_run_with_clearance_at_o_read_and_keep_their_text_apart(seated_o, kind):
+    """The bearing is drawn as a bearing: its wear around the bearing (a curve and the
+    bearing's cross-section) rather than a sphere, the journal's orbit in the bearing's
+    plane only; the layout check of tests/test_figure_layout.py passes."""
+    from test_figure_layout import layout_problems
+
+    from clearsweep.plotting import figure
+
+    fig = figure(seated_o, kind)
+    assert not layout_problems(fig), layout_problems(fig)
+    titles = [ax.get_title() for ax in fig.axes]
+    if kind == "wear-map":
+        assert any("bearing wear around the bearing" in t for t in titles)
+        assert any(ax.name == "polar" and "joint O" in ax.get_title() for ax in fig.axes)
+        assert not any(ax.name == "3d" and "joint O" in ax.get_title() for ax in fig.axes)
+        assert fig.get_suptitle().startswith("Socket and bearing wear depth")
+    if kind == "orbit":
+        assert [t for t in titles if "joint O" in t] == ["joint O: journal in the bearing's plane, yz"]
+
+
+def test_a_life_run_wears_the_bearing_by_cycle_jumps():
+    """Cycle jumps extrapolate the bearing map as they do a socket's: O's depth grows with
+    the revolutions, its effective clearance is c plus the deepest bin, and the coating's
+    remaining thickness is reported for O."""
+    from clearsweep import life
+
+    cfg = load_config("configs/life.yaml", ["joints.B.clearance=0", "joints.O.clearance=2.5e-4",
+                                            "joints.O.coating=PTFE", "life.cycles=2000"])
+    ds = life(cfg)
+    depth = ds.wear_depth_max.sel(joint="O").values
+    assert depth.size >= 2 and np.all(np.diff(depth) > 0) and depth[-1] > 100 * depth[0]
+    np.testing.assert_allclose(ds.clearance_effective.sel(joint="O").values, 2.5e-4 + depth,
+                               rtol=1e-12)
+    assert np.all(ds.coating_remaining.sel(joint="O").values < cfg.joints.O.coating_thickness)
+    assert np.isnan(ds.wear_depth_max.sel(joint="B").values).all()

@@ -8,6 +8,7 @@ from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 
 from ..analysis import configured_clearances, value_text
+from ..variables import JOINT_TYPES
 from .common import _case_label, _cases, _legend_note, _require, axis_label, scaled
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
@@ -61,13 +62,15 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     styles = {r: (_CIRCLE_STYLES[k % len(_CIRCLE_STYLES)],
                   str(0.15 + 0.5 * k / max(len(radii) - 1, 1))) for k, r in enumerate(radii)}
     for j, (joint, clearances) in enumerate(zip(joints, per_joint)):
-        for p, (a, b) in enumerate(planes):
+        # a journal moves in its bearing's plane (y, z) only: one panel
+        bearing = JOINT_TYPES.get(value_text(joint)) == "revolute"
+        for p, (a, b) in enumerate(planes[2:] if bearing else planes):
             ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
                 ax.plot(d.sel(axis=a).values / factor, d.sel(axis=b).values / factor, lw=0.6,
                         color=colour,
-                        label=_case_label(text, len(cases), "ball centre"))
+                        label=_case_label(text, len(cases), "ball or journal centre"))
             for radius, source in sorted(clearances.items()):
                 ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
@@ -77,7 +80,8 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
             ax.set_ylabel(axis_label(offset, f"d_{b}", unit))
             ideal = "" if clearances else " (ideal joint)"
-            ax.set_title(f"joint {value_text(joint)}{ideal}: {a}{b} plane", fontsize="small")
+            where = "journal in the bearing's plane, yz" if bearing else f"{a}{b} plane"
+            ax.set_title(f"joint {value_text(joint)}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
     entries: dict[str, Artist] = {}

@@ -13,6 +13,7 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import SelectionError, value_text
+from ..variables import JOINT_TYPES
 from .common import (
     DIMENSIONLESS,
     _case_label,
@@ -57,6 +58,34 @@ def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
                       attrs={"snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
 
 
+def _draw_bearing_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
+                      unit: str, label: str, joint: str) -> None:
+    """A revolute joint's bearing map (docs/physics.md 5.6: its first row, the depth around
+    the bearing, uniform along its length): the depth against the angle around the bearing,
+    and the bearing's cross-section with the worn profile exaggerated."""
+    rows, cols, first = at
+    ring = depth.isel(polar=0)
+    phi = ring["azimuth"].values
+    ax = fig.add_subplot(rows, cols, first)
+    ax.plot(phi, ring.values, color="C0", lw=1.0)
+    ax.set_xlim(-180.0, 180.0)
+    ax.set_xlabel(axis_label(ring["azimuth"], "angle around the bearing, atan2(z, y)"))
+    ax.set_ylabel(label)
+    ax.grid(alpha=0.3)
+    ax.set_title(f"joint {joint}: bearing wear around the bearing (max {peak:.3g} {unit})",
+                 fontsize="small")
+    polar_ax = fig.add_subplot(rows, cols, first + 1, projection="polar")
+    scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
+    closed = np.radians(np.append(phi, phi[0] + 360.0))
+    polar_ax.plot(closed, np.ones_like(closed), color="0.5", lw=0.8, ls="--")
+    profile = np.append(ring.values, ring.values[0])
+    polar_ax.plot(closed, 1.0 + scale * np.nan_to_num(profile), color="C3", lw=1.2)
+    polar_ax.set_ylim(0.0, 1.0 + 1.2 * WEAR_POLAR_EXAGGERATION)
+    polar_ax.set_yticks([])
+    polar_ax.set_title(f"joint {joint}: bearing cross-section (y right, z up), worn profile "
+                       f"exaggerated", fontsize="small", pad=12)
+
+
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     _require(ds, ("wear_map",), "--kind wear-map")
     ds = _one_case(ds, "wear-map")
@@ -76,6 +105,10 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     for j, joint in enumerate(joints):
         depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
+        if JOINT_TYPES.get(value_text(joint)) == "revolute":
+            _draw_bearing_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit, label,
+                              value_text(joint))
+            continue
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
         ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
         mesh = ax.pcolormesh(np.degrees(azimuth), np.degrees(polar), depth.values, cmap=cmap,
@@ -106,7 +139,9 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(label)
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
     left_out = f"\nnot drawn: joint {', '.join(empty)}, no wear" if empty else ""
-    fig.suptitle("Socket wear depth" + (f", snapshot {snapshot}" if snapshot else "") + left_out)
+    bearing = any(JOINT_TYPES.get(value_text(j)) == "revolute" for j in joints)
+    fig.suptitle(("Socket and bearing wear depth" if bearing else "Socket wear depth")
+                 + (f", snapshot {snapshot}" if snapshot else "") + left_out)
 
 
 def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
