@@ -133,7 +133,6 @@ def test_contact_angle_of_the_journal_is_the_circles_overlap():
         assert revolute.contact_angle(pen, e, ri, rj) == pytest.approx(math.acos(cos_psi), rel=1e-6)
 
 
-@pytest.mark.slow
 def test_halving_the_step_moves_settled_statistics_by_less_than_half_a_percent():
     """A centred journal (impacts at O) over 0.3 s: the energy residual within the default
     tolerance, and the settled RMS acceleration, O's contact fraction and worn volume within
