@@ -121,8 +121,8 @@ class Estimate:
         float64 per row: the kernel's N_Y + N_D + time and wear maximum,
         plus the output variables.
     map_values : int
-        float64 of the two wear maps (2 x polar x azimuth), the
-        projections and the output copy's.
+        float64 of the wear maps (one per joint: N_JOINTS x polar x azimuth),
+        the projections and the output copy's.
     """
 
     steps_asked: int
@@ -171,7 +171,7 @@ def estimate(cfg: Config) -> Estimate:
     rows = steps // save_every + 1
     per_row = L.N_Y + L.N_D + _KERNEL_EXTRA_PER_ROW + _per_row_output_values()
     polar, azimuth = cfg.wear.map
-    map_values = 2 * polar * azimuth + 2 * 3 * L.N_ANGLE_BINS
+    map_values = L.N_JOINTS * (polar * azimuth + 3 * L.N_ANGLE_BINS)
     return Estimate(asked, steps, rows, per_row, map_values)
 
 

@@ -100,7 +100,7 @@ class LifeCost:
         Wear-map snapshots kept at most: ``min(life.snapshots, life.max_blocks) + 1``
         (the final map is always kept).
     map_bytes : int
-        One wear map of both joints (2 x polar x azimuth float64).
+        One wear map of every joint (N_JOINTS x polar x azimuth float64).
     memory_bytes : int
         Its largest memory beyond the block's arrays: the snapshots :data:`_SNAPSHOT_COPIES`
         times (the list kept, the array the checkpoint and the dataset stack them into, and
@@ -118,10 +118,10 @@ class LifeCost:
 
 def life_cost(cfg: Config) -> LifeCost:
     """The snapshots, memory and checkpoint of the life run ``cfg`` at ``life.max_blocks``
-    blocks (the map size x the snapshots actually kept x both joints)."""
+    blocks (the map size x the snapshots actually kept x every joint)."""
     lc = cfg.life
     polar, azimuth = cfg.wear.map
-    map_bytes = 2 * polar * azimuth * 8
+    map_bytes = L.N_JOINTS * polar * azimuth * 8
     kept = min(lc.snapshots, lc.max_blocks) + 1
     rows = lc.max_blocks * _ROW_VALUES * 8
     return LifeCost(kept, map_bytes, (_SNAPSHOT_COPIES * kept + _WORKING_MAPS) * map_bytes + rows,
@@ -148,7 +148,7 @@ def check_life_cost(cfg: Config, block: Estimate, *, allow_large: bool = False,
         "life.max_blocks, or a coarser "
         "wear.map" + ("" if allow_large else ", or --allow-large if the machine can take it"),
         source, got=f"{value!r} ({cost.snapshots:,} snapshots kept of a "
-                    f"{cfg.wear.map[0]} x {cfg.wear.map[1]} wear map of 2 joints, "
+                    f"{cfg.wear.map[0]} x {cfg.wear.map[1]} wear map of {L.N_JOINTS} joints, "
                     f"{format_bytes(cost.map_bytes)} each: {format_bytes(total)} in all, with the "
                     f"block's {format_bytes(block.output_bytes)})")
 

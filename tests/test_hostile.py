@@ -1172,8 +1172,8 @@ ROUND4_BOUNDS = [
      "died at 3.6 GB with a traceback)",
      lambda t, f: ["life", LIFE, "--set", "life.snapshots=10000", "--set", "wear.map=[1000,2000]",
                    "--dry-run"], 2,
-     "life.snapshots: got 10000 (201 snapshots kept of a 1000 x 2000 wear map of 2 joints, "
-     "30.5 MiB each: 18.2 GiB in all"),
+     "life.snapshots: got 10000 (201 snapshots kept of a 1000 x 2000 wear map of 3 joints, "
+     "45.8 MiB each: 27.2 GiB in all"),
     ("life sweep snapshots 1e4 of a 1000 x 2000 map (was: accepted)",
      lambda t, f: ["sweep", CONFIGS / "life_sweep.yaml", "--set", "life.snapshots=10000",
                    "--set", "wear.map=[1000,2000]", "--dry-run"], 2,
