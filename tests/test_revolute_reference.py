@@ -5,7 +5,8 @@
    the journal's contact force (Hertz's law of internal cylinders, n = 3/2, with damping and
    friction written from their formulas) at its contact point on the crank: accelerations,
    joint forces, the bearing's force on the crank, the drive torque, the contact diagnostics
-   (tests/test_reference.py's ``compare``, its tolerances), and the contact mobility W_p.
+   (tests/test_reference.py's ``compare``, its tolerances), the contact mobility W_p, and
+   the stiff rate (docs/physics.md section 4) of the journal's contact, predictive included.
    Measured worst differences, scaled as ``compare`` scales them: accelerations 3.9e-11,
    torque 7.5e-12, the bearing's force and the joint forces 1.1e-11, O's F_N and friction
    force 1.1e-11 relative (the reference's finite-difference approach rate), W_p 6.4e-13;
@@ -148,6 +149,64 @@ def test_journal_contact_mobility(joints, preset):
             # nothing holds the crank in the bearing's plane: the journal's mass is m2 there
             assert np.allclose(ref_mod.point_mobility(r, O), np.diag([0.0, 1.0, 1.0]) / m2,
                                rtol=0.0, atol=RTOL / m2)
+
+
+
+def out_of_contact(pk):
+    """contact_state's arguments that leave A and B (where they have clearance) out of
+    contact and separating."""
+    return {"delta": (-0.5 * CLEAR, -0.5 * CLEAR), "ddot": (-1e-3, -1e-3)}
+
+
+@pytest.mark.parametrize("joints,preset", CASES)
+def test_journal_stiff_rate_undamped(joints, preset):
+    """c_r = 1, no friction, the journal separating slowly, A and B out of contact: the stiff
+    rate (dg[D_RATE]) is sqrt(dF/d delta / m_eff) with the reference's m_eff of the journal."""
+    pk = o_case(joints, preset, contact={"restitution": 1.0}, friction={"enabled": False})
+    rng = np.random.default_rng(41)
+    for t in (0.0, 0.35):
+        y0 = base_state(pk, pk.p[L.P_OMEGA] * t)
+        y = journal_state(y0, pk, rng, 3e-6, -1e-4, **out_of_contact(pk))
+        k = run_evaluate(t, y, pk.p, pk.jp)
+        r = ref_mod.evaluate(t, y, pk.p, pk.jp)
+        c = r.contacts[O]
+        assert all(r.contacts[j].delta < 0.0 for j in r.contacts if j != O)
+        assert abs(c.dfn_dddot) < 1e-12 * c.dfn_ddelta
+        elastic, _, m_eff = ref_mod.stiff_rates(r, O, pk.p, pk.jp)
+        assert k["dg"][L.D_RATE] == pytest.approx(elastic, rel=RTOL, abs=0.0)
+        assert elastic == pytest.approx(np.sqrt(c.dfn_ddelta / m_eff), rel=1e-12, abs=0.0)
+        if joints == "OAB":
+            assert m_eff == pytest.approx(pk.p[L.P_M2], rel=1e-12, abs=0.0)
+
+
+@pytest.mark.parametrize("joints", ["O", "OAB"])
+def test_journal_stiff_rate_predictive(joints):
+    """The journal approaching at 0.05 m/s from 1e-7 m: the rate at the penetration its kinetic
+    energy reaches, (1/2) m_eff delta_dot^2 = U(delta_pred) - U(delta), U = A c^(1-n)
+    delta^(n+1) / (n + 1) the Hertz law's energy (n = 3/2), with the damping there."""
+    pk = o_case(joints, "realistic", friction={"enabled": False})
+    rng = np.random.default_rng(43)
+    y = journal_state(base_state(pk, 0.4), pk, rng, 1e-7, 0.05, **out_of_contact(pk))
+    k = run_evaluate(0.1, y, pk.p, pk.jp)
+    r = ref_mod.evaluate(0.1, y, pk.p, pk.jp)
+    c = r.contacts[O]
+    elastic, _, m_eff = ref_mod.stiff_rates(r, O, pk.p, pk.jp)
+    jp = pk.jp[O]
+    cc, ew, ri, rj = jp[L.J_C], jp[L.J_EW], jp[L.J_RI], jp[L.J_RJ]
+    n = ref_mod.JOURNAL_EXPONENT
+    a = 4.0 / 3.0 * ew * np.sqrt(ri * rj)      # F_el = A c^(1-n) delta^n (journal_force)
+    dpred = (c.delta ** (n + 1.0) + 0.5 * (n + 1.0) * m_eff * c.ddot ** 2 * cc ** (n - 1.0) / a
+             ) ** (1.0 / (n + 1.0))
+    assert dpred > 10.0 * c.delta
+
+    def fn(d, v):
+        return ref_mod.journal_force(d, v, cc, ew, ri, rj, c.kappa)[0]
+
+    kf = ref_mod.d1(lambda d: fn(d, c.ddot), dpred, 1e-3 * dpred)
+    cf = ref_mod.d1(lambda v: fn(dpred, v), c.ddot, 1e-3 * c.ddot)
+    pred = float(np.max(np.abs(np.roots([m_eff, cf, kf]))))
+    assert pred > elastic
+    assert k["dg"][L.D_RATE] == pytest.approx(pred, rel=1e-6, abs=0.0)
 
 
 # ---------------------------------------------------------------------------
