@@ -63,50 +63,61 @@ def o_case(joints, preset="realistic", **sections):
 # 1. the right-hand side against the dense reference
 # ---------------------------------------------------------------------------
 
-def seat_journal(y, p, jp, rng, delta, ddot):
+def seat_journal(y, p, jp, rng, delta, ddot, slip=None):
     """Shift the crank in the bearing's plane so that the journal centre sits at
-    (c + delta) n, n a random in-plane direction, and its centroid velocity along n so that
-    the journal approaches the bearing wall at ddot (the crank's rotation as it is)."""
+    (c + delta) n, n a random in-plane direction, and its centroid velocity in the plane so
+    that the journal approaches the bearing wall at ddot (the crank's rotation as it is) and,
+    where ``slip`` is given, slides along it at that speed (else at about omega R_j)."""
     mech = ref_mod.Mechanism(p, jp)
     y = np.array(y, float)
     phi = rng.uniform(-np.pi, np.pi)
     n = np.array([0.0, np.cos(phi), np.sin(phi)])
+    tangent = np.array([0.0, -n[2], n[1]])
     p_o = ref_mod.point(y[:L.N_Q], ref_mod.CRANK, mech.u_O)
     y[L.Y_R2 + 1:L.Y_R2 + 3] += (jp[O, L.J_C] + delta) * n[1:] - p_o[1:]
     c = ref_mod.journal_contact(mech, y[:L.N_Q], y[L.Y_QD:L.Y_QD + L.N_Q])
     assert np.allclose(c.n, n, atol=1e-12)
-    y[L.Y_QD + L.Y_R2 + 1:L.Y_QD + L.Y_R2 + 3] += (ddot - c.ddot) * n[1:]
+    shift = (ddot - c.ddot) * n
+    if slip is not None:
+        shift += (slip - c.vt @ tangent) * tangent
+    y[L.Y_QD + L.Y_R2 + 1:L.Y_QD + L.Y_R2 + 3] += shift[1:]
     return y
 
 
-def journal_state(y0, pk, rng, delta_o=2e-6, ddot_o=3e-3, **spherical):
+def journal_state(y0, pk, rng, delta_o=2e-6, ddot_o=3e-3, slip_o=None, **spherical):
     """A drifted state (tests/test_reference.perturb) with the journal pressed into the bearing
     wall (seat_journal) and A, B where they have clearance pressed into their sockets
     (tests/test_reference.contact_state; the rod and slider follow the crank)."""
     y = perturb(y0, rng)
-    y = seat_journal(y, pk.p, pk.jp, rng, delta_o, ddot_o)
+    y = seat_journal(y, pk.p, pk.jp, rng, delta_o, ddot_o, slip_o)
     return contact_state(y, pk.p, pk.jp, rng, drift=False, **spherical)
 
 
 @pytest.mark.parametrize("joints,preset", CASES)
 def test_journal_in_contact(joints, preset):
-    """Journal pressed 2e-6 m (or 5e-6 m) into the bearing, approaching or receding, several
-    crank angles, A and B pressed where they have clearance, with and without stored impact
+    """Journal pressed 2e-6 m (or 5e-6 m) into the bearing, approaching or receding, sliding
+    at about omega R_j = 0.06 m/s (full friction) or in the friction ramp, several crank
+    angles, A and B pressed where they have clearance, with and without stored impact
     velocities: every quantity of ``compare`` within RTOL of the reference."""
     pk = o_case(joints, preset)
     rng = np.random.default_rng(100 + CASES.index((joints, preset)))
     results = []
-    for t, delta_o, ddot_o in ((0.0, 2e-6, 3e-3), (0.13, 5e-6, -2e-3), (0.41, 2e-6, 1e-3),
-                               (0.77, 5e-6, 4e-3)):
+    for t, delta_o, ddot_o, slip_o in ((0.0, 2e-6, 3e-3, None), (0.13, 5e-6, -2e-3, None),
+                                       (0.41, 2e-6, 1e-3, 5e-4), (0.77, 5e-6, 4e-3, None)):
         y0 = base_state(pk, pk.p[L.P_THETA0] + pk.p[L.P_OMEGA] * t)
-        y = journal_state(y0, pk, rng, delta_o, ddot_o)
+        y = journal_state(y0, pk, rng, delta_o, ddot_o, slip_o)
         res = compare(t, y, pk)
         r = res["reference"]
         c = r.contacts[O]
         assert c.delta > 0.0 and c.fn > 0.0 and c.ft > 0.0
         assert c.ddot == pytest.approx(ddot_o, rel=1e-9)
-        # the bearing's force carries the journal's contact force (in its plane) and the axial
-        # row's reaction; the friction's moment about the crank axis reaches the drive torque
+        slip = np.linalg.norm(c.vt)
+        if slip_o is None:
+            assert slip > pk.p[L.P_V1]
+        else:
+            assert pk.p[L.P_V0] < slip < pk.p[L.P_V1]
+        # the bearing's force: the journal's contact force (in its plane) and the axial row's
+        # reaction (compare also checks the torque, which carries the friction's moment)
         assert np.linalg.norm(r.reaction_O[1:]) > 0.5 * c.fn
         results.append(res)
         results.append(compare(t, y, pk, dv0=(0.05, 0.02, 0.04)))
@@ -152,10 +163,9 @@ def test_journal_contact_mobility(joints, preset):
 
 
 
-def out_of_contact(pk):
-    """contact_state's arguments that leave A and B (where they have clearance) out of
-    contact and separating."""
-    return {"delta": (-0.5 * CLEAR, -0.5 * CLEAR), "ddot": (-1e-3, -1e-3)}
+#: contact_state's arguments that leave A and B (where they have clearance) out of contact
+#: and separating.
+OUT_OF_CONTACT = {"delta": (-0.5 * CLEAR, -0.5 * CLEAR), "ddot": (-1e-3, -1e-3)}
 
 
 @pytest.mark.parametrize("joints,preset", CASES)
@@ -166,7 +176,7 @@ def test_journal_stiff_rate_undamped(joints, preset):
     rng = np.random.default_rng(41)
     for t in (0.0, 0.35):
         y0 = base_state(pk, pk.p[L.P_OMEGA] * t)
-        y = journal_state(y0, pk, rng, 3e-6, -1e-4, **out_of_contact(pk))
+        y = journal_state(y0, pk, rng, 3e-6, -1e-4, **OUT_OF_CONTACT)
         k = run_evaluate(t, y, pk.p, pk.jp)
         r = ref_mod.evaluate(t, y, pk.p, pk.jp)
         c = r.contacts[O]
@@ -179,6 +189,26 @@ def test_journal_stiff_rate_undamped(joints, preset):
             assert m_eff == pytest.approx(pk.p[L.P_M2], rel=1e-12, abs=0.0)
 
 
+@pytest.mark.parametrize("joints,preset", [("O", "realistic"), ("OAB", "paper")])
+def test_journal_stiff_rate_damped_and_friction(joints, preset):
+    """Damping (c_r = 0.7) and friction with the journal's slip in the ramp, separating: the
+    rate is max(root of m_eff s^2 + dF/d delta_dot s + dF/d delta, mu F_N / (v1 - v0) times
+    the largest tangential inverse mass), with the reference's W_p; a steep ramp (v1 = 2v0)
+    so that friction's rate is the larger (steel's mu is 0.01)."""
+    for friction in (False, True):
+        pk = o_case(joints, preset, friction={"enabled": friction, "v1": 2.0e-4})
+        rng = np.random.default_rng(47)
+        y = journal_state(base_state(pk, 1.0), pk, rng, 4e-6, -2e-3, 1.5e-4, **OUT_OF_CONTACT)
+        k = run_evaluate(0.2, y, pk.p, pk.jp)
+        r = ref_mod.evaluate(0.2, y, pk.p, pk.jp)
+        c = r.contacts[O]
+        assert pk.p[L.P_V0] < np.linalg.norm(c.vt) < pk.p[L.P_V1]
+        assert c.dfn_dddot > 0.0
+        elastic, fric, _ = ref_mod.stiff_rates(r, O, pk.p, pk.jp)
+        assert (fric > elastic) == friction
+        assert k["dg"][L.D_RATE] == pytest.approx(max(elastic, fric), rel=RTOL, abs=0.0)
+
+
 @pytest.mark.parametrize("joints", ["O", "OAB"])
 def test_journal_stiff_rate_predictive(joints):
     """The journal approaching at 0.05 m/s from 1e-7 m: the rate at the penetration its kinetic
@@ -186,7 +216,7 @@ def test_journal_stiff_rate_predictive(joints):
     delta^(n+1) / (n + 1) the Hertz law's energy (n = 3/2), with the damping there."""
     pk = o_case(joints, "realistic", friction={"enabled": False})
     rng = np.random.default_rng(43)
-    y = journal_state(base_state(pk, 0.4), pk, rng, 1e-7, 0.05, **out_of_contact(pk))
+    y = journal_state(base_state(pk, 0.4), pk, rng, 1e-7, 0.05, **OUT_OF_CONTACT)
     k = run_evaluate(0.1, y, pk.p, pk.jp)
     r = ref_mod.evaluate(0.1, y, pk.p, pk.jp)
     c = r.contacts[O]
