@@ -289,8 +289,8 @@ def test_journal_impact_against_scipy(impact_run):
     1-DOF model holds constant (the crank turns 1.4 mrad during the impact; friction, mu =
     0.01, changes the journal's tangential velocity and so its centrifugal part) stay near
     1e-5. Measured: peak force 3.6e-5, penetration 5e-7, velocity ratio 1.1e-5. A stiffness
-    off by 0.1 % (0.4 of it in the peak force), a damping factor off by 0.1 % (a third of it
-    in the ratio) or the entry velocity in place of the fastest approach (2e-4 apart) fails.
+    off by 0.1 % (0.4 of it in the peak force) or a damping factor off by 0.1 % (1.2e-4 in
+    the peak penetration, about half of it in the ratio) fails.
     """
     _, pk, raw, ds = impact_run
     assert int(ds.substeps_used) == 1          # the rows are the steps
