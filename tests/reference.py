@@ -10,10 +10,15 @@ Everything is built the obvious way, independently of the kernel's structured so
   generalised force from Lagrange's equations by finite differences;
 - gravity and the contact law of docs/physics.md section 3, applied at the contact points through
   finite-difference point Jacobians;
+- joint O with clearance (the crank's journal in the ground's bearing, axis x at the origin):
+  the revolute's rows keep the axial one (x of the crank's point O; the tilt and driver rows
+  stay), and the journal's contact force (Hertz's law of internal cylinders, n = 3/2, with
+  the conformal radius, section 3.6) acts at the contact point on the crank;
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
-Only the index constants of ``clearsweep.core.layout`` are used from the kernel package.
+Only the index constants of ``clearsweep.core.layout`` and the joints' rows
+(``clearsweep.core.joints.INDEX``) are used from the kernel package.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from clearsweep.core import layout as L
+from clearsweep.core.joints import INDEX, N_JOINTS
 
 #: Step of the first-derivative stencils in q (m and rad). Five-point stencil: truncation
 #: ~ STEP^4 / 30 * |f^(5)| ~ 1e-12 / 30 * 0.2 m, round-off ~ eps * |f| / STEP ~ 2e-17 / 1e-3,
@@ -37,6 +43,10 @@ STEP_PATH = 5e-3
 
 # body blocks of q: crank 0:6, rod 6:12, slider 12:18; each [r (3), phi (3)]
 CRANK, ROD, SLIDER = 0, 1, 2
+# joints: rows of jp (the spherical joints A, B; the crank's revolute O)
+JOINT_A, JOINT_B, JOINT_O = INDEX["A"], INDEX["B"], INDEX["O"]
+#: Exponent of the journal's Hertz law (internal cylinders; Flores et al. 2008).
+JOURNAL_EXPONENT = 1.5
 
 
 # ---------------------------------------------------------------------------
@@ -151,19 +161,22 @@ class Mechanism:
         self.u_A3 = np.array([-0.5 * self.l3, 0.0, 0.0])   # rod socket of A
         self.u_B3 = np.array([0.5 * self.l3, 0.0, 0.0])    # rod ball of B
         self.u_B4 = np.zeros(3)                             # slider socket of B (centroid)
-        self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 for j in range(2)]
+        self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 for j in range(N_JOINTS)]
+        # the journal's law is the only elastic law written here besides the paper's
+        assert self.p[L.P_EXPONENT] == 0.0, "the reference knows the default elastic laws only"
 
-    # joint j: (ball body, ball offset, socket body, socket offset)
+    # spherical joint j: (ball body, ball offset, socket body, socket offset)
     def joint_bodies(self, j):
-        if j == 0:
+        if j == JOINT_A:
             return CRANK, self.u_A2, ROD, self.u_A3
         return ROD, self.u_B3, SLIDER, self.u_B4
 
     def rows(self):
         """Row ranges of constraints(): dict name -> slice."""
-        out = {"O": slice(0, 3), "angles2": slice(3, 5), "driver": slice(5, 6)}
-        k = 6
-        for j, name in enumerate("AB"):
+        k = 3 if self.ideal[JOINT_O] else 1
+        out = {"O": slice(0, k), "angles2": slice(k, k + 2), "driver": slice(k + 2, k + 3)}
+        k += 3
+        for j, name in ((JOINT_A, "A"), (JOINT_B, "B")):
             if self.ideal[j]:
                 out[name] = slice(k, k + 3)
                 k += 3
@@ -175,12 +188,13 @@ class Mechanism:
     def constraints(self, q, t):
         """C(q, t), docs/physics.md section 2's table (in q's precision)."""
         c = []
-        c.extend(point(q, CRANK, self.u_O))                       # revolute O at the origin
+        p_o = point(q, CRANK, self.u_O)                          # revolute O at the origin;
+        c.extend(p_o if self.ideal[JOINT_O] else p_o[:1])        # with clearance, axial only
         c.extend([q[3], q[4]])                                   # alpha2 = beta2 = 0
         c.append(q[5] - (self.theta0 + self.omega * t))          # driver
-        if self.ideal[0]:                                        # spherical A: rod - crank pin
+        if self.ideal[JOINT_A]:                                  # spherical A: rod - crank pin
             c.extend(point(q, ROD, self.u_A3) - point(q, CRANK, self.u_A2))
-        if self.ideal[1]:                                        # spherical B: slider - rod end
+        if self.ideal[JOINT_B]:                                  # spherical B: slider - rod end
             c.extend(point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3))
         c.append(q[11])                                          # rod spin gamma3 = 0
         c.extend([q[13], q[14] - self.zs, q[15], q[16], q[17]])  # prismatic
@@ -271,20 +285,62 @@ class ContactResult:
 
 
 def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
-    """Contact state and forces of clearance joint j (0: A, 1: B)."""
-    p, jp = mech.p, mech.jp[j]
-    c, ri, rj, ew, mu = jp[L.J_C], jp[L.J_RI], jp[L.J_RJ], jp[L.J_EW], jp[L.J_MU]
+    """Contact state and forces of clearance joint j (A, B: spherical; O: the journal)."""
+    if j == JOINT_O:
+        return journal_contact(mech, q, qd, dv0_stored)
+    jp = mech.jp[j]
+    c, ri, rj, ew = jp[L.J_C], jp[L.J_RI], jp[L.J_RJ], jp[L.J_EW]
     bb, ub, sb, us = mech.joint_bodies(j)
     pb = point(q, bb, ub)
     ps = point(q, sb, us)
     d = pb - ps
     e = np.linalg.norm(d)
     n = d / e if e > 0.0 else np.array([1.0, 0.0, 0.0])  # centred: no contact, any n
-    delta = e - c
     qj = pb + rj * n
     qi = ps + ri * n
     jj = point_jacobian(q, bb, body_offset(q, bb, qj))
     ji = point_jacobian(q, sb, body_offset(q, sb, qi))
+
+    def law(delta, ddot, kappa):
+        return normal_force(delta, ddot, c, ew, ri, kappa)
+
+    return respond(mech, j, qd, e, n, e - c, qj, qi, jj, ji, law, dv0_stored)
+
+
+def journal_force(delta, ddot, c, ew, ri, rj, kappa):
+    """The journal's F_N = F_el (1 + kappa delta_dot), clamped >= 0, and F_el: Hertz's law of a
+    cylinder in a conforming cylindrical bearing, F_el = (4/3) E_w sqrt(R_i R_j / c) delta^(3/2)
+    (the conformal pair's radius R_i R_j / (R_i - R_j), R_i - R_j = c; Flores et al. 2008)."""
+    if delta <= 0.0:
+        return 0.0, 0.0
+    fel = 4.0 / 3.0 * ew * np.sqrt(ri * rj / c) * delta ** JOURNAL_EXPONENT
+    return max(0.0, fel * (1.0 + kappa * ddot)), fel
+
+
+def journal_contact(mech: Mechanism, q, qd, dv0_stored=0.0):
+    """Contact state and forces of joint O: the crank's journal (centre: the crank point O)
+    in the ground's bearing (centre at the origin, axis x), the gap in the bearing's plane."""
+    jp = mech.jp[JOINT_O]
+    c, ri, rj, ew = jp[L.J_C], jp[L.J_RI], jp[L.J_RJ], jp[L.J_EW]
+    pb = point(q, CRANK, mech.u_O)
+    d = np.array([0.0, pb[1], pb[2]])                    # the axial offset is the ideal row's
+    e = np.linalg.norm(d)
+    n = d / e if e > 0.0 else np.array([0.0, 1.0, 0.0])
+    qj = pb + rj * n                                     # on the journal
+    qi = ri * n                                          # on the bearing, which does not move
+    jj = point_jacobian(q, CRANK, body_offset(q, CRANK, qj))
+
+    def law(delta, ddot, kappa):
+        return journal_force(delta, ddot, c, ew, ri, rj, kappa)
+
+    return respond(mech, JOINT_O, qd, e, n, e - c, qj, qi, jj, np.zeros_like(jj), law, dv0_stored)
+
+
+def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored):
+    """Forces of clearance joint j with eccentricity e, normal n and penetration delta, whose
+    contact points qj (ball side, point Jacobian jj) and qi (socket side, ji) move with qd;
+    ``law(delta, delta_dot, kappa)`` gives (F_N, F_el)."""
+    p, mu = mech.p, mech.jp[j, L.J_MU]
     j_rel = jj - ji
     v = j_rel @ qd
     ddot = float(n @ v)
@@ -293,7 +349,7 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
     dv0 = dv0_stored if dv0_stored > 0.0 else max(ddot, p[L.P_DV0_MIN])
     cr = p[L.P_CR]
     kappa = 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
-    fn, fel = normal_force(delta, ddot, c, ew, ri, kappa)
+    fn, fel = law(delta, ddot, kappa)
     force = -fn * n
     ft = 0.0
     if delta > 0.0 and p[L.P_FRICTION] != 0.0 and vtn > 0.0:
@@ -303,9 +359,9 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
     hd = 1e-3 * max(delta, 1e-9)
     dfd = 0.0
     if delta > 3.0 * hd:
-        dfd = d1(lambda x: normal_force(x, ddot, c, ew, ri, kappa)[0], delta, hd)
+        dfd = d1(lambda x: law(x, ddot, kappa)[0], delta, hd)
     hv = 1e-3 * max(abs(ddot), 1e-6)
-    dfdd = d1(lambda x: normal_force(delta, x, c, ew, ri, kappa)[0], ddot, hv) if fn > 0.0 else 0.0
+    dfdd = d1(lambda x: law(delta, x, kappa)[0], ddot, hv) if fn > 0.0 else 0.0
     # dissipated power: -(power of the contact forces) - dU/dt
     pdiss = -(force @ v) - fel * ddot if delta > 0.0 else 0.0
     gen = jj.T @ force - ji.T @ force
@@ -324,7 +380,7 @@ class Reference:
     lam: np.ndarray
     torque: float
     reaction_O: np.ndarray
-    joint_force: np.ndarray     # (2, 3), on the balls
+    joint_force: np.ndarray     # (N_JOINTS, 3), on the balls; O's: the bearing's on the crank
     contacts: dict
     mass: np.ndarray
     cq: np.ndarray
@@ -353,7 +409,8 @@ def acceleration_terms(mech: Mechanism, q, qd, t):
 
 
 def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
-    """Solve the full KKT system of docs/physics.md section 2 at state y (layout.Y_*) and time t."""
+    """Solve the full KKT system of docs/physics.md section 2 at state y (layout.Y_*) and time t;
+    ``dv0_stored``: the stored impact velocities of the first joints (the rest 0)."""
     mech = Mechanism(np.asarray(p, float), np.asarray(jp, float))
     q = np.array(y[:L.N_Q], float)
     qd = np.array(y[L.Y_QD:L.Y_QD + L.N_Q], float)
@@ -362,8 +419,9 @@ def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
 
     mass = mech.mass_matrix(q)
     force = mech.gravity_force() + mech.quadratic_force(q, qd)
+    dv0_stored = tuple(dv0_stored) + (0.0,) * (N_JOINTS - len(dv0_stored))
     contacts = {}
-    for j in range(2):
+    for j in range(N_JOINTS):
         if not mech.ideal[j]:
             contacts[j] = contact(mech, j, q, qd, dv0_stored[j])
             force = force + contacts[j].generalized
@@ -388,9 +446,14 @@ def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
     q_drive = constraint_force("driver")
     torque = q_drive[5]
     drive_power = float(q_drive @ qd)
-    reaction_O = constraint_force("O")[0:3]          # on the crank's centroid coordinates
-    joint_force = np.zeros((2, 3))
-    for j, name in enumerate("AB"):
+    # the bearing's force on the crank: the revolute rows' (on the crank's centroid
+    # coordinates), and with clearance the journal's contact force
+    reaction_O = constraint_force("O")[0:3]
+    if not mech.ideal[JOINT_O]:
+        reaction_O = reaction_O + contacts[JOINT_O].force
+    joint_force = np.zeros((N_JOINTS, 3))
+    joint_force[JOINT_O] = reaction_O
+    for j, name in ((JOINT_A, "A"), (JOINT_B, "B")):
         if mech.ideal[j]:
             ball = mech.joint_bodies(j)[0]
             joint_force[j] = constraint_force(name)[6 * ball:6 * ball + 3]

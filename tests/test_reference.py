@@ -49,9 +49,11 @@ JOINTS = {
 
 
 def packed_case(joints, preset="realistic", **sections):
+    """The packed case with the joints ``joints`` (a key of JOINTS, or a joints section)."""
     # The drifted states below recede at up to ~1e-3 m/s; with a smaller impact-velocity
     # floor the damping term clamps F_N at 0 there, which leaves nothing to compare.
-    cfg = {"joints": JOINTS[joints], "mechanism": {"preset": preset},
+    cfg = {"joints": JOINTS[joints] if isinstance(joints, str) else joints,
+           "mechanism": {"preset": preset},
            "contact": {"min_impact_velocity": 1.0e-2}}
     for key, val in sections.items():
         cfg[key] = dict(cfg.get(key, {}), **val)
@@ -129,10 +131,12 @@ def set_contact_velocity(y, p, jp, j, ddot, slip):
     return y
 
 
-def contact_state(y, p, jp, rng, delta=(2e-6, 2e-6), ddot=(3e-3, -2e-3), slip=(5e-2, 4e-4)):
-    """A drifted state with each clearance joint j at penetration delta[j] (negative: a gap),
-    approach rate ddot[j] and slip speed slip[j], in random directions."""
-    y = perturb(y, rng)
+def contact_state(y, p, jp, rng, delta=(2e-6, 2e-6), ddot=(3e-3, -2e-3), slip=(5e-2, 4e-4),
+                  drift=True):
+    """A drifted state (``drift``: else y as it is) with each spherical clearance joint j at
+    penetration delta[j] (negative: a gap), approach rate ddot[j] and slip speed slip[j], in
+    random directions."""
+    y = perturb(y, rng) if drift else np.array(y, float)
     offsets = {}
     for j in range(2):
         if jp[j, L.J_CLEARANCE] != 0.0:
@@ -174,7 +178,7 @@ def compare(t, y, pk, dv0=(0.0, 0.0)):
     tscale = fscale * pk.p[L.P_L2]
     kf = {"torque": dg[L.D_TORQUE],
           "reaction_O": dg[L.D_REACTION_O:L.D_REACTION_O + 3],
-          "joint_force": dg[L.D_JOINT_FORCE:L.D_JOINT_FORCE + 6].reshape(2, 3)}
+          "joint_force": dg[L.D_JOINT_FORCE:L.D_JOINT_FORCE + 3 * L.N_JOINTS].reshape(L.N_JOINTS, 3)}
     rf = {"torque": r.torque, "reaction_O": r.reaction_O, "joint_force": r.joint_force}
     for name, scale in (("torque", tscale), ("reaction_O", fscale), ("joint_force", fscale)):
         err = np.max(np.abs(np.asarray(kf[name]) - rf[name])) / scale
@@ -303,7 +307,9 @@ def kernel_point_mobility(k, y, pk, j):
     mr = rot_mass(tuple(p[L.P_J3:L.P_J3 + 3]), g3)
     det = mr[0] * mr[4] - mr[1] * mr[3]
     mr_inv = (mr[4] / det, -mr[1] / det, -mr[3] / det, mr[0] / det)
-    minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4], 0.0)     # O ideal: the crank held
+    # the crank's centroid free in the bearing's plane where O has clearance, else held
+    minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4],
+            1.0 / p[L.P_M2] if jp[ref_mod.JOINT_O, L.J_CLEARANCE] != 0.0 else 0.0)
     nc = 3 * int(sum(jp[i, L.J_CLEARANCE] == 0.0 for i in range(2)))
     dg = k["dg"]
     n = np.array(dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3])
@@ -378,14 +384,22 @@ def test_stiff_rate_damped_and_friction(joints, preset):
         delta = [-0.5 * CLEAR, 4e-6]
         y = contact_state(base_state(pk, 1.0), pk.p, pk.jp, rng, delta=delta,
                           ddot=(-1e-3, -2e-3), slip=(1e-3, 5e-4))
-        k = run_evaluate(0.2, y, pk.p, pk.jp)
-        r = ref_mod.evaluate(0.2, y, pk.p, pk.jp)
-        c = r.contacts[j]
-        assert pk.p[L.P_V0] < np.linalg.norm(c.vt) < pk.p[L.P_V1]
-        assert c.dfn_dddot > 0.0
-        elastic, fric, _ = ref_mod.stiff_rates(r, j, pk.p, pk.jp)
+        rate, elastic, fric = rates_in_ramp(0.2, y, pk, j)
         assert (fric > 0.0) == friction
-        assert k["dg"][L.D_RATE] == pytest.approx(max(elastic, fric), rel=RTOL)
+        assert rate == pytest.approx(max(elastic, fric), rel=RTOL)
+
+
+def rates_in_ramp(t, y, pk, j):
+    """The kernel's stiff rate at (t, y) and the reference's elastic/damping and friction
+    rates of clearance joint j, whose slip lies in the friction ramp (asserted, as is an
+    active damping term)."""
+    k = run_evaluate(t, y, pk.p, pk.jp)
+    r = ref_mod.evaluate(t, y, pk.p, pk.jp)
+    c = r.contacts[j]
+    assert pk.p[L.P_V0] < np.linalg.norm(c.vt) < pk.p[L.P_V1]
+    assert c.dfn_dddot > 0.0
+    elastic, fric, _ = ref_mod.stiff_rates(r, j, pk.p, pk.jp)
+    return k["dg"][L.D_RATE], elastic, fric
 
 
 def test_stiff_rate_predictive():
