@@ -39,6 +39,7 @@ CONFIGS = {
     "coating_clearance": ("coating_clearance.yaml", "sweep", ["solver.duration=0.25"], []),
     "paper": ("paper.yaml", "sweep", ["solver.duration=0.25"], []),
     "contact_laws": ("contact_laws.yaml", "sweep", ["solver.duration=0.25"], []),
+    "revolute_clearance": ("revolute_clearance.yaml", "sweep", ["solver.duration=0.25"], []),
     "coating_ensemble": ("coating_ensemble.yaml", "sweep", ["ensemble.members=4", "solver.duration=0.25"],
                          []),
     "life": ("life.yaml", "life", ["life.max_blocks=3"], ["life.max_blocks=12"]),
