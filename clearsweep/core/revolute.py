@@ -29,7 +29,7 @@ from .contact import respond, respond_inline
 from .kinematics import point_state
 from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
 from .target import on_device
-from .wear import coating_worn
+from .wear import arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "revolute"
@@ -139,27 +139,13 @@ def deposit(wmap, j, n, vol, area, radius_length):
     dphi = 2.0 * math.pi / nazim
     phi_c = bearing_angle(n)
     half = 0.5 * area / radius_length
-    dmax = 0.0
     if not half * 2.0 > 1e-9 * dphi:
         ia = min(max(int((phi_c + math.pi) / dphi), 0), nazim - 1)
         wmap[j, 0, ia] += vol / (radius_length * dphi)
         return wmap[j, 0, ia]
     # a bin inside the arc deepens by vol / (2 psi R_i L); one partly inside, by that times
-    # its overlap in bin widths
-    weight = vol / (2.0 * half * radius_length)
-    u0 = (phi_c - half + math.pi) / dphi
-    u1 = (phi_c + half + math.pi) / dphi
-    k = int(math.floor(u0))
-    kend = int(math.floor(u1))
-    while k <= kend:
-        lo = max(float(k), u0)
-        hi = min(float(k + 1), u1)
-        if hi > lo:
-            ia = k % nazim
-            wmap[j, 0, ia] += weight * (hi - lo)
-            dmax = max(dmax, wmap[j, 0, ia])
-        k += 1
-    return dmax
+    # its overlap in bin widths (the sphere's row rule, wear.arc_to_bins, on row 0)
+    return arc_to_bins(wmap, j, 0, phi_c, half, vol / (2.0 * half * radius_length), nazim, 0.0)
 
 
 @compiled

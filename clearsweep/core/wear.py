@@ -126,7 +126,7 @@ def cap_half_width(theta, cos_tc, sin_tc, cos_psi):
 
 
 @compiled
-def _arc_to_bins(wmap, j, ip, phi_c, half, weight, nazim, dmax):
+def arc_to_bins(wmap, j, ip, phi_c, half, weight, nazim, dmax):
     """Add weight * (overlap of the arc [phi_c - half, phi_c + half] with each azimuth bin,
     in bin widths) to row ip of joint j's map; returns the largest value written (and dmax)."""
     dphi = 2.0 * math.pi / nazim
@@ -208,7 +208,7 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
     for k in range(nn):
         ip = int(scratch[k, 0])
         weight = scale * scratch[k, 2] / bin_area(ip, npolar, nazim, radius)
-        dmax = _arc_to_bins(wmap, j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
+        dmax = arc_to_bins(wmap, j, ip, phi_c, scratch[k, 1], weight, nazim, dmax)
     return dmax
 
 
