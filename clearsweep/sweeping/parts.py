@@ -45,6 +45,8 @@ from ..config import Config
 from ..dataset import (
     lock_exclusively,
     open_results,
+    replaced_on_success,
+    write_errors_as_oserror,
     write_netcdf_atomic,
 )
 from ..params import identity_changes, identity_differences, run_identity
@@ -149,8 +151,67 @@ def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
     Used by :meth:`PartStore.write` and by pool workers, which write their
     cases themselves.
     """
+    path = Path(directory) / f"{h}{PART_SUFFIX}"
+    if _plain(part):
+        with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
+            _write_plain(part, tmp, {**part.attrs, KEY_ATTR: h})
+        return path
     part = part.assign_attrs({KEY_ATTR: h})
-    return write_netcdf_atomic(part, Path(directory) / f"{h}{PART_SUFFIX}", encoding=_encoding(part))
+    return write_netcdf_atomic(part, path, encoding=_encoding(part))
+
+
+def _plain(part: xr.Dataset) -> bool:
+    """Whether :func:`_write_plain` writes ``part`` as xarray would: numbers and strings, no
+    encoding of their own (a variable read from a file), every coordinate an index."""
+    import numpy as np
+
+    def plain_attrs(attrs: Mapping) -> bool:
+        return all(type(v) in (str, int, float, list) or isinstance(v, np.floating | np.integer)
+                   for v in attrs.values())
+
+    return (all(name in part.dims for name in part.coords) and plain_attrs(part.attrs)
+            and all(not var.encoding and plain_attrs(var.attrs)
+                    and (var.dtype.kind in "iufU" or var.dtype.kind == "O"
+                         and all(isinstance(x, str) for x in var.values.flat))
+                    for var in part.variables.values()))
+
+
+def _write_plain(part: xr.Dataset, path: str, attrs: Mapping[str, Any]) -> None:
+    """Write ``part`` (:func:`_plain`) to the new file ``path`` with netCDF4 alone, as
+    ``xarray.Dataset.to_netcdf`` writes it (the same dimensions, variables, attributes, fill
+    values and filters, in the same order: tests/test_store.py) at a fraction of its cost:
+    xarray's encoding and per-variable bookkeeping were most of a summary part's write.
+
+    Floats get ``_FillValue`` NaN, but not the uncompressed coordinates (as
+    ``write_netcdf_atomic`` with :func:`_encoding`);
+    strings are variable-length; arrays of :data:`SMALL_ARRAY_BYTES` and more are compressed
+    as one chunk (:func:`_encoding`).
+    """
+    import netCDF4
+    import numpy as np
+
+    encoding = _encoding(part)
+    with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
+        nc.setncatts(dict(attrs))
+        for name, var in part.variables.items():
+            for dim, size in zip(var.dims, var.shape):
+                if dim not in nc.dimensions:
+                    nc.createDimension(dim, size)
+        for name, var in part.variables.items():
+            values = var.values
+            if values.dtype.kind in "OU":
+                out = nc.createVariable(name, str, var.dims)
+                values = str(values[()]) if values.ndim == 0 else values.astype(object)
+            else:
+                chunked = encoding.get(str(name))
+                # (write_netcdf_atomic's coordinates: no _FillValue, unless compressed)
+                fill = np.nan if values.dtype.kind == "f" and (chunked or name not in part.coords) \
+                    else None
+                out = nc.createVariable(name, values.dtype, var.dims, fill_value=fill,
+                                        **(chunked or {}))
+            if var.attrs:
+                out.setncatts(dict(var.attrs))
+            out[...] = values
 
 
 def read_mark(path: str | os.PathLike) -> tuple[str | None, dict[str, Any] | None]:
