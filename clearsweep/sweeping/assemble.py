@@ -399,6 +399,7 @@ class _Writes:
             self.flush()
             return None
         self.budget -= nbytes
+        fill: Any
         if text:
             fill = ""
         elif "_FillValue" in var.ncattrs():

@@ -193,21 +193,22 @@ def _write_plain(part: xr.Dataset, path: str, attrs: Mapping[str, Any]) -> None:
     encoding = _encoding(part)
     with netCDF4.Dataset(path, "w", format="NETCDF4") as nc:
         nc.setncatts(dict(attrs))
-        for name, var in part.variables.items():
+        for var in part.variables.values():
             for dim, size in zip(var.dims, var.shape):
                 if dim not in nc.dimensions:
-                    nc.createDimension(dim, size)
-        for name, var in part.variables.items():
-            values = var.values
+                    nc.createDimension(str(dim), size)
+        for key, var in part.variables.items():
+            name, dims = str(key), tuple(str(d) for d in var.dims)
+            values: Any = var.values
             if values.dtype.kind in "OU":
-                out = nc.createVariable(name, str, var.dims)
+                out: Any = nc.createVariable(name, str, dims)
                 values = str(values[()]) if values.ndim == 0 else values.astype(object)
             else:
-                chunked = encoding.get(str(name))
+                chunked = encoding.get(name)
                 # (write_netcdf_atomic's coordinates: no _FillValue, unless compressed)
-                fill = np.nan if values.dtype.kind == "f" and (chunked or name not in part.coords) \
+                fill = np.nan if values.dtype.kind == "f" and (chunked or key not in part.coords) \
                     else None
-                out = nc.createVariable(name, values.dtype, var.dims, fill_value=fill,
+                out = nc.createVariable(name, values.dtype, dims, fill_value=fill,
                                         **(chunked or {}))
             if var.attrs:
                 out.setncatts(dict(var.attrs))
