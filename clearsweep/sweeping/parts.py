@@ -6,8 +6,9 @@ A sweep writing ``OUT.nc`` keeps its finished cases in the folder
 - ``<key>.nc``: one finished case, named by its case key (:func:`case_key`: the
   hash of everything that decides its results, :func:`clearsweep.params.run_identity`:
   the resolved config, the materials values it reads and the clearsweep version),
-  written to a temporary file in the same folder and renamed into place
-  (:func:`clearsweep.dataset.write_netcdf_atomic`), so a part that is visible is
+  written (with netCDF4 alone, the file ``xarray.Dataset.to_netcdf`` would write:
+  :func:`write_part`) to a temporary file in the same folder and renamed into place
+  (:func:`clearsweep.dataset.replaced_on_success`), so a part that is visible is
   complete. Each part carries its own key and identity as global attributes
   (:data:`KEY_ATTR`, :data:`IDENTITY_ATTR`): the mark that clearsweep wrote it, and
   the proof that it belongs to the case it is filed under. A killed sweep leaves at
