@@ -370,8 +370,9 @@ class _Writes:
     written case by case. Entries no case writes hold the variable's fill value (what the
     file reads there either way)."""
 
-    def __init__(self, variables: Mapping, budget: int = SCAN_CACHE_BYTES):
-        self.variables, self.budget = variables, budget
+    def __init__(self, variables: Mapping, budget: int | None = None):
+        self.variables = variables
+        self.budget = SCAN_CACHE_BYTES if budget is None else budget
         self.arrays: dict[str, np.ndarray] = {}
         self.kept = True
 

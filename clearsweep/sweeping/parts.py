@@ -166,8 +166,11 @@ def _plain(part: xr.Dataset) -> bool:
     encoding of their own (a variable read from a file), every coordinate an index."""
     import numpy as np
 
+    def plain(value) -> bool:
+        return type(value) in (str, int, float) or isinstance(value, np.floating | np.integer)
+
     def plain_attrs(attrs: Mapping) -> bool:
-        return all(type(v) in (str, int, float, list) or isinstance(v, np.floating | np.integer)
+        return all(plain(v) or type(v) is list and v and all(type(x) in (int, float) for x in v)
                    for v in attrs.values())
 
     return (all(name in part.dims for name in part.coords) and plain_attrs(part.attrs)
