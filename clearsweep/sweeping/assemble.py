@@ -6,7 +6,7 @@ per chunk, copies each part into its slice, and renames the file into place.
 A part stores each whole-case array as one chunk with the sweep file's
 filters, so those chunks are copied as compressed bytes: the workers do the
 compression, in parallel, and the driver only moves bytes. Memory holds one
-case and the coordinates, never the sweep.
+case, the coordinates and, within a budget, the small values, never the sweep's arrays.
 """
 
 from __future__ import annotations
@@ -522,8 +522,9 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     Three passes over the parts: the headers (variables, dtypes, case coordinates) and
     every value but the whole-case arrays stored as one chunk (kept up to
     :data:`SCAN_CACHE_BYTES`, so that a part is opened once), then netCDF4 writes of those
-    values, then an h5py copy of the whole-case arrays' compressed chunks as bytes
-    (:func:`_copy_chunks`). Memory holds one case, the coordinates and at most
+    values (one per variable for as many as :data:`SCAN_CACHE_BYTES` hold, :class:`_Writes`),
+    then an h5py copy of the whole-case arrays' compressed chunks as bytes
+    (:func:`_copy_chunks`). Memory holds one case, the coordinates and at most twice
     :data:`SCAN_CACHE_BYTES` of small values.
     """
     shape = tuple(sweep_dims.values())
