@@ -9,8 +9,10 @@ part through ``dataset.write_netcdf_atomic`` (temporary file and rename, as part
 written) and reads each back as assembly does (``dataset.open_results``, then ``load``).
 The formats alternate within each repeat; the best repeat of each is printed, so that a
 busy machine slows every format alike. The formats: netCDF4 with zlib level 1 and shuffle
-in one chunk per variable (the parts' format before this benchmark), the same without
-compression, h5netcdf with gzip level 1 and shuffle, and h5netcdf without compression.
+in one chunk per variable (the parts' format before this benchmark), the same with small
+arrays as they are, the same file written by ``parts.write_part`` with netCDF4 alone (the
+parts now), npz, netCDF4 without compression, h5netcdf with gzip level 1 and shuffle, and
+h5netcdf without compression.
 """
 
 from __future__ import annotations
@@ -38,11 +40,14 @@ def _parts_encoding(ds) -> dict:
     return _encoding(ds)
 
 
-#: name -> (engine, encoding of a dataset); engine "npz": numpy.savez + JSON attributes
+#: name -> (engine, encoding of a dataset); engine "npz": numpy.savez + JSON attributes;
+#: engine "part": ``parts.write_part``, the parts' own writer (its own encoding)
 FORMATS = {
     "netcdf4, zlib 1 + shuffle": ("netcdf4", lambda ds: _chunked(
         ds, {"zlib": True, "complevel": 1, "shuffle": True})),
     "netcdf4, zlib 1 + shuffle, small arrays contiguous": ("netcdf4", _parts_encoding),
+    "netcdf4 alone (parts.write_part: every variable defined, then the values)": (
+        "part", lambda ds: {}),
     "npz + JSON attributes": ("npz", lambda ds: {}),
     "netcdf4, uncompressed": ("netcdf4", lambda ds: {}),
     "h5netcdf, gzip 1 + shuffle": ("h5netcdf", lambda ds: _chunked(
@@ -99,12 +104,15 @@ def _read_npz(path: Path):
 def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tuple[float, float, int]:
     """Seconds per part to write and to read back n parts; bytes per part."""
     from clearsweep.dataset import open_results, write_netcdf_atomic
+    from clearsweep.sweeping.parts import write_part
 
     paths = [folder / f"{k}.nc" for k in range(n)]
     start = time.perf_counter()
     for path in paths:
         if engine == "npz":
             _write_npz(part, path)
+        elif engine == "part":
+            write_part(folder, path.stem, part)
         else:
             write_netcdf_atomic(part, path, encoding=encoding, engine=engine)
     written = time.perf_counter()
@@ -112,7 +120,7 @@ def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tupl
         if engine == "npz":
             _read_npz(path)
             continue
-        with open_results(path, engine=engine) as ds:
+        with open_results(path, engine="netcdf4" if engine == "part" else engine) as ds:
             ds.load()
     read = time.perf_counter()
     size = paths[0].stat().st_size + (paths[0].with_suffix(".json").stat().st_size

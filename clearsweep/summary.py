@@ -124,13 +124,23 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
                              f"missing: {', '.join(missing)}")
         return xr.Dataset({name: ds[name] for name in WEAR_TABLE_VARIABLES})
     projection = ds["wear_projection"]
-    dims = projection.dims[:-1]
     if projection.dims[-1] != "angle":
         projection = projection.transpose(..., "angle")
-        dims = projection.dims[:-1]
     coords = {k: v for k, v in projection.coords.items() if "angle" not in v.dims}
-    angle = projection["angle"].values
+    return xr.Dataset({name: xr.DataArray(var, coords=coords, name=name)
+                       for name, var in _wear_table_variables(ds).items()})
+
+
+def _wear_table_variables(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """:func:`wear_table`'s variables of ``ds`` (holding ``wear_projection``), bare: a
+    DataArray's construction per variable was most of a case summary's cost."""
+    projection = ds.variables["wear_projection"]
+    if projection.dims[-1] != "angle":
+        projection = projection.transpose(..., "angle")
+    dims = projection.dims[:-1]
     p = projection.values
+    angle = (ds.variables["angle"].values if "angle" in ds.variables
+             else np.arange(p.shape[-1]))       # a dimension without its coordinate
     # numpy over the last axis: the same reductions as xarray's (NaN skipped), a small
     # fraction of the cost for the one-case datasets that sweep workers summarize
     with np.errstate(invalid="ignore"):
@@ -150,17 +160,16 @@ def wear_table(ds: xr.Dataset) -> xr.Dataset:
     wear_range = np.where(any_worn, spanned, np.nan)
     threshold = {"wear_threshold_fraction": WEAR_THRESHOLD_FRACTION}
 
-    def var(name: str, values: np.ndarray, **extra) -> xr.DataArray:
-        return xr.DataArray(values, dims=dims, coords=coords, name=name,
-                            attrs={**attrs_for(name), **extra})
+    def var(name: str, values: np.ndarray, **extra) -> xr.Variable:
+        return xr.Variable(dims, values, {**attrs_for(name), **extra})
 
-    return xr.Dataset({
+    return {
         "wear_depth_axis_max": var("wear_depth_axis_max", depth),
         "wear_angle_max": var("wear_angle_max", angle_max, **threshold),
         "wear_angle_min": var("wear_angle_min", angle_min, **threshold),
         "wear_range": var("wear_range", wear_range, **threshold),
         "wear_angle_of_max": var("wear_angle_of_max", angle_of_max),
-    })
+    }
 
 
 def settle_time(ds: xr.Dataset) -> float:
@@ -318,7 +327,7 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
             values = np.where(np.isnan(wmap.values).all(axis=axes), np.nan, finite)
         out["wear_depth_max_final"] = xr.Variable(dims, values, attrs_for("wear_depth_max_final"))
     if "wear_projection" in ds:
-        out.update({str(k): v.variable for k, v in wear_table(ds).data_vars.items()})
+        out.update(_wear_table_variables(ds))
     out.update(motion_summary(ds))
     for name in SUMMARY_ORDER:
         if name not in out and name in ds.data_vars:

@@ -9,7 +9,7 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from clearsweep.dataset import open_results
+from clearsweep.dataset import open_results, write_netcdf_atomic
 from clearsweep.sweeping import assemble as A
 from clearsweep.sweeping import parts as P
 
@@ -183,6 +183,39 @@ def test_chunk_copy_equals_decoded_copy(tmp_path, parts, monkeypatch):
     with open_results(fast) as a, open_results(slow) as b:
         xr.testing.assert_identical(a.load(), b.load())
         np.testing.assert_array_equal(a["x"].isel(k=1).values, parts.read("b")["x"].values)
+
+
+def _netcdf_contents(path) -> dict:
+    """Everything netCDF says of a file, in order: dimensions, global attributes, and each
+    variable's type, dimensions, storage, filters, attributes (``_FillValue`` included) and
+    values."""
+    with netCDF4.Dataset(path) as nc:
+        nc.set_auto_maskandscale(False)
+        return {"dims": [(k, len(d)) for k, d in nc.dimensions.items()],
+                "attrs": [(k, repr(nc.getncattr(k))) for k in nc.ncattrs()],
+                "variables": [(k, str(v.dtype), v.dimensions, v.chunking(), v.filters(),
+                               [(a, repr(v.getncattr(a))) for a in v.ncattrs()],
+                               repr(np.asarray(v[...]).tolist()))
+                              for k, v in nc.variables.items()]}
+
+
+@pytest.mark.parametrize("n_time", [5, P.SMALL_ARRAY_BYTES // 8 + 1])
+def test_a_part_is_the_file_xarray_writes(tmp_path, n_time):
+    """write_part writes parts of numbers and strings with netCDF4 alone (xarray's encoding
+    and its writes between definitions were most of a part's cost): the file is the one
+    ``to_netcdf`` wrote before, to the attribute order and the fill values, small arrays
+    contiguous and large ones compressed."""
+    part = _part(n_time=n_time).drop_vars("contact")      # a bool goes through xarray
+    part["counts"] = (("joint",), np.array([3, 4], dtype=np.int32), {"long_name": "counts"})
+    part["shape_m"] = ((), 0.25, {"units": "m", "range": [0.0, 1.0], "n": np.int64(2)})
+    part = P.with_identity(part.assign_attrs(title="t", count=3, ratio=0.5), {"config": {}})
+    assert P._plain(part)
+    written = P.write_part(tmp_path, "h", part)
+    before = tmp_path / "before.nc"
+    write_netcdf_atomic(part.assign_attrs({P.KEY_ATTR: "h"}), before, encoding=P._encoding(part))
+    assert _netcdf_contents(written) == _netcdf_contents(before)
+    with open_results(written) as a, open_results(before) as b:
+        xr.testing.assert_identical(a.load(), b.load())
 
 
 def test_small_arrays_are_contiguous_in_parts_and_chunked_in_the_sweep(tmp_path, parts):

@@ -6,7 +6,7 @@ per chunk, copies each part into its slice, and renames the file into place.
 A part stores each whole-case array as one chunk with the sweep file's
 filters, so those chunks are copied as compressed bytes: the workers do the
 compression, in parallel, and the driver only moves bytes. Memory holds one
-case and the coordinates, never the sweep.
+case, the coordinates and, within a budget, the small values, never the sweep's arrays.
 """
 
 from __future__ import annotations
@@ -361,8 +361,69 @@ def _chunk_copyable(src, dst, index: tuple, order: list) -> bool:
             and src.filters() == dst.filters())
 
 
-def _copy_case(nc_part, where: tuple[int, ...], variables: Mapping, tpl: _Template) -> list[str]:
-    """Write one part's variables into its slice; return those left for :func:`_copy_chunks`."""
+class _Writes:
+    """The sweep file's values written case by case (everything but the whole-case chunks
+    copied as bytes), kept in memory and written once per variable by :meth:`flush`: a
+    netCDF4 write per variable and case was most of a small case's assembly. Within
+    :data:`SCAN_CACHE_BYTES`; past it, or for a case whose coordinates are placed by
+    position (outer-joined case coordinates), what is kept is written and the rest is
+    written case by case. Entries no case writes hold the variable's fill value (what the
+    file reads there either way)."""
+
+    def __init__(self, variables: Mapping, budget: int | None = None):
+        self.variables = variables
+        self.budget = SCAN_CACHE_BYTES if budget is None else budget
+        self.arrays: dict[str, np.ndarray] = {}
+        self.kept = True
+
+    def write(self, name: str, index: tuple, values, text: bool) -> None:
+        if self.kept and not all(isinstance(i, int | slice) for i in index):
+            self.flush()
+        array = self.arrays.get(name) if self.kept else None
+        if array is None and self.kept:
+            array = self._array(name)
+        if array is None:
+            _write_values(self.variables[name], index, values, text)
+            return
+        if text:
+            values = np.asarray(values, dtype=object)
+            if values.ndim == 0:
+                values = str(values[()])
+        array[index] = values
+
+    def _array(self, name: str) -> np.ndarray | None:
+        var = self.variables[name]
+        text = var.dtype is str
+        dtype = np.dtype(object) if text else np.dtype(var.dtype)
+        nbytes = int(np.prod(var.shape)) * (64 if text else dtype.itemsize)
+        if nbytes > self.budget:
+            self.flush()
+            return None
+        self.budget -= nbytes
+        fill: Any
+        if text:
+            fill = ""
+        elif "_FillValue" in var.ncattrs():
+            fill = var.getncattr("_FillValue")
+        else:
+            fill = netCDF4.default_fillvals[f"{dtype.kind}{dtype.itemsize}"]
+        array = np.full(var.shape, fill, dtype=dtype)
+        self.arrays[name] = array
+        return array
+
+    def flush(self) -> None:
+        """Write what is kept; from here on every value is written at once."""
+        for name, array in self.arrays.items():
+            var = self.variables[name]
+            _write_values(var, slice(None), array, var.dtype is str)
+        self.arrays.clear()
+        self.kept = False
+
+
+def _copy_case(nc_part, where: tuple[int, ...], variables: Mapping, tpl: _Template,
+               writes: _Writes | None = None) -> list[str]:
+    """Write one part's variables into its slice (through ``writes``, where given); return
+    those left for :func:`_copy_chunks`."""
     coords = {d: _values(nc_part[d]) for d in nc_part.dimensions if d in nc_part.variables}
     raw = []
     for name, var in nc_part.variables.items():
@@ -377,7 +438,10 @@ def _copy_case(nc_part, where: tuple[int, ...], variables: Mapping, tpl: _Templa
         for axis, perm in enumerate(order):
             if perm is not None:
                 values = np.take(values, perm, axis=axis)
-        _write_values(dst, where + index, values, var.dtype is str)
+        if writes is None:
+            _write_values(dst, where + index, values, var.dtype is str)
+        else:
+            writes.write(name, where + index, values, var.dtype is str)
     return raw
 
 
@@ -458,8 +522,9 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     Three passes over the parts: the headers (variables, dtypes, case coordinates) and
     every value but the whole-case arrays stored as one chunk (kept up to
     :data:`SCAN_CACHE_BYTES`, so that a part is opened once), then netCDF4 writes of those
-    values, then an h5py copy of the whole-case arrays' compressed chunks as bytes
-    (:func:`_copy_chunks`). Memory holds one case, the coordinates and at most
+    values (one per variable for as many as :data:`SCAN_CACHE_BYTES` hold, :class:`_Writes`),
+    then an h5py copy of the whole-case arrays' compressed chunks as bytes
+    (:func:`_copy_chunks`). Memory holds one case, the coordinates and at most twice
     :data:`SCAN_CACHE_BYTES` of small values.
     """
     shape = tuple(sweep_dims.values())
@@ -475,23 +540,25 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
         with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
             variables = _define(nc, sweep_dims, sweep_coords, tpl, attrs)
+            writes = _Writes(variables)
             for i, slot in enumerate(slots):
                 if check is not None:
                     check()
                 where = tuple(int(k) for k in np.unravel_index(i, shape)) if shape else ()
                 if slot.hash is None:
-                    _write_values(variables["status"], where, "skipped", True)
-                    _write_values(variables["message"], where, slot.message, True)
+                    writes.write("status", where, "skipped", True)
+                    writes.write("message", where, slot.message, True)
                     continue
                 names = None
                 if slot.hash in tpl.copies:
                     with contextlib.suppress(_NeedsFile):
-                        names = _copy_case(tpl.copies[slot.hash], where, variables, tpl)
+                        names = _copy_case(tpl.copies[slot.hash], where, variables, tpl, writes)
                 if names is None:
                     with _open_part(store.path(slot.hash)) as part:
-                        names = _copy_case(part, where, variables, tpl)
+                        names = _copy_case(part, where, variables, tpl, writes)
                 if names:
                     raw.append((where, store.path(slot.hash), names))
+            writes.flush()
         _copy_chunks(Path(tmp), raw, check)
         if finish is not None:
             finish(Path(tmp))
