@@ -73,7 +73,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
 #: Running statistics accumulated by the kernel at every accepted RK4 (sub-)step
 #: (``core.layout.M_*``), never from the saved rows: identical whatever ``save_every``.
 #: Each has a ``_settled`` twin over time >= the ``settle_time_s`` attribute.
-_EVERY_STEP = ("over every accepted RK4 (sub-)step end, not the saved rows")
+_EVERY_STEP = ("within every accepted RK4 (sub-)step (a cubic in time through its ends' values "
+               "and rates), not the saved rows")
 _IDEAL = "; NaN for an ideal joint (no contact law)"
 STATISTICS: dict[str, VariableSpec] = {
     "slider_acceleration_peak": VariableSpec(

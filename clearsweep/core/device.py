@@ -150,7 +150,8 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
                        block(mats, i, 0, (6, 6)), block(mats, i, 1, (6, 6)),
                        block(mats, i, 2, (6, 6)), block(vz, i, 0, (VZ_ROWS, 6)),
                        buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
-                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i])
+                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i],
+                       block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)))
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 

@@ -338,9 +338,9 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             if st != ST_OK:
                 status = st
                 break
-        record_sample(stats, whole, dg1, jp, hh)
+        record_sample(stats, whole, dg, dg1, y, y1, jp, hh, 0.0)
         if in_settled:
-            record_sample(stats, settled, dg1, jp, hh)
+            record_sample(stats, settled, dg, dg1, y, y1, jp, hh, max(0.0, (settle - t) / hh))
         merge_wear(wmap, cur, pend, wmax, scratch)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):

@@ -20,6 +20,8 @@ from .layout import (
     D_CONS,
     D_DDOT,
     D_DELTA,
+    D_DFD,
+    D_DFDD,
     D_ECC,
     D_FN,
     D_HWEAR,
@@ -90,8 +92,11 @@ from .layout import (
     T_WORK_MAX,
     W_SETTLED,
     W_WHOLE,
+    Y_CRANK_ANGLE,
     Y_DISS,
+    Y_QD,
     Y_ROD_BETA,
+    Y_SLIDER_X,
     Y_WORK,
 )
 from .spherical import contact_angle, contact_area
@@ -223,23 +228,112 @@ def copy_row(dst, row, src):
 
 
 @compiled
-def record_sample(m, w, dg, jp, weight):
-    """Fold one accepted (sub-)step end into window w of the running statistics m.
+def hermite_range(f0, f1, m0, m1, lo):
+    """Smallest and largest value over u in [lo, 1] of the cubic Hermite H(u) with H(0) = f0,
+    H(1) = f1, H'(0) = m0, H'(1) = m1 (slopes per unit u: the time slope times the step)."""
+    c2 = 3.0 * (f1 - f0) - 2.0 * m0 - m1
+    c3 = 2.0 * (f0 - f1) + m0 + m1
+    low = f1
+    high = f1
+    if lo > 0.0:
+        v = f0 + lo * (m0 + lo * (c2 + lo * c3))
+        low = min(low, v)
+        high = max(high, v)
+    # interior extrema: H'(u) = m0 + 2 c2 u + 3 c3 u^2 = 0
+    a = 3.0 * c3
+    b = 2.0 * c2
+    r1 = -1.0
+    r2 = -1.0
+    if a == 0.0:
+        if b != 0.0:
+            r1 = -m0 / b
+    else:
+        disc = b * b - 4.0 * a * m0
+        if disc >= 0.0:
+            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+            r1 = q / a
+            if q != 0.0:
+                r2 = m0 / q
+    for r in (r1, r2):
+        if lo < r < 1.0:
+            v = f0 + r * (m0 + r * (c2 + r * c3))
+            low = min(low, v)
+            high = max(high, v)
+    return low, high
 
-    ``weight`` is the (sub-)step length [s] that the sample closes (0 for the initial state):
-    time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
+
+@compiled
+def mean_slopes(f0, f1, mean):
+    """End slopes (per unit step) of the quadratic through f0 and f1 whose mean over the step
+    is ``mean``: the derivative of the cubic Hermite of the integral of f (its ends' values
+    and rates f0, f1), so that :func:`hermite_range` reads the quadratic."""
+    return 6.0 * mean - 4.0 * f0 - 2.0 * f1, -6.0 * mean + 2.0 * f0 + 4.0 * f1
+
+
+@compiled
+def record_sample(m, w, dg0, dg, y0, y, jp, weight, lo):
+    """Fold one accepted (sub-)step into window w of the running statistics m: the step
+    from state y0 (diagnostics dg0) to y (dg), of length ``weight`` [s] (0: the initial
+    state alone, dg0 and y0 unused).
+
+    Time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
+    Peaks are read within the step, over its part u in [lo, 1] (u = (t - t_start) /
+    weight; lo > 0 where the settled window begins inside the step), from a cubic in time
+    through the step's end values and their rates (docs/physics.md section 8.1):
+
+    - slider acceleration a: the slider velocity v is a state, so the quadratic through
+      a0, a1 with the step's mean acceleration (v1 - v0) / weight (the derivative of the
+      cubic Hermite of v); crank torque T likewise from the drive work W, dW/dt = T
+      theta_dot;
+    - penetration delta: the cubic Hermite through delta and its rate delta_dot (the
+      normal approach rate, an exact derivative);
+    - normal force F_N(delta, delta_dot): the cubic Hermite through F_N with the end rates
+      dF_N/dt = dF_N/d delta delta_dot + dF_N/d delta_dot delta_ddot (D_DFD, D_DFDD), the
+      approach acceleration delta_ddot taken as delta_dot's change over the step. The
+      chain rule rather than F_N's finite change: the end rates are then the contact law's
+      at each end, so that a step in which the force turns over gets its interior maximum.
+      delta_ddot from delta_dot, not from a Hermite of delta: delta jumps where the contact
+      direction crosses into a wear-map bin of another depth (c_eff is read from the bin),
+      delta_dot does not, and a jump read as motion gave end rates that overshot the force.
     """
     acc = dg[D_SLIDER_ACC]
-    m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], abs(acc))
+    acc_peak = abs(acc)
+    torque_peak = abs(dg[D_TORQUE])
+    if weight > 0.0:
+        a0 = dg0[D_SLIDER_ACC]
+        m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - y0[Y_QD + Y_SLIDER_X]) / weight)
+        low, high = hermite_range(a0, acc, m0, m1, lo)
+        acc_peak = max(-low, high)
+        rate = 0.5 * (y0[Y_QD + Y_CRANK_ANGLE] + y[Y_QD + Y_CRANK_ANGLE])
+        t0 = dg0[D_TORQUE]
+        m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - y0[Y_WORK]) / (weight * rate))
+        low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
+        torque_peak = max(-low, high)
+    m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
     m[w, M_ACC_SQ] += acc * acc * weight
-    m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], abs(dg[D_TORQUE]))
+    m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
     m[w, M_TIME] += weight
     m[w, M_SAMPLES] += 1.0
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
-        m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], dg[D_FN + j])
-        m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], dg[D_DELTA + j])
+        fn_peak = dg[D_FN + j]
+        pen_peak = dg[D_DELTA + j]
+        if weight > 0.0:
+            d0 = dg0[D_DELTA + j]
+            d1 = dg[D_DELTA + j]
+            v0 = dg0[D_DDOT + j] * weight
+            v1 = dg[D_DDOT + j] * weight
+            _, pen_peak = hermite_range(d0, d1, v0, v1, lo)
+            f0 = dg0[D_FN + j]
+            if f0 > 0.0 or fn_peak > 0.0:
+                # delta_ddot * weight^2, the same at both ends: delta_dot's change over the step
+                dd = v1 - v0
+                s0 = (dg0[D_DFD + j] * v0 + dg0[D_DFDD + j] * dd / weight)
+                s1 = (dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight)
+                _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
+        m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
+        m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
         if dg[D_DELTA + j] > 0.0:
             m[w, M_CONTACT_T + j] += weight
 
@@ -365,13 +459,13 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: no array view is made or passed in the hot loop. Rows of each group, in advance's
 #: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
-#: the stage state;
-#: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its copy,
-#: the largest depth written per joint, the first impact times and their copy; mats: C, S, L
-#: of evaluate; caps: the wear of the step being taken and the accepted wear waiting to be
-#: spread.
-VEC_ROWS = 7
-DIAG_ROWS = 2
+#: the stage state, y at the sub-step's start;
+#: diag: dg, its copy at the step's start and at the sub-step's start; cstate: contact state
+#: s and its copy; pairs: ddot_prev, its copy, the largest depth written per joint, the
+#: first impact times and their copy; mats: C, S, L of evaluate; caps: the wear of the step
+#: being taken and the accepted wear waiting to be spread.
+VEC_ROWS = 8
+DIAG_ROWS = 3
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
 #: row of ``pairs`` holding each joint's first impact time (the next row: its copy)
@@ -445,9 +539,9 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
                 seated = True
         if not seated:
             break
-    record_sample(stats, whole, dg, jp, 0.0)
+    record_sample(stats, whole, dg, dg, y, y, jp, 0.0, 0.0)
     if t0 >= p[P_SETTLE]:
-        record_sample(stats, settled, dg, jp, 0.0)
+        record_sample(stats, settled, dg, dg, y, y, jp, 0.0, 0.0)
     return ST_OK
 
 
@@ -534,7 +628,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
-                   np.zeros((4 * case.wmap.shape[1], 3)))
+                   np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -582,6 +676,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     cur = work.cur
     pend = work.pend
     scratch = work.scratch
+    ysub = work.ysub
+    dgsub = work.dgsub
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
@@ -610,6 +706,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     for i in range(N_D):
         dg[i] = 0.0
         dgsave[i] = 0.0
+        dgsub[i] = 0.0
+    for i in range(N_Y):
+        ysub[i] = 0.0
     for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
@@ -664,6 +763,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
+                copy_into(ysub, y)
+                copy_into(dgsub, dg)
                 st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -682,9 +783,10 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     if st != ST_OK:
                         status = st
                         break
-                record_sample(stats, whole, dg, jp, hs)
+                record_sample(stats, whole, dgsub, dg, ysub, y, jp, hs, 0.0)
                 if in_settled:
-                    record_sample(stats, settled, dg, jp, hs)
+                    record_sample(stats, settled, dgsub, dg, ysub, y, jp, hs,
+                                  max(0.0, (settle - ts) / hs))
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper

@@ -44,11 +44,12 @@ Wear = namedtuple("Wear", ["proj", "wvol", "cur", "pend", "buf_i", "buf_v", "wma
 #: msave (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax,
 #: first_save (one per joint: approach rates and copy, the deepest bin written, the first
 #: impact times' copy); C, S, L, vz (:data:`Solve`); buf_i, buf_v, cur, pend, scratch (as in
-#: :data:`Wear`).
+#: :data:`Wear`); ysub, dgsub (N_Y, N_D: the state and diagnostics at the sub-step's start,
+#: that the in-step peaks of ``rk4.record_sample`` read).
 Rk4Work = namedtuple("Rk4Work", [
     "y", "ysave", "k1", "k1save", "ksum", "kst", "yt", "dg", "dgsave", "s", "ssave", "msave",
     "ddot_prev", "ddot_prev_save", "wmax", "first_save", "C", "S", "L", "vz", "buf_i",
-    "buf_v", "cur", "pend", "scratch"])
+    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub"])
 
 #: Work arrays of ``dopri5.advance_dopri5``: y, y1, yt (N_Y: the state, the trial step's
 #: 5th-order solution, the stage state); k1 ... k7, kt (N_Y: stage derivatives, the
