@@ -79,6 +79,9 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
                              attrs_for("azimuth"))
     if "angle" in sizes:
         coords["angle"] = ("angle", bin_centres_deg(sizes["angle"], -180.0, 180.0), attrs_for("angle"))
+    if "revolution" in sizes:
+        coords["revolution"] = ("revolution", np.arange(1, sizes["revolution"] + 1, dtype=np.int32),
+                                attrs_for("revolution"))
     ds = xr.Dataset(data_vars, coords=coords)
     status = arrays.get("status", "ok")
     ds["status"] = ((), str(status), {"long_name": "simulation status",

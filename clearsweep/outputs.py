@@ -118,7 +118,7 @@ RESULTS_KINDS = {"run": "a run", "life": "a life run", "reliability": "a reliabi
                  "sample": "a sampling sweep", "sweep": "a sweep"}
 
 #: Dimensions of one case's arrays; any other dimension is a sweep's.
-CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle")
+CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle", "revolution")
 #: The dimension of an ensemble's members (after the sweep's own dimensions) and of a
 #: sampling sweep's points (``sweep: sample:``), as results files carry them.
 MEMBER_DIM = "member"

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from .variables import STATISTICS, attrs_for
+from .variables import POINCARE, STATISTICS, attrs_for
 
 #: A projection bin counts as worn above this fraction of its axis's maximum (docs/physics.md section 5).
 WEAR_THRESHOLD_FRACTION = 1.0e-3
@@ -30,9 +30,10 @@ PASS_THROUGH_VARIABLES = ("first_impact_time", "energy_residual_relative", "subs
 STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + tuple(
     n for n in STATISTICS if not n.endswith("_settled"))
 
-#: Order of the variables in ``case_summary``.
+#: Order of the variables in ``case_summary`` (the Poincare sections, per revolution, are
+#: small: a summary store keeps them, for bifurcation diagrams without full stores).
 SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, "wear_depth_max_final", "wear_volume",
-                 *WEAR_TABLE_VARIABLES, *PASS_THROUGH_VARIABLES)
+                 *WEAR_TABLE_VARIABLES, *PASS_THROUGH_VARIABLES, *POINCARE)
 
 
 def with_attrs(da: xr.DataArray, name: str, **extra) -> xr.DataArray:

@@ -28,12 +28,14 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Four cases of 300 steps (3 ms) on a [6, 12] wear map: clearance at B, at A and B, the
 #: centred start (impacts), and the centred start with contact laws of the literature (Flores
 #: damping on the onset impact velocity, Hertz's elastic law: the kernel's other branches);
-#: ``store: full`` so that the CPU sweep keeps series too.
+#: ``store: full`` so that the CPU sweep keeps series too. The Poincare section at 0.72
+#: degrees falls at t = 2 ms: one section per case (the device's ``sec`` results).
 SWEEP = {
     "name": "gpu_sim", "store": "full",
     "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
              "wear": {"map": [6, 12], "amplification": 1000.0},
              "metrics": {"settle_time": 0.001},
+             "outputs": {"poincare_phase_deg": 0.72},
              "solver": {"duration": 0.003}},
     "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws"],
                        "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4],
@@ -105,6 +107,8 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     assert "wear_depth_axis_max" in compared
     assert "impact_count" in compared
     assert "wear_volume" in compared        # kept by the CUDA summaries too
+    assert "poincare_velocity" in compared and "poincare_slider_acc" in compared
+    assert np.isfinite(gpu["poincare_offset"].sel(joint="B").values).all()
 
 
 @pytest.mark.slow

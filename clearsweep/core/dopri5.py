@@ -56,6 +56,7 @@ from .rk4 import (
     accept_substep,
     begin_case,
     case_views,
+    clear_sections,
     copy_into,
     copy_row,
     energy_total,
@@ -64,7 +65,10 @@ from .rk4 import (
     merge_wear,
     note_first_impact,
     record_sample,
+    section_count,
+    section_time,
     step_checks,
+    take_section,
     zero_rows,
 )
 from .work import Dopri5Work
@@ -282,6 +286,11 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         out.track[i] = 0.0
     for j in range(N_JOINTS):
         out.first[j] = -1.0
+    sec = out.sec
+    clear_sections(sec)
+    nsec = min(sec.shape[0], section_count(p, t0, n_steps))
+    ksec = 0
+    tsec = section_time(p, t0, ksec)
 
     status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
     if status != ST_OK:
@@ -365,6 +374,15 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             n_saved += 1
         if status != ST_OK:
             break
+        # Poincare sections inside the step, from the continuous extension
+        while ksec < nsec and (tsec <= t + hh or last):
+            theta = min(1.0, max(0.0, (tsec - t) / hh))
+            dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
+            for i in range(ny):
+                yrow[i] = row[0, i]
+            take_section(tsec, yrow, work.yt, kt, dgo, model, solve, sec, ksec)
+            ksec += 1
+            tsec = section_time(p, t0, ksec)
         copy_into(y, y1)
         copy_into(k1, k7)
         copy_into(dg, dg1)

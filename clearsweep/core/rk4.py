@@ -27,6 +27,7 @@ from .layout import (
     D_HWEAR,
     D_KE,
     D_NORMAL,
+    D_OFFSET,
     D_PE_GRAV,
     D_RATE,
     D_SLIDER_ACC,
@@ -58,8 +59,10 @@ from .layout import (
     N_INFO,
     N_JOINTS,
     N_M,
+    N_Q,
     N_R,
     N_S,
+    N_SEC,
     N_TRACK,
     N_WINDOWS,
     N_Y,
@@ -69,17 +72,24 @@ from .layout import (
     P_DV0_MIN,
     P_ENERGY_TOL,
     P_MAX_LEVEL,
+    P_OMEGA,
     P_ONSET,
     P_PEN_FRAC,
+    P_SECTION_PHASE,
     P_SETTLE,
     P_SLIP,
     P_STAB,
+    P_THETA0,
     P_WEAR,
     R_FIRST_IMPACT,
     R_KE_PEAK,
     R_RESIDUAL_MAX,
     S_BETA,
     S_DV0,
+    SEC_OFFSET,
+    SEC_RATE,
+    SEC_SLIDER_ACC,
+    SEC_TIME,
     ST_CONSTRAINT,
     ST_ENERGY,
     ST_EULER,
@@ -338,6 +348,105 @@ def record_sample(m, w, dg0, dg, y0, y, jp, weight, lo):
             m[w, M_CONTACT_T + j] += weight
 
 
+# --------------------------------------------------------------------------- Poincare sections
+
+TWO_PI = 2.0 * math.pi
+
+#: Half-width of the central difference that gives a section's offset rate, as a fraction of
+#: the output step h: the positions q -+ eps qd of the section's state (docs/physics.md 8.4).
+SECTION_RATE_FRACTION = 1e-2
+
+
+@compiled
+def section_lead(p, t0):
+    """Time from t0 to the first Poincare section [s]: the driven crank angle
+    theta(t) = theta0 + omega t reaches p[P_SECTION_PHASE] + 2 pi k; a crossing at t0 itself
+    (within 1e-9 rad) is not taken."""
+    x = p[P_SECTION_PHASE] - p[P_THETA0] - p[P_OMEGA] * t0
+    x -= TWO_PI * math.floor(x / TWO_PI)
+    if x >= TWO_PI:
+        x = 0.0
+    if x < 1e-9:
+        x += TWO_PI
+    return x / p[P_OMEGA]
+
+
+@compiled
+def section_time(p, t0, k):
+    """Time of section k (0-based: revolution k + 1) of a run from t0 [s]."""
+    return t0 + section_lead(p, t0) + TWO_PI * k / p[P_OMEGA]
+
+
+@compiled
+def section_count(p, t0, n_steps):
+    """Sections a run of n_steps output-grid steps from t0 holds (within 1e-9 of a
+    revolution of its end): the rows of ``Out.sec`` that the integrators fill."""
+    turns = (n_steps * p[P_DT] - section_lead(p, t0)) * p[P_OMEGA] / TWO_PI
+    if turns < -1e-9:
+        return 0
+    return int(math.floor(turns + 1e-9)) + 1
+
+
+@compiled
+def clear_sections(sec):
+    """Every section row NaN (an ideal joint's offsets and rates stay so)."""
+    for k in range(sec.shape[0]):
+        for i in range(N_SEC):
+            sec[k, i] = math.nan
+
+
+@compiled
+def hermite_state(out, u, hs, y0, f0, y1, f1):
+    """out = the cubic Hermite at t0 + u hs of the step from (y0, f0 = y0') to (y1, f1)."""
+    v = 1.0 - u
+    h00 = (1.0 + 2.0 * u) * v * v
+    h10 = u * v * v * hs
+    h01 = u * u * (3.0 - 2.0 * u)
+    h11 = -u * u * v * hs
+    for i in range(y0.shape[0]):
+        out[i] = h00 * y0[i] + h10 * f0[i] + h01 * y1[i] + h11 * f1[i]
+
+
+@compiled(locals=_NOT_LITERAL)
+def take_section(tk, ys, yt, kt, dgt, model, solve, sec, k):
+    """Section row k at time tk from the state ys there (not changed): the slider
+    acceleration and each clearance joint's offset D_OFFSET / c from an evaluation at ys,
+    the offset's rate / c from two more at the positions q -+ eps qd (a central difference
+    along the motion, eps = SECTION_RATE_FRACTION h; error O(eps^2)). yt, kt, dgt: scratch
+    state, derivative and diagnostics. Returns the evaluations' status; the row is NaN
+    unless all three succeed. One evaluate call site (see rk4_substep)."""
+    p = model.p
+    jp = model.jp
+    step_end = True
+    eps = SECTION_RATE_FRACTION * p[P_DT]
+    for m in range(3):
+        sign = -1.0 if m == 0 else (1.0 if m == 1 else 0.0)
+        for i in range(ys.shape[0]):
+            yt[i] = ys[i]
+        for i in range(N_Q):
+            yt[i] = ys[i] + sign * eps * ys[Y_QD + i]
+        st = evaluate(tk + sign * eps, yt, model, kt, dgt, step_end, solve)
+        if st != ST_OK:
+            for i in range(N_SEC):
+                sec[k, i] = math.nan
+            return st
+        for j in range(N_JOINTS):
+            if jp[j, J_CLEARANCE] == 0.0:
+                continue
+            c = jp[j, J_C]
+            for a in range(3):
+                off = dgt[D_OFFSET + 3 * j + a] / c
+                if m == 0:
+                    sec[k, SEC_RATE + 3 * j + a] = off
+                elif m == 1:
+                    sec[k, SEC_RATE + 3 * j + a] = (off - sec[k, SEC_RATE + 3 * j + a]) / (2.0 * eps)
+                else:
+                    sec[k, SEC_OFFSET + 3 * j + a] = off
+    sec[k, SEC_TIME] = tk
+    sec[k, SEC_SLIDER_ACC] = dgt[D_SLIDER_ACC]
+    return ST_OK
+
+
 @compiled
 def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
@@ -459,13 +568,13 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: no array view is made or passed in the hot loop. Rows of each group, in advance's
 #: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
-#: the stage state, y at the sub-step's start;
-#: diag: dg, its copy at the step's start and at the sub-step's start; cstate: contact state
+#: the stage state, y and k1 at the sub-step's start;
+#: diag: dg, its copy at the step's start and at the sub-step's start, dg at a section; cstate: contact state
 #: s and its copy; pairs: ddot_prev, its copy, the largest depth written per joint, the
 #: first impact times and their copy; mats: C, S, L of evaluate; caps: the wear of the step
 #: being taken and the accepted wear waiting to be spread.
-VEC_ROWS = 8
-DIAG_ROWS = 3
+VEC_ROWS = 9
+DIAG_ROWS = 4
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
 #: row of ``pairs`` holding each joint's first impact time (the next row: its copy)
@@ -628,7 +737,8 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
-                   np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D))
+                   np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
+                   np.zeros(N_Y), np.zeros(N_D))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -678,6 +788,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     scratch = work.scratch
     ysub = work.ysub
     dgsub = work.dgsub
+    k1sub = work.k1sub
+    dgsec = work.dgsec
+    sec = out.sec
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     whole = W_WHOLE
@@ -707,8 +820,15 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         dg[i] = 0.0
         dgsave[i] = 0.0
         dgsub[i] = 0.0
+        dgsec[i] = 0.0
     for i in range(N_Y):
         ysub[i] = 0.0
+        k1sub[i] = 0.0
+    clear_sections(sec)
+    # the Poincare sections: the next one's index and time
+    nsec = min(sec.shape[0], section_count(p, t0, n_steps))
+    ksec = 0
+    tsec = section_time(p, t0, ksec)
     for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
@@ -750,6 +870,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         copy_rows_into(msave, stats)
         copy_into(first_save, out.first)
         copy_into(ddot_prev_save, ddot_prev)
+        ksec_save = ksec
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
@@ -765,6 +886,11 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 ts = t + sub * hs
                 copy_into(ysub, y)
                 copy_into(dgsub, dg)
+                # a section in this sub-step (the run's last takes any left within rounding)
+                last_sub = step == n_steps - 1 and sub == nsub - 1
+                due = ksec < nsec and (tsec <= ts + hs or last_sub)
+                if due:
+                    copy_into(k1sub, k1)
                 st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -787,6 +913,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 if in_settled:
                     record_sample(stats, settled, dgsub, dg, ysub, y, jp, hs,
                                   max(0.0, (settle - ts) / hs))
+                while due and ksec < nsec and (tsec <= ts + hs or last_sub):
+                    # the state at the section from the sub-step's cubic Hermite
+                    u = min(1.0, max(0.0, (tsec - ts) / hs))
+                    hermite_state(yt, u, hs, ysub, k1sub, y, k1)
+                    take_section(tsec, yt, ksum, kst, dgsec, model, solve, sec, ksec)
+                    ksec += 1
+                    tsec = section_time(p, t0, ksec)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
@@ -803,6 +936,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             copy_rows_into(stats, msave)
             copy_into(out.first, first_save)
             copy_into(ddot_prev, ddot_prev_save)
+            ksec = ksec_save
+            tsec = section_time(p, t0, ksec)
             level = max(level + 1, need)
         if status != ST_OK:
             if status != ST_UNSTABLE_STEP:

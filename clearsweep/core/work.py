@@ -27,8 +27,10 @@ Case = namedtuple("Case", ["p", "jp", "y0", "wmap", "proj", "wvol"])
 #: What an integrator writes: the output rows t, y, d, wmax (n_save rows; ``keep_rows``
 #: False leaves them untouched), the counters info (layout.I_*), the running statistics
 #: stats (layout.M_*, whole run and settled window), the energy tracking track (layout.T_*)
-#: and each joint's first impact time first [s] (-1: none).
-Out = namedtuple("Out", ["t", "y", "d", "wmax", "info", "stats", "track", "first"])
+#: and each joint's first impact time first [s] (-1: none); the Poincare sections sec
+#: (revolutions x layout.N_SEC, the rows ``rk4.section_count`` gives, or fewer: those are
+#: taken; every row is written, NaN where no section is taken).
+Out = namedtuple("Out", ["t", "y", "d", "wmax", "info", "stats", "track", "first", "sec"])
 
 #: The wear of accepted steps on its way to the map: the projections and worn volume (as
 #: in :data:`Case`), the wear of the step being taken ``cur`` and the wear waiting to be
@@ -45,11 +47,13 @@ Wear = namedtuple("Wear", ["proj", "wvol", "cur", "pend", "buf_i", "buf_v", "wma
 #: first_save (one per joint: approach rates and copy, the deepest bin written, the first
 #: impact times' copy); C, S, L, vz (:data:`Solve`); buf_i, buf_v, cur, pend, scratch (as in
 #: :data:`Wear`); ysub, dgsub (N_Y, N_D: the state and diagnostics at the sub-step's start,
-#: that the in-step peaks of ``rk4.record_sample`` read).
+#: that the in-step peaks of ``rk4.record_sample`` read); k1sub (N_Y: the derivative there,
+#: copied only for a sub-step that holds a Poincare section) and dgsec (N_D: the
+#: diagnostics at a section).
 Rk4Work = namedtuple("Rk4Work", [
     "y", "ysave", "k1", "k1save", "ksum", "kst", "yt", "dg", "dgsave", "s", "ssave", "msave",
     "ddot_prev", "ddot_prev_save", "wmax", "first_save", "C", "S", "L", "vz", "buf_i",
-    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub"])
+    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub", "k1sub", "dgsec"])
 
 #: Work arrays of ``dopri5.advance_dopri5``: y, y1, yt (N_Y: the state, the trial step's
 #: 5th-order solution, the stage state); k1 ... k7, kt (N_Y: stage derivatives, the
