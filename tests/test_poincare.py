@@ -45,7 +45,9 @@ def test_section_between_step_ends_matches_a_run_whose_grid_hits_it():
 
     Ideal mechanism: the slider acceleration agrees to 1e-8 relative. The cubic Hermite of
     the state has a local error ~ h^4 |y''''| / 384, about 1e-17 m here (omega^4 l2 h^4 /
-    384): nothing at 1e-8; what is left is the two runs' rounding and O(h^4) differences.
+    384), and the acceleration, the derivative of the slider velocity's Hermite, one of
+    O(h^3 |a'''|), about 1e-13 m s-2: nothing at 1e-8; what is left is the two runs'
+    rounding and O(h^4) differences.
     The nearest saved rows, one step apart, differ by 1e-5 relative. One clearance joint
     (B, seated): the offset / c agrees to 1e-7; its rate to 2e-4 s-1 (of 0.27 s-1),
     the two step sizes' difference in the seated contact's fast normal mode, not the
@@ -95,7 +97,7 @@ def test_sections_and_statistics_do_not_depend_on_save_every():
 
 def test_taking_sections_changes_nothing_else():
     """The same run with its section rows and with none (Out.sec of no rows): every other
-    output is equal bit for bit (the section's evaluations touch no state of the run)."""
+    output is equal bit for bit (a section reads the run's arrays, writes only its row)."""
     from clearsweep.core.rk4 import integrate
     from clearsweep.core.work import Case, Out
 
@@ -117,6 +119,8 @@ def test_taking_sections_changes_nothing_else():
         results.append((arrays, wear, res))
     (a0, w0, r0), (a1, w1, r1) = results
     assert np.isfinite(a1[-1][0, L.SEC_OFFSET:L.SEC_OFFSET + 6]).all()   # a section taken
+    assert (a0[4][L.I_SECTIONS], a1[4][L.I_SECTIONS]) == (0, 1)            # and counted
+    a0[4][L.I_SECTIONS] = a1[4][L.I_SECTIONS] = 0
     for x, y in zip(a0[:-1] + w0 + [r0], a1[:-1] + w1 + [r1]):
         np.testing.assert_array_equal(x, y)
 

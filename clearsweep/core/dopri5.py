@@ -22,8 +22,10 @@ from .dynamics import VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
+    D_SLIDER_ACC,
     I_DEEPEST,
     I_SAVED,
+    I_SECTIONS,
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
@@ -43,11 +45,11 @@ from .layout import (
     P_ONSET_TOL,
     P_RTOL,
     P_SETTLE,
+    SEC_SLIDER_ACC,
+    SEC_TIME,
     ST_OK,
     ST_UNSTABLE_STEP,
     T_KE_PEAK,
-    W_SETTLED,
-    W_WHOLE,
     Y_QD,
     Y_WORK,
 )
@@ -56,19 +58,20 @@ from .rk4 import (
     accept_substep,
     begin_case,
     case_views,
-    clear_sections,
     copy_into,
     copy_row,
+    end_sections,
     energy_total,
     flush_all_wear,
     kernel_result,
     merge_wear,
     note_first_impact,
+    plan_sections,
     record_sample,
     section_count,
+    section_offsets,
     section_time,
     step_checks,
-    take_section,
     zero_rows,
 )
 from .work import Dopri5Work
@@ -263,8 +266,6 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     pend = work.pend
     scratch = work.scratch
     step_end = True
-    whole = W_WHOLE
-    settled = W_SETTLED
     grid = p[P_DT]
     settle = p[P_SETTLE]
     hmax = p[P_HMAX]
@@ -287,7 +288,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     for j in range(N_JOINTS):
         out.first[j] = -1.0
     sec = out.sec
-    clear_sections(sec)
+    plan_sections(p, t0, n_steps, sec)
     nsec = min(sec.shape[0], section_count(p, t0, n_steps))
     ksec = 0
     tsec = section_time(p, t0, ksec)
@@ -347,9 +348,8 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             if st != ST_OK:
                 status = st
                 break
-        record_sample(stats, whole, dg, dg1, y, y1, jp, hh, 0.0)
-        if in_settled:
-            record_sample(stats, settled, dg, dg1, y, y1, jp, hh, max(0.0, (settle - t) / hh))
+        record_sample(stats, dg, dg1, y, y1, jp, hh,
+                      max(0.0, (settle - t) / hh) if in_settled else -1.0)
         merge_wear(wmap, cur, pend, wmax, scratch)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
@@ -380,7 +380,10 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
             for i in range(ny):
                 yrow[i] = row[0, i]
-            take_section(tsec, yrow, work.yt, kt, dgo, model, solve, sec, ksec)
+            section_offsets(p, jp, yrow, sec, ksec)
+            st = evaluate(tsec, yrow, model, kt, dgo, step_end, solve)
+            sec[ksec, SEC_SLIDER_ACC] = dgo[D_SLIDER_ACC] if st == ST_OK else math.nan
+            sec[ksec, SEC_TIME] = tsec
             ksec += 1
             tsec = section_time(p, t0, ksec)
         copy_into(y, y1)
@@ -403,4 +406,6 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     out.info[I_SAVED] = n_saved
     out.info[I_DEEPEST] = deepest
     out.info[I_SUBSTEPS] = accepted
+    out.info[I_SECTIONS] = ksec
+    end_sections(sec, ksec)
     out.info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))

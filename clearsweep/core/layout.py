@@ -156,7 +156,8 @@ I_SAVED = 1         # output rows saved (or that a run keeping rows would save)
 I_DEEPEST = 2       # deepest sub-step level k taken (dopri5: of the shortest step)
 I_SUBSTEPS = 3      # RK4 sub-steps taken (dopri5: accepted steps)
 I_STEPS = 4         # output-grid steps completed, the stopping step included
-N_INFO = 5
+I_SECTIONS = 5      # Poincare sections taken (rows of Out.sec written)
+N_INFO = 6
 
 # --- energy tracking track[:] (float64) of one run ----------------------------
 T_KE_PEAK = 0       # peak kinetic energy [J]

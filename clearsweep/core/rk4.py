@@ -16,6 +16,9 @@ from numba import njit, types
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
 from .dynamics import VZ_ROWS, evaluate
+from .joints import BODIES, JOINTS
+from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
+from .kinematics import sub as vsub
 from .layout import (
     D_CONS,
     D_DDOT,
@@ -27,7 +30,6 @@ from .layout import (
     D_HWEAR,
     D_KE,
     D_NORMAL,
-    D_OFFSET,
     D_PE_GRAV,
     D_RATE,
     D_SLIDER_ACC,
@@ -37,6 +39,7 @@ from .layout import (
     D_WORN,
     I_DEEPEST,
     I_SAVED,
+    I_SECTIONS,
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
@@ -59,7 +62,6 @@ from .layout import (
     N_INFO,
     N_JOINTS,
     N_M,
-    N_Q,
     N_R,
     N_S,
     N_SEC,
@@ -71,6 +73,8 @@ from .layout import (
     P_DT,
     P_DV0_MIN,
     P_ENERGY_TOL,
+    P_L2,
+    P_L3,
     P_MAX_LEVEL,
     P_OMEGA,
     P_ONSET,
@@ -281,14 +285,25 @@ def mean_slopes(f0, f1, mean):
 
 
 @compiled
-def record_sample(m, w, dg0, dg, y0, y, jp, weight, lo):
-    """Fold one accepted (sub-)step into window w of the running statistics m: the step
-    from state y0 (diagnostics dg0) to y (dg), of length ``weight`` [s] (0: the initial
-    state alone, dg0 and y0 unused).
+def hermite_value(f0, f1, m0, m1, u):
+    """The cubic Hermite of :func:`hermite_range` at u."""
+    c2 = 3.0 * (f1 - f0) - 2.0 * m0 - m1
+    c3 = 2.0 * (f0 - f1) + m0 + m1
+    return f0 + u * (m0 + u * (c2 + u * c3))
+
+
+@compiled
+def record_sample(m, dg0, dg, y0, y, jp, weight, settled_lo):
+    """Fold one accepted (sub-)step into the running statistics m: the step from state y0
+    (diagnostics dg0) to y (dg), of length ``weight`` [s] (0: the initial state alone, dg0
+    and y0 unused), into the whole-run window and, where ``settled_lo`` >= 0, the settled
+    one over its part u >= settled_lo (one loop over the windows: one copy of this code
+    where a device build inlines it).
 
     Time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
     Peaks are read within the step, over its part u in [lo, 1] (u = (t - t_start) /
-    weight; lo > 0 where the settled window begins inside the step), from a cubic in time
+    weight; lo = 0, or settled_lo > 0 where the settled window begins inside the step),
+    from a cubic in time
     through the step's end values and their rates (docs/physics.md section 8.1):
 
     - slider acceleration a: the slider velocity v is a state, so the quadratic through
@@ -306,55 +321,68 @@ def record_sample(m, w, dg0, dg, y0, y, jp, weight, lo):
       direction crosses into a wear-map bin of another depth (c_eff is read from the bin),
       delta_dot does not, and a jump read as motion gave end rates that overshot the force.
     """
-    acc = dg[D_SLIDER_ACC]
-    acc_peak = abs(acc)
-    torque_peak = abs(dg[D_TORQUE])
-    if weight > 0.0:
-        a0 = dg0[D_SLIDER_ACC]
-        m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - y0[Y_QD + Y_SLIDER_X]) / weight)
-        low, high = hermite_range(a0, acc, m0, m1, lo)
-        acc_peak = max(-low, high)
-        rate = 0.5 * (y0[Y_QD + Y_CRANK_ANGLE] + y[Y_QD + Y_CRANK_ANGLE])
-        t0 = dg0[D_TORQUE]
-        m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - y0[Y_WORK]) / (weight * rate))
-        low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
-        torque_peak = max(-low, high)
-    m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
-    m[w, M_ACC_SQ] += acc * acc * weight
-    m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
-    m[w, M_TIME] += weight
-    m[w, M_SAMPLES] += 1.0
-    for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0:
-            continue
-        fn_peak = dg[D_FN + j]
-        pen_peak = dg[D_DELTA + j]
+    for w in range(N_WINDOWS if settled_lo >= 0.0 else 1):
+        lo = 0.0 if w == W_WHOLE else settled_lo
+        acc = dg[D_SLIDER_ACC]
+        acc_peak = abs(acc)
+        torque_peak = abs(dg[D_TORQUE])
         if weight > 0.0:
-            d0 = dg0[D_DELTA + j]
-            d1 = dg[D_DELTA + j]
-            v0 = dg0[D_DDOT + j] * weight
-            v1 = dg[D_DDOT + j] * weight
-            _, pen_peak = hermite_range(d0, d1, v0, v1, lo)
-            f0 = dg0[D_FN + j]
-            if f0 > 0.0 or fn_peak > 0.0:
-                # delta_ddot * weight^2, the same at both ends: delta_dot's change over the step
-                dd = v1 - v0
-                s0 = (dg0[D_DFD + j] * v0 + dg0[D_DFDD + j] * dd / weight)
-                s1 = (dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight)
-                _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
-        m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
-        m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
-        if dg[D_DELTA + j] > 0.0:
-            m[w, M_CONTACT_T + j] += weight
+            a0 = dg0[D_SLIDER_ACC]
+            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - y0[Y_QD + Y_SLIDER_X]) / weight)
+            low, high = hermite_range(a0, acc, m0, m1, lo)
+            acc_peak = max(-low, high)
+            rate = 0.5 * (y0[Y_QD + Y_CRANK_ANGLE] + y[Y_QD + Y_CRANK_ANGLE])
+            t0 = dg0[D_TORQUE]
+            m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - y0[Y_WORK]) / (weight * rate))
+            low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
+            torque_peak = max(-low, high)
+        m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
+        m[w, M_ACC_SQ] += acc * acc * weight
+        m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
+        m[w, M_TIME] += weight
+        m[w, M_SAMPLES] += 1.0
+        for j in range(N_JOINTS):
+            if jp[j, J_CLEARANCE] == 0.0:
+                continue
+            fn_peak = dg[D_FN + j]
+            pen_peak = dg[D_DELTA + j]
+            if weight > 0.0:
+                d0 = dg0[D_DELTA + j]
+                d1 = dg[D_DELTA + j]
+                v0 = dg0[D_DDOT + j] * weight
+                v1 = dg[D_DDOT + j] * weight
+                _, pen_peak = hermite_range(d0, d1, v0, v1, lo)
+                f0 = dg0[D_FN + j]
+                if f0 > 0.0 or fn_peak > 0.0:
+                    # delta_ddot * weight^2, the same at both ends: delta_dot's change
+                    dd = v1 - v0
+                    s0 = (dg0[D_DFD + j] * v0 + dg0[D_DFDD + j] * dd / weight)
+                    s1 = (dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight)
+                    _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
+            m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
+            m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
+            if dg[D_DELTA + j] > 0.0:
+                m[w, M_CONTACT_T + j] += weight
 
 
 # --------------------------------------------------------------------------- Poincare sections
 
 TWO_PI = 2.0 * math.pi
 
-#: Half-width of the central difference that gives a section's offset rate, as a fraction of
-#: the output step h: the positions q -+ eps qd of the section's state (docs/physics.md 8.4).
-SECTION_RATE_FRACTION = 1e-2
+
+def _attachment_row(att):
+    """An attachment of the joint table (joints.Attachment) as floats: (state index of its
+    body's centroid, of its Euler angles, packed index of the length that scales it, the
+    three factors); -1 for a body outside the state (the ground: a fixed point, global
+    frame) or for no length (the centroid)."""
+    body = {b.name: b for b in BODIES}.get(att.body)
+    lengths = {"l2": P_L2, "l3": P_L3}
+    return (float(body.y_r) if body else -1.0, float(body.y_phi) if body else -1.0,
+            float(lengths[att.length]) if att.length else -1.0) + tuple(map(float, att.factors))
+
+
+#: Each joint's ball attachment, then its socket's (rows 2 j, 2 j + 1), for the sections.
+SECTION_ATTACHMENTS = tuple(_attachment_row(a) for joint in JOINTS for a in (joint.ball, joint.socket))
 
 
 @compiled
@@ -388,9 +416,41 @@ def section_count(p, t0, n_steps):
 
 
 @compiled
-def clear_sections(sec):
-    """Every section row NaN (an ideal joint's offsets and rates stay so)."""
+def section_in(sec, taken, t, sub, hs, last):
+    """(Whether the next section, row ``taken`` of sec, falls in sub-step ``sub`` of the step
+    from t, of sub-steps hs: in (t + sub hs, t + (sub + 1) hs], at or before its end for sub
+    0, with no upper bound in the run's ``last`` sub-step; its time, from the row's time
+    that :func:`plan_sections` wrote, NaN: none). ``sub`` = -1 with hs = the whole step: at
+    or before the step's end. The bounds are the same products for adjacent sub-steps, so
+    that each section falls in exactly one."""
+    if taken >= sec.shape[0]:
+        return False, 0.0
+    tk = sec[taken, SEC_TIME]
+    if not tk == tk:
+        return False, tk
+    if sub < 0:
+        return last or tk <= t + hs, tk
+    if sub > 0 and not tk > t + sub * hs:
+        return False, tk
+    return last or tk <= t + (sub + 1) * hs, tk
+
+
+@compiled
+def plan_sections(p, t0, n_steps, sec):
+    """Every section row NaN (an ideal joint's offsets and rates stay so) but the times of
+    the sections a run from t0 of n_steps holds (:func:`section_count`, as many as fit)."""
+    n = min(sec.shape[0], section_count(p, t0, n_steps))
     for k in range(sec.shape[0]):
+        for i in range(N_SEC):
+            sec[k, i] = math.nan
+        if k < n:
+            sec[k, SEC_TIME] = section_time(p, t0, k)
+
+
+@compiled
+def end_sections(sec, taken):
+    """At the end of a run: the rows past the ``taken`` sections NaN (a run that stopped)."""
+    for k in range(taken, sec.shape[0]):
         for i in range(N_SEC):
             sec[k, i] = math.nan
 
@@ -407,44 +467,52 @@ def hermite_state(out, u, hs, y0, f0, y1, f1):
         out[i] = h00 * y0[i] + h10 * f0[i] + h01 * y1[i] + h11 * f1[i]
 
 
-@compiled(locals=_NOT_LITERAL)
-def take_section(tk, ys, yt, kt, dgt, model, solve, sec, k):
-    """Section row k at time tk from the state ys there (not changed): the slider
-    acceleration and each clearance joint's offset D_OFFSET / c from an evaluation at ys,
-    the offset's rate / c from two more at the positions q -+ eps qd (a central difference
-    along the motion, eps = SECTION_RATE_FRACTION h; error O(eps^2)). yt, kt, dgt: scratch
-    state, derivative and diagnostics. Returns the evaluations' status; the row is NaN
-    unless all three succeed. One evaluate call site (see rk4_substep)."""
-    p = model.p
-    jp = model.jp
-    step_end = True
-    eps = SECTION_RATE_FRACTION * p[P_DT]
-    for m in range(3):
-        sign = -1.0 if m == 0 else (1.0 if m == 1 else 0.0)
-        for i in range(ys.shape[0]):
-            yt[i] = ys[i]
-        for i in range(N_Q):
-            yt[i] = ys[i] + sign * eps * ys[Y_QD + i]
-        st = evaluate(tk + sign * eps, yt, model, kt, dgt, step_end, solve)
-        if st != ST_OK:
-            for i in range(N_SEC):
-                sec[k, i] = math.nan
-            return st
-        for j in range(N_JOINTS):
-            if jp[j, J_CLEARANCE] == 0.0:
-                continue
-            c = jp[j, J_C]
-            for a in range(3):
-                off = dgt[D_OFFSET + 3 * j + a] / c
-                if m == 0:
-                    sec[k, SEC_RATE + 3 * j + a] = off
-                elif m == 1:
-                    sec[k, SEC_RATE + 3 * j + a] = (off - sec[k, SEC_RATE + 3 * j + a]) / (2.0 * eps)
-                else:
-                    sec[k, SEC_OFFSET + 3 * j + a] = off
-    sec[k, SEC_TIME] = tk
-    sec[k, SEC_SLIDER_ACC] = dgt[D_SLIDER_ACC]
-    return ST_OK
+@compiled
+def attachment_state(p, y, row):
+    """(position, velocity, rotation, body angular velocity) of the attachment
+    SECTION_ATTACHMENTS[row] at state y: the ball or socket centre and its body's frame."""
+    a = SECTION_ATTACHMENTS[row]
+    length = p[int(a[2])] if a[2] >= 0.0 else 0.0
+    u = (length * a[3], length * a[4], length * a[5])
+    if a[0] < 0.0:
+        eye = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+        return u, (0.0, 0.0, 0.0), eye, (0.0, 0.0, 0.0)
+    r_at = int(a[0])
+    phi_at = int(a[1])
+    tr = trig(y[phi_at], y[phi_at + 1], y[phi_at + 2])
+    R = rotation(tr)
+    w = mv(gmat(tr), (y[Y_QD + phi_at], y[Y_QD + phi_at + 1], y[Y_QD + phi_at + 2]))
+    pos, vel = point_state((y[r_at], y[r_at + 1], y[r_at + 2]),
+                           (y[Y_QD + r_at], y[Y_QD + r_at + 1], y[Y_QD + r_at + 2]), R, w, u)
+    return pos, vel, R, w
+
+
+@compiled
+def section_offsets(p, jp, ys, sec, k):
+    """Section row k's offsets from the state ys at the section: each clearance joint's
+    ball-centre offset d_s = R_s^T (p_ball - p_socket) in its socket frame over c (as the
+    diagnostics D_OFFSET), and its rate R_s^T (v_ball - v_socket) - w_s x d_s over c, from
+    the joint table's attachments (kinematics alone: no evaluation of the equations of
+    motion, whose every call site a device build inlines)."""
+    # one loop over the attachments, ball then socket of each joint (one copy of
+    # attachment_state where a device build inlines it)
+    pb = (0.0, 0.0, 0.0)
+    vb = (0.0, 0.0, 0.0)
+    for row in range(2 * N_JOINTS):
+        j = row // 2
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        pos, vel, R, w = attachment_state(p, ys, row)
+        if row % 2 == 0:
+            pb = pos
+            vb = vel
+            continue
+        d = mtv(R, vsub(pb, pos))
+        rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
+        c = jp[j, J_C]
+        for a in range(3):
+            sec[k, SEC_OFFSET + 3 * j + a] = d[a] / c
+            sec[k, SEC_RATE + 3 * j + a] = rate[a] / c
 
 
 @compiled
@@ -569,12 +637,12 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
 #: the stage state, y and k1 at the sub-step's start;
-#: diag: dg, its copy at the step's start and at the sub-step's start, dg at a section; cstate: contact state
+#: diag: dg, its copy at the step's start and at the sub-step's start; cstate: contact state
 #: s and its copy; pairs: ddot_prev, its copy, the largest depth written per joint, the
 #: first impact times and their copy; mats: C, S, L of evaluate; caps: the wear of the step
 #: being taken and the accepted wear waiting to be spread.
 VEC_ROWS = 9
-DIAG_ROWS = 4
+DIAG_ROWS = 3
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
 #: row of ``pairs`` holding each joint's first impact time (the next row: its copy)
@@ -622,8 +690,6 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     jp = model.jp
     s = model.s
     step_end = True
-    whole = W_WHOLE
-    settled = W_SETTLED
     for w in range(N_WINDOWS):
         for i in range(N_M):
             stats[w, i] = 0.0
@@ -648,9 +714,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
                 seated = True
         if not seated:
             break
-    record_sample(stats, whole, dg, dg, y, y, jp, 0.0, 0.0)
-    if t0 >= p[P_SETTLE]:
-        record_sample(stats, settled, dg, dg, y, y, jp, 0.0, 0.0)
+    record_sample(stats, dg, dg, y, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0)
     return ST_OK
 
 
@@ -738,7 +802,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
                    np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
-                   np.zeros(N_Y), np.zeros(N_D))
+                   np.zeros(N_Y))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -789,12 +853,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     ysub = work.ysub
     dgsub = work.dgsub
     k1sub = work.k1sub
-    dgsec = work.dgsec
     sec = out.sec
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
-    whole = W_WHOLE
-    settled = W_SETTLED
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
@@ -820,15 +881,12 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         dg[i] = 0.0
         dgsave[i] = 0.0
         dgsub[i] = 0.0
-        dgsec[i] = 0.0
     for i in range(N_Y):
         ysub[i] = 0.0
         k1sub[i] = 0.0
-    clear_sections(sec)
+    plan_sections(p, t0, n_steps, sec)
     # the Poincare sections: the next one's index and time
-    nsec = min(sec.shape[0], section_count(p, t0, n_steps))
-    ksec = 0
-    tsec = section_time(p, t0, ksec)
+    out.info[I_SECTIONS] = 0
     for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
@@ -870,7 +928,6 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         copy_rows_into(msave, stats)
         copy_into(first_save, out.first)
         copy_into(ddot_prev_save, ddot_prev)
-        ksec_save = ksec
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
@@ -886,11 +943,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 ts = t + sub * hs
                 copy_into(ysub, y)
                 copy_into(dgsub, dg)
-                # a section in this sub-step (the run's last takes any left within rounding)
-                last_sub = step == n_steps - 1 and sub == nsub - 1
-                due = ksec < nsec and (tsec <= ts + hs or last_sub)
-                if due:
-                    copy_into(k1sub, k1)
+                copy_into(k1sub, k1)
                 st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -909,17 +962,21 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     if st != ST_OK:
                         status = st
                         break
-                record_sample(stats, whole, dgsub, dg, ysub, y, jp, hs, 0.0)
-                if in_settled:
-                    record_sample(stats, settled, dgsub, dg, ysub, y, jp, hs,
-                                  max(0.0, (settle - ts) / hs))
-                while due and ksec < nsec and (tsec <= ts + hs or last_sub):
-                    # the state at the section from the sub-step's cubic Hermite
-                    u = min(1.0, max(0.0, (tsec - ts) / hs))
-                    hermite_state(yt, u, hs, ysub, k1sub, y, k1)
-                    take_section(tsec, yt, ksum, kst, dgsec, model, solve, sec, ksec)
-                    ksec += 1
-                    tsec = section_time(p, t0, ksec)
+                record_sample(stats, dgsub, dg, ysub, y, jp, hs,
+                              max(0.0, (settle - ts) / hs) if in_settled else -1.0)
+                due, tk = section_in(sec, out.info[I_SECTIONS], t, sub, hs,
+                                     step == n_steps - 1 and sub == nsub - 1)
+                if due:
+                    # the section inside this sub-step: the slider acceleration from the cubic
+                    # Hermite of the slider velocity (record_sample's quadratic), the state
+                    # from the sub-step's cubic Hermite (into k1sub, in place), whose offsets
+                    # are read once the step is accepted
+                    u = min(1.0, max(0.0, (tk - ts) / hs))
+                    a0 = k1sub[Y_QD + Y_SLIDER_X]
+                    a1 = k1[Y_QD + Y_SLIDER_X]
+                    m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
+                    sec[out.info[I_SECTIONS], SEC_SLIDER_ACC] = hermite_value(a0, a1, m0, m1, u)
+                    hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
@@ -936,8 +993,6 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             copy_rows_into(stats, msave)
             copy_into(out.first, first_save)
             copy_into(ddot_prev, ddot_prev_save)
-            ksec = ksec_save
-            tsec = section_time(p, t0, ksec)
             level = max(level + 1, need)
         if status != ST_OK:
             if status != ST_UNSTABLE_STEP:
@@ -953,6 +1008,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         total += 1 << level
         deepest = max(deepest, level)
         merge_wear(wmap, cur, pend, wmax, scratch)
+        # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
+        # its offsets from the state kept in k1sub (here, where few values are live: a GPU
+        # thread's registers), and it counts
+        due, _ = section_in(sec, out.info[I_SECTIONS], t, -1, nsub * hs, step == n_steps - 1)
+        if due:
+            section_offsets(p, jp, k1sub, sec, out.info[I_SECTIONS])
+            out.info[I_SECTIONS] += 1
 
         status = step_checks(y, dg, p, jp, status, e0, out.track)
         if (step + 1) % save_every == 0:
@@ -965,6 +1027,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
+    end_sections(sec, out.info[I_SECTIONS])
     if keep_rows and status == ST_OK and n_saved > 0:
         copy_row(out.wmax, n_saved - 1, wmax)
     out.info[I_STATUS] = status

@@ -48,12 +48,11 @@ Wear = namedtuple("Wear", ["proj", "wvol", "cur", "pend", "buf_i", "buf_v", "wma
 #: impact times' copy); C, S, L, vz (:data:`Solve`); buf_i, buf_v, cur, pend, scratch (as in
 #: :data:`Wear`); ysub, dgsub (N_Y, N_D: the state and diagnostics at the sub-step's start,
 #: that the in-step peaks of ``rk4.record_sample`` read); k1sub (N_Y: the derivative there,
-#: copied only for a sub-step that holds a Poincare section) and dgsec (N_D: the
-#: diagnostics at a section).
+#: copied only for a sub-step that holds a Poincare section).
 Rk4Work = namedtuple("Rk4Work", [
     "y", "ysave", "k1", "k1save", "ksum", "kst", "yt", "dg", "dgsave", "s", "ssave", "msave",
     "ddot_prev", "ddot_prev_save", "wmax", "first_save", "C", "S", "L", "vz", "buf_i",
-    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub", "k1sub", "dgsec"])
+    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub", "k1sub"])
 
 #: Work arrays of ``dopri5.advance_dopri5``: y, y1, yt (N_Y: the state, the trial step's
 #: 5th-order solution, the stage state); k1 ... k7, kt (N_Y: stage derivatives, the

@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 
 from ..analysis import results_kind, value_text
-from .common import PlotError, _case_label, _cases, _legend_note, _require, axis_label
+from .common import PlotError, _case_label, _cases, _legend_note, _require, axis_label, figure_legend
 
 #: Fewest revolutions a ``poincare`` figure draws: one section shows no return.
 MIN_REVOLUTIONS = 2
@@ -78,13 +77,7 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
     ax.set_ylabel(axis_label(acc, "slider acceleration"))
     ax.set_title("slider acceleration at the section", fontsize="small")
     ax.grid(alpha=0.3)
-    entries: dict[str, Artist] = {}
-    for each in fig.axes:
-        for handle, label in zip(*each.get_legend_handles_labels()):
-            entries.setdefault(label, handle)
-    if entries:
-        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
-                   ncol=min(len(entries), 3), fontsize="x-small")
+    figure_legend(fig)
     left_out = f"\nnot drawn: joint {', '.join(empty)} (ideal joint)" if empty else ""
     fig.suptitle("Poincare section, once per crank revolution" + _legend_note(len(cases))
                  + left_out)
