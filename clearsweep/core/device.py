@@ -153,7 +153,7 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
                        buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
                        block(caps, i, 1, (N_JOINTS, 6)), scratch[i],
                        block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)),
-                       block(vec, i, 8, (N_Y,)))
+                       block(vec, i, 8, (N_Y,)), block(vec, i, 9, (N_Y,)))
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 

@@ -63,6 +63,7 @@ from .rk4 import (
     end_sections,
     energy_total,
     flush_all_wear,
+    keep_ends,
     kernel_result,
     merge_wear,
     note_first_impact,
@@ -226,7 +227,7 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros((6, 6)), np.zeros((6, 6)), np.zeros((VZ_ROWS, 6)),
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
                       np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
-                      np.zeros((4 * case.wmap.shape[1], 3)))
+                      np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_D))
     advance_dopri5(case, t0, n_steps, save_every, out, work)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
         return np.full(N_R, np.nan)
@@ -293,7 +294,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     ksec = 0
     tsec = section_time(p, t0, ksec)
 
-    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
+    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, work.prev)
     if status != ST_OK:
         out.info[I_STATUS] = status
         out.info[I_SAVED] = 0
@@ -348,7 +349,8 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             if st != ST_OK:
                 status = st
                 break
-        record_sample(stats, dg, dg1, y, y1, jp, hh,
+        keep_ends(work.prev, dg, y)
+        record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0)
         merge_wear(wmap, cur, pend, wmax, scratch)
         # output rows inside the step, from the continuous extension (before y moves on)

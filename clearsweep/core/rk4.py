@@ -114,6 +114,7 @@ from .layout import (
     Y_WORK,
 )
 from .spherical import contact_angle, contact_area
+from .target import on_device
 from .wear import deposit, projection_bins
 from .work import Model, Rk4Work, Solve, Wear
 
@@ -292,19 +293,132 @@ def hermite_value(f0, f1, m0, m1, u):
     return f0 + u * (m0 + u * (c2 + u * c3))
 
 
+#: What :func:`record_sample` keeps of a (sub-)step's end for the next one's start, entries
+#: of the work row ``prev``: slider acceleration, crank torque, slider velocity, drive work,
+#: crank rate, then per joint F_N, delta, delta_dot, dF_N/d delta, dF_N/d delta_dot.
+PV_ACC = 0
+PV_TORQUE = 1
+PV_V = 2
+PV_WORK = 3
+PV_RATE = 4
+PV_FN = 5
+PV_DELTA = PV_FN + N_JOINTS
+PV_DDOT = PV_DELTA + N_JOINTS
+PV_DFD = PV_DDOT + N_JOINTS
+PV_DFDD = PV_DFD + N_JOINTS
+N_PV = PV_DFDD + N_JOINTS
+
+#: Largest |h10|, |h11| of the cubic Hermite basis on [0, 1]: a cubic Hermite never leaves
+#: max(f0, f1) + HERMITE_REACH (|m0| + |m1|), so that a step whose bound stays below the
+#: running peak needs no search for its maximum (the same statistics, fewer operations).
+HERMITE_REACH = 4.0 / 27.0
+
+
 @compiled
-def record_sample(m, dg0, dg, y0, y, jp, weight, settled_lo):
-    """Fold one accepted (sub-)step into the running statistics m: the step from state y0
-    (diagnostics dg0) to y (dg), of length ``weight`` [s] (0: the initial state alone, dg0
-    and y0 unused), into the whole-run window and, where ``settled_lo`` >= 0, the settled
-    one over its part u >= settled_lo (one loop over the windows: one copy of this code
-    where a device build inlines it).
+def keep_ends(prev, dg, y):
+    """prev = what :func:`record_sample` reads of a (sub-)step's start: the values of the
+    state y and its diagnostics dg (PV_*)."""
+    prev[PV_ACC] = dg[D_SLIDER_ACC]
+    prev[PV_TORQUE] = dg[D_TORQUE]
+    prev[PV_V] = y[Y_QD + Y_SLIDER_X]
+    prev[PV_WORK] = y[Y_WORK]
+    prev[PV_RATE] = y[Y_QD + Y_CRANK_ANGLE]
+    for j in range(N_JOINTS):
+        prev[PV_FN + j] = dg[D_FN + j]
+        prev[PV_DELTA + j] = dg[D_DELTA + j]
+        prev[PV_DDOT + j] = dg[D_DDOT + j]
+        prev[PV_DFD + j] = dg[D_DFD + j]
+        prev[PV_DFDD + j] = dg[D_DFDD + j]
+
+
+@compiled
+def step_peak(f0, f1, m0, m1, floor, absolute):
+    """The largest value over a step of the cubic Hermite through f0, f1 with slopes m0, m1
+    (per unit step; of its absolute value with ``absolute``), searched for only where its
+    bound max(f0, f1) + HERMITE_REACH (|m0| + |m1|) exceeds ``floor``; else |f1| or f1,
+    which then changes no running peak at or above floor."""
+    if absolute:
+        if max(abs(f0), abs(f1)) + HERMITE_REACH * (abs(m0) + abs(m1)) <= floor:
+            return abs(f1)
+        low, high = hermite_range(f0, f1, m0, m1, 0.0)
+        return max(-low, high)
+    if max(f0, f1) + HERMITE_REACH * (abs(m0) + abs(m1)) <= floor:
+        return f1
+    _, high = hermite_range(f0, f1, m0, m1, 0.0)
+    return high
+
+
+@compiled
+def fold_peak(m, i, peak, settled_lo, f0, f1, m0, m1, absolute):
+    """Fold a step's peak (:func:`step_peak`, over the whole step) into column i of both
+    windows: the whole run's, and the settled window's where settled_lo >= 0, over the
+    step's part u >= settled_lo (searched again where that is not the whole step)."""
+    m[W_WHOLE, i] = max(m[W_WHOLE, i], peak)
+    if settled_lo > 0.0:
+        low, high = hermite_range(f0, f1, m0, m1, settled_lo)
+        m[W_SETTLED, i] = max(m[W_SETTLED, i], max(-low, high) if absolute else high)
+    elif settled_lo == 0.0:
+        m[W_SETTLED, i] = max(m[W_SETTLED, i], peak)
+
+
+@compiled
+def record_windows(m, prev, dg, y, jp, weight, settled_lo):
+    """:func:`record_sample`'s statistics in a loop over the windows (the device build's
+    arrangement): the same values, one copy of the peak search where the build inlines it."""
+    for w in range(N_WINDOWS if settled_lo >= 0.0 else 1):
+        lo = 0.0 if w == W_WHOLE else settled_lo
+        acc = dg[D_SLIDER_ACC]
+        acc_peak = abs(acc)
+        torque_peak = abs(dg[D_TORQUE])
+        if weight > 0.0:
+            a0 = prev[PV_ACC]
+            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+            low, high = hermite_range(a0, acc, m0, m1, lo)
+            acc_peak = max(-low, high)
+            rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
+            t0 = prev[PV_TORQUE]
+            m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - prev[PV_WORK]) / (weight * rate))
+            low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
+            torque_peak = max(-low, high)
+        m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
+        m[w, M_ACC_SQ] += acc * acc * weight
+        m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
+        m[w, M_TIME] += weight
+        m[w, M_SAMPLES] += 1.0
+        for j in range(N_JOINTS):
+            if jp[j, J_CLEARANCE] == 0.0:
+                continue
+            fn_peak = dg[D_FN + j]
+            pen_peak = dg[D_DELTA + j]
+            if weight > 0.0:
+                d0 = prev[PV_DELTA + j]
+                v0 = prev[PV_DDOT + j] * weight
+                v1 = dg[D_DDOT + j] * weight
+                _, pen_peak = hermite_range(d0, pen_peak, v0, v1, lo)
+                f0 = prev[PV_FN + j]
+                if f0 > 0.0 or fn_peak > 0.0:
+                    dd = v1 - v0
+                    s0 = prev[PV_DFD + j] * v0 + prev[PV_DFDD + j] * dd / weight
+                    s1 = dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight
+                    _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
+            m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
+            m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
+            if dg[D_DELTA + j] > 0.0:
+                m[w, M_CONTACT_T + j] += weight
+
+
+@compiled
+def record_sample(m, prev, dg, y, jp, weight, settled_lo):
+    """Fold one accepted (sub-)step into the running statistics m: the step from the start
+    that ``prev`` holds (:func:`keep_ends`) to the state y (diagnostics dg), of length
+    ``weight`` [s] (0: the initial state alone, prev unused), into the whole-run window
+    and, where ``settled_lo`` >= 0, the settled one over the step's part u >= settled_lo;
+    then prev keeps this step's end for the next.
 
     Time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
-    Peaks are read within the step, over its part u in [lo, 1] (u = (t - t_start) /
-    weight; lo = 0, or settled_lo > 0 where the settled window begins inside the step),
-    from a cubic in time
-    through the step's end values and their rates (docs/physics.md section 8.1):
+    Peaks are read within the step (u = (t - t_start) / weight in [0, 1], or [settled_lo,
+    1] where the settled window begins inside the step) from a cubic in time through the
+    step's end values and their rates (docs/physics.md section 8.1):
 
     - slider acceleration a: the slider velocity v is a state, so the quadratic through
       a0, a1 with the step's mean acceleration (v1 - v0) / weight (the derivative of the
@@ -320,49 +434,70 @@ def record_sample(m, dg0, dg, y0, y, jp, weight, settled_lo):
       delta_ddot from delta_dot, not from a Hermite of delta: delta jumps where the contact
       direction crosses into a wear-map bin of another depth (c_eff is read from the bin),
       delta_dot does not, and a jump read as motion gave end rates that overshot the force.
+
+    A step's peak is searched for once for both windows, and only where the cubic's bound
+    exceeds the settled window's peak (or the whole run's before the window), which is the
+    smaller: below it, neither window's peak can move (the same statistics, fewer
+    operations). A device build (``target.on_device``) takes the same values in a loop
+    over the windows instead, with one copy of the search (fewer registers spilled).
     """
-    for w in range(N_WINDOWS if settled_lo >= 0.0 else 1):
-        lo = 0.0 if w == W_WHOLE else settled_lo
-        acc = dg[D_SLIDER_ACC]
-        acc_peak = abs(acc)
-        torque_peak = abs(dg[D_TORQUE])
-        if weight > 0.0:
-            a0 = dg0[D_SLIDER_ACC]
-            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - y0[Y_QD + Y_SLIDER_X]) / weight)
-            low, high = hermite_range(a0, acc, m0, m1, lo)
-            acc_peak = max(-low, high)
-            rate = 0.5 * (y0[Y_QD + Y_CRANK_ANGLE] + y[Y_QD + Y_CRANK_ANGLE])
-            t0 = dg0[D_TORQUE]
-            m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - y0[Y_WORK]) / (weight * rate))
-            low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
-            torque_peak = max(-low, high)
-        m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
+    if on_device():
+        record_windows(m, prev, dg, y, jp, weight, settled_lo)
+        keep_ends(prev, dg, y)
+        return
+    settled = settled_lo >= 0.0
+    w_floor = W_SETTLED if settled else W_WHOLE
+    acc = dg[D_SLIDER_ACC]
+    torque = dg[D_TORQUE]
+    a0 = acc
+    t0 = torque
+    ma0 = 0.0
+    ma1 = 0.0
+    mt0 = 0.0
+    mt1 = 0.0
+    if weight > 0.0:
+        a0 = prev[PV_ACC]
+        ma0, ma1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+        rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
+        t0 = prev[PV_TORQUE]
+        mt0, mt1 = mean_slopes(t0, torque, (y[Y_WORK] - prev[PV_WORK]) / (weight * rate))
+    fold_peak(m, M_ACC_PEAK, step_peak(a0, acc, ma0, ma1, m[w_floor, M_ACC_PEAK], True),
+              settled_lo, a0, acc, ma0, ma1, True)
+    fold_peak(m, M_TORQUE_PEAK, step_peak(t0, torque, mt0, mt1, m[w_floor, M_TORQUE_PEAK],
+                                          True), settled_lo, t0, torque, mt0, mt1, True)
+    for w in range(N_WINDOWS if settled else 1):
         m[w, M_ACC_SQ] += acc * acc * weight
-        m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
         m[w, M_TIME] += weight
         m[w, M_SAMPLES] += 1.0
-        for j in range(N_JOINTS):
-            if jp[j, J_CLEARANCE] == 0.0:
-                continue
-            fn_peak = dg[D_FN + j]
-            pen_peak = dg[D_DELTA + j]
-            if weight > 0.0:
-                d0 = dg0[D_DELTA + j]
-                d1 = dg[D_DELTA + j]
-                v0 = dg0[D_DDOT + j] * weight
-                v1 = dg[D_DDOT + j] * weight
-                _, pen_peak = hermite_range(d0, d1, v0, v1, lo)
-                f0 = dg0[D_FN + j]
-                if f0 > 0.0 or fn_peak > 0.0:
-                    # delta_ddot * weight^2, the same at both ends: delta_dot's change
-                    dd = v1 - v0
-                    s0 = (dg0[D_DFD + j] * v0 + dg0[D_DFDD + j] * dd / weight)
-                    s1 = (dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight)
-                    _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
-            m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
-            m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
-            if dg[D_DELTA + j] > 0.0:
+    for j in range(N_JOINTS):
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        d1 = dg[D_DELTA + j]
+        f1 = dg[D_FN + j]
+        d0 = d1
+        v0 = 0.0
+        v1 = 0.0
+        f0 = f1
+        s0 = 0.0
+        s1 = 0.0
+        if weight > 0.0:
+            d0 = prev[PV_DELTA + j]
+            v0 = prev[PV_DDOT + j] * weight
+            v1 = dg[D_DDOT + j] * weight
+            f0 = prev[PV_FN + j]
+            if f0 > 0.0 or f1 > 0.0:
+                # delta_ddot * weight^2, the same at both ends: delta_dot's change
+                dd = v1 - v0
+                s0 = prev[PV_DFD + j] * v0 + prev[PV_DFDD + j] * dd / weight
+                s1 = dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight
+        fold_peak(m, M_PEN_PEAK + j, step_peak(d0, d1, v0, v1, m[w_floor, M_PEN_PEAK + j],
+                                               False), settled_lo, d0, d1, v0, v1, False)
+        fold_peak(m, M_FN_PEAK + j, step_peak(f0, f1, s0, s1, m[w_floor, M_FN_PEAK + j],
+                                              False), settled_lo, f0, f1, s0, s1, False)
+        if d1 > 0.0:
+            for w in range(N_WINDOWS if settled else 1):
                 m[w, M_CONTACT_T + j] += weight
+    keep_ends(prev, dg, y)
 
 
 # --------------------------------------------------------------------------- Poincare sections
@@ -415,17 +550,30 @@ def section_count(p, t0, n_steps):
     return int(math.floor(turns + 1e-9)) + 1
 
 
+#: Entries of the work row ``Rk4Work.secnext``: the next section's time [s] (NaN: none
+#: left), its row of Out.sec, the slider acceleration there while its step is under way.
+SN_TIME = 0
+SN_ROW = 1
+SN_ACC = 2
+
+
 @compiled
-def section_in(sec, taken, t, sub, hs, last):
-    """(Whether the next section, row ``taken`` of sec, falls in sub-step ``sub`` of the step
-    from t, of sub-steps hs: in (t + sub hs, t + (sub + 1) hs], at or before its end for sub
-    0, with no upper bound in the run's ``last`` sub-step; its time, from the row's time
-    that :func:`plan_sections` wrote, NaN: none). ``sub`` = -1 with hs = the whole step: at
-    or before the step's end. The bounds are the same products for adjacent sub-steps, so
-    that each section falls in exactly one."""
-    if taken >= sec.shape[0]:
-        return False, 0.0
-    tk = sec[taken, SEC_TIME]
+def next_section(sec, secnext, k):
+    """secnext: section row k next (its planned time, NaN past the rows planned)."""
+    secnext[SN_ROW] = k
+    secnext[SN_TIME] = sec[k, SEC_TIME] if k < sec.shape[0] else math.nan
+
+
+@compiled
+def section_in(secnext, t, sub, hs, last):
+    """(Whether the next section (``secnext``, :func:`next_section`) falls in sub-step
+    ``sub`` of the step from t, of sub-steps hs: in (t + sub hs, t + (sub + 1) hs], at or
+    before its end for sub 0, with no upper bound in the run's ``last`` sub-step; its time).
+    ``sub`` = -1 with hs = the whole step: at or before the step's end. The bounds are the
+    same products for adjacent sub-steps, so that each section falls in exactly one. Reads
+    a work row alone: no pointer to the results stays live across the step (a GPU
+    thread's registers)."""
+    tk = secnext[SN_TIME]
     if not tk == tk:
         return False, tk
     if sub < 0:
@@ -636,12 +784,13 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: no array view is made or passed in the hot loop. Rows of each group, in advance's
 #: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
-#: the stage state, y and k1 at the sub-step's start;
-#: diag: dg, its copy at the step's start and at the sub-step's start; cstate: contact state
+#: the stage state, y and k1 at the start of a sub-step with a section, the next section's
+#: bookkeeping;
+#: diag: dg, its copy at the step's start, the sub-step start's values for record_sample; cstate: contact state
 #: s and its copy; pairs: ddot_prev, its copy, the largest depth written per joint, the
 #: first impact times and their copy; mats: C, S, L of evaluate; caps: the wear of the step
 #: being taken and the accepted wear waiting to be spread.
-VEC_ROWS = 9
+VEC_ROWS = 10
 DIAG_ROWS = 3
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
@@ -682,7 +831,7 @@ def case_views(case, work):
 
 
 @compiled(locals=_NOT_LITERAL)
-def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
+def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
     recorded. Returns the evaluation's status."""
@@ -714,7 +863,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
                 seated = True
         if not seated:
             break
-    record_sample(stats, dg, dg, y, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0)
+    record_sample(stats, prev, dg, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0)
     return ST_OK
 
 
@@ -802,7 +951,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
                    np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
-                   np.zeros(N_Y))
+                   np.zeros(N_Y), np.zeros(N_Y))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -851,8 +1000,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     pend = work.pend
     scratch = work.scratch
     ysub = work.ysub
-    dgsub = work.dgsub
+    prev = work.prev
     k1sub = work.k1sub
+    secnext = work.secnext
     sec = out.sec
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
@@ -880,13 +1030,14 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     for i in range(N_D):
         dg[i] = 0.0
         dgsave[i] = 0.0
-        dgsub[i] = 0.0
+        prev[i] = 0.0
     for i in range(N_Y):
         ysub[i] = 0.0
         k1sub[i] = 0.0
+        secnext[i] = 0.0
     plan_sections(p, t0, n_steps, sec)
+    next_section(sec, secnext, 0)
     # the Poincare sections: the next one's index and time
-    out.info[I_SECTIONS] = 0
     for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
@@ -899,7 +1050,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         out.info[i] = 0
 
     status = ST_OK
-    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
+    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev)
     if st != ST_OK:
         out.info[I_STATUS] = st
         out.info[I_SAVED] = 0
@@ -941,9 +1092,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
-                copy_into(ysub, y)
-                copy_into(dgsub, dg)
-                copy_into(k1sub, k1)
+                if sub == 0:
+                    keep_ends(prev, dg, y)      # the step's start (again after a rejection)
+                due, _ = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
+                if due:
+                    # a section in this sub-step: its start for the cubic Hermite
+                    copy_into(ysub, y)
+                    copy_into(k1sub, k1)
                 st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -962,10 +1117,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     if st != ST_OK:
                         status = st
                         break
-                record_sample(stats, dgsub, dg, ysub, y, jp, hs,
+                record_sample(stats, prev, dg, y, jp, hs,
                               max(0.0, (settle - ts) / hs) if in_settled else -1.0)
-                due, tk = section_in(sec, out.info[I_SECTIONS], t, sub, hs,
-                                     step == n_steps - 1 and sub == nsub - 1)
+                due, tk = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
                 if due:
                     # the section inside this sub-step: the slider acceleration from the cubic
                     # Hermite of the slider velocity (record_sample's quadratic), the state
@@ -975,7 +1129,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     a0 = k1sub[Y_QD + Y_SLIDER_X]
                     a1 = k1[Y_QD + Y_SLIDER_X]
                     m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
-                    sec[out.info[I_SECTIONS], SEC_SLIDER_ACC] = hermite_value(a0, a1, m0, m1, u)
+                    secnext[SN_ACC] = hermite_value(a0, a1, m0, m1, u)
                     hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
             if status != ST_OK or need < 0:
                 break
@@ -1011,10 +1165,12 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
         # its offsets from the state kept in k1sub (here, where few values are live: a GPU
         # thread's registers), and it counts
-        due, _ = section_in(sec, out.info[I_SECTIONS], t, -1, nsub * hs, step == n_steps - 1)
+        due, _ = section_in(secnext, t, -1, nsub * hs, step == n_steps - 1)
         if due:
-            section_offsets(p, jp, k1sub, sec, out.info[I_SECTIONS])
-            out.info[I_SECTIONS] += 1
+            k = int(secnext[SN_ROW])
+            sec[k, SEC_SLIDER_ACC] = secnext[SN_ACC]
+            section_offsets(p, jp, k1sub, sec, k)
+            next_section(sec, secnext, k + 1)
 
         status = step_checks(y, dg, p, jp, status, e0, out.track)
         if (step + 1) % save_every == 0:
@@ -1027,6 +1183,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
+    out.info[I_SECTIONS] = int(secnext[SN_ROW])
     end_sections(sec, out.info[I_SECTIONS])
     if keep_rows and status == ST_OK and n_saved > 0:
         copy_row(out.wmax, n_saved - 1, wmax)

@@ -46,21 +46,24 @@ Wear = namedtuple("Wear", ["proj", "wvol", "cur", "pend", "buf_i", "buf_v", "wma
 #: msave (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax,
 #: first_save (one per joint: approach rates and copy, the deepest bin written, the first
 #: impact times' copy); C, S, L, vz (:data:`Solve`); buf_i, buf_v, cur, pend, scratch (as in
-#: :data:`Wear`); ysub, dgsub (N_Y, N_D: the state and diagnostics at the sub-step's start,
-#: that the in-step peaks of ``rk4.record_sample`` read); k1sub (N_Y: the derivative there,
-#: copied only for a sub-step that holds a Poincare section).
+#: :data:`Wear`); ysub, k1sub (N_Y: the state and its derivative at the start of a sub-step
+#: that holds a Poincare section); prev (N_D, of which ``rk4.N_PV`` used: the sub-step
+#: start's values that the in-step peaks of ``rk4.record_sample`` read) and secnext (N_Y, of which
+#: the first 3 used, ``rk4.SN_*``: the next section's time and row, its slider
+#: acceleration).
 Rk4Work = namedtuple("Rk4Work", [
     "y", "ysave", "k1", "k1save", "ksum", "kst", "yt", "dg", "dgsave", "s", "ssave", "msave",
     "ddot_prev", "ddot_prev_save", "wmax", "first_save", "C", "S", "L", "vz", "buf_i",
-    "buf_v", "cur", "pend", "scratch", "ysub", "dgsub", "k1sub"])
+    "buf_v", "cur", "pend", "scratch", "ysub", "prev", "k1sub", "secnext"])
 
 #: Work arrays of ``dopri5.advance_dopri5``: y, y1, yt (N_Y: the state, the trial step's
 #: 5th-order solution, the stage state); k1 ... k7, kt (N_Y: stage derivatives, the
 #: derivative at a dense-output row); row (1 x N_Y) and yrow (N_Y): a dense-output state;
 #: dg, dg1, dgo (N_D: diagnostics at the step's start, its end, a dense-output row); s,
-#: ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur, pend, scratch as in :data:`Rk4Work`.
+#: ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur, pend, scratch, prev as in
+#: :data:`Rk4Work`.
 Dopri5Work = namedtuple("Dopri5Work", [
     "y", "y1", "yt", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "kt", "row", "yrow", "dg",
     "dg1", "dgo", "s", "ddot_prev", "wmax", "C", "S", "L", "vz", "buf_i", "buf_v", "cur",
-    "pend", "scratch"])
+    "pend", "scratch", "prev"])
 
