@@ -33,7 +33,7 @@ def section_axes(offset: np.ndarray, names) -> tuple[str, str]:
 
 
 def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
-    if results_kind(ds) != "run" or "poincare_time" in ds:
+    if results_kind(ds) not in ("run", "sweep") or "poincare_time" in ds:
         _require(ds, ("poincare_offset", "poincare_slider_acc", "poincare_time"), "--kind poincare")
     # revolutions with a section in any case (a run shorter than one has none)
     taken = 0
