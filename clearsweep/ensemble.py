@@ -29,7 +29,7 @@ import xarray as xr
 
 from .outputs import MEMBER_DIM  # noqa: F401  (the ensemble's dimension, re-exported)
 from .summary import PASS_THROUGH_VARIABLES, SUMMARY_ORDER
-from .variables import attrs_for
+from .variables import POINCARE, attrs_for
 
 #: Confidence level of every interval.
 CONFIDENCE_LEVEL = 0.95
@@ -37,8 +37,9 @@ CONFIDENCE_LEVEL = 0.95
 SUFFIXES = ("_mean", "_std", "_ci_low", "_ci_high")
 CI_METHOD = ("Student t interval of the mean over the members with status ok and a finite "
              "value: mean -+ t(0.975, n - 1) std / sqrt(n), std with ddof = 1")
-#: Summary variables that describe the run, not the mechanism: no statistics.
-_EXCLUDED = ("status", "wall_time")
+#: Summary variables that describe the run, not the mechanism, and the Poincare sections
+#: (samples per revolution, whose members start at different crank phases): no statistics.
+_EXCLUDED = ("status", "wall_time", *POINCARE)
 
 
 def summary_variables(ds: xr.Dataset, dim: str = MEMBER_DIM) -> list[str]:
