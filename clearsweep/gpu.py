@@ -137,7 +137,8 @@ def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
               "wvol": np.zeros((n, L.N_JOINTS)),
               "info": np.zeros((n, L.N_INFO), dtype=np.int64),
               "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK)),
-              "sec": np.full((n, max(section_rows(pk) for pk in group), L.N_SEC), np.nan)}
+              # one row at least: no zero-size array for the device
+              "sec": np.full((n, max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
         arrays[name] = np.zeros((n,) + shape, dtype=np.int64 if name in INT_WORK else np.float64)
     arrays.update(rows_t=np.zeros((n, 1)), rows_y=np.zeros((n, 1, L.N_Y)),
