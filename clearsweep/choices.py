@@ -9,8 +9,8 @@ any of those: each command imports what it runs when it runs.
 REPORT_FORMATS = ("text", "markdown", "csv", "json")
 
 #: Figure kinds of ``clearsweep plot`` (:mod:`clearsweep.plotting`).
-KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "sweep", "life", "reliability",
-         "spectrum", "bifurcation")
+KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "poincare", "sweep", "life",
+         "reliability", "spectrum", "bifurcation")
 #: Abscissae of time-series figures (``--kind bifurcation`` takes a swept key instead).
 X_AXES = ("angle", "time")
 #: Output file suffixes of figures (the suffix sets the format).

@@ -218,6 +218,13 @@ class MetricsConfig(_Section):
 
 
 @dataclass(frozen=True)
+class OutputsConfig(_Section):
+    #: the crank angle of each revolution's Poincare section (docs/physics.md 8.4)
+    poincare_phase_deg: float = _setting(Field(0.0, lo=0.0, hi=360.0, hi_open=True), "degree",
+                                         "crank angle of the Poincare sections")
+
+
+@dataclass(frozen=True)
 class SolverConfig(_Section):
     dt: float = _setting(_positive(1.0e-5), "s", "output-grid time step")
     duration: float = _setting(_positive(1.0), "s", "simulated duration")
@@ -362,6 +369,7 @@ class Config(_Section):
     friction: FrictionConfig = _section(FrictionConfig)
     wear: WearConfig = _section(WearConfig)
     metrics: MetricsConfig = _section(MetricsConfig)
+    outputs: OutputsConfig = _section(OutputsConfig)
     solver: SolverConfig = _section(SolverConfig)
     life: LifeConfig = _section(LifeConfig)
     ensemble: EnsembleConfig = _section(EnsembleConfig)

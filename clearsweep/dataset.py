@@ -79,6 +79,9 @@ def build_dataset(arrays: dict[str, np.ndarray], time_s: np.ndarray, *,
                              attrs_for("azimuth"))
     if "angle" in sizes:
         coords["angle"] = ("angle", bin_centres_deg(sizes["angle"], -180.0, 180.0), attrs_for("angle"))
+    if "revolution" in sizes:
+        coords["revolution"] = ("revolution", np.arange(1, sizes["revolution"] + 1, dtype=np.int32),
+                                attrs_for("revolution"))
     status = xr.Variable((), str(arrays.get("status", "ok")), {
         "long_name": "simulation status", "description": "ok, or the reason the case stopped"})
     # one construction, in the order of before (data, coordinates, status): the coordinates,

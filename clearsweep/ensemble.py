@@ -38,7 +38,8 @@ SUFFIXES = ("_mean", "_std", "_ci_low", "_ci_high")
 CI_METHOD = ("Student t interval of the mean over the members with status ok and a finite "
              "value: mean -+ t(0.975, n - 1) std / sqrt(n), std with ddof = 1")
 #: Summary variables that describe the run, not the mechanism, a category (a period in
-#: revolutions, whose mean means nothing) or samples (the Poincaré sections): no statistics.
+#: revolutions, whose mean means nothing) or samples (the Poincaré sections, per revolution,
+#: whose members start at different crank phases): no statistics.
 _EXCLUDED = ("status", "wall_time", "period", *POINCARE_VARIABLES)
 
 

@@ -25,7 +25,7 @@ from .config import Config, resolve_materials
 from .core import layout as L
 from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
 from .params import Packed, pack
-from .simulation import KernelRun, check_step
+from .simulation import KernelRun, check_step, section_rows
 
 #: What a sweep or the CLI reports when no device is there.
 NO_DEVICE = "no CUDA device: use --backend processes"
@@ -75,21 +75,25 @@ def device_name() -> str:
     return name.decode() if isinstance(name, bytes) else str(name)
 
 
-def case_bytes(map_shape: Sequence[int], max_level: int) -> int:
-    """Device memory [bytes] that one case of a batch takes (inputs, results, work)."""
+def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0) -> int:
+    """Device memory [bytes] that one case of a batch takes (inputs, results, work);
+    ``sections``: the Poincare section rows its batch holds."""
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
     nj = L.N_JOINTS
     items = (L.N_P + nj * L.N_JP + L.N_Y + 2       # p, jp, y0, n_steps, save_every
              + nj * npolar * nazim + nj * 3 * L.N_ANGLE_BINS + nj   # wmap, proj, wvol
              + L.N_INFO + L.N_WINDOWS * L.N_M + L.N_TRACK     # info, stats, track
+             + sections * L.N_SEC                                # sec
              + 1 + L.N_Y + L.N_D + nj)             # row placeholders
     items += sum(math.prod(s) for s in work_shapes(max_level, npolar).values())
     return 8 * items
 
 
 def config_bytes(cfg: Config) -> int:
-    """:func:`case_bytes` of a resolved config."""
-    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level)
+    """:func:`case_bytes` of a resolved config (its revolutions, one section each, rounded
+    up)."""
+    sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
+    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level, sections)
 
 
 def host_batch_bytes() -> int:
@@ -132,7 +136,9 @@ def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
               "proj": np.zeros((n, L.N_JOINTS, 3, L.N_ANGLE_BINS)),
               "wvol": np.zeros((n, L.N_JOINTS)),
               "info": np.zeros((n, L.N_INFO), dtype=np.int64),
-              "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK))}
+              "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK)),
+              # one row at least: no zero-size array for the device
+              "sec": np.full((n, max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
         arrays[name] = np.zeros((n,) + shape, dtype=np.int64 if name in INT_WORK else np.float64)
     arrays.update(rows_t=np.zeros((n, 1)), rows_y=np.zeros((n, 1, L.N_Y)),
@@ -167,7 +173,8 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
     for i, pk in enumerate(packed):
         by_shape.setdefault(tuple(pk.map_shape), []).append(i)
     for shape, members in by_shape.items():
-        need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL])) for i in members)
+        rows = max(section_rows(packed[i]) for i in members)
+        need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL]), rows) for i in members)
         size = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
         for start in range(0, len(members), size):
             batch = members[start:start + size]
@@ -177,17 +184,18 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
             for k, i in enumerate(batch):
                 out[i] = _raw(packed[i], res["wmap"][k], res["proj"][k], res["wvol"][k],
                               res["info"][k], res["stats"][k], res["track"][k],
-                              res["pairs"][k][PAIR_FIRST], wall)
+                              res["pairs"][k][PAIR_FIRST], res["sec"][k][:section_rows(packed[i])],
+                              wall)
     return [r for r in out if r is not None]
 
 
-def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, wall: float) -> KernelRun:
+def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, sec, wall: float) -> KernelRun:
     """One case of a batch as a :class:`~clearsweep.simulation.KernelRun`: one NaN row for
     the series the device does not keep."""
     return KernelRun.from_counters(pk, info, track[L.T_RESIDUAL_MAX], track[L.T_KE_PEAK], first,
                                    wall, t=np.zeros(1), y=np.full((1, L.N_Y), np.nan), d=np.full((1, L.N_D), np.nan),
                                    wmax=np.full((1, L.N_JOINTS), np.nan), wmap=wmap, proj=proj, wvol=wvol,
-                                   stats=stats)
+                                   stats=stats, sec=sec)
 
 
 def simulate_batch(configs: Sequence[Config]) -> list[Any]:

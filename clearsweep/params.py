@@ -433,6 +433,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
                                                            contact.restitution)
     p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
     p[L.P_EXPONENT] = contact.hertz_exponent if contact.elastic == "hertz" else 0.0
+    p[L.P_SECTION_PHASE] = math.radians(cfg.outputs.poincare_phase_deg)
     friction = cfg.friction
     p[L.P_FRICTION] = 1.0 if friction.enabled else 0.0
     p[L.P_V0] = friction.v0

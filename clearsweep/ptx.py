@@ -29,7 +29,7 @@ DEFAULT_CC = (9, 0)
 
 #: Dimensions of run_cases' arguments (the case first) but the work arrays', by name.
 _NDIM = {"p": 2, "jp": 3, "y0": 2, "n_steps": 1, "save_every": 1, "wmap": 4, "proj": 4,
-         "wvol": 2, "info": 2, "stats": 3, "track": 2, "rows_t": 2, "rows_y": 3, "rows_d": 3,
+         "wvol": 2, "info": 2, "stats": 3, "track": 2, "sec": 3, "rows_t": 2, "rows_y": 3, "rows_d": 3,
          "rows_wmax": 3}
 #: run_cases' int64 arguments but the work arrays' (``rk4.INT_WORK``).
 _INT = frozenset({"n_steps", "save_every", "info"})
@@ -38,7 +38,7 @@ _INT = frozenset({"n_steps", "save_every", "info"})
 def run_cases_signature() -> tuple:
     """Numba types of ``run_cases``' arguments, in order (``core.device.ARGS``: C-contiguous
     arrays with the case as first axis, as ``gpu._allocate`` builds them): p, jp, y0,
-    n_steps, save_every; the results wmap, proj, wvol, info, stats, track; the work arrays
+    n_steps, save_every; the results wmap, proj, wvol, info, stats, track, sec; the work arrays
     of ``rk4.work_shapes``; the row placeholders rows_t, rows_y, rows_d, rows_wmax."""
     from numba import types
 

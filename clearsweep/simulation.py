@@ -134,6 +134,7 @@ class KernelRun:
     proj: np.ndarray            #: per-axis projections [m] (2 x 3 x 360)
     wvol: np.ndarray            #: worn volume per joint [m^3]
     stats: np.ndarray           #: running statistics (2 x layout.N_M)
+    sec: np.ndarray             #: Poincare sections (revolutions x layout.N_SEC), NaN: not taken
     status: str                 #: layout.STATUS_NAMES
     n_saved: int                #: rows written
     deepest: int                #: deepest sub-step level k (2^k sub-steps)
@@ -149,7 +150,7 @@ class KernelRun:
                       first_impact: np.ndarray, wall_time: float, **arrays: np.ndarray) -> KernelRun:
         """From an integrator's ``info`` (status, saved rows, deepest level, sub-steps, grid
         steps done), its energy figures and first impact times (negative or NaN: none),
-        and the arrays (t, y, d, wmax, wmap, proj, wvol, stats)."""
+        and the arrays (t, y, d, wmax, wmap, proj, wvol, stats, sec)."""
         first = np.asarray(first_impact, dtype=float)
         return cls(status=L.STATUS_NAMES[int(info[L.I_STATUS])], n_saved=int(info[L.I_SAVED]),
                    deepest=int(info[L.I_DEEPEST]), rk4_steps=int(info[L.I_SUBSTEPS]),
@@ -157,6 +158,14 @@ class KernelRun:
                    residual_max=float(residual_max), ke_peak=float(ke_peak),
                    first_impact=np.where(first >= 0.0, first, np.nan), wall_time=wall_time,
                    **arrays)
+
+
+def section_rows(packed: Packed) -> int:
+    """Poincare sections a run of the packed case holds (``core.rk4.section_count``, run as
+    plain Python: nothing compiled), one per crank revolution."""
+    from .core.rk4 import section_count
+
+    return int(as_python(section_count)(packed.p, 0.0, packed.n_steps))
 
 
 def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
@@ -183,9 +192,10 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     out_wmax = np.zeros((n_save, L.N_JOINTS))
     info = np.zeros(L.N_INFO, dtype=np.int64)
     stats = np.zeros((L.N_WINDOWS, L.N_M))
+    sec = np.full((section_rows(packed), L.N_SEC), np.nan)
     case = Case(packed.p, packed.jp, packed.y0, wmap, proj, wvol)
     out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK),
-              np.zeros(L.N_JOINTS))
+              np.zeros(L.N_JOINTS), sec)
     t0 = time.perf_counter()
     res = integrate(case, 0.0, packed.n_steps, packed.save_every, out)
     wall = time.perf_counter() - t0
@@ -194,7 +204,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     return KernelRun.from_counters(packed, info, res[L.R_RESIDUAL_MAX], res[L.R_KE_PEAK],
                                    res[L.R_FIRST_IMPACT:L.N_R], wall, t=out_t,
                                    y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
-                                   stats=stats)
+                                   stats=stats, sec=sec)
 
 
 def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
@@ -388,4 +398,17 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
         "energy_residual_relative": raw.residual_max / ke_peak if ke_peak > 0 else np.nan,
         "wall_time": raw.wall_time,
         **statistics_from_raw(raw.stats, clearance),
+        **sections_from_raw(raw.sec),
     }
+
+
+def sections_from_raw(sec: np.ndarray) -> dict[str, np.ndarray]:
+    """Kernel Poincare sections (layout.SEC_*) -> the ``poincare_*`` variables (dimension
+    ``revolution``); none for a run that holds no section (shorter than its first)."""
+    if sec.shape[0] == 0:
+        return {}
+    nj = L.N_JOINTS
+    return {"poincare_time": sec[:, L.SEC_TIME],
+            "poincare_slider_acc": sec[:, L.SEC_SLIDER_ACC],
+            "poincare_offset": sec[:, L.SEC_OFFSET:L.SEC_OFFSET + 3 * nj].reshape(-1, nj, 3),
+            "poincare_velocity": sec[:, L.SEC_RATE:L.SEC_RATE + 3 * nj].reshape(-1, nj, 3)}

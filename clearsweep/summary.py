@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from . import motion
-from .variables import STATISTICS, attrs_for
+from .variables import POINCARE, STATISTICS, attrs_for
 
 #: A projection bin counts as worn above this fraction of its axis's maximum (docs/physics.md section 5).
 WEAR_THRESHOLD_FRACTION = 1.0e-3
@@ -42,7 +42,7 @@ POINCARE_SLIDER = "poincare_slider_acc"
 POINCARE_OFFSET = "poincare_offset"
 #: The Poincaré samples, copied into every summary (a few numbers a revolution): a
 #: ``store: summary`` sweep keeps them for its bifurcation diagram.
-POINCARE_VARIABLES = (POINCARE_TIME, POINCARE_SLIDER, POINCARE_OFFSET, "poincare_velocity")
+POINCARE_VARIABLES = tuple(POINCARE)
 
 #: Order of the variables in ``case_summary``.
 SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,

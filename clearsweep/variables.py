@@ -80,7 +80,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
 #: Running statistics accumulated by the kernel at every accepted RK4 (sub-)step
 #: (``core.layout.M_*``), never from the saved rows: identical whatever ``save_every``.
 #: Each has a ``_settled`` twin over time >= the ``settle_time_s`` attribute.
-_EVERY_STEP = ("over every accepted RK4 (sub-)step end, not the saved rows")
+_EVERY_STEP = ("within every accepted RK4 (sub-)step (a cubic in time through its ends' values "
+               "and rates), not the saved rows")
 _IDEAL = "; NaN for an ideal joint (no contact law)"
 STATISTICS: dict[str, VariableSpec] = {
     "slider_acceleration_peak": VariableSpec(
@@ -117,6 +118,30 @@ for _name, _spec in list(STATISTICS.items()):
         "(NaN, or 0 for a count, for a run that ends before it)", _spec.cell_methods)
 CASE_VARIABLES.update(STATISTICS)
 
+#: Poincare sections, one per crank revolution at the crank angle
+#: ``outputs.poincare_phase_deg`` (docs/physics.md 8.4): read by the kernel at the section's
+#: time within the (sub-)step that holds it, whatever ``save_every``; small, so every store
+#: keeps them. A run shorter than its first section has none of them.
+_SECTION = " at each revolution's Poincare section (crank angle outputs.poincare_phase_deg)"
+POINCARE: dict[str, VariableSpec] = {
+    "poincare_offset": VariableSpec(
+        ("revolution", "joint", "axis"), "1", "ball-centre offset over the clearance",
+        "ball-centre offset d in the socket frame / radial clearance c" + _SECTION
+        + "; NaN for an ideal joint"),
+    "poincare_velocity": VariableSpec(
+        ("revolution", "joint", "axis"), "s-1", "ball-centre offset rate over the clearance",
+        "rate of the ball-centre offset d in the socket frame / radial clearance c" + _SECTION
+        + "; NaN for an ideal joint"),
+    "poincare_slider_acc": VariableSpec(
+        ("revolution",), "m s-2", "slider acceleration at the Poincare section",
+        "slider acceleration" + _SECTION),
+    "poincare_time": VariableSpec(
+        ("revolution",), "s", "time of the Poincare section",
+        "t_k = t at which the driven crank angle theta0 + omega t reaches the section angle"
+        " + 360 degrees k; NaN where the run stopped before it"),
+}
+CASE_VARIABLES.update(POINCARE)
+
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
     "time": VariableSpec(("time",), "s", "time"),
@@ -128,6 +153,9 @@ COORDINATES: dict[str, VariableSpec] = {
                             "atan2(y, x) in the socket frame"),
     "angle": VariableSpec(("angle",), "degree", "projection angle bin centre",
                           "about x: atan2(n_z, n_y); about y: atan2(n_x, n_z); about z: atan2(n_y, n_x)"),
+    "revolution": VariableSpec(("revolution",), "1", "crank revolution of the Poincare section",
+                               "1-based: the k-th time the crank angle reaches the section angle "
+                               "after the start"),
 }
 
 

@@ -204,8 +204,26 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
     }
     arrays.update(statistics(t, acceleration, arrays["crank_torque"], normal,
                              arrays["penetration"]))
+    arrays.update(sections(acc_level))
     return build_dataset(arrays, t, config_text=config_text(clearance_b, coating_b),
                          attrs={"settle_time_s": SETTLE_TIME_S})
+
+
+#: Poincare sections of the synthetic case (not of its time series: a figure's input alone).
+N_SECTIONS = 8
+
+
+def sections(acc_level: float) -> dict[str, np.ndarray]:
+    """Period-2 Poincare sections: each joint's offset / c alternates between two points, the
+    slider acceleration between +-acc_level, one revolution a second."""
+    alt = np.where(np.arange(N_SECTIONS) % 2 == 0, 1.0, -1.0)
+    offset = np.zeros((N_SECTIONS, len(JOINTS), 3))
+    offset[:, 0] = np.stack([np.full(N_SECTIONS, 0.5), 0.3 * alt, np.full(N_SECTIONS, -0.6)], axis=-1)
+    offset[:, 1] = np.stack([0.2 * alt * acc_level / ACC_LEVEL, np.full(N_SECTIONS, 0.7),
+                             np.full(N_SECTIONS, -0.5)], axis=-1)
+    return {"poincare_offset": offset, "poincare_velocity": 0.1 * offset,
+            "poincare_slider_acc": acc_level * alt,
+            "poincare_time": np.arange(1.0, N_SECTIONS + 1)}
 
 
 def sweep_case_profiles(coating: str, clearance: float) -> dict:
@@ -282,6 +300,9 @@ def with_poincare(ds: xr.Dataset, slider: np.ndarray, offset: np.ndarray | None 
     each joint along x (y half of it, z 0; NaN for a joint whose column is NaN: an ideal
     one), over ``ds``'s joints; sample k at ``first_s + (k - 1) period_s``."""
     n = slider.size
+    # these samples replace any the dataset has (one_case's own sections)
+    ds = ds.drop_vars([v for v in ("poincare_time", "poincare_slider_acc", "poincare_offset",
+                                   "poincare_velocity", "revolution") if v in ds.variables])
     joints = [str(j) for j in ds["joint"].values] if "joint" in ds.coords else list(JOINTS)
     if offset is None:
         offset = np.full((n, len(joints)), np.nan)

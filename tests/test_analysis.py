@@ -149,7 +149,10 @@ def test_case_summary_numbers(case):
     assert str(s["status"].values) == "ok"
     assert int(s["substeps_used"]) == 4 and int(s["rk4_steps"]) == 80_000
     assert float(s["wall_time"]) == 2.0
-    assert set(s.dims) <= {"joint", "axis"}
+    # the Poincare sections pass through (small: summary stores keep them)
+    assert set(s.dims) <= {"joint", "axis", "revolution"}
+    for name in ("poincare_offset", "poincare_velocity", "poincare_slider_acc", "poincare_time"):
+        xr.testing.assert_identical(s[name], case[name])
     assert s.attrs["config"] == case.attrs["config"]
 
 

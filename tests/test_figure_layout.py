@@ -376,3 +376,24 @@ def test_a_life_run_records_its_command_line(short_life_cli):
         title = " ".join(figure(ds.load(), "life").get_suptitle().split())
     assert history.splitlines()[-1].split(": ", 1)[1].startswith("clearsweep life ")
     assert "--set " + ", ".join(SHORT_LIFE) in title
+
+
+@pytest.fixture(scope="module")
+def poincare_runs() -> xr.Dataset:
+    """Two short one_clearance runs at 600 r/min (three revolutions each) as a sweep over B's
+    clearance."""
+    from clearsweep.simulation import simulate
+
+    runs = [simulate(CONFIG, ["mechanism.speed_rpm=600", "solver.duration=0.3",
+                              f"joints.B.clearance={c}"]) for c in (2.5e-4, 1e-4)]
+    names = ["poincare_offset", "poincare_velocity", "poincare_slider_acc", "poincare_time"]
+    ds = xr.concat([r[names] for r in runs], "B_clearance").assign_coords(B_clearance=[2.5e-4, 1e-4])
+    ds.attrs = runs[0].attrs
+    return ds
+
+
+@pytest.mark.parametrize("select", [None, ["B_clearance=1e-4"]])
+def test_a_poincare_figure_keeps_its_text_apart(poincare_runs, select):
+    fig = figure(poincare_runs, "poincare", select)
+    assert layout_problems(fig) == []
+    assert len(fig.axes) == 2       # joint B (A is ideal) and the slider acceleration

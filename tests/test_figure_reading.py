@@ -155,3 +155,51 @@ def test_a_heat_map_with_the_long_names_of_a_sweep_file_keeps_its_title_inside()
 
 def test_a_single_run_figure_names_its_case(case):
     assert "case: " in figure(case, "slider").get_suptitle()
+
+
+def test_the_poincare_figure_draws_each_section_once_on_its_most_spread_axes():
+    """A period-2 motion known by construction: joint B's sections alternate between two
+    points that differ along y and z only, the slider acceleration between two values. The
+    panel draws those points on the y-z plane (x does not spread), the revolutions against
+    their acceleration; joint A, ideal, gets no panel and the title says so."""
+    from clearsweep.core import layout as L
+    from clearsweep.dataset import build_dataset
+
+    n = 6
+    offset = np.full((n, L.N_JOINTS, 3), np.nan)      # B with clearance; A and O ideal
+    offset[:, 1, 0] = 0.1
+    offset[:, 1, 1] = np.where(np.arange(n) % 2 == 0, 0.6, -0.5)
+    offset[:, 1, 2] = np.where(np.arange(n) % 2 == 0, -0.7, -0.8)
+    acc = np.where(np.arange(n) % 2 == 0, 3.0, -4.0)
+    ds = build_dataset({"poincare_offset": offset, "poincare_velocity": offset,
+                        "poincare_slider_acc": acc, "poincare_time": np.arange(1.0, n + 1)},
+                       np.zeros(1))
+    fig = figure(ds, "poincare")
+    joint_ax, acc_ax = fig.axes
+    assert joint_ax.get_xlabel().startswith("d_y / c") and joint_ax.get_ylabel().startswith("d_z / c")
+    points = joint_ax.lines[0]
+    np.testing.assert_array_equal(points.get_xdata(), offset[:, 1, 1])
+    np.testing.assert_array_equal(points.get_ydata(), offset[:, 1, 2])
+    np.testing.assert_array_equal(acc_ax.lines[0].get_xdata(), np.arange(1, n + 1))
+    np.testing.assert_array_equal(acc_ax.lines[0].get_ydata(), acc)
+    assert "m s-2" in acc_ax.get_ylabel()
+    assert "not drawn: joint A" in fig.get_suptitle()
+
+
+def test_a_poincare_figure_of_a_run_shorter_than_two_revolutions_says_what_it_needs(tmp_path):
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+    from clearsweep.dataset import write_netcdf_atomic
+    from clearsweep.simulation import simulate
+
+    path = tmp_path / "short.nc"
+    write_netcdf_atomic(simulate("configs/one_clearance.yaml", ["solver.duration=0.01"]), path)
+    result = CliRunner().invoke(main, ["plot", str(path), "--kind", "poincare", "-o",
+                                       str(tmp_path / "p.png")])
+    assert result.exit_code != 0
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("clearsweep: error: ")
+    assert "at least 2 crank revolutions" in lines[0] and "hold 0" in lines[0]
+    assert "solver.duration" in lines[0]
+    assert not (tmp_path / "p.png").exists()

@@ -30,12 +30,14 @@ ROOT = Path(__file__).resolve().parents[1]
 #: damping on the onset impact velocity, Hertz's elastic law: the kernel's other branches),
 #: and clearance at the crank's bearing O too (the revolute joint, the crank free in its
 #: bearing's plane, the seated journal sliding on its bearing from the start); ``store:
-#: full`` so that the CPU sweep keeps series too.
+#: full`` so that the CPU sweep keeps series too. The Poincare section at
+#: 0.72 degrees falls at t = 2 ms: one section per case (the device's ``sec`` results).
 SWEEP = {
     "name": "gpu_sim", "store": "full",
     "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}},
              "wear": {"map": [6, 12], "amplification": 1000.0},
              "metrics": {"settle_time": 0.001},
+             "outputs": {"poincare_phase_deg": 0.72},
              "solver": {"duration": 0.003}},
     "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws", "ABO"],
                        "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4, 2.5e-4],
@@ -110,6 +112,8 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     assert "wear_depth_axis_max" in compared
     assert "impact_count" in compared
     assert "wear_volume" in compared        # kept by the CUDA summaries too
+    assert "poincare_velocity" in compared and "poincare_slider_acc" in compared
+    assert np.isfinite(gpu["poincare_offset"].sel(joint="B").values).all()
 
 
 @pytest.mark.slow

@@ -30,6 +30,7 @@ SWEEP_SELECTION = {
     "wear-map": ["B_coating=PTFE", "B_clearance=1e-4"],
     "wear-polar": None,
     "orbit": ["B_coating=none"],
+    "poincare": None,
     "sweep": None,
 }
 
@@ -196,6 +197,10 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
         assert list(full["status"].values) == ["ok", "ok"]
         assert "status: ok" in run_summary_text(full.sel(B_coating="none"))
         for kind in CASE_KINDS:
+            if kind == "poincare":      # 0.02 s holds no crank revolution: said in one line
+                with pytest.raises(PlotError, match="needs at least 2 crank revolutions"):
+                    plot(full, kind, tmp_path / f"{kind}.png", dpi=TEST_DPI)
+                continue
             select = ["B_coating=PTFE"] if kind == "wear-map" else None
             fig = plot(full, kind, tmp_path / f"{kind}.png", select, dpi=TEST_DPI)
             assert_rendered(tmp_path / f"{kind}.png", fig)

@@ -4,6 +4,8 @@ Runs are short (0.1-0.3 s) but for the start-up comparison with the ideal mechan
 needs a whole crank revolution (1 s, about 1 s of run time each).
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,8 @@ from clearsweep.core.contact import elastic_force
 from clearsweep.params import pack
 from clearsweep.simulation import simulate
 from clearsweep.variables import STATISTICS
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 
 TWO = {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4}}}
 IDEAL = {"joints": {"A": {"clearance": 0.0}, "B": {"clearance": 0.0}}}
@@ -46,23 +50,28 @@ def test_statistics_do_not_depend_on_save_every():
     assert float(runs[1].normal_force.max()) < 0.9 * float(runs[0].normal_force.max())
 
 
-def test_peaks_are_the_maxima_of_the_every_step_series(centred_rows):
+def test_peaks_are_read_within_the_steps_of_the_every_step_series(centred_rows):
+    """Peaks are read within each step (docs/physics.md 8.1): never below the largest row of
+    the every-step series, the step ends, and above it by a fraction of a step's change."""
     ds = centred_rows
     assert int(ds.substeps_used) == 1  # no sub-steps: the rows are every step
-    assert float(ds.slider_acceleration_peak) == float(abs(ds.slider_acceleration).max())
-    assert float(ds.crank_torque_peak) == float(abs(ds.crank_torque).max())
     # the clearance joints' (an ideal joint's peaks are NaN: it has no contact)
     clear = [j for j in ds.joint.values if np.isfinite(ds.normal_force_peak.sel(joint=j))]
     assert set(ds.joint.values) - set(clear) == {"O"}
     ds = ds.sel(joint=clear)
-    np.testing.assert_array_equal(ds.normal_force_peak.values, ds.normal_force.max("time").values)
-    np.testing.assert_array_equal(ds.penetration_peak.values,
-                                  np.maximum(ds.penetration.max("time").values, 0.0))
     settled = ds.time >= ds.attrs["settle_time_s"]
-    assert float(ds.slider_acceleration_peak_settled) == float(
-        abs(ds.slider_acceleration.where(settled)).max())
-    np.testing.assert_array_equal(ds.normal_force_peak_settled.values,
-                                  ds.normal_force.where(settled).max("time").values)
+    pairs = [(ds.slider_acceleration_peak, abs(ds.slider_acceleration).max("time")),
+             (ds.crank_torque_peak, abs(ds.crank_torque).max("time")),
+             (ds.normal_force_peak, ds.normal_force.max("time")),
+             (ds.penetration_peak, np.maximum(ds.penetration.max("time"), 0.0)),
+             (ds.slider_acceleration_peak_settled,
+              abs(ds.slider_acceleration.where(settled)).max("time")),
+             (ds.normal_force_peak_settled, ds.normal_force.where(settled).max("time"))]
+    for peak, rows in pairs:
+        assert (peak.values >= rows.values).all(), peak.name
+        np.testing.assert_allclose(peak.values, rows.values, rtol=0.03, err_msg=peak.name)
+    # the impacts of the centred start peak between step ends: some peak lies above its rows
+    assert any((peak.values > rows.values).any() for peak, rows in pairs)
     # RMS: right-end value over each step
     a = ds.slider_acceleration.values[1:]
     assert float(ds.slider_acceleration_rms) == pytest.approx(np.sqrt(np.mean(a ** 2)), rel=1e-12)
@@ -74,6 +83,21 @@ def test_peaks_are_the_maxima_of_the_every_step_series(centred_rows):
     assert (ds.impact_count.values > 0).all()
     assert (ds.impact_count_settled.values <= ds.impact_count.values).all()
     assert (ds.impact_velocity_max.values > 0).all()
+
+
+def test_in_step_peaks_converge_at_the_default_step():
+    """The centred start's first impact at B (one_clearance, t ~ 5.4 ms): its whole-run peak
+    normal force at h = 1e-5 s lies within 0.5 % of the one at h = 2.5e-6 s (read at step
+    ends it was 1.7 % low: 938 N against 955 N), and so do the peak slider acceleration,
+    crank torque and penetration."""
+    runs = [simulate(str(CONFIGS / "one_clearance.yaml"),
+                     [f"solver.dt={dt}", "solver.duration=0.02", "initial.joints=centred"])
+            for dt in (1e-5, 2.5e-6)]
+    for name in ("normal_force_peak", "slider_acceleration_peak", "crank_torque_peak",
+                 "penetration_peak"):
+        coarse, fine = (float(np.nanmax(r[name].values)) for r in runs)
+        assert coarse == pytest.approx(fine, rel=5e-3), name
+    assert float(runs[0].normal_force_peak.sel(joint="B")) > 950.0
 
 
 def test_statistics_carry_units_and_cell_methods(centred_rows):

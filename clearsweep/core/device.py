@@ -124,9 +124,9 @@ else:
 
 
 @cuda.jit
-def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, vec, diag,
-              cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y, rows_d,
-              rows_wmax):
+def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
+              diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
+              rows_d, rows_wmax):
     """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); the grouped work
     arrays of ``rk4.work_shapes`` are handed to advance row by row; ``rows_*`` are
     placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
@@ -135,7 +135,8 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
         case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
                     block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS)), wvol[i])
         out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
-                  block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)))
+                  block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)),
+                  sec[i])
         work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
                        block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
                        block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
@@ -150,7 +151,9 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
                        block(mats, i, 0, (NZ, NZ)), block(mats, i, 1, (NZ, NZ)),
                        block(mats, i, 2, (NZ, NZ)), block(vz, i, 0, (VZ_ROWS, NZ)),
                        buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, 6)),
-                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i])
+                       block(caps, i, 1, (N_JOINTS, 6)), scratch[i],
+                       block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)),
+                       block(vec, i, 8, (N_Y,)), block(vec, i, 9, (N_Y,)))
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
@@ -158,9 +161,11 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
 #: ``rk4.work_shapes``, the row placeholders): :func:`launch` takes them by name.
 ARGS = tuple(inspect.signature(run_cases.py_func).parameters)
 
-#: The arguments that hold what a batch gives back: the results, and the work array
+#: The arguments that hold what a batch gives back: the results (``sec``: the Poincare
+#: sections, revolutions x layout.N_SEC per case, as many rows as the batch's longest run
+#: needs), and the work array
 #: ``pairs`` (its row PAIR_FIRST holds the first impact times).
-RESULTS = ("wmap", "proj", "wvol", "info", "stats", "track", "pairs")
+RESULTS = ("wmap", "proj", "wvol", "info", "stats", "track", "sec", "pairs")
 
 #: Per-case shapes that run_cases' :func:`block` calls take for granted, by argument name:
 #: jp, proj, stats and the work arrays but buf_i, buf_v and scratch.

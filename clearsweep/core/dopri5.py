@@ -22,8 +22,10 @@ from .dynamics import NZ, VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
+    D_SLIDER_ACC,
     I_DEEPEST,
     I_SAVED,
+    I_SECTIONS,
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
@@ -43,11 +45,11 @@ from .layout import (
     P_ONSET_TOL,
     P_RTOL,
     P_SETTLE,
+    SEC_SLIDER_ACC,
+    SEC_TIME,
     ST_OK,
     ST_UNSTABLE_STEP,
     T_KE_PEAK,
-    W_SETTLED,
-    W_WHOLE,
     Y_QD,
     Y_WORK,
 )
@@ -58,12 +60,18 @@ from .rk4 import (
     case_views,
     copy_into,
     copy_row,
+    end_sections,
     energy_total,
     flush_all_wear,
+    keep_ends,
     kernel_result,
     merge_wear,
     note_first_impact,
+    plan_sections,
     record_sample,
+    section_count,
+    section_offsets,
+    section_time,
     step_checks,
     zero_rows,
 )
@@ -219,7 +227,7 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
                       np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
-                      np.zeros((4 * case.wmap.shape[1], 3)))
+                      np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_D))
     advance_dopri5(case, t0, n_steps, save_every, out, work)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
         return np.full(N_R, np.nan)
@@ -259,8 +267,6 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     pend = work.pend
     scratch = work.scratch
     step_end = True
-    whole = W_WHOLE
-    settled = W_SETTLED
     grid = p[P_DT]
     settle = p[P_SETTLE]
     hmax = p[P_HMAX]
@@ -282,8 +288,13 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         out.track[i] = 0.0
     for j in range(N_JOINTS):
         out.first[j] = -1.0
+    sec = out.sec
+    plan_sections(p, t0, n_steps, sec)
+    nsec = min(sec.shape[0], section_count(p, t0, n_steps))
+    ksec = 0
+    tsec = section_time(p, t0, ksec)
 
-    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
+    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, work.prev)
     if status != ST_OK:
         out.info[I_STATUS] = status
         out.info[I_SAVED] = 0
@@ -338,9 +349,9 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             if st != ST_OK:
                 status = st
                 break
-        record_sample(stats, whole, dg1, jp, hh)
-        if in_settled:
-            record_sample(stats, settled, dg1, jp, hh)
+        keep_ends(work.prev, dg, y)
+        record_sample(stats, work.prev, dg1, y1, jp, hh,
+                      max(0.0, (settle - t) / hh) if in_settled else -1.0)
         merge_wear(wmap, cur, pend, wmax, scratch)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
@@ -365,6 +376,18 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             n_saved += 1
         if status != ST_OK:
             break
+        # Poincare sections inside the step, from the continuous extension
+        while ksec < nsec and (tsec <= t + hh or last):
+            theta = min(1.0, max(0.0, (tsec - t) / hh))
+            dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
+            for i in range(ny):
+                yrow[i] = row[0, i]
+            section_offsets(p, jp, yrow, sec, ksec)
+            st = evaluate(tsec, yrow, model, kt, dgo, step_end, solve)
+            sec[ksec, SEC_SLIDER_ACC] = dgo[D_SLIDER_ACC] if st == ST_OK else math.nan
+            sec[ksec, SEC_TIME] = tsec
+            ksec += 1
+            tsec = section_time(p, t0, ksec)
         copy_into(y, y1)
         copy_into(k1, k7)
         copy_into(dg, dg1)
@@ -385,4 +408,6 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     out.info[I_SAVED] = n_saved
     out.info[I_DEEPEST] = deepest
     out.info[I_SUBSTEPS] = accepted
+    out.info[I_SECTIONS] = ksec
+    end_sections(sec, ksec)
     out.info[I_STEPS] = min(n_steps, int(math.floor((t - t0) / grid + 1e-9)) + (0 if status == ST_OK else 1))

@@ -53,7 +53,8 @@ P_HYST_NUM = 45     # numerator of the hysteresis factor [-]
 P_HYST_DEN = 46     # denominator of the hysteresis factor [-]
 P_ONSET = 47        # 1.0 = delta_dot0 is the episode's onset value, 0.0 its running maximum
 P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K delta^n
-N_P = 49
+P_SECTION_PHASE = 49  # crank angle of the Poincare sections, once per revolution [rad]
+N_P = 50
 
 # --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
@@ -141,13 +142,23 @@ M_TIME = M_TORQUE_PEAK + 1          # duration the window covers [s]
 M_SAMPLES = M_TIME + 1              # step-end samples in the window [-]
 N_M = M_SAMPLES + 1
 
+# --- Poincare sections sec[k, :] (one row per crank revolution k; rk4.section_time) ----
+# Read within the (sub-)step holding the section time, at that time exactly; NaN where not
+# taken (an ideal joint's offsets, a run that stopped before).
+SEC_TIME = 0                            # time of the section [s]
+SEC_SLIDER_ACC = 1                      # slider acceleration [m/s^2]
+SEC_OFFSET = 2                          # N_JOINTS x 3: D_OFFSET / c (socket frame) [-]
+SEC_RATE = SEC_OFFSET + 3 * N_JOINTS    # N_JOINTS x 3: its rate / c [1/s]
+N_SEC = SEC_RATE + 3 * N_JOINTS
+
 # --- counters info[:] (int64) of one run ------------------------------------
 I_STATUS = 0        # status code (ST_*)
 I_SAVED = 1         # output rows saved (or that a run keeping rows would save)
 I_DEEPEST = 2       # deepest sub-step level k taken (dopri5: of the shortest step)
 I_SUBSTEPS = 3      # RK4 sub-steps taken (dopri5: accepted steps)
 I_STEPS = 4         # output-grid steps completed, the stopping step included
-N_INFO = 5
+I_SECTIONS = 5      # Poincare sections taken (rows of Out.sec written)
+N_INFO = 6
 
 # --- energy tracking track[:] (float64) of one run ----------------------------
 T_KE_PEAK = 0       # peak kinetic energy [J]

@@ -17,10 +17,15 @@ from . import revolute
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
 from .dynamics import JOINT_O, NZ, VZ_ROWS, evaluate
+from .joints import BODIES, JOINTS
+from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
+from .kinematics import sub as vsub
 from .layout import (
     D_CONS,
     D_DDOT,
     D_DELTA,
+    D_DFD,
+    D_DFDD,
     D_ECC,
     D_FN,
     D_HWEAR,
@@ -35,6 +40,7 @@ from .layout import (
     D_WORN,
     I_DEEPEST,
     I_SAVED,
+    I_SECTIONS,
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
@@ -60,6 +66,7 @@ from .layout import (
     N_M,
     N_R,
     N_S,
+    N_SEC,
     N_TRACK,
     N_WINDOWS,
     N_Y,
@@ -68,18 +75,27 @@ from .layout import (
     P_DT,
     P_DV0_MIN,
     P_ENERGY_TOL,
+    P_L2,
+    P_L3,
     P_MAX_LEVEL,
+    P_OMEGA,
     P_ONSET,
     P_PEN_FRAC,
+    P_SECTION_PHASE,
     P_SETTLE,
     P_SLIP,
     P_STAB,
+    P_THETA0,
     P_WEAR,
     R_FIRST_IMPACT,
     R_KE_PEAK,
     R_RESIDUAL_MAX,
     S_BETA,
     S_DV0,
+    SEC_OFFSET,
+    SEC_RATE,
+    SEC_SLIDER_ACC,
+    SEC_TIME,
     ST_CONSTRAINT,
     ST_ENERGY,
     ST_EULER,
@@ -92,11 +108,15 @@ from .layout import (
     T_WORK_MAX,
     W_SETTLED,
     W_WHOLE,
+    Y_CRANK_ANGLE,
     Y_DISS,
+    Y_QD,
     Y_ROD_BETA,
+    Y_SLIDER_X,
     Y_WORK,
 )
 from .spherical import contact_angle, contact_area
+from .target import on_device
 from .wear import deposit, projection_bins
 from .work import Model, Rk4Work, Solve, Wear
 
@@ -233,25 +253,424 @@ def copy_row(dst, row, src):
 
 
 @compiled
-def record_sample(m, w, dg, jp, weight):
-    """Fold one accepted (sub-)step end into window w of the running statistics m.
+def hermite_range(f0, f1, m0, m1, lo):
+    """Smallest and largest value over u in [lo, 1] of the cubic Hermite H(u) with H(0) = f0,
+    H(1) = f1, H'(0) = m0, H'(1) = m1 (slopes per unit u: the time slope times the step)."""
+    c2 = 3.0 * (f1 - f0) - 2.0 * m0 - m1
+    c3 = 2.0 * (f0 - f1) + m0 + m1
+    low = f1
+    high = f1
+    if lo > 0.0:
+        v = f0 + lo * (m0 + lo * (c2 + lo * c3))
+        low = min(low, v)
+        high = max(high, v)
+    # interior extrema: H'(u) = m0 + 2 c2 u + 3 c3 u^2 = 0
+    a = 3.0 * c3
+    b = 2.0 * c2
+    r1 = -1.0
+    r2 = -1.0
+    if a == 0.0:
+        if b != 0.0:
+            r1 = -m0 / b
+    else:
+        disc = b * b - 4.0 * a * m0
+        if disc >= 0.0:
+            q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+            r1 = q / a
+            if q != 0.0:
+                r2 = m0 / q
+    for r in (r1, r2):
+        if lo < r < 1.0:
+            v = f0 + r * (m0 + r * (c2 + r * c3))
+            low = min(low, v)
+            high = max(high, v)
+    return low, high
 
-    ``weight`` is the (sub-)step length [s] that the sample closes (0 for the initial state):
-    time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
+
+@compiled
+def mean_slopes(f0, f1, mean):
+    """End slopes (per unit step) of the quadratic through f0 and f1 whose mean over the step
+    is ``mean``: the derivative of the cubic Hermite of the integral of f (its ends' values
+    and rates f0, f1), so that :func:`hermite_range` reads the quadratic."""
+    return 6.0 * mean - 4.0 * f0 - 2.0 * f1, -6.0 * mean + 2.0 * f0 + 4.0 * f1
+
+
+@compiled
+def hermite_value(f0, f1, m0, m1, u):
+    """The cubic Hermite of :func:`hermite_range` at u."""
+    c2 = 3.0 * (f1 - f0) - 2.0 * m0 - m1
+    c3 = 2.0 * (f0 - f1) + m0 + m1
+    return f0 + u * (m0 + u * (c2 + u * c3))
+
+
+#: What :func:`record_sample` keeps of a (sub-)step's end for the next one's start, entries
+#: of the work row ``prev``: slider acceleration, crank torque, slider velocity, drive work,
+#: crank rate, then per joint F_N, delta, delta_dot, dF_N/d delta, dF_N/d delta_dot.
+PV_ACC = 0
+PV_TORQUE = 1
+PV_V = 2
+PV_WORK = 3
+PV_RATE = 4
+PV_FN = 5
+PV_DELTA = PV_FN + N_JOINTS
+PV_DDOT = PV_DELTA + N_JOINTS
+PV_DFD = PV_DDOT + N_JOINTS
+PV_DFDD = PV_DFD + N_JOINTS
+N_PV = PV_DFDD + N_JOINTS
+
+#: Largest |h10|, |h11| of the cubic Hermite basis on [0, 1]: a cubic Hermite never leaves
+#: max(f0, f1) + HERMITE_REACH (|m0| + |m1|), so that a step whose bound stays below the
+#: running peak needs no search for its maximum (the same statistics, fewer operations).
+HERMITE_REACH = 4.0 / 27.0
+
+
+@compiled
+def keep_ends(prev, dg, y):
+    """prev = what :func:`record_sample` reads of a (sub-)step's start: the values of the
+    state y and its diagnostics dg (PV_*)."""
+    prev[PV_ACC] = dg[D_SLIDER_ACC]
+    prev[PV_TORQUE] = dg[D_TORQUE]
+    prev[PV_V] = y[Y_QD + Y_SLIDER_X]
+    prev[PV_WORK] = y[Y_WORK]
+    prev[PV_RATE] = y[Y_QD + Y_CRANK_ANGLE]
+    for j in range(N_JOINTS):
+        prev[PV_FN + j] = dg[D_FN + j]
+        prev[PV_DELTA + j] = dg[D_DELTA + j]
+        prev[PV_DDOT + j] = dg[D_DDOT + j]
+        prev[PV_DFD + j] = dg[D_DFD + j]
+        prev[PV_DFDD + j] = dg[D_DFDD + j]
+
+
+@compiled
+def step_peak(f0, f1, m0, m1, floor, absolute):
+    """The largest value over a step of the cubic Hermite through f0, f1 with slopes m0, m1
+    (per unit step; of its absolute value with ``absolute``), searched for only where its
+    bound max(f0, f1) + HERMITE_REACH (|m0| + |m1|) exceeds ``floor``; else |f1| or f1,
+    which then changes no running peak at or above floor."""
+    if absolute:
+        if max(abs(f0), abs(f1)) + HERMITE_REACH * (abs(m0) + abs(m1)) <= floor:
+            return abs(f1)
+        low, high = hermite_range(f0, f1, m0, m1, 0.0)
+        return max(-low, high)
+    if max(f0, f1) + HERMITE_REACH * (abs(m0) + abs(m1)) <= floor:
+        return f1
+    _, high = hermite_range(f0, f1, m0, m1, 0.0)
+    return high
+
+
+@compiled
+def fold_peak(m, i, peak, settled_lo, f0, f1, m0, m1, absolute):
+    """Fold a step's peak (:func:`step_peak`, over the whole step) into column i of both
+    windows: the whole run's, and the settled window's where settled_lo >= 0, over the
+    step's part u >= settled_lo (searched again where that is not the whole step)."""
+    m[W_WHOLE, i] = max(m[W_WHOLE, i], peak)
+    if settled_lo > 0.0:
+        low, high = hermite_range(f0, f1, m0, m1, settled_lo)
+        m[W_SETTLED, i] = max(m[W_SETTLED, i], max(-low, high) if absolute else high)
+    elif settled_lo == 0.0:
+        m[W_SETTLED, i] = max(m[W_SETTLED, i], peak)
+
+
+@compiled
+def record_windows(m, prev, dg, y, jp, weight, settled_lo):
+    """:func:`record_sample`'s statistics in a loop over the windows (the device build's
+    arrangement): the same values, one copy of the peak search where the build inlines it."""
+    for w in range(N_WINDOWS if settled_lo >= 0.0 else 1):
+        lo = 0.0 if w == W_WHOLE else settled_lo
+        acc = dg[D_SLIDER_ACC]
+        acc_peak = abs(acc)
+        torque_peak = abs(dg[D_TORQUE])
+        if weight > 0.0:
+            a0 = prev[PV_ACC]
+            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+            low, high = hermite_range(a0, acc, m0, m1, lo)
+            acc_peak = max(-low, high)
+            rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
+            t0 = prev[PV_TORQUE]
+            m0, m1 = mean_slopes(t0, dg[D_TORQUE], (y[Y_WORK] - prev[PV_WORK]) / (weight * rate))
+            low, high = hermite_range(t0, dg[D_TORQUE], m0, m1, lo)
+            torque_peak = max(-low, high)
+        m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], acc_peak)
+        m[w, M_ACC_SQ] += acc * acc * weight
+        m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], torque_peak)
+        m[w, M_TIME] += weight
+        m[w, M_SAMPLES] += 1.0
+        for j in range(N_JOINTS):
+            if jp[j, J_CLEARANCE] == 0.0:
+                continue
+            fn_peak = dg[D_FN + j]
+            pen_peak = dg[D_DELTA + j]
+            if weight > 0.0:
+                d0 = prev[PV_DELTA + j]
+                v0 = prev[PV_DDOT + j] * weight
+                v1 = dg[D_DDOT + j] * weight
+                _, pen_peak = hermite_range(d0, pen_peak, v0, v1, lo)
+                f0 = prev[PV_FN + j]
+                if f0 > 0.0 or fn_peak > 0.0:
+                    dd = v1 - v0
+                    s0 = prev[PV_DFD + j] * v0 + prev[PV_DFDD + j] * dd / weight
+                    s1 = dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight
+                    _, fn_peak = hermite_range(f0, fn_peak, s0, s1, lo)
+            m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], fn_peak)
+            m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], pen_peak)
+            if dg[D_DELTA + j] > 0.0:
+                m[w, M_CONTACT_T + j] += weight
+
+
+@compiled
+def record_sample(m, prev, dg, y, jp, weight, settled_lo):
+    """Fold one accepted (sub-)step into the running statistics m: the step from the start
+    that ``prev`` holds (:func:`keep_ends`) to the state y (diagnostics dg), of length
+    ``weight`` [s] (0: the initial state alone, prev unused), into the whole-run window
+    and, where ``settled_lo`` >= 0, the settled one over the step's part u >= settled_lo;
+    then prev keeps this step's end for the next.
+
+    Time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
+    Peaks are read within the step (u = (t - t_start) / weight in [0, 1], or [settled_lo,
+    1] where the settled window begins inside the step) from a cubic in time through the
+    step's end values and their rates (docs/physics.md section 8.1):
+
+    - slider acceleration a: the slider velocity v is a state, so the quadratic through
+      a0, a1 with the step's mean acceleration (v1 - v0) / weight (the derivative of the
+      cubic Hermite of v); crank torque T likewise from the drive work W, dW/dt = T
+      theta_dot;
+    - penetration delta: the cubic Hermite through delta and its rate delta_dot (the
+      normal approach rate, an exact derivative);
+    - normal force F_N(delta, delta_dot): the cubic Hermite through F_N with the end rates
+      dF_N/dt = dF_N/d delta delta_dot + dF_N/d delta_dot delta_ddot (D_DFD, D_DFDD), the
+      approach acceleration delta_ddot taken as delta_dot's change over the step. The
+      chain rule rather than F_N's finite change: the end rates are then the contact law's
+      at each end, so that a step in which the force turns over gets its interior maximum.
+      delta_ddot from delta_dot, not from a Hermite of delta: delta jumps where the contact
+      direction crosses into a wear-map bin of another depth (c_eff is read from the bin),
+      delta_dot does not, and a jump read as motion gave end rates that overshot the force.
+
+    A step's peak is searched for once for both windows, and only where the cubic's bound
+    exceeds the settled window's peak (or the whole run's before the window), which is the
+    smaller: below it, neither window's peak can move (the same statistics, fewer
+    operations). A device build (``target.on_device``) takes the same values in a loop
+    over the windows instead, with one copy of the search (fewer registers spilled).
     """
+    if on_device():
+        record_windows(m, prev, dg, y, jp, weight, settled_lo)
+        keep_ends(prev, dg, y)
+        return
+    settled = settled_lo >= 0.0
+    w_floor = W_SETTLED if settled else W_WHOLE
     acc = dg[D_SLIDER_ACC]
-    m[w, M_ACC_PEAK] = max(m[w, M_ACC_PEAK], abs(acc))
-    m[w, M_ACC_SQ] += acc * acc * weight
-    m[w, M_TORQUE_PEAK] = max(m[w, M_TORQUE_PEAK], abs(dg[D_TORQUE]))
-    m[w, M_TIME] += weight
-    m[w, M_SAMPLES] += 1.0
+    torque = dg[D_TORQUE]
+    a0 = acc
+    t0 = torque
+    ma0 = 0.0
+    ma1 = 0.0
+    mt0 = 0.0
+    mt1 = 0.0
+    if weight > 0.0:
+        a0 = prev[PV_ACC]
+        ma0, ma1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+        rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
+        t0 = prev[PV_TORQUE]
+        mt0, mt1 = mean_slopes(t0, torque, (y[Y_WORK] - prev[PV_WORK]) / (weight * rate))
+    fold_peak(m, M_ACC_PEAK, step_peak(a0, acc, ma0, ma1, m[w_floor, M_ACC_PEAK], True),
+              settled_lo, a0, acc, ma0, ma1, True)
+    fold_peak(m, M_TORQUE_PEAK, step_peak(t0, torque, mt0, mt1, m[w_floor, M_TORQUE_PEAK],
+                                          True), settled_lo, t0, torque, mt0, mt1, True)
+    for w in range(N_WINDOWS if settled else 1):
+        m[w, M_ACC_SQ] += acc * acc * weight
+        m[w, M_TIME] += weight
+        m[w, M_SAMPLES] += 1.0
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
-        m[w, M_FN_PEAK + j] = max(m[w, M_FN_PEAK + j], dg[D_FN + j])
-        m[w, M_PEN_PEAK + j] = max(m[w, M_PEN_PEAK + j], dg[D_DELTA + j])
-        if dg[D_DELTA + j] > 0.0:
-            m[w, M_CONTACT_T + j] += weight
+        d1 = dg[D_DELTA + j]
+        f1 = dg[D_FN + j]
+        d0 = d1
+        v0 = 0.0
+        v1 = 0.0
+        f0 = f1
+        s0 = 0.0
+        s1 = 0.0
+        if weight > 0.0:
+            d0 = prev[PV_DELTA + j]
+            v0 = prev[PV_DDOT + j] * weight
+            v1 = dg[D_DDOT + j] * weight
+            f0 = prev[PV_FN + j]
+            if f0 > 0.0 or f1 > 0.0:
+                # delta_ddot * weight^2, the same at both ends: delta_dot's change
+                dd = v1 - v0
+                s0 = prev[PV_DFD + j] * v0 + prev[PV_DFDD + j] * dd / weight
+                s1 = dg[D_DFD + j] * v1 + dg[D_DFDD + j] * dd / weight
+        fold_peak(m, M_PEN_PEAK + j, step_peak(d0, d1, v0, v1, m[w_floor, M_PEN_PEAK + j],
+                                               False), settled_lo, d0, d1, v0, v1, False)
+        fold_peak(m, M_FN_PEAK + j, step_peak(f0, f1, s0, s1, m[w_floor, M_FN_PEAK + j],
+                                              False), settled_lo, f0, f1, s0, s1, False)
+        if d1 > 0.0:
+            for w in range(N_WINDOWS if settled else 1):
+                m[w, M_CONTACT_T + j] += weight
+    keep_ends(prev, dg, y)
+
+
+# --------------------------------------------------------------------------- Poincare sections
+
+TWO_PI = 2.0 * math.pi
+
+
+def _attachment_row(att):
+    """An attachment of the joint table (joints.Attachment) as floats: (state index of its
+    body's centroid, of its Euler angles, packed index of the length that scales it, the
+    three factors); -1 for a body outside the state (the ground: a fixed point, global
+    frame) or for no length (the centroid)."""
+    body = {b.name: b for b in BODIES if b.y_r is not None}.get(att.body)
+    lengths = {"l2": P_L2, "l3": P_L3}
+    return (float(body.y_r) if body else -1.0, float(body.y_phi) if body else -1.0,
+            float(lengths[att.length]) if att.length else -1.0) + tuple(map(float, att.factors))
+
+
+#: Each joint's ball attachment, then its socket's (rows 2 j, 2 j + 1), for the sections.
+SECTION_ATTACHMENTS = tuple(_attachment_row(a) for joint in JOINTS for a in (joint.ball, joint.socket))
+
+
+@compiled
+def section_lead(p, t0):
+    """Time from t0 to the first Poincare section [s]: the driven crank angle
+    theta(t) = theta0 + omega t reaches p[P_SECTION_PHASE] + 2 pi k; a crossing at t0 itself
+    (within 1e-9 rad) is not taken."""
+    x = p[P_SECTION_PHASE] - p[P_THETA0] - p[P_OMEGA] * t0
+    x -= TWO_PI * math.floor(x / TWO_PI)
+    if x >= TWO_PI:
+        x = 0.0
+    if x < 1e-9:
+        x += TWO_PI
+    return x / p[P_OMEGA]
+
+
+@compiled
+def section_time(p, t0, k):
+    """Time of section k (0-based: revolution k + 1) of a run from t0 [s]."""
+    return t0 + section_lead(p, t0) + TWO_PI * k / p[P_OMEGA]
+
+
+@compiled
+def section_count(p, t0, n_steps):
+    """Sections a run of n_steps output-grid steps from t0 holds (within 1e-9 of a
+    revolution of its end): the rows of ``Out.sec`` that the integrators fill."""
+    turns = (n_steps * p[P_DT] - section_lead(p, t0)) * p[P_OMEGA] / TWO_PI
+    if turns < -1e-9:
+        return 0
+    return int(math.floor(turns + 1e-9)) + 1
+
+
+#: Entries of the work row ``Rk4Work.secnext``: the next section's time [s] (NaN: none
+#: left), its row of Out.sec, the slider acceleration there while its step is under way.
+SN_TIME = 0
+SN_ROW = 1
+SN_ACC = 2
+
+
+@compiled
+def next_section(sec, secnext, k):
+    """secnext: section row k next (its planned time, NaN past the rows planned)."""
+    secnext[SN_ROW] = k
+    secnext[SN_TIME] = sec[k, SEC_TIME] if k < sec.shape[0] else math.nan
+
+
+@compiled
+def section_in(secnext, t, sub, hs, last):
+    """(Whether the next section (``secnext``, :func:`next_section`) falls in sub-step
+    ``sub`` of the step from t, of sub-steps hs: in (t + sub hs, t + (sub + 1) hs], at or
+    before its end for sub 0, with no upper bound in the run's ``last`` sub-step; its time).
+    ``sub`` = -1 with hs = the whole step: at or before the step's end. The bounds are the
+    same products for adjacent sub-steps, so that each section falls in exactly one. Reads
+    a work row alone: no pointer to the results stays live across the step (a GPU
+    thread's registers)."""
+    tk = secnext[SN_TIME]
+    if not tk == tk:
+        return False, tk
+    if sub < 0:
+        return last or tk <= t + hs, tk
+    if sub > 0 and not tk > t + sub * hs:
+        return False, tk
+    return last or tk <= t + (sub + 1) * hs, tk
+
+
+@compiled
+def plan_sections(p, t0, n_steps, sec):
+    """Every section row NaN (an ideal joint's offsets and rates stay so) but the times of
+    the sections a run from t0 of n_steps holds (:func:`section_count`, as many as fit)."""
+    n = min(sec.shape[0], section_count(p, t0, n_steps))
+    for k in range(sec.shape[0]):
+        for i in range(N_SEC):
+            sec[k, i] = math.nan
+        if k < n:
+            sec[k, SEC_TIME] = section_time(p, t0, k)
+
+
+@compiled
+def end_sections(sec, taken):
+    """At the end of a run: the rows past the ``taken`` sections NaN (a run that stopped)."""
+    for k in range(taken, sec.shape[0]):
+        for i in range(N_SEC):
+            sec[k, i] = math.nan
+
+
+@compiled
+def hermite_state(out, u, hs, y0, f0, y1, f1):
+    """out = the cubic Hermite at t0 + u hs of the step from (y0, f0 = y0') to (y1, f1)."""
+    v = 1.0 - u
+    h00 = (1.0 + 2.0 * u) * v * v
+    h10 = u * v * v * hs
+    h01 = u * u * (3.0 - 2.0 * u)
+    h11 = -u * u * v * hs
+    for i in range(y0.shape[0]):
+        out[i] = h00 * y0[i] + h10 * f0[i] + h01 * y1[i] + h11 * f1[i]
+
+
+@compiled
+def attachment_state(p, y, row):
+    """(position, velocity, rotation, body angular velocity) of the attachment
+    SECTION_ATTACHMENTS[row] at state y: the ball or socket centre and its body's frame."""
+    a = SECTION_ATTACHMENTS[row]
+    length = p[int(a[2])] if a[2] >= 0.0 else 0.0
+    u = (length * a[3], length * a[4], length * a[5])
+    if a[0] < 0.0:
+        eye = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+        return u, (0.0, 0.0, 0.0), eye, (0.0, 0.0, 0.0)
+    r_at = int(a[0])
+    phi_at = int(a[1])
+    tr = trig(y[phi_at], y[phi_at + 1], y[phi_at + 2])
+    R = rotation(tr)
+    w = mv(gmat(tr), (y[Y_QD + phi_at], y[Y_QD + phi_at + 1], y[Y_QD + phi_at + 2]))
+    pos, vel = point_state((y[r_at], y[r_at + 1], y[r_at + 2]),
+                           (y[Y_QD + r_at], y[Y_QD + r_at + 1], y[Y_QD + r_at + 2]), R, w, u)
+    return pos, vel, R, w
+
+
+@compiled
+def section_offsets(p, jp, ys, sec, k):
+    """Section row k's offsets from the state ys at the section: each clearance joint's
+    ball-centre offset d_s = R_s^T (p_ball - p_socket) in its socket frame over c (as the
+    diagnostics D_OFFSET), and its rate R_s^T (v_ball - v_socket) - w_s x d_s over c, from
+    the joint table's attachments (kinematics alone: no evaluation of the equations of
+    motion, whose every call site a device build inlines)."""
+    # one loop over the attachments, ball then socket of each joint (one copy of
+    # attachment_state where a device build inlines it)
+    pb = (0.0, 0.0, 0.0)
+    vb = (0.0, 0.0, 0.0)
+    for row in range(2 * N_JOINTS):
+        j = row // 2
+        if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        pos, vel, R, w = attachment_state(p, ys, row)
+        if row % 2 == 0:
+            pb = pos
+            vb = vel
+            continue
+        d = mtv(R, vsub(pb, pos))
+        rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
+        c = jp[j, J_C]
+        for a in range(3):
+            sec[k, SEC_OFFSET + 3 * j + a] = d[a] / c
+            sec[k, SEC_RATE + 3 * j + a] = rate[a] / c
 
 
 @compiled
@@ -384,13 +803,14 @@ def step_checks(y, dg, p, jp, status, e0, track):
 #: no array view is made or passed in the hot loop. Rows of each group, in advance's
 #: argument order:
 #: vec: y, its copy at the step's start, k1, k1's copy, k2 (+ k3), the stage derivative,
-#: the stage state;
-#: diag: dg and its copy; cstate: contact state s and its copy; pairs: ddot_prev, its copy,
-#: the largest depth written per joint, the first impact times and their copy; mats: C, S, L
-#: of evaluate; caps: the wear of the step being taken and the accepted wear waiting to be
-#: spread.
-VEC_ROWS = 7
-DIAG_ROWS = 2
+#: the stage state, y and k1 at the start of a sub-step with a section, the next section's
+#: bookkeeping;
+#: diag: dg, its copy at the step's start, the sub-step start's values for record_sample; cstate: contact state
+#: s and its copy; pairs: ddot_prev, its copy, the largest depth written per joint, the
+#: first impact times and their copy; mats: C, S, L of evaluate; caps: the wear of the step
+#: being taken and the accepted wear waiting to be spread.
+VEC_ROWS = 10
+DIAG_ROWS = 3
 CSTATE_ROWS = 2
 PAIR_ROWS = 5
 #: row of ``pairs`` holding each joint's first impact time (the next row: its copy)
@@ -430,7 +850,7 @@ def case_views(case, work):
 
 
 @compiled(locals=_NOT_LITERAL)
-def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
+def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
     recorded. Returns the evaluation's status."""
@@ -438,8 +858,6 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
     jp = model.jp
     s = model.s
     step_end = True
-    whole = W_WHOLE
-    settled = W_SETTLED
     for w in range(N_WINDOWS):
         for i in range(N_M):
             stats[w, i] = 0.0
@@ -465,9 +883,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats):
                 seated = True
         if not seated:
             break
-    record_sample(stats, whole, dg, jp, 0.0)
-    if t0 >= p[P_SETTLE]:
-        record_sample(stats, settled, dg, jp, 0.0)
+    record_sample(stats, prev, dg, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0)
     return ST_OK
 
 
@@ -554,7 +970,8 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
                    np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
-                   np.zeros((4 * case.wmap.shape[1], 3)))
+                   np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
+                   np.zeros(N_Y), np.zeros(N_Y))
     advance(case, t0, n_steps, save_every, True, out, work)
     return kernel_result(out.track, out.first)
 
@@ -602,10 +1019,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     cur = work.cur
     pend = work.pend
     scratch = work.scratch
+    ysub = work.ysub
+    prev = work.prev
+    k1sub = work.k1sub
+    secnext = work.secnext
+    sec = out.sec
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
-    whole = W_WHOLE
-    settled = W_SETTLED
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
@@ -630,6 +1050,14 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     for i in range(N_D):
         dg[i] = 0.0
         dgsave[i] = 0.0
+        prev[i] = 0.0
+    for i in range(N_Y):
+        ysub[i] = 0.0
+        k1sub[i] = 0.0
+        secnext[i] = 0.0
+    plan_sections(p, t0, n_steps, sec)
+    next_section(sec, secnext, 0)
+    # the Poincare sections: the next one's index and time
     for j in range(N_JOINTS):
         ddot_prev_save[j] = 0.0
         wmax[j] = 0.0
@@ -642,7 +1070,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         out.info[i] = 0
 
     status = ST_OK
-    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats)
+    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev)
     if st != ST_OK:
         out.info[I_STATUS] = st
         out.info[I_SAVED] = 0
@@ -684,6 +1112,13 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
+                if sub == 0:
+                    keep_ends(prev, dg, y)      # the step's start (again after a rejection)
+                due, _ = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
+                if due:
+                    # a section in this sub-step: its start for the cubic Hermite
+                    copy_into(ysub, y)
+                    copy_into(k1sub, k1)
                 st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -702,9 +1137,20 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     if st != ST_OK:
                         status = st
                         break
-                record_sample(stats, whole, dg, jp, hs)
-                if in_settled:
-                    record_sample(stats, settled, dg, jp, hs)
+                record_sample(stats, prev, dg, y, jp, hs,
+                              max(0.0, (settle - ts) / hs) if in_settled else -1.0)
+                due, tk = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
+                if due:
+                    # the section inside this sub-step: the slider acceleration from the cubic
+                    # Hermite of the slider velocity (record_sample's quadratic), the state
+                    # from the sub-step's cubic Hermite (into k1sub, in place), whose offsets
+                    # are read once the step is accepted
+                    u = min(1.0, max(0.0, (tk - ts) / hs))
+                    a0 = k1sub[Y_QD + Y_SLIDER_X]
+                    a1 = k1[Y_QD + Y_SLIDER_X]
+                    m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
+                    secnext[SN_ACC] = hermite_value(a0, a1, m0, m1, u)
+                    hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
@@ -736,6 +1182,15 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         total += 1 << level
         deepest = max(deepest, level)
         merge_wear(wmap, cur, pend, wmax, scratch)
+        # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
+        # its offsets from the state kept in k1sub (here, where few values are live: a GPU
+        # thread's registers), and it counts
+        due, _ = section_in(secnext, t, -1, nsub * hs, step == n_steps - 1)
+        if due:
+            k = int(secnext[SN_ROW])
+            sec[k, SEC_SLIDER_ACC] = secnext[SN_ACC]
+            section_offsets(p, jp, k1sub, sec, k)
+            next_section(sec, secnext, k + 1)
 
         status = step_checks(y, dg, p, jp, status, e0, out.track)
         if (step + 1) % save_every == 0:
@@ -748,6 +1203,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         if status != ST_OK:
             break
     flush_all_wear(wmap, pend, wmax, scratch)
+    out.info[I_SECTIONS] = int(secnext[SN_ROW])
+    end_sections(sec, out.info[I_SECTIONS])
     if keep_rows and status == ST_OK and n_saved > 0:
         copy_row(out.wmax, n_saved - 1, wmax)
     out.info[I_STATUS] = status

@@ -27,8 +27,10 @@ Case = namedtuple("Case", ["p", "jp", "y0", "wmap", "proj", "wvol"])
 #: What an integrator writes: the output rows t, y, d, wmax (n_save rows; ``keep_rows``
 #: False leaves them untouched), the counters info (layout.I_*), the running statistics
 #: stats (layout.M_*, whole run and settled window), the energy tracking track (layout.T_*)
-#: and each joint's first impact time first [s] (-1: none).
-Out = namedtuple("Out", ["t", "y", "d", "wmax", "info", "stats", "track", "first"])
+#: and each joint's first impact time first [s] (-1: none); the Poincare sections sec
+#: (revolutions x layout.N_SEC, the rows ``rk4.section_count`` gives, or fewer: those are
+#: taken; every row is written, NaN where no section is taken).
+Out = namedtuple("Out", ["t", "y", "d", "wmax", "info", "stats", "track", "first", "sec"])
 
 #: The wear of accepted steps on its way to the map: the projections and worn volume (as
 #: in :data:`Case`), the wear of the step being taken ``cur`` and the wear waiting to be
@@ -44,19 +46,24 @@ Wear = namedtuple("Wear", ["proj", "wvol", "cur", "pend", "buf_i", "buf_v", "wma
 #: msave (2 x N_M: statistics at the step's start); ddot_prev, ddot_prev_save, wmax,
 #: first_save (one per joint: approach rates and copy, the deepest bin written, the first
 #: impact times' copy); C, S, L, vz (:data:`Solve`); buf_i, buf_v, cur, pend, scratch (as in
-#: :data:`Wear`).
+#: :data:`Wear`); ysub, k1sub (N_Y: the state and its derivative at the start of a sub-step
+#: that holds a Poincare section); prev (N_D, of which ``rk4.N_PV`` used: the sub-step
+#: start's values that the in-step peaks of ``rk4.record_sample`` read) and secnext (N_Y, of which
+#: the first 3 used, ``rk4.SN_*``: the next section's time and row, its slider
+#: acceleration).
 Rk4Work = namedtuple("Rk4Work", [
     "y", "ysave", "k1", "k1save", "ksum", "kst", "yt", "dg", "dgsave", "s", "ssave", "msave",
     "ddot_prev", "ddot_prev_save", "wmax", "first_save", "C", "S", "L", "vz", "buf_i",
-    "buf_v", "cur", "pend", "scratch"])
+    "buf_v", "cur", "pend", "scratch", "ysub", "prev", "k1sub", "secnext"])
 
 #: Work arrays of ``dopri5.advance_dopri5``: y, y1, yt (N_Y: the state, the trial step's
 #: 5th-order solution, the stage state); k1 ... k7, kt (N_Y: stage derivatives, the
 #: derivative at a dense-output row); row (1 x N_Y) and yrow (N_Y): a dense-output state;
 #: dg, dg1, dgo (N_D: diagnostics at the step's start, its end, a dense-output row); s,
-#: ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur, pend, scratch as in :data:`Rk4Work`.
+#: ddot_prev, wmax, C, S, L, vz, buf_i, buf_v, cur, pend, scratch, prev as in
+#: :data:`Rk4Work`.
 Dopri5Work = namedtuple("Dopri5Work", [
     "y", "y1", "yt", "k1", "k2", "k3", "k4", "k5", "k6", "k7", "kt", "row", "yrow", "dg",
     "dg1", "dgo", "s", "ddot_prev", "wmax", "C", "S", "L", "vz", "buf_i", "buf_v", "cur",
-    "pend", "scratch"])
+    "pend", "scratch", "prev"])
 

@@ -26,6 +26,10 @@ Kinds (``KINDS``):
 ``orbit``
     ball-centre offset in the socket frame on the xy, xz and yz planes,
     inside the clearance circle; cases overlaid.
+``poincare``
+    the Poincare section, once per crank revolution: per clearance joint the ball-centre
+    offset over the clearance on the plane of its two most spread axes, and the slider
+    acceleration against the revolution; cases overlaid. Needs 2 revolutions at least.
 ``sweep``
     one summary metric (``analysis.case_summary``) over one sweep dimension
     (lines) or two (heat maps, their spread stated, a joint without data left out);
@@ -103,6 +107,7 @@ from .motion import (  # noqa: F401
     bifurcation_axis,
 )
 from .orbit import _draw_orbit
+from .poincare import _draw_poincare
 from .reliability import _draw_reliability
 from .series import _draw_forces, _draw_slider
 from .sweep import (  # noqa: F401
@@ -140,6 +145,7 @@ FIGURES = {
     "wear-map": FigureKind((11, 9), _draw_wear_map),
     "wear-polar": FigureKind((11, 9.5), _draw_wear_polar),
     "orbit": FigureKind((12, 8), _draw_orbit),
+    "poincare": FigureKind((14, 5.4), _draw_poincare),
     "sweep": FigureKind((8, 5), _draw_sweep, ("metric",)),
     "life": FigureKind((16, 10), _draw_life),
     "reliability": FigureKind((14, 8), _draw_reliability, ("b10",)),

@@ -192,6 +192,19 @@ def _legend(ax, cases) -> None:
         ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
 
 
+def figure_legend(fig) -> None:
+    """One legend below the panels: every panel's entries once, in the order they first
+    appear (two columns where a label is long)."""
+    entries: dict[str, object] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    if entries:
+        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
+                   ncol=min(len(entries), 2 if max(map(len, entries)) > 40 else 3),
+                   fontsize="x-small")
+
+
 def _legend_note(n: int) -> str:
     """Title line saying that ``n`` overlaid lines have no legend ("" when they have one)."""
     if n <= MAX_LEGEND_ENTRIES:

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 
 from ..analysis import configured_clearances, value_text
 from ..variables import JOINT_TYPES
-from .common import _case_label, _cases, _legend_note, _require, axis_label, scaled
+from .common import _case_label, _cases, _legend_note, _require, axis_label, figure_legend, scaled
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
 _CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
@@ -84,14 +83,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_title(f"joint {value_text(joint)}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
-    entries: dict[str, Artist] = {}
-    for ax in fig.axes:
-        for handle, label in zip(*ax.get_legend_handles_labels()):
-            entries.setdefault(label, handle)
-    if entries:
-        fig.legend(list(entries.values()), list(entries), loc="outside lower center",
-                   ncol=min(len(entries), 2 if max(map(len, entries)) > 40 else 3),
-                   fontsize="x-small")
+    figure_legend(fig)
     left_out = f"\nnot drawn: joint {', '.join(empty)}, ball at the centre (ideal joint)" if empty else ""
     fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)) + left_out)
 
