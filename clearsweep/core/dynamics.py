@@ -112,7 +112,6 @@ from .target import on_device
 from .work import Model, Solve
 
 NZ = 8  # free coordinates: x3, y3, z3, alpha3, beta3, x4, y2, z2
-NC_MAX = 6  # constraint rows of the Schur solve: ideal A and ideal B, 3 each
 
 #: The joints' rows (joints.JOINTS), as constants of the compiled code.
 JOINT_A = INDEX["A"]
