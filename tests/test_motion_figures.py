@@ -237,7 +237,8 @@ def test_a_zip_groups_diagram_is_drawn_against_its_first_key_by_default(bifurcat
     assert fig.axes[-1].get_xlabel() == "crank speed in revolutions per minute [min-1]"
 
 
-def test_the_shipped_bifurcation_sweep_runs_20_revolutions_a_speed_with_8_of_start_up():
+def test_the_shipped_bifurcation_sweep_runs_110_revolutions_a_speed_with_10_of_start_up():
+    """100 settled revolutions: the samples the 0-1 test for chaos needs."""
     from pathlib import Path
 
     from clearsweep.sweeping import expand
@@ -247,8 +248,8 @@ def test_the_shipped_bifurcation_sweep_runs_20_revolutions_a_speed_with_8_of_sta
     assert len(configs) == 60 and plan.store == "summary"
     for cfg in configs:
         revolution = 60.0 / cfg.mechanism.speed_rpm
-        assert cfg.solver.duration == pytest.approx(20 * revolution, rel=1e-6)
-        assert cfg.metrics.settle_time == pytest.approx(8 * revolution, rel=1e-6)
+        assert cfg.solver.duration == pytest.approx(110 * revolution, rel=1e-6)
+        assert cfg.metrics.settle_time == pytest.approx(10 * revolution, rel=1e-6)
         assert cfg.joints.A.clearance == 0.0 and cfg.joints.B.clearance == 2.5e-4
     speeds = [cfg.mechanism.speed_rpm for cfg in configs]
     assert speeds[0] == 50.0 and speeds[-1] == 640.0

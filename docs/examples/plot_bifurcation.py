@@ -8,7 +8,7 @@ it: :func:`clearsweep.plotting.figure` with ``kind="bifurcation"`` draws each ca
 10 samples against the swept value (docs/physics.md section 11).
 
 ``configs/bifurcation.yaml`` sweeps joint B's mechanism (0.25 mm clearance) over 60 crank
-speeds from 50 to 640 r/min, 20 revolutions each. Here the same sweep runs 7 speeds around
+speeds from 50 to 640 r/min, 110 revolutions each. Here the same sweep runs 7 speeds around
 the change that single runs show between 90 and 100 r/min (below, the ball comes back to
 the same point of its socket every revolution; above, it does not), 14 revolutions each
 with 4 of start-up, in this process (``workers=1``): real runs of the kernel (about 6
