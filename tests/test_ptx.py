@@ -14,7 +14,7 @@ import pytest
 
 from clearsweep import ptx
 
-#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 1,216
+#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 1,224
 #: (``python -m clearsweep.ptx``; 932 before joint O, the in-step peaks and the Poincare
 #: sections, 916 before the contact laws; 4,544 before the kernel was reshaped for the GPU,
 #: 2,696 before core/device.py handed advance its fixed-shape rows through ``block`` and

@@ -30,6 +30,7 @@ from .layout import (
     P_V1,
     S_DV0,
 )
+from .target import on_device
 
 
 @compiled
@@ -366,3 +367,13 @@ respond = compiled(_named(_respond, "respond"))
 #: :func:`_respond` inlined into each joint type's ``contact``: the CPU build's, where the
 #: call cost the two-clearance case 14 % of its steps/s.
 respond_inline = compiled(inline="always")(_named(_respond, "respond_inline"))
+
+
+@compiled(inline="always")
+def compose(j, model, ball, socket, pb, ps, geo, law, energy):
+    """:func:`_respond` as each build takes it, the call every joint type's ``contact`` ends
+    with: inlined in the CPU build (:data:`respond_inline`), called in a device build
+    (:data:`respond`; ``target.on_device``)."""
+    if on_device():
+        return respond(j, model, ball, socket, pb, ps, geo, law, energy)
+    return respond_inline(j, model, ball, socket, pb, ps, geo, law, energy)

@@ -25,11 +25,10 @@ the normal and the contact points lie in that plane:
 import math
 
 from .compiled import compiled
-from .contact import respond, respond_inline
+from .contact import compose
 from .kinematics import point_state
 from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
-from .target import on_device
-from .wear import arc_to_bins, coating_worn
+from .wear import angle_bin, arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "revolute"
@@ -58,11 +57,9 @@ def map_read(wmap, j, n, interp):
     dh/dphi [m per rad]: the bin holding phi, or (``interp``) linear between the bin centres,
     periodic around the bearing."""
     nazim = wmap.shape[2]
-    v = (bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim
     if not interp:
-        ia = min(max(int(v), 0), nazim - 1)
-        return wmap[j, 0, ia], 0.0
-    v -= 0.5
+        return wmap[j, 0, angle_bin(n[2], n[1], nazim)], 0.0
+    v = (bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim - 0.5
     k = int(math.floor(v))
     fv = v - k
     k0 = k % nazim
@@ -78,9 +75,7 @@ def worn_through(wmap, j, n, coat):
     of the bearing map holding the in-plane direction n."""
     if not coat < math.inf:
         return False
-    nazim = wmap.shape[2]
-    ia = min(max(int((bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim), 0), nazim - 1)
-    return coating_worn(wmap[j, 0, ia], coat)
+    return coating_worn(wmap[j, 0, angle_bin(n[2], n[1], wmap.shape[2])], coat)
 
 
 @compiled
@@ -140,7 +135,7 @@ def deposit(wmap, j, n, vol, area, radius_length):
     phi_c = bearing_angle(n)
     half = 0.5 * area / radius_length
     if not half * 2.0 > 1e-9 * dphi:
-        ia = min(max(int((phi_c + math.pi) / dphi), 0), nazim - 1)
+        ia = angle_bin(n[2], n[1], nazim)
         wmap[j, 0, ia] += vol / (radius_length * dphi)
         return wmap[j, 0, ia]
     # a bin inside the arc deepens by vol / (2 psi R_i L); one partly inside, by that times
@@ -159,6 +154,4 @@ def contact(j, model, ball, socket, energy):
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     geo = gap(model.jp, j, model.wmap, model.p, pb, ps)
-    if on_device():
-        return respond(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
-    return respond_inline(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
+    return compose(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)

@@ -18,10 +18,9 @@ The kernel composes these; nothing of a joint type's geometry is written elsewhe
 import math
 
 from .compiled import compiled
-from .contact import respond, respond_inline
+from .contact import compose
 from .kinematics import dot, mtv, mv, point_state, scale, sub
 from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
-from .target import on_device
 from .wear import worn_surface
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
@@ -90,6 +89,4 @@ def contact(j, model, ball, socket, energy):
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     geo = gap(model.jp, j, model.wmap, model.p, pb, ps, Rs)
-    if on_device():
-        return respond(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], energy)
-    return respond_inline(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], energy)
+    return compose(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], energy)

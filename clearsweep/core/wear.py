@@ -92,7 +92,8 @@ def bin_area(ip, npolar, nazim, radius):
 
 @compiled
 def angle_bin(y, x, nbins):
-    """One-degree bin of atan2(y, x) over [-180, 180) degrees."""
+    """Bin of atan2(y, x) among ``nbins`` over [-180, 180) degrees (one-degree bins for the
+    projections; a bearing map's azimuth bins)."""
     i = int((math.atan2(y, x) + math.pi) / (2.0 * math.pi) * nbins)
     if i >= nbins:
         i = nbins - 1
