@@ -17,7 +17,7 @@ from .choices import DAMPING_LAWS
 from .config import Config, EnsembleConfig, JointConfig, RevoluteJointConfig, resolve_materials
 from .core import layout as L
 from .core.contact import hysteresis_fraction
-from .core.joints import JOINTS
+from .core.joints import BODIES, JOINTS
 from .materials import FIELDS
 from .version import __version__
 
@@ -310,10 +310,9 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
             continue  # no load to lean on: the ball stays centred
         c, ew = jp[j, L.J_C], jp[j, L.J_EW]
         if wmap is not None:
-            # the socket body: the rod for A, the slider for B, the ground for O
-            socket = joint.socket.body
-            phi = (y_ideal[L.Y_PHI3:L.Y_PHI3 + 3] if socket == "rod"
-                   else y_ideal[L.Y_PHI4:L.Y_PHI4 + 3] if socket == "slider" else np.zeros(3))
+            # the socket body's angles (the table's; the ground, with no state, unrotated)
+            socket = next(body for body in BODIES if body.name == joint.socket.body)
+            phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
             c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
         delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)

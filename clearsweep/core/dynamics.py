@@ -781,13 +781,17 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
     L = solve.L
     vz = solve.vz
     n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
-    if j == JOINT_A:
-        # the socket point Q_i on the rod
-        qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
+    if j == JOINT_O:
+        # the rod carries neither side of O: no rod Jacobian (point_mobility ignores it)
+        Jr = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     else:
-        # the ball point Q_j on the rod (O: unused, the rod carries neither side)
-        qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
-    Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
+        if j == JOINT_A:
+            # the socket point Q_i on the rod
+            qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
+        else:
+            # the ball point Q_j on the rod
+            qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
+        Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
     wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
     inv_m = quad_form(wp, n, n)
     if not inv_m > 0.0:
