@@ -8,6 +8,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
+from ..variables import JOINT_TYPES
 from .common import _abscissa, _cases, _legend, _legend_note, _require, axis_label, scaled
 
 _AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
@@ -34,7 +35,9 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     _require(ds, ("reaction_O", "joint_force"), "--kind forces")
     # (panel title, variable, joint or None)
     rows = [("reaction at O (ground on crank)", "reaction_O", None)]
-    rows += [(f"joint {value_text(j)} (on the ball)", "joint_force", j) for j in ds["joint"].values]
+    # the revolute joint at O: its force on the journal is the reaction at O, drawn once
+    rows += [(f"joint {value_text(j)} (on the ball)", "joint_force", j) for j in ds["joint"].values
+             if JOINT_TYPES.get(value_text(j)) != "revolute"]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)
     axes = fig.subplots(len(rows), len(components), sharex=True, squeeze=False)
