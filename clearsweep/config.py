@@ -40,7 +40,8 @@ from .schema import (  # noqa: F401
 )
 
 __all__ = [
-    "ConfigError", "Field", "Config", "JointConfig", "RevoluteJointConfig", "EnsembleConfig", "PerturbConfig",
+    "ConfigError", "Field", "Config", "JointConfig", "RevoluteJointConfig", "PrismaticJointConfig",
+    "section_clearance", "EnsembleConfig", "PerturbConfig",
     "ReliabilityConfig", "SCHEMA",
     "DEFAULTS", "load_config",
     "apply_override", "dump_config",
@@ -125,6 +126,45 @@ class RevoluteJointConfig(_Section):
         return self.bearing_radius - self.clearance
 
 
+@dataclass(frozen=True)
+class PrismaticJointConfig(_Section):
+    """The slider's guide P: a block in a guide; both clearances 0 (the default) make it
+    ideal. The block moves across the guide (y, z) and tilts within its clearances, and
+    touches the walls at its corners."""
+
+    clearance_y: float = _setting(Field(0.0, lo=0.0), "m",
+                                  "clearance of joint P between the block's sides and the guide")
+    clearance_z: float = _setting(Field(0.0, lo=0.0), "m",
+                                  "clearance of joint P above and below the block")
+    block: tuple[float, float, float] = _setting(Field([0.08, 0.06, 0.06], size=3, lo=0.0, lo_open=True),
+                                                 "m", "block length, width and height of joint P")
+    corner_radius: float = _setting(_positive(1.0e-3), "m", "edge radius of joint P's block corners")
+    coating: str = _setting(Field("none", str), None, "guide wall coating of joint P")
+    coating_thickness: float = _setting(_positive(1.0e-4), "m", "coating thickness of joint P")
+    base_thickness: float = _setting(_positive(4.9e-3), "m", "guide wall base thickness of joint P")
+    #: None: the surface material's own coefficient
+    wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
+                                              "Archard wear coefficient of joint P's guide walls")
+
+    @property
+    def clearance(self) -> float:
+        """The smaller of the two clearances [m]: 0 for an ideal guide."""
+        return min(self.clearance_y, self.clearance_z)
+
+    @property
+    def socket_radius(self) -> float:
+        """The corners' edge radius [m] (the contact law's radius)."""
+        return self.corner_radius
+
+
+def section_clearance(spec: Mapping[str, Any]) -> float:
+    """A joint section's clearance [m] as a mapping gives it: ``clearance``, or a guide's
+    smaller of ``clearance_y`` and ``clearance_z``."""
+    if "clearance" in spec:
+        return float(spec["clearance"])
+    return float(min(spec["clearance_y"], spec["clearance_z"]))
+
+
 #: The key of each joint section's outer radius (socket or bearing).
 RADIUS_KEYS = ("socket_radius", "bearing_radius")
 
@@ -139,10 +179,12 @@ class JointsConfig(_Section):
     A: JointConfig = _section(JointConfig)
     B: JointConfig = _section(JointConfig)
     O: RevoluteJointConfig = _section(RevoluteJointConfig)
+    P: PrismaticJointConfig = _section(PrismaticJointConfig)
 
-    def items(self) -> tuple[tuple[str, JointConfig | RevoluteJointConfig], ...]:
-        """``(("A", joint A), ("B", joint B), ("O", joint O))``, in kernel order."""
-        return (("A", self.A), ("B", self.B), ("O", self.O))
+    def items(self) -> tuple[tuple[str, "JointConfig | RevoluteJointConfig | PrismaticJointConfig"], ...]:
+        """``(("A", joint A), ("B", joint B), ("O", joint O), ("P", joint P))``, in kernel
+        order."""
+        return (("A", self.A), ("B", self.B), ("O", self.O), ("P", self.P))
 
 
 @dataclass(frozen=True)
@@ -396,7 +438,7 @@ def _info_of(cls: type, prefix: str = "") -> dict[str, tuple[str | None, str]]:
         if f.default_factory is not MISSING:
             sub = f.default_factory
             sub_prefix = ("joints.X." if sub is JointConfig else "joints.O." if sub is RevoluteJointConfig
-                          else f"{prefix}{f.name}.")
+                          else "joints.P." if sub is PrismaticJointConfig else f"{prefix}{f.name}.")
             out.update(_info_of(sub, sub_prefix))  # type: ignore[arg-type]
         else:
             out[prefix + f.name] = (f.metadata["units"], f.metadata["long_name"])
@@ -532,6 +574,20 @@ def _check_together(cfg: dict[str, Any], source: str) -> None:
                     "average it over); for perturbed members set ensemble.members to 2 or more", source)
 
 
+def _check_guide(spec: Mapping[str, Any], source: str) -> None:
+    """Joint P's guide: both clearances or neither, a corner radius that fits the block."""
+    cy, cz = spec["clearance_y"], spec["clearance_z"]
+    if (cy > 0.0) != (cz > 0.0):
+        key, value = ("joints.P.clearance_z", cz) if cy > 0.0 else ("joints.P.clearance_y", cy)
+        raise ConfigError(key, value, "a number > 0 when the other clearance of joint P is, "
+                          "or both 0 (an ideal guide)", source)
+    smallest = min(spec["block"])
+    if spec["corner_radius"] > 0.5 * smallest:
+        raise ConfigError("joints.P.corner_radius", spec["corner_radius"],
+                          f"a number <= half the block's smallest side ({0.5 * smallest:g} m, "
+                          "joints.P.block)", source)
+
+
 def _validate(raw: Any, source: str, base_dir: str) -> Config:
     cfg = _resolve(raw, SCHEMA, "", source)
     for key, op, other in _RELATIONS:
@@ -539,7 +595,10 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
         if not _OPS[op](value, bound):
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
+    _check_guide(cfg["joints"]["P"], source)
     for joint, spec in cfg["joints"].items():
+        if joint == "P":
+            continue
         radius = radius_key(spec)
         most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
         if spec["clearance"] > most:
@@ -555,6 +614,13 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
     # A member's own config has its drawn clearance and no band (reliability.member_config).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
+        if joint == "P":
+            clearance = section_clearance(spec)
+            if 0.0 < clearance <= tolerance:
+                raise ConfigError("reliability.clearance_tolerance", tolerance,
+                                  f"a number < the smaller of joints.P.clearance_y and clearance_z "
+                                  f"({clearance!r}), so that every member keeps a clearance", source)
+            continue
         radius = radius_key(spec)
         most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
         if 0.0 < spec["clearance"] <= tolerance:

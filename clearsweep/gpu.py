@@ -33,12 +33,12 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
-#: Host memory [bytes] that one batch's arrays and results may take at most: 12 GiB (10,000
-#: cases of the default map at 1.09 MB each, three joints' maps), or a quarter of the
+#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (10,000
+#: cases of the default map at 1.46 MB each, four joints' maps), or a quarter of the
 #: machine's memory where that is less (:func:`host_batch_bytes`). A batch must hold
 #: thousands of cases to fill the device: on an H200, one launch of 1,470 cases ran
 #: 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
-HOST_BATCH_BYTES = 12 << 30
+HOST_BATCH_BYTES = 16 << 30
 
 #: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
 SIMULATOR_BATCH = 64

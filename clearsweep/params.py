@@ -14,7 +14,14 @@ from typing import Any
 import numpy as np
 
 from .choices import DAMPING_LAWS
-from .config import Config, EnsembleConfig, JointConfig, RevoluteJointConfig, resolve_materials
+from .config import (
+    Config,
+    EnsembleConfig,
+    JointConfig,
+    PrismaticJointConfig,
+    RevoluteJointConfig,
+    resolve_materials,
+)
 from .core import layout as L
 from .core.contact import hysteresis_fraction
 from .core.joints import BODIES, JOINTS
@@ -22,7 +29,7 @@ from .materials import FIELDS
 from .version import __version__
 
 #: A joint section of the config: a spherical joint (A, B) or the revolute joint O.
-AnyJoint = JointConfig | RevoluteJointConfig
+AnyJoint = JointConfig | RevoluteJointConfig | PrismaticJointConfig
 
 
 @dataclass(frozen=True)
@@ -193,10 +200,12 @@ def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
 
 
 def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.0, 0.0),
-                  offset_B=(0.0, 0.0, 0.0), offset_O=(0.0, 0.0, 0.0)) -> np.ndarray:
+                  offset_B=(0.0, 0.0, 0.0), offset_O=(0.0, 0.0, 0.0),
+                  offset_P=(0.0, 0.0, 0.0)) -> np.ndarray:
     """State at crank angle theta0 moving at omega [rad/s], the ball-centre offsets (global
     frame [m], zero = centred ball) held fixed; velocities from the kinematics with the
-    offsets held, so that no ball moves relative to its socket at the start."""
+    offsets held, so that no ball moves relative to its socket at the start. ``offset_P``:
+    the slider block's offset across its guide (its y and z; x is the guide's)."""
     l2, l3 = preset.crank_length_m, preset.rod_length_m
     st, ct = math.sin(theta0), math.cos(theta0)
     y = np.zeros(L.N_Y)
@@ -208,7 +217,8 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     y[g2] = theta0
     y[qd + r2:qd + r2 + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
     y[qd + g2] = omega
-    a, b, x4 = rod_endpoints(preset, theta0, offset_A, offset_B, offset_O)
+    d_p = np.array([0.0, offset_P[1], offset_P[2]])
+    a, b, x4 = rod_endpoints(preset, theta0, offset_A, np.asarray(offset_B, float) + d_p, offset_O)
     va = np.array([0.0, l2 * ct, l2 * st]) * omega
     # |b - a| = l3 with b moving along X only: (b - a) . (vb - va) = 0
     vb = np.array([(b - a) @ va / (b - a)[0], 0.0, 0.0])
@@ -221,10 +231,31 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     y[qd + ph3] = (d[0] * dd[1] - d[1] * dd[0]) / (d[0] ** 2 + d[1] ** 2)
     y[qd + ph3 + 1] = -dd[2] / math.cos(y[ph3 + 1])
     y[r4] = x4
-    y[r4 + 1] = 0.0
-    y[r4 + 2] = preset.slider_height_m
+    y[r4 + 1] = d_p[1]
+    y[r4 + 2] = preset.slider_height_m + d_p[2]
     y[qd + r4] = vb[0]
     return y
+
+
+def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> None:
+    """Joint P's own columns of its jp row: the block, the two clearances (J_C the smaller),
+    the corners' edge radius, and the walls' wear maps along the guide: from the ideal
+    slider's travel (docs/physics.md section 1) widened by the block's half length and
+    5 % of the travel each way."""
+    length, width, height = joint.block
+    row[L.J_LENGTH] = length
+    row[L.J_WIDTH] = width
+    row[L.J_HEIGHT] = height
+    row[L.J_CY] = joint.clearance_y
+    row[L.J_CZ] = joint.clearance_z
+    row[L.J_C] = joint.clearance
+    row[L.J_RI] = joint.corner_radius
+    row[L.J_RJ] = joint.corner_radius
+    theta = np.linspace(0.0, 2.0 * math.pi, 721)
+    x = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
+    margin = 0.5 * length + 0.05 * float(x.max() - x.min())
+    row[L.J_X0] = float(x.min()) - margin
+    row[L.J_XSPAN] = float(x.max() - x.min()) + 2.0 * margin
 
 
 def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float = 0.0,
@@ -302,6 +333,9 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
             continue
         f = forces[j].copy()
         law = p[L.P_EXPONENT]
+        if joint.type == "prismatic":
+            offsets[j] = seated_block(f, jp[j], p)
+            continue
         if joint.type == "revolute":
             f[0] = 0.0          # axial: ideal
             law = journal_law(p)
@@ -318,6 +352,26 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
         offsets[j] = -(c + delta) * f / size
     return offsets
+
+
+def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The offset [m] (0, y, z) of a block seated in its guide (joint P's jp ``row``) under
+    the ideal guide's force ``force`` [N] on it: against the y wall the force's y part
+    pushes from, and likewise in z, each wall's four corners sharing that part of the load
+    (a corner's law, ``prismatic.corner_law``, and the coated modulus); a part that is 0 or
+    not finite leaves the block centred in that direction."""
+    from .core.prismatic import CORNER_EXPONENT
+
+    law = p[L.P_EXPONENT] if p[L.P_EXPONENT] != 0.0 else CORNER_EXPONENT
+    out = np.zeros(3)
+    for axis, c in ((1, row[L.J_CY]), (2, row[L.J_CZ])):
+        part = float(force[axis])
+        if not (math.isfinite(part) and part != 0.0):
+            continue
+        # the corner's power law A c (delta / c)^n with A = 4 E_w sqrt(r_c c) / 3
+        delta = static_penetration(0.25 * abs(part), c, row[L.J_EW], row[L.J_RI], c, law)
+        out[axis] = -math.copysign(c + delta, part)
+    return out
 
 
 @dataclass(frozen=True)
@@ -477,6 +531,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
         jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
+        if isinstance(joint, PrismaticJointConfig):
+            guide_row(jp[j], joint, preset)
     perturb = cfg.ensemble.perturb
     member = member_perturbation(cfg.ensemble) if perturb.any else None
     if member is not None:      # unperturbed: the nominal case, bit for bit
@@ -494,10 +550,12 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     if member is not None and perturb.ball_offset > 0.0:
         for j, row in enumerate(JOINTS):
             shift = member.ball_offset[j].copy()
-            if row.type == "revolute":
-                shift[0] = 0.0      # the journal moves in the bearing's plane only
+            if row.type in ("revolute", "prismatic"):
+                shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
+                                    # across its guide
             offsets[j] = perturbed_offset(offsets[j], shift, float(jp[j, L.J_C]))
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
-    y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"])
+    y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
+                       by_name["P"])
     return Packed(p=p, jp=jp, y0=y0, n_steps=n_steps, save_every=save_every,
                   map_shape=(wear.map[0], wear.map[1]), method=solver.method)

@@ -33,9 +33,11 @@ def check_step(cfg: Config, packed: Packed) -> None:
     penetration the run accepts (contact.max_penetration_fraction * c), with the lightest
     mass a contact can meet (rod, slider, or the rod's end-point rotational mass; where O has
     clearance the crank is free in its bearing's plane, and that mass in series with the
-    crank's), each joint with its own elastic law (the journal's at O).
+    crank's; at P, the block's mass at a corner, its rotation included), each joint with its
+    own elastic law (the journal's at O, the corners' at P).
     """
     from .core.joints import INDEX
+    from .core.prismatic import corner_law
     from .core.revolute import journal_law
 
     solver = cfg.solver
@@ -53,10 +55,19 @@ def check_step(cfg: Config, packed: Packed) -> None:
         if jp[L.J_CLEARANCE] == 0.0:
             continue
         delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
-        law = as_python(journal_law)(packed.p) if j == INDEX["O"] else packed.p[L.P_EXPONENT]
-        _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI],
-                                                jp[L.J_RJ], law)
-        rate = math.sqrt(stiffness / m_ref)
+        mass = m_ref
+        rj = jp[L.J_RJ]
+        if j == INDEX["P"]:
+            law = as_python(corner_law)(packed.p)
+            rj = jp[L.J_C]
+            corner = 0.25 * (jp[L.J_LENGTH] ** 2 + jp[L.J_WIDTH] ** 2 + jp[L.J_HEIGHT] ** 2)
+            mass = 1.0 / (1.0 / preset.slider_mass_kg + corner / min(preset.slider_inertia_kgm2))
+        elif j == INDEX["O"]:
+            law = as_python(journal_law)(packed.p)
+        else:
+            law = packed.p[L.P_EXPONENT]
+        _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI], rj, law)
+        rate = math.sqrt(stiffness / mass)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
     if dt > limit:

@@ -38,11 +38,13 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
     "reaction_O": VariableSpec(("time", "axis"), "N", "reaction of the ground on the crank at O",
                                "global frame"),
     "joint_force": VariableSpec(("time", "joint", "axis"), "N",
-                                "force on the ball of the joint (O: on the crank's journal)",
+                                "force on the ball of the joint (O: on the crank's journal; P: the "
+                                "guide's on the slider)",
                                 "global frame; constraint reaction (ideal joint) or contact force "
                                 "(clearance joint) acting on the ball"),
     "normal_force": VariableSpec(("time", "joint"), "N", "normal contact force F_N",
-                                 "zero for ideal joints and while out of contact"),
+                                 "zero for ideal joints and while out of contact; P: its most "
+                                 "deeply penetrating corner's"),
     "friction_force": VariableSpec(("time", "joint"), "N", "magnitude of the friction force F_t"),
     "penetration": VariableSpec(("time", "joint"), "m", "penetration depth delta",
                                 "e - c_eff(n); negative while free flight"),
@@ -59,7 +61,10 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
                                     "E_kin + E_pot - W_drive + E_diss - (E_kin + E_pot)(t=0)"),
     "constraint_violation": VariableSpec(("time",), "m", "largest position-constraint violation"),
     "wear_map": VariableSpec(("joint", "polar", "azimuth"), "m", "socket wear depth map",
-                             "bin-averaged Archard wear depth over the socket inner sphere, socket frame"),
+                             "bin-averaged Archard wear depth over the socket inner sphere, socket "
+                             "frame; O: row 0 around the bearing; P: the guide's walls +y, -y, +z, "
+                             "-z as four bands of polar // 4 rows across the wall by azimuth bins "
+                             "along the guide"),
     "wear_projection": VariableSpec(("joint", "axis", "angle"), "m", "wear depth projected per axis",
                                     "paper Eq. 15-17: k |F_N,axis| dS / A binned by the contact "
                                     "direction's angle about the axis, socket frame"),
@@ -145,7 +150,7 @@ CASE_VARIABLES.update(POINCARE)
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
     "time": VariableSpec(("time",), "s", "time"),
-    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank bearing, revolute)"),
+    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank bearing, revolute; P: slider guide, prismatic)"),
     "axis": VariableSpec(("axis",), "", "Cartesian axis"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre",
                           "measured from the socket frame's +z axis"),
@@ -241,7 +246,7 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
 LIFE_VARIABLES: dict[str, VariableSpec] = {
     "cycle": VariableSpec(("cycle",), "1", "crank revolutions at the end of the block",
                           "cumulative revolutions, simulated and jumped"),
-    "joint": VariableSpec(("joint",), "", "joint (A, B: spherical; O: revolute)"),
+    "joint": VariableSpec(("joint",), "", "joint (A, B: spherical; O: revolute; P: prismatic)"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre"),
     "azimuth": VariableSpec(("azimuth",), "degree", "azimuth of the wear-map bin centre"),
     "block_revolutions": VariableSpec(("cycle",), "1", "revolutions simulated in the block"),

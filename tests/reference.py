@@ -14,6 +14,11 @@ Everything is built the obvious way, independently of the kernel's structured so
   the revolute's rows keep the axial one (x of the crank's point O; the tilt and driver rows
   stay), and the journal's contact force (Hertz's law of internal cylinders, n = 3/2, with
   the conformal radius, section 3.6) acts at the contact point on the crank;
+- joint P with clearance (the slider's block in the ground's guide, axis x at height z_s):
+  the prismatic rows go, and each of the block's eight corners (rounded, edge radius r_c)
+  pushes on the wall it crosses with Hertz's point-on-flat law, F = (4/3) E_w sqrt(r_c)
+  delta^(3/2), damping and friction written from their formulas, at the corner
+  (section 3.7);
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
@@ -44,7 +49,7 @@ STEP_PATH = 5e-3
 # body blocks of q: crank 0:6, rod 6:12, slider 12:18; each [r (3), phi (3)]
 CRANK, ROD, SLIDER = 0, 1, 2
 # joints: rows of jp (the spherical joints A, B; the crank's revolute O)
-JOINT_A, JOINT_B, JOINT_O = INDEX["A"], INDEX["B"], INDEX["O"]
+JOINT_A, JOINT_B, JOINT_O, JOINT_P = INDEX["A"], INDEX["B"], INDEX["O"], INDEX["P"]
 #: Exponent of the journal's Hertz law (internal cylinders; Flores et al. 2008).
 JOURNAL_EXPONENT = 1.5
 
@@ -181,8 +186,9 @@ class Mechanism:
                 out[name] = slice(k, k + 3)
                 k += 3
         out["spin3"] = slice(k, k + 1)
-        out["prismatic"] = slice(k + 1, k + 6)
-        out["m"] = k + 6
+        rows_p = 5 if self.ideal[JOINT_P] else 0
+        out["prismatic"] = slice(k + 1, k + 1 + rows_p)
+        out["m"] = k + 1 + rows_p
         return out
 
     def constraints(self, q, t):
@@ -197,7 +203,8 @@ class Mechanism:
         if self.ideal[JOINT_B]:                                  # spherical B: slider - rod end
             c.extend(point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3))
         c.append(q[11])                                          # rod spin gamma3 = 0
-        c.extend([q[13], q[14] - self.zs, q[15], q[16], q[17]])  # prismatic
+        if self.ideal[JOINT_P]:                                  # prismatic
+            c.extend([q[13], q[14] - self.zs, q[15], q[16], q[17]])
         return np.array(c)
 
     def mass_matrix(self, q):
@@ -285,9 +292,12 @@ class ContactResult:
 
 
 def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
-    """Contact state and forces of clearance joint j (A, B: spherical; O: the journal)."""
+    """Contact state and forces of clearance joint j (A, B: spherical; O: the journal; P: the
+    block's corners)."""
     if j == JOINT_O:
         return journal_contact(mech, q, qd, dv0_stored)
+    if j == JOINT_P:
+        return block_contact(mech, q, qd)
     jp = mech.jp[j]
     c, ri, rj, ew = jp[L.J_C], jp[L.J_RI], jp[L.J_RJ], jp[L.J_EW]
     bb, ub, sb, us = mech.joint_bodies(j)
@@ -334,6 +344,52 @@ def journal_contact(mech: Mechanism, q, qd, dv0_stored=0.0):
         return journal_force(delta, ddot, c, ew, ri, rj, kappa)
 
     return respond(mech, JOINT_O, qd, e, n, e - c, qj, qi, jj, np.zeros_like(jj), law, dv0_stored)
+
+
+def block_contact(mech: Mechanism, q, qd):
+    """Contact state and forces of joint P: every corner of the block (length 2a, width 2b,
+    height 2h about the slider's centroid) against the guide wall it crosses (walls at
+    y = +-(b + c_y), z = z_s +- (h + c_z)), each a point contact with a fresh episode. The
+    result's force and generalised force are the sums over the corners; its contact values
+    those of the corner that penetrates deepest."""
+    jp = mech.jp[JOINT_P]
+    half = 0.5 * np.array([jp[L.J_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
+    clear = {1: jp[L.J_CY], 2: jp[L.J_CZ]}
+    centre = np.array([0.0, 0.0, mech.zs])
+    ew, rc = jp[L.J_EW], jp[L.J_RI]
+
+    def law(delta, ddot, kappa):
+        if delta <= 0.0:
+            return 0.0, 0.0
+        fel = 4.0 / 3.0 * ew * np.sqrt(rc) * delta ** 1.5
+        return max(0.0, fel * (1.0 + kappa * ddot)), fel
+
+    total = np.zeros(3)
+    gen = np.zeros(18)
+    pdiss = 0.0
+    deepest = None
+    for signs in [(sx, sy, sz) for sz in (-1, 1) for sy in (-1, 1) for sx in (-1, 1)]:
+        u = np.array(signs) * half
+        corner = point(q, SLIDER, u)
+        jc = point_jacobian(q, SLIDER, u)
+        for axis in (1, 2):
+            n = np.zeros(3)
+            n[axis] = signs[axis]
+            delta = float(n @ (corner - centre)) - half[axis] - clear[axis]
+            res = respond(mech, JOINT_P, qd, 0.0, n, delta, corner, corner, jc,
+                          np.zeros_like(jc), law, 0.0)
+            if deepest is None or delta > deepest.delta:
+                deepest = res
+            if delta > 0.0:
+                total = total + res.force
+                gen = gen + res.generalized
+                pdiss += res.pdiss
+    r = q[12:15] - centre
+    deepest.ecc = float(np.hypot(r[1], r[2]))
+    deepest.force = total
+    deepest.generalized = gen
+    deepest.pdiss = pdiss
+    return deepest
 
 
 def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored):
@@ -459,6 +515,9 @@ def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
             joint_force[j] = constraint_force(name)[6 * ball:6 * ball + 3]
         else:
             joint_force[j] = contacts[j].force
+    # the guide's force on the slider: the prismatic rows' on its centroid, or the corners'
+    joint_force[JOINT_P] = (constraint_force("prismatic")[12:15] if mech.ideal[JOINT_P]
+                            else contacts[JOINT_P].force)
 
     minv = np.linalg.inv(mass)
     s = cq @ minv @ cq.T

@@ -46,13 +46,13 @@ ACC_HALF_PERIOD_S = 0.02
 ACC_SPIKE = 50.0                     # [m s-2]
 ACC_SPIKE_TIME_S = 0.01
 SETTLE_TIME_S = 0.05
-NORMAL_FORCE_PEAK = {"A": 40.0, "B": 120.0, "O": 0.0}   # [N]
+NORMAL_FORCE_PEAK = {"A": 40.0, "B": 120.0, "O": 0.0, "P": 0.0}   # [N]
 #: The ideal joints of the synthetic case.
-IDEAL = ("O",)
+IDEAL = ("O", "P")
 NORMAL_FORCE_PEAK_TIME_S = 0.1
 WEAR_MAP_SHAPE = (36, 72)
-WEAR_MAP_PEAK = {"A": 3.0e-11, "B": 9.0e-11, "O": 0.0}   # [m]
-WEAR_MAP_PEAK_BIN = {"A": (10, 20), "B": (25, 50), "O": (0, 0)}
+WEAR_MAP_PEAK = {"A": 3.0e-11, "B": 9.0e-11, "O": 0.0, "P": 0.0}   # [m]
+WEAR_MAP_PEAK_BIN = {"A": (10, 20), "B": (25, 50), "O": (0, 0), "P": (0, 0)}
 N_ANGLE = 360
 SUB_THRESHOLD_DEPTH = 1.0e-15        # [m], < 1e-3 of every peak below
 
@@ -151,8 +151,8 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         normal[spike, j] = NORMAL_FORCE_PEAK[joint]
     swing = np.stack([np.cos(theta), np.sin(theta), 0.2 * np.cos(2 * theta)], axis=-1)
     # (time, joint, axis), scaled with the acceleration level so that sweep cases differ
-    force = np.stack([50.0 * swing, 80.0 * swing, 100.0 * swing], axis=1) * acc_level / ACC_LEVEL
-    clearances = np.array([CLEARANCE_M, clearance_b, 0.0])
+    force = np.stack([50.0 * swing, 80.0 * swing, 100.0 * swing, 30.0 * swing], axis=1) * acc_level / ACC_LEVEL
+    clearances = np.array([CLEARANCE_M, clearance_b, 0.0, 0.0])
     radius = ORBIT_FRACTION * clearances
     offset = np.stack([np.cos(3 * theta), np.sin(3 * theta), 0.3 * np.sin(5 * theta)], axis=-1)
     offset = offset / np.linalg.norm(offset, axis=-1, keepdims=True)
@@ -194,7 +194,7 @@ def one_case(*, profiles: dict | None = None, acc_level: float = ACC_LEVEL,
         "constraint_violation": np.full(n, 1e-9),
         "wear_map": wear_map,
         "wear_projection": projection,
-        "wear_volume": np.array([1e-15, 2e-15, 0.0]),
+        "wear_volume": np.array([1e-15, 2e-15, 0.0, 0.0]),
         "substeps_used": np.int64(4),
         "rk4_steps": np.int64(80_000),
         "energy_residual_max": 1e-7,
@@ -322,7 +322,7 @@ def with_poincare(ds: xr.Dataset, slider: np.ndarray, offset: np.ndarray | None 
 
 
 def bifurcation_sweep(values=(2.9, 3.2, 3.5, 3.83, 4.0), revolutions: int = 40,
-                      dim: str = "speed_rpm", joints=("A", "B", "O")) -> xr.Dataset:
+                      dim: str = "speed_rpm", joints=("A", "B", "O", "P")) -> xr.Dataset:
     """A summary sweep over ``dim`` whose Poincaré samples are the logistic map's attractor
     at r = each value: slider acceleration 10 x (m s-2), joint B's offset x along x (y half),
     the other joints ideal (NaN); the first half of the revolutions before the settled

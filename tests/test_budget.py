@@ -16,7 +16,7 @@ TOO_LARGE = [
     ("solver.duration=1.0e+3", "solver.duration", "GiB"),              # 10 GiB of saved rows
     ("solver.duration=1.0e+6", "solver.duration", "1e+11 steps"),
     ("solver.dt=1.0e-300", "solver.dt", "1e+298 steps"),
-    ("wear.map=[100000, 100000]", "wear.map", "wear maps 224 GiB"),
+    ("wear.map=[100000, 100000]", "wear.map", "wear maps 298 GiB"),
 ]
 
 

@@ -25,6 +25,7 @@ from clearsweep.config import (
     parse_yaml,
     radius_key,
     resolve_materials,
+    section_clearance,
     set_path,
 )
 
@@ -244,7 +245,14 @@ def _configs(schema=SCHEMA):
 
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
-    for joint in raw["joints"].values():
+    guide = raw["joints"]["P"]
+    if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
+        guide["clearance_z"] = guide["clearance_y"]
+    guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]
+    guide["coating"] = guide["coating"] if guide["coating"] in ("none", "PTFE", "lead") else "MoS2"
+    for name, joint in raw["joints"].items():
+        if name == "P":
+            continue
         # room for the clearance and its tolerance band (at most 1.5 c, below): c + t <= R / 2
         radius = radius_key(joint)
         joint[radius] = 3.0 * joint["clearance"] + joint[radius]
@@ -260,7 +268,7 @@ def _consistent(raw):
         solver["max_step"] = max(solver["max_step"], solver["dt"] / 2 ** solver["max_substep_level"])
     rel = raw["reliability"]
     rel["member"] = rel["member"] % rel["members"]
-    clearances = [j["clearance"] for j in raw["joints"].values() if j["clearance"] > 0.0]
+    clearances = [section_clearance(j) for j in raw["joints"].values() if section_clearance(j) > 0.0]
     rel["clearance_tolerance"] = min([rel["clearance_tolerance"], *(0.5 * c for c in clearances)])
     return raw
 

@@ -178,14 +178,14 @@ def latched(mode, rates):
     dg = np.zeros(L.N_D)
     stats = np.zeros((2, L.N_M))
     model = Model(pk.p, pk.jp, s, np.zeros((nj, 1, 1)))
-    wear = Wear(np.zeros((nj, 3, L.N_ANGLE_BINS)), np.zeros(nj), np.zeros((nj, 6)), np.zeros((nj, 6)),
+    wear = Wear(np.zeros((nj, 3, L.N_ANGLE_BINS)), np.zeros(nj), np.zeros((nj, L.N_CAP)), np.zeros((nj, L.N_CAP)),
                 np.zeros((4, 4), np.int64), np.zeros((4, 4)), np.zeros(nj), np.zeros((4, 3)))
     ddot_prev = np.zeros(nj)
     for rate in rates:
         dg[L.D_DELTA + 1] = 1e-7
         dg[L.D_ECC + 1] = C + 1e-7
         dg[L.D_DDOT + 1] = rate
-        accept_substep(1e-5, False, model, dg, stats, wear, 0, ddot_prev)
+        accept_substep(1e-5, False, model, dg, stats, wear, 0, ddot_prev, np.zeros(L.N_Y))
     return s[1, L.S_DV0], stats[L.W_WHOLE, L.M_IMPACTS + 1]
 
 

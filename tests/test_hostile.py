@@ -490,7 +490,7 @@ ROUND4_MESSAGES = [
     ("life --resume from a checkpoint of another map shape (was: ValueError traceback)",
      lambda t, f: _checkpoint(f, t, wmap=np.zeros((2, 3, 12))) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
-     2, "(wmap has shape (2, 3, 12), expected (3, 6, 12)); pass --discard-checkpoint"),
+     2, "(wmap has shape (2, 3, 12), expected (4, 6, 12)); pass --discard-checkpoint"),
     ("life --resume from a checkpoint of ragged rows (was: exit 0, a block lost)",
      lambda t, f: _checkpoint(f, t, row_cycle=np.array([1.0])) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "out.nc"],
@@ -1172,8 +1172,8 @@ ROUND4_BOUNDS = [
      "died at 3.6 GB with a traceback)",
      lambda t, f: ["life", LIFE, "--set", "life.snapshots=10000", "--set", "wear.map=[1000,2000]",
                    "--dry-run"], 2,
-     "life.snapshots: got 10000 (201 snapshots kept of a 1000 x 2000 wear map of 3 joints, "
-     "45.8 MiB each: 27.2 GiB in all"),
+     "life.snapshots: got 10000 (201 snapshots kept of a 1000 x 2000 wear map of 4 joints, "
+     "61 MiB each: 36.3 GiB in all"),
     ("life sweep snapshots 1e4 of a 1000 x 2000 map (was: accepted)",
      lambda t, f: ["sweep", CONFIGS / "life_sweep.yaml", "--set", "life.snapshots=10000",
                    "--set", "wear.map=[1000,2000]", "--dry-run"], 2,

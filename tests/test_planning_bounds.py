@@ -98,13 +98,13 @@ def test_a_life_runs_snapshots_and_checkpoint_are_counted():
 
     cfg = load_config(CONFIGS / "life.yaml", ["life.snapshots=10000", "wear.map=[1000, 2000]"])
     cost = life_cost(cfg)
-    # a map per joint (A, B and the bearing O)
-    assert cost.snapshots == 201 and cost.map_bytes == 3 * 1000 * 2000 * 8
+    # a map per joint (A, B, the bearing O and the guide P)
+    assert cost.snapshots == 201 and cost.map_bytes == 4 * 1000 * 2000 * 8
     assert cost.memory_bytes > 3 * 201 * cost.map_bytes and cost.checkpoint_bytes > 201 * cost.map_bytes
     result = CliRunner().invoke(main, ["life", str(CONFIGS / "life.yaml"), "--dry-run"])
     assert result.exit_code == 0, result.output
-    assert ("up to 13 wear-map snapshots of 243 KiB" in result.stdout
-            and "a checkpoint of up to 3.37 MiB rewritten after every block (up to 674 MiB "
+    assert ("up to 13 wear-map snapshots of 324 KiB" in result.stdout
+            and "a checkpoint of up to 4.48 MiB rewritten after every block (up to 896 MiB "
                 "written)" in result.stdout)
 
 

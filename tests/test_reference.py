@@ -309,7 +309,8 @@ def kernel_point_mobility(k, y, pk, j):
     mr_inv = (mr[4] / det, -mr[1] / det, -mr[3] / det, mr[0] / det)
     # the crank's centroid free in the bearing's plane where O has clearance, else held
     minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4],
-            1.0 / p[L.P_M2] if jp[ref_mod.JOINT_O, L.J_CLEARANCE] != 0.0 else 0.0)
+            1.0 / p[L.P_M2] if jp[ref_mod.JOINT_O, L.J_CLEARANCE] != 0.0 else 0.0,
+            1.0 / p[L.P_M4] if jp[ref_mod.JOINT_P, L.J_CLEARANCE] != 0.0 else 0.0)
     nc = 3 * int(sum(jp[i, L.J_CLEARANCE] == 0.0 for i in range(2)))
     dg = k["dg"]
     n = np.array(dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3])

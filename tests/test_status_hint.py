@@ -16,8 +16,8 @@ def test_hint_names_the_largest_term_and_the_wear_against_the_clearance():
     arrays = {"energy_kinetic": np.full(n, 1.0), "energy_potential": np.full(n, 0.5),
               "work_drive": np.linspace(0.0, 2.0, n), "energy_dissipated": np.linspace(0.0, 3.0, n),
               "energy_residual": np.array([0.0, 0.1, 0.2, 0.3, np.nan]),
-              "wear_depth_max": np.array([[0.0, 0.0, 0.0]] * 3 + [[0.0, 5e-5, 0.0],
-                                                                   [np.nan, np.nan, np.nan]])}
+              "wear_depth_max": np.array([[0.0, 0.0, 0.0, 0.0]] * 3 + [[0.0, 5e-5, 0.0, 0.0],
+                                                                        [np.nan] * 4])}
     cfg = load_config({"joints": {"B": {"clearance": 2.5e-4}}})
     hint = energy_residual_hint(arrays, np.arange(n) * 0.1, cfg)
     assert hint.startswith("hint (saved rows up to t = 0.3 s): the largest change since t = 0 is "

@@ -201,6 +201,7 @@ def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
     base case under ``base`` of ``sweep_config``. A joint the text leaves out has its
     default, no clearance (joint O in a file written before it existed).
     """
+    from ..config import section_clearance
     from ..schema import ConfigError, parse_yaml
     from ..variables import JOINTS
 
@@ -209,7 +210,7 @@ def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
             config = parse_yaml(ds.attrs.get(attr) or "", attr) or {}
             joints = (config[section] if section else config)["joints"]
             return {**{name: 0.0 for name in JOINTS},
-                    **{str(j): float(spec["clearance"]) for j, spec in joints.items()}}
+                    **{str(j): section_clearance(spec) for j, spec in joints.items()}}
         except (ConfigError, KeyError, TypeError, ValueError, AttributeError):
             continue
     return {}

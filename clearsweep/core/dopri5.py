@@ -30,6 +30,7 @@ from .layout import (
     I_STEPS,
     I_SUBSTEPS,
     J_CLEARANCE,
+    N_CAP,
     N_D,
     N_JOINTS,
     N_R,
@@ -226,7 +227,7 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((NZ, NZ)),
                       np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
-                      np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
+                      np.zeros((N_JOINTS, N_CAP)), np.zeros((N_JOINTS, N_CAP)),
                       np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_D))
     advance_dopri5(case, t0, n_steps, save_every, out, work)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
@@ -340,9 +341,9 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         # ---- accepted: the same per-step rules as RK4 ----
         in_settled = t + hh >= settle
         for j in range(N_JOINTS):
-            for i in range(6):
+            for i in range(N_CAP):
                 cur[j, i] = 0.0
-        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
+        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev, y1)
         note_first_impact(out.first, stats, t + hh)
         if changed:
             st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
@@ -352,7 +353,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         keep_ends(work.prev, dg, y)
         record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0)
-        merge_wear(wmap, cur, pend, wmax, scratch)
+        merge_wear(wmap, cur, pend, wmax, scratch, jp, case.wvol)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
             # the sample's time from its grid-step count: the same for any save_every

@@ -15,6 +15,12 @@ crank's y2, z2 (its centroid in the bearing's plane) are free only where O has c
 and otherwise carry a zero inverse mass and zero columns, which leave every product as it
 was. The crank's multipliers (torque, reaction at O) follow from its own equations once the
 joint forces are known. Implemented: gamma3 = 0 as published (paper Eq. 24).
+
+Where the slider's guide (joint P) has clearance, the slider's y4, z4 join the free
+coordinates (z gains them as its last two, inverse mass 1/m4, else 0 as for the crank's),
+and its three angles follow from its own rotational equations with the corners' contact
+moments: joint B holds the slider at its centroid, which the angles do not move, so they
+are not coupled to the other free coordinates.
 """
 
 import math
@@ -22,7 +28,7 @@ import math
 import numpy as np
 from numba import types
 
-from . import revolute, spherical
+from . import prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .joints import INDEX
@@ -62,6 +68,7 @@ from .layout import (
     D_PDISS,
     D_PDRIVE,
     D_PE_GRAV,
+    D_PRATE,
     D_RATE,
     D_REACTION_O,
     D_SLIDER_ACC,
@@ -111,12 +118,13 @@ from .layout import (
 from .target import on_device
 from .work import Model, Solve
 
-NZ = 8  # free coordinates: x3, y3, z3, alpha3, beta3, x4, y2, z2
+NZ = 10  # free coordinates: x3, y3, z3, alpha3, beta3, x4, y2, z2, y4, z4
 
 #: The joints' rows (joints.JOINTS), as constants of the compiled code.
 JOINT_A = INDEX["A"]
 JOINT_B = INDEX["B"]
 JOINT_O = INDEX["O"]
+JOINT_P = INDEX["P"]
 
 #: The ground's body state (r, v, R, w): the bearing of joint O.
 GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
@@ -129,6 +137,13 @@ def o_free(jp):
     where it is needed rather than kept live through the right-hand side (a GPU thread's
     registers: 16 B fewer spill stores, ``python -m clearsweep.ptx``)."""
     return jp[JOINT_O, J_CLEARANCE] != 0.0
+
+
+@compiled(inline="always")
+def p_free(jp):
+    """Whether joint P has clearance, the slider's block free across its guide and in its
+    three angles (read from jp where needed, as :func:`o_free`)."""
+    return jp[JOINT_P, J_CLEARANCE] != 0.0
 
 
 @compiled
@@ -174,8 +189,8 @@ def chol_solve(L, vz, b, nc):
 @compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
-    rows of the work array vz; minv: 1/m3, 1/m4 and 1/m2, the last 0 where the crank is held
-    in its bearing)."""
+    rows of the work array vz; minv: 1/m3, 1/m4, 1/m2 and 1/m4 again, the third 0 where the
+    crank is held in its bearing, the fourth 0 where the slider is held in its guide)."""
     vz[out, 0] = minv[0] * vz[v, 0]
     vz[out, 1] = minv[0] * vz[v, 1]
     vz[out, 2] = minv[0] * vz[v, 2]
@@ -184,6 +199,8 @@ def minv_apply(minv, mr_inv, vz, v, out):
     vz[out, 5] = minv[1] * vz[v, 5]
     vz[out, 6] = minv[2] * vz[v, 6]
     vz[out, 7] = minv[2] * vz[v, 7]
+    vz[out, 8] = minv[3] * vz[v, 8]
+    vz[out, 9] = minv[3] * vz[v, 9]
 
 
 @compiled
@@ -227,7 +244,8 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     closed form, and (e_y e_y^T + e_z e_z^T) / m2 at O.
     """
     xs = minv[1] if j == JOINT_B else 0.0
-    cs = minv[2] if j != JOINT_B else 0.0
+    # the crank's centroid in its bearing's plane (A, O), or the slider's across its guide (B)
+    cs = minv[2] if j != JOINT_B else minv[3]
     if j == JOINT_O and nc == 0:
         return (0.0, 0.0, 0.0, cs, 0.0, cs)
     if nc == 0:
@@ -254,6 +272,8 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
         vz[k, 5] = -1.0 if (j == JOINT_B and k == 0) else 0.0
         vz[k, 6] = crank if k == 1 else 0.0
         vz[k, 7] = crank if k == 2 else 0.0
+        vz[k, 8] = -1.0 if (j == JOINT_B and k == 1) else 0.0
+        vz[k, 9] = -1.0 if (j == JOINT_B and k == 2) else 0.0
     for b in range(3):
         constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
         for a in range(b + 1):
@@ -352,19 +372,52 @@ def crank_accelerations(t, y, p, t2):
 
 
 @compiled(inline="always")
-def fixed_accelerations(y, p, dy):
+def fixed_accelerations(y, p, dy, held):
     """Accelerations that the other single-body constraints fix (Baumgarte rows): the rod's
-    spin gamma3 and the slider's y and z (returned: gdd3, ydd4, zdd4) and its angles
-    (written into dy)."""
+    spin gamma3 and, where the slider is ``held`` in its guide (joint P ideal), its y and z
+    (returned: gdd3, ydd4, zdd4; 0, 0 where it is free) and its angles (written into dy)."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
     qd = Y_QD
     gdd3 = -2.0 * a_b * y[qd + Y_PHI3 + 2] - b_b * b_b * y[Y_PHI3 + 2]
+    if not held:
+        return gdd3, 0.0, 0.0
     ydd4 = -2.0 * a_b * y[qd + Y_R4 + 1] - b_b * b_b * y[Y_R4 + 1]
     zdd4 = -2.0 * a_b * y[qd + Y_R4 + 2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
     for k in range(3):
         dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
     return gdd3, ydd4, zdd4
+
+
+@compiled(inline="always")
+def slider_rotation(y, p, t4, N4, dy):
+    """The free slider's angular accelerations (joint P with clearance) from its rotational
+    equations G^T J G phi_dd = G^T (N4 - w x J w - J gdot phi_dot), written into dy; False
+    where the 3x3 mass block is singular (an Euler-angle limit)."""
+    qd = Y_QD
+    J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
+    pd4 = (y[qd + Y_PHI4], y[qd + Y_PHI4 + 1], y[qd + Y_PHI4 + 2])
+    G4 = gmat(t4)
+    w4 = mv(G4, pd4)
+    gq4 = gdot_phidot(t4, pd4[0], pd4[1], pd4[2])
+    Jw4 = (J4[0] * w4[0], J4[1] * w4[1], J4[2] * w4[2])
+    Jg4 = (J4[0] * gq4[0], J4[1] * gq4[1], J4[2] * gq4[2])
+    b = mtv(G4, sub(N4, add(cross(w4, Jw4), Jg4)))
+    m = rot_mass(J4, G4)
+    # Cramer's rule on the symmetric 3x3 block
+    c0 = m[4] * m[8] - m[5] * m[7]
+    c1 = m[5] * m[6] - m[3] * m[8]
+    c2 = m[3] * m[7] - m[4] * m[6]
+    det = m[0] * c0 + m[1] * c1 + m[2] * c2
+    if not det > 0.0:
+        return False
+    x0 = (b[0] * c0 + b[1] * (m[2] * m[7] - m[1] * m[8]) + b[2] * (m[1] * m[5] - m[2] * m[4])) / det
+    x1 = (b[0] * c1 + b[1] * (m[0] * m[8] - m[2] * m[6]) + b[2] * (m[2] * m[3] - m[0] * m[5])) / det
+    x2 = (b[0] * c2 + b[1] * (m[1] * m[6] - m[0] * m[7]) + b[2] * (m[0] * m[4] - m[1] * m[3])) / det
+    dy[qd + Y_PHI4] = x0
+    dy[qd + Y_PHI4 + 1] = x1
+    dy[qd + Y_PHI4 + 2] = x2
+    return True
 
 
 @compiled(inline="always")
@@ -448,7 +501,9 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
         cpos = sub(r4, p3B)
         cvel = sub(v4, v3B)
         quad = point_accel_quadratic(R3, w3, gq3, uB3)
-        known4 = (0.0, ydd4, zdd4)
+        # the slider's y, z: fixed by its guide, or free (columns 8, 9) where P has clearance
+        slide = p_free(jp)
+        known4 = (0.0, 0.0, 0.0) if slide else (0.0, ydd4, zdd4)
         for i in range(3):
             for k in range(NZ):
                 C[nc + i, k] = 0.0
@@ -459,6 +514,9 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
                                   + JrB[3 * i + 2] * gdd3 + quad[i])
             cons = max(cons, abs(cpos[i]))
         C[nc, 5] = 1.0
+        if slide:
+            C[nc + 1, 8] = 1.0
+            C[nc + 2, 9] = 1.0
         nc += 3
     return nc, cons
 
@@ -541,7 +599,8 @@ def kinetic_energy(p, y, t2, t3, t4):
 
 #: Local variables that Numba must type as plain int64: a constant argument would otherwise
 #: compile the callee once per value (a Literal specialisation).
-_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64}
+_NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64,
+                "joint_p": types.int64}
 
 
 @compiled(locals=_NOT_LITERAL)
@@ -592,6 +651,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
     joint_a = JOINT_A
     joint_b = JOINT_B
     joint_o = JOINT_O
+    joint_p = JOINT_P
     qd = Y_QD
     t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
     t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
@@ -607,7 +667,8 @@ def evaluate(t, y, model, dy, dg, full, solve):
     N2 = zero
     F3 = scale(p[P_M3], grav)
     N3 = zero
-    F4x = p[P_M4] * grav[0]
+    F4 = scale(p[P_M4], grav)
+    N4 = zero
     pdiss = 0.0
     if full:
         clear_contacts(dg)
@@ -645,7 +706,9 @@ def evaluate(t, y, model, dy, dg, full, solve):
         fB = cB.force
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
-        F4x -= fB[0]
+        F4 = sub(F4, fB)
+        if p_free(jp):
+            N4 = sub(N4, body_moment(R4, r4, cB.q_socket, fB))
         pdiss += cB.diss_power
         if full:
             store_contact(dg, joint_b, cB)
@@ -666,20 +729,35 @@ def evaluate(t, y, model, dy, dg, full, solve):
             for i in range(3):
                 dg[D_JOINT_FORCE + 3 * JOINT_O + i] = cO.force[i]
 
+    # joint P: ball = the slider's block, socket = the ground's guide (global frame)
+    if p_free(jp):
+        slider = body_state(y, t4, Y_R4, Y_PHI4)
+        fP, nP, dP = prismatic.contact(joint_p, model, slider, full, dg)
+        F4 = add(F4, fP)
+        N4 = add(N4, nP)
+        pdiss += dP
+        if not slider_rotation(y, p, t4, N4, dy):
+            return ST_SINGULAR
+
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
-    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy)
+    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy, not p_free(jp))
 
     # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
-    mr_inv, ok = rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz)
+    mr_inv, ok = rod_equations(F3, N3, F4[0], y, t3, J3, gdd3, vz)
     if not ok:
         return ST_SINGULAR
     # the crank's centroid in the bearing's plane: free where O has clearance (forces
     # gravity, O's contact and A's contact, inverse mass 1/m2), else held (zero, 0)
     vz[VZ_FORCE, 6] = F2[1] if o_free(jp) else 0.0
     vz[VZ_FORCE, 7] = F2[2] if o_free(jp) else 0.0
-    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(jp) else 0.0)
+    # the slider across its guide likewise, where P has clearance (forces gravity, P's and
+    # B's contacts)
+    vz[VZ_FORCE, 8] = F4[1] if p_free(jp) else 0.0
+    vz[VZ_FORCE, 9] = F4[2] if p_free(jp) else 0.0
+    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(jp) else 0.0,
+            1.0 / p[P_M4] if p_free(jp) else 0.0)
     nc, cons = ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
@@ -687,6 +765,9 @@ def evaluate(t, y, model, dy, dg, full, solve):
            vz[VZ_ZDD, 5])
     if o_free(jp):
         rdd2 = (rdd2[0], vz[VZ_ZDD, 6], vz[VZ_ZDD, 7])
+    if p_free(jp):
+        ydd4 = vz[VZ_ZDD, 8]
+        zdd4 = vz[VZ_ZDD, 9]
 
     # ---- assemble qdd ----
     for k in range(N_Q):
@@ -736,6 +817,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
         dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
         dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
         dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
+    if not p_free(jp):
+        # the ideal guide's reaction on the slider, from the slider's equations: across the
+        # guide only (the guide takes no load along it)
+        dg[D_JOINT_FORCE + 3 * JOINT_P] = 0.0
+        dg[D_JOINT_FORCE + 3 * JOINT_P + 1] = p[P_M4] * (ydd4 - grav[1]) + fB[1]
+        dg[D_JOINT_FORCE + 3 * JOINT_P + 2] = p[P_M4] * (zdd4 - grav[2]) + fB[2]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
     dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
@@ -749,11 +836,15 @@ def evaluate(t, y, model, dy, dg, full, solve):
         cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
     else:
         cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
-    cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
+    if not p_free(jp):
+        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        if j == JOINT_P:
+            rate = max(rate, dg[D_PRATE])   # the corners' own, prismatic.contact
             continue
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:

@@ -10,10 +10,11 @@ of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one
 registration without its module or docs).
 
 What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin in
-the rod), joint B (rod end in the slider) and joint O (crank journal in the ground's
-bearing) by name, with the attachment points written there as in :data:`JOINTS`, and
-removes the crank's rotation and the slider's guide analytically (eight free coordinates,
-the crank's two in the bearing plane counting only where O has clearance,
+the rod), joint B (rod end in the slider), joint O (crank journal in the ground's
+bearing) and joint P (the slider's block in the ground's guide) by name, with the attachment points written there as in :data:`JOINTS`, and
+removes the crank's rotation and the slider's guide analytically (ten free coordinates,
+the crank's two in the bearing plane counting only where O has clearance, the slider's two
+across its guide only where P has,
 ``dynamics.minv_apply``); tests/test_joints.py checks the table's attachments against the
 packed initial state.
 """
@@ -30,7 +31,8 @@ BODIES = (Body("crank", 0, 3), Body("rod", 6, 9), Body("slider", 12, 15),
           Body("ground", None, None))
 
 #: A point fixed in a body, in the body's frame [m]: ``length`` names the packed length it
-#: scales (``"l2"``: crank, ``"l3"``: rod, None: the point is the centroid) and
+#: scales (``"l2"``: crank, ``"l3"``: rod, ``"zs"``: the guide's height, None: the point is
+#: the centroid) and
 #: ``factors`` the three multiples of that length.
 Attachment = namedtuple("Attachment", ["body", "length", "factors"])
 
@@ -50,6 +52,11 @@ JOINTS = (
     # bearing at the origin, axis along global x
     Joint("O", "revolute", ball=Attachment("crank", "l2", (0.0, 0.0, 0.5)),
           socket=Attachment("ground", None, (0.0, 0.0, 0.0))),
+    # the slider's block (its "ball": the block's centroid) in the ground's guide along
+    # global x at the height z_s (the socket's attachment: the guide's axis at x = 0; the
+    # block moves freely along it, and its offset across it is (y4, z4 - z_s))
+    Joint("P", "prismatic", ball=Attachment("slider", None, (0.0, 0.0, 0.0)),
+          socket=Attachment("ground", "zs", (0.0, 0.0, 1.0))),
 )
 
 #: Joints of the mechanism.
@@ -60,7 +67,7 @@ INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
 
 #: Registered joint types: type name -> the module of ``clearsweep.core`` that implements
 #: it (that module's ``JOINT_TYPE`` is the name).
-JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute"}
+JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic"}
 
 #: What a joint-type module provides, compiled in that module (docs/architecture.md,
 #: "Joint types"): the gap geometry, the contact composed into a ``contact.ContactState``

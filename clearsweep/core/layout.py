@@ -69,8 +69,16 @@ J_EW_BASE = 7       # equivalent modulus E_w of the uncoated pair [Pa]
 J_MU_BASE = 8       # friction coefficient of the base [-]
 J_K_BASE = 9        # wear coefficient of the base [m^2/N]
 J_COAT = 10         # coating thickness [m]; inf = no coating to wear through
-J_LENGTH = 11       # bearing length L [m] (revolute joints; 0 for a spherical one)
-N_JP = 12
+J_LENGTH = 11       # bearing length L [m] (revolute joints), block length (prismatic); else 0
+# a prismatic joint's block in its guide (0 for the other types); its J_C is the smaller of
+# its two clearances, J_RI the corners' edge radius
+J_WIDTH = 12        # block width, across the guide along y [m]
+J_HEIGHT = 13       # block height, across the guide along z [m]
+J_CY = 14           # clearance between the block's sides and the guide's y walls [m]
+J_CZ = 15           # clearance between the block's top / bottom and the guide's z walls [m]
+J_X0 = 16           # start of the walls' wear maps along the guide (x) [m]
+J_XSPAN = 17        # length of the walls' wear maps along the guide [m]
+N_JP = 18
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
@@ -94,7 +102,17 @@ N_Y = 38
 # --- discrete contact state s[j, :] (one row per joint) -----------------------------------------
 S_DV0 = 0           # impact velocity of the current contact, 0 = none [m/s]
 S_BETA = 1          # contact angle beta at the last accepted step [rad]
-N_S = 2
+# a prismatic joint: each corner-wall pair's impact velocity (prismatic.SLOTS of them:
+# 8 corners, each against the y wall and the z wall it faces), 0 = not in contact [m/s]
+S_SLOT = 2
+P_SLOTS = 16
+N_S = S_SLOT + P_SLOTS
+
+# --- the wear of a step on its way to the map, cur[j, :] and pend[j, :] (rk4.merge_wear) ---
+# a spherical or revolute joint: sum V n (3), sum V, sum V A, the surface's scale; a
+# prismatic joint: per corner-wall pair k, sum V, sum V x, sum V a (x along the guide, a
+# across the wall) at 3 k .. 3 k + 2
+N_CAP = 3 * P_SLOTS
 
 # --- diagnostics vector d (one evaluation of the right-hand side) ----------
 D_SLIDER_ACC = 0
@@ -123,7 +141,8 @@ D_DFD = D_NGLOBAL + 3 * N_JOINTS        # per joint, dF_N/d delta [N/m]
 D_DFDD = D_DFD + N_JOINTS               # per joint, dF_N/d delta_dot [N s/m]
 D_WORN = D_DFDD + N_JOINTS              # per joint, 1.0 = coating worn through under the
                                         # contact point (base values used)
-N_D = D_WORN + N_JOINTS
+D_PRATE = D_WORN + N_JOINTS             # largest stiff rate of a prismatic joint's corners [1/s]
+N_D = D_PRATE + 1
 
 # --- running statistics m[w, :] (w = 0: whole run, 1: settled window) ---------
 # Updated at every accepted RK4 (sub-)step end, never from the saved output rows.

@@ -13,10 +13,10 @@ import math
 import numpy as np
 from numba import njit, types
 
-from . import revolute
+from . import prismatic, revolute
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
-from .dynamics import JOINT_O, NZ, VZ_ROWS, evaluate
+from .dynamics import JOINT_O, JOINT_P, NZ, VZ_ROWS, body_state, evaluate
 from .joints import BODIES, JOINTS
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
 from .kinematics import sub as vsub
@@ -46,6 +46,8 @@ from .layout import (
     I_SUBSTEPS,
     J_C,
     J_CLEARANCE,
+    J_CY,
+    J_CZ,
     J_LENGTH,
     J_RI,
     J_RJ,
@@ -60,6 +62,7 @@ from .layout import (
     M_TORQUE_PEAK,
     M_VIMP_MAX,
     N_ANGLE_BINS,
+    N_CAP,
     N_D,
     N_INFO,
     N_JOINTS,
@@ -87,11 +90,10 @@ from .layout import (
     P_STAB,
     P_THETA0,
     P_WEAR,
+    P_ZS,
     R_FIRST_IMPACT,
     R_KE_PEAK,
     R_RESIDUAL_MAX,
-    S_BETA,
-    S_DV0,
     SEC_OFFSET,
     SEC_RATE,
     SEC_SLIDER_ACC,
@@ -103,6 +105,8 @@ from .layout import (
     ST_OK,
     ST_PENETRATION,
     ST_UNSTABLE_STEP,
+    S_BETA,
+    S_DV0,
     T_KE_PEAK,
     T_RESIDUAL_MAX,
     T_WORK_MAX,
@@ -110,7 +114,9 @@ from .layout import (
     W_WHOLE,
     Y_CRANK_ANGLE,
     Y_DISS,
+    Y_PHI4,
     Y_QD,
+    Y_R4,
     Y_ROD_BETA,
     Y_SLIDER_X,
     Y_WORK,
@@ -521,7 +527,7 @@ def _attachment_row(att):
     three factors); -1 for a body outside the state (the ground: a fixed point, global
     frame) or for no length (the centroid)."""
     body = {b.name: b for b in BODIES if b.y_r is not None}.get(att.body)
-    lengths = {"l2": P_L2, "l3": P_L3}
+    lengths = {"l2": P_L2, "l3": P_L3, "zs": P_ZS}
     return (float(body.y_r) if body else -1.0, float(body.y_phi) if body else -1.0,
             float(lengths[att.length]) if att.length else -1.0) + tuple(map(float, att.factors))
 
@@ -668,17 +674,32 @@ def section_offsets(p, jp, ys, sec, k):
         d = mtv(R, vsub(pb, pos))
         rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
         c = jp[j, J_C]
-        for a in range(3):
-            sec[k, SEC_OFFSET + 3 * j + a] = d[a] / c
-            sec[k, SEC_RATE + 3 * j + a] = rate[a] / c
+        cy = c
+        cz = c
+        if j == JOINT_P:
+            # the block across its guide, over each direction's clearance: the position
+            # along the guide is free
+            d = (0.0, d[1], d[2])
+            rate = (0.0, rate[1], rate[2])
+            cy = jp[j, J_CY]
+            cz = jp[j, J_CZ]
+        sec[k, SEC_OFFSET + 3 * j] = d[0] / c
+        sec[k, SEC_RATE + 3 * j] = rate[0] / c
+        sec[k, SEC_OFFSET + 3 * j + 1] = d[1] / cy
+        sec[k, SEC_RATE + 3 * j + 1] = rate[1] / cy
+        sec[k, SEC_OFFSET + 3 * j + 2] = d[2] / cz
+        sec[k, SEC_RATE + 3 * j + 2] = rate[2] / cz
 
 
 @compiled
-def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
+def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, y):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
     projections, the worn volume, the step's cap ``cur`` and the undo buffer at row ``nbuf``
     of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
     ``model.s``, impact counts and velocities.
+
+    A prismatic joint's corners take their own rules (``prismatic.accept``, from the block's
+    state in y): their wear waits in ``cur`` until the step is accepted, and needs no undo.
 
     Returns (whether the contact state changed, so that the step-end evaluation must be
     redone; the next free undo-buffer row).
@@ -697,6 +718,11 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     changed = False
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
+            continue
+        if j == JOINT_P:
+            slider = body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+            if prismatic.accept(j, model, slider, hs, in_settled, stats, cur):
+                changed = True
             continue
         ddot = dg[D_DDOT + j]
         if dg[D_DELTA + j] > 0.0:
@@ -837,7 +863,7 @@ def work_shapes(max_level, npolar):
     return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, N_JOINTS, N_S),
             "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, NZ, NZ),
             "vz": (VZ_ROWS, NZ), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
-            "caps": (CAP_ROWS, N_JOINTS, 6), "scratch": (4 * npolar, 3)}
+            "caps": (CAP_ROWS, N_JOINTS, N_CAP), "scratch": (4 * npolar, 3)}
 
 
 @compiled(inline="always")
@@ -875,6 +901,11 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
         seated = False
         for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
+            if j == JOINT_P and jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+                prismatic.seat(j, model, body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1],
+                                                           y[Y_PHI4 + 2]), Y_R4, Y_PHI4))
+                seated = True
+                continue
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
                 s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
                 if j != JOINT_O:
@@ -888,11 +919,17 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
 
 
 @compiled
-def merge_wear(wmap, cur, pend, wmax, scratch):
+def merge_wear(wmap, cur, pend, wmax, scratch, jp, wvol):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
-    without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m]."""
+    without wear this step spreads its waiting cap. A prismatic joint's corners spread
+    theirs at once (``prismatic.deposit``, which adds it to the worn volume ``wvol``).
+    ``wmax`` keeps the deepest bin [m]."""
     for j in range(N_JOINTS):
+        if j == JOINT_P:
+            if jp[j, J_CLEARANCE] != 0.0:
+                wmax[j] = max(wmax[j], prismatic.deposit(wmap, j, jp, cur, wvol))
+            continue
         if cur[j, 3] > 0.0:
             if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
                 wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
@@ -908,7 +945,7 @@ def flush_all_wear(wmap, pend, wmax, scratch):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
     for j in range(N_JOINTS):
-        if pend[j, 3] > 0.0:
+        if j != JOINT_P and pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
 
@@ -969,7 +1006,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS),
                    np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-                   np.zeros((N_JOINTS, 6)), np.zeros((N_JOINTS, 6)),
+                   np.zeros((N_JOINTS, N_CAP)), np.zeros((N_JOINTS, N_CAP)),
                    np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
                    np.zeros(N_Y), np.zeros(N_Y))
     advance(case, t0, n_steps, save_every, True, out, work)
@@ -1108,7 +1145,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             nbuf = 0
             need = -1
             for j in range(N_JOINTS):
-                for i in range(6):
+                for i in range(N_CAP):
                     cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
@@ -1130,7 +1167,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     break
                 in_settled = ts + hs >= settle
                 changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                               ddot_prev)
+                                               ddot_prev, y)
                 note_first_impact(out.first, stats, ts + hs)
                 if changed:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -1172,8 +1209,11 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             if status != ST_UNSTABLE_STEP:
                 # the stopping attempt's wear stays in the projections and the worn
                 # volume: keep the map holding the same volume (an unstable step's last
-                # attempt was rejected and undone)
+                # attempt was rejected and undone); a prismatic joint's wear of the attempt
+                # reached neither
                 for j in range(N_JOINTS):
+                    if j == JOINT_P:
+                        continue
                     for i in range(5):
                         pend[j, i] += cur[j, i]
                     if cur[j, 3] > 0.0:
@@ -1181,7 +1221,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             break
         total += 1 << level
         deepest = max(deepest, level)
-        merge_wear(wmap, cur, pend, wmax, scratch)
+        merge_wear(wmap, cur, pend, wmax, scratch, jp, wvol)
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
         # its offsets from the state kept in k1sub (here, where few values are live: a GPU
         # thread's registers), and it counts

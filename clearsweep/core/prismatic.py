@@ -1,0 +1,432 @@
+"""The prismatic clearance joint: the slider's block in a guide with clearance
+(docs/physics.md section 3.7, docs/modelling.md).
+
+A joint type of the shape docs/architecture.md ("Joint types") describes, with one
+difference: a block touches its guide at up to eight corners at once, not at one point.
+The guide is fixed in the ground along the global x axis at the height z_s; its four walls
+lie at y = +-(b + c_y) and z - z_s = +-(h + c_z), where the block (length 2a along the
+guide, width 2b, height 2h) sits centred with the gaps c_y and c_z. The block slides along
+x, moves across the guide (y, z) and tilts (its three angles) within its clearances.
+
+Each of the block's eight corners faces one y wall and one z wall: 16 corner-wall pairs
+("slots", k = 2 corner + 0 for the y wall, + 1 for the z wall). A slot is in contact where
+its corner lies beyond its wall; its force is the contact law of a rounded corner of edge
+radius r_c on a flat wall, F_el = K delta^n with K = 4 E_w sqrt(r_c) / 3 and n = 3/2 (Hertz;
+the case's exponent under ``contact.elastic: hertz``), with the case's damping law on the
+slot's own impact velocity, and the improved Coulomb friction on the corner's slip over the
+wall (along and across the guide). Every slot's force acts at its corner.
+
+- :func:`slot_geometry`: a slot's corner, wall, outward normal and penetration against the
+  wall's worn position c + h, h read from the wall's wear map at the corner;
+- the wall maps: the joint's map rows split in four bands, one per wall (+y, -y, +z, -z),
+  each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
+  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`deposit`;
+- :func:`contact`: the sum over the slots (force, moment, dissipated power) and, at a
+  step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
+  total elastic energy, the guide's total force and the largest stiff rate of a slot;
+- :func:`accept`: an accepted step's corner impacts and the wear each slot leaves on its
+  wall's map (``rk4.accept_substep``), :func:`seat` the slots of a seated start;
+- :func:`contact_angle`, :func:`contact_area`: the Hertz patch of a rounded corner,
+  a = sqrt(r_c delta).
+"""
+
+import math
+
+from .compiled import compiled
+from .contact import (
+    contact_damping,
+    elastic_energy,
+    episode_impact_velocity,
+    friction_magnitude,
+    normal_force,
+    reachable_penetration,
+    stiff_rate,
+    surface,
+)
+from .kinematics import add, cross, dot, mtv, mv, scale, sub
+from .layout import (
+    D_CEFF,
+    D_DDOT,
+    D_DELTA,
+    D_DFD,
+    D_DFDD,
+    D_ECC,
+    D_FN,
+    D_FT,
+    D_HWEAR,
+    D_JOINT_FORCE,
+    D_NGLOBAL,
+    D_NORMAL,
+    D_OFFSET,
+    D_PRATE,
+    D_UEL,
+    D_VT,
+    D_WORN,
+    J_COAT,
+    J_CY,
+    J_CZ,
+    J_HEIGHT,
+    J_LENGTH,
+    J_RI,
+    J_WIDTH,
+    J_X0,
+    J_XSPAN,
+    M_IMPACTS,
+    M_VIMP_MAX,
+    P_AMPL,
+    P_DT,
+    P_DV0_MIN,
+    P_EXPONENT,
+    P_FEEDBACK,
+    P_FRICTION,
+    P_J4,
+    P_M4,
+    P_ONSET,
+    P_SLOTS,
+    P_V0,
+    P_V1,
+    P_WEAR,
+    P_ZS,
+    S_DV0,
+    S_SLOT,
+    W_SETTLED,
+    W_WHOLE,
+)
+from .wear import coating_worn
+
+#: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
+JOINT_TYPE = "prismatic"
+
+#: The corners' elastic exponent where the case keeps the paper's (spherical) law: Hertz's
+#: point contact of a rounded corner on a flat wall.
+CORNER_EXPONENT = 1.5
+
+#: Walls of the guide, in the order of their bands of the wear map.
+WALLS = ("+y", "-y", "+z", "-z")
+
+
+@compiled
+def corner_law(p):
+    """The exponent n of a corner's power law: the case's Hertz exponent under
+    ``contact.elastic: hertz``, else :data:`CORNER_EXPONENT`."""
+    law = p[P_EXPONENT]
+    return law if law != 0.0 else CORNER_EXPONENT
+
+
+@compiled
+def slot_corner(jp, j, k):
+    """Slot k's corner u in the block's frame [m] (its centroid the origin) and whether the
+    slot is the corner's y wall (else its z wall)."""
+    corner = k // 2
+    sx = 1.0 if corner & 1 else -1.0
+    sy = 1.0 if corner & 2 else -1.0
+    sz = 1.0 if corner & 4 else -1.0
+    return (0.5 * sx * jp[j, J_LENGTH], 0.5 * sy * jp[j, J_WIDTH],
+            0.5 * sz * jp[j, J_HEIGHT]), k % 2 == 0
+
+
+@compiled
+def wall_bin(jp, j, wall, x, across, nrow, ncol):
+    """(row, column) of the wear-map bin of wall ``wall`` (0..3: +y, -y, +z, -z) holding the
+    point x [m] along the guide and ``across`` [m] across the wall (z - z_s on a y wall, y on
+    a z wall); points beyond the map's ends fall in its end bins."""
+    band = nrow // 4
+    half = 0.5 * jp[j, J_HEIGHT] + jp[j, J_CZ] if wall < 2 else 0.5 * jp[j, J_WIDTH] + jp[j, J_CY]
+    col = int(math.floor((x - jp[j, J_X0]) / jp[j, J_XSPAN] * ncol))
+    row = int(math.floor((across + half) / (2.0 * half) * band))
+    return wall * band + min(max(row, 0), band - 1), min(max(col, 0), ncol - 1)
+
+
+@compiled
+def wall_bin_area(jp, j, wall, nrow, ncol):
+    """Area [m^2] of one bin of wall ``wall``'s wear map."""
+    band = nrow // 4
+    half = 0.5 * jp[j, J_HEIGHT] + jp[j, J_CZ] if wall < 2 else 0.5 * jp[j, J_WIDTH] + jp[j, J_CY]
+    return jp[j, J_XSPAN] / ncol * 2.0 * half / band
+
+
+@compiled
+def gap(jp, j, wmap, p, k, q):
+    """Gap geometry of slot k of prismatic joint j with its corner at the global point q:
+    (wall, n, across, row, col, h, worn, c_eff, delta): the wall's index and outward unit
+    normal, the corner's position across the wall [m], its map bin, the wall's wear depth
+    there h [m] (0 without feedback), whether its coating is worn through there, the local
+    clearance c + h and the penetration delta = (corner beyond the block's nominal face) -
+    c_eff [m] (negative: a gap)."""
+    corner = k // 2
+    zs = p[P_ZS]
+    if k % 2 == 0:
+        s = 1.0 if corner & 2 else -1.0
+        wall = 0 if s > 0.0 else 1
+        n = (0.0, s, 0.0)
+        out = s * q[1] - 0.5 * jp[j, J_WIDTH]
+        c = jp[j, J_CY]
+        across = q[2] - zs
+    else:
+        s = 1.0 if corner & 4 else -1.0
+        wall = 2 if s > 0.0 else 3
+        n = (0.0, 0.0, s)
+        out = s * (q[2] - zs) - 0.5 * jp[j, J_HEIGHT]
+        c = jp[j, J_CZ]
+        across = q[1]
+    row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
+    depth = wmap[j, row, col]
+    h = depth if p[P_FEEDBACK] != 0.0 else 0.0
+    coat = jp[j, J_COAT]
+    worn = coat < math.inf and coating_worn(depth, coat)
+    return wall, n, across, row, col, h, worn, c + h, out - c - h
+
+
+@compiled
+def contact_angle(pen, rc):
+    """Half-angle psi [rad] of the rounded corner's (edge radius r_c) surface inside the
+    Hertz patch at penetration ``pen``: sin psi = a / r_c, a = sqrt(r_c pen)."""
+    if pen <= 0.0:
+        return 0.0
+    return math.asin(min(1.0, math.sqrt(pen / rc)))
+
+
+@compiled
+def contact_area(pen, rc):
+    """Hertz patch pi a^2 = pi r_c pen [m^2] of a rounded corner on a flat wall."""
+    return math.pi * rc * max(pen, 0.0)
+
+
+@compiled
+def corner_mobility(p, u, nb):
+    """Inverse mass [1/kg] of the block's motion at body point u along the body-frame unit
+    vector nb, the block alone (its centroid free, its rotation free): 1/m4 +
+    (u x nb)^T J4^-1 (u x nb). The rod that joint B ties to the block only adds mass, so this
+    bounds the mechanism's value from above (a stiff rate at least as fast)."""
+    a = cross(u, nb)
+    return (1.0 / p[P_M4] + a[0] * a[0] / p[P_J4] + a[1] * a[1] / p[P_J4 + 1]
+            + a[2] * a[2] / p[P_J4 + 2])
+
+
+@compiled
+def slot_state(j, model, k, slider):
+    """Slot k's contact: (delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, wall,
+    across, row, col, h, worn, c_eff, u): the penetration [m] and approach rate [m/s], the
+    normal force with its elastic part and slopes, the force on the block [N] (normal and
+    friction) at the corner q, the wall's normal, the slip velocity and speed, the wall,
+    the corner's position across it and its map bin, the wear depth, the worn-through flag,
+    the local clearance and the corner in the block's frame. ``slider``: the block's body
+    state (r, v, R, w)."""
+    p = model.p
+    jp = model.jp
+    r4, v4, R4, w4 = slider
+    u, _ = slot_corner(jp, j, k)
+    ru = mv(R4, u)
+    q = add(r4, ru)
+    wall, n, across, row, col, h, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
+    vq = add(v4, mv(R4, cross(w4, u)))
+    ddot = dot(n, vq)
+    vt = sub(vq, scale(ddot, n))
+    slip = math.sqrt(dot(vt, vt))
+    zero = (0.0, 0.0, 0.0)
+    if delta <= 0.0:
+        return (delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, q, n, vt, slip, wall, across, row,
+                col, h, worn, c_eff, u)
+    ew, mu, _ = surface(jp, j, worn)
+    rc = jp[j, J_RI]
+    kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, rc, c_eff, corner_law(p), kappa)
+    force = scale(-fn, n)
+    if p[P_FRICTION] != 0.0 and slip > 0.0:
+        ft = friction_magnitude(mu, fn, slip, p[P_V0], p[P_V1])
+        force = add(force, scale(-ft / slip, vt))
+    return (delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, wall, across, row, col,
+            h, worn, c_eff, u)
+
+
+@compiled
+def slot_rate(j, model, k, st, R4):
+    """Largest stiff rate [1/s] of slot k in contact or closing within one output step
+    (docs/physics.md section 4), from the block's mobility at the corner
+    (:func:`corner_mobility`); 0 for a slot that stays open. ``st``: :func:`slot_state`."""
+    p = model.p
+    jp = model.jp
+    delta, ddot, fn, _, dfd, dfdd, _, _, n, _, slip, _, _, _, _, _, worn, c_eff, u = st
+    if not (delta > 0.0 or delta + ddot * p[P_DT] > 0.0):
+        return 0.0
+    inv_m = corner_mobility(p, u, mtv(R4, n))
+    m_eff = 1.0 / inv_m
+    rate = stiff_rate(m_eff, dfd, dfdd)
+    ew, mu, _ = surface(jp, j, worn)
+    rc = jp[j, J_RI]
+    law = corner_law(p)
+    if ddot > 0.0:
+        dpred = reachable_penetration(max(delta, 0.0), m_eff, ddot, c_eff, ew, rc, c_eff, law)
+        kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
+        _, _, dfp, dfdp = normal_force(dpred, ddot, c_eff, ew, rc, c_eff, law, kappa)
+        rate = max(rate, stiff_rate(m_eff, dfp, dfdp))
+    if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+        # the tangential inverse mass, bounded by the largest over directions
+        jmin = min(p[P_J4], min(p[P_J4 + 1], p[P_J4 + 2]))
+        inv_t = 1.0 / p[P_M4] + dot(u, u) / jmin
+        slope = 1.0 / (p[P_V1] - p[P_V0]) if slip < p[P_V1] else 1.0 / slip
+        rate = max(rate, mu * fn * slope * inv_t)
+    return rate
+
+
+@compiled
+def contact(j, model, slider, full, dg):
+    """The guide's action on the block of prismatic joint j: (force [N], moment about the
+    block's centroid in the block's frame [N m], power dissipated by damping and friction
+    [W]), summed over the slots. ``slider``: the block's body state (r, v, R, w).
+
+    With ``full`` (a step's end), joint j's diagnostics into dg: the contact values of the
+    slot that penetrates deepest (or, with none in contact, of the one nearest to contact),
+    the block's offset (0, y, z - z_s) from the guide's axis, the elastic energy of all
+    slots, the guide's total force on the block and the largest stiff rate of a slot
+    (D_PRATE)."""
+    p = model.p
+    r4, v4, R4, w4 = slider
+    force = (0.0, 0.0, 0.0)
+    moment = (0.0, 0.0, 0.0)
+    pdiss = 0.0
+    uel = 0.0
+    rate = 0.0
+    best = -math.inf
+    law = corner_law(p)
+    for k in range(P_SLOTS):
+        st = slot_state(j, model, k, slider)
+        delta = st[0]
+        if full:
+            rate = max(rate, slot_rate(j, model, k, st, R4))
+            if delta > best:
+                best = delta
+                store_slot(dg, j, st)
+        if delta <= 0.0:
+            continue
+        ddot = st[1]
+        fn = st[2]
+        fel = st[3]
+        f = st[6]
+        force = add(force, f)
+        moment = add(moment, cross(st[18], mtv(R4, f)))
+        # damping, and friction: the friction force's work on the corner's slip
+        pdiss += (fn - fel) * ddot - dot(add(f, scale(fn, st[8])), st[9])
+        if full:
+            ew, _, _ = surface(model.jp, j, st[16])
+            uel += elastic_energy(delta, st[17], ew, model.jp[j, J_RI], st[17], law)
+    if full:
+        dg[D_UEL + j] = uel
+        dg[D_PRATE] = rate
+        dg[D_ECC + j] = math.sqrt(r4[1] * r4[1] + (r4[2] - p[P_ZS]) * (r4[2] - p[P_ZS]))
+        dg[D_OFFSET + 3 * j] = 0.0
+        dg[D_OFFSET + 3 * j + 1] = r4[1]
+        dg[D_OFFSET + 3 * j + 2] = r4[2] - p[P_ZS]
+        for i in range(3):
+            dg[D_JOINT_FORCE + 3 * j + i] = force[i]
+    return force, moment, pdiss
+
+
+@compiled
+def store_slot(dg, j, st):
+    """Joint j's per-joint contact diagnostics from one slot's :func:`slot_state`."""
+    delta, ddot, fn, _, dfd, dfdd, force, _, n, _, slip, _, _, _, _, h, worn, c_eff, _ = st
+    dg[D_FN + j] = fn
+    ft = add(force, scale(fn, n))
+    dg[D_FT + j] = math.sqrt(dot(ft, ft))
+    dg[D_DELTA + j] = delta
+    dg[D_DDOT + j] = ddot
+    dg[D_VT + j] = slip
+    dg[D_CEFF + j] = c_eff
+    dg[D_HWEAR + j] = h
+    dg[D_DFD + j] = dfd
+    dg[D_DFDD + j] = dfdd
+    dg[D_WORN + j] = 1.0 if worn else 0.0
+    for i in range(3):
+        dg[D_NORMAL + 3 * j + i] = n[i]
+        dg[D_NGLOBAL + 3 * j + i] = n[i]
+
+
+@compiled
+def seat(j, model, slider):
+    """A seated start's slots: each corner that starts in contact begins its episode without
+    an impact (impact velocity at the floor)."""
+    p = model.p
+    s = model.s
+    for k in range(P_SLOTS):
+        st = slot_state(j, model, k, slider)
+        s[j, S_SLOT + k] = episode_impact_velocity(0.0, st[1], p[P_DV0_MIN], False) if st[0] > 0.0 else 0.0
+    s[j, S_DV0] = 0.0
+
+
+@compiled
+def accept(j, model, slider, hs, in_settled, stats, cur):
+    """An accepted (sub-)step of length hs ends with the block in state ``slider``: each
+    slot's contact episode (an onset is an impact, counted with its approach rate; the
+    impact velocity follows ``contact.episode_impact_velocity``), and the wear of each slot
+    in contact, Archard's V = k F_N |v_t| hs, into ``cur[j]`` (per slot: V, V x, V a;
+    spread on the wall's map once the step is accepted, :func:`deposit`).
+
+    Returns whether a slot's episode state changed (the step-end evaluation must be redone).
+    """
+    p = model.p
+    jp = model.jp
+    s = model.s
+    changed = False
+    wear_on = p[P_WEAR] != 0.0
+    any_contact = False
+    for k in range(P_SLOTS):
+        st = slot_state(j, model, k, slider)
+        delta = st[0]
+        ddot = st[1]
+        at = S_SLOT + k
+        if delta > 0.0:
+            any_contact = True
+            fn = st[2]
+            if wear_on and fn > 0.0:
+                _, _, k_wear = surface(jp, j, st[16])
+                vol = p[P_AMPL] * k_wear * fn * st[10] * hs
+                cur[j, 3 * k] += vol
+                cur[j, 3 * k + 1] += vol * st[7][0]
+                cur[j, 3 * k + 2] += vol * st[12]
+            dv0 = episode_impact_velocity(s[j, at], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
+            if s[j, at] == 0.0:
+                changed = True
+                stats[W_WHOLE, M_IMPACTS + j] += 1.0
+                stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j], ddot)
+                if in_settled:
+                    stats[W_SETTLED, M_IMPACTS + j] += 1.0
+                    stats[W_SETTLED, M_VIMP_MAX + j] = max(stats[W_SETTLED, M_VIMP_MAX + j],
+                                                           ddot)
+            elif dv0 != s[j, at]:
+                changed = True
+            s[j, at] = dv0
+        elif s[j, at] != 0.0:
+            s[j, at] = 0.0
+            changed = True
+    s[j, S_DV0] = 1.0 if any_contact else 0.0
+    return changed
+
+
+@compiled
+def deposit(wmap, j, jp, cur, wvol):
+    """Spread joint j's accepted step wear ``cur[j]`` on its wall maps, each slot's volume on
+    the bin of its volume-weighted mean position (a corner's Hertz patch, tens of microns
+    across, lies well inside a bin); add it to the worn volume ``wvol[j]`` and clear it.
+    Each bin deepens by its volume over its area, so sum(depth * bin area) = volume to
+    rounding. Returns the largest depth of a bin written [m]."""
+    nrow = wmap.shape[1]
+    ncol = wmap.shape[2]
+    top = 0.0
+    for k in range(P_SLOTS):
+        vol = cur[j, 3 * k]
+        if vol > 0.0:
+            corner = k // 2
+            if k % 2 == 0:
+                wall = 0 if corner & 2 else 1
+            else:
+                wall = 2 if corner & 4 else 3
+            row, col = wall_bin(jp, j, wall, cur[j, 3 * k + 1] / vol, cur[j, 3 * k + 2] / vol,
+                                nrow, ncol)
+            wmap[j, row, col] += vol / wall_bin_area(jp, j, wall, nrow, ncol)
+            top = max(top, wmap[j, row, col])
+            wvol[j] += vol
+        cur[j, 3 * k] = 0.0
+        cur[j, 3 * k + 1] = 0.0
+        cur[j, 3 * k + 2] = 0.0
+    return top
