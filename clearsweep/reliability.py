@@ -143,7 +143,7 @@ def member_config(cfg: Config) -> Config:
     rc = cfg.reliability
     if not rc.any:
         return cfg
-    from .config import resolve_materials
+    from .config import PrismaticJointConfig, resolve_materials
     from .params import surface_material
 
     draws = member_draws(cfg)
@@ -152,7 +152,7 @@ def member_config(cfg: Config) -> Config:
     for j, (name, joint) in enumerate(cfg.joints.items()):
         if joint.clearance <= 0.0:
             continue
-        if rc.clearance_tolerance > 0.0 and name == "P":
+        if rc.clearance_tolerance > 0.0 and isinstance(joint, PrismaticJointConfig):
             # the guide's two clearances move together by the member's draw
             shift = float(draws.clearance[j]) - joint.clearance
             values["joints__P__clearance_y"] = joint.clearance_y + shift

@@ -150,7 +150,8 @@ CASE_VARIABLES.update(POINCARE)
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
     "time": VariableSpec(("time",), "s", "time"),
-    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank bearing, revolute; P: slider guide, prismatic)"),
+    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank "
+                                          "bearing, revolute; P: slider guide, prismatic)"),
     "axis": VariableSpec(("axis",), "", "Cartesian axis"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre",
                           "measured from the socket frame's +z axis"),

@@ -11,10 +11,11 @@ registration without its module or docs).
 
 What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin in
 the rod), joint B (rod end in the slider), joint O (crank journal in the ground's
-bearing) and joint P (the slider's block in the ground's guide) by name, with the attachment points written there as in :data:`JOINTS`, and
-removes the crank's rotation and the slider's guide analytically (ten free coordinates,
-the crank's two in the bearing plane counting only where O has clearance, the slider's two
-across its guide only where P has,
+bearing) and joint P (the slider's block in the ground's guide) by name, with the
+attachment points written there as in :data:`JOINTS`, and removes the crank's rotation
+and the slider's guide analytically (ten free coordinates, the crank's two in the bearing
+plane counting only where O has clearance, the slider's two across its guide only where
+P has,
 ``dynamics.minv_apply``); tests/test_joints.py checks the table's attachments against the
 packed initial state.
 """
