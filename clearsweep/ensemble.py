@@ -135,18 +135,27 @@ def welch_interval(mean1: float, std1: float, n1: int, mean2: float, std2: float
     Welch-Satterthwaite degrees of freedom; two ensembles without spread (std 0) give
     the exact difference as both bounds. NaN bounds when either has fewer than two members.
     """
+    return contrast_interval([mean1, mean2], [std1, std2], [n1, n2], [-1.0, 1.0], level)
+
+
+def contrast_interval(means, stds, counts, weights,
+                      level: float = CONFIDENCE_LEVEL) -> tuple[float, float, float]:
+    """A contrast sum(w_i m_i) of independent ensemble means and its t confidence interval:
+    variance sum(w_i^2 s_i^2 / n_i), Welch-Satterthwaite degrees of freedom (two means with
+    weights -1, +1: :func:`welch_interval`). Ensembles without spread give the exact value as
+    both bounds; NaN bounds where one has fewer than two members."""
     from scipy import stats  # imported here: 0.5 s that a plain run does not need
 
-    diff = mean2 - mean1
-    if n1 < 2 or n2 < 2 or not all(map(math.isfinite, (mean1, mean2, std1, std2))):
-        return diff, math.nan, math.nan
-    v1, v2 = std1 ** 2 / n1, std2 ** 2 / n2
-    se2 = v1 + v2
+    value = float(sum(w * m for w, m in zip(weights, means)))
+    if min(counts) < 2 or not all(map(math.isfinite, (*means, *stds))):
+        return value, math.nan, math.nan
+    parts = [w * w * s * s / n for w, s, n in zip(weights, stds, counts)]
+    se2 = sum(parts)
     if se2 == 0.0:
-        return diff, diff, diff
-    df = se2 ** 2 / (v1 ** 2 / (n1 - 1) + v2 ** 2 / (n2 - 1))
+        return value, value, value
+    df = se2 ** 2 / sum(v * v / (n - 1) for v, n in zip(parts, counts))
     half = float(stats.t.ppf(0.5 + 0.5 * level, df)) * math.sqrt(se2)
-    return diff, diff - half, diff + half
+    return value, value - half, value + half
 
 
 def distinguishable(low: float, high: float) -> bool | None:

@@ -230,8 +230,15 @@ def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
     for joint in ds["joint"].values:
         key = f"joints.{value_text(joint)}.clearance"
         swept = next((c for c in ds.coords.values() if c.attrs.get("config_key") == key), None)
+        # a guide's two clearances (joints.P.clearance_y, _z): the smaller one
+        pair = [c for c in ds.coords.values() if c.attrs.get("config_key") in (key + "_y", key + "_z")]
         if swept is not None:
             per_joint.append(xr.DataArray(swept.values.astype(float), dims=swept.dims))
+        elif pair:
+            arrays = [xr.DataArray(c.values.astype(float), dims=c.dims) for c in pair]
+            if len(arrays) == 1 and value_text(joint) in configured:
+                arrays.append(xr.DataArray(configured[value_text(joint)]))
+            per_joint.append(xr.apply_ufunc(np.minimum, *arrays) if len(arrays) == 2 else arrays[0])
         elif value_text(joint) in configured:
             per_joint.append(xr.DataArray(configured[value_text(joint)]))
         else:

@@ -15,6 +15,7 @@ from ..ensemble import MEMBER_DIM
 from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..summary import case_summary
+from .factorial import factorial_lines
 from .selection import (
     _MISSING_TEXT,
     design_dims,
@@ -338,6 +339,7 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             lines.append(f"    {spread}")
     if not ensemble:
         lines += _sweep_motion_lines(ds, case_summary(ds), usable, dims)
+    lines += factorial_lines(ds)
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")
     text = "\n".join(lines)

@@ -86,6 +86,70 @@ def _draw_bearing_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray
                        f"exaggerated", fontsize="small", pad=12)
 
 
+def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
+    """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
+    the run's config (``params.guide_row``: the walls' bins along the guide and across each
+    wall); None where the file's config cannot be read."""
+    import yaml
+
+    from ..config import ConfigError, load_config
+    from ..core import layout as L
+    from ..params import PRESETS, guide_row
+
+    for name in ("config", "sweep_config"):
+        try:
+            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
+            base = doc.get("base", doc) if name == "sweep_config" else doc
+            cfg = load_config(base)
+        except (yaml.YAMLError, ConfigError, AttributeError, TypeError, ValueError):
+            continue
+        row = np.zeros(L.N_JP)
+        guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
+        return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
+                0.5 * row[L.J_WIDTH] + row[L.J_CY])
+    return None
+
+
+def _draw_guide_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
+                    unit: str, label: str, joint: str, extent) -> None:
+    """A prismatic joint's wall maps (docs/physics.md 5.7: the map's rows in four bands, one
+    per wall +y, -y, +z, -z, each across the wall by along the guide): the two y walls in
+    the first panel, the two z walls in the second, against the position along the guide
+    [mm] (bins where the config cannot be read) and across the wall [mm]."""
+    rows, cols, first = at
+    band = depth.sizes["polar"] // 4
+    ncol = depth.sizes["azimuth"]
+    norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
+    for k, walls in enumerate((("+y", "-y"), ("+z", "-z"))):
+        ax = fig.add_subplot(rows, cols, first + k)
+        if extent is not None:
+            x0, span, half_y_wall, half_z_wall = extent
+            half = half_y_wall if k == 0 else half_z_wall
+            x_edges = 1e3 * (x0 + span * np.arange(ncol + 1) / ncol)
+            a_edges = 1e3 * half * (2.0 * np.arange(band + 1) / band - 1.0)
+            xlabel, across = "position along the guide x [mm]", "across the wall [mm]"
+        else:
+            x_edges = np.arange(ncol + 1.0)
+            a_edges = np.arange(band + 1.0)
+            xlabel, across = f"bin along the guide [{DIMENSIONLESS}]", f"bin across [{DIMENSIONLESS}]"
+        # one wall above the other, a gap between them
+        w0, w1 = (0, 1) if k == 0 else (2, 3)
+        upper = depth.values[w0 * band:(w0 + 1) * band]
+        lower = depth.values[w1 * band:(w1 + 1) * band]
+        height = a_edges[-1] - a_edges[0]
+        mesh = ax.pcolormesh(x_edges, a_edges + 0.6 * height, upper, cmap="viridis", norm=norm,
+                             shading="flat")
+        ax.pcolormesh(x_edges, a_edges - 0.6 * height, lower, cmap="viridis", norm=norm,
+                      shading="flat")
+        ax.set_yticks([0.6 * height + 0.5 * (a_edges[0] + a_edges[-1]),
+                       -0.6 * height + 0.5 * (a_edges[0] + a_edges[-1])], [walls[0], walls[1]])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"wall ({across})")
+        ax.set_title(f"joint {joint}: guide walls {walls[0]} and {walls[1]} (max {peak:.3g} {unit})",
+                     fontsize="small")
+        fig.colorbar(mesh, ax=ax).set_label(label)
+
+
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     _require(ds, ("wear_map",), "--kind wear-map")
     ds = _one_case(ds, "wear-map")
@@ -108,6 +172,10 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         if JOINT_TYPES.get(value_text(joint)) == "revolute":
             _draw_bearing_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit, label,
                               value_text(joint))
+            continue
+        if JOINT_TYPES.get(value_text(joint)) == "prismatic":
+            _draw_guide_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit, label,
+                            value_text(joint), guide_extent(ds))
             continue
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
         ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
@@ -139,8 +207,11 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(label)
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
     left_out = f"\nnot drawn: joint {', '.join(empty)}, no wear" if empty else ""
-    bearing = any(JOINT_TYPES.get(value_text(j)) == "revolute" for j in joints)
-    fig.suptitle(("Socket and bearing wear depth" if bearing else "Socket wear depth")
+    kinds = {JOINT_TYPES.get(value_text(j)) for j in joints}
+    surfaces = ["Socket"] + [name for kind, name in (("revolute", "bearing"), ("prismatic", "guide"))
+                             if kind in kinds]
+    fig.suptitle((" and ".join(surfaces) if len(surfaces) < 3
+                  else ", ".join(surfaces[:-1]) + " and " + surfaces[-1]) + " wear depth"
                  + (f", snapshot {snapshot}" if snapshot else "") + left_out)
 
 

@@ -1,0 +1,166 @@
+"""A sweep that switches joints' clearance on and off, read as a two-level factorial design
+(docs/mixed_clearances.md): which joint's clearance drives the slider's vibration, which
+drives each joint's wear, and whether two clearances together do what each does alone.
+
+A joint is a factor where its clearance (``selection.joint_clearances``) takes two values
+along one design dimension, 0 (ideal) and one > 0. Over the other design dimensions (the
+other factors and any further axis, such as the speed) every cell counts once:
+
+- the main effect of joint j on a metric: the mean over the cells of (j with clearance) -
+  (j ideal);
+- the interaction of joints i and j: the mean over the other cells of
+  m(i, j) - m(i) - m(j) + m(none), how far the pair's effect is from the sum of each
+  alone (0: the effects add).
+
+With an ensemble (a ``member`` dimension) each is formed member by member (every design's
+member k draws the same perturbation) and given with the 95 % t interval of the members'
+values; without one, the value alone.
+"""
+
+from __future__ import annotations
+
+import itertools
+import textwrap
+
+import numpy as np
+import xarray as xr
+
+from ..ensemble import distinguishable
+from .selection import design_dims, is_ensemble, joint_clearances, value_text
+
+#: What the report reads: the slider's vibration, and each joint's wear.
+VIBRATION = ("slider_acceleration_rms_settled", "slider RMS acceleration, settled")
+WEAR = ("wear_volume", "worn volume")
+
+
+def clearance_factors(ds: xr.Dataset) -> dict[str, tuple[str, int, int]]:
+    """Joint name -> (its design dimension, index where ideal, index with clearance), for
+    each joint whose clearance is 0 at one position and > 0 at the other of one dimension
+    and does not vary along another."""
+    clearances = joint_clearances(ds)
+    if clearances is None:
+        return {}
+    dims = design_dims(ds)
+    out = {}
+    for joint in clearances["joint"].values:
+        gap = clearances.sel(joint=joint)
+        varying = [d for d in gap.dims if d in dims and gap.sizes[d] > 1
+                   and not bool((gap.max(d) == gap.min(d)).all())]
+        if len(varying) != 1 or ds.sizes[varying[0]] != 2:
+            continue
+        d = varying[0]
+        values = gap.isel({k: 0 for k in gap.dims if k != d}).values
+        if values.min() == 0.0 < values.max():
+            out[value_text(joint)] = (d, int(np.argmin(values)), int(np.argmax(values)))
+    return out
+
+
+def _values(ds: xr.Dataset, name: str, joint: str | None) -> xr.DataArray:
+    """Metric ``name`` (joint ``joint``'s) of every case, NaN where a case is not ok."""
+    values = ds[name]
+    if joint is not None:
+        values = values.sel(joint=joint)
+    if "status" in ds:
+        values = values.where(ds["status"].astype(str) == "ok")
+    return values
+
+
+def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tuple[int, int]],
+             factors: dict[str, tuple[str, int, int]], where: dict[str, int] | None = None):
+    """The contrast of metric ``name`` over the factors in ``terms`` (joint -> (+1 index,
+    -1 index); the sign of a cell is the product of its terms': a main effect has one term,
+    an interaction two), averaged over every cell of the other design dimensions but those
+    fixed by ``where`` (dim -> index) and over the cells where every value is finite.
+
+    An ensemble's members draw the same perturbation in every design (``params.
+    member_perturbation``: the seed and the member number alone), so the contrast is formed
+    member by member and its 95 % t interval is that of the members' contrasts (paired:
+    the scatter common to the designs cancels). Returns (value, low, high), NaN bounds
+    without members, or None where no cell has values."""
+    from scipy import stats
+
+    values = _values(ds, name, joint)
+    where = dict(where or {})
+    term_dims = [factors[j][0] for j in terms]
+    others = [d for d in design_dims(ds) if d not in term_dims and d not in where]
+    total = 0.0
+    usable = 0
+    for cell in itertools.product(*(range(ds.sizes[d]) for d in others)):
+        part = 0.0
+        for signs in itertools.product((0, 1), repeat=len(terms)):
+            at = dict(where, **dict(zip(others, cell)))
+            sign = 1.0
+            for (j, (on, off)), s in zip(terms.items(), signs):
+                at[factors[j][0]] = on if s else off
+                sign *= 1.0 if s else -1.0
+            part = part + sign * values.isel(at)
+        if not bool(np.isfinite(part).all()):
+            continue
+        total = total + part
+        usable += 1
+    if not usable:
+        return None
+    per_member = np.atleast_1d(np.asarray(total, dtype=float)) / usable
+    value = float(per_member.mean())
+    n = per_member.size
+    if not is_ensemble(ds) or n < 2:
+        return value, float("nan"), float("nan")
+    half = float(stats.t.ppf(0.975, n - 1)) * float(per_member.std(ddof=1)) / np.sqrt(n)
+    return value, value - half, value + half
+
+
+def _effect_text(value: float, low: float, high: float, units: str) -> str:
+    verdict = distinguishable(low, high)
+    interval = f" [{low:+.3g}, {high:+.3g}]" if np.isfinite(low) else ""
+    tail = {True: "", False: ", within the spread", None: ""}[verdict]
+    return f"{value:+.3g}{interval} {units}{tail}".rstrip()
+
+
+def factorial_lines(ds: xr.Dataset) -> list[str]:
+    """The report's section on a clearance factorial design (empty without two factors)."""
+    factors = clearance_factors(ds)
+    if len(factors) < 2 or VIBRATION[0] not in ds:
+        return []
+    names = list(factors)
+    rest = [d for d in design_dims(ds) if d not in {f[0] for f in factors.values()}]
+    over = f" and over {', '.join(rest)}" if rest else ""
+    ensemble = is_ensemble(ds)
+    head = (f"Clearance as a two-level design over joints {', '.join(names)}: effects averaged over "
+            f"the other joints' settings{over}" + (" (95 % intervals from the members)" if ensemble else "")
+            + ":")
+    lines = ["", *textwrap.wrap(head, width=100, subsequent_indent="  ")]
+    metrics = [(VIBRATION[0], None, VIBRATION[1], None)]
+    if WEAR[0] in ds:
+        metrics += [(WEAR[0], j, f"{WEAR[1]} at {j}", j) for j in names]
+    for name, joint, label, only in metrics:
+        units = ds[name].attrs.get("units", "")
+        # a joint's wear exists where it has clearance: its own factor held on
+        where = {factors[only][0]: factors[only][2]} if only else {}
+        lines.append(f"  {label} [{units}]" + (f" (cases with clearance at {only})" if only else "")
+                     + ":")
+        effects = {}
+        for j in names:
+            if j == only:
+                continue
+            on_off = {j: (factors[j][2], factors[j][1])}
+            found = contrast(ds, name, joint, on_off, factors, where)
+            if found is None:
+                continue
+            effects[j] = found
+            lines.append(f"    clearance at {j}: {_effect_text(*found, units)}")
+        standing = {k: v for k, v in effects.items() if distinguishable(v[1], v[2]) is not False}
+        if standing:
+            top = max(standing, key=lambda k: abs(standing[k][0]))
+            lines.append(f"    largest effect: clearance at {top}")
+        elif effects:
+            lines.append("    no joint's clearance changes it beyond the members' spread")
+        for a, b in itertools.combinations([j for j in names if j != only], 2):
+            found = contrast(ds, name, joint, {a: (factors[a][2], factors[a][1]),
+                                               b: (factors[b][2], factors[b][1])}, factors, where)
+            if found is None:
+                continue
+            word = {True: "they do not add", False: "they add", None: ""}[distinguishable(*found[1:])]
+            lines.append(f"    {a} and {b} together minus each alone: "
+                         f"{_effect_text(*found, units).replace(', within the spread', '')}"
+                         + (f"; {word}" if word else ""))
+    return lines
