@@ -78,12 +78,17 @@ SWEEP_START_S = 6.0
 SECONDS_PER_CASE = 0.05
 
 
-def sweep_time_text(steps: float, cases: int, workers: int | None = None) -> str:
-    """The estimated wall time of a sweep of ``cases`` cases and ``steps`` RK4 steps on
+def sweep_seconds(steps: float, cases: int, workers: int | None = None) -> float:
+    """The estimated wall time [s] of a sweep of ``cases`` cases and ``steps`` RK4 steps on
     ``workers`` cores: :func:`time_text`'s steps plus the fixed costs (start, cache load)
     and the cost per case (part writing, assembly)."""
+    return SWEEP_START_S + (cases * SECONDS_PER_CASE + steps * SECONDS_PER_STEP) / (workers or 1)
+
+
+def sweep_time_text(steps: float, cases: int, workers: int | None = None) -> str:
+    """:func:`sweep_seconds` in words, with the costs it assumes."""
     share = workers or 1
-    seconds = SWEEP_START_S + (cases * SECONDS_PER_CASE + steps * SECONDS_PER_STEP) / share
+    seconds = sweep_seconds(steps, cases, workers)
     where = f"on {share} worker{'s' if share != 1 else ''}" if workers else "on one core"
     return (f"about {duration_text(seconds)} {where} (at {SECONDS_PER_STEP * 1e6:g} us per "
             f"step, {SECONDS_PER_CASE:g} s per case and {SWEEP_START_S:g} s to start)")

@@ -387,6 +387,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         CheckpointError,
         LifeInterrupted,
         LifeState,
+        block_steps,
         checkpoint_path_for,
         life,
         life_block,
@@ -394,6 +395,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
         life_stop_hint,
         life_summary_text,
         life_time_left,
+        life_time_text,
     )
 
     if cfg.ensemble.members > 1:    # one life run follows one case: it would run member 0 alone
@@ -408,6 +410,9 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
                      derived=(CHECKPOINT_SUFFIX, CHECKPOINT_SUFFIX + ".lock"))
     checkpoint = checkpoint_path_for(out)
     replacing = _replacing(out, "config", dump_config(cfg))
+    if not quiet:       # the plan's time, as a sweep prints its plan before it runs
+        click.echo(f"clearsweep: a life run of at most {cfg.life.max_blocks:,} blocks: "
+                   f"{life_time_text(cfg, block_steps(cfg))}", err=True)
     announce_compile(quiet, [cfg.solver.method])
 
     started, blocks = time.perf_counter(), [0]

@@ -8,8 +8,8 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx`` prints them (tests/test_ptx.py checks them in CI;
-benchmarks/README.md records them).
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY]`` prints them, keeping the PTX text in
+PTX_FILE if given (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
 """
 
 from __future__ import annotations
@@ -146,14 +146,42 @@ def ptxas_report(ptx: str, arch: str = "sm_90") -> PtxasReport:
     return parse_ptxas(log, arch, seconds)
 
 
-def main() -> None:
-    """Print the figures of run_cases for sm_90 (argument: a path to keep the PTX in)."""
+def parse_args(argv: list[str] | None = None):
+    """The command line of ``python -m clearsweep.ptx``: an optional path to keep the PTX in
+    and the compute capability to build for."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m clearsweep.ptx",
+        description="Compile core.device.run_cases to PTX for a GPU without one (numba-cuda's "
+                    "NVVM, about a minute) and print ptxas' resource figures per thread: "
+                    "registers, stack frame, spill stores and loads.")
+    parser.add_argument("output", nargs="?", type=Path, default=None,
+                        help="a file to keep the PTX text in (default: not kept)")
+    parser.add_argument("--arch", default=f"sm_{DEFAULT_CC[0]}{DEFAULT_CC[1]}",
+                        help="the compute capability to build for, as sm_XY "
+                             "(default: %(default)s, an H100)")
+    args = parser.parse_args(argv)
+    match = re.fullmatch(r"sm_(\d+)(\d)", args.arch)
+    if match is None:
+        parser.error(f"--arch: expected sm_XY (for example sm_90), got {args.arch!r}")
+    args.cc = (int(match.group(1)), int(match.group(2)))
+    if args.output is not None and args.output.is_dir():
+        parser.error(f"output: {str(args.output)!r} is a folder; give a file path for the PTX")
+    return args
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Print the figures of run_cases (``--help``: the arguments; argv: sys.argv[1:] by
+    default)."""
+    args = parse_args(argv)
     began = time.perf_counter()
-    ptx = compile_run_cases_ptx()
+    ptx = compile_run_cases_ptx(args.cc)
     print(f"PTX: {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
-    if len(sys.argv) > 1:
-        Path(sys.argv[1]).write_text(ptx)
-    print(ptxas_report(ptx).line())
+    if args.output is not None:
+        args.output.write_text(ptx)
+        print(f"PTX kept in {args.output}")
+    print(ptxas_report(ptx, args.arch).line())
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ when a limit is crossed, or after ``life.max_blocks`` blocks.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
 
 from .budget import (
     MAX_OUTPUT_BYTES,
+    SECONDS_PER_STEP,
     Estimate,
     check_budget,
     duration_text,
@@ -42,7 +44,7 @@ from .budget import (
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import history_line, lock_exclusively, replaced_on_success, with_command_line
-from .params import Packed, identity_changes, pack, run_identity
+from .params import Packed, identity_changes, joint_configs, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import format_length, length_unit
 from .version import __version__
@@ -69,11 +71,17 @@ def row_stride(n_block: int, most: int = BLOCK_ROW_STRIDE) -> int:
     return next(s for s in range(min(most, n_block), 0, -1) if n_block % s == 0)
 
 
-def block_config(cfg: Config) -> Config:
-    """The config of one dynamic block of a life run: ``life.block_revolutions`` revolutions
-    in whole RK4 steps, with rows every few steps (the motion error is read from them)."""
+def block_steps(cfg: Config) -> int:
+    """RK4 steps of one dynamic block of a life run: ``life.block_revolutions`` revolutions
+    in whole steps."""
     period = 60.0 / cfg.mechanism.speed_rpm
-    n_block = int(math.ceil(cfg.life.block_revolutions * period / cfg.solver.dt - 1e-9))
+    return int(math.ceil(cfg.life.block_revolutions * period / cfg.solver.dt - 1e-9))
+
+
+def block_config(cfg: Config) -> Config:
+    """The config of one dynamic block of a life run: :func:`block_steps` steps, with rows
+    every few steps (the motion error is read from them)."""
+    n_block = block_steps(cfg)
     return cfg.replace(**{"solver__duration": n_block * cfg.solver.dt,
                           "solver__save_every": row_stride(n_block)})
 
@@ -153,6 +161,104 @@ def check_life_cost(cfg: Config, block: Estimate, *, allow_large: bool = False,
                     f"block's {format_bytes(block.output_bytes)})")
 
 
+#: The limits whose crossing follows the deepest bin's wear depth alone: what a plan can
+#: forecast before a run (:func:`forecast_blocks`); the others depend on the dynamics.
+DEPTH_LIMITS = ("clearance_growth", "wear_through")
+
+
+@dataclass(frozen=True)
+class LifeForecast:
+    """The blocks a life run is expected to take, before it runs (:func:`forecast_blocks`).
+
+    Attributes
+    ----------
+    blocks : int
+        Blocks expected: to the wear limits in ``limits`` if wear sets the pace, at most
+        ``bound``.
+    bound : int
+        Most blocks: ``life.max_blocks``.
+    limits : tuple of str
+        The limits of :data:`DEPTH_LIMITS` the forecast walks to; empty where the run
+        watches none of them (or nothing wears): then ``blocks == bound``.
+    """
+
+    blocks: int
+    bound: int
+    limits: tuple[str, ...]
+
+    def describe(self, cfg: Config) -> str:
+        """``"100 blocks to the wear limit (life.max_clearance_growth) at jumps of 1 % of the
+        clearance, fewer if it reaches 1e+06 revolutions first"``."""
+        lc = cfg.life
+        if not self.limits:
+            return (f"{self.blocks:,} blocks (no wear limit watched to forecast from: "
+                    "life.cycles or a dynamic limit ends it, at a pace the plan cannot know)")
+        coating = (f" or {100 * lc.jump_coating_fraction:.3g} % of the coating left"
+                   if "wear_through" in self.limits else "")
+        return (f"{self.blocks:,} blocks to the wear limit{'s' if len(self.limits) > 1 else ''} "
+                f"({limit_keys(self.limits)}) at jumps of {100 * lc.jump_clearance_fraction:.3g} % "
+                f"of the clearance{coating}, fewer if it reaches {lc.cycles:.4g} revolutions or "
+                "another limit first")
+
+
+def limit_keys(names) -> str:
+    """``"life.max_clearance_growth, life.stop_at_wear_through"``: the config keys of the
+    limits ``names`` (:data:`CRITERIA` and ``wear_through``)."""
+    return ", ".join("life.stop_at_wear_through" if name == "wear_through" else CRITERIA[name][0]
+                     for name in names)
+
+
+def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
+    """The blocks the life run ``cfg`` takes if wear sets its pace, before it runs.
+
+    A jump grows the bin whose wear rate limits it by exactly what :func:`jump_revolutions`
+    allows (``life.jump_clearance_fraction`` of the clearance, less while coating remains),
+    whatever the wear rate; taking that bin for the deepest one, the depth after each
+    block follows from the config alone, and with it the block at which a limit of
+    :data:`DEPTH_LIMITS` is crossed: ``life.max_clearance_growth`` and, with
+    ``life.stop_at_wear_through``, the coating's thickness. Each clearance joint is walked
+    as if it set the pace. ``every_limit``: a reliability member, which runs until every
+    watched limit is crossed (the dynamic ones taken to come no later); else the first.
+
+    The forecast is at most ``life.max_blocks``, and at most the blocks that reach
+    ``life.cycles`` without a jump. A run that reaches ``life.cycles`` (its wear rate
+    decides, which only a run shows) or a dynamic limit first takes fewer blocks.
+    """
+    lc = cfg.life
+    most = min(lc.max_blocks, max(1, math.ceil(lc.cycles / lc.block_revolutions - 1e-9)))
+    watched = [name for name in DEPTH_LIMITS
+               if (lc.max_clearance_growth is not None if name == "clearance_growth"
+                   else lc.stop_at_wear_through)]
+    joints = tuple((j.clearance, j.coating_thickness if j.coating != "none" else math.inf)
+                   for _, j in joint_configs(cfg) if j.clearance > 0.0)
+    if not (cfg.wear.enabled and joints and watched):
+        return LifeForecast(lc.max_blocks, lc.max_blocks, ())
+    per_limit = []
+    for name in watched:
+        found = [_blocks_to_depth(c, coat, lc.max_clearance_growth if name == "clearance_growth"
+                                  else coat, lc.jump_clearance_fraction,
+                                  lc.jump_coating_fraction, most) for c, coat in joints]
+        per_limit.append(min(found))
+    return LifeForecast(max(per_limit) if every_limit else min(per_limit), lc.max_blocks,
+                        tuple(watched))
+
+
+@functools.lru_cache(maxsize=1024)
+def _blocks_to_depth(clearance: float, coating: float, depth: float, clearance_fraction: float,
+                     coating_fraction: float, most: int) -> int:
+    """Blocks until the deepest bin of a joint reaches ``depth`` [m] (at most ``most``; inf
+    depth: ``most``), each block but the last followed by the largest jump
+    :func:`jump_revolutions` allows that bin."""
+    reached, blocks = 0.0, 1
+    while blocks < most and reached < depth * (1.0 - 1e-9):
+        step = clearance_fraction * clearance
+        if reached < coating:
+            step = min(step, coating_fraction * max(coating - reached, coating_fraction * coating))
+        reached += step
+        blocks += 1
+    return blocks
+
+
 def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> str:
     """What ``clearsweep life CONFIG --dry-run`` prints: the blocks, their RK4 steps and
     memory, the snapshots and checkpoint, and the time of the longest run
@@ -160,17 +266,26 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
     lc = cfg.life
     est = check_budget(block_config(cfg), allow_large=allow_large, source=source)
     cost = check_life_cost(cfg, est, allow_large=allow_large, source=source)
-    steps = lc.max_blocks * est.steps
     return (f"{source}: a life run to {lc.cycles:.4g} revolutions, at most {lc.max_blocks:,} "
             f"blocks of {lc.block_revolutions:g} revolutions ({est.steps:,} RK4 steps each, "
             f"memory up to {est.describe()}); up to {cost.snapshots:,} wear-map snapshots of "
             f"{format_bytes(cost.map_bytes)}: memory up to "
             f"{format_bytes(est.output_bytes + cost.memory_bytes)} in all; a checkpoint of up "
             f"to {format_bytes(cost.checkpoint_bytes)} rewritten after every block (up to "
-            f"{format_bytes(lc.max_blocks * cost.checkpoint_bytes)} written); at most "
-            f"{steps:.3g} RK4 steps, at most {time_text(steps)}; it stops sooner at a limit "
-            "(each block's progress line gives the time left at the pace so far); "
-            "nothing run (--dry-run)")
+            f"{format_bytes(lc.max_blocks * cost.checkpoint_bytes)} written); "
+            f"{life_time_text(cfg, est.steps)} (each block's progress line gives the time left "
+            "at the pace so far); nothing run (--dry-run)")
+
+
+def life_time_text(cfg: Config, steps_per_block: int) -> str:
+    """The time of the life run ``cfg``, bound and expected (:func:`forecast_blocks`):
+    ``"at most 2e+07 RK4 steps, at most about 1.33 min on one core (...); expected about
+    40 s: 101 blocks to the wear limit (...)"``."""
+    steps = cfg.life.max_blocks * steps_per_block
+    forecast = forecast_blocks(cfg)
+    expected = forecast.blocks * steps_per_block * SECONDS_PER_STEP
+    return (f"at most {steps:.3g} RK4 steps, at most {time_text(steps)}; expected about "
+            f"{duration_text(expected)}: {forecast.describe(cfg)}")
 
 
 def life_block(cfg: Config, *, allow_large: bool = False,
@@ -867,14 +982,17 @@ FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coat
 def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float) -> str:
     """The expected time left of a life run after ``blocks`` blocks reached ``cycles``
     revolutions in ``elapsed_s``: at the pace so far in revolutions, capped by the
-    blocks left (``life.max_blocks``) at the time per block so far; ``""`` when done.
-    The pace grows as the jumps lengthen, so the time left is rather too long than short;
-    a limit reached stops the run sooner still."""
+    blocks left (``life.max_blocks``, and those the plan forecasts to the wear limits,
+    :func:`forecast_blocks`, while the run is short of them) at the time per block so far;
+    ``""`` when done. The pace grows as the jumps lengthen, so the time left is rather too
+    long than short; a limit reached stops the run sooner still."""
     lc = cfg.life
     if blocks <= 0 or cycles <= 0.0 or cycles >= lc.cycles or blocks >= lc.max_blocks:
         return ""
+    forecast = forecast_blocks(cfg)
+    most = forecast.blocks if forecast.limits and blocks < forecast.blocks else lc.max_blocks
     by_pace = elapsed_s * (lc.cycles - cycles) / cycles
-    by_blocks = elapsed_s * (lc.max_blocks - blocks) / blocks
+    by_blocks = elapsed_s * (most - blocks) / blocks
     return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
 
 

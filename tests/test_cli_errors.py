@@ -153,7 +153,9 @@ def test_a_life_run_stopped_by_a_block_exits_1(files, monkeypatch, no_compile):
     monkeypatch.setattr(service_life, "life_summary_text", lambda ds: "life summary")
     result = invoke("life", "case.yaml", "-o", "l.nc")
     stderr = assert_error(result, 1, "life run stopped: block_status:diverged", "l.nc")
-    assert result.stdout == "life summary\n" and stderr.startswith("clearsweep: wrote l.nc\n")
+    # the plan's time first, as a sweep prints its plan
+    assert stderr.startswith("clearsweep: a life run of at most 200 blocks: ")
+    assert result.stdout == "life summary\n" and "\nclearsweep: wrote l.nc\n" in stderr
     assert (files / "l.nc").exists()
 
 

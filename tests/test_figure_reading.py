@@ -203,3 +203,100 @@ def test_a_poincare_figure_of_a_run_shorter_than_two_revolutions_says_what_it_ne
     assert "at least 2 crank revolutions" in lines[0] and "hold 0" in lines[0]
     assert "solver.duration" in lines[0]
     assert not (tmp_path / "p.png").exists()
+
+
+# ------------------------------------------------------- ideal joints are named nowhere
+
+#: one_clearance.yaml has its clearance at B alone: joints A and O are ideal.
+ONE_CLEARANCE = "configs/one_clearance.yaml"
+
+
+def _figure_texts(fig) -> list[str]:
+    """Every text of ``fig``: titles, labels, legend entries, annotations."""
+    from matplotlib.text import Text
+
+    return [t.get_text() for t in fig.findobj(Text) if t.get_text().strip()]
+
+
+def _named_joints(fig) -> set[str]:
+    """The joints that a text of ``fig`` names ("joint A", "joint A, O")."""
+    import re
+
+    named: set[str] = set()
+    for text in _figure_texts(fig):
+        for match in re.finditer(r"\bjoints? ((?:[ABO](?:, |,\s*| and )?)+)", " ".join(text.split())):
+            named |= set(re.findall(r"[ABO]", match.group(1)))
+    return named
+
+
+@pytest.fixture(scope="module")
+def b_alone():
+    """A run of configs/one_clearance.yaml (B with clearance, A and O ideal), 0.005 s."""
+    from clearsweep.simulation import simulate
+
+    return simulate(ONE_CLEARANCE, ["solver.duration=0.005"])
+
+
+@pytest.mark.parametrize("kind", ["wear-map", "wear-polar", "orbit"])
+def test_a_single_run_figure_names_no_ideal_joint(b_alone, kind):
+    """The titles said "not drawn: joint A, O, no wear", "joint A: no wear; joint O: no
+    wear" and "not drawn: joint A, O, ball at the centre (ideal joint)": a joint that is
+    ideal in the run is named nowhere in its figure, as in the sweep figures."""
+    fig = figure(b_alone, kind)
+    assert _named_joints(fig) == {"B"}, _figure_texts(fig)
+
+
+def test_a_poincare_figure_names_no_ideal_joint():
+    """Two revolutions at 3000 r/min: the title said "not drawn: joint A, O (ideal joint)"."""
+    from clearsweep.simulation import simulate
+
+    ds = simulate(ONE_CLEARANCE, ["mechanism.speed_rpm=3000", "solver.duration=0.041"])
+    fig = figure(ds, "poincare")
+    assert len(fig.axes) == 2                   # joint B and the slider acceleration
+    assert _named_joints(fig) == {"B"}, _figure_texts(fig)
+
+
+def test_a_life_snapshot_figure_names_no_ideal_joint(short_life_cli):
+    """A life run's wear-map snapshot lost the run's config, and with it which joints are
+    ideal: its title said "not drawn: joint A, O, no wear". It now reads as the final map's
+    (the case and the start as well)."""
+    ds = xr.load_dataset(short_life_cli[0])
+    snapshot = figure(ds, "wear-map", ["snapshot=1"])
+    assert _named_joints(snapshot) == {"B"}, _figure_texts(snapshot)
+    final = figure(ds, "wear-map")
+    assert _named_joints(final) == {"B"}
+    assert snapshot.get_suptitle().split("\n")[-1] == final.get_suptitle().split("\n")[-1]
+
+
+def test_a_clearance_joint_without_wear_is_still_named():
+    """With wear off, B (with clearance) has no wear: the figure says so; A and O, ideal,
+    are not named."""
+    from clearsweep.simulation import simulate
+
+    ds = simulate(ONE_CLEARANCE, ["solver.duration=0.005", "wear.enabled=false"])
+    fig = figure(ds, "wear-polar")
+    assert "joint B: no wear" in " ".join(fig.get_suptitle().split())
+    assert _named_joints(fig) == {"B"}
+    fig = figure(ds, "wear-map")
+    assert "not drawn: joint B, no wear" in fig.get_suptitle() and not fig.axes
+
+
+@pytest.mark.parametrize("kind", ["wear-map", "wear-polar", "orbit"])
+def test_a_figure_of_the_ideal_mechanism_is_refused_in_one_line(kind, tmp_path):
+    """Every joint ideal: wear-polar and orbit drew a row of panels per ideal joint, named,
+    and wear-map a title over no panel; now one line says there is nothing to draw."""
+    from click.testing import CliRunner
+
+    from clearsweep.cli import main
+    from clearsweep.dataset import write_netcdf_atomic
+    from clearsweep.simulation import simulate
+
+    path = tmp_path / "ideal.nc"
+    write_netcdf_atomic(simulate("configs/ideal.yaml", ["solver.duration=0.005"]), path)
+    result = CliRunner().invoke(main, ["plot", str(path), "--kind", kind, "-o",
+                                       str(tmp_path / "f.png")])
+    assert result.exit_code != 0
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("clearsweep: error: "), result.output
+    assert f"--kind {kind} draws the joints with a clearance" in lines[0]
+    assert not (tmp_path / "f.png").exists()

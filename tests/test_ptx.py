@@ -108,6 +108,59 @@ def test_launch_refuses_shapes_that_run_cases_does_not_address():
         device.launch(arrays)
 
 
+def test_help_prints_usage_and_writes_no_file(tmp_path):
+    """``python -m clearsweep.ptx --help`` prints its usage and exits 0 without compiling; it
+    once took "--help" for the path to keep the PTX in and wrote a file of that name."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = str(Path(ptx.__file__).resolve().parents[1])
+    proc = subprocess.run([sys.executable, "-m", "clearsweep.ptx", "--help"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": root})
+    assert proc.returncode == 0, proc.stderr
+    assert "usage: python -m clearsweep.ptx" in proc.stdout
+    assert "output" in proc.stdout and "--arch" in proc.stdout
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_main_keeps_the_ptx_where_asked(tmp_path, monkeypatch, capsys):
+    """main's optional path keeps the PTX text; --arch picks the capability handed to the
+    compile and to ptxas (the compile itself stubbed: it takes about a minute)."""
+    calls = []
+
+    def compile_stub(cc=ptx.DEFAULT_CC):
+        calls.append(cc)
+        return "// PTX text"
+
+    monkeypatch.setattr(ptx, "compile_run_cases_ptx", compile_stub)
+    monkeypatch.setattr(ptx, "ptxas_report", lambda text, arch="sm_90": ptx.parse_ptxas(
+        LOG.replace("sm_90", arch), arch))
+    out = tmp_path / "kernel.ptx"
+    ptx.main([str(out), "--arch", "sm_80"])
+    assert out.read_text() == "// PTX text"
+    assert calls == [(8, 0)]
+    assert "sm_80: 255 registers" in capsys.readouterr().out
+    ptx.main([])
+    assert calls[-1] == ptx.DEFAULT_CC
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kernel.ptx"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--arch", "90"], "--arch: expected sm_XY"),
+    (["--no-such-option"], "unrecognized arguments"),
+    (["."], "is a folder"),
+])
+def test_bad_arguments_are_refused_before_the_compile(argv, message, monkeypatch, capsys):
+    monkeypatch.setattr(ptx, "compile_run_cases_ptx", lambda cc=None: pytest.fail("compiled"))
+    with pytest.raises(SystemExit) as exc:
+        ptx.main(argv)
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+
+
 def _build_key(ptxas) -> str:
     """What the PTX build depends on: every clearsweep source file, the compilers' versions
     and the ptxas used. The same key builds the same PTX and the same ptxas figures."""

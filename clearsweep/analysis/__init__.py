@@ -69,6 +69,7 @@ from .selection import (  # noqa: F401
     choice_message,
     configured_clearances,
     design_dims,
+    ideal_joints,
     is_ensemble,
     iter_cases,
     iter_points,

@@ -246,6 +246,18 @@ def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
     return xr.concat(per_joint, dim="joint", coords="minimal").assign_coords(joint=ds["joint"])
 
 
+def ideal_joints(ds: xr.Dataset) -> list[str]:
+    """The joints that are ideal (no clearance) in every case of ``ds``, in ``joint`` order:
+    their per-joint results are n/a throughout, so a report has no row and a figure no
+    panel and no mention of them. Empty where ``ds`` does not say which joints have
+    clearance (:func:`joint_clearances` is None)."""
+    clearances = joint_clearances(ds)
+    if clearances is None:
+        return []
+    return [value_text(j) for j in clearances["joint"].values
+            if not float(clearances.sel(joint=j).max()) > 0.0]
+
+
 def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:
     """``rows`` without those of an ideal joint (clearance 0) of the case ``clearance`` is of."""
     if clearance is None:

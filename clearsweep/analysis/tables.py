@@ -27,6 +27,7 @@ from .selection import (
     _drop_ideal_rows,
     choice_message,
     design_dims,
+    ideal_joints,
     iter_cases,
     iter_points,
     joint_clearances,
@@ -123,10 +124,10 @@ def without_ideal_joints(values: xr.DataArray, ds: xr.Dataset) -> xr.DataArray:
     mechanism with spherical clearance only): their per-joint metrics are n/a throughout,
     so a table has no row and a figure no panel for them. All of them where every joint is
     ideal (the ideal mechanism), or where ``ds`` does not say which joints have clearance."""
-    clearances = joint_clearances(ds) if "joint" in values.dims else None
-    if clearances is None:
+    ideal = ideal_joints(ds) if "joint" in values.dims else []
+    if not ideal:
         return values
-    kept = [j for j in values["joint"].values if float(clearances.sel(joint=j).max()) > 0.0]
+    kept = [j for j in values["joint"].values if value_text(j) not in ideal]
     return values.sel(joint=kept) if kept else values
 
 

@@ -7,7 +7,10 @@ variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
 or categorical quantity. Lengths and forces are drawn in the unit that reads
 directly (nm, µm, mm, kN: ``variables.DISPLAY_UNITS``), never with offset text. The
 title names the case or ``--select`` slice, the start (seated or centred) and every
-``--set`` override of the command line the file's ``history`` records.
+``--set`` override of the command line the file's ``history`` records. A joint that is ideal
+in every case drawn (``analysis.ideal_joints``) has no panel and is named nowhere; a
+per-joint kind of results whose joints are all ideal is refused (``PlotError``). The forces
+on an ideal joint's ball (``forces``) are drawn: they are the constraint's, not n/a.
 
 Kinds (``KINDS``):
 
@@ -256,8 +259,7 @@ def _config(ds: xr.Dataset) -> dict:
 def start_text(ds: xr.Dataset) -> str:
     """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``
     of the config, or of a ``--set`` on the command line; a sweep's file keeps its config as
-    written), unless a sweep dimension varies it; "" for a file without a config (a life
-    run's snapshot)."""
+    written), unless a sweep dimension varies it; "" for a file without a config."""
     if not {"config", "sweep_config"} & set(ds.attrs):
         return ""
     if any(str(d).endswith("initial_joints") for d in sweep_dims(ds)):

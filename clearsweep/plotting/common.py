@@ -10,7 +10,7 @@ import numpy as np
 import xarray as xr
 from matplotlib import colormaps
 
-from ..analysis import iter_cases, label_text, results_kind, sweep_dims, value_text
+from ..analysis import ideal_joints, iter_cases, label_text, results_kind, sweep_dims, value_text
 from ..outputs import RESULTS_KINDS
 from ..variables import display_unit
 
@@ -165,6 +165,24 @@ def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
     offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
                       if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in dims)
     raise PlotError(f"--kind {kind} draws one case; choose it with --select DIM=VALUE ({offer})")
+
+
+def _clearance_joints(ds: xr.Dataset, values: xr.DataArray, kind: str) -> list:
+    """The joints of ``values`` that have a clearance in some case of ``ds``: those a figure
+    of ``kind`` may draw or name (:func:`clearsweep.analysis.ideal_joints`; all of them
+    where ``ds`` does not say).
+
+    Raises
+    ------
+    PlotError
+        Every joint is ideal: the figure would have nothing to draw.
+    """
+    ideal = ideal_joints(ds)
+    named = [j for j in values["joint"].values if value_text(j) not in ideal]
+    if not named:
+        raise PlotError(f"--kind {kind} draws the joints with a clearance, and every joint of "
+                        "these results is ideal (joints.*.clearance 0): there is nothing to draw")
+    return named
 
 
 def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:

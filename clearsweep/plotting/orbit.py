@@ -8,7 +8,16 @@ from matplotlib.figure import Figure
 
 from ..analysis import configured_clearances, value_text
 from ..variables import JOINT_TYPES
-from .common import _case_label, _cases, _legend_note, _require, axis_label, figure_legend, scaled
+from .common import (
+    _case_label,
+    _cases,
+    _clearance_joints,
+    _legend_note,
+    _require,
+    axis_label,
+    figure_legend,
+    scaled,
+)
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
 _CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
@@ -41,10 +50,11 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     configured = configured_clearances(ds)
-    # an ideal joint's ball stays in the centre: no panel of a point at the origin
-    joints = [j for j in offset["joint"].values
-              if np.nan_to_num(offset.sel(joint=j).values).any()] or list(offset["joint"].values)
-    empty = [value_text(j) for j in offset["joint"].values if j not in joints]
+    # a ball that stays in the centre gets no panel of a point at the origin; an ideal
+    # joint's is not named either
+    named = _clearance_joints(ds, offset, "orbit")
+    joints = [j for j in named if np.nan_to_num(offset.sel(joint=j).values).any()] or named
+    empty = [value_text(j) for j in named if j not in joints]
     factor, unit = scaled(offset)
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 4.8)
@@ -84,6 +94,6 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
     figure_legend(fig)
-    left_out = f"\nnot drawn: joint {', '.join(empty)}, ball at the centre (ideal joint)" if empty else ""
+    left_out = f"\nnot drawn: joint {', '.join(empty)}, ball at the centre" if empty else ""
     fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)) + left_out)
 

@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis import results_kind, value_text
+from ..analysis import ideal_joints, results_kind, value_text
 from .common import PlotError, _case_label, _cases, _legend_note, _require, axis_label, figure_legend
 
 #: Fewest revolutions a ``poincare`` figure draws: one section shows no return.
@@ -46,9 +46,11 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
                         "solver.duration >= 2 x 60 / mechanism.speed_rpm s")
     offset = ds["poincare_offset"]
     cases = _cases(ds)
-    # an ideal joint has no offset: no panel
+    # a joint without offsets gets no panel; an ideal joint (no offsets) is not named
+    ideal = ideal_joints(ds)
     joints = [j for j in offset["joint"].values if np.isfinite(offset.sel(joint=j).values).any()]
-    empty = [value_text(j) for j in offset["joint"].values if j not in joints]
+    empty = [value_text(j) for j in offset["joint"].values
+             if j not in joints and value_text(j) not in ideal]
     panels = len(joints) + 1
     fig.set_size_inches(max(4.6 * panels, 8.0), 5.4)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
@@ -78,6 +80,6 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
     ax.set_title("slider acceleration at the section", fontsize="small")
     ax.grid(alpha=0.3)
     figure_legend(fig)
-    left_out = f"\nnot drawn: joint {', '.join(empty)} (ideal joint)" if empty else ""
+    left_out = f"\nnot drawn: joint {', '.join(empty)}, no section" if empty else ""
     fig.suptitle("Poincare section, once per crank revolution" + _legend_note(len(cases))
                  + left_out)

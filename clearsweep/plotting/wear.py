@@ -18,6 +18,7 @@ from .common import (
     DIMENSIONLESS,
     _case_label,
     _cases,
+    _clearance_joints,
     _edges,
     _legend_note,
     _one_case,
@@ -54,8 +55,9 @@ def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
             f"--select snapshot=K, K one of {offer}", name=str(name), value=str(text),
             choices=[str(k) for k in range(ds.sizes["snapshot"])])
     snapshot = ds["wear_map_snapshot"].isel(snapshot=k, drop=True)
+    # the run's attributes (its config: the case, the start and which joints are ideal)
     return xr.Dataset({"wear_map": snapshot.assign_attrs(ds["wear_map"].attrs)},
-                      attrs={"snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
+                      attrs={**ds.attrs, "snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
 
 
 def _draw_bearing_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
@@ -159,9 +161,11 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     grid_p, grid_a = np.meshgrid(polar, azimuth, indexing="ij")
     sphere = (np.sin(grid_p) * np.cos(grid_a), np.sin(grid_p) * np.sin(grid_a), np.cos(grid_p))
     cmap = colormaps["viridis"]
-    # a joint without wear (an ideal joint) gets no panel: its map would be one flat colour
-    joints = [j for j in wear["joint"].values if np.nan_to_num(wear.sel(joint=j).values).any()]
-    empty = [value_text(j) for j in wear["joint"].values if j not in joints]
+    # a joint without wear gets no panel: its map would be one flat colour; the title names
+    # one with a clearance, never an ideal one
+    named = _clearance_joints(ds, wear, "wear-map")
+    joints = [j for j in named if np.nan_to_num(wear.sel(joint=j).values).any()]
+    empty = [value_text(j) for j in named if j not in joints]
     factor, unit = scaled(wear)
     label = axis_label(wear, "wear depth", unit)
     if len(joints) == 1:        # one row of panels: no empty band where the other was
@@ -222,10 +226,11 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     closed = np.append(theta, theta[0])
     cases = _cases(ds)
     axes_names = projection["axis"].values
-    # a joint without wear (an ideal joint) gets no row of unworn circles: the title says so
-    joints = [j for j in projection["joint"].values
-              if np.nan_to_num(projection.sel(joint=j).values).any()] or list(projection["joint"].values)
-    scales = [f"joint {value_text(j)}: no wear" for j in projection["joint"].values if j not in joints]
+    # a joint with a clearance but no wear gets no row of unworn circles: the title says so;
+    # an ideal joint is not named
+    named = _clearance_joints(ds, projection, "wear-polar")
+    joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
+    scales = [f"joint {value_text(j)}: no wear" for j in named if j not in joints]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 
 from .. import variables
-from ..budget import estimate, format_bytes, sweep_time_text, time_text
+from ..budget import duration_text, estimate, format_bytes, sweep_seconds, sweep_time_text
 from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
     SWEEP_FILE_KEYS,
@@ -39,7 +39,7 @@ from ..config import (
 )
 from ..outputs import MEMBER_DIM, SAMPLE_DIM  # noqa: F401  (also read as plan.MEMBER_DIM, plan.SAMPLE_DIM)
 from ..schema import OVERSIZED, ClearsweepWarning, oversized_number, oversized_text
-from ..service_life import life_block
+from ..service_life import DEPTH_LIMITS, block_steps, forecast_blocks, life_block, limit_keys
 from ..simulation import preflight
 from .assemble import SweepSlot
 from .parts import canonical_json, case_key
@@ -273,12 +273,9 @@ class SweepPlan:
             return max(values, default=0.0) * to_run if self.counted else sum(values)
 
         if self.store in ("life", "reliability"):
-            # a life run simulates up to life.max_blocks blocks of life.block_revolutions
-            blocks = total([cfg.life.max_blocks * cfg.life.block_revolutions * 60.0
-                            / cfg.mechanism.speed_rpm / cfg.solver.dt for cfg in runnable.values()])
-            return (f"sweep {self.name!r}: {n_cases:,} life runs{checked}, {to_run:,} to run"
-                    f"{resumed}: at most {blocks:.3g} RK4 steps (life.max_blocks blocks each), "
-                    f"at most {time_text(blocks, workers)}; most runs end sooner")
+            return self._describe_life(runnable, to_run, total,
+                                       f"sweep {self.name!r}: {n_cases:,} life runs{checked}, "
+                                       f"{to_run:,} to run{resumed}", workers)
         steps = total([estimates[h].steps for h in runnable])
         # the file holds the kept cases too
         sizes = [e.output_bytes if self.store == "full" else e.map_bytes for e in estimates.values()]
@@ -287,6 +284,39 @@ class SweepPlan:
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
                 f"{steps:.3g} RK4 steps: {sweep_time_text(steps, to_run, workers)}; results up to "
                 f"{format_bytes(per_case)} before compression")
+
+    def _describe_life(self, runnable: dict[str, Config], to_run: int, total, head: str,
+                       workers: int | None) -> str:
+        """:meth:`describe` of a life or reliability sweep: at most life.max_blocks blocks
+        a run, and the blocks expected if wear sets the pace
+        (:func:`clearsweep.service_life.forecast_blocks`; a reliability member runs until
+        every limit it watches is crossed), each in RK4 steps and wall time."""
+        every = self.store == "reliability"
+        bound, expected, forecasts = [], [], []
+        for cfg in runnable.values():
+            # a life run simulates up to life.max_blocks blocks of life.block_revolutions
+            steps = block_steps(cfg)
+            forecast = forecast_blocks(cfg, every_limit=every)
+            bound.append(cfg.life.max_blocks * steps)
+            expected.append(forecast.blocks * steps)
+            forecasts.append(forecast)
+        most, likely = total(bound), total(expected)
+        blocks = sorted({f.blocks for f in forecasts})
+        span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
+        limits = [name for name in DEPTH_LIMITS if any(name in f.limits for f in forecasts)]
+        if not limits:
+            why = f"{span} blocks a run: no wear limit watched to forecast from"
+        elif every:
+            why = (f"{span} blocks a run to its wear limits ({limit_keys(limits)}), the other "
+                   "limits it watches taken to come no later; fewer where life.cycles comes first")
+        else:
+            why = (f"{span} blocks a run to the first wear limit ({limit_keys(limits)}); fewer "
+                   "where life.cycles or another limit comes first")
+        return (f"{head}: at most {most:.3g} RK4 steps (life.max_blocks blocks each), at most "
+                f"{sweep_time_text(most, to_run, workers)}; expected about "
+                f"{duration_text(sweep_seconds(likely, to_run, workers))} ({likely:.3g} RK4 "
+                f"steps: {why})" if blocks else
+                f"{head}: nothing to run")
 
     def plan_text(self, workers: int | None = None) -> str:
         """What ``clearsweep validate`` prints for a sweep file: its dimensions, the cases,
