@@ -224,8 +224,8 @@ def _named_joints(fig) -> set[str]:
 
     named: set[str] = set()
     for text in _figure_texts(fig):
-        for match in re.finditer(r"\bjoints? ((?:[ABO](?:, |,\s*| and )?)+)", " ".join(text.split())):
-            named |= set(re.findall(r"[ABO]", match.group(1)))
+        for match in re.finditer(r"\bjoints? ((?:[ABOP](?:, |,\s*| and )?)+)", " ".join(text.split())):
+            named |= set(re.findall(r"[ABOP]", match.group(1)))
     return named
 
 

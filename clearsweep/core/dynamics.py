@@ -389,6 +389,19 @@ def fixed_accelerations(y, p, dy, held):
     return gdd3, ydd4, zdd4
 
 
+@compiled
+def free_slider(j, y, t4, model, N4, full, dg, dy):
+    """The slider's block free in its guide (joint P with clearance): the corners' contacts
+    (``prismatic.contact``; with ``full``, P's diagnostics into dg) and the block's angular
+    accelerations under their moment and ``N4`` (B's, where B has clearance) into dy.
+    Returns (the guide's force on the block [N], the power it dissipates [W], whether the
+    rotational mass block was regular)."""
+    slider = body_state(y, t4, Y_R4, Y_PHI4)
+    force, moment, pdiss = prismatic.contact(j, model, slider, full, dg)
+    ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
+    return force, pdiss, ok
+
+
 @compiled(inline="always")
 def slider_rotation(y, p, t4, N4, dy):
     """The free slider's angular accelerations (joint P with clearance) from its rotational
@@ -731,13 +744,11 @@ def evaluate(t, y, model, dy, dg, full, solve):
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(jp):
-        slider = body_state(y, t4, Y_R4, Y_PHI4)
-        fP, nP, dP = prismatic.contact(joint_p, model, slider, full, dg)
-        F4 = add(F4, fP)
-        N4 = add(N4, nP)
-        pdiss += dP
-        if not slider_rotation(y, p, t4, N4, dy):
+        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy)
+        if not ok:
             return ST_SINGULAR
+        F4 = add(F4, fP)
+        pdiss += dP
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
