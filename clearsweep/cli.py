@@ -233,13 +233,15 @@ def _replacing(path: str, attr: str, new_text: str) -> str:
     differ (from the resolved config its attribute ``attr`` records), shown as --set."""
     if not Path(path).is_file():
         return ""
-    import xarray as xr
+    import netCDF4
 
     from .params import _flat
 
     try:
-        with xr.open_dataset(path) as old:
-            old_text, history = old.attrs.get(attr), str(old.attrs.get("history", ""))
+        # the two attributes alone: opening it with xarray decoded every variable
+        with netCDF4.Dataset(path, "r") as old:
+            attrs = {name: old.getncattr(name) for name in old.ncattrs()}
+        old_text, history = attrs.get(attr), str(attrs.get("history", ""))
         old_flat, new_flat = _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config"))
     except Exception:       # not a results file we can read: check_output decided it may go
         return ""

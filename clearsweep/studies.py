@@ -13,8 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-
-import xarray as xr
+from typing import TYPE_CHECKING
 
 from .choices import DEFAULT_SWEEP_METRIC
 from .outputs import RESULTS_KINDS
@@ -22,8 +21,11 @@ from .outputs import RESULTS_KINDS
 #: The figure kinds that draw one run's time series and wear maps.
 RUN_FIGURES = "slider, forces, spectrum, wear-map, wear-polar or orbit"
 
+if TYPE_CHECKING:
+    import xarray as xr
+
 #: Imports and returns a text report: the dataset -> its text.
-TextReport = Callable[[], Callable[[xr.Dataset], str]]
+TextReport = Callable[[], Callable[["xr.Dataset"], str]]
 #: Imports and returns a table report: ``(dataset, format, reference)`` -> its text.
 TableReport = Callable[[], Callable[..., str]]
 
