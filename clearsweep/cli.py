@@ -242,7 +242,9 @@ def _replacing(path: str, attr: str, new_text: str) -> str:
         with netCDF4.Dataset(path, "r") as old:
             attrs = {name: old.getncattr(name) for name in old.ncattrs()}
         old_text, history = attrs.get(attr), str(attrs.get("history", ""))
-        old_flat, new_flat = _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config"))
+        # the same text: the same values, without reading it twice (most of this, before)
+        old_flat, new_flat = ({}, {}) if old_text == new_text else (
+            _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config")))
     except Exception:       # not a results file we can read: check_output decided it may go
         return ""
     when = history.split(": ", 1)[0] if ": " in history else "earlier"
