@@ -26,28 +26,31 @@ ROOT = Path(__file__).resolve().parent.parent
 NOT_IMPORTED = ("dask", "dask.array", "distributed", "matplotlib", "scipy.signal", "SALib",
                 "lifelines")
 
-RUN = """
-import atexit, json, sys
-atexit.register(lambda: open(sys.argv[1], "w").write(json.dumps(sorted(sys.modules))))
+#: The ``clearsweep`` console script, with the modules loaded written at its exit.
+ENTRY = """
+import atexit, json, os, sys
+atexit.register(lambda: open(os.environ["MODULES_JSON"], "w").write(json.dumps(sorted(sys.modules))))
 from clearsweep.cli import main
-main(["run", "configs/one_clearance.yaml", "--set", "solver.duration=0.005", "-q",
-      "-o", sys.argv[2]])
+sys.exit(main())
 """
 
 
 def test_a_plain_run_does_not_import_what_it_does_not_use(tmp_path):
     modules = tmp_path / "modules.json"
     out = tmp_path / "one.nc"
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MODULES_JSON": str(modules)}
+    argv = ["run", "configs/one_clearance.yaml", "--set", "solver.duration=0.005", "-o", str(out)]
     for _ in range(2):      # the second run replaces the first's file (it reads its config)
-        proc = subprocess.run([sys.executable, "-c", RUN, str(modules), str(out)], cwd=ROOT,
-                              env=env, capture_output=True, text=True, timeout=600)
+        proc = subprocess.run([sys.executable, "-c", ENTRY, *argv], cwd=ROOT, env=env,
+                              capture_output=True, text=True, timeout=600)
         assert proc.returncode == 0, proc.stderr
         imported = set(json.loads(modules.read_text()))
         assert "clearsweep.simulation" in imported and "xarray" in imported
         assert [m for m in NOT_IMPORTED if m in imported] == []
+    assert "replacing the result of" in proc.stderr and "made with the same values" in proc.stderr
+    assert proc.stdout.startswith("status: ok")      # the run's summary on stdout
     with xr.open_dataset(out) as ds:
-        assert str(ds["status"].values) == "ok"
+        assert str(ds["status"].values) == "ok" and ds.sizes["time"] > 1
 
 
 def test_xarray_still_tells_dask_arrays_once_dask_is_imported(monkeypatch):
