@@ -258,6 +258,8 @@ def _replacing(path: str, attr: str, new_text: str) -> str:
         with netCDF4.Dataset(path, "r") as old:
             attrs = {name: old.getncattr(name) for name in old.ncattrs()}
         old_text, history = attrs.get(attr), str(attrs.get("history", ""))
+        if not isinstance(old_text, str):
+            return ""
         # the same text: the same values, without reading it twice (most of this, before)
         old_flat, new_flat = ({}, {}) if old_text == new_text else (
             _flat(parse_yaml(old_text, path)), _flat(parse_yaml(new_text, "config")))

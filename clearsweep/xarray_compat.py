@@ -89,6 +89,6 @@ def defer_dask_array() -> bool:
         cache.setdefault("dask", _DeferredDask(module_class))
         placed += isinstance(cache["dask"], _DeferredDask)
     if callable(test):
-        namedarray_utils.is_dask_collection = _without_dask_graph(test)
+        namedarray_utils.is_dask_collection = _without_dask_graph(test)  # type: ignore[assignment]
         placed += 1
     return placed == 2
