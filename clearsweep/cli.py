@@ -158,7 +158,7 @@ class _Group(_Command, click.Group):
 def _ending() -> None:
     """The ``clearsweep`` process ends with its command (it exits once this returns): move
     what the command made out of the garbage collector's reach, so that the interpreter's
-    shutdown does not walk it again. Those collections were 0.3-0.5 s of a short run
+    shutdown does not walk it again. Those collections were 0.14-0.33 s of a short run
     (benchmarks/README.md, the cached start); its files are written and closed by then,
     and the exit handlers still run. Not done where the command runs inside a caller
     (arguments given: a script, ``CliRunner``)."""
