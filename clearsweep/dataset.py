@@ -19,6 +19,11 @@ import xarray as xr
 
 from .variables import AXES, CASE_VARIABLES, JOINTS, attrs_for
 from .version import __version__
+from .xarray_compat import defer_dask_array
+
+# every dataset clearsweep builds or opens passes here: xarray imports dask.array only once
+# a dask array can exist (clearsweep.xarray_compat)
+defer_dask_array()
 
 
 def versions() -> dict[str, str]:

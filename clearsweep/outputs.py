@@ -116,6 +116,9 @@ def is_results_file(path: str | os.PathLike) -> bool:
 RESULTS_KINDS = {"run": "a run", "life": "a life run", "reliability": "a reliability sweep",
                  "life-sweep": "a life sweep", "ensemble": "an ensemble",
                  "sample": "a sampling sweep", "sweep": "a sweep"}
+#: The kinds whose files a sweep's ``store:`` alone tells (the ``sweep_store`` attribute);
+#: a sweep of any other store is a ``"sweep"``, an ``"ensemble"`` or a ``"sample"``.
+STORE_KINDS = {"life": "life-sweep", "reliability": "reliability"}
 
 #: Dimensions of one case's arrays; any other dimension is a sweep's.
 CASE_DIMS = ("time", "joint", "axis", "polar", "azimuth", "angle", "revolution")
@@ -127,6 +130,19 @@ SAMPLE_DIM = "sample"
 #: Kinds that one command writes, as :func:`check_output` compares them: a sweep file of
 #: any design (grid, sampling, ensemble) is one family.
 _FAMILY = {"ensemble": "sweep", "sample": "sweep"}
+
+
+def store_kind(store: str) -> str:
+    """The kind of results file (a key of :data:`RESULTS_KINDS`) a sweep of ``store``
+    writes, as :func:`check_output` compares it (an ensemble or a sampling sweep of the
+    ``full`` or ``summary`` store is a ``"sweep"``)."""
+    return STORE_KINDS.get(store, "sweep")
+
+
+def has_member_statistics(dims: Collection[str], variables: Collection[str]) -> bool:
+    """Whether a file holds ensemble members and their statistics (a ``member`` dimension
+    and ``members_ok``)."""
+    return MEMBER_DIM in dims and "members_ok" in variables
 
 
 def kind_of(attrs: Mapping[str, Any], dims: Collection[str], variables: Collection[str]) -> str:
@@ -154,11 +170,9 @@ def kind_of(attrs: Mapping[str, Any], dims: Collection[str], variables: Collecti
     if "cycle" in dims and ("stop_reason" in variables or "block_status" in variables):
         return "life"
     store = attrs.get("sweep_store")
-    if store == "reliability":
-        return "reliability"
-    if store == "life":
-        return "life-sweep"
-    if MEMBER_DIM in dims and "members_ok" in variables:
+    if isinstance(store, str) and store in STORE_KINDS:
+        return STORE_KINDS[store]
+    if has_member_statistics(dims, variables):
         return "ensemble"
     if SAMPLE_DIM in dims:
         return "sample"

@@ -68,3 +68,45 @@ def test_a_file_on_disk_is_told_by_the_same_rule_as_an_open_dataset(tmp_path, ki
     assert file_kind(path) == kind
     ds.to_netcdf(tmp_path / "foreign.nc")
     assert file_kind(tmp_path / "foreign.nc") is None       # not clearsweep's: no kind
+
+
+def test_every_study_kind_is_in_the_registry_with_every_hook():
+    """Every kind of results file has one entry in ``studies.STUDIES`` (report, plot), and every
+    ``store:`` one in ``sweeping.stores.STORES`` (plan, run, assemble), each giving every hook:
+    the CLI and the planner ask the tables instead of testing the kind's name."""
+    import dataclasses
+
+    from clearsweep.outputs import RESULTS_KINDS as NAMED
+    from clearsweep.studies import STUDIES, Refusal, StudyKind
+    from clearsweep.sweeping.stores import CUDA_BATCH, ENSEMBLE, STORES, CaseFunctions
+
+    assert tuple(STUDIES) == tuple(NAMED) == RESULTS_KINDS
+    for name, study in STUDIES.items():
+        assert isinstance(study, StudyKind) and study.name == name and study.described == NAMED[name]
+        for hook in ("text_report", "table_report"):
+            loader = getattr(study, hook)
+            assert loader is None or callable(loader()), (name, hook)
+        assert (study.report_reads is None) or study.text_report is not None
+        assert all(isinstance(r, Refusal) for r in study.refusals.values())
+    # the kinds report prints as text, and those whose text --metric replaces by a table
+    assert [k for k, s in STUDIES.items() if s.text_report] == ["life", "reliability", "life-sweep"]
+    assert [k for k, s in STUDIES.items() if s.metric_table] == ["reliability", "life-sweep"]
+    assert [k for k, s in STUDIES.items() if s.table_report] == ["ensemble"]
+
+    hooks = [f.name for f in dataclasses.fields(next(iter(STORES.values())))]
+    for name, store in STORES.items():
+        assert store.name == name and store.results_kind in STUDIES
+        for hook in hooks:
+            assert getattr(store, hook) is not None, (name, hook)
+        functions = store.functions()
+        assert isinstance(functions, CaseFunctions)
+        assert all(f is None or callable(f) for f in dataclasses.astuple(functions))
+        assert callable(store.check_case) and callable(store.check_base) and callable(store.members)
+    assert [s.name for s in STORES.values() if s.runs_life] == ["life", "reliability"]
+    assert {s.results_kind for s in STORES.values()} == {"sweep", "life-sweep", "reliability"}
+    # the ensemble adds its statistics over a store without its own; the CUDA batch stores
+    # its device cases' summaries and its --keep-series cases' series
+    assert callable(ENSEMBLE.finish) and ENSEMBLE.key == "ensemble.member"
+    assert not STORES[CUDA_BATCH.on_device].keeps_series and STORES[CUDA_BATCH.with_series].keeps_series
+    assert STORES["full"].finish(CaseFunctions(), {"member": 2}) is ENSEMBLE.finish
+    assert STORES["full"].finish(CaseFunctions(), {"B_coating": 2}) is None

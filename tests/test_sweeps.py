@@ -30,6 +30,7 @@ from clearsweep.sweeping import CasesFailedWarning, drop_timing, expand, run_swe
 from clearsweep.sweeping import backends as sweep_backends
 from clearsweep.sweeping import plan as sweep_plan
 from clearsweep.sweeping import run as sweep_run
+from clearsweep.sweeping import stores as sweep_stores
 from clearsweep.sweeping.parts import PartStore, parts_dir_for
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -354,7 +355,7 @@ def test_a_huge_grid_is_refused_before_any_case_is_validated(monkeypatch):
     def validated(cfg, **kwargs):
         raise AssertionError("a case was validated before the size of the sweep was checked")
 
-    monkeypatch.setattr(sweep_plan, "preflight", validated)
+    monkeypatch.setattr(sweep_stores, "preflight", validated)
     grid = {f"{key}": [1e-4 * (i + 1) for i in range(10)] for key in
             ("joints.A.clearance", "joints.B.clearance", "friction.v0", "contact.min_impact_velocity",
              "wear.amplification", "solver.energy_tolerance")}

@@ -109,7 +109,9 @@ def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tupl
     return value, value - half, value + half
 
 
-def _effect_text(value: float, low: float, high: float, units: str) -> str:
+def _effect_text(found: tuple[float, float, float], units: str) -> str:
+    """``+0.16 [+0.124, +0.196] m s-2``, and whether the interval holds 0."""
+    value, low, high = found
     verdict = distinguishable(low, high)
     interval = f" [{low:+.3g}, {high:+.3g}]" if np.isfinite(low) else ""
     tail = {True: "", False: ", within the spread", None: ""}[verdict]
@@ -129,13 +131,13 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
             f"the other joints' settings{over}" + (" (95 % intervals from the members)" if ensemble else "")
             + ":")
     lines = ["", *textwrap.wrap(head, width=100, subsequent_indent="  ")]
-    metrics = [(VIBRATION[0], None, VIBRATION[1], None)]
+    metrics: list[tuple[str, str | None, str, str | None]] = [(VIBRATION[0], None, VIBRATION[1], None)]
     if WEAR[0] in ds:
         metrics += [(WEAR[0], j, f"{WEAR[1]} at {j}", j) for j in names]
     for name, joint, label, only in metrics:
         units = ds[name].attrs.get("units", "")
         # a joint's wear exists where it has clearance: its own factor held on
-        where = {factors[only][0]: factors[only][2]} if only else {}
+        where: dict[str, int] = {factors[only][0]: factors[only][2]} if only else {}
         lines.append(f"  {label} [{units}]" + (f" (cases with clearance at {only})" if only else "")
                      + ":")
         effects = {}
@@ -147,7 +149,7 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
             if found is None:
                 continue
             effects[j] = found
-            lines.append(f"    clearance at {j}: {_effect_text(*found, units)}")
+            lines.append(f"    clearance at {j}: {_effect_text(found, units)}")
         standing = {k: v for k, v in effects.items() if distinguishable(v[1], v[2]) is not False}
         if standing:
             top = max(standing, key=lambda k: abs(standing[k][0]))
@@ -161,6 +163,6 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
                 continue
             word = {True: "they do not add", False: "they add", None: ""}[distinguishable(*found[1:])]
             lines.append(f"    {a} and {b} together minus each alone: "
-                         f"{_effect_text(*found, units).replace(', within the spread', '')}"
+                         f"{_effect_text(found, units).replace(', within the spread', '')}"
                          + (f"; {word}" if word else ""))
     return lines

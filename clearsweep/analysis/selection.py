@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from ..ensemble import MEMBER_DIM
-from ..outputs import CASE_DIMS, kind_of
+from ..outputs import CASE_DIMS, has_member_statistics, kind_of
 from ..outputs import RESULTS_KINDS as _RESULTS_KINDS
 from ..schema import close_matches
 
@@ -269,7 +269,7 @@ def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | No
 
 def is_ensemble(ds: xr.Dataset) -> bool:
     """Whether ``ds`` is an ensemble sweep with its statistics."""
-    return MEMBER_DIM in ds.dims and "members_ok" in ds
+    return has_member_statistics({str(d) for d in ds.dims}, {str(v) for v in ds.variables})
 
 
 def design_dims(ds: xr.Dataset) -> tuple[str, ...]:

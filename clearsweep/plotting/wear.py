@@ -102,6 +102,8 @@ def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
         try:
             doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
             base = doc.get("base", doc) if name == "sweep_config" else doc
+            if not isinstance(base, dict):
+                continue
             cfg = load_config(base)
         except (yaml.YAMLError, ConfigError, AttributeError, TypeError, ValueError):
             continue

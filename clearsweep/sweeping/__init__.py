@@ -10,6 +10,8 @@ never shadows that function on ``clearsweep``):
 - :mod:`.worker`: runs one case in a worker and writes its part.
 - :mod:`.assemble`: parts -> one labelled sweep netCDF, case by case, in bounded memory.
 - :mod:`.parts`: one finished case per part file; the resume ledger and its lock.
+- :mod:`.stores`: what each ``store:`` does with its cases (checks, members, case
+  functions, what the file gets added), the ensemble and the CUDA batch, said once.
 
 Sweep file
 ----------

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..summary import case_summary
 from .guard import require_main_guard
+from .stores import CUDA_BATCH
 from .worker import SIGNAL_CAUSES, CaseTask, _error_part, _part, _run_and_store, _run_case, _worker_init, crash_report
 
 #: Futures kept in flight per worker, so that no worker waits for the driver.
@@ -127,7 +128,8 @@ class _Cuda:
         with self.guard.interruptible():
             for future, h, task in queued:
                 if h in self.series:
-                    future.set_result(_run_case(task._replace(store="full", simulate=None)))
+                    future.set_result(_run_case(task._replace(store=CUDA_BATCH.with_series,
+                                                                  simulate=None)))
             started = time.perf_counter()
             try:
                 results = simulate_batch([task.config for _, task in on_device])
@@ -137,7 +139,7 @@ class _Cuda:
         for (future, task), result in zip(on_device, results):
             try:
                 part = (_error_part(result, wall) if isinstance(result, BaseException)
-                        else _part(result, "summary", task.summarize or case_summary))
+                        else _part(result, CUDA_BATCH.on_device, task.summarize or case_summary))
             except Exception as exc:
                 part = _error_part(exc, wall)
             future.set_result(part)

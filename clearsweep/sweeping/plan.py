@@ -39,8 +39,7 @@ from ..config import (
 )
 from ..outputs import MEMBER_DIM, SAMPLE_DIM  # noqa: F401  (also read as plan.MEMBER_DIM, plan.SAMPLE_DIM)
 from ..schema import OVERSIZED, ClearsweepWarning, oversized_number, oversized_text
-from ..service_life import DEPTH_LIMITS, block_steps, forecast_blocks, life_block, limit_keys
-from ..simulation import preflight
+from ..service_life import DEPTH_LIMITS, block_steps, forecast_blocks, limit_keys
 from .assemble import SweepSlot
 from .parts import canonical_json, case_key
 from .stores import STORES
@@ -272,13 +271,14 @@ class SweepPlan:
         def total(values: list[float]) -> float:
             return max(values, default=0.0) * to_run if self.counted else sum(values)
 
-        if self.store in ("life", "reliability"):
+        if STORES[self.store].runs_life:
             return self._describe_life(runnable, to_run, total,
                                        f"sweep {self.name!r}: {n_cases:,} life runs{checked}, "
                                        f"{to_run:,} to run{resumed}", workers)
         steps = total([estimates[h].steps for h in runnable])
         # the file holds the kept cases too
-        sizes = [e.output_bytes if self.store == "full" else e.map_bytes for e in estimates.values()]
+        keeps_series = STORES[self.store].keeps_series
+        sizes = [e.output_bytes if keeps_series else e.map_bytes for e in estimates.values()]
         per_case = max(sizes, default=0) * (n_cases - skipped) if self.counted else sum(sizes)
         counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
@@ -291,7 +291,7 @@ class SweepPlan:
         a run, and the blocks expected if wear sets the pace
         (:func:`clearsweep.service_life.forecast_blocks`; a reliability member runs until
         every limit it watches is crossed), each in RK4 steps and wall time."""
-        every = self.store == "reliability"
+        every = STORES[self.store].every_limit
         bound, expected, forecasts = [], [], []
         for cfg in runnable.values():
             # a life run simulates up to life.max_blocks blocks of life.block_revolutions
@@ -646,51 +646,14 @@ def _check_case_count(sizes: Sequence[tuple[int, str]], max_cases: int | None, h
                           got=f"{n_points:,} cases ({shape})")
 
 
-def member_axes(base: Config) -> list[Axis]:
-    """The ``member`` dimension of an ensemble (``ensemble.members > 1``), else none."""
-    n = base.ensemble.members
-    if n <= 1:
+def member_axes(base: Config, store: str = "full") -> list[Axis]:
+    """The ``member`` dimension that ``base`` adds to a sweep of ``store``
+    (:attr:`~clearsweep.sweeping.stores.Store.members`: an ensemble's, ``ensemble.members >
+    1``, or a reliability sweep's ``reliability.members`` life runs), else none."""
+    members = STORES[store].members(base)
+    if members is None:
         return []
-    return [Axis(MEMBER_DIM, "grid", ("ensemble.member",), (MEMBER_DIM,), (tuple(range(n)),))]
-
-
-def reliability_member_axes(base: Config) -> list[Axis]:
-    """The ``member`` dimension of a reliability sweep: ``reliability.members`` life runs."""
-    n = base.reliability.members
-    return [Axis(MEMBER_DIM, "grid", ("reliability.member",), (MEMBER_DIM,), (tuple(range(n)),))]
-
-
-def _check_reliability_base(base: Config, source: str) -> None:
-    if base.ensemble.members > 1:
-        raise ConfigError("ensemble.members", base.ensemble.members, "1 with store: reliability "
-                          "(its members are reliability.members)", source)
-
-
-def _check_reliability_case(cfg: Config, source: str, allow_large: bool,
-                            label: Mapping[str, Any] | None = None) -> None:
-    """A reliability case: limits that can be reached, and a member config (its draws
-    applied) that the simulator admits.
-
-    A design whose limits can never be reached (wear-through of an uncoated design) refuses
-    the whole sweep before anything runs, its message saying how to run the other designs:
-    a ``sweep.skip`` rule for it. A design the sweep file asks for is never dropped unsaid."""
-    from ..reliability import check_reliability, member_config
-
-    try:
-        check_reliability(cfg, source)
-    except ConfigError as exc:
-        design = {n: v for n, v in (label or {}).items() if n != MEMBER_DIM}
-        if not design:
-            raise
-        rule = "{" + ", ".join(f"{n}: {v}" for n, v in design.items()) + "}"
-        raise ConfigError(exc.key, exc.value, f"{exc.expected}; to run the other designs, "
-                          f"skip this one (sweep: skip: [{rule}])", exc.source, exc.suggestion,
-                          exc.got) from None
-    try:
-        life_block(member_config(cfg), allow_large=allow_large, source=source)
-    except ConfigError as exc:
-        raise ConfigError(exc.key, exc.value, f"{exc.expected} (with the draws of reliability "
-                          f"member {cfg.reliability.member})", source, exc.suggestion, exc.got) from None
+    return [Axis(MEMBER_DIM, "grid", (members.key,), (MEMBER_DIM,), (tuple(range(members.count)),))]
 
 
 def _parse_skips(rules, axes: Sequence[Axis], source: str) -> list[list[tuple[str, list]]]:
@@ -806,15 +769,16 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
     store = doc.get("store", "full")
     if store not in STORE_MODES:
         raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
+    kind = STORES[store]
     base = _load_base(doc.get("base"), base_dir, source, overrides)
     spec = doc.get("sweep")
-    if store == "reliability":
-        _check_reliability_base(base, source)
-    members = base.reliability.members if store == "reliability" else base.ensemble.members
+    kind.check_base(base, source)
+    member_axis = member_axes(base, store)
+    members = member_axis[0].size if member_axis else 1
     axes = _parse_axes(spec, base, source, max_cases, members, too_many_hint)
     _check_case_count([(a.size, a.dim) for a in axes] + ([(members, MEMBER_DIM)] if members > 1 else []),
                       max_cases, too_many_hint, source)
-    axes += reliability_member_axes(base) if store == "reliability" else member_axes(base)
+    axes += member_axis
     _check_overrides(overrides, axes, source)
     skips = _parse_skips((spec or {}).get("skip"), axes, source)
 
@@ -840,12 +804,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             set_path(cfg, key, value)
         try:
             resolved = load_config(cfg, source_name=source)
-            if store == "life":     # each case is a life run: check its blocks, not its duration
-                life_block(resolved, allow_large=allow_large, source=source)
-            elif store != "reliability":
-                preflight(resolved, allow_large=allow_large, seat=False)    # the run seats it
-            if store == "reliability":
-                _check_reliability_case(resolved, source, allow_large, label)
+            kind.check_case(resolved, source, allow_large, label)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
         cases.append(Case(index, case_key(resolved), resolved))

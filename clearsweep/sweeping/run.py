@@ -19,7 +19,6 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
-import netCDF4
 import xarray as xr
 
 from ..config import ConfigError
@@ -35,7 +34,7 @@ from .assemble import write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .guard import require_main_guard
 from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
-from .plan import MAX_CASES, MEMBER_DIM, SweepPlan, expand
+from .plan import MAX_CASES, SweepPlan, expand
 from .stores import STORES
 from .worker import CaseTask, _receipt, _worker_died
 
@@ -154,21 +153,6 @@ def _drive(backend, tasks: Iterable[tuple[str, CaseTask]], on_result: Callable[[
     except BaseException:
         backend.cancel(list(pending))
         raise
-
-
-def add_ensemble_statistics(path: Path) -> None:
-    """Append the ensemble statistics (:func:`clearsweep.ensemble.ensemble_statistics`) of
-    the summary variables of the sweep file at ``path``; reads the summaries only."""
-    from ..ensemble import ensemble_statistics, summary_variables
-
-    with xr.open_dataset(path) as ds:
-        names = ["status", *summary_variables(ds)]
-        stats = ensemble_statistics(ds[names].load())
-    stats = stats.drop_vars(list(stats.coords))
-    with netCDF4.Dataset(path, "a") as nc:
-        nc.setncatts(stats.attrs)
-    stats.attrs = {}
-    stats.to_netcdf(path, mode="a", engine="netcdf4")
 
 
 def drop_timing(ds: xr.Dataset) -> xr.Dataset:
@@ -311,8 +295,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
                 functions = STORES[plan.store].functions()
                 simulate_case = _simulate or functions.simulate
                 summarize_case = _summarize or functions.summarize
-                finish = functions.finish or (add_ensemble_statistics if MEMBER_DIM in plan.dims
-                                              else None)
+                finish = STORES[plan.store].finish(functions, plan.dims)
                 todo = [(h, CaseTask(cfg, plan.store, simulate_case, summarize_case))
                         for h, cfg in runnable.items() if h not in finished]
                 _execute(plan, store, todo, len(runnable), workers, client, progress, guard, cuda)
