@@ -10,7 +10,7 @@ REPORT_FORMATS = ("text", "markdown", "csv", "json")
 
 #: Figure kinds of ``clearsweep plot`` (:mod:`clearsweep.plotting`).
 KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "poincare", "sweep", "life",
-         "reliability", "spectrum", "bifurcation")
+         "reliability", "spectrum", "bifurcation", "effects")
 #: Abscissae of time-series figures (``--kind bifurcation`` takes a swept key instead).
 X_AXES = ("angle", "time")
 #: Output file suffixes of figures (the suffix sets the format).

@@ -28,6 +28,9 @@ import xarray as xr
 from ..ensemble import distinguishable
 from .selection import design_dims, is_ensemble, joint_clearances, value_text
 
+#: A contrast below this fraction of the metric's largest magnitude is rounding: 0.
+ROUNDING = 1e-12
+
 #: What the report reads: the slider's vibration, and each joint's wear.
 VIBRATION = ("slider_acceleration_rms_settled", "slider RMS acceleration, settled")
 WEAR = ("wear_volume", "worn volume")
@@ -101,6 +104,9 @@ def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tupl
     if not usable:
         return None
     per_member = np.atleast_1d(np.asarray(total, dtype=float)) / usable
+    # what is left of terms that cancel, rounding of the metric's size: 0
+    size = float(np.nanmax(np.abs(values.values))) if np.isfinite(values.values).any() else 0.0
+    per_member[np.abs(per_member) <= ROUNDING * size] = 0.0
     value = float(per_member.mean())
     n = per_member.size
     if not is_ensemble(ds) or n < 2:

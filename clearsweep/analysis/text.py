@@ -290,7 +290,7 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
     lines += [_axis_line(ds, d) for d in dims]
     lines.append("")
     lines.append("Headline metrics, lowest (best) and highest (worst) design"
-                 + (" (ensemble mean +- half-width of its 95% interval)" if ensemble else "") + ":")
+                 + ("\n(ensemble mean +- half-width of its 95% interval)" if ensemble else "") + ":")
     clearances = joint_clearances(ds)
     for metric in HEADLINE_METRICS:
         found = _headline_values(ds, metric, ensemble)
@@ -334,8 +334,12 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             if len(ranked) == 1 or low == high:
                 lines.append(f"    all {len(ranked)} equal: {shown_value(low, low_h)}")
                 continue
-            lines.append(f"    lowest  {shown_value(low, low_h):>16}  {_design_text(ds, low_at)}")
-            lines.append(f"    highest {shown_value(high, high_h):>16}  {_design_text(ds, high_at)}")
+            for word, value, width, at in (("lowest ", low, low_h, low_at),
+                                           ("highest", high, high_h, high_at)):
+                # a design of many axes continues under itself: lines of at most 100
+                lines += textwrap.wrap(f"    {word} {shown_value(value, width):>16}  "
+                                       f"{_design_text(ds, at)}", width=100,
+                                       subsequent_indent=" " * 30, break_on_hyphens=False)
             lines.append(f"    {spread}")
     if not ensemble:
         lines += _sweep_motion_lines(ds, case_summary(ds), usable, dims)

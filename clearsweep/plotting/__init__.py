@@ -101,6 +101,7 @@ from .common import (  # noqa: F401
     selection_text,
     wrapped_label,
 )
+from .effects import _draw_effects
 from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
 from .motion import (  # noqa: F401
     BIFURCATION_REVOLUTIONS,
@@ -154,6 +155,7 @@ FIGURES = {
     "reliability": FigureKind((14, 8), _draw_reliability, ("b10",)),
     "spectrum": FigureKind((9, 5.5), _draw_spectrum),
     "bifurcation": FigureKind((10, 9), _draw_bifurcation, ("x",)),
+    "effects": FigureKind((15, 8), _draw_effects),
 }
 
 
