@@ -10,7 +10,9 @@ independent models.
    penetrate, counted in numpy (``slot_penetrations``). Measured worst differences, scaled
    as tests/test_reference.py's ``compare`` scales them: accelerations 3.5e-11, torque
    6.7e-12, the guide's and the joints' forces 1.3e-11, P's F_N 1.1e-14 and friction force
-   8.7e-15 relative (the deepest slot's); RTOL = 1e-7.
+   8.7e-15 relative (the deepest slot's); RTOL = 1e-7. A worn wall (a depth in the map bin
+   under a corner) acts as the wider gap c + h there and nowhere else; the corners' stiff
+   rate is the free block's at the corner (equal to 1e-12), above the constrained one.
 2. The ideal mechanism's closed form (params.ideal_slider_x) with clearances of 1e-9 m: the
    realistic corners sink ~1.2 um into the walls under the load, which moves x by the
    closed form's slope times that (measured 1.08e-6 m, 3.9e-6 relative, near theta = 2.8 +
@@ -20,8 +22,8 @@ independent models.
 4. One corner impact of the full kernel against scipy's integration of the 1-DOF model
    m_eff delta'' = -F_N(delta, delta'): peak force -1.2e-5, penetration -1.3e-5, velocity
    ratio +3.4e-4 relative (the block turns during the impact; tolerance 1e-3).
-5. The worn volume of each wall's band of P's map against k * sum(F_N |v_t| dt) written out
-   from the saved states: 3e-13 relative.
+5. The worn volume of each wall's band of P's map, and each bin's depth, against
+   k * sum(F_N |v_t| dt) written out from the saved states: 3e-13 relative (bins 6e-13).
 6. The energy residual of a 0.1 s run (3.9e-8 of the peak kinetic energy) and the settled
    statistics' change with dt halved (< 5e-5).
 7. Bad ``joints.P`` values: one ``clearsweep: error:`` line naming the key.
@@ -43,8 +45,17 @@ from test_revolute_reference import seat_journal
 from clearsweep.cli import main
 from clearsweep.config import load_config, resolve_materials
 from clearsweep.core import layout as L
+from clearsweep.core.dynamics import NZ, VZ_ROWS, evaluate
 from clearsweep.core.joints import INDEX
-from clearsweep.params import PRESETS, ideal_slider_x, initial_state, pack, seated_offsets
+from clearsweep.core.work import Model, Solve
+from clearsweep.params import (
+    PRESETS,
+    Packed,
+    ideal_slider_x,
+    initial_state,
+    pack,
+    seated_offsets,
+)
 from clearsweep.simulation import case_dataset, prepare_kernel, run_kernel
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -124,12 +135,14 @@ def pose_block(y, p, angles, offset):
     return y
 
 
-def block_state(y0, pk, rng, pose, velocity=(2e-3, -1e-3), rates=(2e-2, -1e-2, 3e-2)):
+def block_state(y0, pk, rng, pose, velocity=(2e-3, -1e-3), rates=(2e-2, -1e-2, 3e-2),
+                stand=False):
     """A drifted state (tests/test_reference.perturb) with the block posed (``POSES``), the
     journal (O with clearance) pressed into its bearing, A and B (with clearance) pressed
     into their sockets (tests/test_reference.contact_state: the rod and the slider's x
     follow), and then the slider's velocity across the guide and its angular rates [rad/s]
-    set: corners approaching and receding at ~1e-3 m/s."""
+    set: corners approaching and receding at ~1e-3 m/s; with ``stand``, its velocity along
+    the guide 0 (the corners' slip ~4e-4 m/s, in the friction ramp)."""
     p, jp = pk.p, pk.jp
     y = perturb(y0, rng)
     if jp[O, L.J_CLEARANCE] != 0.0:
@@ -139,6 +152,8 @@ def block_state(y0, pk, rng, pose, velocity=(2e-3, -1e-3), rates=(2e-2, -1e-2, 3
     y = contact_state(y, p, jp, rng, drift=False)
     y[L.Y_QD + L.Y_R4 + 1:L.Y_QD + L.Y_R4 + 3] = velocity
     y[L.Y_QD + L.Y_PHI4:L.Y_QD + L.Y_PHI4 + 3] = rates
+    if stand:
+        y[L.Y_QD + L.Y_R4] = 0.0
     return y
 
 
@@ -148,14 +163,16 @@ def test_block_in_contact(joints, preset):
     (on opposite walls), with tilts of 1e-4..6e-4 rad, at four crank angles, the corners
     approaching and receding, the other clearance joints pressed into contact: every
     quantity of ``compare`` within RTOL of the reference, and the slots in contact those
-    intended (counted in numpy from the reference's rotation)."""
+    intended (counted in numpy from the reference's rotation). At t = 0 the slider
+    stands (``block_state``'s ``stand``), so the deepest corner's slip lies in the friction
+    ramp (4e-4 m/s); at the other angles beyond it."""
     pk = packed_case(P_JOINTS[joints], preset)
     rng = np.random.default_rng(300 + CASES.index((joints, preset)))
     results = []
     for t in (0.0, 0.13, 0.41, 0.77):
         for pose, (_, _, slots) in POSES.items():
             y0 = base_state(pk, pk.p[L.P_THETA0] + pk.p[L.P_OMEGA] * t)
-            y = block_state(y0, pk, rng, pose)
+            y = block_state(y0, pk, rng, pose, stand=t == 0.0)
             pen = slot_penetrations(y, pk.p, pk.jp)
             assert set(np.flatnonzero(pen > 0.0)) == slots, (pose, pen)
             live = np.sort(pen[pen > -1e-5])
@@ -163,7 +180,9 @@ def test_block_in_contact(joints, preset):
             res = compare(t, y, pk)
             c = res["reference"].contacts[P]
             assert c.delta == pytest.approx(pen.max(), rel=1e-9)
-            assert c.fn > 0.0
+            assert c.fn > 0.0 and c.ft > 0.0
+            slip = np.linalg.norm(c.vt)
+            assert (pk.p[L.P_V0] < slip < pk.p[L.P_V1]) == (t == 0.0), slip
             dg = res["kernel"]["dg"]
             res["fn"] = abs(dg[L.D_FN + P] - c.fn) / c.fn
             res["ft"] = abs(dg[L.D_FT + P] - c.ft) / c.fn
@@ -448,7 +467,9 @@ def slot_wear(pk, raw):
     0), kappa = 20 (1 - c_r) / (13 c_r delta_dot0) with delta_dot0 the slot's episode's
     onset value: max(delta_dot, contact.min_impact_velocity) at the first row in contact
     (the seated start's slots too, at the initial row), the row's own approach before the
-    episode's value is booked. Returns (rows x 16 volumes [m^3], the wall of each slot)."""
+    episode's value is booked. Returns (rows x 16 volumes [m^3], the wall of each slot,
+    rows x 16 x 2: the corner's x and its position across its wall (z - z_s on a y wall,
+    y on a z wall) [m])."""
     p, jp = pk.p, pk.jp
     u, signs = corners(jp)
     half = np.abs(u[-1])
@@ -473,14 +494,16 @@ def slot_wear(pk, raw):
             v = v4 + rot @ np.cross(w, u[c])
             ddot = n @ v
             out.append((n @ q - half[axis] - clear[axis], ddot,
-                        np.linalg.norm(v - ddot * n)))
+                        np.linalg.norm(v - ddot * n), q[0], q[3 - axis]))
         return out
 
     dv0 = np.array([max(ddot, floor) if delta > 0.0 else 0.0
-                    for delta, ddot, _ in slots(raw.y[0])])
+                    for delta, ddot, *_ in slots(raw.y[0])])
     vol = np.zeros((len(raw.y) - 1, 16))
+    where = np.zeros((len(raw.y) - 1, 16, 2))
     for row, y in enumerate(raw.y[1:]):
-        for s, (delta, ddot, slip) in enumerate(slots(y)):
+        for s, (delta, ddot, slip, x, across) in enumerate(slots(y)):
+            where[row, s] = x, across
             if delta <= 0.0:
                 dv0[s] = 0.0
                 continue
@@ -489,25 +512,28 @@ def slot_wear(pk, raw):
             vol[row, s] = p[L.P_AMPL] * jp[P, L.J_K] * fn * slip * p[L.P_DT]
             if dv0[s] == 0.0:
                 dv0[s] = max(ddot, floor)
-    return vol, walls
+    return vol, walls, where
 
 
 def test_worn_volume_per_wall():
     """A seated block (crank from 1 rad, so that the rod pushes it on a y wall as well as
     its weight on the -z wall) sliding for 0.01 s (1000 steps): each wall's band of P's map
     holds sum(depth x bin area) = k x sum over rows and the wall's slots of F_N |v_t| dt
-    (slot_wear), and the four bands together hold P's wear_volume, to 1e-9 relative. Both
+    (slot_wear), each bin the volume of the steps whose corner lay over it (the bin found in
+    numpy from the corner's x and its position across the wall) over its area, and the four
+    bands together hold P's wear_volume, to 1e-9 relative (bins: of the deepest). Both
     sides add the same float64 products in other orders and from corner positions rounded
     differently (~1e-17 m against penetrations of ~1 um: ~1e-11 in F_N). Measured: +y wall
-    1.2e-16, -z wall 3.0e-13 (4.1e-16 and 5.6e-15 m^3 worn), the total 3e-13; the other
-    two walls untouched on both sides."""
+    1.2e-16, -z wall 3.0e-13 (4.1e-16 and 5.6e-15 m^3 worn), the total 3e-13, the bins
+    6e-13 of the deepest (40 bins worn); the other two walls untouched on both sides."""
     _, pk, raw, ds = run_case(WEARING)
     assert int(ds.substeps_used) == 1          # the rows are the steps
     jp = pk.jp
-    vol, walls = slot_wear(pk, raw)
+    vol, walls, where = slot_wear(pk, raw)
     wmap = ds.wear_map.sel(joint="P").values
     nrow, ncol = wmap.shape
     band = nrow // 4
+    expected = np.zeros_like(wmap)
     total = float(ds.wear_volume.sel(joint="P"))
     assert total > 0.0 and not ds.wear_volume.sel(joint=["A", "B", "O"]).any()
     worst = 0.0
@@ -517,12 +543,22 @@ def test_worn_volume_per_wall():
         area = jp[P, L.J_XSPAN] / ncol * 2.0 * half / band
         on_map = wmap[wall * band:(wall + 1) * band].sum() * area
         archard = vol[:, walls == wall].sum()
+        # each step's volume deepens the bin under its corner by volume / area
+        for step, s in zip(*np.nonzero(vol * (walls == wall))):
+            x, across = where[step, s]
+            col = int(np.floor((x - jp[P, L.J_X0]) / jp[P, L.J_XSPAN] * ncol))
+            # a corner sunk into the other wall lies just beyond this one's edge: its end bin
+            row = min(max(int(np.floor((across + half) / (2.0 * half) * band)), 0), band - 1)
+            assert 0 < col < ncol - 1
+            expected[wall * band + row, col] += vol[step, s] / area
         print("wall", wall, on_map, archard, (on_map - archard) / max(archard, 1e-300))
         if archard == 0.0:
             assert on_map == 0.0
         else:
             worst = max(worst, abs(on_map / archard - 1.0))
-    print("worst", worst, vol.sum() / total - 1.0)
+    bins = np.abs(wmap - expected).max() / wmap.max()
+    print("worst", worst, vol.sum() / total - 1.0, bins, (wmap > 0).sum())
+    assert bins < 1e-9
     assert worst < 1e-9
     worn = {wall for wall in range(4) if vol[:, walls == wall].any()}
     assert worn & {0, 1} and worn & {2, 3}       # a y wall and a z wall
@@ -581,3 +617,99 @@ def test_bad_guide(tmp_path, command, sets, key):
         args += ["-o", str(out)]
     assert_error(CliRunner().invoke(main, args), 2, key)
     assert not out.exists()
+
+
+# ---------------------------------------------------------------------------
+# 1b. a worn wall, and the corners' stiff rate
+# ---------------------------------------------------------------------------
+
+def kernel_evaluate(t, y, pk, wmap=None):
+    """One kernel right-hand side (tests/test_reference.run_evaluate) on the wear map
+    ``wmap`` (N_JOINTS x 36 x 72 [m]; default unworn)."""
+    s = np.zeros((L.N_JOINTS, L.N_S))
+    wmap = np.zeros((L.N_JOINTS, 36, 72)) if wmap is None else wmap
+    work = dict(dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D), C=np.zeros((NZ, NZ)),
+                S=np.zeros((NZ, NZ)), L=np.zeros((NZ, NZ)), vz=np.zeros((VZ_ROWS, NZ)))
+    st = evaluate(t, np.array(y, float), Model(pk.p, pk.jp, s, wmap), work["dy"], work["dg"],
+                  True, Solve(work["C"], work["S"], work["L"], work["vz"]))
+    assert st == L.ST_OK
+    return work
+
+
+def test_worn_wall_is_a_wider_gap():
+    """Wear feedback: a depth h in the +y wall's map bin under the one corner in contact (the
+    "one" pose; bin found in numpy: the band of rows 0..8 of 36 across the wall, z - z_s,
+    and the column along the guide, x) acts on that corner as the clearance c_y + h: the
+    accelerations, the guide's force and the contact values as those of the unworn map with
+    c_y + h, and as the dense reference's there (``compare``); the same depth in the next
+    bin along the guide, or in the -y wall's band, changes nothing."""
+    pk = packed_case(P_JOINTS["P"], "realistic")
+    rng = np.random.default_rng(61)
+    t = 0.41
+    y = block_state(base_state(pk, pk.p[L.P_THETA0] + pk.p[L.P_OMEGA] * t), pk, rng, "one")
+    jp = pk.jp
+    u = corners(jp)[0][IMPACT_SLOT // 2]
+    q = ref_mod.point(y[:L.N_Q], SLIDER, u)
+    half = 0.5 * jp[P, L.J_HEIGHT] + jp[P, L.J_CZ]
+    col = int((q[0] - jp[P, L.J_X0]) / jp[P, L.J_XSPAN] * 72)
+    row = int((q[2] - pk.p[L.P_ZS] + half) / (2.0 * half) * 9)
+    assert 0 < col < 71 and 0 <= row < 9
+    h = 1e-6
+    worn = np.zeros((L.N_JOINTS, 36, 72))
+    worn[P, row, col] = h
+    k = kernel_evaluate(t, y, pk, worn)
+    wider = Packed(p=pk.p, jp=pk.jp.copy(), y0=pk.y0, n_steps=pk.n_steps,
+                   save_every=pk.save_every, map_shape=pk.map_shape)
+    wider.jp[P, L.J_CY] += h
+    res = compare(t, y, wider)
+    kw = res["kernel"]
+    assert res["reference"].contacts[P].delta == pytest.approx(2e-6 - h, rel=1e-3)
+    assert k["dg"][L.D_HWEAR + P] == h
+    assert k["dg"][L.D_CEFF + P] == pytest.approx(kw["dg"][L.D_CEFF + P], rel=1e-15)
+    for key in (L.D_DELTA, L.D_FN, L.D_FT, L.D_DDOT, L.D_VT):
+        assert k["dg"][key + P] == pytest.approx(kw["dg"][key + P], rel=1e-9), key
+    assert np.allclose(k["dy"], kw["dy"], rtol=1e-9, atol=1e-12)
+    unworn = kernel_evaluate(t, y, pk)
+    for other in ((P, row, col + 1), (P, 9 + row, col), (P, row, col - 1)):
+        elsewhere = np.zeros((L.N_JOINTS, 36, 72))
+        elsewhere[other] = h
+        assert np.array_equal(kernel_evaluate(t, y, pk, elsewhere)["dy"], unworn["dy"]), other
+    assert not np.allclose(unworn["dy"], k["dy"], rtol=1e-6)
+
+
+def test_corner_stiff_rate():
+    """The corners' stiff rate (docs/physics.md section 4), the one corner in contact
+    (the "one" pose), no damping (c_r = 1), no friction: separating slowly, sqrt(dF/d delta
+    W) with dF/d delta = (3/2) K delta^(1/2) and W = 1/m4 + (u x n_b)^T J4^-1 (u x n_b) the
+    free block's inverse mass at the corner (prismatic.corner_mobility), which bounds the
+    mechanism's (the reference's n^T W_p n, the block tied to the rod at B) from above;
+    approaching at 0.05 m/s, the rate at the penetration the approach reaches by energy,
+    K delta_p^(5/2) / (5/2) = K delta^(5/2) / (5/2) + m_eff delta_dot^2 / 2."""
+    pk = packed_case(P_JOINTS["P"], "realistic", contact={"restitution": 1.0},
+                     friction={"enabled": False})
+    rng = np.random.default_rng(67)
+    t = 0.2
+    y0 = base_state(pk, pk.p[L.P_THETA0] + pk.p[L.P_OMEGA] * t)
+    jp, p = pk.jp, pk.p
+    k_hertz = corner_stiffness(jp)
+    u = corners(jp)[0][IMPACT_SLOT // 2]
+    for ddot in (-1e-4, 0.05):
+        y = block_state(y0, pk, rng, "one", velocity=(ddot, 0.0), rates=(0.0, 0.0, 0.0))
+        k = kernel_evaluate(t, y, pk)
+        r = ref_mod.evaluate(t, y, p, jp)
+        c = r.contacts[P]
+        assert c.ddot == pytest.approx(ddot, rel=1e-12)
+        n_body = ref_mod.rotation(y[L.Y_PHI4:L.Y_PHI4 + 3]).T @ c.n
+        lever = np.cross(u, n_body)
+        inv_m = 1.0 / p[L.P_M4] + lever @ (lever / p[L.P_J4:L.P_J4 + 3])
+        bound = ref_mod.stiff_rates(r, P, p, jp)[0]          # the constrained m_eff
+        delta = c.delta
+        if ddot > 0.0:
+            delta = (delta ** 2.5 + 1.25 * ddot ** 2 / (inv_m * k_hertz)) ** 0.4
+            assert delta > 3.0 * c.delta
+        rate = np.sqrt(1.5 * k_hertz * np.sqrt(delta) * inv_m)
+        print("stiff rate:", ddot, k["dg"][L.D_RATE], rate, bound)
+        assert k["dg"][L.D_RATE] == pytest.approx(rate, rel=1e-12)
+        assert k["dg"][L.D_PRATE] == k["dg"][L.D_RATE]
+        if ddot < 0.0:
+            assert bound < rate
