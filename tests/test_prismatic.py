@@ -699,3 +699,22 @@ def test_corner_stiff_rate():
         assert k["dg"][L.D_PRATE] == k["dg"][L.D_RATE]
         if ddot < 0.0:
             assert bound < rate
+
+
+@pytest.mark.parametrize("clearance", [0.3, 1.0])
+def test_guide_beyond_the_rods_reach(tmp_path, clearance):
+    """Clearances that let the block sit where the rod cannot reach it (here, the crank at
+    theta = pi: z_s - l2 - c below the crank pin's level, 0.26 m + c against l3 = 0.38 m):
+    `run` refuses them in one line naming the key (before the check, the seated start took
+    a square root of a negative number: a traceback); 0.05 m, within reach, packs."""
+    out = tmp_path / "p.nc"
+    args = ["run", str(ROOT / "configs" / "one_clearance.yaml"), "-o", str(out),
+            "--set", "mechanism.theta0=3.14159"]
+    for item in guide(clearance):
+        args += ["--set", item]
+    assert_error(CliRunner().invoke(main, args), 2, "joints.P.clearance_y", "reach")
+    assert not out.exists()
+    cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
+                      [*guide(0.05), "mechanism.theta0=3.14159"])
+    pk = pack(cfg, resolve_materials(cfg))         # the seated start
+    assert np.all(np.isfinite(pk.y0)) and pk.y0[L.Y_R4 + 2] < pk.p[L.P_ZS] - 0.05
