@@ -16,6 +16,7 @@ import numpy as np
 from .choices import DAMPING_LAWS
 from .config import (
     Config,
+    ConfigError,
     EnsembleConfig,
     JointConfig,
     PrismaticJointConfig,
@@ -237,6 +238,25 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     return y
 
 
+def check_guide_reach(joint: PrismaticJointConfig, preset: Preset) -> None:
+    """Raise ConfigError where joint P's clearances let the block sit where the rod cannot
+    reach it: at some crank angle theta and some offset (y, z) within the clearances,
+    (y - l2 sin theta)^2 + (z_s + z + l2 cos theta)^2 >= l3^2 (docs/physics.md section 1; the
+    start would have no slider position). Names the larger clearance."""
+    theta = np.linspace(0.0, 2.0 * math.pi, 7201)
+    l2, l3 = preset.crank_length_m, preset.rod_length_m
+    worst = float(np.max((l2 * np.abs(np.sin(theta)) + joint.clearance_y) ** 2
+                         + (np.abs(preset.slider_height_m + l2 * np.cos(theta))
+                            + joint.clearance_z) ** 2))
+    if worst < l3 ** 2:
+        return
+    key = "clearance_y" if joint.clearance_y >= joint.clearance_z else "clearance_z"
+    raise ConfigError(f"joints.P.{key}", getattr(joint, key),
+                      f"clearances of joint P that keep the block within the rod's reach "
+                      f"({l3:g} m) anywhere in its guide at every crank angle (these let it lie "
+                      f"{math.sqrt(worst):.3g} m from the crank pin across the guide)")
+
+
 def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> None:
     """Joint P's own columns of its jp row: the block, the two clearances (J_C the smaller),
     the corners' edge radius, and the walls' wear maps along the guide: from the ideal
@@ -252,6 +272,7 @@ def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> N
     row[L.J_RI] = joint.corner_radius
     row[L.J_RJ] = joint.corner_radius
     theta = np.linspace(0.0, 2.0 * math.pi, 721)
+    check_guide_reach(joint, preset)
     x = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
     margin = 0.5 * length + 0.05 * float(x.max() - x.min())
     row[L.J_X0] = float(x.min()) - margin

@@ -9,6 +9,9 @@ contact's linearised vibration at its deepest penetration.
 
 import math
 
+import numpy as np
+
+from clearsweep.core import layout as L
 from clearsweep.core.contact import (
     damping_factor,
     elastic_force,
@@ -60,3 +63,56 @@ def impact_restitution(cr, v_in, m_eff=1.0, ew=EW, steps=4000, latch_floor=None,
         if x < 0 and v < 0:
             return -v / v_in
     raise AssertionError("ball did not leave the contact")
+
+
+def scipy_impact(force, mass, v_in, cr, a_ext=0.0, rounds=4):
+    """One impact of the 1-DOF model mass x'' = -F_N(x, x') + mass a_ext from x = 0 at x' =
+    v_in until the contact opens, integrated by scipy (DOP853, rtol 1e-12); ``force(x, v,
+    kappa)`` gives F_N with the damping factor kappa = 20 (1 - c_r) / (13 c_r x'_0) of the
+    paper's law, x'_0 the impact's fastest approach (contact.impact_velocity's default): a
+    fixed point of the model's own trajectory, reached in ``rounds`` rounds from v_in.
+
+    Returns (duration [s], {"force": peak F_N [N], "penetration": peak x [m], "ratio": the
+    exit/entry velocity ratio})."""
+    from scipy.integrate import solve_ivp
+
+    def leaves(t, z):
+        return z[0] if t > 0.0 else 1.0
+    leaves.terminal = True
+    leaves.direction = -1
+    dv0 = v_in
+    for _ in range(rounds):
+        kappa = 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
+
+        def rhs(_, z, kappa=kappa):
+            return [z[1], -force(z[0], z[1], kappa) / mass + a_ext]
+
+        sol = solve_ivp(rhs, (0.0, 1e-2), [0.0, v_in], method="DOP853", rtol=1e-12,
+                        atol=[1e-17, 1e-12], events=leaves, dense_output=True)
+        t_out = sol.t_events[0][0]
+        z = sol.sol(np.linspace(0.0, t_out, 100001))
+        dv0 = z[1].max()
+    return t_out, {"force": max(force(x, v, kappa) for x, v in z.T), "penetration": z[0].max(),
+                   "ratio": -sol.y_events[0][0][1] / v_in}
+
+
+def kernel_impact(raw, ds, j):
+    """The first contact episode of clearance joint j in a kernel run whose rows are its
+    steps: (k0, k1: its first and last rows in contact, v_in: the approach rate where the
+    penetration, linear between rows, crosses 0 on the way in, {"force": the rows' peak F_N
+    [N], "penetration": their peak [m], "ratio": the exit/entry velocity ratio})."""
+    delta = raw.d[:, L.D_DELTA + j]
+    ddot = raw.d[:, L.D_DDOT + j]
+    k0 = int(np.argmax(delta > 0.0))
+    k1 = k0 + int(np.argmax(delta[k0:] <= 0.0)) - 1
+    assert k0 > 2 and k1 > k0 + 100
+
+    def crossing(k):
+        f = delta[k] / (delta[k] - delta[k + 1])
+        return ddot[k] + f * (ddot[k + 1] - ddot[k])
+
+    v_in = crossing(k0 - 1)
+    name = str(ds.joint.values[j])
+    return k0, k1, v_in, {"force": ds.normal_force.sel(joint=name).values[k0:k1 + 1].max(),
+                          "penetration": ds.penetration.sel(joint=name).values[k0:k1 + 1].max(),
+                          "ratio": -crossing(k1) / v_in}

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import reference as ref_mod
-from scipy.integrate import solve_ivp
+from impacts import kernel_impact, scipy_impact
 from test_reference import (
     RTOL,
     base_state,
@@ -264,12 +264,6 @@ def impact_run():
     return run_case(IMPACT)
 
 
-def crossing(x, v, k):
-    """Where x, linear between rows k and k + 1, crosses 0: (fraction of the step, v there)."""
-    f = x[k] / (x[k] - x[k + 1])
-    return f, v[k] + f * (v[k + 1] - v[k])
-
-
 def test_journal_impact_against_scipy(impact_run):
     """Peak normal force, peak penetration and the exit/entry velocity ratio of O's first
     impact against scipy's integration of m2 delta'' = -F_N(delta, delta') + m2 a_ext, F_N the
@@ -293,54 +287,21 @@ def test_journal_impact_against_scipy(impact_run):
     p, jp = pk.p, pk.jp
     dt = p[L.P_DT]
     d = raw.d
-    delta = d[:, L.D_DELTA + O]
     ddot = d[:, L.D_DDOT + O]
-    k0 = int(np.argmax(delta > 0.0))                        # first row in contact
-    k1 = k0 + int(np.argmax(delta[k0:] <= 0.0)) - 1         # last row of the episode
-    assert k0 > 2 and k1 > k0 + 100
+    k0, k1, v_in, kernel = kernel_impact(raw, ds, O)
     # A out of contact throughout, so that only O's force moves the crank in the plane
     assert np.all(d[k0 - 2:k1 + 2, L.D_DELTA + A] < 0.0)
     assert ds.first_impact_time.sel(joint="O") == pytest.approx(raw.t[k0])
     a_ext = (ddot[k0 - 1] - ddot[k0 - 2]) / dt
-    _, v_in = crossing(delta, ddot, k0 - 1)
-    _, v_out = crossing(delta, ddot, k1)
-    fn = ds.normal_force.sel(joint="O").values
-    pen = ds.penetration.sel(joint="O").values
-    kernel = {"force": fn[k0:k1 + 1].max(), "penetration": pen[k0:k1 + 1].max(),
-              "ratio": -v_out / v_in}
-
     m2, cr = p[L.P_M2], p[L.P_CR]
     c, ew, ri, rj = jp[O, L.J_C], jp[O, L.J_EW], jp[O, L.J_RI], jp[O, L.J_RJ]
 
-    def impact(dv0):
-        """The 1-DOF impact with the impact velocity dv0 in the damping factor: (duration,
-        samples of (delta, delta') over it, exit velocity, the force law)."""
-        kappa = 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
+    def force(x, v, kappa):
+        return ref_mod.journal_force(x, v, c, ew, ri, rj, kappa)[0]
 
-        def force(x, v):
-            return ref_mod.journal_force(x, v, c, ew, ri, rj, kappa)[0]
-
-        def rhs(_, z):
-            return [z[1], -force(z[0], z[1]) / m2 + a_ext]
-
-        def leaves(t, z):
-            return z[0] if t > 0.0 else 1.0
-        leaves.terminal = True
-        leaves.direction = -1
-        sol = solve_ivp(rhs, (0.0, 1e-3), [0.0, v_in], method="DOP853", rtol=1e-12,
-                        atol=[1e-16, 1e-12], events=leaves, dense_output=True)
-        t_out = sol.t_events[0][0]
-        return t_out, sol.sol(np.linspace(0.0, t_out, 100001)), sol.y_events[0][0][1], force
-
-    # the impact velocity is the episode's fastest approach (contact.impact_velocity's
-    # default): a little above the entry velocity, as a_ext still speeds the approach up while
-    # F_N < m2 a_ext; a fixed point of the model's own trajectory, reached in a few rounds
-    dv0 = v_in
-    for _ in range(4):
-        t_out, z, v_exit, force = impact(dv0)
-        dv0 = z[1].max()
-    model = {"force": max(force(x, v) for x, v in z.T), "penetration": z[0].max(),
-             "ratio": -v_exit / v_in}
+    # the impact velocity is the episode's fastest approach: a little above the entry
+    # velocity, as a_ext still speeds the approach up while F_N < m2 a_ext
+    t_out, model = scipy_impact(force, m2, v_in, cr, a_ext)
     assert t_out == pytest.approx((k1 - k0 + 1) * dt, abs=2 * dt)
     assert 0.5 < model["ratio"] < 0.9
     for key, val in model.items():
