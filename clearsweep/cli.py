@@ -346,6 +346,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
                       dry_run=dry_run)
         return
     if dry_run:
+        _preflight(cfg, config, allow_large)
         click.echo(case_plan_text(config, est))
         return
     from .simulation import simulate
@@ -545,6 +546,21 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
         _fail(f"cannot write {exc.filename or out}: {_reason(exc)}{note}", 1)
 
 
+def _preflight(cfg, config: str, allow_large: bool) -> None:
+    """What a run checks before it starts, compiling nothing (``simulation.preflight`` without
+    the seated start): the packing (the guide's reach) and the step bound; an error names the
+    file ``config``."""
+    from .simulation import preflight
+
+    try:
+        preflight(cfg, allow_large=allow_large, seat=False)
+    except ConfigError as exc:
+        if exc.source != "<config>":
+            raise
+        raise ConfigError(exc.key, exc.value, exc.expected, config, exc.suggestion, exc.got,
+                          exc.line) from None
+
+
 @main.command()
 @click.argument("config", type=click.Path(dir_okay=False))
 @_overrides
@@ -573,6 +589,7 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
         return
     cfg = load_config(config, overrides)
     est = check_budget(cfg, allow_large=allow_large, source=config)
+    _preflight(cfg, config, allow_large)
     if not quiet:
         click.echo(dump_config(cfg), nl=False)
         click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory "

@@ -248,3 +248,15 @@ def test_a_missing_series_is_blamed_on_the_summary_store_only_where_it_is_one():
     assert "summary-only sweep" in message(summary) and "store: full" in message(summary)
     assert "summary-only" not in message(
         xr.Dataset({"x": ("B_clearance", [1.0])}, attrs={"sweep_store": "full"}))
+
+
+def test_validate_refuses_the_step_that_run_refuses():
+    """Was: `validate` called a case with solver.dt = 5e-3 s valid, and `run` then refused
+    it (the step bound is checked when the case is packed, which validate did not do). Now
+    both refuse it in one line that names the file and the key, compiling nothing."""
+    config = str(ROOT / "configs" / "one_clearance.yaml")
+    for command in (["validate", config], ["run", config, "--dry-run"]):
+        result = CliRunner().invoke(main, [*command, "--set", "solver.dt=5e-3"])
+        assert result.exit_code == 2, result.output
+        line = result.output.strip().splitlines()[-1]
+        assert line.startswith("clearsweep: error: ") and "one_clearance.yaml: solver.dt" in line

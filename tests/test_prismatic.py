@@ -661,15 +661,16 @@ def test_corner_stiff_rate():
             assert bound < rate
 
 
+@pytest.mark.parametrize("command", ["validate", "run"])
 @pytest.mark.parametrize("clearance", [0.3, 1.0])
-def test_guide_beyond_the_rods_reach(tmp_path, clearance):
+def test_guide_beyond_the_rods_reach(tmp_path, clearance, command):
     """Clearances that let the block sit where the rod cannot reach it (here, the crank at
     theta = pi: z_s - l2 - c below the crank pin's level, 0.26 m + c against l3 = 0.38 m):
-    `run` refuses them in one line naming the key (before the check, the seated start took
-    a square root of a negative number: a traceback); 0.05 m, within reach, packs."""
+    `run` and `validate` refuse them in one line naming the key (before the check, the seated
+    start took a square root of a negative number: a traceback); 0.05 m, within reach, packs."""
     out = tmp_path / "p.nc"
-    args = ["run", str(ROOT / "configs" / "one_clearance.yaml"), "-o", str(out),
-            "--set", "mechanism.theta0=3.14159"]
+    args = [command, str(ROOT / "configs" / "one_clearance.yaml"), "--set", "mechanism.theta0=3.14159"]
+    args += ["-o", str(out)] if command == "run" else []
     for item in guide(clearance):
         args += ["--set", item]
     assert_error(CliRunner().invoke(main, args), 2, "joints.P.clearance_y", "reach")
