@@ -285,6 +285,12 @@ def reliability_summary(ds: xr.Dataset) -> xr.Dataset:
         "units": "1", "long_name": "crank revolutions to the limit, or reached where censored"})
     summary["censored"] = xr.DataArray(censored, dims="limit", attrs={
         "long_name": "limit not reached (right-censored at revolutions_to_limit)"})
+    # the joint that reached each limit first ("": none, or a limit of the slider's)
+    joints = [str(ds[f"first_joint_to_{n}"].values) if f"first_joint_to_{n}" in ds else ""
+              for n in names]
+    joints.append(joints[int(np.argmin(np.where(hit, times, np.inf)))] if hit.any() else "")
+    summary["first_joint"] = xr.DataArray(np.array(joints, dtype=object), dims="limit", attrs={
+        "long_name": "the joint that reached the limit first (empty: none, or the slider's)"})
     summary = summary.assign_coords(limit=("limit", [*names, ANY_LIMIT],
                                            {"long_name": "life limit (any: the first reached)"}))
     return summary
@@ -551,6 +557,21 @@ def _life_text(value: float, horizon: float) -> str:
     return f"> {horizon:.3g}" if math.isinf(value) else f"{value:.3g}"
 
 
+def _first_joints(flat: xr.Dataset, limit: str, rows) -> list[str]:
+    """``first to reach it: joint B in 12 members, P in 4`` per design, where the members
+    name the joint (``first_joint``); nothing for a file without it."""
+    if "first_joint" not in flat:
+        return []
+    out = []
+    for label, case in rows:
+        names = [str(v) for v in np.atleast_1d(case["first_joint"].values) if str(v)]
+        if names:
+            counts = sorted(((names.count(j), j) for j in set(names)), reverse=True)
+            out.append(f"  {label}: first to reach it: "
+                       + ", ".join(f"joint {j} in {n}" for n, j in counts) + " members")
+    return [f"which joint reaches {limit} first:", *out] if out else []
+
+
 def reliability_text(ds: xr.Dataset, limits: Sequence[str] | None = None) -> str:
     """Designs ranked by B10 per limit, with intervals, B50, the Weibull fit and which
     designs cannot be told apart; then what decides the life (rank correlations)."""
@@ -585,6 +606,7 @@ def reliability_text(ds: xr.Dataset, limits: Sequence[str] | None = None) -> str
         widths = [max(len(r[i]) for r in table) for i in range(len(head))]
         lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in table]
         lines += _distinguishable(rows)
+        lines += _first_joints(flat, limit, rows)
         if ds.sizes.get("input", 0):
             lines.append(f"what decides it: Spearman rank correlation with the revolutions to "
                          f"{limit} [{level:.0%} interval], share of the rank variance")

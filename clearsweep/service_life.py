@@ -903,11 +903,20 @@ def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float) -> xr.D
     for name, (key, var) in CRITERIA.items():
         limit = cfg.get(key)
         values = data[var][1]
+        first = ""
+        if values.ndim == 2 and limit is not None:
+            # each joint against the limit: the one that crosses it first
+            per_joint = [crossing_cycle(cycles, values[:, j], limit) for j in range(values.shape[1])]
+            if np.isfinite(per_joint).any():
+                first = JOINTS[int(np.nanargmin(per_joint))]
         values = values if values.ndim == 1 else np.nanmax(np.where(np.isfinite(values), values, -np.inf),
                                                              axis=1)
         data[f"cycles_to_{name}"] = ((), np.nan if limit is None else crossing_cycle(cycles, values, limit))
-    data["cycles_to_wear_through"] = ((), float(np.nanmin(data["wear_through_cycle"][1]))
-                                      if np.isfinite(data["wear_through_cycle"][1]).any() else np.nan)
+        data[f"first_joint_to_{name}"] = ((), first)
+    through = data["wear_through_cycle"][1]
+    data["cycles_to_wear_through"] = ((), float(np.nanmin(through)) if np.isfinite(through).any() else np.nan)
+    data["first_joint_to_wear_through"] = ((), JOINTS[int(np.nanargmin(through))]
+                                           if np.isfinite(through).any() else "")
     data["wall_time"] = ((), wall)
     ds = xr.Dataset({k: (v[0], v[1]) for k, v in data.items()},
                     coords={"cycle": ("cycle", cycles), "joint": ("joint", list(JOINTS)),
@@ -950,7 +959,8 @@ def life_summary_text(ds: xr.Dataset) -> str:
         value = float(ds[f"cycles_to_{name}"])
         unset = cfg is not None and getattr(cfg.life, key.split(".", 1)[1]) is None
         text = f"{value:.4g}" if math.isfinite(value) else "not set" if unset else "not reached"
-        lines.append(f"  revolutions to {key}: {text}")
+        first = str(ds[f"first_joint_to_{name}"].values) if f"first_joint_to_{name}" in ds else ""
+        lines.append(f"  revolutions to {key}: {text}" + (f" (joint {first} first)" if first else ""))
     for j, joint in enumerate(ds.joint.values):
         cyc = float(ds.wear_through_cycle[j])
         spec = getattr(joints, str(joint), None) if joints is not None else None
@@ -1030,7 +1040,8 @@ def life_summary(ds: xr.Dataset) -> xr.Dataset:
     from .variables import LIFE_VARIABLES
 
     out = {str(name): ds[name] for name in ds.data_vars
-           if str(name).startswith("cycles_to_") or name in ("status", "stop_reason", "wall_time",
+           if str(name).startswith(("cycles_to_", "first_joint_to_"))
+           or name in ("status", "stop_reason", "wall_time",
                                                              "wear_through_cycle")}
     for name in FINAL_VARIABLES:
         spec = LIFE_VARIABLES[name]

@@ -304,6 +304,17 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
                                            "blocks; NaN if not reached or not set"),
     "cycles_to_wear_through": VariableSpec((), "1", "revolutions to the first coating wear-through",
                                            "earliest joint; NaN if none"),
+    **{f"first_joint_to_{name}": VariableSpec((), "", f"the joint that reached {what} first",
+                                              "each joint against the limit; empty if none did")
+       for name, what in (("clearance_growth", "life.max_clearance_growth"),
+                          ("normal_force", "life.max_normal_force"),
+                          ("wear_through", "coating wear-through"))},
+    "first_joint_to_rms_acceleration": VariableSpec((), "", "the joint that reached "
+                                                    "life.max_rms_acceleration first",
+                                                    "empty: the slider's, no joint's"),
+    "first_joint_to_motion_error": VariableSpec((), "", "the joint that reached "
+                                                "life.max_motion_error first",
+                                                "empty: the slider's, no joint's"),
     "wall_time": VariableSpec((), "s", "wall-clock time of the life run"),
 }
 
@@ -311,6 +322,10 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
 #: Text variables of results files and the dims they carry besides the sweep's.
 TEXT_VARIABLES: dict[str, tuple[str, ...]] = {
     "status": (), "message": (), "stop_reason": (), "block_status": ("cycle",),
+    **{f"first_joint_to_{name}": () for name in ("clearance_growth", "normal_force",
+                                                 "rms_acceleration", "motion_error",
+                                                 "wear_through")},
+    "first_joint": ("limit",),
 }
 
 #: Dims of a reliability sweep's estimates and member draws besides the design dims

@@ -19,7 +19,7 @@ from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
 from ..motion import HIGH_ORDER
 from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
-from ..variables import length_unit
+from ..variables import JOINT_TYPES, length_unit
 from .selection import (
     _MISSING_TEXT,
     CASE_DIMS,
@@ -357,6 +357,11 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
     """
     wear = wear_table(ds)
     columns: tuple[_Column, ...] = _WEAR_COLUMNS
+    # a guide's walls have no projections about the axes (docs/physics.md 5.7): its wear is in
+    # the final-wear table; the flat csv / json table keeps its row for its statistics
+    flat = [j for j in wear["joint"].values if JOINT_TYPES.get(value_text(j)) != "prismatic"]
+    if not with_statistics and len(flat) < wear.sizes["joint"]:
+        wear = wear.sel(joint=flat)
     if with_statistics:
         summary = case_summary(ds)
         extra = tuple(c for c in (*_MOTION_COLUMNS, *_CONTACT_COLUMNS, *_FINAL_WEAR_COLUMNS)

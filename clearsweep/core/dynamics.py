@@ -186,6 +186,14 @@ def chol_solve(L, vz, b, nc):
         vz[b, i] = acc / L[i, i]
 
 
+@compiled(inline="always")
+def free_count(minv):
+    """The free coordinates in use: NZ, or NZ - 2 where the slider is held in its guide
+    (minv[3] = 0: its y4, z4, the last two, carry nothing), so that the loops of the solve
+    cost what they did before joint P for every case without clearance there."""
+    return NZ if minv[3] != 0.0 else NZ - 2
+
+
 @compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
@@ -199,8 +207,9 @@ def minv_apply(minv, mr_inv, vz, v, out):
     vz[out, 5] = minv[1] * vz[v, 5]
     vz[out, 6] = minv[2] * vz[v, 6]
     vz[out, 7] = minv[2] * vz[v, 7]
-    vz[out, 8] = minv[3] * vz[v, 8]
-    vz[out, 9] = minv[3] * vz[v, 9]
+    if minv[3] != 0.0:
+        vz[out, 8] = minv[3] * vz[v, 8]
+        vz[out, 9] = minv[3] * vz[v, 9]
 
 
 @compiled
@@ -210,9 +219,10 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
     minv_apply(minv, mr_inv, vz, g, w1)
     if nc == 0:
         return
+    nz = free_count(minv)
     for i in range(nc):
         acc = 0.0
-        for k in range(NZ):
+        for k in range(nz):
             acc += C[i, k] * vz[w1, k]
         vz[lam, i] = acc
     chol_solve(L, vz, lam, nc)
@@ -223,7 +233,7 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
 def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
     """vz[out] = M_zz^-1 (vz[f] - C^T vz[lam]): free accelerations from the multipliers
     (f, lam, tmp, out: rows of the work array vz)."""
-    for k in range(NZ):
+    for k in range(free_count(minv)):
         acc = vz[f, k]
         for i in range(nc):
             acc -= C[i, k] * vz[lam, i]
@@ -278,7 +288,7 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
         constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
         for a in range(b + 1):
             acc = 0.0
-            for k in range(NZ):
+            for k in range(free_count(minv)):
                 acc += vz[a, k] * vz[6, k]
             # (a, b) with a <= b -> packed index
             if a == 0:
@@ -539,22 +549,23 @@ def schur_solve(C, S, L, nc, minv, mr_inv, vz):
     """Free accelerations into vz[VZ_ZDD] and the ideal joints' multipliers into
     vz[VZ_LAMBDA], by the Schur complement S = C M^-1 C^T (Cholesky). False if singular."""
     minv_apply(minv, mr_inv, vz, VZ_FORCE, VZ_MINV_FORCE)
+    nz = free_count(minv)
     if nc == 0:
-        for k in range(NZ):
+        for k in range(nz):
             vz[VZ_ZDD, k] = vz[VZ_MINV_FORCE, k]
         return True
     for i in range(nc):
         acc = -vz[VZ_RHS, i]
-        for k in range(NZ):
+        for k in range(nz):
             acc += C[i, k] * vz[VZ_MINV_FORCE, k]
         vz[VZ_LAMBDA, i] = acc
     for jj in range(nc):
-        for k in range(NZ):
+        for k in range(nz):
             vz[VZ_WORK1, k] = C[jj, k]
         minv_apply(minv, mr_inv, vz, VZ_WORK1, VZ_WORK2)
         for i in range(jj, nc):
             acc = 0.0
-            for k in range(NZ):
+            for k in range(nz):
                 acc += C[i, k] * vz[VZ_WORK2, k]
             S[i, jj] = acc
             S[jj, i] = acc

@@ -11,7 +11,6 @@ from matplotlib.figure import Figure
 from ..analysis import factorial
 from .common import PlotError, display_scale
 
-
 #: Volumes drawn in the unit that reads directly (worn volumes are some 1e-15 m^3).
 VOLUME_UNITS = ((1e-18, "\u00b5m3"), (1e-9, "mm3"), (1.0, "m3"))
 
