@@ -186,12 +186,22 @@ def chol_solve(L, vz, b, nc):
         vz[b, i] = acc / L[i, i]
 
 
+#: Free coordinates but the slider's y4, z4 (the last two, free only where P has clearance).
+NZ_HELD = NZ - 2
+
+
 @compiled(inline="always")
-def free_count(minv):
-    """The free coordinates in use: NZ, or NZ - 2 where the slider is held in its guide
-    (minv[3] = 0: its y4, z4, the last two, carry nothing), so that the loops of the solve
-    cost what they did before joint P for every case without clearance there."""
-    return NZ if minv[3] != 0.0 else NZ - 2
+def row_dot(A, i, B, k, minv, start):
+    """start + the sum over the free coordinates in use of A[i, c] B[k, c], added in order:
+    the first NZ_HELD, a constant count a compiler unrolls as it did before joint P, then the
+    slider's two where it is free (minv[3] != 0)."""
+    acc = start
+    for c in range(NZ_HELD):
+        acc += A[i, c] * B[k, c]
+    if minv[3] != 0.0:
+        for c in range(NZ_HELD, NZ):
+            acc += A[i, c] * B[k, c]
+    return acc
 
 
 @compiled
@@ -219,12 +229,8 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
     minv_apply(minv, mr_inv, vz, g, w1)
     if nc == 0:
         return
-    nz = free_count(minv)
     for i in range(nc):
-        acc = 0.0
-        for k in range(nz):
-            acc += C[i, k] * vz[w1, k]
-        vz[lam, i] = acc
+        vz[lam, i] = row_dot(C, i, vz, w1, minv, 0.0)
     chol_solve(L, vz, lam, nc)
     back_substitute(vz, g, C, lam, nc, minv, mr_inv, w2, w1)
 
@@ -233,11 +239,17 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
 def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
     """vz[out] = M_zz^-1 (vz[f] - C^T vz[lam]): free accelerations from the multipliers
     (f, lam, tmp, out: rows of the work array vz)."""
-    for k in range(free_count(minv)):
+    for k in range(NZ_HELD):
         acc = vz[f, k]
         for i in range(nc):
             acc -= C[i, k] * vz[lam, i]
         vz[tmp, k] = acc
+    if minv[3] != 0.0:
+        for k in range(NZ_HELD, NZ):
+            acc = vz[f, k]
+            for i in range(nc):
+                acc -= C[i, k] * vz[lam, i]
+            vz[tmp, k] = acc
     minv_apply(minv, mr_inv, vz, tmp, out)
 
 
@@ -287,9 +299,7 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     for b in range(3):
         constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
         for a in range(b + 1):
-            acc = 0.0
-            for k in range(free_count(minv)):
-                acc += vz[a, k] * vz[6, k]
+            acc = row_dot(vz, a, vz, 6, minv, 0.0)
             # (a, b) with a <= b -> packed index
             if a == 0:
                 vz[5, b] = acc
@@ -549,24 +559,18 @@ def schur_solve(C, S, L, nc, minv, mr_inv, vz):
     """Free accelerations into vz[VZ_ZDD] and the ideal joints' multipliers into
     vz[VZ_LAMBDA], by the Schur complement S = C M^-1 C^T (Cholesky). False if singular."""
     minv_apply(minv, mr_inv, vz, VZ_FORCE, VZ_MINV_FORCE)
-    nz = free_count(minv)
     if nc == 0:
-        for k in range(nz):
+        for k in range(NZ):
             vz[VZ_ZDD, k] = vz[VZ_MINV_FORCE, k]
         return True
     for i in range(nc):
-        acc = -vz[VZ_RHS, i]
-        for k in range(nz):
-            acc += C[i, k] * vz[VZ_MINV_FORCE, k]
-        vz[VZ_LAMBDA, i] = acc
+        vz[VZ_LAMBDA, i] = row_dot(C, i, vz, VZ_MINV_FORCE, minv, -vz[VZ_RHS, i])
     for jj in range(nc):
-        for k in range(nz):
+        for k in range(NZ):
             vz[VZ_WORK1, k] = C[jj, k]
         minv_apply(minv, mr_inv, vz, VZ_WORK1, VZ_WORK2)
         for i in range(jj, nc):
-            acc = 0.0
-            for k in range(nz):
-                acc += C[i, k] * vz[VZ_WORK2, k]
+            acc = row_dot(C, i, vz, VZ_WORK2, minv, 0.0)
             S[i, jj] = acc
             S[jj, i] = acc
     if not solve_spd(S, vz, VZ_LAMBDA, nc, L):

@@ -1145,9 +1145,12 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             nbuf = 0
             need = -1
             for j in range(N_JOINTS):
-                # a prismatic joint's slots fill its row; the others use its first 6
-                for i in range(N_CAP if j == JOINT_P else 6):
+                for i in range(6):
                     cur[j, i] = 0.0
+            if jp[JOINT_P, J_CLEARANCE] != 0.0:
+                # a prismatic joint's slots fill its row
+                for i in range(6, N_CAP):
+                    cur[JOINT_P, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
                 if sub == 0:
