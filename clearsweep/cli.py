@@ -345,8 +345,9 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
                       resume=resume, overwrite=overwrite, discard_parts=discard_parts,
                       dry_run=dry_run)
         return
+    # bad input is refused before the kernel is compiled (the seated start needs it)
+    _preflight(cfg, config, allow_large)
     if dry_run:
-        _preflight(cfg, config, allow_large)
         click.echo(case_plan_text(config, est))
         return
     from .simulation import simulate

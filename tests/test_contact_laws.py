@@ -185,7 +185,7 @@ def latched(mode, rates):
         dg[L.D_DELTA + 1] = 1e-7
         dg[L.D_ECC + 1] = C + 1e-7
         dg[L.D_DDOT + 1] = rate
-        accept_substep(1e-5, False, model, dg, stats, wear, 0, ddot_prev, np.zeros(L.N_Y))
+        accept_substep(1e-5, False, model, dg, stats, wear, 0, ddot_prev)
     return s[1, L.S_DV0], stats[L.W_WHOLE, L.M_IMPACTS + 1]
 
 

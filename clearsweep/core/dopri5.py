@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from .compiled import compiled
-from .dynamics import NZ, VZ_ROWS, evaluate
+from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate
 from .layout import (
     D_DELTA,
     D_KE,
@@ -56,11 +56,13 @@ from .layout import (
 )
 from .rk4 import (
     _NOT_LITERAL,
+    accept_prismatic,
     accept_substep,
     begin_case,
     case_views,
     copy_into,
     copy_row,
+    deposit_prismatic,
     end_sections,
     energy_total,
     flush_all_wear,
@@ -343,7 +345,10 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         for j in range(N_JOINTS):
             for i in range(N_CAP):
                 cur[j, i] = 0.0
-        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev, y1)
+        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
+        if jp[JOINT_P, J_CLEARANCE] != 0.0 and accept_prismatic(hh, in_settled, model, stats,
+                                                                 cur, y1):
+            changed = True
         note_first_impact(out.first, stats, t + hh)
         if changed:
             st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
@@ -353,7 +358,9 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         keep_ends(work.prev, dg, y)
         record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0)
-        merge_wear(wmap, cur, pend, wmax, scratch, jp, case.wvol)
+        merge_wear(wmap, cur, pend, wmax, scratch)
+        if jp[JOINT_P, J_CLEARANCE] != 0.0:
+            deposit_prismatic(wmap, cur, wmax, jp, case.wvol)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
             # the sample's time from its grid-step count: the same for any save_every

@@ -692,14 +692,15 @@ def section_offsets(p, jp, ys, sec, k):
 
 
 @compiled
-def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, y):
+def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
     projections, the worn volume, the step's cap ``cur`` and the undo buffer at row ``nbuf``
     of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
     ``model.s``, impact counts and velocities.
 
-    A prismatic joint's corners take their own rules (``prismatic.accept``, from the block's
-    state in y): their wear waits in ``cur`` until the step is accepted, and needs no undo.
+    A prismatic joint's corners take their own rules (:func:`accept_prismatic`, called
+    beside this where the joint has clearance): their wear waits in ``cur`` until the step
+    is accepted, and needs no undo.
 
     Returns (whether the contact state changed, so that the step-end evaluation must be
     redone; the next free undo-buffer row).
@@ -717,12 +718,7 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, y):
     ampl = p[P_AMPL]
     changed = False
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0:
-            continue
-        if j == JOINT_P:
-            slider = body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2]), Y_R4, Y_PHI4)
-            if prismatic.accept(j, model, slider, hs, in_settled, stats, cur):
-                changed = True
+        if jp[j, J_CLEARANCE] == 0.0 or j == JOINT_P:
             continue
         ddot = dg[D_DDOT + j]
         if dg[D_DELTA + j] > 0.0:
@@ -794,6 +790,17 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, y):
             changed = True
         ddot_prev[j] = ddot
     return changed, nbuf
+
+
+@compiled
+def accept_prismatic(hs, in_settled, model, stats, cur, y):
+    """:func:`accept_substep`'s part for the prismatic joint with clearance: its corners'
+    impacts and wear (``prismatic.accept``) from the block's state in y. A call of its own
+    beside accept_substep, so that the step's bookkeeping of every case without clearance at
+    P is what it was before joint P (steps/s, benchmarks/README.md). Returns whether a
+    corner's episode changed."""
+    slider = body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+    return prismatic.accept(JOINT_P, model, slider, hs, in_settled, stats, cur)
 
 
 @compiled
@@ -919,16 +926,13 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
 
 
 @compiled
-def merge_wear(wmap, cur, pend, wmax, scratch, jp, wvol):
+def merge_wear(wmap, cur, pend, wmax, scratch):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
-    without wear this step spreads its waiting cap. A prismatic joint's corners spread
-    theirs at once (``prismatic.deposit``, which adds it to the worn volume ``wvol``).
-    ``wmax`` keeps the deepest bin [m]."""
+    without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m].
+    A prismatic joint's corners spread theirs in :func:`deposit_prismatic`."""
     for j in range(N_JOINTS):
         if j == JOINT_P:
-            if jp[j, J_CLEARANCE] != 0.0:
-                wmax[j] = max(wmax[j], prismatic.deposit(wmap, j, jp, cur, wvol))
             continue
         if cur[j, 3] > 0.0:
             if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
@@ -938,6 +942,14 @@ def merge_wear(wmap, cur, pend, wmax, scratch, jp, wvol):
             pend[j, 5] = cur[j, 5]
         elif pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+
+
+@compiled
+def deposit_prismatic(wmap, cur, wmax, jp, wvol):
+    """After an accepted step, where the prismatic joint has clearance: its corners' wear
+    of the step on its wall maps (``prismatic.deposit``, which adds it to the worn volume
+    ``wvol``); ``wmax`` keeps the deepest bin [m]."""
+    wmax[JOINT_P] = max(wmax[JOINT_P], prismatic.deposit(wmap, JOINT_P, jp, cur, wvol))
 
 
 @compiled
@@ -1067,6 +1079,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     stab = p[P_STAB]
     settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
+    slides = jp[JOINT_P, J_CLEARANCE] != 0.0    # the slider's block free in its guide
     zero_rows(msave)
     zero_rows(vz)
     zero_rows(buf_v)
@@ -1147,7 +1160,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             for j in range(N_JOINTS):
                 for i in range(6):
                     cur[j, i] = 0.0
-            if jp[JOINT_P, J_CLEARANCE] != 0.0:
+            if slides:
                 # a prismatic joint's slots fill its row
                 for i in range(6, N_CAP):
                     cur[JOINT_P, i] = 0.0
@@ -1171,7 +1184,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     break
                 in_settled = ts + hs >= settle
                 changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                               ddot_prev, y)
+                                               ddot_prev)
+                if slides and accept_prismatic(hs, in_settled, model, stats, cur, y):
+                    changed = True
                 note_first_impact(out.first, stats, ts + hs)
                 if changed:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
@@ -1225,7 +1240,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             break
         total += 1 << level
         deepest = max(deepest, level)
-        merge_wear(wmap, cur, pend, wmax, scratch, jp, wvol)
+        merge_wear(wmap, cur, pend, wmax, scratch)
+        if slides:
+            deposit_prismatic(wmap, cur, wmax, jp, wvol)
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
         # its offsets from the state kept in k1sub (here, where few values are live: a GPU
         # thread's registers), and it counts
