@@ -178,7 +178,8 @@ def latched(mode, rates):
     dg = np.zeros(L.N_D)
     stats = np.zeros((2, L.N_M))
     model = Model(pk.p, pk.jp, s, np.zeros((nj, 1, 1)))
-    wear = Wear(np.zeros((nj, 3, L.N_ANGLE_BINS)), np.zeros(nj), np.zeros((nj, L.N_CAP)), np.zeros((nj, L.N_CAP)),
+    wear = Wear(np.zeros((nj, 3, L.N_ANGLE_BINS)), np.zeros(nj), np.zeros((L.N_CAP_ROWS, L.N_CAP)),
+                np.zeros((L.N_CAP_ROWS, L.N_CAP)),
                 np.zeros((4, 4), np.int64), np.zeros((4, 4)), np.zeros(nj), np.zeros((4, 3)))
     ddot_prev = np.zeros(nj)
     for rate in rates:

@@ -36,7 +36,7 @@ import numba
 from numba import cuda, types
 
 from .dynamics import NZ, VZ_ROWS
-from .layout import N_ANGLE_BINS, N_CAP, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
+from .layout import N_ANGLE_BINS, N_CAP, N_CAP_ROWS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
@@ -150,8 +150,8 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
                        block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
                        block(mats, i, 0, (NZ, NZ)), block(mats, i, 1, (NZ, NZ)),
                        block(mats, i, 2, (NZ, NZ)), block(vz, i, 0, (VZ_ROWS, NZ)),
-                       buf_i[i], buf_v[i], block(caps, i, 0, (N_JOINTS, N_CAP)),
-                       block(caps, i, 1, (N_JOINTS, N_CAP)), scratch[i],
+                       buf_i[i], buf_v[i], block(caps, i, 0, (N_CAP_ROWS, N_CAP)),
+                       block(caps, i, 1, (N_CAP_ROWS, N_CAP)), scratch[i],
                        block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)),
                        block(vec, i, 8, (N_Y,)), block(vec, i, 9, (N_Y,)))
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)

@@ -31,6 +31,7 @@ from .layout import (
     I_SUBSTEPS,
     J_CLEARANCE,
     N_CAP,
+    N_CAP_ROWS,
     N_D,
     N_JOINTS,
     N_R,
@@ -229,7 +230,7 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros((NZ, NZ)),
                       np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
-                      np.zeros((N_JOINTS, N_CAP)), np.zeros((N_JOINTS, N_CAP)),
+                      np.zeros((N_CAP_ROWS, N_CAP)), np.zeros((N_CAP_ROWS, N_CAP)),
                       np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_D))
     advance_dopri5(case, t0, n_steps, save_every, out, work)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
@@ -342,7 +343,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             continue
         # ---- accepted: the same per-step rules as RK4 ----
         in_settled = t + hh >= settle
-        for j in range(N_JOINTS):
+        for j in range(N_CAP_ROWS):
             for i in range(N_CAP):
                 cur[j, i] = 0.0
         changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)

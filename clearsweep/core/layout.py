@@ -109,10 +109,13 @@ P_SLOTS = 16
 N_S = S_SLOT + P_SLOTS
 
 # --- the wear of a step on its way to the map, cur[j, :] and pend[j, :] (rk4.merge_wear) ---
-# a spherical or revolute joint: sum V n (3), sum V, sum V A, the surface's scale; a
-# prismatic joint: per corner-wall pair k, sum V, sum V x, sum V a (x along the guide, a
-# across the wall) at 3 k .. 3 k + 2
-N_CAP = 3 * P_SLOTS
+# a spherical or revolute joint's row j: sum V n (3), sum V, sum V A, the surface's scale; a
+# prismatic joint's corner-wall pair k: sum V, sum V x, sum V a (x along the guide, a
+# across the wall) in row CAP_SLOT_ROW + k // 2, columns 3 (k % 2) .. 3 (k % 2) + 2: rows of
+# 6, as the other joints' wear has them
+N_CAP = 6
+CAP_SLOT_ROW = N_JOINTS
+N_CAP_ROWS = N_JOINTS + P_SLOTS // 2
 
 # --- diagnostics vector d (one evaluation of the right-hand side) ----------
 D_SLIDER_ACC = 0

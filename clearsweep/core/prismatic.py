@@ -45,6 +45,7 @@ from .contact import (
 )
 from .kinematics import add, cross, dot, mtv, mv, scale, sub
 from .layout import (
+    CAP_SLOT_ROW,
     D_CEFF,
     D_DDOT,
     D_DELTA,
@@ -123,6 +124,12 @@ def slot_corner(jp, j, k):
     sz = 1.0 if corner & 4 else -1.0
     return (0.5 * sx * jp[j, J_LENGTH], 0.5 * sy * jp[j, J_WIDTH],
             0.5 * sz * jp[j, J_HEIGHT]), k % 2 == 0
+
+
+@compiled(inline="always")
+def slot_cell(k):
+    """Where slot k's step wear waits in ``cur`` (layout.CAP_SLOT_ROW): (row, first column)."""
+    return CAP_SLOT_ROW + k // 2, 3 * (k % 2)
 
 
 @compiled
@@ -359,7 +366,7 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     """An accepted (sub-)step of length hs ends with the block in state ``slider``: each
     slot's contact episode (an onset is an impact, counted with its approach rate; the
     impact velocity follows ``contact.episode_impact_velocity``), and the wear of each slot
-    in contact, Archard's V = k F_N |v_t| hs, into ``cur[j]`` (per slot: V, V x, V a;
+    in contact, Archard's V = k F_N |v_t| hs, into ``cur`` (per slot, :func:`slot_cell`: V, V x, V a;
     spread on the wall's map once the step is accepted, :func:`deposit`).
 
     Returns whether a slot's episode state changed (the step-end evaluation must be redone).
@@ -381,9 +388,10 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
             if wear_on and fn > 0.0:
                 _, _, k_wear = surface(jp, j, st[16])
                 vol = p[P_AMPL] * k_wear * fn * st[10] * hs
-                cur[j, 3 * k] += vol
-                cur[j, 3 * k + 1] += vol * st[7][0]
-                cur[j, 3 * k + 2] += vol * st[12]
+                row, col = slot_cell(k)
+                cur[row, col] += vol
+                cur[row, col + 1] += vol * st[7][0]
+                cur[row, col + 2] += vol * st[12]
             dv0 = episode_impact_velocity(s[j, at], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
             if s[j, at] == 0.0:
                 changed = True
@@ -405,7 +413,7 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
 
 @compiled
 def deposit(wmap, j, jp, cur, wvol):
-    """Spread joint j's accepted step wear ``cur[j]`` on its wall maps, each slot's volume on
+    """Spread joint j's accepted step wear (``cur``'s slot rows) on its wall maps, each slot's volume on
     the bin of its volume-weighted mean position (a corner's Hertz patch, tens of microns
     across, lies well inside a bin); add it to the worn volume ``wvol[j]`` and clear it.
     Each bin deepens by its volume over its area, so sum(depth * bin area) = volume to
@@ -414,19 +422,20 @@ def deposit(wmap, j, jp, cur, wvol):
     ncol = wmap.shape[2]
     top = 0.0
     for k in range(P_SLOTS):
-        vol = cur[j, 3 * k]
+        cr, cc = slot_cell(k)
+        vol = cur[cr, cc]
         if vol > 0.0:
             corner = k // 2
             if k % 2 == 0:
                 wall = 0 if corner & 2 else 1
             else:
                 wall = 2 if corner & 4 else 3
-            row, col = wall_bin(jp, j, wall, cur[j, 3 * k + 1] / vol, cur[j, 3 * k + 2] / vol,
+            row, col = wall_bin(jp, j, wall, cur[cr, cc + 1] / vol, cur[cr, cc + 2] / vol,
                                 nrow, ncol)
             wmap[j, row, col] += vol / wall_bin_area(jp, j, wall, nrow, ncol)
             top = max(top, wmap[j, row, col])
             wvol[j] += vol
-        cur[j, 3 * k] = 0.0
-        cur[j, 3 * k + 1] = 0.0
-        cur[j, 3 * k + 2] = 0.0
+        cur[cr, cc] = 0.0
+        cur[cr, cc + 1] = 0.0
+        cur[cr, cc + 2] = 0.0
     return top

@@ -21,6 +21,7 @@ from .joints import BODIES, JOINTS
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
 from .kinematics import sub as vsub
 from .layout import (
+    CAP_SLOT_ROW,
     D_CONS,
     D_DDOT,
     D_DELTA,
@@ -63,6 +64,7 @@ from .layout import (
     M_VIMP_MAX,
     N_ANGLE_BINS,
     N_CAP,
+    N_CAP_ROWS,
     N_D,
     N_INFO,
     N_JOINTS,
@@ -870,7 +872,7 @@ def work_shapes(max_level, npolar):
     return {"vec": (VEC_ROWS, N_Y), "diag": (DIAG_ROWS, N_D), "cstate": (CSTATE_ROWS, N_JOINTS, N_S),
             "msave": (N_WINDOWS, N_M), "pairs": (PAIR_ROWS, N_JOINTS), "mats": (MAT_ROWS, NZ, NZ),
             "vz": (VZ_ROWS, NZ), "buf_i": (nbuf_max, 4), "buf_v": (nbuf_max, 4),
-            "caps": (CAP_ROWS, N_JOINTS, N_CAP), "scratch": (4 * npolar, 3)}
+            "caps": (CAP_ROWS, N_CAP_ROWS, N_CAP), "scratch": (4 * npolar, 3)}
 
 
 @compiled(inline="always")
@@ -1018,7 +1020,7 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros(N_JOINTS), np.zeros(N_JOINTS), np.zeros(N_JOINTS),
                    np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((VZ_ROWS, NZ)),
                    np.zeros((nbuf_max, 4), dtype=np.int64), np.zeros((nbuf_max, 4)),
-                   np.zeros((N_JOINTS, N_CAP)), np.zeros((N_JOINTS, N_CAP)),
+                   np.zeros((N_CAP_ROWS, N_CAP)), np.zeros((N_CAP_ROWS, N_CAP)),
                    np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
                    np.zeros(N_Y), np.zeros(N_Y))
     advance(case, t0, n_steps, save_every, True, out, work)
@@ -1161,9 +1163,10 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                 for i in range(6):
                     cur[j, i] = 0.0
             if slides:
-                # a prismatic joint's slots fill its row
-                for i in range(6, N_CAP):
-                    cur[JOINT_P, i] = 0.0
+                # a prismatic joint's slots
+                for j in range(CAP_SLOT_ROW, N_CAP_ROWS):
+                    for i in range(N_CAP):
+                        cur[j, i] = 0.0
             for sub in range(nsub):
                 ts = t + sub * hs
                 if sub == 0:
