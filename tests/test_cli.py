@@ -48,7 +48,8 @@ def fake_run(monkeypatch):
                           coords={"time": [0.0, 0.1]})
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=simulate, kernel_needs_compiling=lambda method="rk4": False,
+        simulate=simulate, preflight=lambda cfg, allow_large=False, seat=True: None,
+        kernel_needs_compiling=lambda method="rk4": False,
         prepare_kernel=lambda method="rk4": 0.0))
     monkeypatch.setitem(sys.modules, "clearsweep.analysis", types.SimpleNamespace(
         run_summary_text=lambda ds: f"summary: status {ds['status'].item()}"))
@@ -185,7 +186,8 @@ def test_other_exceptions_propagate(tmp_path, monkeypatch):
         raise RuntimeError("kernel exploded")
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=simulate, kernel_needs_compiling=lambda method="rk4": False,
+        simulate=simulate, preflight=lambda cfg, allow_large=False, seat=True: None,
+        kernel_needs_compiling=lambda method="rk4": False,
         prepare_kernel=lambda method="rk4": 0.0))
     result, _, out = run_case(tmp_path, "name: x\n")
     assert result.exit_code != 0 and isinstance(result.exception, RuntimeError)

@@ -164,7 +164,8 @@ def test_an_interrupted_case_is_one_line_exit_130(files, monkeypatch):
         raise KeyboardInterrupt
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=interrupted, kernel_needs_compiling=lambda method="rk4": False,
+        simulate=interrupted, preflight=lambda cfg, allow_large=False, seat=True: None,
+        kernel_needs_compiling=lambda method="rk4": False,
         prepare_kernel=lambda method="rk4": 0.0))
     assert_error(invoke("run", "case.yaml", "-o", "o.nc"), 130, "stopped by Ctrl-C")
     assert not (files / "o.nc").exists()
@@ -231,7 +232,9 @@ def nothing_runs(monkeypatch):
     monkeypatch.setattr(sweeping, "run_sweep", forbidden)
     monkeypatch.setattr(service_life, "life", forbidden)
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
-        simulate=forbidden, kernel_needs_compiling=forbidden, prepare_kernel=forbidden))
+        simulate=forbidden, kernel_needs_compiling=forbidden, prepare_kernel=forbidden,
+        # the checks a run makes before it starts, which compile and run nothing
+        preflight=lambda cfg, allow_large=False, seat=True: None))
 
 
 @pytest.mark.parametrize("args, words", [

@@ -58,8 +58,10 @@ def assert_rendered(path, fig) -> None:
 #: kinds drawn from one case or a sweep (``life`` needs a life dataset: tests/test_service_life.py;
 #: ``reliability`` a reliability sweep: tests/test_reliability.py; ``spectrum`` two settled
 #: revolutions, which the synthetic 0.2 s do not hold, and ``bifurcation`` Poincaré samples:
-#: tests/test_motion_figures.py)
-CASE_KINDS = [k for k in KINDS if k not in ("life", "reliability", "spectrum", "bifurcation")]
+#: tests/test_motion_figures.py; ``effects`` a sweep that switches joints' clearance on and
+#: off: tests/test_factorial.py)
+CASE_KINDS = [k for k in KINDS if k not in ("life", "reliability", "spectrum", "bifurcation",
+                                            "effects")]
 
 
 @pytest.mark.parametrize("kind", [k for k in CASE_KINDS if k != "sweep"])
