@@ -32,6 +32,7 @@ import numpy as np
 
 from .config import Config, ConfigError
 from .service_life import CRITERIA, LifeState, life, life_summary
+from .variables import JOINTS
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -404,19 +405,16 @@ def rank_correlation(x: np.ndarray, y: np.ndarray, level: float = CONFIDENCE_LEV
     return rho, math.tanh(z - half), math.tanh(z + half)
 
 
-#: Scattered inputs: (name, member variable, joint index or None, config key of the scatter).
-INPUTS = (
-    ("clearance_A", "member_clearance", 0, "reliability.clearance_tolerance"),
-    ("clearance_B", "member_clearance", 1, "reliability.clearance_tolerance"),
-    ("clearance_O", "member_clearance", 2, "reliability.clearance_tolerance"),
-    ("wear_coefficient_A", "member_wear_factor", 0, "reliability.wear_coefficient_cv"),
-    ("wear_coefficient_B", "member_wear_factor", 1, "reliability.wear_coefficient_cv"),
-    ("wear_coefficient_O", "member_wear_factor", 2, "reliability.wear_coefficient_cv"),
-    ("coating_thickness_A", "member_coating_thickness", 0, "reliability.coating_thickness_cv"),
-    ("coating_thickness_B", "member_coating_thickness", 1, "reliability.coating_thickness_cv"),
-    ("coating_thickness_O", "member_coating_thickness", 2, "reliability.coating_thickness_cv"),
-    ("speed", "member_speed", None, "reliability.speed_cv"),
-)
+#: Scattered inputs: (name, member variable, joint index or None, config key of the scatter),
+#: per joint of the table (variables.JOINTS, in its order), then the speed.
+INPUTS = tuple(
+    (f"{what}_{joint}", var, j, key)
+    for what, var, key in (("clearance", "member_clearance", "reliability.clearance_tolerance"),
+                           ("wear_coefficient", "member_wear_factor", "reliability.wear_coefficient_cv"),
+                           ("coating_thickness", "member_coating_thickness",
+                            "reliability.coating_thickness_cv"))
+    for j, joint in enumerate(JOINTS)
+) + (("speed", "member_speed", None, "reliability.speed_cv"),)
 
 
 def revolution_grid(first: float, last: float, points: int = GRID_POINTS) -> np.ndarray:
@@ -567,8 +565,8 @@ def _first_joints(flat: xr.Dataset, limit: str, rows) -> list[str]:
         names = [str(v) for v in np.atleast_1d(case["first_joint"].values) if str(v)]
         if names:
             counts = sorted(((names.count(j), j) for j in set(names)), reverse=True)
-            out.append(f"  {label}: first to reach it: "
-                       + ", ".join(f"joint {j} in {n}" for n, j in counts) + " members")
+            out.append(f"  {label}: first to reach it: " + ", ".join(
+                f"joint {j} in {n} member{'s' if n != 1 else ''}" for n, j in counts))
     return [f"which joint reaches {limit} first:", *out] if out else []
 
 

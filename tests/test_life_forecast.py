@@ -101,3 +101,33 @@ def test_the_forecast_never_passes_the_bound():
     first, every = forecast_blocks(both), forecast_blocks(both, every_limit=True)
     assert first.limits == every.limits == ("clearance_growth", "wear_through")
     assert first.blocks < every.blocks <= 200
+
+
+def test_a_life_names_the_joint_that_reaches_a_limit_first():
+    """Each joint against the limit: the first_joint_to_* of a life run is the joint whose
+    own series crosses it first (here B, the one with clearance, of A, B, O, P), the report
+    names it, and a reliability sweep counts it per design."""
+    import numpy as np
+    import xarray as xr
+
+    from clearsweep.reliability import _first_joints
+    from clearsweep.service_life import crossing_cycle, life_summary_text
+
+    cfg = load_config(CASE, TINY_LIFE)
+    ds = life(cfg)
+    assert str(ds["stop_reason"].values) == "clearance_growth"
+    depth = ds["wear_depth_max"].values
+    crossings = [crossing_cycle(ds["cycle"].values, depth[:, j], 7e-5) for j in range(depth.shape[1])]
+    first = str(ds["joint"].values[int(np.nanargmin(crossings))])
+    assert first == "B" == str(ds["first_joint_to_clearance_growth"].values)
+    assert str(ds["first_joint_to_motion_error"].values) == ""     # not set
+    assert "revolutions to life.max_clearance_growth: " in life_summary_text(ds)
+    assert "(joint B first)" in life_summary_text(ds)
+    flat = xr.Dataset({"first_joint": (("design", "member", "limit"),
+                                       np.array([[["B", "B"], ["P", "P"], ["B", "B"], ["", ""]]],
+                                                dtype=object))},
+                      coords={"limit": ["clearance_growth", "any"]})
+    rows = [("B_coating=none", flat.isel(design=0).sel(limit="any"))]
+    assert _first_joints(flat, "any", rows) == [
+        "which joint reaches any first:",
+        "  B_coating=none: first to reach it: joint B in 2 members, joint P in 1 member"]
