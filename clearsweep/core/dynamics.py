@@ -423,6 +423,19 @@ def free_slider(j, y, t4, model, N4, full, dg, dy):
 
 
 @compiled(inline="always")
+def euler_equations(J, t, pd, N):
+    """A body's rotational equations in its Euler angles, M phi_dd = Q: (Q = G^T (N - w x J w
+    - J Gdot phi_dot), M = G^T J G, G) for principal inertia J, the angles' trig(...) t,
+    their rates pd and the body-frame moment N (w = G pd)."""
+    G = gmat(t)
+    w = mv(G, pd)
+    gq = gdot_phidot(t, pd[0], pd[1], pd[2])
+    Jw = (J[0] * w[0], J[1] * w[1], J[2] * w[2])
+    Jg = (J[0] * gq[0], J[1] * gq[1], J[2] * gq[2])
+    return mtv(G, sub(N, add(cross(w, Jw), Jg))), rot_mass(J, G), G
+
+
+@compiled(inline="always")
 def slider_rotation(y, p, t4, N4, dy):
     """The free slider's angular accelerations (joint P with clearance) from its rotational
     equations G^T J G phi_dd = G^T (N4 - w x J w - J gdot phi_dot), written into dy; False
@@ -430,13 +443,7 @@ def slider_rotation(y, p, t4, N4, dy):
     qd = Y_QD
     J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
     pd4 = (y[qd + Y_PHI4], y[qd + Y_PHI4 + 1], y[qd + Y_PHI4 + 2])
-    G4 = gmat(t4)
-    w4 = mv(G4, pd4)
-    gq4 = gdot_phidot(t4, pd4[0], pd4[1], pd4[2])
-    Jw4 = (J4[0] * w4[0], J4[1] * w4[1], J4[2] * w4[2])
-    Jg4 = (J4[0] * gq4[0], J4[1] * gq4[1], J4[2] * gq4[2])
-    b = mtv(G4, sub(N4, add(cross(w4, Jw4), Jg4)))
-    m = rot_mass(J4, G4)
+    b, m, _ = euler_equations(J4, t4, pd4, N4)
     # Cramer's rule on the symmetric 3x3 block
     c0 = m[4] * m[8] - m[5] * m[7]
     c1 = m[5] * m[6] - m[3] * m[8]
@@ -460,14 +467,7 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
     over (alpha3, beta3) (row-major 4-tuple) and whether that block is positive definite."""
     qd = Y_QD
     pd3 = (y[qd + Y_PHI3], y[qd + Y_PHI3 + 1], y[qd + Y_PHI3 + 2])
-    G3 = gmat(t3)
-    w3 = mv(G3, pd3)
-    gq3 = gdot_phidot(t3, pd3[0], pd3[1], pd3[2])
-    Jw3 = (J3[0] * w3[0], J3[1] * w3[1], J3[2] * w3[2])
-    Jg3 = (J3[0] * gq3[0], J3[1] * gq3[1], J3[2] * gq3[2])
-    mom3 = sub(N3, add(cross(w3, Jw3), Jg3))
-    Qp3 = mtv(G3, mom3)
-    Mr3 = rot_mass(J3, G3)
+    Qp3, Mr3, _ = euler_equations(J3, t3, pd3, N3)
     vz[VZ_FORCE, 0] = F3[0]
     vz[VZ_FORCE, 1] = F3[1]
     vz[VZ_FORCE, 2] = F3[2]
@@ -589,13 +589,7 @@ def crank_reactions(p, F2, N2, y, t2, pdd2, rdd2):
     qd = Y_QD
     pd2 = (y[qd + Y_PHI2], y[qd + Y_PHI2 + 1], y[qd + Y_PHI2 + 2])
     R2 = rotation(t2)
-    G2 = gmat(t2)
-    w2 = mv(G2, pd2)
-    gq2 = gdot_phidot(t2, pd2[0], pd2[1], pd2[2])
-    Jw2 = (J2[0] * w2[0], J2[1] * w2[1], J2[2] * w2[2])
-    Jg2 = (J2[0] * gq2[0], J2[1] * gq2[1], J2[2] * gq2[2])
-    Qp2 = mtv(G2, sub(N2, add(cross(w2, Jw2), Jg2)))
-    Mr2 = rot_mass(J2, G2)
+    Qp2, Mr2, G2 = euler_equations(J2, t2, pd2, N2)
     Mp2 = mv(Mr2, pdd2)
     lamO = sub(F2, scale(m2, rdd2))
     JO = point_jacobian_rot(R2, uO, G2)
