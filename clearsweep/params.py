@@ -395,6 +395,19 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray) -> np.ndarra
     return out
 
 
+def perturbed_block(nominal: np.ndarray, shift: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """A block's nominal offset across its guide [m] (0, y, z) moved by ``shift`` times each
+    direction's clearance (joint P's jp ``row``: c_y, c_z) and kept, direction by direction,
+    within ``max(|nominal|, c)``: the guide is a box, so no corner starts deeper in a wall
+    than the seated start's (a limit on the offset's length let one direction grow while
+    the other shrank: corners 37 um into a wall)."""
+    d = np.array(nominal, dtype=float)
+    for axis, c in ((1, float(row[L.J_CY])), (2, float(row[L.J_CZ]))):
+        limit = max(abs(float(nominal[axis])), c)
+        d[axis] = min(max(float(nominal[axis]) + c * float(shift[axis]), -limit), limit)
+    return d
+
+
 @dataclass(frozen=True)
 class MemberPerturbation:
     """What makes one ensemble member differ from the nominal case (docs/physics.md section 10).
@@ -574,6 +587,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
             if row.type in ("revolute", "prismatic"):
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
                                     # across its guide
+            if row.type == "prismatic":
+                offsets[j] = perturbed_block(offsets[j], shift, jp[j])
+                continue
             offsets[j] = perturbed_offset(offsets[j], shift, float(jp[j, L.J_C]))
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],

@@ -679,3 +679,79 @@ def test_guide_beyond_the_rods_reach(tmp_path, clearance, command):
                       [*guide(0.05), "mechanism.theta0=3.14159"])
     pk = pack(cfg, resolve_materials(cfg))         # the seated start
     assert np.all(np.isfinite(pk.y0)) and pk.y0[L.Y_R4 + 2] < pk.p[L.P_ZS] - 0.05
+
+
+# ---------------------------------------------------------------------------
+# review fixes: the perturbed start, dopri5's onsets, the walls' bin areas
+# ---------------------------------------------------------------------------
+
+def test_a_perturbed_start_keeps_each_corner_out_of_the_walls():
+    """An ensemble member's start moves the seated block by its draw times each direction's
+    clearance and keeps it, direction by direction, within max(|seated|, c): before, a limit
+    on the offset's length let one direction grow while the other shrank (corners up to
+    37 um into a wall, 598 N at the first step)."""
+    from clearsweep.params import perturbed_block
+
+    cy, cz = 1e-4, 2e-4
+    row = np.zeros(L.N_JP)
+    row[L.J_CY], row[L.J_CZ] = cy, cz
+    seated = np.array([0.0, -(cy + 1e-6), -(cz + 1e-6)])
+    rng = np.random.default_rng(5)
+    for shift in rng.uniform(-1.0, 1.0, (200, 3)):
+        d = perturbed_block(seated, shift, row)
+        assert d[0] == 0.0
+        assert abs(d[1]) <= cy + 1e-6 and abs(d[2]) <= cz + 1e-6
+    # members of an ensemble with large offsets: no corner deeper than the seated start's
+    cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
+                      [*guide(1e-4), "ensemble.members=8", "ensemble.perturb.ball_offset=1",
+                       "ensemble.perturb.crank_phase_deg=60"])
+    seated_pk = pack(cfg.replace(ensemble__members=1, ensemble__perturb__ball_offset=0.0,
+                                 ensemble__perturb__crank_phase_deg=0.0), resolve_materials(cfg))
+    sink = max(abs(seated_pk.y0[L.Y_R4 + 1]), abs(seated_pk.y0[L.Y_R4 + 2] - seated_pk.p[L.P_ZS]))
+    for member in range(8):
+        pk = pack(cfg.replace(ensemble__member=member), resolve_materials(cfg))
+        assert abs(pk.y0[L.Y_R4 + 1]) <= max(sink, 1e-4) + 1e-15
+        assert abs(pk.y0[L.Y_R4 + 2] - pk.p[L.P_ZS]) <= max(sink, 1e-4) + 1e-15
+
+
+def test_dopri5_shortens_its_step_to_a_corner_that_closes_while_another_touches():
+    """dopri5's onset rule reads P's 16 corner-wall gaps: the block seated on its bottom
+    wall (four corners in contact, the deepest pair's penetration > 0 at both ends) moving
+    across the guide into a side wall gets a shorter step; before, the joint's one
+    penetration never went from <= 0 to > 0, and no onset was bracketed."""
+    from clearsweep.core.dopri5 import onset_step
+
+    cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
+                      [*guide(1e-4), "mechanism.gravity=[0, 0, -9.81]"])
+    pk = pack(cfg, resolve_materials(cfg))
+    y0 = np.array(pk.y0)
+    y0[L.Y_R4 + 1] = 0.0                          # centred across, resting on the bottom wall
+    y0[L.Y_R4 + 2] = pk.p[L.P_ZS] - (1e-4 + 1e-6)
+    y1 = y0.copy()
+    y1[L.Y_R4 + 1] = 1e-4 + 2e-6                  # its side corners 2 um into the +y wall
+    model = Model(pk.p, pk.jp, np.zeros((L.N_JOINTS, L.N_S)), np.zeros((L.N_JOINTS, 36, 72)))
+    dg = np.zeros(L.N_D)
+    h = 1e-4
+    pp = pk.p.copy()
+    pp[L.P_ONSET_TOL] = 1e-7
+    shorter = onset_step(pp, pk.jp, dg, dg, h, model, y0, y1)
+    assert 0.0 < shorter < h
+    # the onset's linear estimate: 1e-4 / (1e-4 + 2e-6) of the step, half the tolerance after
+    assert shorter == pytest.approx(h * 1e-4 / (1e-4 + 2e-6) + 0.5e-7, rel=1e-9)
+
+
+def test_the_walls_bin_areas_tile_the_walls():
+    """A life run's mean wear depth weights P's bins by their areas on the walls (not on a
+    sphere of the corner radius): each band sums to the wall's area over the map's span."""
+    from clearsweep.service_life import guide_bin_areas
+
+    cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
+                      [*guide(1e-4, 2e-4), "joints.P.block=[0.08, 0.05, 0.07]"])
+    pk = pack(cfg, resolve_materials(cfg))
+    jp, j = pk.jp, INDEX["P"]
+    areas = guide_bin_areas(jp, j, (36, 72))
+    span = jp[j, L.J_XSPAN]
+    height = jp[j, L.J_HEIGHT] + 2 * jp[j, L.J_CZ]
+    width = jp[j, L.J_WIDTH] + 2 * jp[j, L.J_CY]
+    for wall, across in enumerate((height, height, width, width)):
+        assert areas[9 * wall:9 * wall + 9].sum() == pytest.approx(span * across, rel=1e-12)

@@ -17,8 +17,10 @@ import math
 import numpy as np
 from numba import njit
 
+from . import prismatic
 from .compiled import compiled
-from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate
+from .dynamics import JOINT_P, NZ, VZ_ROWS, body_state, evaluate
+from .kinematics import trig
 from .layout import (
     D_DELTA,
     D_KE,
@@ -47,12 +49,15 @@ from .layout import (
     P_ONSET_TOL,
     P_RTOL,
     P_SETTLE,
+    P_SLOTS,
     SEC_SLIDER_ACC,
     SEC_TIME,
     ST_OK,
     ST_UNSTABLE_STEP,
     T_KE_PEAK,
+    Y_PHI4,
     Y_QD,
+    Y_R4,
     Y_WORK,
 )
 from .rk4 import (
@@ -190,10 +195,25 @@ def dopri5_trial(t, h, work, model, solve):
     return evaluate(t + h, y1, model, k7, dg1, step_end, solve)
 
 
+@compiled(inline="always")
+def onset_within(d0, d1, h, tol, shorter):
+    """``shorter``, or the step that ends just after a gap d0 <= 0 closes to d1 > 0 (linear
+    estimate) where that is shorter."""
+    if d0 <= 0.0 < d1:
+        theta = d0 / (d0 - d1)     # linear estimate of the onset in the step
+        hj = max(theta * h + 0.5 * tol, tol)
+        hj = min(hj, 0.5 * h) if hj >= h else hj
+        shorter = hj if shorter == 0.0 else min(shorter, hj)
+    return shorter
+
+
 @compiled
-def onset_step(p, jp, dg0, dg1, h):
+def onset_step(p, jp, dg0, dg1, h, model, y0, y1):
     """0 when no clearance joint's gap closes over the step, or the step is within the
-    onset tolerance; else a shorter step that ends just after the estimated onset."""
+    onset tolerance; else a shorter step that ends just after the estimated onset. A
+    prismatic joint's gaps are its 16 corner-wall pairs', from the block's states y0 and y1
+    (its diagnostics hold the deepest pair's only, which stays in contact while others
+    close)."""
     tol = p[P_ONSET_TOL]
     if h <= tol:
         return 0.0
@@ -201,13 +221,15 @@ def onset_step(p, jp, dg0, dg1, h):
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
-        d0 = dg0[D_DELTA + j]     # signed: the gap is -delta before contact
-        d1 = dg1[D_DELTA + j]
-        if d0 <= 0.0 < d1:
-            theta = d0 / (d0 - d1)     # linear estimate of the onset in the step
-            hj = max(theta * h + 0.5 * tol, tol)
-            hj = min(hj, 0.5 * h) if hj >= h else hj
-            shorter = hj if shorter == 0.0 else min(shorter, hj)
+        if j == JOINT_P:
+            s0 = body_state(y0, trig(y0[Y_PHI4], y0[Y_PHI4 + 1], y0[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+            s1 = body_state(y1, trig(y1[Y_PHI4], y1[Y_PHI4 + 1], y1[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+            for k in range(P_SLOTS):
+                shorter = onset_within(prismatic.slot_state(j, model, k, s0)[0],
+                                       prismatic.slot_state(j, model, k, s1)[0], h, tol, shorter)
+            continue
+        # signed: the gap is -delta before contact
+        shorter = onset_within(dg0[D_DELTA + j], dg1[D_DELTA + j], h, tol, shorter)
     return shorter
 
 
@@ -337,7 +359,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
                 status = ST_UNSTABLE_STEP
                 break
             continue
-        shorter = onset_step(p, jp, dg, dg1, hh)
+        shorter = onset_step(p, jp, dg, dg1, hh, model, y, y1)
         if shorter > 0.0:
             h = shorter
             continue

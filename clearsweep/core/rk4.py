@@ -98,6 +98,7 @@ from .layout import (
     R_RESIDUAL_MAX,
     S_BETA,
     S_DV0,
+    S_SLOT,
     SEC_OFFSET,
     SEC_RATE,
     SEC_SLIDER_ACC,
@@ -899,6 +900,8 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
     for j in range(N_JOINTS):
         s[j, S_DV0] = 0.0
         s[j, S_BETA] = math.pi
+        for k in range(S_SLOT, N_S):
+            s[j, k] = 0.0           # a prismatic joint's corner-wall pairs: none in contact
     # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
     # (seated start): it is in contact, not an impact
     for again in range(2):
