@@ -381,9 +381,9 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray) -> np.ndarra
     pushes from, and likewise in z, each wall's four corners sharing that part of the load
     (a corner's law, ``prismatic.corner_law``, and the coated modulus); a part that is 0 or
     not finite leaves the block centred in that direction."""
-    from .core.prismatic import CORNER_EXPONENT
+    from .core.prismatic import corner_law
 
-    law = p[L.P_EXPONENT] if p[L.P_EXPONENT] != 0.0 else CORNER_EXPONENT
+    law = corner_law(p)
     out = np.zeros(3)
     for axis, c in ((1, row[L.J_CY]), (2, row[L.J_CZ])):
         part = float(force[axis])

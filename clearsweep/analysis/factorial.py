@@ -124,6 +124,32 @@ def _effect_text(found: tuple[float, float, float], units: str) -> str:
     return f"{value:+.3g}{interval} {units}{tail}".rstrip()
 
 
+def metrics(ds: xr.Dataset, factors: dict[str, tuple[str, int, int]]) -> list[tuple[str, str | None]]:
+    """What the design is read for: (variable, joint or None) of the slider's vibration,
+    then each factor joint's worn volume (where the file has it)."""
+    out: list[tuple[str, str | None]] = [(VIBRATION[0], None)]
+    if WEAR[0] in ds:
+        out += [(WEAR[0], j) for j in factors]
+    return out
+
+
+def main_effects(ds: xr.Dataset, name: str, joint: str | None,
+                 factors: dict[str, tuple[str, int, int]]) -> dict[str, tuple[float, float, float]]:
+    """Each other factor joint's effect (:func:`contrast`) on metric ``name`` of ``joint``
+    (None: a metric of the mechanism); a joint's own wear is read where it has clearance,
+    its own factor held on, and is not an effect of itself."""
+    # a joint's wear exists where it has clearance: its own factor held on
+    where = {factors[joint][0]: factors[joint][2]} if joint else {}
+    effects = {}
+    for j in factors:
+        if j == joint:
+            continue
+        found = contrast(ds, name, joint, {j: (factors[j][2], factors[j][1])}, factors, where)
+        if found is not None:
+            effects[j] = found
+    return effects
+
+
 def factorial_lines(ds: xr.Dataset) -> list[str]:
     """The report's section on a clearance factorial design (empty without two factors)."""
     factors = clearance_factors(ds)
@@ -137,32 +163,21 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
             f"the other joints' settings{over}" + (" (95 % intervals from the members)" if ensemble else "")
             + ":")
     lines = ["", *textwrap.wrap(head, width=100, subsequent_indent="  ")]
-    metrics: list[tuple[str, str | None, str, str | None]] = [(VIBRATION[0], None, VIBRATION[1], None)]
-    if WEAR[0] in ds:
-        metrics += [(WEAR[0], j, f"{WEAR[1]} at {j}", j) for j in names]
-    for name, joint, label, only in metrics:
+    for name, joint in metrics(ds, factors):
         units = ds[name].attrs.get("units", "")
-        # a joint's wear exists where it has clearance: its own factor held on
-        where: dict[str, int] = {factors[only][0]: factors[only][2]} if only else {}
-        lines.append(f"  {label} [{units}]" + (f" (cases with clearance at {only})" if only else "")
+        label = f"{WEAR[1]} at {joint}" if joint else VIBRATION[1]
+        lines.append(f"  {label} [{units}]" + (f" (cases with clearance at {joint})" if joint else "")
                      + ":")
-        effects = {}
-        for j in names:
-            if j == only:
-                continue
-            on_off = {j: (factors[j][2], factors[j][1])}
-            found = contrast(ds, name, joint, on_off, factors, where)
-            if found is None:
-                continue
-            effects[j] = found
-            lines.append(f"    clearance at {j}: {_effect_text(found, units)}")
+        effects = main_effects(ds, name, joint, factors)
+        lines += [f"    clearance at {j}: {_effect_text(found, units)}" for j, found in effects.items()]
         standing = {k: v for k, v in effects.items() if distinguishable(v[1], v[2]) is not False}
         if standing:
             top = max(standing, key=lambda k: abs(standing[k][0]))
             lines.append(f"    largest effect: clearance at {top}")
         elif effects:
             lines.append("    no joint's clearance changes it beyond the members' spread")
-        for a, b in itertools.combinations([j for j in names if j != only], 2):
+        where = {factors[joint][0]: factors[joint][2]} if joint else {}
+        for a, b in itertools.combinations([j for j in names if j != joint], 2):
             found = contrast(ds, name, joint, {a: (factors[a][2], factors[a][1]),
                                                b: (factors[b][2], factors[b][1])}, factors, where)
             if found is None:

@@ -19,8 +19,7 @@ from numba import njit
 
 from . import prismatic
 from .compiled import compiled
-from .dynamics import JOINT_P, NZ, VZ_ROWS, body_state, evaluate
-from .kinematics import trig
+from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
 from .layout import (
     D_DELTA,
     D_KE,
@@ -55,9 +54,7 @@ from .layout import (
     ST_OK,
     ST_UNSTABLE_STEP,
     T_KE_PEAK,
-    Y_PHI4,
     Y_QD,
-    Y_R4,
     Y_WORK,
 )
 from .rk4 import (
@@ -222,11 +219,11 @@ def onset_step(p, jp, dg0, dg1, h, model, y0, y1):
         if jp[j, J_CLEARANCE] == 0.0:
             continue
         if j == JOINT_P:
-            s0 = body_state(y0, trig(y0[Y_PHI4], y0[Y_PHI4 + 1], y0[Y_PHI4 + 2]), Y_R4, Y_PHI4)
-            s1 = body_state(y1, trig(y1[Y_PHI4], y1[Y_PHI4 + 1], y1[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+            s0 = slider_state(y0)
+            s1 = slider_state(y1)
             for k in range(P_SLOTS):
-                shorter = onset_within(prismatic.slot_state(j, model, k, s0)[0],
-                                       prismatic.slot_state(j, model, k, s1)[0], h, tol, shorter)
+                shorter = onset_within(prismatic.slot_state(j, model, k, s0).delta,
+                                       prismatic.slot_state(j, model, k, s1).delta, h, tol, shorter)
             continue
         # signed: the gap is -delta before contact
         shorter = onset_within(dg0[D_DELTA + j], dg1[D_DELTA + j], h, tol, shorter)

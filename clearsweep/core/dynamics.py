@@ -371,6 +371,12 @@ def body_state(y, tr, r_at, phi_at):
 
 
 @compiled(inline="always")
+def slider_state(y):
+    """(r, v, R, w) of the slider's block at state y, its angles' trig(...) formed here."""
+    return body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2]), Y_R4, Y_PHI4)
+
+
+@compiled(inline="always")
 def crank_accelerations(t, y, p, t2):
     """Accelerations of the driven crank (revolute O + driver, Baumgarte rows): (pdd2, wd2,
     rdd2), its Euler-angle and body angular accelerations and its centroid acceleration."""

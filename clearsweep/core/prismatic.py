@@ -31,6 +31,7 @@ wall (along and across the guide). Every slot's force acts at its corner.
 """
 
 import math
+from collections import namedtuple
 
 from .compiled import compiled
 from .contact import (
@@ -105,6 +106,28 @@ CORNER_EXPONENT = 1.5
 #: Walls of the guide, in the order of their bands of the wear map.
 WALLS = ("+y", "-y", "+z", "-z")
 
+#: One corner-wall pair's contact (:func:`slot_state`; Numba compiles a namedtuple as a
+#: tuple: fields are read by name at no cost). Vectors are 3-tuples, global frame unless
+#: named ``_body``.
+Slot = namedtuple("Slot", (
+    "delta",        # penetration [m] (negative: a gap)
+    "ddot",         # approach rate [m/s]
+    "fn",           # normal force F_N [N]
+    "fel",          # its elastic part [N]
+    "dfd",          # dF_N / d delta [N/m]
+    "dfdd",         # dF_N / d delta_dot [N s/m]
+    "force",        # force on the block at the corner, normal and friction [N]
+    "q",            # the corner [m]
+    "n",            # the wall's outward normal
+    "vt",           # the corner's slip velocity over the wall [m/s]
+    "slip",         # its speed [m/s]
+    "across",       # the corner's position across the wall [m]
+    "worn",         # the wall's coating worn through under the corner
+    "c_eff",        # local clearance c + h [m]
+    "h",            # the wall's wear depth under the corner [m]
+    "u_body",       # the corner in the block's frame [m]
+))
+
 
 @compiled
 def corner_law(p):
@@ -114,16 +137,31 @@ def corner_law(p):
     return law if law != 0.0 else CORNER_EXPONENT
 
 
+@compiled(inline="always")
+def corner_sign(corner, bit):
+    """+1 where the corner (0..7) lies on the positive side along the axis of ``bit`` (1: x,
+    2: y, 4: z), else -1."""
+    return 1.0 if corner & bit else -1.0
+
+
 @compiled
 def slot_corner(jp, j, k):
-    """Slot k's corner u in the block's frame [m] (its centroid the origin) and whether the
-    slot is the corner's y wall (else its z wall)."""
+    """Slot k's corner u in the block's frame [m] (its centroid the origin)."""
     corner = k // 2
-    sx = 1.0 if corner & 1 else -1.0
-    sy = 1.0 if corner & 2 else -1.0
-    sz = 1.0 if corner & 4 else -1.0
-    return (0.5 * sx * jp[j, J_LENGTH], 0.5 * sy * jp[j, J_WIDTH],
-            0.5 * sz * jp[j, J_HEIGHT]), k % 2 == 0
+    return (0.5 * corner_sign(corner, 1) * jp[j, J_LENGTH],
+            0.5 * corner_sign(corner, 2) * jp[j, J_WIDTH],
+            0.5 * corner_sign(corner, 4) * jp[j, J_HEIGHT])
+
+
+@compiled(inline="always")
+def slot_wall(k):
+    """Slot k's wall (0..3: +y, -y, +z, -z) and the side s = +-1 it faces: the corner's y
+    wall for even k, its z wall for odd k."""
+    if k % 2 == 0:
+        s = corner_sign(k // 2, 2)
+        return (0 if s > 0.0 else 1), s
+    s = corner_sign(k // 2, 4)
+    return (2 if s > 0.0 else 3), s
 
 
 @compiled(inline="always")
@@ -132,13 +170,22 @@ def slot_cell(k):
     return CAP_SLOT_ROW + k // 2, 3 * (k % 2)
 
 
+@compiled(inline="always")
+def wall_half(jp, j, wall):
+    """Half the extent [m] of wall ``wall`` across the guide: h + c_z for a y wall (its
+    height), b + c_y for a z wall (its width)."""
+    if wall < 2:
+        return 0.5 * jp[j, J_HEIGHT] + jp[j, J_CZ]
+    return 0.5 * jp[j, J_WIDTH] + jp[j, J_CY]
+
+
 @compiled
 def wall_bin(jp, j, wall, x, across, nrow, ncol):
     """(row, column) of the wear-map bin of wall ``wall`` (0..3: +y, -y, +z, -z) holding the
     point x [m] along the guide and ``across`` [m] across the wall (z - z_s on a y wall, y on
     a z wall); points beyond the map's ends fall in its end bins."""
     band = nrow // 4
-    half = 0.5 * jp[j, J_HEIGHT] + jp[j, J_CZ] if wall < 2 else 0.5 * jp[j, J_WIDTH] + jp[j, J_CY]
+    half = wall_half(jp, j, wall)
     col = int(math.floor((x - jp[j, J_X0]) / jp[j, J_XSPAN] * ncol))
     row = int(math.floor((across + half) / (2.0 * half) * band))
     return wall * band + min(max(row, 0), band - 1), min(max(col, 0), ncol - 1)
@@ -147,9 +194,7 @@ def wall_bin(jp, j, wall, x, across, nrow, ncol):
 @compiled
 def wall_bin_area(jp, j, wall, nrow, ncol):
     """Area [m^2] of one bin of wall ``wall``'s wear map."""
-    band = nrow // 4
-    half = 0.5 * jp[j, J_HEIGHT] + jp[j, J_CZ] if wall < 2 else 0.5 * jp[j, J_WIDTH] + jp[j, J_CY]
-    return jp[j, J_XSPAN] / ncol * 2.0 * half / band
+    return jp[j, J_XSPAN] / ncol * 2.0 * wall_half(jp, j, wall) / (nrow // 4)
 
 
 @compiled
@@ -160,18 +205,14 @@ def gap(jp, j, wmap, p, k, q):
     there h [m] (0 without feedback), whether its coating is worn through there, the local
     clearance c + h and the penetration delta = (corner beyond the block's nominal face) -
     c_eff [m] (negative: a gap)."""
-    corner = k // 2
     zs = p[P_ZS]
-    if k % 2 == 0:
-        s = 1.0 if corner & 2 else -1.0
-        wall = 0 if s > 0.0 else 1
+    wall, s = slot_wall(k)
+    if wall < 2:
         n = (0.0, s, 0.0)
         out = s * q[1] - 0.5 * jp[j, J_WIDTH]
         c = jp[j, J_CY]
         across = q[2] - zs
     else:
-        s = 1.0 if corner & 4 else -1.0
-        wall = 2 if s > 0.0 else 3
         n = (0.0, 0.0, s)
         out = s * (q[2] - zs) - 0.5 * jp[j, J_HEIGHT]
         c = jp[j, J_CZ]
@@ -212,28 +253,21 @@ def corner_mobility(p, u, nb):
 
 @compiled
 def slot_state(j, model, k, slider):
-    """Slot k's contact: (delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, wall,
-    across, row, col, h, worn, c_eff, u): the penetration [m] and approach rate [m/s], the
-    normal force with its elastic part and slopes, the force on the block [N] (normal and
-    friction) at the corner q, the wall's normal, the slip velocity and speed, the wall,
-    the corner's position across it and its map bin, the wear depth, the worn-through flag,
-    the local clearance and the corner in the block's frame. ``slider``: the block's body
-    state (r, v, R, w)."""
+    """Slot k's contact, a :data:`Slot`. ``slider``: the block's body state (r, v, R, w)."""
     p = model.p
     jp = model.jp
     r4, v4, R4, w4 = slider
-    u, _ = slot_corner(jp, j, k)
-    ru = mv(R4, u)
-    q = add(r4, ru)
-    wall, n, across, row, col, h, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
+    u = slot_corner(jp, j, k)
+    q = add(r4, mv(R4, u))
+    _, n, across, _, _, h, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
     vq = add(v4, mv(R4, cross(w4, u)))
     ddot = dot(n, vq)
     vt = sub(vq, scale(ddot, n))
     slip = math.sqrt(dot(vt, vt))
     zero = (0.0, 0.0, 0.0)
     if delta <= 0.0:
-        return (delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, q, n, vt, slip, wall, across, row,
-                col, h, worn, c_eff, u)
+        return Slot(delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, q, n, vt, slip, across, worn, c_eff,
+                    h, u)
     ew, mu, _ = surface(jp, j, worn)
     rc = jp[j, J_RI]
     kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
@@ -242,8 +276,7 @@ def slot_state(j, model, k, slider):
     if p[P_FRICTION] != 0.0 and slip > 0.0:
         ft = friction_magnitude(mu, fn, slip, p[P_V0], p[P_V1])
         force = add(force, scale(-ft / slip, vt))
-    return (delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, wall, across, row, col,
-            h, worn, c_eff, u)
+    return Slot(delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, across, worn, c_eff, h, u)
 
 
 @compiled
@@ -253,13 +286,15 @@ def slot_rate(j, model, k, st, R4):
     (:func:`corner_mobility`); 0 for a slot that stays open. ``st``: :func:`slot_state`."""
     p = model.p
     jp = model.jp
-    delta, ddot, fn, _, dfd, dfdd, _, _, n, _, slip, _, _, _, _, _, worn, c_eff, u = st
+    delta = st.delta
+    ddot = st.ddot
+    c_eff = st.c_eff
+    u = st.u_body
     if not (delta > 0.0 or delta + ddot * p[P_DT] > 0.0):
         return 0.0
-    inv_m = corner_mobility(p, u, mtv(R4, n))
-    m_eff = 1.0 / inv_m
-    rate = stiff_rate(m_eff, dfd, dfdd)
-    ew, mu, _ = surface(jp, j, worn)
+    m_eff = 1.0 / corner_mobility(p, u, mtv(R4, st.n))
+    rate = stiff_rate(m_eff, st.dfd, st.dfdd)
+    ew, mu, _ = surface(jp, j, st.worn)
     rc = jp[j, J_RI]
     law = corner_law(p)
     if ddot > 0.0:
@@ -267,12 +302,12 @@ def slot_rate(j, model, k, st, R4):
         kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
         _, _, dfp, dfdp = normal_force(dpred, ddot, c_eff, ew, rc, c_eff, law, kappa)
         rate = max(rate, stiff_rate(m_eff, dfp, dfdp))
-    if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+    if p[P_FRICTION] != 0.0 and mu > 0.0 and st.fn > 0.0:
         # the tangential inverse mass, bounded by the largest over directions
         jmin = min(p[P_J4], min(p[P_J4 + 1], p[P_J4 + 2]))
         inv_t = 1.0 / p[P_M4] + dot(u, u) / jmin
-        slope = 1.0 / (p[P_V1] - p[P_V0]) if slip < p[P_V1] else 1.0 / slip
-        rate = max(rate, mu * fn * slope * inv_t)
+        slope = 1.0 / (p[P_V1] - p[P_V0]) if st.slip < p[P_V1] else 1.0 / st.slip
+        rate = max(rate, mu * st.fn * slope * inv_t)
     return rate
 
 
@@ -298,25 +333,21 @@ def contact(j, model, slider, full, dg):
     law = corner_law(p)
     for k in range(P_SLOTS):
         st = slot_state(j, model, k, slider)
-        delta = st[0]
         if full:
             rate = max(rate, slot_rate(j, model, k, st, R4))
-            if delta > best:
-                best = delta
+            if st.delta > best:
+                best = st.delta
                 store_slot(dg, j, st)
-        if delta <= 0.0:
+        if st.delta <= 0.0:
             continue
-        ddot = st[1]
-        fn = st[2]
-        fel = st[3]
-        f = st[6]
+        f = st.force
         force = add(force, f)
-        moment = add(moment, cross(st[18], mtv(R4, f)))
+        moment = add(moment, cross(st.u_body, mtv(R4, f)))
         # damping, and friction: the friction force's work on the corner's slip
-        pdiss += (fn - fel) * ddot - dot(add(f, scale(fn, st[8])), st[9])
+        pdiss += (st.fn - st.fel) * st.ddot - dot(add(f, scale(st.fn, st.n)), st.vt)
         if full:
-            ew, _, _ = surface(model.jp, j, st[16])
-            uel += elastic_energy(delta, st[17], ew, model.jp[j, J_RI], st[17], law)
+            ew, _, _ = surface(model.jp, j, st.worn)
+            uel += elastic_energy(st.delta, st.c_eff, ew, model.jp[j, J_RI], st.c_eff, law)
     if full:
         dg[D_UEL + j] = uel
         dg[D_PRATE] = rate
@@ -332,21 +363,20 @@ def contact(j, model, slider, full, dg):
 @compiled
 def store_slot(dg, j, st):
     """Joint j's per-joint contact diagnostics from one slot's :func:`slot_state`."""
-    delta, ddot, fn, _, dfd, dfdd, force, _, n, _, slip, _, _, _, _, h, worn, c_eff, _ = st
-    dg[D_FN + j] = fn
-    ft = add(force, scale(fn, n))
+    dg[D_FN + j] = st.fn
+    ft = add(st.force, scale(st.fn, st.n))     # the friction force
     dg[D_FT + j] = math.sqrt(dot(ft, ft))
-    dg[D_DELTA + j] = delta
-    dg[D_DDOT + j] = ddot
-    dg[D_VT + j] = slip
-    dg[D_CEFF + j] = c_eff
-    dg[D_HWEAR + j] = h
-    dg[D_DFD + j] = dfd
-    dg[D_DFDD + j] = dfdd
-    dg[D_WORN + j] = 1.0 if worn else 0.0
+    dg[D_DELTA + j] = st.delta
+    dg[D_DDOT + j] = st.ddot
+    dg[D_VT + j] = st.slip
+    dg[D_CEFF + j] = st.c_eff
+    dg[D_HWEAR + j] = st.h
+    dg[D_DFD + j] = st.dfd
+    dg[D_DFDD + j] = st.dfdd
+    dg[D_WORN + j] = 1.0 if st.worn else 0.0
     for i in range(3):
-        dg[D_NORMAL + 3 * j + i] = n[i]
-        dg[D_NGLOBAL + 3 * j + i] = n[i]
+        dg[D_NORMAL + 3 * j + i] = st.n[i]
+        dg[D_NGLOBAL + 3 * j + i] = st.n[i]
 
 
 @compiled
@@ -357,7 +387,8 @@ def seat(j, model, slider):
     s = model.s
     for k in range(P_SLOTS):
         st = slot_state(j, model, k, slider)
-        s[j, S_SLOT + k] = episode_impact_velocity(0.0, st[1], p[P_DV0_MIN], False) if st[0] > 0.0 else 0.0
+        s[j, S_SLOT + k] = (episode_impact_velocity(0.0, st.ddot, p[P_DV0_MIN], False)
+                            if st.delta > 0.0 else 0.0)
     s[j, S_DV0] = 0.0
 
 
@@ -366,8 +397,8 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     """An accepted (sub-)step of length hs ends with the block in state ``slider``: each
     slot's contact episode (an onset is an impact, counted with its approach rate; the
     impact velocity follows ``contact.episode_impact_velocity``), and the wear of each slot
-    in contact, Archard's V = k F_N |v_t| hs, into ``cur`` (per slot, :func:`slot_cell`: V, V x, V a;
-    spread on the wall's map once the step is accepted, :func:`deposit`).
+    in contact, Archard's V = k F_N |v_t| hs, into ``cur`` (per slot, :func:`slot_cell`: V,
+    V x, V a; spread on the wall's map once the step is accepted, :func:`deposit`).
 
     Returns whether a slot's episode state changed (the step-end evaluation must be redone).
     """
@@ -379,19 +410,17 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     any_contact = False
     for k in range(P_SLOTS):
         st = slot_state(j, model, k, slider)
-        delta = st[0]
-        ddot = st[1]
+        ddot = st.ddot
         at = S_SLOT + k
-        if delta > 0.0:
+        if st.delta > 0.0:
             any_contact = True
-            fn = st[2]
-            if wear_on and fn > 0.0:
-                _, _, k_wear = surface(jp, j, st[16])
-                vol = p[P_AMPL] * k_wear * fn * st[10] * hs
+            if wear_on and st.fn > 0.0:
+                _, _, k_wear = surface(jp, j, st.worn)
+                vol = p[P_AMPL] * k_wear * st.fn * st.slip * hs
                 row, col = slot_cell(k)
                 cur[row, col] += vol
-                cur[row, col + 1] += vol * st[7][0]
-                cur[row, col + 2] += vol * st[12]
+                cur[row, col + 1] += vol * st.q[0]
+                cur[row, col + 2] += vol * st.across
             dv0 = episode_impact_velocity(s[j, at], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
             if s[j, at] == 0.0:
                 changed = True
@@ -413,8 +442,8 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
 
 @compiled
 def deposit(wmap, j, jp, cur, wvol):
-    """Spread joint j's accepted step wear (``cur``'s slot rows) on its wall maps, each slot's volume on
-    the bin of its volume-weighted mean position (a corner's Hertz patch, tens of microns
+    """Spread joint j's accepted step wear (``cur``'s slot rows) on its wall maps, each
+    slot's volume on the bin of its volume-weighted mean position (a corner's Hertz patch, tens of microns
     across, lies well inside a bin); add it to the worn volume ``wvol[j]`` and clear it.
     Each bin deepens by its volume over its area, so sum(depth * bin area) = volume to
     rounding. Returns the largest depth of a bin written [m]."""
@@ -425,11 +454,7 @@ def deposit(wmap, j, jp, cur, wvol):
         cr, cc = slot_cell(k)
         vol = cur[cr, cc]
         if vol > 0.0:
-            corner = k // 2
-            if k % 2 == 0:
-                wall = 0 if corner & 2 else 1
-            else:
-                wall = 2 if corner & 4 else 3
+            wall, _ = slot_wall(k)
             row, col = wall_bin(jp, j, wall, cur[cr, cc + 1] / vol, cur[cr, cc + 2] / vol,
                                 nrow, ncol)
             wmap[j, row, col] += vol / wall_bin_area(jp, j, wall, nrow, ncol)

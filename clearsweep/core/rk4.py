@@ -16,7 +16,7 @@ from numba import njit, types
 from . import prismatic, revolute
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
-from .dynamics import JOINT_O, JOINT_P, NZ, VZ_ROWS, body_state, evaluate
+from .dynamics import JOINT_O, JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
 from .joints import BODIES, JOINTS
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
 from .kinematics import sub as vsub
@@ -117,9 +117,7 @@ from .layout import (
     W_WHOLE,
     Y_CRANK_ANGLE,
     Y_DISS,
-    Y_PHI4,
     Y_QD,
-    Y_R4,
     Y_ROD_BETA,
     Y_SLIDER_X,
     Y_WORK,
@@ -802,8 +800,7 @@ def accept_prismatic(hs, in_settled, model, stats, cur, y):
     beside accept_substep, so that the step's bookkeeping of every case without clearance at
     P is what it was before joint P (steps/s, benchmarks/README.md). Returns whether a
     corner's episode changed."""
-    slider = body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2]), Y_R4, Y_PHI4)
-    return prismatic.accept(JOINT_P, model, slider, hs, in_settled, stats, cur)
+    return prismatic.accept(JOINT_P, model, slider_state(y), hs, in_settled, stats, cur)
 
 
 @compiled
@@ -914,8 +911,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
         for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
             if j == JOINT_P and jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
-                prismatic.seat(j, model, body_state(y, trig(y[Y_PHI4], y[Y_PHI4 + 1],
-                                                           y[Y_PHI4 + 2]), Y_R4, Y_PHI4))
+                prismatic.seat(j, model, slider_state(y))
                 seated = True
                 continue
             if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:

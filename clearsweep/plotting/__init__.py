@@ -98,6 +98,7 @@ from .common import (  # noqa: F401
     keep_relative_span,
     plain_ticks,
     point_text,
+    run_config,
     selection_text,
     wrapped_label,
 )
@@ -244,20 +245,6 @@ def case_text(ds: xr.Dataset) -> str:
     return f"case: {name}" if isinstance(name, str) and name else ""
 
 
-def _config(ds: xr.Dataset) -> dict:
-    """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable."""
-    for name in ("config", "sweep_config"):
-        try:
-            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
-        except yaml.YAMLError:
-            continue
-        if isinstance(doc, dict):
-            base = doc.get("base", doc) if name == "sweep_config" else doc
-            if isinstance(base, dict):
-                return base
-    return {}
-
-
 def start_text(ds: xr.Dataset) -> str:
     """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``
     of the config, or of a ``--set`` on the command line; a sweep's file keeps its config as
@@ -266,7 +253,7 @@ def start_text(ds: xr.Dataset) -> str:
         return ""
     if any(str(d).endswith("initial_joints") for d in sweep_dims(ds)):
         return ""
-    initial = _config(ds).get("initial")
+    initial = run_config(ds).get("initial")
     start = initial.get("joints") if isinstance(initial, dict) else None
     for override in _overrides(ds):
         key, _, value = override.partition("=")

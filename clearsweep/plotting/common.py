@@ -8,6 +8,7 @@ import textwrap
 
 import numpy as np
 import xarray as xr
+import yaml
 from matplotlib import colormaps
 
 from ..analysis import ideal_joints, iter_cases, label_text, results_kind, sweep_dims, value_text
@@ -39,6 +40,20 @@ DIMENSIONLESS = "-"
 #: Colour-bar labels are wrapped to lines of at most this many characters, so that the
 #: layout engine can keep them inside a figure of the default size.
 COLOURBAR_LABEL_CHARACTERS = 36
+
+
+def run_config(ds: xr.Dataset) -> dict:
+    """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable."""
+    for name in ("config", "sweep_config"):
+        try:
+            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
+        except yaml.YAMLError:
+            continue
+        if isinstance(doc, dict):
+            base = doc.get("base", doc) if name == "sweep_config" else doc
+            if isinstance(base, dict):
+                return base
+    return {}
 
 
 _SINGLE_CASE_COLOUR = "tab:red"

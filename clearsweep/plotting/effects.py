@@ -35,27 +35,16 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
         raise PlotError("--kind effects needs a sweep that switches the clearance of two or more "
                         "joints on and off (two values along one dimension each, 0 and > 0, "
                         f"and {factorial.VIBRATION[0]}), as configs/mixed_clearances.yaml does")
-    names = list(factors)
-    panels: list[tuple[str, str | None, str | None]] = [(factorial.VIBRATION[0], None, None)]
-    if factorial.WEAR[0] in ds:
-        panels += [(factorial.WEAR[0], j, j) for j in names]
+    panels = factorial.metrics(ds, factors)
     cols = min(3, len(panels))
     rows = -(-len(panels) // cols)
-    for k, (name, joint, only) in enumerate(panels):
+    for k, (name, joint) in enumerate(panels):
         ax = fig.add_subplot(rows, cols, k + 1)
-        where = {factors[only][0]: factors[only][2]} if only else {}
-        shown, values, lows, highs = [], [], [], []
-        for j in names:
-            if j == only:
-                continue
-            found = factorial.contrast(ds, name, joint, {j: (factors[j][2], factors[j][1])},
-                                       factors, where)
-            if found is None:
-                continue
-            shown.append(j)
-            values.append(found[0])
-            lows.append(found[1])
-            highs.append(found[2])
+        effects = factorial.main_effects(ds, name, joint, factors)
+        shown = list(effects)
+        values = [effects[j][0] for j in shown]
+        lows = [effects[j][1] for j in shown]
+        highs = [effects[j][2] for j in shown]
         units = str(ds[name].attrs.get("units", ""))
         scale, unit = _scale(np.abs(np.concatenate([values, lows, highs])), units)
         v = np.asarray(values) / scale
@@ -73,7 +62,7 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
         ax.invert_yaxis()
         what = "slider RMS acceleration, settled" if joint is None else f"worn volume at {joint}"
         ax.set_xlabel(f"change of the {what} [{unit}]")
-        ax.set_title(what + (f" (cases with clearance at {only})" if only else ""),
+        ax.set_title(what + (f" (cases with clearance at {joint})" if joint else ""),
                      fontsize="small")
         ax.grid(axis="x", alpha=0.3)
     rest = [d for d in factorial.design_dims(ds) if d not in {f[0] for f in factors.values()}]

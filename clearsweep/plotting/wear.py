@@ -25,6 +25,7 @@ from .common import (
     _require,
     axis_label,
     display_scale,
+    run_config,
     scaled,
 )
 
@@ -92,26 +93,21 @@ def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
     """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
     the run's config (``params.guide_row``: the walls' bins along the guide and across each
     wall); None where the file's config cannot be read."""
-    import yaml
-
     from ..config import ConfigError, load_config
     from ..core import layout as L
     from ..params import PRESETS, guide_row
 
-    for name in ("config", "sweep_config"):
-        try:
-            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
-            base = doc.get("base", doc) if name == "sweep_config" else doc
-            if not isinstance(base, dict):
-                continue
-            cfg = load_config(base)
-        except (yaml.YAMLError, ConfigError, AttributeError, TypeError, ValueError):
-            continue
-        row = np.zeros(L.N_JP)
-        guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
-        return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
-                0.5 * row[L.J_WIDTH] + row[L.J_CY])
-    return None
+    base = run_config(ds)
+    if not base:
+        return None
+    try:
+        cfg = load_config(base)
+    except (ConfigError, TypeError, ValueError):
+        return None
+    row = np.zeros(L.N_JP)
+    guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
+    return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
+            0.5 * row[L.J_WIDTH] + row[L.J_CY])
 
 
 def _draw_guide_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
