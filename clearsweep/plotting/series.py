@@ -36,8 +36,10 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     # (panel title, variable, joint or None)
     rows = [("reaction at O (ground on crank)", "reaction_O", None)]
     # the revolute joint at O: its force on the journal is the reaction at O, drawn once
-    rows += [(f"joint {value_text(j)} (on the ball)", "joint_force", j) for j in ds["joint"].values
-             if JOINT_TYPES.get(value_text(j)) != "revolute"]
+    # the prismatic joint's: the guide's force on the slider
+    rows += [(f"joint {value_text(j)} (" + ("guide on slider" if JOINT_TYPES.get(value_text(j)) == "prismatic"
+                                           else "on the ball") + ")", "joint_force", j)
+             for j in ds["joint"].values if JOINT_TYPES.get(value_text(j)) != "revolute"]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)
     axes = fig.subplots(len(rows), len(components), sharex=True, squeeze=False)
