@@ -10,19 +10,22 @@ written) and reads each back as assembly does (``dataset.open_results``, then ``
 The formats alternate within each repeat; the best repeat of each is printed, so that a
 busy machine slows every format alike. The formats: netCDF4 with zlib level 1 and shuffle
 in one chunk per variable (the parts' format before this benchmark), the same with small
-arrays as they are, the same file written by ``parts.write_part`` with netCDF4 alone (the
-parts now), npz, netCDF4 without compression, h5netcdf with gzip level 1 and shuffle, and
+arrays as they are, the same file written by ``parts.write_part`` (netCDF4 defines it;
+the large arrays' chunks, deflated by zlib or by ISA-L (the parts now), are written as
+bytes), npz, netCDF4 without compression, h5netcdf with gzip level 1 and shuffle, and
 h5netcdf without compression.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
 import tempfile
 import time
+import zlib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,8 +49,9 @@ FORMATS = {
     "netcdf4, zlib 1 + shuffle": ("netcdf4", lambda ds: _chunked(
         ds, {"zlib": True, "complevel": 1, "shuffle": True})),
     "netcdf4, zlib 1 + shuffle, small arrays contiguous": ("netcdf4", _parts_encoding),
-    "netcdf4 alone (parts.write_part: every variable defined, then the values)": (
-        "part", lambda ds: {}),
+    "parts.write_part, chunks deflated by zlib (netCDF4 alone: every variable defined, then "
+    "the values; the chunks written as bytes)": ("part-zlib", lambda ds: {}),
+    "parts.write_part, chunks deflated by ISA-L (the parts now)": ("part", lambda ds: {}),
     "npz + JSON attributes": ("npz", lambda ds: {}),
     "netcdf4, uncompressed": ("netcdf4", lambda ds: {}),
     "h5netcdf, gzip 1 + shuffle": ("h5netcdf", lambda ds: _chunked(
@@ -111,7 +115,7 @@ def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tupl
     for path in paths:
         if engine == "npz":
             _write_npz(part, path)
-        elif engine == "part":
+        elif engine.startswith("part"):
             write_part(folder, path.stem, part)
         else:
             write_netcdf_atomic(part, path, encoding=encoding, engine=engine)
@@ -120,7 +124,7 @@ def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tupl
         if engine == "npz":
             _read_npz(path)
             continue
-        with open_results(path, engine="netcdf4" if engine == "part" else engine) as ds:
+        with open_results(path, engine="netcdf4" if engine.startswith("part") else engine) as ds:
             ds.load()
     read = time.perf_counter()
     size = paths[0].stat().st_size + (paths[0].with_suffix(".json").stat().st_size
@@ -129,6 +133,19 @@ def time_format(part, engine: str, encoding: dict, n: int, folder: Path) -> tupl
         path.unlink()
         path.with_suffix(".json").unlink(missing_ok=True)
     return (written - start) / n, (read - written) / n, size
+
+
+@contextlib.contextmanager
+def _deflate(compress):
+    """``parts.write_part`` deflating its chunks with ``compress`` (None: its own, ISA-L)."""
+    from clearsweep.sweeping import parts as P
+
+    own = P._compress
+    P._compress = compress or own
+    try:
+        yield
+    finally:
+        P._compress = own
 
 
 def main(argv=None) -> int:
@@ -143,7 +160,9 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             for _ in range(args.repeats):
                 for name, (engine, encoding) in FORMATS.items():
-                    w, r, size = time_format(part, engine, encoding(part), args.parts, Path(tmp))
+                    with _deflate(zlib.compress if engine == "part-zlib" else None):
+                        w, r, size = time_format(part, engine, encoding(part), args.parts,
+                                                 Path(tmp))
                     old = best.get(name)
                     best[name] = (min(w, old[0]), min(r, old[1]), size) if old else (w, r, size)
         print(f"\n{store} store: {len(part.data_vars)} variables, "
