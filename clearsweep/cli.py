@@ -437,14 +437,18 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     announce_compile(quiet, [cfg.solver.method])
 
     started, blocks = time.perf_counter(), [0]
+    depths: list[tuple[float, float]] = []      # (revolutions, deepest bin [m]) per block
 
     def progress(row: dict[str, Any]) -> None:
         blocks[0] += 1
+        finite = [float(d) for d in row["wear_depth_max"] if math.isfinite(d)]
+        depths.append((float(row["cycle"]), max(finite, default=0.0)))
         if not quiet:
             # the joints with a clearance (an ideal joint's depth is NaN)
             depth = ", ".join(f"{j} {format_length(d, 3)}" for j, d in zip(JOINTS, row["wear_depth_max"])
                               if math.isfinite(d))
-            left = life_time_left(cfg, float(row["cycle"]), blocks[0], time.perf_counter() - started)
+            left = life_time_left(cfg, float(row["cycle"]), blocks[0], time.perf_counter() - started,
+                                  depths)
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
                        f"status {row['block_status']}" + (f"; {left}" if left else ""), err=True)
 

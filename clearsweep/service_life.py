@@ -19,7 +19,7 @@ import math
 import os
 import time
 import zipfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1003,21 +1003,44 @@ def life_summary_text(ds: xr.Dataset) -> str:
 FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coating_remaining")
 
 
-def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float) -> str:
+def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float,
+                   depths: Sequence[tuple[float, float]] = ()) -> str:
     """The expected time left of a life run after ``blocks`` blocks reached ``cycles``
-    revolutions in ``elapsed_s``: at the pace so far in revolutions, capped by the
-    blocks left (``life.max_blocks``, and those the plan forecasts to the wear limits,
-    :func:`forecast_blocks`, while the run is short of them) at the time per block so far;
-    ``""`` when done. The pace grows as the jumps lengthen, so the time left is rather too
-    long than short; a limit reached stops the run sooner still."""
+    revolutions in ``elapsed_s``, at the time per block so far, for the blocks that are
+    expected to be left (:func:`blocks_left`); ``""`` when done."""
     lc = cfg.life
     if blocks <= 0 or cycles <= 0.0 or cycles >= lc.cycles or blocks >= lc.max_blocks:
         return ""
+    by_pace = elapsed_s * (lc.cycles - cycles) / cycles
+    by_blocks = elapsed_s * blocks_left(cfg, blocks, depths) / blocks
+    return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
+
+
+def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] = ()) -> float:
+    """The blocks a life run is expected to take after its first ``blocks``.
+
+    At most ``life.max_blocks``, and those :func:`forecast_blocks` gives to the wear limits
+    while the run is short of them. ``depths``: (revolutions, deepest bin [m]) at the end of
+    each block so far. From three blocks on, the depth is taken to grow as a power of the
+    revolutions, h = h_k (N / N_k)^beta, beta from the last two blocks (a socket running in
+    wears ever slower: beta 0.5 in configs/life.yaml), and each further block to add the
+    mean depth of the last blocks' jumps; the run then ends at ``life.cycles`` with the depth
+    h(life.cycles), or sooner at a wear limit. Without that (fewer blocks, no wear), the
+    cap alone.
+    """
+    lc = cfg.life
     forecast = forecast_blocks(cfg)
     most = forecast.blocks if forecast.limits and blocks < forecast.blocks else lc.max_blocks
-    by_pace = elapsed_s * (lc.cycles - cycles) / cycles
-    by_blocks = elapsed_s * (most - blocks) / blocks
-    return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
+    left = float(max(most - blocks, 0))
+    if len(depths) < 3:
+        return left
+    (n0, h0), (n1, h1), (n2, h2) = depths[-3], depths[-2], depths[-1]
+    if not (0.0 < n1 < n2 < lc.cycles and 0.0 < h1 < h2 and h0 < h1):
+        return left
+    beta = math.log(h2 / h1) / math.log(n2 / n1)
+    step = (h2 - h0) / 2.0
+    end = h2 * (lc.cycles / n2) ** beta
+    return min(left, max(0.0, (end - h2) / step))
 
 
 def life_stop_hint(cfg: Config, stop: str) -> str:

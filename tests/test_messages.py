@@ -221,6 +221,26 @@ def test_a_life_run_gives_its_expected_time_left_from_the_blocks_so_far():
     assert life_time_left(cfg, 5.0, 100, 10.0) == ""
 
 
+@pytest.mark.parametrize("beta", [0.5, 1.0])
+def test_the_blocks_left_follow_the_depth_s_power_law(beta):
+    """A life run whose deepest bin grows as a N^beta, by the same depth each block: after
+    three blocks the blocks left are those that reach life.cycles exactly (configs/life.yaml
+    ran 40 blocks where its plan's cap said 101, and the time left at the first blocks was
+    4-7x the run's)."""
+    from clearsweep.service_life import blocks_left, forecast_blocks
+
+    cfg = load_config(LIFE, ["life.max_blocks=10000", "life.cycles=1e6"])
+    step = 2e-6                           # each block's jump [m]
+    a = 50 * step / 1e6 ** beta           # h = a N^beta [m]: 1e6 revolutions at block 50
+    revolutions = [(step * b / a) ** (1.0 / beta) for b in range(1, 6)]
+    depths = [(n, a * n ** beta) for n in revolutions]
+    cap = forecast_blocks(cfg).blocks - 5
+    assert cap > 45
+    assert blocks_left(cfg, 5, depths) == pytest.approx(45, rel=1e-9)   # 50, less the 5 run
+    assert blocks_left(cfg, 5, depths[:2]) == cap          # too few blocks: the cap alone
+    assert blocks_left(cfg, 5, [(n, 1e-6) for n, _ in depths]) == cap     # no growth seen
+
+
 def test_plot_sweep_of_a_life_sweep_without_metric_asks_for_one(tmp_path):
     """It failed on the default metric, a name the user never typed."""
     path = tmp_path / "ls.nc"
