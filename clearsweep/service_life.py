@@ -1034,7 +1034,7 @@ def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] 
     left = float(max(most - blocks, 0))
     if len(depths) < 3:
         return left
-    (n0, h0), (n1, h1), (n2, h2) = depths[-3], depths[-2], depths[-1]
+    (_, h0), (n1, h1), (n2, h2) = depths[-3], depths[-2], depths[-1]
     if not (0.0 < n1 < n2 < lc.cycles and 0.0 < h1 < h2 and h0 < h1):
         return left
     beta = math.log(h2 / h1) / math.log(n2 / n1)

@@ -110,3 +110,29 @@ def test_every_study_kind_is_in_the_registry_with_every_hook():
     assert not STORES[CUDA_BATCH.on_device].keeps_series and STORES[CUDA_BATCH.with_series].keeps_series
     assert STORES["full"].finish(CaseFunctions(), {"member": 2}) is ENSEMBLE.finish
     assert STORES["full"].finish(CaseFunctions(), {"B_coating": 2}) is None
+
+
+@pytest.mark.parametrize("kind, ds", FILES, ids=[f"{k}-{i}" for i, (k, _) in enumerate(FILES)])
+def test_the_figures_ask_one_table_what_each_kind_of_file_gives(kind, ds):
+    """``plotting.common.FILE_FIGURES`` says, per kind of file, why it lacks a figure's
+    variables, whether its runs keep Poincare sections, and whether wear-map reads its
+    snapshots: the figure code asks it instead of testing the kind's name."""
+    from clearsweep.plotting.common import FILE_FIGURES, PlotError, _require, file_figures
+
+    assert tuple(sorted(FILE_FIGURES)) == tuple(sorted(RESULTS_KINDS))
+    facts = file_figures(ds)
+    assert facts is FILE_FIGURES[kind]
+    assert facts.sections == (kind in ("run", "sweep"))
+    assert facts.wear_map_snapshots == (kind == "life")
+    with pytest.raises(PlotError) as err:
+        _require(ds, ("wear_map",), "--kind wear-map")
+    text = str(err.value)
+    assert text.startswith("--kind wear-map needs wear_map, which this dataset lacks")
+    if kind == "life":
+        assert "a life run keeps its blocks' summaries and wear maps" in text
+    elif kind == "sweep":
+        assert ("summary-only sweep" in text) == (ds.attrs.get("sweep_store") != "full")
+    elif kind != "run":
+        from clearsweep.outputs import RESULTS_KINDS as NAMED
+
+        assert text.endswith(f" (a file of {NAMED[kind]})")

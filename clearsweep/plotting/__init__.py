@@ -72,7 +72,7 @@ import xarray as xr
 import yaml
 from matplotlib.figure import Figure
 
-from ..analysis import SelectionError, choice_message, parse_selection, results_kind, sweep_dims
+from ..analysis import SelectionError, choice_message, parse_selection, sweep_dims
 from ..choices import (  # noqa: F401
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -95,6 +95,7 @@ from .common import (  # noqa: F401
     PlotError,
     axis_label,
     coordinate_text,
+    file_figures,
     keep_relative_span,
     plain_ticks,
     point_text,
@@ -206,7 +207,7 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
         raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")
     if b10 and "b10" not in spec.options:
         raise PlotError(f"--b10 applies to --kind {_kinds_taking('b10')} only")
-    if kind == "wear-map" and results_kind(ds) == "life" and "wear_map_snapshot" in ds:
+    if kind == "wear-map" and file_figures(ds).wear_map_snapshots and "wear_map_snapshot" in ds:
         ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
     selection = parse_selection(ds, select)
     ds = ds.sel(selection) if selection else ds

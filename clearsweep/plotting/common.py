@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import re
 import textwrap
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -161,16 +163,52 @@ def wrapped_label(label: str, width: int = COLOURBAR_LABEL_CHARACTERS) -> str:
     return "\n".join(lines)
 
 
+@dataclass(frozen=True)
+class FileFigures:
+    """What one kind of results file (a key of ``outputs.RESULTS_KINDS``) gives the figures:
+    the figure code asks :func:`file_figures` instead of testing the kind's name."""
+
+    #: Why a file of this kind lacks a variable a figure needs (after "which this dataset
+    #: lacks"), given the file.
+    lacks: Callable[[xr.Dataset], str]
+    #: Its runs keep Poincare sections whenever they last a revolution: without them,
+    #: ``--kind poincare`` says the runs were too short rather than naming variables.
+    sections: bool = False
+    #: ``--kind wear-map`` draws its blocks' wear-map snapshots (a life run).
+    wear_map_snapshots: bool = False
+
+
+def _sweep_lacks(ds: xr.Dataset) -> str:
+    if ds.attrs.get("sweep_store") == "full":
+        return ""
+    return " (a summary-only sweep holds no time series or wear maps: keep them with store: full)"
+
+
+def _a_file_of(kind: str) -> Callable[[xr.Dataset], str]:
+    return lambda ds: f" (a file of {RESULTS_KINDS[kind]})"
+
+
+#: Every kind of results file, said once for the figures.
+FILE_FIGURES = {
+    **{kind: FileFigures(_a_file_of(kind)) for kind in RESULTS_KINDS},
+    "run": FileFigures(lambda ds: "", sections=True),
+    "sweep": FileFigures(_sweep_lacks, sections=True),
+    "life": FileFigures(lambda ds: " (a life run keeps its blocks' summaries and wear maps)",
+                        wear_map_snapshots=True),
+}
+
+
+def file_figures(ds: xr.Dataset) -> FileFigures:
+    """What the kind of results file ``ds`` is (``analysis.results_kind``) gives the figures."""
+    return FILE_FIGURES[results_kind(ds)]
+
+
 def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
     """Raise ``PlotError`` unless ``ds`` holds ``names``; ``what`` asked for them (``--kind slider``)."""
     missing = [n for n in names if n not in ds]
     if missing:
-        kind = results_kind(ds)
-        why = {"sweep": (" (a summary-only sweep holds no time series or wear maps: keep them "
-                         "with store: full)") if ds.attrs.get("sweep_store") != "full" else "",
-               "run": "", "life": " (a life run keeps its blocks' summaries and wear maps)"}
         raise PlotError(f"{what} needs {', '.join(missing)}, which this dataset lacks"
-                        + why.get(kind, f" (a file of {RESULTS_KINDS[kind]})"))
+                        + file_figures(ds).lacks(ds))
 
 
 def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:

@@ -14,8 +14,17 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis import ideal_joints, results_kind, value_text
-from .common import PlotError, _case_label, _cases, _legend_note, _require, axis_label, figure_legend
+from ..analysis import ideal_joints, value_text
+from .common import (
+    PlotError,
+    _case_label,
+    _cases,
+    _legend_note,
+    _require,
+    axis_label,
+    figure_legend,
+    file_figures,
+)
 
 #: Fewest revolutions a ``poincare`` figure draws: one section shows no return.
 MIN_REVOLUTIONS = 2
@@ -33,7 +42,7 @@ def section_axes(offset: np.ndarray, names) -> tuple[str, str]:
 
 
 def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
-    if results_kind(ds) not in ("run", "sweep") or "poincare_time" in ds:
+    if not file_figures(ds).sections or "poincare_time" in ds:
         _require(ds, ("poincare_offset", "poincare_slider_acc", "poincare_time"), "--kind poincare")
     # revolutions with a section in any case (a run shorter than one has none)
     taken = 0
