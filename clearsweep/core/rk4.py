@@ -153,7 +153,7 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
                 "settled": types.int64}
 
 
-@compiled(locals=_NOT_LITERAL)
+@compiled(inline="always", locals=_NOT_LITERAL)
 def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
     """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place
     (``model``, ``solve``: :func:`dynamics.evaluate`'s).
@@ -163,6 +163,13 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
     k2, then k2 + k3 (the sum the update uses, formed as before: bit-identical). One call
     site because a GPU build inlines evaluate wherever it is called: three sites made the
     kernel's code, and the register spills that each copy brings, three times larger.
+
+    Inlined into :func:`advance` (``inline="always"``; a GPU build inlines every device
+    function anyway: registers and spills as before). As a call of its own it took its ten arguments'
+    fields, about 110 stack words (each array is passed as its pointer, shape and strides),
+    at every step, and after joint P the steps/s of cases without P clearance fell to
+    0.89-0.92 of the tree before, most of it in advance's own code, in those argument
+    copies (benchmarks/README.md, "Joint P").
     """
     stage = False  # stage derivatives only: no energies, no stiff rates
     n = y.shape[0]
