@@ -165,11 +165,11 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
     kernel's code, and the register spills that each copy brings, three times larger.
 
     Inlined into :func:`advance` (``inline="always"``; a GPU build inlines every device
-    function anyway: registers and spills as before). As a call of its own it took its ten arguments'
-    fields, about 110 stack words (each array is passed as its pointer, shape and strides),
-    at every step, and after joint P the steps/s of cases without P clearance fell to
-    0.89-0.92 of the tree before, most of it in advance's own code, in those argument
-    copies (benchmarks/README.md, "Joint P").
+    function anyway: registers and spills as before). As a call of its own it took its
+    ten arguments' fields, about 110 stack words (each array is passed as its pointer,
+    shape and strides), at every step, and after joint P the steps/s of cases without P
+    clearance fell to 0.89-0.92 of the tree before, most of it in advance's own code, in
+    those argument copies (benchmarks/README.md, "Joint P").
     """
     stage = False  # stage derivatives only: no energies, no stiff rates
     n = y.shape[0]
