@@ -153,18 +153,29 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
                 "settled": types.int64}
 
 
-@compiled(locals=_NOT_LITERAL)
-def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve):
+@compiled(inline="always", locals=_NOT_LITERAL)
+def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve, stage):
     """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place
-    (``model``, ``solve``: :func:`dynamics.evaluate`'s).
+    (``model``, ``solve``: :func:`dynamics.evaluate`'s; ``stage``: False, the caller's
+    variable typed as a plain boolean: the stage derivatives only, no energies, no stiff
+    rates).
 
     The stage derivatives k2, k3, k4 (at t + c hs, c = 1/2, 1/2, 1) come from one call of
     evaluate in a loop, each into the work array ``kst``; the work array ``ksum`` keeps
     k2, then k2 + k3 (the sum the update uses, formed as before: bit-identical). One call
     site because a GPU build inlines evaluate wherever it is called: three sites made the
     kernel's code, and the register spills that each copy brings, three times larger.
+
+    Inlined into :func:`advance` (``inline="always"``; a GPU build inlines every device
+    function anyway: registers and spills as before). As a call of its own it took its
+    ten arguments' fields, about 110 stack words (each array is passed as its pointer,
+    shape and strides), at every step, and after joint P the steps/s of cases without P
+    clearance fell to 0.89-0.92 of the tree before, most of it in advance's own code, in
+    those argument copies (benchmarks/README.md, "Joint P"). ``stage`` is an argument
+    because an inlined function's ``locals`` do not reach its caller: a literal False
+    here compiled evaluate a second time, and that copy ran slower (0.96-0.98 of
+    c65bb49's ideal case against 1.05-1.07).
     """
-    stage = False  # stage derivatives only: no energies, no stiff rates
     n = y.shape[0]
     copy_into(kst, k1)
     for i_stage in range(3):
@@ -1076,6 +1087,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     sec = out.sec
     model, solve, wear = case_views(case, work)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
+    stage = False    # the stage evaluations: the derivative only
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
@@ -1175,7 +1187,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     # a section in this sub-step: its start for the cubic Hermite
                     copy_into(ysub, y)
                     copy_into(k1sub, k1)
-                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve)
+                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve, stage)
                 if st == ST_OK:
                     st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
                 if st != ST_OK:
