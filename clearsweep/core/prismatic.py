@@ -16,11 +16,13 @@ the case's exponent under ``contact.elastic: hertz``), with the case's damping l
 slot's own impact velocity, and the improved Coulomb friction on the corner's slip over the
 wall (along and across the guide). Every slot's force acts at its corner.
 
-- :func:`slot_geometry`: a slot's corner, wall, outward normal and penetration against the
-  wall's worn position c + h, h read from the wall's wear map at the corner;
+- :func:`gap`: a slot's wall, outward normal and penetration against the wall's worn
+  position c + h, h read from the wall's wear map at the corner (its bin, or with
+  ``wear.interpolate`` bilinearly, :func:`wall_read`, whose gradient tilts the corner's
+  force onto the worn wall's normal: :func:`slot_state`);
 - the wall maps: the joint's map rows split in four bands, one per wall (+y, -y, +z, -z),
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
-  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`deposit`;
+  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`wall_read`, :func:`deposit`;
 - :func:`contact`: the sum over the slots (force, moment, dissipated power) and, at a
   step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   total elastic energy, the guide's total force and the largest stiff rate of a slot;
