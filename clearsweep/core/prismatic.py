@@ -247,14 +247,14 @@ def wall_read(wmap, j, jp, wall, x, across):
 @compiled
 def gap(jp, j, wmap, p, k, q):
     """Gap geometry of slot k of prismatic joint j with its corner at the global point q:
-    (wall, n, across, row, col, h, slope, worn, c_eff, delta): the wall's index and outward
-    unit normal, the corner's position across the wall [m], its map bin, the wall's wear
-    depth there h [m] (0 without feedback; the bin's, or with ``wear.interpolate`` the
-    bilinear read of :func:`wall_read`), h's gradient with respect to the corner (global,
-    tangent to the wall; zero for the bin read), whether the wall's coating is worn through
-    in the bin, the local clearance c + h and the penetration delta = (corner beyond the
-    block's nominal face) - c_eff [m] (negative: a gap), whose gradient with respect to the
-    corner is n - slope: the worn wall's normal."""
+    (n, across, h, slope, worn, c_eff, delta): the wall's outward unit normal, the corner's
+    position across the wall [m], the wall's wear depth there h [m] (0 without feedback;
+    the bin's, or with ``wear.interpolate`` the bilinear read of :func:`wall_read`), h's
+    gradient with respect to the corner (global, tangent to the wall; zero for the bin
+    read), whether the wall's coating is worn through in the bin under the corner, the
+    local clearance c + h and the penetration delta = (corner beyond the block's nominal
+    face) - c_eff [m] (negative: a gap), whose gradient with respect to the corner is
+    n - slope: the worn wall's normal."""
     zs = p[P_ZS]
     wall, s = slot_wall(k)
     if wall < 2:
@@ -267,19 +267,22 @@ def gap(jp, j, wmap, p, k, q):
         out = s * (q[2] - zs) - 0.5 * jp[j, J_HEIGHT]
         c = jp[j, J_CZ]
         across = q[1]
-    row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
-    depth = wmap[j, row, col]
+    feedback = p[P_FEEDBACK] != 0.0
+    binned = feedback and p[P_INTERP] == 0.0
+    coat = jp[j, J_COAT]
     h = 0.0
     slope = (0.0, 0.0, 0.0)
-    if p[P_FEEDBACK] != 0.0:
-        if p[P_INTERP] != 0.0:
-            h, dh_dx, dh_da = wall_read(wmap, j, jp, wall, q[0], across)
-            slope = (dh_dx, 0.0, dh_da) if wall < 2 else (dh_dx, dh_da, 0.0)
-        else:
+    worn = False
+    if feedback and not binned:
+        h, dh_dx, dh_da = wall_read(wmap, j, jp, wall, q[0], across)
+        slope = (dh_dx, 0.0, dh_da) if wall < 2 else (dh_dx, dh_da, 0.0)
+    if binned or coat < math.inf:
+        row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
+        depth = wmap[j, row, col]
+        if binned:
             h = depth
-    coat = jp[j, J_COAT]
-    worn = coat < math.inf and coating_worn(depth, coat)
-    return wall, n, across, row, col, h, slope, worn, c + h, out - c - h
+        worn = coat < math.inf and coating_worn(depth, coat)
+    return n, across, h, slope, worn, c + h, out - c - h
 
 
 @compiled
@@ -328,7 +331,7 @@ def slot_state(j, model, k, slider):
     r4, v4, R4, w4 = slider
     u = slot_corner(jp, j, k)
     q = add(r4, mv(R4, u))
-    _, n, across, _, _, h, slope, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
+    n, across, h, slope, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
     vq = add(v4, mv(R4, cross(w4, u)))
     sloped = slope[0] != 0.0 or slope[1] != 0.0 or slope[2] != 0.0
     hdot = 0.0
