@@ -354,7 +354,8 @@ def slot_state(j, model, k, slider):
     kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
     fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, rc, c_eff, law, kappa)
     if sloped:
-        # U = A c_eff (delta / c_eff)^n / (n + 1) delta, A ~ sqrt(c_eff): U ~ c_eff^(3/2 - n)
+        # U = delta F_el / (n + 1), F_el = A c_eff (delta / c_eff)^n with A ~ sqrt(c_eff)
+        # (R_j = c_eff): U ~ c_eff^(3/2 - n), so dU/dc_eff = (3/2 - n) U / c_eff
         uc = (1.5 - law) * elastic_energy(delta, c_eff, ew, rc, c_eff, law) / c_eff
         x = uc if fn > 0.0 else 0.0
         fnormal = add(scale(-fn, n), scale(fn - x, slope))
