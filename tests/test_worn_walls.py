@@ -24,6 +24,8 @@ energy residual. Checked here:
 4. A short run with the walls pre-worn into steps of 1.5 um along the guide, feedback on:
    the energy residual with the bilinear read (measured 6.8e-9 relative; dopri5 1.6e-8)
    and with the bin read (measured 5.4e-5; dopri5 5.5e-5).
+5. The seated start on worn walls (a life run's block): the block rests on the worn
+   surface at its least worn loaded corner, read as the kernel reads it.
 """
 
 from __future__ import annotations
@@ -271,3 +273,53 @@ def test_a_run_over_stepped_walls(method):
     binned = stepped_run("false", method)
     assert smooth < 1e-7
     assert binned > 100.0 * smooth
+
+
+# ---------------------------------------------------------------------------
+# 5. the seated start on worn walls
+# ---------------------------------------------------------------------------
+
+def start_penetrations(pk, wmap):
+    """The 16 slots' penetrations [m] at the start y0 of the packed case ``pk``, read on the
+    wear map ``wmap`` as the kernel reads it."""
+    from clearsweep.core.dynamics import slider_state
+
+    model = Model(pk.p, pk.jp, np.zeros((L.N_JOINTS, L.N_S)), wmap)
+    state = slider_state(pk.y0)
+    return np.array([prismatic.slot_state(P, model, k, state).delta for k in range(L.P_SLOTS)])
+
+
+@pytest.mark.parametrize("interpolate", ["true", "false"])
+def test_a_seated_block_rests_on_its_worn_walls(interpolate):
+    """A life block starts seated on the walls its earlier blocks wore: each loaded wall's
+    least worn corner at the unworn start's static penetration (the block moved out by that
+    corner's depth), the other corners clear of their deeper wear. Walls worn 4 um evenly:
+    the start moved out by 4 um exactly; worn 2..6 um at random: the deepest corner of each
+    loaded wall at the unworn penetration (before, the block started 2-6 um off its walls)."""
+    from clearsweep.config import load_config, resolve_materials
+    from clearsweep.params import pack
+
+    cfg = load_config({"joints": {"P": {"clearance_y": 1e-4, "clearance_z": 8e-5}},
+                       "wear": {"map": [ROWS, COLS], "interpolate": interpolate == "true"}})
+    materials = resolve_materials(cfg)
+    unworn = pack(cfg, materials)
+    zero = np.zeros((L.N_JOINTS, ROWS, COLS))
+    pen0 = start_penetrations(unworn, zero)
+    loaded = pen0 > 0.0
+    assert loaded.sum() >= 4
+    even = zero.copy()
+    even[P] = 4e-6
+    worn = pack(cfg, materials, even)
+    axes = slice(L.Y_R4 + 1, L.Y_R4 + 3)
+    offset = unworn.y0[axes] - np.array([0.0, unworn.p[L.P_ZS]])
+    moved = worn.y0[axes] - unworn.y0[axes]
+    assert np.allclose(moved, 4e-6 * np.sign(offset), rtol=1e-9, atol=1e-15)
+    assert np.allclose(start_penetrations(worn, even)[loaded], pen0[loaded], rtol=1e-9, atol=0.0)
+    rough = zero.copy()
+    rough[P] = 2e-6 + np.random.default_rng(3).random((ROWS, COLS)) * 4e-6
+    pen = start_penetrations(pack(cfg, materials, rough), rough)
+    for wall in range(4):
+        slots = [k for k in range(L.P_SLOTS) if prismatic.slot_wall(k)[0] == wall]
+        if loaded[slots].any():
+            assert pen[slots].max() == pytest.approx(pen0[slots].max(), rel=1e-2)
+            assert np.all(pen[slots] <= pen0[slots].max() * (1 + 1e-2))
