@@ -356,6 +356,9 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         law = p[L.P_EXPONENT]
         if joint.type == "prismatic":
             offsets[j] = seated_block(f, jp[j], p)
+            if wmap is not None and p[L.P_FEEDBACK] != 0.0:
+                r4 = y_ideal[L.Y_R4:L.Y_R4 + 3] + offsets[j]
+                offsets[j] = seated_block(f, jp[j], p, worn_walls(jp, j, wmap, p, r4))
             continue
         if joint.type == "revolute":
             f[0] = 0.0          # axial: ideal
@@ -375,12 +378,32 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     return offsets
 
 
-def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray) -> np.ndarray:
+def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
+               r4: np.ndarray) -> tuple[float, float, float, float]:
+    """The least wear depth [m] under the four corners that face each wall of prismatic
+    joint j (+y, -y, +z, -z), the block unrotated with its centroid at ``r4``: read as the
+    kernel reads it (``prismatic.gap``: the bin, or bilinearly with ``wear.interpolate``)."""
+    from .core.prismatic import gap, slot_corner, slot_wall
+
+    depth = [math.inf] * 4
+    wmap = np.ascontiguousarray(wmap, dtype=np.float64)
+    for k in range(L.P_SLOTS):
+        q = tuple(float(a + b) for a, b in zip(r4, slot_corner(jp, j, k)))
+        wall = slot_wall(k)[0]
+        depth[wall] = min(depth[wall], float(gap(jp, j, wmap, p, k, q)[2]))
+    return depth[0], depth[1], depth[2], depth[3]
+
+
+def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
+                 depth: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)) -> np.ndarray:
     """The offset [m] (0, y, z) of a block seated in its guide (joint P's jp ``row``) under
     the ideal guide's force ``force`` [N] on it: against the y wall the force's y part
     pushes from, and likewise in z, each wall's four corners sharing that part of the load
     (a corner's law, ``prismatic.corner_law``, and the coated modulus); a part that is 0 or
-    not finite leaves the block centred in that direction."""
+    not finite leaves the block centred in that direction. ``depth``: each wall's wear
+    under its least worn corner (+y, -y, +z, -z; :func:`worn_walls`), which moves the
+    wall's surface out by that much: the least worn corner rests on it, the others start
+    clear of their deeper wear."""
     from .core.prismatic import corner_law
 
     law = corner_law(p)
@@ -389,6 +412,8 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray) -> np.ndarra
         part = float(force[axis])
         if not (math.isfinite(part) and part != 0.0):
             continue
+        # the block rests on the wall opposite the force's direction: -y (-z) for a part > 0
+        c = c + depth[2 * axis - 2 + (1 if part > 0.0 else 0)]
         # the corner's power law A c (delta / c)^n with A = 4 E_w sqrt(r_c c) / 3
         delta = static_penetration(0.25 * abs(part), c, row[L.J_EW], row[L.J_RI], c, law)
         out[axis] = -math.copysign(c + delta, part)

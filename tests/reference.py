@@ -18,7 +18,9 @@ Everything is built the obvious way, independently of the kernel's structured so
   the prismatic rows go, and each of the block's eight corners (rounded, edge radius r_c)
   pushes on the wall it crosses with Hertz's point-on-flat law, F = (4/3) E_w sqrt(r_c)
   delta^(3/2), damping and friction written from their formulas, at the corner
-  (section 3.7);
+  (section 3.7); on walls worn by a given map read bilinearly (``wear.feedback`` and
+  ``wear.interpolate``), the depth from scipy's linear interpolation between the bin
+  centres and the force along the penetration's gradient, by differences (section 3.5);
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
@@ -149,6 +151,7 @@ class Mechanism:
 
     p: np.ndarray
     jp: np.ndarray
+    wmap: np.ndarray | None = None      # the wear map (N_JOINTS x rows x columns) [m]
     l2: float = field(init=False)
     l3: float = field(init=False)
     zs: float = field(init=False)
@@ -346,17 +349,40 @@ def journal_contact(mech: Mechanism, q, qd, dv0_stored=0.0):
     return respond(mech, JOINT_O, qd, e, n, e - c, qj, qi, jj, np.zeros_like(jj), law, dv0_stored)
 
 
+def wall_depth(mech: Mechanism, wall, x, across):
+    """Depth [m] of guide wall ``wall`` (0..3: +y, -y, +z, -z; its band of P's map, rows
+    across the wall, columns along the guide) at x along the guide and ``across`` (z - z_s on
+    a y wall, y on a z wall): scipy's linear interpolation between the bin centres, the
+    point held inside the rectangle of the centres."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    jp = mech.jp[JOINT_P]
+    band_rows = mech.wmap.shape[1] // 4
+    ncol = mech.wmap.shape[2]
+    half = (0.5 * jp[L.J_HEIGHT] + jp[L.J_CZ]) if wall < 2 else (0.5 * jp[L.J_WIDTH] + jp[L.J_CY])
+    xs = jp[L.J_X0] + (np.arange(ncol) + 0.5) * jp[L.J_XSPAN] / ncol
+    ac = -half + (np.arange(band_rows) + 0.5) * 2.0 * half / band_rows
+    band = mech.wmap[JOINT_P, wall * band_rows:(wall + 1) * band_rows]
+    if band_rows == 1:
+        return float(np.interp(x, xs, band[0]))
+    read = RegularGridInterpolator((ac, xs), band)
+    return float(read([[np.clip(across, ac[0], ac[-1]), np.clip(x, xs[0], xs[-1])]])[0])
+
+
 def block_contact(mech: Mechanism, q, qd):
     """Contact state and forces of joint P: every corner of the block (length 2a, width 2b,
     height 2h about the slider's centroid) against the guide wall it crosses (walls at
-    y = +-(b + c_y), z = z_s +- (h + c_z)), each a point contact with a fresh episode. The
-    result's force and generalised force are the sums over the corners; its contact values
-    those of the corner that penetrates deepest."""
+    y = +-(b + c_y), z = z_s +- (h + c_z), worn by ``mech.wmap`` where the case reads it
+    bilinearly), each a point contact with a fresh episode. The result's force and
+    generalised force are the sums over the corners; its contact values those of the corner
+    that penetrates deepest."""
     jp = mech.jp[JOINT_P]
     half = 0.5 * np.array([jp[L.J_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
     clear = {1: jp[L.J_CY], 2: jp[L.J_CZ]}
     centre = np.array([0.0, 0.0, mech.zs])
     ew, rc = jp[L.J_EW], jp[L.J_RI]
+    worn = (mech.wmap is not None and mech.p[L.P_FEEDBACK] != 0.0
+            and mech.p[L.P_INTERP] != 0.0)
 
     def law(delta, ddot, kappa):
         if delta <= 0.0:
@@ -375,9 +401,20 @@ def block_contact(mech: Mechanism, q, qd):
         for axis in (1, 2):
             n = np.zeros(3)
             n[axis] = signs[axis]
-            delta = float(n @ (corner - centre)) - half[axis] - clear[axis]
+            wall = 2 * (axis - 1) + (0 if signs[axis] > 0 else 1)
+
+            def penetration(x, n=n, axis=axis, wall=wall):
+                h = wall_depth(mech, wall, x[0], x[3 - axis] - centre[3 - axis]) if worn else 0.0
+                return float(n @ (x - centre)) - half[axis] - clear[axis] - h
+
+            delta = penetration(corner)
+            grad = None
+            if worn:
+                step = 1e-6
+                grad = np.array([(penetration(corner + step * e) - penetration(corner - step * e))
+                                 / (2.0 * step) for e in np.eye(3)])
             res = respond(mech, JOINT_P, qd, 0.0, n, delta, corner, corner, jc,
-                          np.zeros_like(jc), law, 0.0)
+                          np.zeros_like(jc), law, 0.0, grad)
             if deepest is None or delta > deepest.delta:
                 deepest = res
             if delta > 0.0:
@@ -392,21 +429,25 @@ def block_contact(mech: Mechanism, q, qd):
     return deepest
 
 
-def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored):
+def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored, grad=None):
     """Forces of clearance joint j with eccentricity e, normal n and penetration delta, whose
     contact points qj (ball side, point Jacobian jj) and qi (socket side, ji) move with qd;
-    ``law(delta, delta_dot, kappa)`` gives (F_N, F_el)."""
+    ``law(delta, delta_dot, kappa)`` gives (F_N, F_el). ``grad``: delta's gradient with
+    respect to the contact point where it is not n (a worn guide wall): the approach rate is
+    grad . v and the normal force -F_N grad; the slip stays the velocity's part across n."""
     p, mu = mech.p, mech.jp[j, L.J_MU]
     j_rel = jj - ji
     v = j_rel @ qd
-    ddot = float(n @ v)
-    vt = v - ddot * n
+    vt = v - float(n @ v) * n
+    if grad is None:
+        grad = n
+    ddot = float(grad @ v)
     vtn = float(np.linalg.norm(vt))
     dv0 = dv0_stored if dv0_stored > 0.0 else max(ddot, p[L.P_DV0_MIN])
     cr = p[L.P_CR]
     kappa = 20.0 * (1.0 - cr) / (13.0 * cr * dv0)
     fn, fel = law(delta, ddot, kappa)
-    force = -fn * n
+    force = -fn * grad
     ft = 0.0
     if delta > 0.0 and p[L.P_FRICTION] != 0.0 and vtn > 0.0:
         ft = mu * friction_factor(vtn, p[L.P_V0], p[L.P_V1]) * fn
@@ -464,10 +505,11 @@ def acceleration_terms(mech: Mechanism, q, qd, t):
     return (cq.astype(float), ct.astype(float), cfun(q).astype(float), h.astype(float))
 
 
-def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0)) -> Reference:
+def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0), wmap=None) -> Reference:
     """Solve the full KKT system of docs/physics.md section 2 at state y (layout.Y_*) and time t;
-    ``dv0_stored``: the stored impact velocities of the first joints (the rest 0)."""
-    mech = Mechanism(np.asarray(p, float), np.asarray(jp, float))
+    ``dv0_stored``: the stored impact velocities of the first joints (the rest 0); ``wmap``:
+    the wear map that joint P's walls are read from (none: unworn)."""
+    mech = Mechanism(np.asarray(p, float), np.asarray(jp, float), wmap)
     q = np.array(y[:L.N_Q], float)
     qd = np.array(y[L.Y_QD:L.Y_QD + L.N_Q], float)
     rows = mech.rows()

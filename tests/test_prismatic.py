@@ -198,17 +198,18 @@ def test_block_in_contact(joints, preset):
 # runs of the kernel
 # ---------------------------------------------------------------------------
 
-def run_case(overrides, edit=None):
+def run_case(overrides, edit=None, wmap0=None):
     """The kernel's run of configs/one_clearance.yaml with B ideal unless ``overrides`` say
     otherwise, and ``overrides``; ``edit(cfg, pk)`` may change the packed case before the
-    run. (config, packed case, raw run, results dataset)."""
+    run, ``wmap0(cfg, pk)`` gives the wear map it starts from (default unworn).
+    (config, packed case, raw run, results dataset)."""
     cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
                       ["joints.B.clearance=0", *overrides])
     pk = pack(cfg, resolve_materials(cfg))
     if edit is not None:
         edit(cfg, pk)
     prepare_kernel(cfg.solver.method)
-    raw = run_kernel(pk)
+    raw = run_kernel(pk, wmap0=None if wmap0 is None else wmap0(cfg, pk))
     assert raw.status == "ok"
     return cfg, pk, raw, case_dataset(cfg, pk, raw)
 

@@ -61,11 +61,13 @@ def packed_case(joints, preset="realistic", **sections):
     return pack(cfg, resolve_materials(cfg))
 
 
-def run_evaluate(t, y, p, jp, dv0=(0.0, 0.0)):
-    """One kernel right-hand side with fresh work arrays (as rk4.integrate allocates them)."""
+def run_evaluate(t, y, p, jp, dv0=(0.0, 0.0), wmap=None):
+    """One kernel right-hand side with fresh work arrays (as rk4.integrate allocates them),
+    on the wear map ``wmap`` (default unworn, 36 x 72)."""
     s = np.zeros((L.N_JOINTS, L.N_S))
     s[:len(dv0), L.S_DV0] = dv0
-    work = dict(wmap=np.zeros((L.N_JOINTS, 36, 72)), dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D),
+    wmap = np.zeros((L.N_JOINTS, 36, 72)) if wmap is None else wmap
+    work = dict(wmap=wmap, dy=np.zeros(L.N_Y), dg=np.zeros(L.N_D),
                 C=np.zeros((NZ, NZ)), S=np.zeros((NZ, NZ)), L=np.zeros((NZ, NZ)),
                 vz=np.zeros((VZ_ROWS, NZ)))
     st = evaluate(t, np.array(y, float), Model(p, jp, s, work["wmap"]), work["dy"], work["dg"],
@@ -153,12 +155,13 @@ def contact_state(y, p, jp, rng, delta=(2e-6, 2e-6), ddot=(3e-3, -2e-3), slip=(5
 # comparison
 # ---------------------------------------------------------------------------
 
-def compare(t, y, pk, dv0=(0.0, 0.0)):
-    """Kernel vs reference at (t, y); returns the largest scaled difference of each group."""
+def compare(t, y, pk, dv0=(0.0, 0.0), wmap=None):
+    """Kernel vs reference at (t, y) on the wear map ``wmap`` (default unworn); returns the
+    largest scaled difference of each group."""
     p, jp = pk.p, pk.jp
-    k = run_evaluate(t, y, p, jp, dv0)
+    k = run_evaluate(t, y, p, jp, dv0, wmap)
     dy, dg = k["dy"], k["dg"]
-    r = ref_mod.evaluate(t, y, p, jp, dv0)
+    r = ref_mod.evaluate(t, y, p, jp, dv0, wmap)
     out = {}
 
     assert np.array_equal(dy[:L.N_Q], y[L.Y_QD:L.Y_QD + L.N_Q])

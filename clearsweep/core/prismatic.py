@@ -16,11 +16,13 @@ the case's exponent under ``contact.elastic: hertz``), with the case's damping l
 slot's own impact velocity, and the improved Coulomb friction on the corner's slip over the
 wall (along and across the guide). Every slot's force acts at its corner.
 
-- :func:`slot_geometry`: a slot's corner, wall, outward normal and penetration against the
-  wall's worn position c + h, h read from the wall's wear map at the corner;
+- :func:`gap`: a slot's wall, outward normal and penetration against the wall's worn
+  position c + h, h read from the wall's wear map at the corner (its bin, or with
+  ``wear.interpolate`` bilinearly, :func:`wall_read`, whose gradient tilts the corner's
+  force onto the worn wall's normal: :func:`slot_state`);
 - the wall maps: the joint's map rows split in four bands, one per wall (+y, -y, +z, -z),
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
-  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`deposit`;
+  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`wall_read`, :func:`deposit`;
 - :func:`contact`: the sum over the slots (force, moment, dissipated power) and, at a
   step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   total elastic energy, the guide's total force and the largest stiff rate of a slot;
@@ -81,6 +83,7 @@ from .layout import (
     P_EXPONENT,
     P_FEEDBACK,
     P_FRICTION,
+    P_INTERP,
     P_J4,
     P_M4,
     P_ONSET,
@@ -111,12 +114,14 @@ WALLS = ("+y", "-y", "+z", "-z")
 #: named ``_body``.
 Slot = namedtuple("Slot", (
     "delta",        # penetration [m] (negative: a gap)
-    "ddot",         # approach rate [m/s]
+    "ddot",         # approach rate d delta / dt [m/s]
     "fn",           # normal force F_N [N]
     "fel",          # its elastic part [N]
     "dfd",          # dF_N / d delta [N/m]
     "dfdd",         # dF_N / d delta_dot [N s/m]
     "force",        # force on the block at the corner, normal and friction [N]
+    "fnormal",      # its normal part (the force without friction) [N]
+    "pdiss",        # power dissipated by the slot's damping and friction [W]
     "q",            # the corner [m]
     "n",            # the wall's outward normal
     "vt",           # the corner's slip velocity over the wall [m/s]
@@ -124,7 +129,7 @@ Slot = namedtuple("Slot", (
     "across",       # the corner's position across the wall [m]
     "worn",         # the wall's coating worn through under the corner
     "c_eff",        # local clearance c + h [m]
-    "h",            # the wall's wear depth under the corner [m]
+    "h",            # the wall's wear depth at the corner [m]
     "u_body",       # the corner in the block's frame [m]
 ))
 
@@ -197,14 +202,59 @@ def wall_bin_area(jp, j, wall, nrow, ncol):
     return jp[j, J_XSPAN] / ncol * 2.0 * wall_half(jp, j, wall) / (nrow // 4)
 
 
+@compiled(inline="always")
+def clamped_cell(u, n):
+    """(i, f, clamped) of the coordinate u [bins, 0 at the first bin's centre] among n bin
+    centres: u lies between centres i and i + 1 at the fraction f; beyond the first or the
+    last centre it is held there (f = 0, ``clamped``)."""
+    i = int(math.floor(u))
+    if i < 0:
+        return 0, 0.0, True
+    if i >= n - 1:
+        return n - 1, 0.0, True
+    return i, u - i, False
+
+
+@compiled
+def wall_read(wmap, j, jp, wall, x, across):
+    """Depth h [m] of wall ``wall``'s map (0..3: +y, -y, +z, -z) at x [m] along the guide and
+    ``across`` [m] across the wall, bilinear between the bin centres of the wall's band (held
+    at the band's first and last centres across the wall and at the map's ends along it:
+    never read from the neighbouring wall's band); and its gradient (dh/dx, dh/d across)
+    [-], zero along a direction where the read is held."""
+    band = wmap.shape[1] // 4
+    ncol = wmap.shape[2]
+    half = wall_half(jp, j, wall)
+    c0, fx, held_x = clamped_cell((x - jp[j, J_X0]) / jp[j, J_XSPAN] * ncol - 0.5, ncol)
+    r0, fa, held_a = clamped_cell((across + half) / (2.0 * half) * band - 0.5, band)
+    c1 = min(c0 + 1, ncol - 1)
+    r1 = wall * band + min(r0 + 1, band - 1)
+    r0 += wall * band
+    w00 = wmap[j, r0, c0]
+    w01 = wmap[j, r0, c1]
+    w10 = wmap[j, r1, c0]
+    w11 = wmap[j, r1, c1]
+    h = (1.0 - fa) * ((1.0 - fx) * w00 + fx * w01) + fa * ((1.0 - fx) * w10 + fx * w11)
+    dh_dx = 0.0
+    dh_da = 0.0
+    if not held_x:
+        dh_dx = ((1.0 - fa) * (w01 - w00) + fa * (w11 - w10)) * ncol / jp[j, J_XSPAN]
+    if not held_a:
+        dh_da = ((1.0 - fx) * (w10 - w00) + fx * (w11 - w01)) * band / (2.0 * half)
+    return h, dh_dx, dh_da
+
+
 @compiled
 def gap(jp, j, wmap, p, k, q):
     """Gap geometry of slot k of prismatic joint j with its corner at the global point q:
-    (wall, n, across, row, col, h, worn, c_eff, delta): the wall's index and outward unit
-    normal, the corner's position across the wall [m], its map bin, the wall's wear depth
-    there h [m] (0 without feedback), whether its coating is worn through there, the local
-    clearance c + h and the penetration delta = (corner beyond the block's nominal face) -
-    c_eff [m] (negative: a gap)."""
+    (n, across, h, slope, worn, c_eff, delta): the wall's outward unit normal, the corner's
+    position across the wall [m], the wall's wear depth there h [m] (0 without feedback;
+    the bin's, or with ``wear.interpolate`` the bilinear read of :func:`wall_read`), h's
+    gradient with respect to the corner (global, tangent to the wall; zero for the bin
+    read), whether the wall's coating is worn through in the bin under the corner, the
+    local clearance c + h and the penetration delta = (corner beyond the block's nominal
+    face) - c_eff [m] (negative: a gap), whose gradient with respect to the corner is
+    n - slope: the worn wall's normal."""
     zs = p[P_ZS]
     wall, s = slot_wall(k)
     if wall < 2:
@@ -217,12 +267,22 @@ def gap(jp, j, wmap, p, k, q):
         out = s * (q[2] - zs) - 0.5 * jp[j, J_HEIGHT]
         c = jp[j, J_CZ]
         across = q[1]
-    row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
-    depth = wmap[j, row, col]
-    h = depth if p[P_FEEDBACK] != 0.0 else 0.0
+    feedback = p[P_FEEDBACK] != 0.0
+    binned = feedback and p[P_INTERP] == 0.0
     coat = jp[j, J_COAT]
-    worn = coat < math.inf and coating_worn(depth, coat)
-    return wall, n, across, row, col, h, worn, c + h, out - c - h
+    h = 0.0
+    slope = (0.0, 0.0, 0.0)
+    worn = False
+    if feedback and not binned:
+        h, dh_dx, dh_da = wall_read(wmap, j, jp, wall, q[0], across)
+        slope = (dh_dx, 0.0, dh_da) if wall < 2 else (dh_dx, dh_da, 0.0)
+    if binned or coat < math.inf:
+        row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
+        depth = wmap[j, row, col]
+        if binned:
+            h = depth
+        worn = coat < math.inf and coating_worn(depth, coat)
+    return n, across, h, slope, worn, c + h, out - c - h
 
 
 @compiled
@@ -253,30 +313,64 @@ def corner_mobility(p, u, nb):
 
 @compiled
 def slot_state(j, model, k, slider):
-    """Slot k's contact, a :data:`Slot`. ``slider``: the block's body state (r, v, R, w)."""
+    """Slot k's contact, a :data:`Slot`. ``slider``: the block's body state (r, v, R, w).
+
+    On a sloped worn wall (the bilinear read, the gap's ``slope`` s != 0) the penetration
+    delta = out - c - h(x, across) has the gradient m = n - s with respect to the corner, and
+    the normal force derives from the corner's elastic potential U(delta, c_eff)
+    (docs/physics.md 3.5, 3.7): -F_N m - X s on the block, X = dU/dc_eff at fixed delta while
+    F_N > 0 (0 otherwise). The guide does not move, so its power is exactly
+    -F_N delta_dot - X h_dot with delta_dot = m . v_q and h_dot = s . v_q, v_q the corner's
+    velocity; the damping part (F_N - F_el) delta_dot + (X - U_c) h_dot is booked as
+    dissipated. Friction stays tangent to the wall, against the corner's slip over it: its
+    power is then its dot product with that slip whatever the normal force's direction.
+    A flat wall (s = 0) gives -F_N n.
+    """
     p = model.p
     jp = model.jp
     r4, v4, R4, w4 = slider
     u = slot_corner(jp, j, k)
     q = add(r4, mv(R4, u))
-    _, n, across, _, _, h, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
+    n, across, h, slope, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
     vq = add(v4, mv(R4, cross(w4, u)))
-    ddot = dot(n, vq)
-    vt = sub(vq, scale(ddot, n))
+    sloped = slope[0] != 0.0 or slope[1] != 0.0 or slope[2] != 0.0
+    hdot = 0.0
+    if sloped:
+        hdot = dot(slope, vq)
+        vn = dot(n, vq)
+        ddot = vn - hdot
+        vt = sub(vq, scale(vn, n))
+    else:
+        ddot = dot(n, vq)
+        vt = sub(vq, scale(ddot, n))
     slip = math.sqrt(dot(vt, vt))
     zero = (0.0, 0.0, 0.0)
     if delta <= 0.0:
-        return Slot(delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, q, n, vt, slip, across, worn, c_eff,
-                    h, u)
+        return Slot(delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, zero, 0.0, q, n, vt, slip, across,
+                    worn, c_eff, h, u)
     ew, mu, _ = surface(jp, j, worn)
     rc = jp[j, J_RI]
+    law = corner_law(p)
     kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, rc, c_eff, corner_law(p), kappa)
-    force = scale(-fn, n)
+    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, rc, c_eff, law, kappa)
+    if sloped:
+        # U = delta F_el / (n + 1), F_el = A c_eff (delta / c_eff)^n with A ~ sqrt(c_eff)
+        # (R_j = c_eff): U ~ c_eff^(3/2 - n), so dU/dc_eff = (3/2 - n) U / c_eff
+        uc = (1.5 - law) * elastic_energy(delta, c_eff, ew, rc, c_eff, law) / c_eff
+        x = uc if fn > 0.0 else 0.0
+        fnormal = add(scale(-fn, n), scale(fn - x, slope))
+        pdiss = (fn - fel) * ddot + (x - uc) * hdot
+    else:
+        fnormal = scale(-fn, n)
+        pdiss = (fn - fel) * ddot
+    force = fnormal
     if p[P_FRICTION] != 0.0 and slip > 0.0:
         ft = friction_magnitude(mu, fn, slip, p[P_V0], p[P_V1])
         force = add(force, scale(-ft / slip, vt))
-    return Slot(delta, ddot, fn, fel, dfd, dfdd, force, q, n, vt, slip, across, worn, c_eff, h, u)
+    # friction: its work on the corner's slip
+    pdiss -= dot(sub(force, fnormal), vt)
+    return Slot(delta, ddot, fn, fel, dfd, dfdd, force, fnormal, pdiss, q, n, vt, slip, across,
+                worn, c_eff, h, u)
 
 
 @compiled
@@ -343,8 +437,7 @@ def contact(j, model, slider, full, dg):
         f = st.force
         force = add(force, f)
         moment = add(moment, cross(st.u_body, mtv(R4, f)))
-        # damping, and friction: the friction force's work on the corner's slip
-        pdiss += (st.fn - st.fel) * st.ddot - dot(add(f, scale(st.fn, st.n)), st.vt)
+        pdiss += st.pdiss
         if full:
             ew, _, _ = surface(model.jp, j, st.worn)
             uel += elastic_energy(st.delta, st.c_eff, ew, model.jp[j, J_RI], st.c_eff, law)
@@ -364,7 +457,7 @@ def contact(j, model, slider, full, dg):
 def store_slot(dg, j, st):
     """Joint j's per-joint contact diagnostics from one slot's :func:`slot_state`."""
     dg[D_FN + j] = st.fn
-    ft = add(st.force, scale(st.fn, st.n))     # the friction force
+    ft = sub(st.force, st.fnormal)     # the friction force
     dg[D_FT + j] = math.sqrt(dot(ft, ft))
     dg[D_DELTA + j] = st.delta
     dg[D_DDOT + j] = st.ddot
