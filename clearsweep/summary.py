@@ -248,13 +248,20 @@ def poincare_points(ds: xr.Dataset, start: float | None = None
 
 
 def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
-    """``period`` and ``chaos_k`` of every case of ``ds`` (with the Poincaré samples)."""
-    time, slider, offset = poincare_points(ds)
+    """``period`` and ``chaos_k`` of every case of ``ds`` (with the Poincaré samples), from
+    the settled samples of :func:`poincare_points`, masked here on the arrays (three
+    ``where`` on the DataArrays were half of a summary case's summaries)."""
+    time = ds[POINCARE_TIME]
     dims = tuple(str(d) for d in time.dims if d != REVOLUTION_DIM)
     time_v = time.transpose(*dims, REVOLUTION_DIM).values
-    slider_v = slider.transpose(*dims, REVOLUTION_DIM).values
-    offset_v = (None if offset is None else
-                offset.transpose(*dims, REVOLUTION_DIM, ...).values)
+    settled = time_v >= settle_time(ds) - 1e-12
+    time_v = np.where(settled, time_v, np.nan)
+    slider_v = np.where(settled, ds[POINCARE_SLIDER].transpose(*dims, REVOLUTION_DIM).values, np.nan)
+    offset_v = None
+    if POINCARE_OFFSET in ds:
+        offset_v = ds[POINCARE_OFFSET].transpose(*dims, REVOLUTION_DIM, ...).values
+        offset_v = np.where(settled.reshape(settled.shape + (1,) * (offset_v.ndim - settled.ndim)),
+                            offset_v, np.nan)
     period = np.full(time_v.shape[:-1], motion.PERIOD_UNKNOWN, dtype=np.int64)
     chaos = np.full(time_v.shape[:-1], np.nan)
     for index in np.ndindex(*time_v.shape[:-1]):
