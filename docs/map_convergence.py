@@ -45,17 +45,22 @@ CONFIGS = {
     "life": ("life.yaml", "life", ["life.max_blocks=3"], ["life.max_blocks=12"]),
     # a reliability sweep's members are life runs of its base: member 0's, unperturbed
     "reliability": ("reliability.yaml", "reliability", ["life.max_blocks=3"], ["life.max_blocks=12"]),
+    # all four joints clear: the guide's walls hold the corners' track depth (physics.md 5.7)
+    "reliability_joints": ("reliability_joints.yaml", "reliability", ["life.max_blocks=3"],
+                           ["life.max_blocks=12"]),
 }
 
 
 def _depths(name: str, kind: str, overrides: list[str], workers: int,
-            client=None) -> tuple[list[int], np.ndarray]:
-    """The config's wear map and the max depth [m] of every case and clearance joint (NaN
-    where the joint is ideal or nothing wore); a sweep runs on ``workers`` processes, or on
-    ``client`` (an executor of warm workers, see ``run_sweep``) where given."""
+            client=None) -> tuple[list[int], np.ndarray, np.ndarray | None]:
+    """The config's wear map, the max depth [m] of every case and clearance joint (NaN
+    where the joint is ideal or nothing wore) and, for a life run, each joint's worn volume
+    [m^3] (None otherwise); a sweep runs on ``workers`` processes, or on ``client`` (an
+    executor of warm workers, see ``run_sweep``) where given."""
     from clearsweep.config import load_config
 
     path = ROOT / "configs" / CONFIGS[name][0]
+    volume = None
     if kind == "case":
         from clearsweep.simulation import simulate
 
@@ -67,6 +72,7 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int,
         cfg = load_config(path, overrides) if kind == "life" else _sweep_base(path, overrides)
         ds = life(cfg)
         shape, depth = cfg.wear.map, ds.wear_depth_max.isel(cycle=-1)
+        volume = ds.wear_volume.isel(cycle=-1).values
     else:
         import yaml
 
@@ -83,7 +89,7 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int,
         base = yaml.safe_load(ds.attrs["sweep_config"])["base"]
         shape = base["wear"]["map"]
     values = np.asarray(depth.values, dtype=float).ravel()
-    return list(shape), np.where(values > 0.0, values, np.nan)
+    return list(shape), np.where(values > 0.0, values, np.nan), volume
 
 
 def _sweep_base(path: Path, overrides: list[str]):
@@ -97,14 +103,24 @@ def measure(name: str, short: bool, workers: int = 1, client=None) -> dict:
     """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`)."""
     _, kind, short_overrides, full_overrides = CONFIGS[name]
     overrides = short_overrides if short else full_overrides
-    shape, coarse = _depths(name, kind, overrides, workers, client)
+    shape, coarse, volume = _depths(name, kind, overrides, workers, client)
     fine_shape = [2 * shape[0], 2 * shape[1]]
-    _, fine = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers, client)
+    _, fine, fine_volume = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers,
+                                   client)
     with np.errstate(invalid="ignore"):
         ratio = coarse / fine
-    return {"config": name, "map": shape, "fine_map": fine_shape,
-            "depth_max": float(np.nanmax(coarse)), "fine_depth_max": float(np.nanmax(fine)),
-            "worst_ratio": float(np.nanmin(ratio)), "short": short}
+    row = {"config": name, "map": shape, "fine_map": fine_shape,
+           "depth_max": float(np.nanmax(coarse)), "fine_depth_max": float(np.nanmax(fine)),
+           "worst_ratio": float(np.nanmin(ratio)), "short": short}
+    if volume is not None:
+        # a life run's joints: each one's depth ratio and worn volume ratio (NaN: ideal)
+        from clearsweep.core.joints import JOINTS
+
+        with np.errstate(invalid="ignore", divide="ignore"):
+            vratio = np.where(volume > 0.0, volume / fine_volume, np.nan)
+        row["joint_depth_ratio"] = {j.name: float(r) for j, r in zip(JOINTS, ratio)}
+        row["joint_volume_ratio"] = {j.name: float(r) for j, r in zip(JOINTS, vratio)}
+    return row
 
 
 def main(argv: list[str] | None = None) -> None:
