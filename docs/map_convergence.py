@@ -1,7 +1,9 @@
 """Max wear depth of every shipped config at its wear map and at twice the resolution.
 
 Run from the repository root: ``.venv/bin/python docs/map_convergence.py`` (add ``--short``
-for the short runs of the fast test, ``--only NAME`` for one config). A map's largest bin
+for the short runs of the fast test, ``--only NAME`` for one config, ``--set KEY=VALUE`` for
+an override of both runs, e.g. another map; ``--json`` adds, for a life run, each joint's
+ratio of depths and of worn volumes). A map's largest bin
 depth (``wear_depth_max_final``, a life run's ``wear_depth_max`` at its end) converges from
 below as the map is refined (docs/physics.md section 5): a bin wider than the contact cap
 spreads the cap's volume over the bin. For each config that reports a max depth it runs
@@ -99,10 +101,12 @@ def _sweep_base(path: Path, overrides: list[str]):
     return expand(path).base.replace(*overrides)
 
 
-def measure(name: str, short: bool, workers: int = 1, client=None) -> dict:
-    """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`)."""
+def measure(name: str, short: bool, workers: int = 1, client=None,
+            extra: tuple[str, ...] = ()) -> dict:
+    """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`),
+    ``extra`` overrides on both maps' runs (``wear.map=[n, m]``: that map and its double)."""
     _, kind, short_overrides, full_overrides = CONFIGS[name]
-    overrides = short_overrides if short else full_overrides
+    overrides = [*(short_overrides if short else full_overrides), *extra]
     shape, coarse, volume = _depths(name, kind, overrides, workers, client)
     fine_shape = [2 * shape[0], 2 * shape[1]]
     _, fine, fine_volume = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers,
@@ -129,12 +133,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--only", action="append", choices=list(CONFIGS), help="one config")
     parser.add_argument("--workers", type=int, default=1, help="worker processes of the sweeps")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON lines")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="an override of both runs, e.g. 'wear.map=[36, 72]'")
     args = parser.parse_args(argv)
     print("| config | map | max depth [m] | map x 2 | max depth [m] | worst case ratio | within "
           f"{TOLERANCE:.0%} |")
     print("|---|---|---|---|---|---|---|")
     for name in args.only or CONFIGS:
-        row = measure(name, args.short, args.workers)
+        row = measure(name, args.short, args.workers, extra=tuple(args.set))
         if args.json:
             print(json.dumps(row))
             continue

@@ -526,6 +526,26 @@ def test_worn_volume_and_track_depth_per_wall():
     assert vol.sum() == pytest.approx(total, rel=1e-9, abs=0.0)
 
 
+def test_a_track_wider_than_a_bin_spreads_over_the_bin():
+    """The track's width is the Hertz patch 2 sqrt(r_c delta) while it fits in a bin across
+    the wall, and the bin's extent once the patch would cover more (a 4-row map: one bin
+    across each wall, 70.4 mm on this block's y walls; a patch 126 mm wide), so a step's depth is never more than its
+    volume over the bin's area; a y wall and a z wall have their own extents."""
+    from clearsweep.core.prismatic import track_width
+
+    cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
+                      [*guide(1e-4, 2e-4), "joints.P.block=[0.08, 0.05, 0.07]"])
+    jp = pack(cfg, resolve_materials(cfg)).jp
+    rc = jp[P, L.J_RI]
+    height = jp[P, L.J_HEIGHT] + 2 * jp[P, L.J_CZ]      # a y wall's extent across
+    width = jp[P, L.J_WIDTH] + 2 * jp[P, L.J_CY]        # a z wall's
+    assert track_width(jp, P, 0, 1e-6, 144) == pytest.approx(2 * np.sqrt(rc * 1e-6), rel=1e-15)
+    assert track_width(jp, P, 3, 1e-6, 144) == pytest.approx(2 * np.sqrt(rc * 1e-6), rel=1e-15)
+    assert track_width(jp, P, 1, 4.0, 4) == pytest.approx(height, rel=1e-15)
+    assert track_width(jp, P, 2, 4.0, 4) == pytest.approx(width, rel=1e-15)
+    assert track_width(jp, P, 2, 4.0, 36) == pytest.approx(width / 9, rel=1e-15)
+
+
 # ---------------------------------------------------------------------------
 # 6. the energy balance, and the step
 # ---------------------------------------------------------------------------
