@@ -348,18 +348,6 @@ def bin_areas(shape: tuple[int, int], radius: float) -> np.ndarray:
     return np.repeat(row[:, None], nazim, axis=1)
 
 
-def guide_bin_areas(jp: np.ndarray, j: int, shape: tuple[int, int]) -> np.ndarray:
-    """Area [m^2] of each bin of a guide's wall maps (joint j of jp; docs/physics.md 5.7):
-    the kernel's own ``core.prismatic.wall_bin_area``, band by band (+y, -y, +z, -z); the
-    rows past the four bands, which no wall uses, get the last band's."""
-    from .core.prismatic import wall_bin_area
-
-    npolar, nazim = shape
-    band = max(npolar // 4, 1)
-    rows = [wall_bin_area(jp, j, min(ip // band, 3), npolar, nazim) for ip in range(npolar)]
-    return np.repeat(np.array(rows)[:, None], nazim, axis=1)
-
-
 def jump_revolutions(depth: np.ndarray, rate: np.ndarray, clearance: np.ndarray,
                      coating: np.ndarray, clearance_fraction: float,
                      coating_fraction: float) -> float:
@@ -666,7 +654,9 @@ def _block_row(cfg: Config, raw: KernelRun, state: LifeState, revs: float, jp: n
     for j in range(L.N_JOINTS):
         worn = state.wmap[j] > WORN_FRACTION * depth_max[j]
         if worn.any():
-            areas = (guide_bin_areas(jp, j, state.wmap.shape[1:])
+            # a guide's bins hold the depth of the corners' tracks, each over the same
+            # length along the guide (docs/physics.md 5.7): their plain mean
+            areas = (np.ones(state.wmap.shape[1:])
                      if JOINT_TYPES[JOINTS[j]] == "prismatic"
                      else bin_areas(state.wmap.shape[1:], jp[j, L.J_RI]))
             mean[j] = float((state.wmap[j] * areas)[worn].sum() / areas[worn].sum())

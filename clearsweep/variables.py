@@ -64,7 +64,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
                              "bin-averaged Archard wear depth over the socket inner sphere, socket "
                              "frame; O: row 0 around the bearing; P: the guide's walls +y, -y, +z, "
                              "-z as four bands of polar // 4 rows across the wall by azimuth bins "
-                             "along the guide"),
+                             "along the guide, each bin the depth of the corners' track over "
+                             "it (volume over track width x bin length)"),
     "wear_projection": VariableSpec(("joint", "axis", "angle"), "m", "wear depth projected per axis",
                                     "paper Eq. 15-17: k |F_N,axis| dS / A binned by the contact "
                                     "direction's angle about the axis, socket frame"),

@@ -1,7 +1,9 @@
 """Max wear depth of every shipped config at its wear map and at twice the resolution.
 
 Run from the repository root: ``.venv/bin/python docs/map_convergence.py`` (add ``--short``
-for the short runs of the fast test, ``--only NAME`` for one config). A map's largest bin
+for the short runs of the fast test, ``--only NAME`` for one config, ``--set KEY=VALUE`` for
+an override of both runs, e.g. another map; ``--json`` adds, for a life run, each joint's
+ratio of depths and of worn volumes). A map's largest bin
 depth (``wear_depth_max_final``, a life run's ``wear_depth_max`` at its end) converges from
 below as the map is refined (docs/physics.md section 5): a bin wider than the contact cap
 spreads the cap's volume over the bin. For each config that reports a max depth it runs
@@ -45,17 +47,22 @@ CONFIGS = {
     "life": ("life.yaml", "life", ["life.max_blocks=3"], ["life.max_blocks=12"]),
     # a reliability sweep's members are life runs of its base: member 0's, unperturbed
     "reliability": ("reliability.yaml", "reliability", ["life.max_blocks=3"], ["life.max_blocks=12"]),
+    # all four joints clear: the guide's walls hold the corners' track depth (physics.md 5.7)
+    "reliability_joints": ("reliability_joints.yaml", "reliability", ["life.max_blocks=3"],
+                           ["life.max_blocks=12"]),
 }
 
 
 def _depths(name: str, kind: str, overrides: list[str], workers: int,
-            client=None) -> tuple[list[int], np.ndarray]:
-    """The config's wear map and the max depth [m] of every case and clearance joint (NaN
-    where the joint is ideal or nothing wore); a sweep runs on ``workers`` processes, or on
-    ``client`` (an executor of warm workers, see ``run_sweep``) where given."""
+            client=None) -> tuple[list[int], np.ndarray, np.ndarray | None]:
+    """The config's wear map, the max depth [m] of every case and clearance joint (NaN
+    where the joint is ideal or nothing wore) and, for a life run, each joint's worn volume
+    [m^3] (None otherwise); a sweep runs on ``workers`` processes, or on ``client`` (an
+    executor of warm workers, see ``run_sweep``) where given."""
     from clearsweep.config import load_config
 
     path = ROOT / "configs" / CONFIGS[name][0]
+    volume = None
     if kind == "case":
         from clearsweep.simulation import simulate
 
@@ -67,6 +74,7 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int,
         cfg = load_config(path, overrides) if kind == "life" else _sweep_base(path, overrides)
         ds = life(cfg)
         shape, depth = cfg.wear.map, ds.wear_depth_max.isel(cycle=-1)
+        volume = ds.wear_volume.isel(cycle=-1).values
     else:
         import yaml
 
@@ -83,7 +91,7 @@ def _depths(name: str, kind: str, overrides: list[str], workers: int,
         base = yaml.safe_load(ds.attrs["sweep_config"])["base"]
         shape = base["wear"]["map"]
     values = np.asarray(depth.values, dtype=float).ravel()
-    return list(shape), np.where(values > 0.0, values, np.nan)
+    return list(shape), np.where(values > 0.0, values, np.nan), volume
 
 
 def _sweep_base(path: Path, overrides: list[str]):
@@ -93,18 +101,30 @@ def _sweep_base(path: Path, overrides: list[str]):
     return expand(path).base.replace(*overrides)
 
 
-def measure(name: str, short: bool, workers: int = 1, client=None) -> dict:
-    """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`)."""
+def measure(name: str, short: bool, workers: int = 1, client=None,
+            extra: tuple[str, ...] = ()) -> dict:
+    """One row of the table for config ``name`` (``workers``, ``client``: see :func:`_depths`),
+    ``extra`` overrides on both maps' runs (``wear.map=[n, m]``: that map and its double)."""
     _, kind, short_overrides, full_overrides = CONFIGS[name]
-    overrides = short_overrides if short else full_overrides
-    shape, coarse = _depths(name, kind, overrides, workers, client)
+    overrides = [*(short_overrides if short else full_overrides), *extra]
+    shape, coarse, volume = _depths(name, kind, overrides, workers, client)
     fine_shape = [2 * shape[0], 2 * shape[1]]
-    _, fine = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers, client)
+    _, fine, fine_volume = _depths(name, kind, [*overrides, f"wear.map={fine_shape}"], workers,
+                                   client)
     with np.errstate(invalid="ignore"):
         ratio = coarse / fine
-    return {"config": name, "map": shape, "fine_map": fine_shape,
-            "depth_max": float(np.nanmax(coarse)), "fine_depth_max": float(np.nanmax(fine)),
-            "worst_ratio": float(np.nanmin(ratio)), "short": short}
+    row = {"config": name, "map": shape, "fine_map": fine_shape,
+           "depth_max": float(np.nanmax(coarse)), "fine_depth_max": float(np.nanmax(fine)),
+           "worst_ratio": float(np.nanmin(ratio)), "short": short}
+    if volume is not None:
+        # a life run's joints: each one's depth ratio and worn volume ratio (NaN: ideal)
+        from clearsweep.core.joints import JOINTS
+
+        with np.errstate(invalid="ignore", divide="ignore"):
+            vratio = np.where(volume > 0.0, volume / fine_volume, np.nan)
+        row["joint_depth_ratio"] = {j.name: float(r) for j, r in zip(JOINTS, ratio)}
+        row["joint_volume_ratio"] = {j.name: float(r) for j, r in zip(JOINTS, vratio)}
+    return row
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -113,12 +133,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--only", action="append", choices=list(CONFIGS), help="one config")
     parser.add_argument("--workers", type=int, default=1, help="worker processes of the sweeps")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON lines")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="an override of both runs, e.g. 'wear.map=[36, 72]'")
     args = parser.parse_args(argv)
     print("| config | map | max depth [m] | map x 2 | max depth [m] | worst case ratio | within "
           f"{TOLERANCE:.0%} |")
     print("|---|---|---|---|---|---|---|")
     for name in args.only or CONFIGS:
-        row = measure(name, args.short, args.workers)
+        row = measure(name, args.short, args.workers, extra=tuple(args.set))
         if args.json:
             print(json.dumps(row))
             continue

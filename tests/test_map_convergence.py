@@ -30,6 +30,10 @@ TABLE = {
     "coating_ensemble": ([144, 288], 0.945),    # 1 s seated members (0.949 at 0.25 s, offsets)
     "life": ([72, 144], 0.997),
     "reliability": ([36, 72], 0.958),             # member 0's life run, 12 blocks
+    # member 0, 12 blocks: B 1.000, A 1.002, O 1.016, P's walls 1.002; at 36 x 72 (its
+    # --set "wear.map=[36, 72]") B 0.904, A 0.932, O 0.984, P 1.000 (0.702 while P's bins
+    # held the track's volume over the bin's area)
+    "reliability_joints": ([72, 144], 1.000),
 }
 
 
@@ -45,8 +49,7 @@ def test_every_shipped_config_that_reports_a_depth_is_in_the_table():
     # ideal has no clearance (no wear); life_sweep runs life.yaml's map; sensitivity asks for
     # accelerations and forces, no wear depth, on a coarse map that its header states;
     # bifurcation asks for the motion's period and spectrum, no wear depth; mixed_clearances
-    # answers with worn volumes, which the map does not change (a corner of P wears a track
-    # one bin wide, whose depth is the map's bin size: docs/mixed_clearances.md)
+    # answers with worn volumes, which the map does not change
     assert shipped - set(mc.CONFIGS) == {"ideal", "life_sweep", "sensitivity", "bifurcation",
                                          "mixed_clearances"}
     assert set(TABLE) == set(mc.CONFIGS)
@@ -65,6 +68,21 @@ def test_a_short_run_at_twice_the_resolution_agrees():
     row = mc.measure("two_clearances", short=True)
     assert row["map"] == [144, 288] and row["fine_map"] == [288, 576]
     assert 1.0 - mc.TOLERANCE <= row["worst_ratio"] <= 1.0 + mc.TOLERANCE
+
+
+def test_the_guides_track_depth_does_not_depend_on_the_map():
+    """All four joints clear (configs/reliability_joints.yaml's member 0, 3 blocks) on 36 x
+    72 and 72 x 144 (half the config's map and the config's): P's largest wall depth, the
+    depth of its corners' track, agrees to 1e-3 (measured 0.9998), and every joint's worn
+    volume to 1 % (measured 1.002: the jumps, which read the depths, reach the same
+    revolutions on both maps). With the track's
+    volume spread over the bin's area the depth went as the bin's height: 0.58, and the
+    coarse map's jumps ran 17 % further."""
+    row = mc.measure("reliability_joints", short=True, extra=("wear.map=[36, 72]",))
+    assert row["map"] == [36, 72] and row["fine_map"] == [72, 144]
+    assert row["joint_depth_ratio"]["P"] == pytest.approx(1.0, abs=1e-3)
+    for joint, ratio in row["joint_volume_ratio"].items():
+        assert ratio == pytest.approx(1.0, abs=0.01), joint
 
 
 @pytest.mark.slow

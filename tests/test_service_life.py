@@ -191,3 +191,25 @@ def test_a_life_sweep_stores_each_design_s_life_summary(tmp_path, short_life, pr
     assert report.exit_code == 0, report.output
     assert "Service life per design" in report.output
     assert "B_coating=MoS2" in report.output and "B_coating=PTFE" in report.output
+
+
+def test_the_guide_s_mean_depth_is_the_plain_mean_of_its_track_bins():
+    """A life run's wear_depth_mean of P is the plain mean of its bins deeper than 1 % of the
+    largest (each bin a piece of the corners' track, docs/physics.md 5.7), not a mean
+    weighted by the bins' areas on the walls: here a y wall's bins are 1.4 times a z wall's
+    (block 50 mm wide, 70 mm high) and both kinds are worn, so the two means differ."""
+    cfg = load_config("configs/one_clearance.yaml",
+                      ["joints.B.clearance=0", "joints.P.clearance_y=1e-4",
+                       "joints.P.clearance_z=1e-4", "joints.P.block=[0.08, 0.05, 0.07]",
+                       "wear.map=[36, 72]", "wear.interpolate=true", "solver.dt=2e-5",
+                       "life.cycles=2"])     # two blocks, no jump: the map is the last row's
+    ds = life(cfg)
+    wmap = ds.wear_map.sel(joint="P").values
+    worn = wmap > 1e-2 * wmap.max()
+    band = wmap.shape[0] // 4
+    walls = np.repeat(np.arange(4), band)[:, None] * np.ones(wmap.shape[1], dtype=int)
+    assert worn[walls < 2].any() and worn[walls >= 2].any()     # y and z walls
+    mean = float(ds.wear_depth_mean.isel(cycle=-1).sel(joint="P"))
+    assert mean == pytest.approx(wmap[worn].mean(), rel=1e-12)
+    weights = np.where(walls < 2, 0.0702, 0.0502)[worn]        # the walls' heights
+    assert abs((wmap[worn] * weights).sum() / weights.sum() / mean - 1.0) > 1e-3

@@ -110,9 +110,10 @@ N_S = S_SLOT + P_SLOTS
 
 # --- the wear of a step on its way to the map, cur[j, :] and pend[j, :] (rk4.merge_wear) ---
 # a spherical or revolute joint's row j: sum V n (3), sum V, sum V A, the surface's scale; a
-# prismatic joint's corner-wall pair k: sum V, sum V x, sum V a (x along the guide, a
-# across the wall) in row CAP_SLOT_ROW + k // 2, columns 3 (k % 2) .. 3 (k % 2) + 2: rows of
-# 6, as the other joints' wear has them
+# prismatic joint's row j: sum V in column 0; its corner-wall pair k: sum V / w, sum (V / w)
+# x, sum (V / w) a (w the track's width, x along the guide, a across the wall) in row
+# CAP_SLOT_ROW + k // 2, columns 3 (k % 2) .. 3 (k % 2) + 2: rows of 6, as the other
+# joints' wear has them
 N_CAP = 6
 CAP_SLOT_ROW = N_JOINTS
 N_CAP_ROWS = N_JOINTS + P_SLOTS // 2

@@ -22,7 +22,8 @@ wall (along and across the guide). Every slot's force acts at its corner.
   force onto the worn wall's normal: :func:`slot_state`);
 - the wall maps: the joint's map rows split in four bands, one per wall (+y, -y, +z, -z),
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
-  (x from jp[J_X0] over jp[J_XSPAN]): :func:`wall_bin`, :func:`wall_read`, :func:`deposit`;
+  (x from jp[J_X0] over jp[J_XSPAN]), each bin holding the depth of the corners' track
+  over it: :func:`wall_bin`, :func:`wall_read`, :func:`track_width`, :func:`deposit`;
 - :func:`contact`: the sum over the slots (force, moment, dissipated power) and, at a
   step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   total elastic energy, the guide's total force and the largest stiff rate of a slot;
@@ -197,9 +198,11 @@ def wall_bin(jp, j, wall, x, across, nrow, ncol):
 
 
 @compiled
-def wall_bin_area(jp, j, wall, nrow, ncol):
-    """Area [m^2] of one bin of wall ``wall``'s wear map."""
-    return jp[j, J_XSPAN] / ncol * 2.0 * wall_half(jp, j, wall) / (nrow // 4)
+def track_width(jp, j, wall, delta, nrow):
+    """Width w [m] across wall ``wall`` of the track a corner wears at penetration
+    ``delta`` (> 0): its Hertz patch 2 a = 2 sqrt(r_c delta), at most a bin's extent
+    across the wall (``nrow`` the map's rows; a wider patch spreads over the bin)."""
+    return min(2.0 * math.sqrt(jp[j, J_RI] * delta), 2.0 * wall_half(jp, j, wall) / (nrow // 4))
 
 
 @compiled(inline="always")
@@ -490,8 +493,10 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     """An accepted (sub-)step of length hs ends with the block in state ``slider``: each
     slot's contact episode (an onset is an impact, counted with its approach rate; the
     impact velocity follows ``contact.episode_impact_velocity``), and the wear of each slot
-    in contact, Archard's V = k F_N |v_t| hs, into ``cur`` (per slot, :func:`slot_cell`: V,
-    V x, V a; spread on the wall's map once the step is accepted, :func:`deposit`).
+    in contact, Archard's V = k F_N |v_t| hs: V / w, its track's width w
+    (:func:`track_width`), into ``cur`` per slot (:func:`slot_cell`: V / w, (V / w) x,
+    (V / w) a; spread on the wall's map once the step is accepted, :func:`deposit`) and V
+    into ``cur[j, 0]`` (the joint's own row, which the other joints' wear leaves unused).
 
     Returns whether a slot's episode state changed (the step-end evaluation must be redone).
     """
@@ -510,10 +515,14 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
             if wear_on and st.fn > 0.0:
                 _, _, k_wear = surface(jp, j, st.worn)
                 vol = p[P_AMPL] * k_wear * st.fn * st.slip * hs
+                wall, _ = slot_wall(k)
+                # the volume over the track's width: its depth times the length along the guide
+                line = vol / track_width(jp, j, wall, st.delta, model.wmap.shape[1])
                 row, col = slot_cell(k)
-                cur[row, col] += vol
-                cur[row, col + 1] += vol * st.q[0]
-                cur[row, col + 2] += vol * st.across
+                cur[row, col] += line
+                cur[row, col + 1] += line * st.q[0]
+                cur[row, col + 2] += line * st.across
+                cur[j, 0] += vol
             dv0 = episode_impact_velocity(s[j, at], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
             if s[j, at] == 0.0:
                 changed = True
@@ -535,25 +544,30 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
 
 @compiled
 def deposit(wmap, j, jp, cur, wvol):
-    """Spread joint j's accepted step wear (``cur``'s slot rows) on its wall maps, each
-    slot's volume on the bin of its volume-weighted mean position (a corner's Hertz patch, tens of microns
-    across, lies well inside a bin); add it to the worn volume ``wvol[j]`` and clear it.
-    Each bin deepens by its volume over its area, so sum(depth * bin area) = volume to
-    rounding. Returns the largest depth of a bin written [m]."""
+    """Spread joint j's accepted step wear on its wall maps (docs/physics.md 5.7): each
+    slot's track wear (``cur``'s slot rows: sum of V / w, V the sub-step's volume and w
+    its track's width, :func:`track_width`) on the bin of its mean position (weighted
+    alike: a corner's Hertz patch, tens of microns across, lies well inside a bin), which
+    deepens by it over the bin's length along the guide: the depth of the corner's track,
+    Archard's k p s, whatever the bins' sizes. The step's volume (``cur[j, 0]``) adds to
+    the worn volume ``wvol[j]``; both are cleared. Returns the largest depth of a bin
+    written [m]."""
     nrow = wmap.shape[1]
     ncol = wmap.shape[2]
+    length = jp[j, J_XSPAN] / ncol
     top = 0.0
     for k in range(P_SLOTS):
         cr, cc = slot_cell(k)
-        vol = cur[cr, cc]
-        if vol > 0.0:
+        line = cur[cr, cc]
+        if line > 0.0:
             wall, _ = slot_wall(k)
-            row, col = wall_bin(jp, j, wall, cur[cr, cc + 1] / vol, cur[cr, cc + 2] / vol,
+            row, col = wall_bin(jp, j, wall, cur[cr, cc + 1] / line, cur[cr, cc + 2] / line,
                                 nrow, ncol)
-            wmap[j, row, col] += vol / wall_bin_area(jp, j, wall, nrow, ncol)
+            wmap[j, row, col] += line / length
             top = max(top, wmap[j, row, col])
-            wvol[j] += vol
         cur[cr, cc] = 0.0
         cur[cr, cc + 1] = 0.0
         cur[cr, cc + 2] = 0.0
+    wvol[j] += cur[j, 0]
+    cur[j, 0] = 0.0
     return top

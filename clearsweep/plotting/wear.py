@@ -176,8 +176,10 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
                               value_text(joint))
             continue
         if JOINT_TYPES.get(value_text(joint)) == "prismatic":
-            _draw_guide_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit, label,
-                            value_text(joint), guide_extent(ds))
+            # the depth of the corners' tracks along the guide (docs/physics.md 5.7)
+            _draw_guide_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit,
+                            axis_label(wear, "track depth", unit), value_text(joint),
+                            guide_extent(ds))
             continue
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
         ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
