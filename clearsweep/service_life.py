@@ -838,6 +838,10 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
             break
         if state.cycles + revs > lc.cycles * (1.0 + 1e-12):
             break
+        if len(state.rows) >= lc.max_blocks:
+            # no block would follow the jump: the run ends on the last block's map
+            stop = "max_blocks"
+            break
         dn = jump_revolutions(state.wmap, rate, clearance, coat, lc.jump_clearance_fraction,
                               lc.jump_coating_fraction)
         dn = max(0.0, min(dn, lc.cycles - state.cycles - revs))

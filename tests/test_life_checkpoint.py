@@ -203,3 +203,16 @@ def test_a_second_life_run_to_the_same_output_is_refused_while_the_first_runs(tm
     result = _cli("life", CASE, "-o", out, "-q", "--resume", *sets(QUICK))
     assert result.exit_code == 0, result.output
     assert not lock.exists() and not checkpoint.exists() and out.exists()
+
+
+def test_a_run_stopped_by_max_blocks_ends_on_its_last_block_s_map():
+    """The last block's jump was applied before the max_blocks check: the file's final map
+    and its last snapshot, labelled with the last block's revolutions, were a jump deeper
+    than that block's wear (its row's wear_depth_max)."""
+    ds = life(CASE, [*QUICK, "life.max_blocks=3"])
+    assert str(ds.stop_reason.values) == "max_blocks" and ds.sizes["cycle"] == 3
+    last = ds.isel(cycle=-1)
+    for joint in ("B",):
+        assert float(ds.wear_map.sel(joint=joint).max()) == float(last.wear_depth_max.sel(joint=joint))
+    assert float(ds.snapshot_cycle[-1]) == float(ds.cycle[-1])
+    np.testing.assert_array_equal(ds.wear_map_snapshot.isel(snapshot=-1).values, ds.wear_map.values)
