@@ -438,21 +438,28 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
 
     started, blocks = time.perf_counter(), [0]
     depths: list[tuple[float, float]] = []      # (revolutions, deepest bin [m]) per block
+    before = [(0, 0.0)]                         # a resumed checkpoint's blocks and revolutions
+
+    def deepest(row: dict[str, Any]) -> tuple[float, float]:
+        finite = [float(d) for d in row["wear_depth_max"] if math.isfinite(d)]
+        return float(row["cycle"]), max(finite, default=0.0)
 
     def progress(row: dict[str, Any]) -> None:
         blocks[0] += 1
-        finite = [float(d) for d in row["wear_depth_max"] if math.isfinite(d)]
-        depths.append((float(row["cycle"]), max(finite, default=0.0)))
+        depths.append(deepest(row))
         if not quiet:
             # the joints with a clearance (an ideal joint's depth is NaN)
             depth = ", ".join(f"{j} {format_length(d, 3)}" for j, d in zip(JOINTS, row["wear_depth_max"])
                               if math.isfinite(d))
             left = life_time_left(cfg, float(row["cycle"]), blocks[0], time.perf_counter() - started,
-                                  depths)
+                                  depths, before[0])
             click.echo(f"  block at {row['cycle']:.4g} revolutions: max depth {depth}, "
                        f"status {row['block_status']}" + (f"; {left}" if left else ""), err=True)
 
     def resumed(state: LifeState) -> None:
+        # the blocks left count from the checkpoint's, the pace from this process's
+        before[0] = (len(state.rows), float(state.cycles))
+        depths[:] = [deepest(row) for row in state.rows]
         if not quiet:
             click.echo(f"resuming from {checkpoint}: {len(state.rows)} blocks, "
                        f"{state.cycles:.4g} revolutions", err=True)

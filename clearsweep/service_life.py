@@ -1001,15 +1001,20 @@ FINAL_VARIABLES = ("wear_depth_max", "wear_volume", "clearance_effective", "coat
 
 
 def life_time_left(cfg: Config, cycles: float, blocks: int, elapsed_s: float,
-                   depths: Sequence[tuple[float, float]] = ()) -> str:
-    """The expected time left of a life run after ``blocks`` blocks reached ``cycles``
-    revolutions in ``elapsed_s``, at the time per block so far, for the blocks that are
-    expected to be left (:func:`blocks_left`); ``""`` when done."""
+                   depths: Sequence[tuple[float, float]] = (),
+                   before: tuple[int, float] = (0, 0.0)) -> str:
+    """The expected time left of a life run whose ``blocks`` blocks of this process reached
+    ``cycles`` revolutions in ``elapsed_s`` (``before``: the blocks and revolutions of a
+    checkpoint it resumed from): the lesser of the time at the pace so far in revolutions
+    (the jumps lengthen, so rather too long) and the time per block so far times the
+    blocks expected to be left (:func:`blocks_left`); ``""`` when done."""
     lc = cfg.life
-    if blocks <= 0 or cycles <= 0.0 or cycles >= lc.cycles or blocks >= lc.max_blocks:
+    done, start = before
+    total = done + blocks
+    if blocks <= 0 or cycles <= start or cycles >= lc.cycles or total >= lc.max_blocks:
         return ""
-    by_pace = elapsed_s * (lc.cycles - cycles) / cycles
-    by_blocks = elapsed_s * blocks_left(cfg, blocks, depths) / blocks
+    by_pace = elapsed_s * (lc.cycles - cycles) / (cycles - start)
+    by_blocks = elapsed_s * blocks_left(cfg, total, depths) / blocks
     return f"about {duration_text(min(by_pace, by_blocks))} left at this pace"
 
 
@@ -1022,8 +1027,8 @@ def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] 
     revolutions, h = h_k (N / N_k)^beta, beta from the last two blocks (a socket running in
     wears ever slower: beta 0.5 in configs/life.yaml), and each further block to add the
     mean depth of the last blocks' jumps; the run then ends at ``life.cycles`` with the depth
-    h(life.cycles), or sooner at a wear limit. Without that (fewer blocks, no wear), the
-    cap alone.
+    h(life.cycles), or at the cap if that comes first (the wear limits' blocks). Without
+    that (fewer blocks, no wear), the cap alone.
     """
     lc = cfg.life
     forecast = forecast_blocks(cfg)
@@ -1035,9 +1040,10 @@ def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] 
     if not (0.0 < n1 < n2 < lc.cycles and 0.0 < h1 < h2 and h0 < h1):
         return left
     beta = math.log(h2 / h1) / math.log(n2 / n1)
-    step = (h2 - h0) / 2.0
-    end = h2 * (lc.cycles / n2) ** beta
-    return min(left, max(0.0, (end - h2) / step))
+    growth = beta * math.log(lc.cycles / n2)        # log of h(life.cycles) / h2
+    if not growth < math.log(1.0 + left * (h2 - h0) / (2.0 * h2)):
+        return left          # past the cap (or a steep fit whose power would overflow)
+    return min(left, max(0.0, h2 * math.expm1(growth) / ((h2 - h0) / 2.0)))
 
 
 def life_stop_hint(cfg: Config, stop: str) -> str:

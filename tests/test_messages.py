@@ -219,6 +219,11 @@ def test_a_life_run_gives_its_expected_time_left_from_the_blocks_so_far():
     assert life_time_left(cfg, 1.0, 10, 10.0) == f"about {duration_text(90.0)} left at this pace"
     assert life_time_left(cfg, 1000.0, 10, 10.0) == ""
     assert life_time_left(cfg, 5.0, 100, 10.0) == ""
+    # resumed at block 10, 500 revolutions: this process's 1 block, 1 s, took 100 of them,
+    # so 4 s more at this pace (0.67 s when the 600 revolutions were all taken as its own)
+    assert life_time_left(cfg, 600.0, 1, 1.0, before=(10, 500.0)) == \
+        f"about {duration_text(4.0)} left at this pace"
+    assert life_time_left(cfg, 600.0, 1, 1.0, before=(99, 500.0)) == ""      # max_blocks
 
 
 @pytest.mark.parametrize("beta", [0.5, 1.0])
@@ -239,6 +244,9 @@ def test_the_blocks_left_follow_the_depth_s_power_law(beta):
     assert blocks_left(cfg, 5, depths) == pytest.approx(45, rel=1e-9)   # 50, less the 5 run
     assert blocks_left(cfg, 5, depths[:2]) == cap          # too few blocks: the cap alone
     assert blocks_left(cfg, 5, [(n, 1e-6) for n, _ in depths]) == cap     # no growth seen
+    # a steep fit (two blocks a revolution apart, the depth doubled) is the cap, not an
+    # OverflowError that would stop the run from its progress line
+    assert blocks_left(cfg, 5, [(1e4, 1e-6), (1e4 + 1, 2e-6), (1e4 + 2, 4e-6)]) == cap
 
 
 def test_plot_sweep_of_a_life_sweep_without_metric_asks_for_one(tmp_path):

@@ -243,10 +243,13 @@ def deflated_chunk(values) -> bytes:
     bytes HDF5 reads back: its shuffle filter (byte k of every element together, k = 0, 1,
     ...), then a zlib stream. The stream comes from ISA-L (``isal``), which deflates a full
     case's float time series 10-40x faster than zlib at about the same size (benchmarks/
-    README.md, "Part files"); any zlib inflates it. Without ``isal``, zlib writes it."""
+    README.md, "Part files"); any zlib inflates it. Without ``isal``, zlib writes it. The
+    bytes are those of ``values`` in native byte order, the variable's."""
     import numpy as np
 
-    a = np.ascontiguousarray(values)
+    # in native byte order, as netCDF4 creates the variable (a byte-swapped array's own
+    # bytes would read back as other values)
+    a = np.ascontiguousarray(values, dtype=np.asarray(values).dtype.newbyteorder("="))
     shuffled = np.ascontiguousarray(a.reshape(-1).view(np.uint8).reshape(-1, a.itemsize).T)
     return _compress(shuffled, COMPRESSION["complevel"])
 
