@@ -839,8 +839,9 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
         if state.cycles + revs > lc.cycles * (1.0 + 1e-12):
             break
         if len(state.rows) >= lc.max_blocks:
-            # no block would follow the jump: the run ends on the last block's map (kept,
-            # so that a resume with more blocks goes on from it)
+            # no block would follow the jump: the run ends on the last block's map (kept in
+            # the checkpoint, as after every block: a run whose output write failed is
+            # finished by --resume without running it again)
             stop = "max_blocks"
             if checkpoint is not None:
                 save_checkpoint(checkpoint, cfg, state, time.perf_counter() - start)

@@ -260,9 +260,11 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
         "the block's energy balance (docs/physics.md 8.3); the run stops a block whose residual "
         "passes solver.energy_tolerance of the energy throughput"),
     "wear_depth_max": VariableSpec(("cycle", "joint"), "m", "maximum wear depth",
-                                   "largest bin of the socket wear map after the block"),
+                                   "largest bin of the joint's wear map after the block (joint P: "
+                                   "the deepest track on its walls)"),
     "wear_depth_mean": VariableSpec(("cycle", "joint"), "m", "mean wear depth over the worn area",
-                                    "area-weighted mean of the bins deeper than 1e-2 of the maximum"),
+                                    "area-weighted mean of the bins deeper than 1e-2 of the maximum "
+                                    "(joint P: the plain mean of its track bins)"),
     "wear_volume": VariableSpec(("cycle", "joint"), "m3", "worn volume sum of k F_N dS",
                                 "blocks simulated plus jumps extrapolated"),
     "clearance_effective": VariableSpec(("cycle", "joint"), "m",

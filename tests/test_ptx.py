@@ -14,7 +14,7 @@ import pytest
 
 from clearsweep import ptx
 
-#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 3,260
+#: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 3,100
 #: (``python -m clearsweep.ptx``; 1,224 before joint P, whose corner contacts NVVM inlines
 #: with the rest of the right-hand side at each of its call sites: 1,788 with P's
 #: right-hand side compiled out; 932 before joint O, the in-step peaks and the Poincare

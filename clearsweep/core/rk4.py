@@ -173,7 +173,7 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve, stage):
     clearance fell to 0.89-0.92 of the tree before, most of it in advance's own code, in
     those argument copies (benchmarks/README.md, "Joint P"). ``stage`` is an argument
     because an inlined function's ``locals`` do not reach its caller: a literal False
-    here compiled evaluate a second time, and that copy ran slower (0.96-0.98 of
+    here compiled evaluate a second time, and that copy ran slower (0.96-0.97 of
     c65bb49's ideal case against 1.05-1.07).
     """
     n = y.shape[0]
