@@ -596,6 +596,10 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_guide(cfg["joints"]["P"], source)
+    if cfg["joints"]["P"]["clearance_y"] > 0.0 and cfg["wear"]["map"][0] < 4:
+        # the guide's four walls are bands of the map's polar rows, one row at least each
+        raise ConfigError("wear.map", cfg["wear"]["map"], "at least 4 polar rows with "
+                          "clearance at joint P (its four walls share them)", source)
     for joint, spec in cfg["joints"].items():
         if joint == "P":
             continue

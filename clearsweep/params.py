@@ -27,7 +27,7 @@ from .core import layout as L
 from .core.contact import hysteresis_fraction
 from .core.joints import BODIES, JOINTS
 from .materials import FIELDS
-from .version import __version__
+from .version import IDENTITY_VERSION
 
 #: A joint section of the config: a spherical joint (A, B) or the revolute joint O.
 AnyJoint = JointConfig | RevoluteJointConfig | PrismaticJointConfig
@@ -129,7 +129,8 @@ def run_identity(cfg: Config) -> dict[str, Any]:
     ``config``: the resolved config without ``materials_file`` (the file's path does not
     change a result; its values do); ``materials``: the values of every material the run
     reads (the base and the joints' coatings, as :func:`pack` reads them, sources left
-    out); ``version``: the clearsweep version. Finished work (a sweep's part, a life
+    out); ``version``: the clearsweep version and the results' revision
+    (:data:`clearsweep.version.IDENTITY_VERSION`). Finished work (a sweep's part, a life
     checkpoint) belongs to a run exactly when their identities are equal.
     """
     config = cfg.to_dict()
@@ -138,7 +139,7 @@ def run_identity(cfg: Config) -> dict[str, Any]:
     used = sorted({BASE_MATERIAL, *(j.coating for _, j in cfg.joints.items() if j.coating != "none")})
     return {"config": config,
             "materials": {m: {f: getattr(table[m], f) for f in FIELDS} for m in used},
-            "version": __version__}
+            "version": IDENTITY_VERSION}
 
 
 def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:

@@ -47,7 +47,7 @@ from .dataset import history_line, lock_exclusively, replaced_on_success, with_c
 from .params import Packed, identity_changes, joint_configs, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
-from .version import __version__
+from .version import IDENTITY_VERSION
 
 #: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
 WORN_FRACTION = 1e-2
@@ -478,7 +478,7 @@ def save_checkpoint(path: str | os.PathLike, cfg: Config, state: LifeState, wall
     rows = state.rows
     arrays: dict[str, Any] = {
         "format": np.array(CHECKPOINT_FORMAT), "config": np.array(_config_json(cfg)),
-        "materials": np.array(_materials_json(cfg)), "version": np.array(__version__),
+        "materials": np.array(_materials_json(cfg)), "version": np.array(IDENTITY_VERSION),
         "cycles": np.array(state.cycles),
         "wall": np.array(state.wall_before + wall), "wmap": state.wmap, "wvol": state.wvol,
         "row_keys": np.array(list(rows[0])),

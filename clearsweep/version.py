@@ -30,3 +30,13 @@ def _version() -> str:
 
 
 __version__ = _version()
+
+
+#: The revision of the results: raised whenever a config gives other results than before
+#: (here: joint P's walls read bilinearly and holding the corners' track depth). It is part
+#: of every run's identity (``params.run_identity``): a sweep's parts and a life checkpoint
+#: written before are another run's, refused by --resume with the difference named, not
+#: mixed into this one's results.
+RESULTS_REVISION = 2
+#: The version a run's identity records: the package's and the results' revision.
+IDENTITY_VERSION = f"{__version__} (results revision {RESULTS_REVISION})"

@@ -770,3 +770,17 @@ def test_dopri5_shortens_its_step_to_a_corner_that_closes_while_another_touches(
     # the onset's linear estimate: 1e-4 / (1e-4 + 2e-6) of the step, half the tolerance after
     assert shorter == pytest.approx(h * 1e-4 / (1e-4 + 2e-6) + 0.5e-7, rel=1e-9)
 
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_a_map_too_small_for_the_guides_walls(tmp_path, command):
+    """The guide's four walls are bands of the map's polar rows: with fewer than 4, the run
+    divided by a band of 0 rows (ZeroDivisionError traceback after validate accepted it);
+    now one line naming wear.map, before anything runs."""
+    out = tmp_path / "p.nc"
+    args = [command, str(ROOT / "configs" / "one_clearance.yaml"), "--set", "wear.map=[3,8]"]
+    args += ["-o", str(out)] if command == "run" else []
+    for item in guide(1e-4):
+        args += ["--set", item]
+    assert_error(CliRunner().invoke(main, args), 2, "wear.map", "4 polar rows")
+    assert not out.exists()

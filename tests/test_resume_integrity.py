@@ -130,16 +130,19 @@ def test_the_materials_files_path_is_not_part_of_the_key(folder):
     assert "2 finished before, kept" in result.stderr
 
 
-def test_parts_of_another_clearsweep_version_are_refused(folder, monkeypatch):
+@pytest.mark.parametrize("before", ["0.0.1", "0.1.0"])
+def test_parts_of_another_clearsweep_version_are_refused(folder, monkeypatch, before):
     """Was: a part's name was the hash of the config alone; another version's parts were
-    resumed as this version's."""
-    version = params.__version__
-    monkeypatch.setattr(params, "__version__", "0.0.1")
+    resumed as this version's. "0.1.0": the parts of the same package version before its
+    results' revision (joint P's walls read bilinearly, their track depth), which
+    would have been mixed with this revision's results."""
+    version = params.IDENTITY_VERSION
+    monkeypatch.setattr(params, "IDENTITY_VERSION", before)
     assert sweep("--keep-parts").exit_code == 0
-    monkeypatch.setattr(params, "__version__", version)
+    monkeypatch.setattr(params, "IDENTITY_VERSION", version)
     (folder / "sw.nc").unlink()
     one_error_line(sweep("--resume"), 2, "made with other inputs",
-                   f"clearsweep version: '0.0.1' there, '{params.__version__}' here")
+                   f"clearsweep version: '{before}' there, '{version}' here")
 
 
 def test_an_ensemble_resumed_after_the_materials_file_changed_is_refused(folder):
