@@ -250,6 +250,8 @@ def _consistent(raw):
         guide["clearance_z"] = guide["clearance_y"]
     guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]
     guide["coating"] = guide["coating"] if guide["coating"] in ("none", "PTFE", "lead") else "MoS2"
+    if guide["clearance_y"] > 0.0:          # a row at least for each of the guide's four walls
+        raw["wear"]["map"] = [max(raw["wear"]["map"][0], 4), raw["wear"]["map"][1]]
     for name, joint in raw["joints"].items():
         if name == "P":
             continue
