@@ -215,6 +215,8 @@ def _write_plain(part: xr.Dataset, path: str, attrs: Mapping[str, Any]) -> None:
                 values = str(values[()]) if values.ndim == 0 else values.astype(object)
             else:
                 chunked = encoding.get(name)
+                # netCDF4 stores native byte order: a byte-swapped array is converted here
+                values = values.astype(values.dtype.newbyteorder("="), copy=False)
                 # (write_netcdf_atomic's coordinates: no _FillValue, unless compressed)
                 fill = np.nan if values.dtype.kind == "f" and (chunked or key not in part.coords) \
                     else None
