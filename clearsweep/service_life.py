@@ -1041,10 +1041,11 @@ def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] 
     if not (0.0 < n1 < n2 < lc.cycles and 0.0 < h1 < h2 and h0 < h1):
         return left
     beta = math.log(h2 / h1) / math.log(n2 / n1)
+    step = (h2 - h0) / 2.0                          # the mean depth of the last two jumps
     growth = beta * math.log(lc.cycles / n2)        # log of h(life.cycles) / h2
-    if not growth < math.log(1.0 + left * (h2 - h0) / (2.0 * h2)):
+    if not growth < math.log(1.0 + left * step / h2):
         return left          # past the cap (or a steep fit whose power would overflow)
-    return min(left, max(0.0, h2 * math.expm1(growth) / ((h2 - h0) / 2.0)))
+    return min(left, max(0.0, h2 * math.expm1(growth) / step))
 
 
 def life_stop_hint(cfg: Config, stop: str) -> str:

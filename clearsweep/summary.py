@@ -236,13 +236,20 @@ def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
             xr.Variable(dims, share, {**attrs_for("slider_acceleration_high_order_share"), **extra})}
 
 
+def is_settled(time, start: float):
+    """Whether Poincaré sample times ``time`` (an array or a DataArray) [s] lie in the
+    settled window from ``start`` [s] on (within 1e-12 s: a section at the window's start
+    counts)."""
+    return time >= start - 1e-12
+
+
 def poincare_points(ds: xr.Dataset, start: float | None = None
                     ) -> tuple[xr.DataArray, xr.DataArray, xr.DataArray | None]:
     """The settled Poincaré samples of ``ds``: (time, slider acceleration, offsets / clearance
     or None), each NaN at the revolutions before ``start`` (default: :func:`settle_time`)."""
     start = settle_time(ds) if start is None else start
     time = ds[POINCARE_TIME]
-    settled = time >= start - 1e-12
+    settled = is_settled(time, start)
     offset = ds[POINCARE_OFFSET].where(settled) if POINCARE_OFFSET in ds else None
     return time.where(settled), ds[POINCARE_SLIDER].where(settled), offset
 
@@ -254,7 +261,7 @@ def _periodicity_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
     time = ds[POINCARE_TIME]
     dims = tuple(str(d) for d in time.dims if d != REVOLUTION_DIM)
     time_v = time.transpose(*dims, REVOLUTION_DIM).values
-    settled = time_v >= settle_time(ds) - 1e-12
+    settled = is_settled(time_v, settle_time(ds))
     time_v = np.where(settled, time_v, np.nan)
     slider_v = np.where(settled, ds[POINCARE_SLIDER].transpose(*dims, REVOLUTION_DIM).values, np.nan)
     offset_v = None
