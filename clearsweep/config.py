@@ -18,7 +18,7 @@ import copy
 import math
 import operator
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
@@ -574,8 +574,10 @@ def _check_together(cfg: dict[str, Any], source: str) -> None:
                     "average it over); for perturbed members set ensemble.members to 2 or more", source)
 
 
-def _check_guide(spec: Mapping[str, Any], source: str) -> None:
-    """Joint P's guide: both clearances or neither, a corner radius that fits the block."""
+def _check_guide(spec: Mapping[str, Any], wear_map: Sequence[int], source: str) -> None:
+    """Joint P's guide: both clearances or neither, a corner radius that fits the block,
+    and with clearance a wear map of a polar row at least for each of its four walls (they
+    are bands of the map's rows)."""
     cy, cz = spec["clearance_y"], spec["clearance_z"]
     if (cy > 0.0) != (cz > 0.0):
         key, value = ("joints.P.clearance_z", cz) if cy > 0.0 else ("joints.P.clearance_y", cy)
@@ -586,6 +588,9 @@ def _check_guide(spec: Mapping[str, Any], source: str) -> None:
         raise ConfigError("joints.P.corner_radius", spec["corner_radius"],
                           f"a number <= half the block's smallest side ({0.5 * smallest:g} m, "
                           "joints.P.block)", source)
+    if cy > 0.0 and wear_map[0] < 4:
+        raise ConfigError("wear.map", wear_map, "at least 4 polar rows with clearance at "
+                          "joint P (its four walls share them)", source)
 
 
 def _validate(raw: Any, source: str, base_dir: str) -> Config:
@@ -595,11 +600,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
         if not _OPS[op](value, bound):
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
-    _check_guide(cfg["joints"]["P"], source)
-    if cfg["joints"]["P"]["clearance_y"] > 0.0 and cfg["wear"]["map"][0] < 4:
-        # the guide's four walls are bands of the map's polar rows, one row at least each
-        raise ConfigError("wear.map", cfg["wear"]["map"], "at least 4 polar rows with "
-                          "clearance at joint P (its four walls share them)", source)
+    _check_guide(cfg["joints"]["P"], cfg["wear"]["map"], source)
     for joint, spec in cfg["joints"].items():
         if joint == "P":
             continue
