@@ -112,11 +112,14 @@ def side_by_side(trees: dict[str, Path], duration: float, repeats: int) -> dict:
 
 
 def shipped_case_configs() -> list[Path]:
-    """configs/*.yaml that are single cases (sweep files have a ``sweep:`` section)."""
+    """configs/*.yaml that are single cases (not sweep files, as ``load_config`` tells them:
+    ``config.file_kind``; a one-design reliability file has no ``sweep:`` section)."""
     import yaml
 
+    from clearsweep.config import file_kind
+
     return [path for path in sorted((ROOT / "configs").glob("*.yaml"))
-            if "sweep" not in (yaml.safe_load(path.read_text()) or {})]
+            if file_kind(yaml.safe_load(path.read_text()) or {}) != "sweep"]
 
 
 def config_rate(path: Path, duration: float) -> tuple[float, float, float]:
