@@ -17,7 +17,7 @@ import xarray as xr
 
 from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
-from ..motion import HIGH_ORDER
+from ..motion import HIGH_ORDER, PERIOD_UNKNOWN
 from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
 from ..variables import JOINT_TYPES, length_unit
 from .selection import (
@@ -98,6 +98,19 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
     }, attrs={"reference": label_text(chosen)})
 
 
+def report_summary(ds: xr.Dataset) -> xr.Dataset:
+    """:func:`clearsweep.summary.case_summary` of ``ds`` as the reports read it: a ``period``
+    that a case lacks (a run too short for a Poincaré section, beside cases that have them:
+    NaN in the sweep's file) is ``PERIOD_UNKNOWN``, as a run's own undetermined period is,
+    and the periods are integers."""
+    summary = case_summary(ds)
+    if "period" in summary and summary["period"].dtype.kind == "f":
+        values = summary["period"].values
+        summary["period"] = summary["period"].copy(
+            data=np.where(np.isnan(values), PERIOD_UNKNOWN, values).astype(np.int64))
+    return summary
+
+
 def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
     """One ``case_summary`` variable over the sweep dimensions.
 
@@ -106,7 +119,7 @@ def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
     SelectionError
         ``metric`` is not a summary variable of ``ds``; the message lists them.
     """
-    summary = case_summary(ds)
+    summary = report_summary(ds)
     if metric in summary:
         return without_ideal_joints(summary[metric], ds)
     # a life or reliability sweep's own per-case numbers (cycles_reached, b10, ...)
@@ -207,10 +220,13 @@ def _rows(obj: xr.Dataset, dims: tuple[str, ...], names: list[str]) -> list[dict
 
 
 def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tuple[str, ...],
-                 keep=None) -> list[_Group]:
+                 keep=None, bare: bool = False) -> list[_Group]:
     """A group per sweep case, headed by its coordinates (and status where not ``ok``).
 
     Points that a sweep's ``skip:`` rules left out (status ``skipped``) are not listed.
+    A case whose every row is of an ideal joint has no rows; with ``bare``, one row instead,
+    its ``row_dims`` None and its columns over them None: the case's own values (the flat
+    table of csv and json keeps every case).
     """
     groups = []
     clearances = joint_clearances(table)
@@ -230,12 +246,22 @@ def _case_groups(table: xr.Dataset, columns: tuple[_Column, ...], row_dims: tupl
             if heading or status != "ok":
                 heading = f"{heading} (status: {status})" if heading else f"status: {status}"
         rows = _drop_ideal_rows(_rows(case, row_dims, [c.name for c in columns]), clearance)
+        if bare and not rows:
+            rows = [{**dict.fromkeys(row_dims),
+                     **{c.name: None if set(case[c.name].dims) & set(row_dims)
+                        else case[c.name].values[()] for c in columns}}]
         groups.append(_Group(heading, keys, rows))
     return groups
 
 
+#: What a text or markdown table says in place of rows where a case has none: every
+#: joint of it is ideal (its per-joint rows are left out).
+NO_CLEARANCE_ROWS = "none: every joint is ideal (joints.*.clearance 0)"
+
+
 def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
-            columns: tuple[_Column, ...], units: Mapping[str, str], fmt: str) -> str:
+            columns: tuple[_Column, ...], units: Mapping[str, str], fmt: str,
+            empty: str = NO_CLEARANCE_ROWS) -> str:
     """Lay groups of rows out as text or markdown blocks, or as one flat csv / json table.
 
     Parameters
@@ -244,6 +270,9 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
         Row-key entries of each row (``joint``, ``axis``, sweep dims), printed first.
     units
         Units of each value column, for the headings.
+    empty
+        Text and markdown: printed under the heading of a group without rows, and after
+        the title (one line for the table) where no group has rows.
     """
     if fmt not in REPORT_FORMATS:
         raise SelectionError(choice_message("format", fmt, list(REPORT_FORMATS)), name="format",
@@ -274,10 +303,14 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
         group_keys = list(groups[0].keys) if groups else []
         writer.writerow(group_keys + list(key_names) + [heading(c) for c in columns])
         for record in records:
-            writer.writerow(["nan" if v is None else repr(v) if isinstance(v, float) else v
-                             for v in record.values()])
+            # a row without joint or wear direction (a case of ideal joints only): empty keys
+            writer.writerow(["" if v is None and k in key_names else "nan" if v is None
+                             else repr(v) if isinstance(v, float) else v
+                             for k, v in record.items()])
         return buffer.getvalue().rstrip("\n")
 
+    if not any(g.rows for g in groups):
+        return f"## {title}\n\n{empty}" if fmt == "markdown" else f"{title}: {empty}"
     titles = [_KEY_HEADINGS.get(k, k) for k in key_names] + [heading(c) for c in columns]
     n_keys = len(key_names)
     if fmt == "text" and len(columns) > 1:
@@ -299,12 +332,17 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
             used += w
         if len(parts) > 1:
             return "\n\n".join(_render(title if i == 0 else f"{title}, continued", groups, key_names,
-                                        tuple(part), units_given, fmt) for i, part in enumerate(parts))
+                                        tuple(part), units_given, fmt, empty)
+                                for i, part in enumerate(parts))
     out = [f"## {title}" if fmt == "markdown" else title]
     for group in groups:
         cells = [[value_text(r[k]) for k in key_names]
                  + [_cell(r[c.name], c.spec, scale.get(c.name)) for c in columns]
                  for r in group.rows]
+        if not cells:
+            heading_line = f"\n### {group.heading}\n" if fmt == "markdown" else f"\n{group.heading}"
+            out += [heading_line if group.heading else "", empty]
+            continue
         if fmt == "markdown":
             out.append(f"\n### {group.heading}\n" if group.heading else "")
             out.append("| " + " | ".join(titles) + " |")
@@ -312,8 +350,8 @@ def _render(title: str, groups: list[_Group], key_names: tuple[str, ...],
             out.extend("| " + " | ".join(row) + " |" for row in cells)
             continue
         # headings on two lines where one would make the table wider than a report line
-        head = [_two_lines(t) if len(t) > max((len(row[i]) for row in cells), default=0)
-                and sum(max(len(t), *(len(r[i]) for r in cells)) + 2 for i, t in enumerate(titles))
+        head = [_two_lines(t) if len(t) > max(len(row[i]) for row in cells)
+                and sum(max([len(t), *(len(r[i]) for r in cells)]) + 2 for i, t in enumerate(titles))
                 > REPORT_WIDTH else (t, "") for i, t in enumerate(titles)]
         widths = [max(len(h[0]), len(h[1]), *(len(row[i]) for row in cells))
                   for i, h in enumerate(head)]
@@ -360,21 +398,27 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
     # a guide's walls have no projections about the axes (docs/physics.md 5.7): its wear is in
     # the final-wear table; the flat csv / json table keeps its row for its statistics
     flat = [j for j in wear["joint"].values if JOINT_TYPES.get(value_text(j)) != "prismatic"]
+    empty = NO_CLEARANCE_ROWS
     if not with_statistics and len(flat) < wear.sizes["joint"]:
+        guides = [value_text(j) for j in wear["joint"].values if j not in flat
+                  and value_text(j) not in ideal_joints(ds)]
+        if guides:
+            empty = (f"none: no ball or bearing joint has a clearance (the wear of guide "
+                     f"{', '.join(guides)} is in the table of the wear at the end of the run)")
         wear = wear.sel(joint=flat)
     if with_statistics:
-        summary = case_summary(ds)
-        extra = tuple(c for c in (*_MOTION_COLUMNS, *_CONTACT_COLUMNS, *_FINAL_WEAR_COLUMNS)
-                      if c.name in summary)
-        like = wear["wear_depth_axis_max"]
-        wear = wear.assign({c.name: summary[c.name].broadcast_like(like).transpose(*like.dims)
-                            for c in extra})
+        summary = report_summary(ds)
+        extra = tuple(c for c in (*_MOTION_COLUMNS, *_CHARACTER_COLUMNS, *_CONTACT_COLUMNS,
+                                  *_FINAL_WEAR_COLUMNS) if c.name in summary)
+        # each on its own dims: a row takes its case's (and joint's) value, and a case of
+        # ideal joints only (one bare row) its case values
+        wear = wear.assign({c.name: summary[c.name] for c in extra})
         columns = extra + _WEAR_COLUMNS
     table = _with_status(ds, wear)
     title = (f"Wear prediction (paper Tables 4-5; wear angles: depth > "
              f"{WEAR_THRESHOLD_FRACTION:g} of the axis maximum)")
-    groups = _case_groups(table, columns, ("joint", "axis"))
-    return _render(title, groups, ("joint", "axis"), columns, _units(table, columns), fmt)
+    groups = _case_groups(table, columns, ("joint", "axis"), bare=with_statistics)
+    return _render(title, groups, ("joint", "axis"), columns, _units(table, columns), fmt, empty)
 
 
 _MOTION_COLUMNS = (
@@ -414,7 +458,7 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
     the motion's spectrum and periodicity where the file has them (one row per case).
     A file without the statistics gives an empty string.
     """
-    summary = case_summary(ds)
+    summary = report_summary(ds)
     settle = ds.attrs.get("settle_time_s")
     window = f"settled = t >= {float(settle):g} s" if settle is not None else "settled window"
     blocks = []

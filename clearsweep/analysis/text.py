@@ -26,6 +26,7 @@ from .selection import (
     label_text,
     value_text,
 )
+from .tables import report_summary
 
 # --------------------------------------------------------------------------- text reports
 
@@ -62,7 +63,7 @@ def run_summary_text(ds: xr.Dataset) -> str:
         energy residual (relative): 2.50e-06
         wall time: 2 s (40,000 RK4 steps/s, 80,000 steps)
     """
-    summary = case_summary(ds)
+    summary = report_summary(ds)
     blocks = []
     for label, case in iter_cases(summary):
         lines = [f"case {label_text(label)}"] if label else []
@@ -342,7 +343,7 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
                                        subsequent_indent=" " * 30, break_on_hyphens=False)
             lines.append(f"    {spread}")
     if not ensemble:
-        lines += _sweep_motion_lines(ds, case_summary(ds), usable, dims)
+        lines += _sweep_motion_lines(ds, report_summary(ds), usable, dims)
     lines += factorial_lines(ds)
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")
