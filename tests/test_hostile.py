@@ -6,7 +6,8 @@ Rows of round 3b (issue 22, items 3 and 4) and of the fresh round on the reliabi
 life sections, sampling sweeps, sensitivity, the CUDA backend's options and results files
 of older versions (issue 20, item 6); round 4's resume integrity and the user's files
 (issue 33, items 1 and 2: ``ROUND4_INTEGRITY``), its messages (items 4-6:
-``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``). Before, the rows marked
+``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``); round 5's messages of
+``--kind bifurcation`` (issue 40, item 10: ``ROUND5_BIFURCATION``). Before, the rows marked
 "was:" ended as said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
@@ -62,7 +63,8 @@ def without(src: Path, dst: Path, *names: str) -> Path:
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     """Results files the rows read: a short run, a short life run, a small reliability
-    sweep, Saltelli designs that match their data or not, and older-version copies."""
+    sweep, a two-speed sweep, Saltelli designs that match their data or not, and
+    older-version copies."""
     d = tmp_path_factory.mktemp("inputs")
     # the shipped reliability sweep cut to one coating, two members and one short block
     text = (CONFIGS / "reliability.yaml").read_text()
@@ -72,7 +74,9 @@ def files(tmp_path_factory):
                  ["life", LIFE, *SHORT_LIFE, "-q", "-o", d / "life.nc"],
                  ["sweep", d / "rel.yaml", "--set", "reliability.members=2", *SHORT_LIFE,
                   "--set", "life.max_blocks=1", "--no-progress", "--workers", "1",
-                  "-o", d / "rel.nc"]):
+                  "-o", d / "rel.nc"],
+                 ["sweep", speed_sweep(d), "--no-progress", "--workers", "1", "-q",
+                  "-o", d / "bif.nc"]):
         result = CliRunner().invoke(main, [str(a) for a in argv])
         assert result.exit_code == 0, result.output
     saltelli_file(d / "samp.nc")
@@ -92,6 +96,17 @@ def files(tmp_path_factory):
     without(d / "rel.nc", d / "old_rel.nc", *b10)
     (d / "afile").write_text("a file, not a folder\n")
     return d
+
+
+def speed_sweep(tmp: Path) -> Path:
+    """configs/bifurcation.yaml's zip group (labels ``speed``, ``mechanism.speed_rpm``) over
+    60 and 600 r/min, 2 ms a case: shorter than a revolution, no Poincaré section."""
+    path = tmp / "bif.yaml"
+    path.write_text("name: bif\nstore: summary\nbase: {joints: {B: {clearance: 2.5e-4}}, "
+                    "solver: {duration: 0.002}, wear: {map: [6, 12]}}\n"
+                    "sweep: {zip: [{name: speed, labels: [60, 600], "
+                    "mechanism.speed_rpm: [60.0, 600.0]}]}\n")
+    return path
 
 
 def sweep_file(tmp: Path, body: str, base: str = ONE, store: str = "summary") -> str:
@@ -1186,6 +1201,35 @@ ROUND4_BOUNDS = [
      2, "expected a case whose arrays fit in this machine's memory"),
 ]
 ROWS += ROUND4_BOUNDS
+
+
+def _bifurcation(*options: str):
+    return lambda t, f: ["plot", f / "bif.nc", "--kind", "bifurcation", *options, "-o", t / "out.png"]
+
+
+# --- round 5 (issue 40, item 10): --kind bifurcation's --select says what its keys must be
+ROUND5_BIFURCATION = [
+    ("plot bifurcation --select a zip group's key (was: 'unknown sweep dimension', no word "
+     "of --x)", _bifurcation("--select", "speed_rpm=60"), 2,
+     "a --select key of --kind bifurcation must be a swept dimension, and the key drawn "
+     "against is given with --x (one of speed, speed_rpm)"),
+    ("plot bifurcation --select a joint (was: 'unknown sweep dimension', no word of --x)",
+     _bifurcation("--select", "joint=B"), 2,
+     "a --select key of --kind bifurcation must be a swept dimension"),
+    ("plot bifurcation --select the swept key (was: 'this file sweeps none')",
+     _bifurcation("--select", "speed=60"), 2,
+     "--select speed=...: fixes the last swept dimension, and --kind bifurcation draws "
+     "against one: leave it out of --select (--x names the key drawn against)"),
+    ("plot bifurcation --x speed_rpm --select speed=600 (was: '--x speed_rpm: not a swept "
+     "key of this file')", _bifurcation("--x", "speed_rpm", "--select", "speed=600"), 2,
+     "--select speed=...: fixes the dimension of --x speed_rpm, which --kind bifurcation "
+     "draws against"),
+    ("plot bifurcation of runs shorter than a revolution (was: 'a file of an older version "
+     "of clearsweep')", _bifurcation(), 2,
+     "which this file lacks: its runs ended before their first section (one a crank "
+     "revolution: run for solver.duration >= 2 x 60 / mechanism.speed_rpm s)"),
+]
+ROWS += ROUND5_BIFURCATION
 
 
 @pytest.fixture

@@ -111,6 +111,7 @@ from .motion import (  # noqa: F401
     _draw_bifurcation,
     _draw_spectrum,
     bifurcation_axis,
+    bifurcation_selection,
 )
 from .orbit import _draw_orbit
 from .poincare import _draw_poincare
@@ -209,7 +210,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
         raise PlotError(f"--b10 applies to --kind {_kinds_taking('b10')} only")
     if kind == "wear-map" and file_figures(ds).wear_map_snapshots and "wear_map_snapshot" in ds:
         ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
-    selection = parse_selection(ds, select)
+    selection = (bifurcation_selection(ds, select, x) if kind == "bifurcation"
+                 else parse_selection(ds, select))
     ds = ds.sel(selection) if selection else ds
     fig = Figure(figsize=spec.size_inches, layout="constrained")
     options = {"x": x, "metric": metric, "b10": b10}

@@ -11,8 +11,10 @@ from matplotlib.figure import Figure
 
 from ..analysis import (
     HIGH_ORDER,
+    SelectionError,
     crank_speed,
     order_spectrum,
+    parse_selection,
     settle_time,
     spectrum_summary,
     sweep_dims,
@@ -116,6 +118,35 @@ def bifurcation_axis(ds: xr.Dataset, x: str | None) -> tuple[str, str]:
     return x, along[x]
 
 
+def bifurcation_selection(ds: xr.Dataset, select, x: str | None) -> dict[str, object]:
+    """``--select`` of ``--kind bifurcation`` as a ``.sel`` dict: each key a swept dimension
+    of ``ds``, none of them the one drawn against (``x``'s, or with ``x`` None the only one
+    left unselected). Raises ``SelectionError`` or ``PlotError`` saying that a key must be a
+    swept dimension, and that the key drawn against is chosen with ``--x``."""
+    dims = [d for d in sweep_dims(ds) if ds.sizes[d] > 1]
+    along = {str(n): str(c.dims[0]) for n, c in ds.coords.items()
+             if c.ndim == 1 and str(c.dims[0]) in dims}
+    along.update({d: d for d in dims})
+    try:
+        selection = parse_selection(ds, select)
+    except SelectionError as exc:
+        if exc.name in dims:          # a swept dimension given a value it lacks: as it is
+            raise
+        keys = f" (one of {', '.join(sorted(along))})" if along else ""
+        raise SelectionError(f"{exc}; a --select key of --kind bifurcation must be a swept "
+                             f"dimension, and the key drawn against is given with --x{keys}",
+                             name=exc.name, value=exc.value, choices=exc.choices) from None
+    fixed = [d for d in dims if d in selection]
+    if x is not None and along.get(x) in fixed:
+        raise PlotError(f"--select {along[x]}=...: fixes the dimension of --x {x}, which --kind "
+                        "bifurcation draws against; --select fixes the other swept dimensions")
+    if x is None and dims and len(fixed) == len(dims):
+        raise PlotError(f"--select {fixed[-1]}=...: fixes the last swept dimension, and --kind "
+                        "bifurcation draws against one: leave it out of --select (--x names the "
+                        "key drawn against)")
+    return selection
+
+
 def _first_key(ds: xr.Dataset, dim: str) -> str:
     """A sweep dimension's abscissa: a zip group's first key (``speed_rpm``, with its units),
     not its labels; the dimension itself otherwise."""
@@ -156,9 +187,12 @@ def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
     x, dim = bifurcation_axis(ds, x)            # a missing sweep is the first thing to say
     missing = [n for n in ("poincare_time", "poincare_slider_acc") if n not in ds]
     if missing:
+        # a file holds them where a case lasted a revolution: both causes are said
         raise PlotError(f"--kind bifurcation needs the Poincaré samples ({', '.join(missing)}), "
-                        "which this file lacks: a file of an older version of clearsweep; run "
-                        "the sweep again (every store keeps them)")
+                        "which this file lacks: its runs ended before their first section (one "
+                        "a crank revolution: run for solver.duration >= 2 x 60 / "
+                        "mechanism.speed_rpm s), or it is a file of an older version of "
+                        "clearsweep (run the sweep again: every store keeps them)")
     joints = clearance_joints(ds)
     n_rev = BIFURCATION_REVOLUTIONS
     # the last revolutions of each case: (case, n_rev) arrays, NaN where a case has fewer
