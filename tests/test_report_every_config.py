@@ -1,21 +1,22 @@
 """``report`` and ``plot`` on every kind of results file the project writes (issue 40, items 1
-and 5): every shipped config in configs/, run short, through ``report`` in every format and
-``plot`` of every figure kind; and single runs with clearance at every subset of the joints
-O, A, B and P, the empty one (the ideal mechanism) included.
+and 5): every shipped config in configs/, run short, through ``report`` in every format
+(``--reference`` too where it sweeps a design) and ``plot`` of every figure kind; and single
+runs with clearance at every subset of the joints O, A, B and P, the empty one (the ideal
+mechanism) included.
 
 Before, ``report`` of configs/ideal.yaml's run (and of a run with clearance at P only, and
-``--full`` of configs/paper.yaml's sweep, whose first case has no clearance) ended in
-``TypeError: 'int' object is not iterable``; csv and json of the ideal run had no row; and
-the text report of a sweep whose cases have Poincaré sections in some cases and none in
-others exited 2 with "cannot convert float NaN to integer".
+``--full`` and ``--reference`` of configs/paper.yaml's sweep, whose first case has no
+clearance) ended in ``TypeError: 'int' object is not iterable``; csv and json of the ideal run
+had no row; and the text report of a sweep whose cases have Poincaré sections in some cases
+and none in others exited 2 with "cannot convert float NaN to integer".
 
 A shipped config is cut to a short run here: 0.25 s at 600 r/min (2.5 revolutions: Poincaré
 sections and a spectrum) where it does not sweep the speed or the duration (20 ms at 60 r/min
-of the paper's preset), a coarse wear
-map, the first two values of each grid axis, two members of an ensemble or a reliability
-design, two life blocks (one for a reliability member), a Saltelli sample of n = 4; a zip
-group of more than four entries keeps its first and last (configs/bifurcation.yaml: 50 and
-640 r/min, at one fixed duration: the slower run has no section, the faster ones).
+of the paper's preset), a coarse wear map, the first two values of each grid axis, two members
+of an ensemble or a reliability design, two life blocks (one for a reliability member), a
+Saltelli sample of n = 4; a zip group of more than four entries keeps its first and last
+(configs/bifurcation.yaml: 50 and 640 r/min, at one fixed duration: the slower run has no
+section, the faster one two settled ones).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import xarray as xr
 import yaml
 from click.testing import CliRunner
 
-from clearsweep.analysis import PERIOD_UNKNOWN, results_kind
+from clearsweep.analysis import PERIOD_UNKNOWN, design_dims, results_kind
 from clearsweep.choices import KINDS
 from clearsweep.cli import main
 from clearsweep.config import file_kind
@@ -198,12 +199,19 @@ def test_report_of_every_shipped_config_in_every_format(shipped, name):
     path = shipped[name]
     with xr.open_dataset(path) as ds:
         study = STUDIES[results_kind(ds)]
+        dims = design_dims(ds)
+        # against a design's second value: configs/paper.yaml's first case (no clearance) is
+        # then compared with it
+        reference = ([f"{dims[0]}={ds[dims[0]].values[min(1, ds.sizes[dims[0]] - 1)]}"]
+                     if dims and dims[0] in ds.coords else [])
     text_only = study.text_report is not None
     result = invoke("report", path)
     assert result.exit_code == 0 and result.exception is None, result.output
     assert result.stdout.strip()
-    for options in (["--full"], ["--format", "markdown"], ["--format", "csv"],
-                    ["--format", "json"]):
+    options_tried = [["--full"], *(["--format", f] for f in ("markdown", "csv", "json"))]
+    options_tried += [["--reference", r, "--format", f] for r in reference
+                      for f in ("text", "csv", "json")]
+    for options in options_tried:
         result = invoke("report", path, *options)
         if text_only:       # a life run, a life sweep, a reliability sweep: text only, said so
             assert "which report prints as text only" in one_error_line(result)
