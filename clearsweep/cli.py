@@ -208,6 +208,11 @@ def _reason(exc: OSError) -> str:
     """Why a write failed, in words: a full disk is named as such."""
     if exc.errno == errno.ENOSPC:
         return f"the disk is full ({exc.strerror})"
+    if exc.errno == errno.EFBIG:
+        from .dataset import file_size_limit_text
+
+        return (exc.strerror if exc.strerror and "ulimit -f" in exc.strerror
+                else file_size_limit_text()) + "; raise the limit (ulimit -f unlimited)"
     return exc.strerror or str(exc)
 
 
@@ -573,7 +578,8 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
     except OSError as exc:
         parts = parts_dir_for(out)
         kept = PartStore(parts).finished() if parts.is_dir() else set()
-        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
+        room = "" if exc.errno == errno.EFBIG else "make room and "
+        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: {room}run again "
                 "with --resume" if kept else "")
         _fail(f"cannot write {exc.filename or out}: {_reason(exc)}{note}", 1)
 

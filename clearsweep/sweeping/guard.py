@@ -3,8 +3,12 @@
 A pool worker (``forkserver`` or ``spawn``) starts by importing the script that
 started the pool, under the name ``__mp_main__``. A script whose sweep call is
 not guarded would start the sweep again in every worker: the workers die, every
-case fails, and the run takes many times as long. :func:`require_main_guard`
-stops that before anything starts.
+case fails, and the run takes many times as long. A script read from standard input
+cannot be re-imported at all, and a daemonic ``multiprocessing.Pool`` worker may not
+start processes. :func:`require_main_guard` stops these before anything starts, and
+lets through what works: a guarded script, a process that ``multiprocessing`` started
+(its target runs after the script's import), ``python -c``, an interactive session and
+a notebook, whose workers import no script.
 """
 
 from __future__ import annotations
@@ -98,13 +102,16 @@ def require_main_guard(workers: int) -> None:
     main = sys.modules.get("__main__")
     if main is None:
         return
-    if getattr(main, "__name__", None) == "__mp_main__":
-        reimport = getattr(main, "__file__", None)
-        if _top_level_frame(vars(main)) is not None:
-            raise UnguardedScript(
-                f"a sweep with {workers} worker processes was started while a worker process "
-                f"was importing the script {reimport or '?'!r}: the script starts its work "
-                f"when imported; {ADVICE}")
+    # A process started by spawn or forkserver runs the parent's script as ``__mp_main__``
+    # (runpy) while multiprocessing's ``_inheriting`` is set, before its target; after that
+    # its ``__main__`` is that module, and a sweep its target starts is no import's
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        importing = sys.modules.get("__mp_main__")
+        script = getattr(importing, "__file__", None) or getattr(main, "__file__", None)
+        raise UnguardedScript(
+            f"a sweep with {workers} worker processes was started while a worker process "
+            f"was importing the script {script or '?'!r}: the script starts its work "
+            f"when imported; {ADVICE}")
     if multiprocessing.current_process().daemon:
         raise UnguardedScript(
             f"a sweep with {workers} worker processes was started in the daemonic process "
