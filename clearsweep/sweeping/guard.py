@@ -121,7 +121,7 @@ def require_main_guard(workers: int) -> None:
     path = _reimported_from(main)
     if path is None:
         return
-    if not os.path.isfile(os.path.join(multiprocessing.process.ORIGINAL_DIR or "", path)):
+    if not os.path.isfile(os.path.join(getattr(multiprocessing.process, "ORIGINAL_DIR", None) or "", path)):
         what = ("read from standard input" if path == "<stdin>"
                 else f"whose file {path!r} a worker cannot read")
         raise UnguardedScript(

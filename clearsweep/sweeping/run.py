@@ -207,7 +207,9 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         A ``distributed.Client``, a scheduler address (connected to here and
         disconnected after), or a ``concurrent.futures.Executor`` owned by
         the caller (e.g. :func:`process_pool`, to reuse warm workers across
-        sweeps). The library never starts a cluster.
+        sweeps; a ``ThreadPoolExecutor`` works, its threads writing one part at a time,
+        but runs the cases no faster than one worker: the kernel holds the GIL). The
+        library never starts a cluster.
     resume
         Keep the finished cases of an interrupted run (``OUT.parts``) and run
         only the others; no case runs twice.
@@ -267,8 +269,9 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         ran failed (with ``report_failures``; the file is written).
     UnguardedScript
         ``workers`` > 1 asked for from the top level of a script, outside
-        ``if __name__ == "__main__":`` (every worker would re-run the script), before
-        anything runs.
+        ``if __name__ == "__main__":`` (every worker would re-run the script), from a
+        script read from standard input (no worker can re-import it), or in a daemonic
+        ``multiprocessing.Pool`` worker (pass ``workers=1`` there), before anything runs.
     """
     plan = (config_or_path if isinstance(config_or_path, SweepPlan)
             else expand(config_or_path, overrides, allow_large=allow_large, max_cases=max_cases))
