@@ -234,3 +234,21 @@ def test_a_warning_raised_in_a_worker_reaches_the_driver_once(tmp_path):
     assert res.stdout.strip() == "1 RuntimeWarning the friction law is extrapolated"
     assert res.stderr.strip().splitlines() == [
         "clearsweep: warning: the friction law is extrapolated (RuntimeWarning from script)"]
+
+
+def test_a_warning_class_that_cannot_travel_comes_back_as_a_user_warning():
+    """A category defined in a function cannot be pickled to the driver: the receipt must
+    still travel (the warning's text is kept, its class becomes UserWarning)."""
+    import pickle
+
+    from clearsweep.sweeping.worker import WARNINGS_KEY, _portable, reissue
+
+    class Local(UserWarning):
+        pass
+
+    assert _portable(RuntimeWarning) is RuntimeWarning and _portable(Local) is UserWarning
+    receipt = {"status": "ok", WARNINGS_KEY: [("text", _portable(Local), "f.py", 3)] * 2}
+    pickle.dumps(receipt)
+    with pytest.warns(UserWarning, match="^text$") as caught:
+        assert reissue(receipt, set()) == {"status": "ok"}
+    assert len(caught) == 1

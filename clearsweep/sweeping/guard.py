@@ -118,19 +118,20 @@ def require_main_guard(workers: int) -> None:
             f"{multiprocessing.current_process().name!r} (a multiprocessing.Pool worker), "
             "which may not start processes of its own; pass workers=1 to run the sweep's "
             "cases in this process, or start the sweep outside the pool")
-    path = _reimported_from(main)
-    if path is None:
-        return
-    if not os.path.isfile(os.path.join(getattr(multiprocessing.process, "ORIGINAL_DIR", None) or "", path)):
-        what = ("read from standard input" if path == "<stdin>"
-                else f"whose file {path!r} a worker cannot read")
+    reimported = _reimported_from(main)
+    started_in = getattr(multiprocessing.process, "ORIGINAL_DIR", None) or ""
+    if reimported is not None and not os.path.isfile(os.path.join(started_in, reimported)):
+        what = ("read from standard input" if reimported == "<stdin>"
+                else f"whose file {reimported!r} a worker cannot read")
         raise UnguardedScript(
             f"a sweep with {workers} worker processes was started from a script {what}: each "
             f"worker process starts by re-importing the script from its file; save the script "
             f"to a file and run that (its work under `if __name__ == \"__main__\":`), or pass "
             f"workers=1")
-    frame = _top_level_frame(vars(main), getattr(main, "__file__", None))
-    if frame is None:
+    # a script run from its file, or as a module (python -m: re-imported by name)
+    path = getattr(main, "__file__", None)
+    frame = None if path is None else _top_level_frame(vars(main), path)
+    if path is None or frame is None:
         return
     try:
         source = Path(path).read_text(encoding="utf-8")

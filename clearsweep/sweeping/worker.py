@@ -5,6 +5,7 @@ from __future__ import annotations
 import faulthandler
 import functools
 import os
+import pickle
 import signal
 import threading
 import time
@@ -138,8 +139,18 @@ def _run_and_store(task: CaseTask, parts_dir: str, h: str) -> dict[str, Any]:
         write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
     receipt = _receipt(part)
     if caught:
-        receipt[WARNINGS_KEY] = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
+        receipt[WARNINGS_KEY] = [(str(w.message), _portable(w.category), w.filename, w.lineno)
+                                 for w in caught]
     return receipt
+
+
+def _portable(category: type[Warning]) -> type[Warning]:
+    """``category``, or ``UserWarning`` where the class cannot travel to the driver (one
+    defined in a function): a warning must not fail the case's receipt."""
+    try:
+        return category if pickle.loads(pickle.dumps(category)) is category else UserWarning
+    except Exception:
+        return UserWarning
 
 
 def reissue(receipt: dict[str, Any], seen: set) -> dict[str, Any]:
