@@ -208,6 +208,11 @@ def _reason(exc: OSError) -> str:
     """Why a write failed, in words: a full disk is named as such."""
     if exc.errno == errno.ENOSPC:
         return f"the disk is full ({exc.strerror})"
+    if exc.errno == errno.EFBIG:
+        from .dataset import file_size_limit_text
+
+        return (exc.strerror if exc.strerror and "ulimit -f" in exc.strerror
+                else file_size_limit_text()) + "; raise the limit (ulimit -f unlimited)"
     return exc.strerror or str(exc)
 
 
@@ -286,6 +291,26 @@ def _wrote(path: str | Path, quiet: bool, detail: str = "") -> None:
         click.echo(f"clearsweep: wrote {path}{detail}", err=True)
 
 
+class _OutFile(click.Path):
+    """An output file's path (``-o/--out``): refused at once where it cannot name a file,
+    an empty name or a name ending in ``/`` (before, ``-o ''`` wrote the default file and
+    ``-o new/`` the file ``new``, exit 0)."""
+
+    def __init__(self) -> None:
+        super().__init__(dir_okay=False)
+
+    def convert(self, value, param, ctx):
+        text = os.fsdecode(value) if isinstance(value, bytes | os.PathLike) else str(value)
+        if text == "":
+            self.fail("an empty name; give a file name, such as out.nc", param, ctx)
+        if text.endswith(("/", os.sep)) or os.path.basename(text) in (".", ".."):
+            self.fail(f"{text!r} names a folder; give a file in it, such as "
+                      f"{text.rstrip('/' + os.sep) or '.'}/out.nc", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+_OUT_FILE = _OutFile()
+
 _quiet = click.option("-q", "--quiet", is_flag=True,
                       help="Print nothing but errors and warnings.")
 _dry_run = click.option("--dry-run", is_flag=True,
@@ -307,7 +332,7 @@ def main() -> None:
 
 @main.command()
 @click.argument("config", type=click.Path(dir_okay=False))
-@click.option("-o", "--out", type=click.Path(dir_okay=False),
+@click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>.nc in the current folder].")
 @_overrides
 @_allow_large
@@ -379,7 +404,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
 
 @main.command("life")
 @click.argument("config", type=click.Path(dir_okay=False))
-@click.option("-o", "--out", type=click.Path(dir_okay=False),
+@click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>_life.nc in the current folder].")
 @_overrides
 @_allow_large
@@ -553,7 +578,8 @@ def _run_sweep_or_fail(plan, out: str, command: str, config: str, overrides: tup
     except OSError as exc:
         parts = parts_dir_for(out)
         kept = PartStore(parts).finished() if parts.is_dir() else set()
-        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: make room and run again "
+        room = "" if exc.errno == errno.EFBIG else "make room and "
+        note = (f"; the {len(kept)} finished case(s) are kept in {parts}: {room}run again "
                 "with --resume" if kept else "")
         _fail(f"cannot write {exc.filename or out}: {_reason(exc)}{note}", 1)
 
@@ -793,7 +819,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 @main.command("plot")
 @click.argument("path", type=click.Path(exists=True, dir_okay=False))
 @click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
-@click.option("-o", "--out", required=True, type=click.Path(dir_okay=False),
+@click.option("-o", "--out", required=True, type=_OUT_FILE,
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Draw only the sweep cases with this coordinate value (repeatable).")
@@ -868,7 +894,7 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
               help="Summary variable to analyse (the ensemble mean where the file is an ensemble).")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Fix another dimension of NAME (e.g. joint=B); repeatable.")
-@click.option("-o", "--out", "plot_path", type=click.Path(dir_okay=False), default=None,
+@click.option("-o", "--out", "plot_path", type=_OUT_FILE, default=None,
               help="Also draw the indices with their intervals to this file (.png, .pdf, .svg).")
 @click.option("--overwrite", is_flag=True,
               help="Replace an existing -o/--out file that is not a figure clearsweep drew.")
@@ -974,7 +1000,7 @@ def _program() -> list[str]:
 
 @main.command("sweep")
 @click.argument("config", type=click.Path(dir_okay=False))
-@click.option("-o", "--out", type=click.Path(dir_okay=False),
+@click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>.nc in the current folder]; "
                    "finished cases are kept in OUT.parts/ until it is written.")
 @click.option("--workers", type=click.IntRange(min=1), default=None,

@@ -260,6 +260,24 @@ def lock_exclusively(path: str | os.PathLike) -> int | None:
         os.close(fd)        # removed by the process that held it: lock the path's file anew
 
 
+def file_size_limit() -> int | None:
+    """This process's file-size limit (``RLIMIT_FSIZE``, ``ulimit -f``) [bytes]; ``None``:
+    none. A write beyond it fails with ``EFBIG`` (netCDF-C: "NetCDF: HDF error")."""
+    try:
+        import resource
+    except ImportError:     # not a POSIX system
+        return None
+    soft = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    return None if soft == resource.RLIM_INFINITY else int(soft)
+
+
+def file_size_limit_text(limit: int | None = None) -> str:
+    """The file-size limit in words, for a write it stopped."""
+    limit = file_size_limit() if limit is None else limit
+    return ("a file would pass this process's file-size limit"
+            + (f" of {limit:,} bytes" if limit is not None else "") + " (ulimit -f)")
+
+
 #: Free space below which a failed write is reported as a full disk [bytes].
 NEARLY_FULL_BYTES = 16 * 2 ** 20
 
@@ -269,20 +287,31 @@ def write_errors_as_oserror(path: str | os.PathLike):
     """Turn the netCDF library's errors of a write into ``OSError`` naming ``path``.
 
     netCDF-C reports a full disk, or a file it cannot write, as
-    ``RuntimeError("NetCDF: HDF error")``; callers (the CLI) catch ``OSError``
-    for every output failure. The message adds the free space on the disk.
+    ``RuntimeError("NetCDF: HDF error")``, and h5py (the chunks copied into a sweep
+    file) as a ``RuntimeError`` or ``OSError`` whose text holds HDF5's ``errno = N``;
+    callers (the CLI) catch ``OSError`` for every output failure. The message adds the
+    free space on the disk; a write stopped by the file-size limit (``ulimit -f``: HDF5's
+    errno 27, or netCDF-C's error under a finite limit) is ``EFBIG`` and names the limit.
     """
     try:
         yield
-    except RuntimeError as exc:
-        if not str(exc).startswith("NetCDF:"):
+    except (RuntimeError, OSError) as exc:
+        text = str(exc)
+        said = re.search(r"errno = (\d+)", text)
+        if isinstance(exc, OSError) and (exc.errno is not None or said is None):
             raise
+        if not (text.startswith("NetCDF:") or said):
+            raise
+        code = int(said.group(1)) if said else None
+        limit = file_size_limit()
+        if code == errno.EFBIG or (code is None and limit is not None):
+            raise OSError(errno.EFBIG, file_size_limit_text(limit), str(path)) from exc
         try:
             free = shutil.disk_usage(Path(path).parent).free
         except OSError:
             free = None
-        full = free is not None and free < NEARLY_FULL_BYTES
-        reason = str(exc) + (f" (the disk is full: {free} bytes free)" if full else "")
+        full = code == errno.ENOSPC or (free is not None and free < NEARLY_FULL_BYTES)
+        reason = text + (f" (the disk is full: {free} bytes free)" if full else "")
         raise OSError(errno.ENOSPC if full else errno.EIO, reason, str(path)) from exc
 
 

@@ -66,6 +66,8 @@ RESUME_REMEDY = ("move it away and run again (--overwrite would also delete the 
 TEMPORARY_NAME_EXTRA = len("." + ".9999999." + "x" * 8 + ".tmp")
 #: File-name length where the file system does not say (Linux, macOS and Windows: 255).
 DEFAULT_NAME_MAX = 255
+#: The longest path [bytes, with its final NUL] where the system does not say (Linux's PATH_MAX).
+DEFAULT_PATH_MAX = 4096
 
 
 class OutputError(ValueError):
@@ -213,16 +215,16 @@ def is_own_figure(path: str | os.PathLike) -> bool:
     return re.search(mark[1], head + tail) is not None
 
 
-def _name_max(path: Path) -> int:
+def _name_max(path: Path, what: str = "PC_NAME_MAX", default: int = DEFAULT_NAME_MAX) -> int:
     """The longest file name [bytes] the file system holding ``path`` (or its nearest
-    existing folder) admits."""
+    existing folder) admits (``what="PC_PATH_MAX"``: the longest path)."""
     folder = path.parent
     while True:
         try:
-            return int(os.pathconf(folder, "PC_NAME_MAX"))
+            return int(os.pathconf(folder, what))
         except (OSError, ValueError):
             if folder == folder.parent:
-                return DEFAULT_NAME_MAX
+                return default
             folder = folder.parent
 
 
@@ -230,8 +232,9 @@ def check_name_lengths(path: str | os.PathLike, option: str, derived: Iterable[s
     """Refuse an output whose name, or a name the command derives from it (``derived``: the
     suffixes of ``OUT.parts``, ``OUT.life-checkpoint`` and its lock; each written through
     a temporary file ``.NAME.PID.XXXXXXXX.tmp``), is longer than the file system admits, or
-    that lies under a folder name that is: the write failed with "File name too long" at the
-    end of the work, or a traceback before it.
+    that lies under a folder name that is, or whose whole path (from ``/``, with the longest
+    derived name) is longer than the system's ``PATH_MAX``: the write failed with "File name
+    too long" at the end of the work, or a traceback before it.
 
     Raises
     ------
@@ -241,19 +244,26 @@ def check_name_lengths(path: str | os.PathLike, option: str, derived: Iterable[s
     path = Path(path)
     limit = _name_max(path)
     shown = str(path) if len(str(path)) <= 80 else f"{str(path)[:60]}...{str(path)[-12:]}"
+    longest = max(("", *derived), key=len)
     for part in path.parent.parts:
         if len(os.fsencode(part)) > limit:
             raise OutputError(f"{option} {shown}: the folder name {part[:24]}... is "
                               f"{len(os.fsencode(part))} bytes long; the file system admits "
                               f"{limit}: choose a shorter one")
     size = len(os.fsencode(path.name))
-    longest = max(("", *derived), key=len)
     if size + len(longest) + TEMPORARY_NAME_EXTRA > limit:
         made = f"OUT{longest} and temporary files" if longest else "temporary files"
         raise OutputError(f"{option} {shown}: the name is {size} bytes long, the names written "
                           f"beside it ({made}) {TEMPORARY_NAME_EXTRA + len(longest)} bytes more, "
                           f"and the file system admits {limit}: choose a name of at most "
                           f"{limit - TEMPORARY_NAME_EXTRA - len(longest)} bytes")
+    whole = len(os.fsencode(os.path.abspath(path)))
+    path_max = _name_max(path, "PC_PATH_MAX", DEFAULT_PATH_MAX)
+    if whole + len(longest) + TEMPORARY_NAME_EXTRA >= path_max:
+        raise OutputError(f"{option} {shown}: the path is {whole} bytes long (from /), the "
+                          f"names written beside it {TEMPORARY_NAME_EXTRA + len(longest)} bytes "
+                          f"more, and the system admits paths of {path_max - 1}: choose a "
+                          "shorter path")
 
 
 def check_folder(path: str | os.PathLike, option: str) -> None:

@@ -6,8 +6,9 @@ Rows of round 3b (issue 22, items 3 and 4) and of the fresh round on the reliabi
 life sections, sampling sweeps, sensitivity, the CUDA backend's options and results files
 of older versions (issue 20, item 6); round 4's resume integrity and the user's files
 (issue 33, items 1 and 2: ``ROUND4_INTEGRITY``), its messages (items 4-6:
-``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``); round 5's messages of
-``--kind bifurcation`` (issue 40, item 10: ``ROUND5_BIFURCATION``). Before, the rows marked
+``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``); round 5's output paths
+and messages of ``--kind bifurcation`` (issue 40, item 10: ``ROUND5_OUTPUTS``,
+``ROUND5_BIFURCATION``). Before, the rows marked
 "was:" ended as said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import errno
 import os
+import subprocess
 import threading
 import time
 from pathlib import Path
@@ -1202,6 +1204,36 @@ ROUND4_BOUNDS = [
 ]
 ROWS += ROUND4_BOUNDS
 
+#: A path of 4.2 kB from / (42 folders of 100 bytes): each name within NAME_MAX, the whole
+#: beyond PATH_MAX.
+LONG_PATH = "/".join(["b" * 100] * 42)
+
+# --- round 5 (issue 40, item 10): output paths that name no file
+ROUND5_OUTPUTS = [
+    ("run -o '' (was: wrote the default one_clearance.nc, exit 0)",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=0.002", "-o", ""], 2,
+     "invalid value for '-o' / '--out': an empty name; give a file name, such as out.nc"),
+    ("sweep -o '' (was: wrote the default s.nc in the current folder, exit 0)",
+     lambda t, f: ["sweep", sweep_file(t, "sweep: {grid: {joints.B.coating: [none]}}\n"),
+                   "--set", "solver.duration=0.002", "--workers", "1", "-o", ""], 2,
+     "an empty name"),
+    ("plot -o '' (was: refused by the figure-format check, naming no empty name)",
+     lambda t, f: ["plot", f / "run.nc", "--kind", "slider", "-o", ""], 2, "an empty name"),
+    ("run -o out_new/ (was: wrote the file out_new, exit 0)",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=0.002", "-o", f"{t}/out_new/"], 2,
+     "out_new/' names a folder; give a file in it, such as "),
+    ("life -o existing folder/ (was: click's 'File ... is a directory')",
+     lambda t, f: ["life", LIFE, *SHORT_LIFE, "-o", f"{t}/"], 2, "names a folder"),
+    ("run -o a 4.2 kB path (was: OSError [Errno 36] traceback)",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=0.002", "-o", t / LONG_PATH / "out.nc"],
+     2, "bytes long (from /), the names written beside it 28 bytes more, and the system admits "
+        "paths of 4095: choose a shorter path"),
+    ("sweep -o a 4.2 kB path (was: OSError [Errno 36] traceback)",
+     lambda t, f: ["sweep", sweep_file(t, "sweep: {grid: {joints.B.coating: [none]}}\n"),
+                   "-o", t / LONG_PATH / "out.nc"], 2, "and the system admits paths of 4095"),
+]
+ROWS += ROUND5_OUTPUTS
+
 
 def _bifurcation(*options: str):
     return lambda t, f: ["plot", f / "bif.nc", "--kind", "bifurcation", *options, "-o", t / "out.png"]
@@ -1485,3 +1517,60 @@ def test_library_warnings_are_one_clearsweep_line(tmp_path, capsys):
                   "/venv/lib/python3.11/site-packages/SALib/analyze/sobol.py", 140)
     assert capsys.readouterr().err == ("clearsweep: warning: invalid value encountered in divide "
                                        "(RuntimeWarning from SALib)\n")
+
+
+def under_file_size_limit(tmp: Path, argv: list[str], limit: int) -> subprocess.CompletedProcess:
+    """``clearsweep ARGV`` in a process whose files may not grow beyond ``limit`` bytes
+    (``ulimit -f``: a write beyond it fails with EFBIG, "NetCDF: HDF error" in netCDF-C)."""
+    import resource
+    import sys
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, resource.getrlimit(resource.RLIMIT_FSIZE)[1]))
+
+    return subprocess.run([sys.executable, "-m", "clearsweep.cli", *map(str, argv)], cwd=tmp,
+                          capture_output=True, text=True, timeout=300, preexec_fn=limited)
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_sweep_whose_parts_pass_the_file_size_limit_says_so_and_counts_what_is_kept(tmp_path,
+                                                                                      workers):
+    """Before: "the serial backend failed (OSError: [Errno 5] NetCDF: HDF error: ...); 0 of 2
+    cases are kept in ...; run again with --resume", which the limit stops again."""
+    out = tmp_path / "out.nc"
+    result = under_file_size_limit(tmp_path, ["sweep", two_case_sweep(tmp_path), "-o", out,
+                                              "--workers", workers, "--no-progress", "-q"],
+                                   16 * 1024)
+    assert result.returncode == 1, result.stderr[-2000:]
+    assert result.stderr.strip().splitlines() == [
+        f"clearsweep: error: cannot write in {out}.parts: a file would pass this process's "
+        "file-size limit of 16,384 bytes (ulimit -f); 0 of the 2 cases are finished and kept "
+        "there: raise the limit (ulimit -f unlimited) and run again with --resume"]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("what, limit_kib", [("sweep", 64), ("full sweep", 600), ("run", 64)])
+def test_a_results_file_beyond_the_file_size_limit_names_the_limit(tmp_path, what, limit_kib):
+    """Before: "cannot write OUT: NetCDF: HDF error", for a sweep with "make room and run
+    again with --resume"; a full sweep whose time series passed the limit in h5py's copy
+    ended in a traceback (RuntimeError: Can't decrement id ref count (... errno = 27 ...))."""
+    out = tmp_path / "out.nc"
+    if what != "run":     # four parts fit (summary: about 47 kB each), the sweep file not
+        config = tmp_path / "four.yaml"
+        text = Path(two_case_sweep(tmp_path)).read_text().replace(
+            "[none, PTFE]", "[none, PTFE, MoS2, lead]")
+        if what == "full sweep":
+            text = text.replace("store: summary", "store: full").replace("0.002", "0.05")
+        config.write_text(text)
+        argv = ["sweep", config, "-o", out, "--workers", "1", "--no-progress", "-q"]
+        kept = f"; the 4 finished case(s) are kept in {out}.parts: run again with --resume"
+    else:
+        argv = ["run", ONE, "--set", "solver.duration=0.05", "-o", out, "-q"]
+        kept = ""
+    result = under_file_size_limit(tmp_path, argv, limit_kib * 1024)
+    assert result.returncode == 1, result.stderr[-2000:]
+    assert result.stderr.strip().splitlines() == [
+        f"clearsweep: error: cannot write {out}: a file would pass this process's file-size "
+        f"limit of {limit_kib * 1024:,} bytes (ulimit -f); raise the limit (ulimit -f "
+        f"unlimited){kept}"]
+    assert not out.exists()

@@ -77,12 +77,13 @@ def test_the_guard_is_read_from_the_script(source, line, expected):
 
 
 def test_worker_processes_from_a_worker_reimporting_the_script_are_refused(monkeypatch):
-    import types
+    """A process still importing its parent's script (multiprocessing's ``_inheriting``, set
+    while spawn or forkserver runs it as ``__mp_main__``); a spawned child past its import
+    runs its sweep (tests/test_workers_hazards.py)."""
+    import multiprocessing
 
-    fake = types.ModuleType("__mp_main__")
-    fake.__file__ = "/somewhere/script.py"
-    monkeypatch.setitem(sys.modules, "__main__", fake)
-    with pytest.raises(UnguardedScript, match="__main__"):
+    monkeypatch.setattr(multiprocessing.current_process(), "_inheriting", True, raising=False)
+    with pytest.raises(UnguardedScript, match="while a worker process was importing"):
         run_sweep({"base": str(ROOT / "configs/two_clearances.yaml"),
                    "sweep": {"grid": {"joints.B.coating": ["none", "PTFE"]}}}, workers=2)
 

@@ -3,13 +3,18 @@
 A pool worker (``forkserver`` or ``spawn``) starts by importing the script that
 started the pool, under the name ``__mp_main__``. A script whose sweep call is
 not guarded would start the sweep again in every worker: the workers die, every
-case fails, and the run takes many times as long. :func:`require_main_guard`
-stops that before anything starts.
+case fails, and the run takes many times as long. A script read from standard input
+cannot be re-imported at all, and a daemonic ``multiprocessing.Pool`` worker may not
+start processes. :func:`require_main_guard` stops these before anything starts, and
+lets through what works: a guarded script, a process that ``multiprocessing`` started
+(its target runs after the script's import), ``python -c``, an interactive session and
+a notebook, whose workers import no script.
 """
 
 from __future__ import annotations
 
 import ast
+import os
 import sys
 from pathlib import Path
 from types import FrameType
@@ -20,7 +25,9 @@ ADVICE = ('put the script\'s work under `if __name__ == "__main__":` (the README
 
 
 class UnguardedScript(RuntimeError):
-    """Worker processes were asked for from a script's top level, outside ``if __name__ == "__main__":``."""
+    """Worker processes were asked for where they would fail: from a script's top level,
+    outside ``if __name__ == "__main__":``, from a script that a worker cannot re-import
+    (read from standard input), or in a daemonic pool worker."""
 
 
 def _is_main_test(node: ast.expr) -> bool:
@@ -46,36 +53,84 @@ def _guarded(source: str, line: int) -> bool | None:
     return None
 
 
-def _top_level_frame(main_globals: dict) -> FrameType | None:
-    """The frame running the main module's own top-level code, if this call came from it."""
+def _top_level_frame(main_globals: dict, filename: str | None = None) -> FrameType | None:
+    """The frame running the main module's own top-level code (read from ``filename``, where
+    given), if this call came from it."""
     frame: FrameType | None = sys._getframe(1)
     found = None
     while frame is not None:
-        if frame.f_globals is main_globals and frame.f_code.co_name == "<module>":
+        if (frame.f_globals is main_globals and frame.f_code.co_name == "<module>"
+                and (filename is None or frame.f_code.co_filename == filename)):
             found = frame
         frame = frame.f_back
     return found
 
 
+def _reimported_from(main) -> str | None:
+    """The path a worker process started by ``spawn`` or ``forkserver`` runs as the main
+    module before its first case (``multiprocessing.spawn.get_preparation_data``'s rule):
+    the main module's ``__file__``, unless it was started by module name (``python -m``);
+    ``None`` where a worker imports no script (``python -c``, an interactive session, a
+    notebook)."""
+    if getattr(getattr(main, "__spec__", None), "name", None) is not None:
+        return None
+    path = getattr(main, "__file__", None)
+    return None if path is None else str(path)
+
+
 def require_main_guard(workers: int) -> None:
     """Raise :class:`UnguardedScript` where starting ``workers`` worker processes now would
-    re-run the calling script in each of them.
+    fail: the workers would re-run the calling script, or could not start at all.
 
-    Two cases: this process is itself a worker re-running a script (its ``__main__`` is
-    ``__mp_main__``), or the call comes from the top level of a script file, outside
-    ``if __name__ == "__main__":``. An interactive session, ``python -c`` and a call from a
-    guarded block pass.
+    Refused, before any worker starts:
+
+    - a worker process importing a script (its ``__main__`` is ``__mp_main__``) that asks
+      for workers from the script's top level, i.e. while it is imported;
+    - a call from the top level of a script file, outside ``if __name__ == "__main__":``;
+    - a script that a worker cannot re-import: one read from standard input
+      (``python - <<EOF``, ``python < script.py``), or whose file is gone;
+    - a daemonic process (a ``multiprocessing.Pool`` worker), which may not start
+      processes of its own.
+
+    A process started by ``multiprocessing`` (``spawn``, the default on macOS and Windows)
+    that calls a sweep after importing a guarded script, ``python -c``, an interactive
+    session, a notebook and a call from a guarded block pass: their workers import no
+    script, or one that starts nothing when imported.
     """
+    import multiprocessing
+
     main = sys.modules.get("__main__")
     if main is None:
         return
-    if getattr(main, "__name__", None) == "__mp_main__":
+    # A process started by spawn or forkserver runs the parent's script as ``__mp_main__``
+    # (runpy) while multiprocessing's ``_inheriting`` is set, before its target; after that
+    # its ``__main__`` is that module, and a sweep its target starts is no import's
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        importing = sys.modules.get("__mp_main__")
+        script = getattr(importing, "__file__", None) or getattr(main, "__file__", None)
         raise UnguardedScript(
-            f"a sweep with {workers} worker processes was started while a worker process was "
-            f"importing the script {getattr(main, '__file__', '?')!r}: the script starts its "
-            f"work when imported; {ADVICE}")
+            f"a sweep with {workers} worker processes was started while a worker process "
+            f"was importing the script {script or '?'!r}: the script starts its work "
+            f"when imported; {ADVICE}")
+    if multiprocessing.current_process().daemon:
+        raise UnguardedScript(
+            f"a sweep with {workers} worker processes was started in the daemonic process "
+            f"{multiprocessing.current_process().name!r} (a multiprocessing.Pool worker), "
+            "which may not start processes of its own; pass workers=1 to run the sweep's "
+            "cases in this process, or start the sweep outside the pool")
+    reimported = _reimported_from(main)
+    started_in = getattr(multiprocessing.process, "ORIGINAL_DIR", None) or ""
+    if reimported is not None and not os.path.isfile(os.path.join(started_in, reimported)):
+        what = ("read from standard input" if reimported == "<stdin>"
+                else f"whose file {reimported!r} a worker cannot read")
+        raise UnguardedScript(
+            f"a sweep with {workers} worker processes was started from a script {what}: each "
+            f"worker process starts by re-importing the script from its file; save the script "
+            f"to a file and run that (its work under `if __name__ == \"__main__\":`), or pass "
+            f"workers=1")
+    # a script run from its file, or as a module (python -m: re-imported by name)
     path = getattr(main, "__file__", None)
-    frame = _top_level_frame(vars(main))
+    frame = None if path is None else _top_level_frame(vars(main), path)
     if path is None or frame is None:
         return
     try:

@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 import xarray as xr
+from xarray.backends.locks import NETCDFC_LOCK
 
 from ..config import Config
 from ..dataset import (
@@ -67,6 +68,9 @@ IDENTITY_ATTR = "clearsweep_case_identity"
 #: The temporary file of a part being written (``replaced_on_success``'s naming,
 #: ``.KEY.nc.PID.XXXX.tmp``).
 _TEMPORARY = re.compile(r"\.[^/]+\.nc\.[A-Za-z0-9_.]+\.tmp")
+#: Held while this process writes a part with netCDF4 (:func:`_write_plain`): xarray's own
+#: lock of the netCDF-C library, which its reads and writes in this process take too.
+_NETCDF_LOCK = NETCDFC_LOCK
 #: Compression of numeric variables, in parts and in the assembled file.
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.
@@ -150,11 +154,13 @@ def write_part(directory: str | os.PathLike, h: str, part: xr.Dataset) -> Path:
     marked with its key ``h`` (:data:`KEY_ATTR`).
 
     Used by :meth:`PartStore.write` and by pool workers, which write their
-    cases themselves.
+    cases themselves. Threads of one process (a caller's ``ThreadPoolExecutor``, a Dask
+    worker of several threads) write one part at a time: the netCDF and HDF5 libraries
+    are not thread-safe, and two writes at once crashed the process (SIGSEGV).
     """
     path = Path(directory) / f"{h}{PART_SUFFIX}"
     if _plain(part):
-        with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
+        with write_errors_as_oserror(path), replaced_on_success(path) as tmp, _NETCDF_LOCK:
             _write_plain(part, tmp, {**part.attrs, KEY_ATTR: h})
         return path
     part = part.assign_attrs({KEY_ATTR: h})

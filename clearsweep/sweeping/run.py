@@ -23,6 +23,7 @@ import xarray as xr
 
 from ..config import ConfigError
 from ..dataset import (
+    file_size_limit_text,
     history_line,
     open_results,
     remove_stale_temporaries,
@@ -36,7 +37,7 @@ from .guard import require_main_guard
 from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
 from .plan import MAX_CASES, SweepPlan, expand
 from .stores import STORES
-from .worker import CaseTask, _receipt, _worker_died
+from .worker import CaseTask, _receipt, _worker_died, reissue
 
 #: Variables (and dataset attributes) that change from run to run of the same sweep.
 TIMING_VARIABLES = ("wall_time",)
@@ -206,7 +207,9 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         A ``distributed.Client``, a scheduler address (connected to here and
         disconnected after), or a ``concurrent.futures.Executor`` owned by
         the caller (e.g. :func:`process_pool`, to reuse warm workers across
-        sweeps). The library never starts a cluster.
+        sweeps; a ``ThreadPoolExecutor`` works, its threads writing one part at a time,
+        but runs the cases no faster than one worker: the kernel holds the GIL). The
+        library never starts a cluster.
     resume
         Keep the finished cases of an interrupted run (``OUT.parts``) and run
         only the others; no case runs twice.
@@ -266,8 +269,9 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
         ran failed (with ``report_failures``; the file is written).
     UnguardedScript
         ``workers`` > 1 asked for from the top level of a script, outside
-        ``if __name__ == "__main__":`` (every worker would re-run the script), before
-        anything runs.
+        ``if __name__ == "__main__":`` (every worker would re-run the script), from a
+        script read from standard input (no worker can re-import it), or in a daemonic
+        ``multiprocessing.Pool`` worker (pass ``workers=1`` there), before anything runs.
     """
     plan = (config_or_path if isinstance(config_or_path, SweepPlan)
             else expand(config_or_path, overrides, allow_large=allow_large, max_cases=max_cases))
@@ -360,6 +364,24 @@ def _cuda_options(plan: SweepPlan, backend: str | None, keep_series: str | Itera
     return {"window": batch_window(list(plan.runnable().values())), "series": frozenset(series)}
 
 
+def _failed(exc: Exception, label: str, directory: Path, kept: int, total: int) -> SweepFailed:
+    """The :class:`SweepFailed` of a sweep that ``exc`` stopped, with ``kept`` of its ``total``
+    cases kept in ``directory``: a full disk and a file-size limit named as such."""
+    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+        return SweepFailed(f"the disk is full: cannot write in {directory} ({exc.strerror}); "
+                           f"{kept} of the {total} cases are finished and kept there: make room "
+                           "and run again with --resume")
+    if isinstance(exc, OSError) and exc.errno == errno.EFBIG:
+        reason = (exc.strerror if exc.strerror and "ulimit -f" in exc.strerror
+                  else file_size_limit_text())
+        return SweepFailed(f"cannot write in {directory}: {reason}; {kept} of the {total} cases "
+                           "are finished and kept there: raise the limit (ulimit -f unlimited) "
+                           "and run again with --resume")
+    return SweepFailed(f"the {label} backend failed ({type(exc).__name__}: {exc}); {kept} of "
+                       f"{total} cases are kept in {directory}; run again with --resume to finish "
+                       "the sweep")
+
+
 def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers, client,
              progress: bool, guard: _InterruptGuard, cuda: dict | None = None) -> None:
     """Run ``todo`` on the chosen backend, writing each finished case at once."""
@@ -385,11 +407,14 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     bar.set_postfix(failed=failed)
     done = kept
 
+    warned: set = set()
+
     def on_result(h: str, result) -> None:
         nonlocal failed, done
         if isinstance(result, xr.Dataset):
             store.write(h, with_identity(result, run_identity(runnable[h])))
             result = _receipt(result)
+        result = reissue(result, warned)
         store.log("done", hash=h, **result)
         failed += result["status"] not in NOT_FAILED
         done += 1
@@ -401,24 +426,23 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
             bar.last_print_t = bar.start_t
 
     interrupted = stopped = False
+    failure: Exception | None = None
     try:
         _drive(backend, todo, on_result, guard)
     except KeyboardInterrupt:
         interrupted = stopped = True
     except Exception as exc:
-        interrupted = True
+        interrupted, failure = True, exc
         with contextlib.suppress(OSError):      # the log is on the same (maybe full) disk
             store.log("failed", error=f"{type(exc).__name__}: {exc}")
-        if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
-            raise SweepFailed(f"the disk is full: cannot write in {store.directory} "
-                              f"({exc.strerror}); {done} of the {total} cases are finished and kept "
-                              "there: make room and run again with --resume") from exc
-        raise SweepFailed(f"the {backend.label} backend failed ({type(exc).__name__}: {exc}); "
-                          f"{done} of {total} cases are kept in {store.directory}; run again "
-                          "with --resume to finish the sweep") from exc
     finally:
         bar.close()
         backend.close(interrupted=interrupted)
+    if failure is not None:
+        # what --resume keeps: the parts on disk (a pool worker writes its part before the
+        # driver hears of it), counted once the workers are stopped
+        kept_now = len(store.finished() & set(runnable))
+        raise _failed(failure, backend.label, store.directory, kept_now, total) from failure
     if stopped:
         # what is kept is what --resume keeps: the parts on disk, counted once the workers
         # are stopped (a worker writes its part before the driver hears of it)

@@ -5,9 +5,11 @@ from __future__ import annotations
 import faulthandler
 import functools
 import os
+import pickle
 import signal
 import threading
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -21,6 +23,8 @@ from ..summary import case_summary
 from .parts import MESSAGE_ATTRS, STATUS_ATTRS, with_identity, write_part
 from .stores import STORES
 
+#: The receipt's key of the warnings a case raised in a pool worker process.
+WARNINGS_KEY = "warnings"
 #: How often a pool worker checks that the driver process still exists [s].
 WATCHDOG_PERIOD_S = 1.0
 
@@ -120,11 +124,45 @@ def _run_and_store(task: CaseTask, parts_dir: str, h: str) -> dict[str, Any]:
     """Run one case and write its part here, in the worker; return its receipt.
 
     Writing in the worker keeps the driver (which shares the cores) idle
-    while the cases run.
+    while the cases run. A pool worker process sends back the warnings the case raised
+    (:data:`WARNINGS_KEY`), for :func:`reissue`.
     """
-    part = _run_case(task)
-    write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
-    return _receipt(part)
+    if threading.current_thread() is not threading.main_thread():
+        # a thread of the caller's executor or of a Dask worker: warnings are the process's,
+        # and catching them here would change them for every thread at once
+        part = _run_case(task)
+        write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
+        return _receipt(part)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")     # the driver's filters decide (:func:`reissue`)
+        part = _run_case(task)
+        write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
+    receipt = _receipt(part)
+    if caught:
+        receipt[WARNINGS_KEY] = [(str(w.message), _portable(w.category), w.filename, w.lineno)
+                                 for w in caught]
+    return receipt
+
+
+def _portable(category: type[Warning]) -> type[Warning]:
+    """``category``, or ``UserWarning`` where the class cannot travel to the driver (one
+    defined in a function): a warning must not fail the case's receipt."""
+    try:
+        return category if pickle.loads(pickle.dumps(category)) is category else UserWarning
+    except Exception:
+        return UserWarning
+
+
+def reissue(receipt: dict[str, Any], seen: set) -> dict[str, Any]:
+    """``receipt`` without the warnings its worker process caught, which are raised again
+    here, in the driver, each distinct one once per sweep (``seen``): they reach the caller's
+    filters and the ``clearsweep`` command's one-line printer instead of the worker's stderr."""
+    receipt = dict(receipt)
+    for message, category, filename, lineno in receipt.pop(WARNINGS_KEY, ()):
+        if (category, message) not in seen:
+            seen.add((category, message))
+            warnings.warn_explicit(message, category, filename, lineno)
+    return receipt
 
 
 def _driver_gone(pid: int) -> bool:
