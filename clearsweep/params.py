@@ -387,7 +387,9 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     along -F, at the eccentricity c + delta_s where the elastic force equals ``|F|``. With a
     wear map (a socket worn by an earlier run), c is the local worn clearance c_eff(n) and
     the modulus the one the contact law uses there. The journal of O leans along the
-    reaction's part in the bearing's plane (y, z), with the journal's law.
+    reaction's part in the bearing's plane (y, z), with the journal's law, turned by the
+    friction angle where friction is on (:func:`journal_seat`), so that its contact force,
+    normal and friction together, is the ideal reaction.
     """
     from .core.dynamics import ideal_joint_forces
     from .core.kinematics import rotation, trig
@@ -413,16 +415,49 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         size = float(np.linalg.norm(f))
         if not (math.isfinite(size) and size > 0.0):
             continue  # no load to lean on: the ball stays centred
+        u = f / size            # the contact's force on the ball leans along u
+        if joint.type == "revolute":
+            u, size = journal_seat(u, size, p, jp, j, omega, wmap)
         c, ew = jp[j, L.J_C], jp[j, L.J_EW]
         if wmap is not None:
             # the socket body's angles (the table's; the ground, with no state, unrotated)
             socket = next(body for body in BODIES if body.name == joint.socket.body)
             phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
-            c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
+            c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
         delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        offsets[j] = -(c + delta) * f / size
+        offsets[j] = -(c + delta) * u
     return offsets
+
+
+def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: int,
+                 omega: float, wmap: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    """The seated journal's normal and load under friction (docs/physics.md 3.6): the
+    direction -n [-] (unit, in the bearing's plane) and the normal force F_N [N] at which
+    the contact's force, F_N (-n) plus the friction of the journal spinning in its bearing,
+    equals the ideal reaction |F| u on the crank.
+
+    The journal turns with the crank at omega about x while its centre stays put, so its
+    contact point slips at R_j |omega| along sign(omega) x x n, and friction adds
+    mu' F_N sign(omega) x x (-n), mu' = mu c_d(R_j |omega|) (section 3.3). The sum is
+    F_N sqrt(1 + mu'^2) times -n turned by sign(omega) atan(mu') about x: -n is u turned
+    back by the friction angle, and F_N = |F| / sqrt(1 + mu'^2). Friction off, or no
+    slip: u and |F| unchanged. ``wmap``: a worn bearing, whose friction coefficient is the
+    base's where its coating is worn through at u's direction."""
+    from .core import revolute
+    from .core.contact import friction_factor
+
+    if p[L.P_FRICTION] == 0.0 or omega == 0.0:
+        return u, size
+    mu = jp[j, L.J_MU]
+    if wmap is not None and revolute.worn_through(np.ascontiguousarray(wmap, dtype=np.float64), j,
+                                                  tuple(float(v) for v in -u), float(jp[j, L.J_COAT])):
+        mu = jp[j, L.J_MU_BASE]
+    mu_eff = mu * as_python(friction_factor)(jp[j, L.J_RJ] * abs(omega), p[L.P_V0], p[L.P_V1])
+    angle = -math.copysign(math.atan(mu_eff), omega)
+    cs, sn = math.cos(angle), math.sin(angle)
+    turned = np.array([0.0, cs * u[1] - sn * u[2], sn * u[1] + cs * u[2]])
+    return turned, size / math.sqrt(1.0 + mu_eff * mu_eff)
 
 
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
