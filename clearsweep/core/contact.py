@@ -210,9 +210,10 @@ def friction_magnitude(mu, fn, vt, v0, v1):
 
 @compiled
 def surface(jp, j, worn):
-    """(modulus [Pa] of the joint's law, jp[J_EW], mu [-], k [m^2/N]) that joint j's contact uses: the coated surface's, or the
-    base material's where the coating is worn through (``worn``; wear.worn_surface says
-    where). The one place where the coating/base switch is made."""
+    """(modulus [Pa] of the joint's law (jp[J_EW]), mu [-], k [m^2/N]) that joint j's contact
+    uses: the coated surface's, or the base material's where the coating is worn through
+    (``worn``; wear.worn_surface says where). The one place where the coating/base switch
+    is made."""
     if worn:
         return jp[j, J_EW_BASE], jp[j, J_MU_BASE], jp[j, J_K_BASE]
     return jp[j, J_EW], jp[j, J_MU], jp[j, J_K]
