@@ -118,6 +118,52 @@ def equivalent_modulus(joint: AnyJoint, materials: dict, rule: str) -> float:
     return 1.0 / ((1.0 - nui ** 2) / ei + (1.0 - nuj ** 2) / ej)
 
 
+def plane_strain_modulus(youngs_modulus_Pa: float, poisson_ratio: float) -> float:
+    """E / (1 - nu^2) [Pa]: one body's share of Hertz's contact modulus (docs/physics.md 3.2)."""
+    return youngs_modulus_Pa / (1.0 - poisson_ratio ** 2)
+
+
+def hertz_modulus(joint: AnyJoint, materials: dict) -> float:
+    """Hertz's contact modulus E* [Pa] of joint's pair, socket i (maybe coated) on ball j
+    (docs/physics.md 3.2, "Hertz's modulus"):
+
+        1/E* = w_i + (1 - nu_s^2)/E_s,   w_i = f_c (1 - nu_c^2)/E_c + f_s (1 - nu_s^2)/E_s
+
+    f_c = l_c / (l_c + l_s), f_s = 1 - f_c: the coated side's compliance is the thickness
+    average of its coating's and its base's (the layers in series, as in the paper's
+    double elastic layer, with Hertz's plane-strain moduli in place of the oedometric
+    ones). Uncoated (or l_c -> 0) it is Hertz's E* = [(1 - nu_1^2)/E_1 + (1 - nu_2^2)/E_2]^-1
+    of the two base bodies; l_c >> l_s gives the coating's own against the ball."""
+    base = materials[BASE_MATERIAL]
+    ws = 1.0 / plane_strain_modulus(base.youngs_modulus_Pa, base.poisson_ratio)
+    wi = ws
+    if joint.coating != "none":
+        coat = materials[joint.coating]
+        lc = joint.coating_thickness
+        fc = lc / (lc + joint.base_thickness)
+        wi = fc / plane_strain_modulus(coat.youngs_modulus_Pa, coat.poisson_ratio) + (1.0 - fc) * ws
+    return 1.0 / (wi + ws)
+
+
+def power_law_joint(joint_type: str, exponent: float) -> bool:
+    """Whether a joint of ``joint_type`` takes the power law (Hertz's, docs/physics.md 3.2)
+    in a case whose ``P_EXPONENT`` is ``exponent``: the journal of O and P's corners always
+    (``revolute.journal_law``, ``prismatic.corner_law``), the spherical joints under
+    ``contact.elastic: hertz`` (``exponent`` != 0); else the paper's layered law."""
+    return joint_type in ("revolute", "prismatic") or exponent != 0.0
+
+
+def contact_modulus(joint: AnyJoint, joint_type: str, materials: dict, rule: str,
+                    exponent: float) -> float:
+    """The modulus [Pa] of joint's elastic law, packed as jp[J_EW]: Hertz's E*
+    (:func:`hertz_modulus`) where the joint takes the power law (:func:`power_law_joint`),
+    the paper's layered E_w (:func:`equivalent_modulus`, layer rule ``rule``) under the
+    paper's law."""
+    if power_law_joint(joint_type, exponent):
+        return hertz_modulus(joint, materials)
+    return equivalent_modulus(joint, materials, rule)
+
+
 def surface_material(joint: AnyJoint, materials: dict):
     """The socket surface's material: the coating where coated, else the base."""
     return materials[BASE_MATERIAL if joint.coating == "none" else joint.coating]
@@ -308,7 +354,7 @@ def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float
 
 def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
                  p: np.ndarray) -> tuple[float, float]:
-    """Local clearance c_eff [m] and modulus E_w [Pa] that the kernel's contact law uses in
+    """Local clearance c_eff [m] and modulus [Pa] (jp[J_EW]) that the kernel's contact law uses in
     socket-frame direction ``normal_socket`` of joint j's worn socket (docs/physics.md 3.1).
 
     The kernel's own functions: ``wear.worn_surface`` reads the map as the run will (bin or
@@ -341,7 +387,9 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     along -F, at the eccentricity c + delta_s where the elastic force equals ``|F|``. With a
     wear map (a socket worn by an earlier run), c is the local worn clearance c_eff(n) and
     the modulus the one the contact law uses there. The journal of O leans along the
-    reaction's part in the bearing's plane (y, z), with the journal's law.
+    reaction's part in the bearing's plane (y, z), with the journal's law, turned by the
+    friction angle where friction is on (:func:`journal_seat`), so that its contact force,
+    normal and friction together, is the ideal reaction.
     """
     from .core.dynamics import ideal_joint_forces
     from .core.kinematics import rotation, trig
@@ -367,16 +415,49 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         size = float(np.linalg.norm(f))
         if not (math.isfinite(size) and size > 0.0):
             continue  # no load to lean on: the ball stays centred
+        u = f / size            # the contact's force on the ball leans along u
+        if joint.type == "revolute":
+            u, size = journal_seat(u, size, p, jp, j, omega, wmap)
         c, ew = jp[j, L.J_C], jp[j, L.J_EW]
         if wmap is not None:
             # the socket body's angles (the table's; the ground, with no state, unrotated)
             socket = next(body for body in BODIES if body.name == joint.socket.body)
             phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
             rot = np.array(rotation(trig(*phi))).reshape(3, 3)
-            c, ew = worn_contact(jp, j, wmap, rot.T @ (-f / size), p)
+            c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
         delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        offsets[j] = -(c + delta) * f / size
+        offsets[j] = -(c + delta) * u
     return offsets
+
+
+def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: int,
+                 omega: float, wmap: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    """The seated journal's normal and load under friction (docs/physics.md 3.6): the
+    direction -n [-] (unit, in the bearing's plane) and the normal force F_N [N] at which
+    the contact's force, F_N (-n) plus the friction of the journal spinning in its bearing,
+    equals the ideal reaction |F| u on the crank.
+
+    The journal turns with the crank at omega about x while its centre stays put, so its
+    contact point slips at R_j |omega| along sign(omega) x x n, and friction adds
+    mu' F_N sign(omega) x x (-n), mu' = mu c_d(R_j |omega|) (section 3.3). The sum is
+    F_N sqrt(1 + mu'^2) times -n turned by sign(omega) atan(mu') about x: -n is u turned
+    back by the friction angle, and F_N = |F| / sqrt(1 + mu'^2). Friction off, or no
+    slip: u and |F| unchanged. ``wmap``: a worn bearing, whose friction coefficient is the
+    base's where its coating is worn through at u's direction."""
+    from .core import revolute
+    from .core.contact import friction_factor
+
+    if p[L.P_FRICTION] == 0.0 or omega == 0.0:
+        return u, size
+    mu = jp[j, L.J_MU]
+    if wmap is not None and revolute.worn_through(np.ascontiguousarray(wmap, dtype=np.float64), j,
+                                                  tuple(float(v) for v in -u), float(jp[j, L.J_COAT])):
+        mu = jp[j, L.J_MU_BASE]
+    mu_eff = mu * as_python(friction_factor)(jp[j, L.J_RJ] * abs(omega), p[L.P_V0], p[L.P_V1])
+    angle = -math.copysign(math.atan(mu_eff), omega)
+    cs, sn = math.cos(angle), math.sin(angle)
+    turned = np.array([0.0, cs * u[1] - sn * u[2], sn * u[1] + cs * u[2]])
+    return turned, size / math.sqrt(1.0 + mu_eff * mu_eff)
 
 
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
@@ -415,7 +496,7 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
             continue
         # the block rests on the wall opposite the force's direction: -y (-z) for a part > 0
         c = c + depth[2 * axis - 2 + (1 if part > 0.0 else 0)]
-        # the corner's power law A c (delta / c)^n with A = 4 E_w sqrt(r_c c) / 3
+        # the corner's power law A c (delta / c)^n with A = 4 E* sqrt(r_c c) / 3
         delta = static_penetration(0.25 * abs(part), c, row[L.J_EW], row[L.J_RI], c, law)
         out[axis] = -math.copysign(c + delta, part)
     return out
@@ -578,15 +659,17 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_C] = c
         jp[j, L.J_RI] = joint.socket_radius
         jp[j, L.J_RJ] = joint.socket_radius - c
-        jp[j, L.J_EW] = equivalent_modulus(joint, materials, contact.layer_rule)
+        kind = JOINTS[j].type
+        jp[j, L.J_EW] = contact_modulus(joint, kind, materials, contact.layer_rule, p[L.P_EXPONENT])
         jp[j, L.J_MU] = surface.friction_coefficient
         k = joint.wear_coefficient
         jp[j, L.J_K] = surface.wear_coefficient_m2_per_N if k is None else k
         # where the coating is worn through: the uncoated pair (docs/service_life.md)
         coated = joint.coating != "none"
         base = materials[BASE_MATERIAL]
-        jp[j, L.J_EW_BASE] = (equivalent_modulus(replace(joint, coating="none"), materials,
-                                                 contact.layer_rule) if coated else jp[j, L.J_EW])
+        jp[j, L.J_EW_BASE] = (contact_modulus(replace(joint, coating="none"), kind, materials,
+                                              contact.layer_rule, p[L.P_EXPONENT])
+                              if coated else jp[j, L.J_EW])
         jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf

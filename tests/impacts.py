@@ -27,6 +27,16 @@ RJ = RI - C     # ball radius [m]
 EW = 1.1e11     # equivalent modulus [Pa]
 
 
+def hertz_modulus_steel():
+    """Hertz's contact modulus E* [Pa] of steel on steel from the material table's E and nu,
+    in closed form: E* = [(1 - nu^2)/E + (1 - nu^2)/E]^-1 = E / (2 (1 - nu^2)) (Johnson,
+    Contact Mechanics, 1985, eq. 4.22)."""
+    from clearsweep.materials import load_materials
+
+    steel = load_materials()["steel"]
+    return steel.youngs_modulus_Pa / (2.0 * (1.0 - steel.poisson_ratio ** 2))
+
+
 def impact_restitution(cr, v_in, m_eff=1.0, ew=EW, steps=4000, latch_floor=None, law=0, exponent=0.0,
                        onset=False):
     """Velocity ratio out/in of one ball-in-socket impact.

@@ -16,7 +16,7 @@ Everything is built the obvious way, independently of the kernel's structured so
   the conformal radius, section 3.6) acts at the contact point on the crank;
 - joint P with clearance (the slider's block in the ground's guide, axis x at height z_s):
   the prismatic rows go, and each of the block's eight corners (rounded, edge radius r_c)
-  pushes on the wall it crosses with Hertz's point-on-flat law, F = (4/3) E_w sqrt(r_c)
+  pushes on the wall it crosses with Hertz's point-on-flat law, F = (4/3) E* sqrt(r_c)
   delta^(3/2), damping and friction written from their formulas, at the corner
   (section 3.7); on walls worn by a given map read bilinearly (``wear.feedback`` and
   ``wear.interpolate``), the depth from scipy's linear interpolation between the bin
@@ -322,7 +322,7 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
 
 def journal_force(delta, ddot, c, ew, ri, rj, kappa):
     """The journal's F_N = F_el (1 + kappa delta_dot), clamped >= 0, and F_el: Hertz's law of a
-    cylinder in a conforming cylindrical bearing, F_el = (4/3) E_w sqrt(R_i R_j / c) delta^(3/2)
+    cylinder in a conforming cylindrical bearing, F_el = (4/3) E* sqrt(R_i R_j / c) delta^(3/2)
     (the conformal pair's radius R_i R_j / (R_i - R_j), R_i - R_j = c; Flores et al. 2008)."""
     if delta <= 0.0:
         return 0.0, 0.0

@@ -19,7 +19,7 @@ from clearsweep.core.contact import (
 )
 from clearsweep.core.spherical import contact_area
 from clearsweep.materials import load_materials
-from clearsweep.params import equivalent_modulus, oedometric_modulus
+from clearsweep.params import equivalent_modulus, hertz_modulus, oedometric_modulus
 
 MATERIALS = load_materials()
 
@@ -53,6 +53,39 @@ def test_softer_coating_lowers_modulus(coating):
     ei = oedometric_modulus(steel.youngs_modulus_Pa, steel.poisson_ratio)
     expected = 1.0 / ((1 - m.poisson_ratio ** 2) / ei + (1 - steel.poisson_ratio ** 2) / ei)
     assert equivalent_modulus(thin, MATERIALS, "series") == pytest.approx(expected, rel=1e-9)
+
+
+def test_hertz_modulus_of_steel_on_steel_is_the_closed_form():
+    """Hertz's E* = [(1 - nu^2)/E + (1 - nu^2)/E]^-1 = E / (2 (1 - nu^2)) of the uncoated
+    steel pair, and the paper's layered E_w over it is the oedometric factor
+    (1 - nu) / ((1 + nu)(1 - 2 nu)), 1.346 for nu = 0.3: what O's journal and P's corners
+    took before issue 41."""
+    steel = MATERIALS["steel"]
+    e, nu = steel.youngs_modulus_Pa, steel.poisson_ratio
+    assert hertz_modulus(joint(), MATERIALS) == pytest.approx(e / (2.0 * (1.0 - nu ** 2)), rel=1e-14)
+    ratio = equivalent_modulus(joint(), MATERIALS, "series") / hertz_modulus(joint(), MATERIALS)
+    assert ratio == pytest.approx((1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu)), rel=1e-14)
+    assert ratio == pytest.approx(1.346, abs=1e-3)
+
+
+@pytest.mark.parametrize("coating", ["MoS2", "lead", "PTFE"])
+def test_coated_hertz_modulus_between_its_limits(coating):
+    """The coated side's compliance is the thickness average of its coating's and its base's
+    (docs/physics.md 3.2): a vanishing coating gives the uncoated E*, a coating much thicker
+    than its base Hertz's E* of the coating material against the steel ball, and the default
+    0.1 mm over 4.9 mm the thickness-weighted value between them."""
+    steel, m = MATERIALS["steel"], MATERIALS[coating]
+    ws = (1.0 - steel.poisson_ratio ** 2) / steel.youngs_modulus_Pa
+    wc = (1.0 - m.poisson_ratio ** 2) / m.youngs_modulus_Pa
+    uncoated = 1.0 / (2.0 * ws)
+    thin = JointConfig(coating=coating, coating_thickness=1e-15, base_thickness=4.9e-3)
+    assert hertz_modulus(thin, MATERIALS) == pytest.approx(uncoated, rel=1e-11)
+    thick = JointConfig(coating=coating, coating_thickness=1.0, base_thickness=1e-15)
+    assert hertz_modulus(thick, MATERIALS) == pytest.approx(1.0 / (wc + ws), rel=1e-11)
+    fc = 1e-4 / 5e-3
+    expected = 1.0 / (fc * wc + (1.0 - fc) * ws + ws)
+    assert hertz_modulus(joint(coating), MATERIALS) == pytest.approx(expected, rel=1e-14)
+    assert hertz_modulus(joint(coating), MATERIALS) < uncoated        # every coating is softer
 
 
 def test_small_penetration_limit_of_stiffness():
@@ -150,3 +183,36 @@ def test_friction_factor_is_the_ramp_of_physics_3_3(vt, factor):
     """c_d by hand at the default v0 = 1e-4 m/s, v1 = 1e-3 m/s: 0 below v0, linear between,
     1 above v1 (the reference in tests/reference.py is a separate formulation)."""
     assert friction_factor(vt, 1e-4, 1e-3) == pytest.approx(factor, abs=1e-15)
+
+
+@pytest.mark.parametrize("elastic", ["paper", "hertz"])
+def test_each_joint_packs_the_modulus_of_its_law(elastic):
+    """jp[J_EW] is the modulus of the joint's elastic law: Hertz's E* at O's journal and P's
+    corners (always a Hertz power law) and at A and B under ``contact.elastic: hertz``, the
+    paper's layered E_w at A and B under the paper's law; where the coating is worn through
+    (J_EW_BASE) the uncoated pair's value of the same law."""
+    from clearsweep.config import load_config
+    from clearsweep.core import layout as L
+    from clearsweep.core.joints import INDEX
+    from clearsweep.params import pack
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    cfg = load_config(str(root / "configs" / "two_clearances.yaml"),
+                      [f"contact.elastic={elastic}", "joints.O.clearance=1e-4",
+                       "joints.O.coating=PTFE", "joints.P.clearance_y=1e-4",
+                       "joints.P.clearance_z=1e-4", "joints.A.coating=MoS2"])
+    jp = pack(cfg, MATERIALS, seat=False).jp
+    steel = MATERIALS["steel"]
+    e_star = steel.youngs_modulus_Pa / (2.0 * (1.0 - steel.poisson_ratio ** 2))
+    o, p_, a, b = INDEX["O"], INDEX["P"], INDEX["A"], INDEX["B"]
+    assert jp[p_, L.J_EW] == pytest.approx(e_star, rel=1e-14)
+    assert jp[o, L.J_EW_BASE] == pytest.approx(e_star, rel=1e-14)
+    assert jp[o, L.J_EW] == pytest.approx(hertz_modulus(cfg.joints.O, MATERIALS), rel=1e-14)
+    if elastic == "hertz":
+        assert jp[b, L.J_EW] == pytest.approx(e_star, rel=1e-14)
+        assert jp[a, L.J_EW] == pytest.approx(hertz_modulus(cfg.joints.A, MATERIALS), rel=1e-14)
+        assert jp[a, L.J_EW_BASE] == pytest.approx(e_star, rel=1e-14)
+    else:
+        assert jp[b, L.J_EW] == equivalent_modulus(joint(), MATERIALS, "series")
+        assert jp[a, L.J_EW] == equivalent_modulus(cfg.joints.A, MATERIALS, "series")
+        assert jp[a, L.J_EW_BASE] == equivalent_modulus(joint(), MATERIALS, "series")

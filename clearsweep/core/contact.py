@@ -41,9 +41,10 @@ def stiffness_factor(ew, ri):
 
 @compiled
 def power_coefficient(ew, ri, rj):
-    """A = 4 E_w sqrt(R_i R_j) / 3 [N/m] of the power law F_el = A c (delta / c)^n: with
-    n = 3/2 Hertz's law of a ball in a conforming socket, K = 4 E_w sqrt(R_i R_j / c) / 3
-    (docs/physics.md section 3.2)."""
+    """A = 4 E* sqrt(R_i R_j) / 3 [N/m] of the power law F_el = A c (delta / c)^n: with
+    n = 3/2 Hertz's law of a ball in a conforming socket, K = 4 E* sqrt(R_i R_j / c) / 3;
+    ``ew`` is Hertz's modulus E* (jp[J_EW] of a power-law joint, docs/physics.md section
+    3.2)."""
     return 4.0 * ew * math.sqrt(ri * rj) / 3.0
 
 
@@ -209,9 +210,10 @@ def friction_magnitude(mu, fn, vt, v0, v1):
 
 @compiled
 def surface(jp, j, worn):
-    """(E_w [Pa], mu [-], k [m^2/N]) that joint j's contact uses: the coated surface's, or the
-    base material's where the coating is worn through (``worn``; wear.worn_surface says
-    where). The one place where the coating/base switch is made."""
+    """(modulus [Pa] of the joint's law (jp[J_EW]), mu [-], k [m^2/N]) that joint j's contact
+    uses: the coated surface's, or the base material's where the coating is worn through
+    (``worn``; wear.worn_surface says where). The one place where the coating/base switch
+    is made."""
     if worn:
         return jp[j, J_EW_BASE], jp[j, J_MU_BASE], jp[j, J_K_BASE]
     return jp[j, J_EW], jp[j, J_MU], jp[j, J_K]

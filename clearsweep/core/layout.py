@@ -61,11 +61,11 @@ J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
 J_C = 1             # radial clearance c [m]
 J_RI = 2            # socket radius R_i [m]
 J_RJ = 3            # ball radius R_j [m]
-J_EW = 4            # equivalent modulus E_w [Pa]
+J_EW = 4            # modulus of the joint's elastic law [Pa]: Hertz's E* (power law), else E_w
 J_MU = 5            # friction coefficient of the socket surface [-]
 J_K = 6             # wear coefficient of the socket surface [m^2/N]
 # base material, used where the bin of the contact direction is worn to J_COAT or deeper
-J_EW_BASE = 7       # equivalent modulus E_w of the uncoated pair [Pa]
+J_EW_BASE = 7       # J_EW of the uncoated pair [Pa]
 J_MU_BASE = 8       # friction coefficient of the base [-]
 J_K_BASE = 9        # wear coefficient of the base [m^2/N]
 J_COAT = 10         # coating thickness [m]; inf = no coating to wear through

@@ -11,8 +11,9 @@ x, moves across the guide (y, z) and tilts (its three angles) within its clearan
 Each of the block's eight corners faces one y wall and one z wall: 16 corner-wall pairs
 ("slots", k = 2 corner + 0 for the y wall, + 1 for the z wall). A slot is in contact where
 its corner lies beyond its wall; its force is the contact law of a rounded corner of edge
-radius r_c on a flat wall, F_el = K delta^n with K = 4 E_w sqrt(r_c) / 3 and n = 3/2 (Hertz;
-the case's exponent under ``contact.elastic: hertz``), with the case's damping law on the
+radius r_c on a flat wall, F_el = K delta^n with K = 4 E* sqrt(r_c) / 3 (Hertz's modulus E*,
+``params.hertz_modulus``) and n = 3/2 (Hertz; the case's exponent under
+``contact.elastic: hertz``), with the case's damping law on the
 slot's own impact velocity, and the improved Coulomb friction on the corner's slip over the
 wall (along and across the guide). Every slot's force acts at its corner.
 

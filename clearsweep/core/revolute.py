@@ -17,8 +17,9 @@ the normal and the contact points lie in that plane:
 - :func:`contact_angle` and :func:`contact_area`: the half-angle psi of the arc where the
   journal's circle overlaps the bearing's, and the strip A = 2 psi R_i L;
 - :func:`contact`: the gap composed by ``contact.respond`` with the journal's elastic law,
-  the power law F_el = K delta^n with K = 4 E_w sqrt(R_i R_j / c) / 3 and n = 3/2 unless
-  ``contact.elastic: hertz`` gives another exponent (Flores et al. 2008; docs/physics.md
+  the power law F_el = K delta^n with K = 4 E* sqrt(R_i R_j / c) / 3 (Hertz's modulus E*,
+  ``params.hertz_modulus``) and n = 3/2 unless ``contact.elastic: hertz`` gives another
+  exponent (Flores et al. 2008; docs/physics.md
   section 3.6).
 """
 
