@@ -214,7 +214,8 @@ def check_budget(cfg: Config, *, allow_large: bool = False,
     if allow_large:
         hint = "--allow-large lifts the bounds of clearsweep, not those of this machine"
     # of the two that set the rows, name the one that left its usual range
-    row_key = "solver.duration" if solver.duration > DEFAULTS.solver.duration else "solver.dt"
+    length_key = "solver.duration" if solver.revolutions is None else "solver.revolutions"
+    row_key = length_key if solver.duration > DEFAULTS.solver.duration else "solver.dt"
     if not allow_large and est.steps > MAX_STEPS:
         steps = solver.duration / solver.dt
         key = row_key
@@ -223,12 +224,12 @@ def check_budget(cfg: Config, *, allow_large: bool = False,
                f" s / {solver.dt!r} s = {steps:.3g} steps)")
         raise ConfigError(key, value,
                           f"a run of at most {MAX_STEPS:.3g} RK4 steps; raise solver.dt, shorten "
-                          f"solver.duration, {hint}", source, got=got)
+                          f"{length_key}, {hint}", source, got=got)
     if est.output_bytes > limit:
         if est.map_bytes > est.row_bytes:
             key, value, fix = "wear.map", list(cfg.wear.map), "use fewer wear-map bins"
         else:
-            key, value, fix = (row_key, cfg.get(row_key), "shorten solver.duration, raise "
+            key, value, fix = (row_key, cfg.get(row_key), f"shorten {length_key}, raise "
                                "solver.dt or solver.save_every")
         where = f"this machine's memory ({format_bytes(limit)} free)" if allow_large else \
             format_bytes(MAX_OUTPUT_BYTES)

@@ -771,6 +771,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
         format_sweep_summary,
         format_wear_table,
         results_kind,
+        short_settled_window,
     )
 
     if reference and metric:
@@ -812,6 +813,9 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
             raise click.UsageError(str(exc)) from exc
         except ValueError as exc:
             _fail(f"{path}: {exc}", 2)
+        short = short_settled_window(ds) if fmt == "text" else None
+    if short:
+        warnings.warn(f"{path}: {short}", ClearsweepWarning, stacklevel=1)
     if not quiet:
         click.echo(text)
 

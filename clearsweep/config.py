@@ -20,7 +20,7 @@ import operator
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import MISSING, dataclass, field, fields
-from typing import Any
+from typing import Any, ClassVar
 
 from .choices import DAMPING_LAWS, MAX_BLOCKS, MAX_MEMBERS, MAX_SNAPSHOTS
 from .schema import (  # noqa: F401
@@ -45,7 +45,8 @@ __all__ = [
     "ReliabilityConfig", "SCHEMA",
     "DEFAULTS", "load_config",
     "apply_override", "dump_config",
-    "get_path", "set_path", "resolve_materials", "read_yaml", "parse_yaml", "close_match",
+    "get_path", "set_path", "set_setting", "ALTERNATIVES", "alternative_of",
+    "resolve_materials", "read_yaml", "parse_yaml", "close_match",
     "field_info", "FIELD_INFO", "SWEEP_FILE_KEYS", "file_kind",
 ]
 
@@ -67,13 +68,21 @@ def _positive(default: float) -> Field:
 class _Section:
     """Shared behaviour of the frozen configuration sections."""
 
+    #: (seconds key, revolutions key) of the section's alternative pairs (:data:`ALTERNATIVES`)
+    _alternatives: ClassVar[tuple[tuple[str, str], ...]] = ()
+
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (lists for vectors): YAML, JSON and hashing use it."""
+        """Plain nested dict (lists for vectors): YAML, JSON and hashing use it. A length
+        asked in revolutions leaves its seconds key null (what was asked: ``load_config``
+        of the dict resolves it again, at the speed the dict then holds)."""
         out: dict[str, Any] = {}
         for f in fields(self):  # type: ignore[arg-type]
             value = getattr(self, f.name)
             out[f.name] = (value.to_dict() if isinstance(value, _Section)
                            else list(value) if isinstance(value, tuple) else value)
+        for seconds, revolutions in self._alternatives:
+            if out[revolutions] is not None:
+                out[seconds] = None
         return out
 
     def get(self, key: str) -> Any:
@@ -256,7 +265,14 @@ class WearConfig(_Section):
 
 @dataclass(frozen=True)
 class MetricsConfig(_Section):
+    _alternatives = (("settle_time", "settle_revolutions"),)
+
+    #: resolved: settle_revolutions * 60 / speed_rpm where settle_revolutions is given
     settle_time: float = _setting(Field(0.05, lo=0.0), "s", "start of the settled window")
+    #: the alternative to settle_time (give one of them); null: not given
+    settle_revolutions: float | None = _setting(
+        Field(None, lo=0.0, nullable=True), "1",
+        "crank revolutions before the settled window (alternative to settle_time)")
 
 
 @dataclass(frozen=True)
@@ -268,8 +284,14 @@ class OutputsConfig(_Section):
 
 @dataclass(frozen=True)
 class SolverConfig(_Section):
+    _alternatives = (("duration", "revolutions"),)
+
     dt: float = _setting(_positive(1.0e-5), "s", "output-grid time step")
+    #: resolved: revolutions * 60 / speed_rpm where revolutions is given
     duration: float = _setting(_positive(1.0), "s", "simulated duration")
+    #: the alternative to duration (give one of them); null: not given
+    revolutions: float | None = _setting(Field(None, lo=0.0, lo_open=True, nullable=True), "1",
+                                         "simulated crank revolutions (alternative to duration)")
     save_every: int = _setting(Field(10, int, lo=1), "1", "steps per output sample")
     baumgarte: tuple[float, float] = _setting(Field([5.0, 5.0], lo=0.0, size=2), "s-1",
                                               "Baumgarte coefficients (alpha, beta)")
@@ -422,7 +444,7 @@ class Config(_Section):
         keywords (``joints__B__clearance=1e-4``) applied."""
         raw = self.to_dict()
         for key, value in values.items():
-            set_path(raw, key.replace("__", "."), value)
+            set_setting(raw, key.replace("__", "."), value)
         return load_config(raw, overrides, source_name="<config>")
 
 
@@ -593,8 +615,50 @@ def _check_guide(spec: Mapping[str, Any], wear_map: Sequence[int], source: str) 
                           "joint P (its four walls share them)", source)
 
 
+#: A length given in seconds or in crank revolutions, one of the two (docs/configs.md):
+#: (seconds key, revolutions key). The resolved config holds the seconds, from
+#: ``revolutions * 60 / mechanism.speed_rpm`` where the revolutions were given.
+ALTERNATIVES = (("solver.duration", "solver.revolutions"),
+                ("metrics.settle_time", "metrics.settle_revolutions"))
+
+
+def alternative_of(key: str) -> str | None:
+    """The other key of ``key``'s pair in :data:`ALTERNATIVES`, or None."""
+    for pair in ALTERNATIVES:
+        if key in pair:
+            return pair[1 - pair.index(key)]
+    return None
+
+
+def _given_alternatives(raw: Any, source: str) -> list[tuple[str, str, Any]]:
+    """The pairs of :data:`ALTERNATIVES` given in revolutions in ``raw``: (seconds key,
+    revolutions key, revolutions). A seconds key given as null is not given (it is removed
+    from ``raw``: a resolved config's dict holds it so); both given is refused."""
+    given = []
+    for seconds, revolutions in ALTERNATIVES:
+        section, _, s_name = seconds.partition(".")
+        r_name = revolutions.partition(".")[2]
+        node = raw.get(section) if isinstance(raw, Mapping) else None
+        if not isinstance(node, dict):
+            continue        # absent, or refused by _resolve
+        if s_name in node and node[s_name] is None:
+            del node[s_name]
+        if node.get(r_name) is None:
+            continue
+        if s_name in node:
+            raise ConfigError(revolutions, node[r_name],
+                              f"null when {seconds} is given ({short_repr(node[s_name])}): a length "
+                              f"is given in one of {seconds} [s] and {revolutions}, not both", source)
+        given.append((seconds, revolutions, node[r_name]))
+    return given
+
+
 def _validate(raw: Any, source: str, base_dir: str) -> Config:
+    given = _given_alternatives(raw, source)
     cfg = _resolve(raw, SCHEMA, "", source)
+    for seconds, revolutions, _ in given:
+        # the checked value (normalised by _resolve) in seconds at this case's speed
+        set_path(cfg, seconds, get_path(cfg, revolutions) * 60.0 / cfg["mechanism"]["speed_rpm"])
     for key, op, other in _RELATIONS:
         value, bound = get_path(cfg, key), get_path(cfg, other)
         if not _OPS[op](value, bound):
@@ -697,6 +761,20 @@ def set_path(cfg: dict[str, Any], key: str, value: Any) -> None:
     node[parts[-1]] = value
 
 
+def set_setting(cfg: dict[str, Any], key: str, value: Any) -> None:
+    """:func:`set_path`, for a setting given after the config (``--set``, a sweep's axis,
+    :meth:`Config.replace`): a value for one key of an :data:`ALTERNATIVES` pair replaces
+    the length the config gave in the other unit (``solver.revolutions=10`` over a file's
+    ``solver.duration: 2`` runs 10 revolutions)."""
+    other = alternative_of(key)
+    if other is not None and value is not None:
+        section, _, name = other.partition(".")
+        node = cfg.get(section)
+        if isinstance(node, dict):
+            node.pop(name, None)
+    set_path(cfg, key, value)
+
+
 def _split_override(text: str, source: str) -> tuple[str, Any]:
     key, sep, raw = str(text).partition("=")
     key = key.strip()
@@ -720,7 +798,7 @@ def apply_override(cfg: dict[str, Any], text: str, *, source: str = "--set") -> 
     to :func:`load_config` for that.
     """
     key, value = _split_override(text, source)
-    set_path(cfg, key, value)
+    set_setting(cfg, key, value)
     return cfg
 
 
@@ -774,8 +852,12 @@ def load_config(source: str | os.PathLike | Mapping[str, Any] | Config, override
     try:
         for text in overrides:
             key, value = _split_override(text, label)
+            if alternative_of(key) in overridden:
+                raise ConfigError(key, value, f"one of {alternative_of(key)} and {key}, not both "
+                                  "(the same length in two units)", label,
+                                  got=f"{short_repr(value)} (from --set)")
             overridden.append(key)
-            set_path(raw, key, value)
+            set_setting(raw, key, value)
         return _validate(raw, label, base_dir)
     except ConfigError as exc:
         if exc.key and any(exc.key == k or k.startswith(exc.key + ".") for k in overridden):

@@ -276,8 +276,16 @@ def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
         # one are NaN, while wear_map, wear_projection and wear_volume hold the wear up
         # to this time)
         "status_time_s": raw.t_end,
+        # what was asked (solver.duration, or solver.revolutions at this speed), and what ran:
+        # whole output samples, so up to save_every - 1 steps more
+        "duration_s": cfg.solver.duration,
         "simulated_duration_s": float(packed.n_steps * packed.p[L.P_DT]),
     }
+    # a length asked in crank revolutions: the revolutions (the seconds are above)
+    for name, value in (("revolutions", cfg.solver.revolutions),
+                        ("settle_revolutions", cfg.metrics.settle_revolutions)):
+        if value is not None:
+            attrs[name] = value
     if raw.status == L.STATUS_NAMES[L.ST_ENERGY]:
         attrs["status_hint"] = energy_residual_hint(arrays, raw.t, cfg)
     return build_dataset(arrays, raw.t, config_text=dump_config(cfg), attrs=attrs)

@@ -9,6 +9,8 @@ section 5 and the :mod:`clearsweep.analysis` docstring.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import xarray as xr
 
@@ -172,30 +174,115 @@ def _wear_table_variables(ds: xr.Dataset) -> dict[str, xr.Variable]:
     }
 
 
-def settle_time(ds: xr.Dataset) -> float:
-    """Start of the settled window [s] (``metrics.settle_time``) of a one-case dataset: the
-    ``settle_time_s`` attribute a run records; in a case of a sweep file, its
-    ``metrics_settle_time`` coordinate (a swept key) or the sweep's base config (its default where the config does
-    not set it); 0 for a file without a config."""
-    if "settle_time_s" in ds.attrs:
-        return float(ds.attrs["settle_time_s"])
-    for name in SETTLE_TIME_COORDINATES:
-        if name in ds.coords and ds[name].ndim == 0:
-            return float(ds[name].values)
+#: The coordinate names of a swept key that a one-case dataset may hold (clearsweep.sweeping's
+#: naming: the short name, or the full one where the short one is taken).
+SETTING_COORDINATES = {
+    "metrics.settle_time": SETTLE_TIME_COORDINATES,
+    "metrics.settle_revolutions": ("metrics_settle_revolutions", "settle_revolutions"),
+    "solver.duration": ("duration", "solver_duration"),
+    "solver.revolutions": ("revolutions", "solver_revolutions"),
+    "mechanism.speed_rpm": ("speed_rpm", "mechanism_speed_rpm"),
+}
+
+
+@functools.lru_cache(maxsize=8)
+def _parsed(text: str, base: bool) -> dict | None:
+    """A config text's document (a sweep's: its base), parsed once for every case that
+    reads it; not to be changed."""
     import yaml
 
-    for name, base in (("config", False), ("sweep_config", True)):
-        try:
-            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
-            doc = doc.get("base", {}) if base else doc
-            return float(doc["metrics"]["settle_time"])
-        except (yaml.YAMLError, AttributeError, KeyError, TypeError, ValueError):
-            continue
-    if {"config", "sweep_config"} & set(ds.attrs):
-        from .config import MetricsConfig
+    try:
+        doc = yaml.safe_load(text) or {}
+        doc = doc.get("base", {}) if base else doc
+    except (yaml.YAMLError, AttributeError):
+        return None
+    return doc if isinstance(doc, dict) else None
 
-        return float(MetricsConfig().settle_time)
-    return 0.0
+
+def _config_docs(ds: xr.Dataset) -> list[dict]:
+    """The case configs a dataset's text holds: its ``config`` (a run), else its sweep's base."""
+    docs = []
+    for name, base in (("config", False), ("sweep_config", True)):
+        if name in ds.attrs:
+            doc = _parsed(str(ds.attrs[name] or ""), base)
+            if doc is not None:
+                docs.append(doc)
+    return docs
+
+
+def _swept(ds: xr.Dataset, key: str) -> float | None:
+    for name in SETTING_COORDINATES[key]:
+        if name in ds.coords and ds[name].ndim == 0:
+            return float(ds[name].values)
+    return None
+
+
+def _given(doc: dict, key: str) -> float | None:
+    section, _, name = key.partition(".")
+    try:
+        value = doc[section][name]
+        return None if value is None else float(value)
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _speed_rpm(ds: xr.Dataset) -> float:
+    swept = _swept(ds, "mechanism.speed_rpm")
+    if swept is not None:
+        return swept
+    for doc in _config_docs(ds):
+        given = _given(doc, "mechanism.speed_rpm")
+        if given is not None:
+            return given
+    from .config import MechanismConfig
+
+    return float(MechanismConfig().speed_rpm)
+
+
+def _length(ds: xr.Dataset, seconds: str, revolutions: str, default: float) -> float | None:
+    """A one-case dataset's length of ``seconds`` [s], given in seconds or as ``revolutions``
+    (clearsweep.config.ALTERNATIVES): a swept key (it replaces the base's length), else its
+    config's, else its sweep base's, else ``default``; None for a file without a config."""
+    docs = _config_docs(ds)
+    pairs = [(_swept(ds, seconds), _swept(ds, revolutions)),
+             *((_given(doc, seconds), _given(doc, revolutions)) for doc in docs)]
+    for in_seconds, in_revolutions in pairs:
+        if in_seconds is not None:
+            return in_seconds
+        if in_revolutions is not None:
+            return in_revolutions * 60.0 / _speed_rpm(ds)
+    return default if docs else None
+
+
+def settle_time(ds: xr.Dataset) -> float:
+    """Start of the settled window [s] (``metrics.settle_time``, or
+    ``metrics.settle_revolutions`` * 60 / speed_rpm) of a one-case dataset: the
+    ``settle_time_s`` attribute a run records; in a case of a sweep file, its swept key
+    (``metrics_settle_time``, ``metrics_settle_revolutions``, with a swept ``speed_rpm``)
+    or the sweep's base config (its default where the config does not set it); 0 for a file
+    without a config."""
+    if "settle_time_s" in ds.attrs:
+        return float(ds.attrs["settle_time_s"])
+    from .config import MetricsConfig
+
+    start = _length(ds, "metrics.settle_time", "metrics.settle_revolutions",
+                    MetricsConfig().settle_time)
+    return 0.0 if start is None else start
+
+
+def settled_revolutions(ds: xr.Dataset) -> float:
+    """Crank revolutions in the settled window of a one-case dataset: (end of the run -
+    :func:`settle_time`) * speed_rpm / 60, the end the ``simulated_duration_s`` a run
+    records, else the case's ``solver.duration`` (or ``solver.revolutions``) as for
+    :func:`settle_time`; NaN for a file without a config."""
+    from .config import SolverConfig
+
+    end = ds.attrs.get("simulated_duration_s")
+    if end is None:
+        end = _length(ds, "solver.duration", "solver.revolutions", SolverConfig().duration)
+    if end is None:
+        return float("nan")
+    return (float(end) - settle_time(ds)) * _speed_rpm(ds) / 60.0
 
 
 def crank_speed(t: np.ndarray, crank_angle: np.ndarray) -> float:

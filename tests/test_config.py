@@ -261,6 +261,11 @@ def _consistent(raw):
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
+    if raw["solver"]["revolutions"] is not None:    # one length of the two; at least dt
+        raw["solver"]["duration"] = None
+        raw["solver"]["revolutions"] += 2.0 * raw["solver"]["dt"] * raw["mechanism"]["speed_rpm"] / 60.0
+    if raw["metrics"]["settle_revolutions"] is not None:
+        raw["metrics"]["settle_time"] = None
     # member < members, both inside their bounds
     raw["ensemble"]["member"] = raw["ensemble"]["member"] % raw["ensemble"]["members"]
     if raw["ensemble"]["members"] == 1:     # perturbations need an ensemble
@@ -485,3 +490,50 @@ def test_same_key_in_different_mappings_is_fine():
     assert load_config({}).joints.A.clearance == 0.0
     assert parse_yaml("A: {clearance: 1}\nB: {clearance: 2}\n") == {"A": {"clearance": 1},
                                                                       "B": {"clearance": 2}}
+
+
+# ------------------------------------------------ lengths in crank revolutions (issue 41)
+
+@pytest.mark.parametrize("section, seconds, revolutions", [
+    ("solver", "duration", "revolutions"), ("metrics", "settle_time", "settle_revolutions")])
+def test_a_length_in_seconds_and_in_revolutions_both_is_refused_naming_both(
+        tmp_path, section, seconds, revolutions):
+    path = write(tmp_path, f"{section}: {{{seconds}: 0.5, {revolutions}: 1}}\n")
+    with pytest.raises(ConfigError) as err:
+        load_config(path)
+    assert err.value.key == f"{section}.{revolutions}"
+    assert f"{section}.{seconds}" in str(err.value) and "not both" in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+def test_neither_length_gives_the_defaults_in_seconds():
+    cfg = load_config({})
+    assert (cfg.solver.duration, cfg.solver.revolutions) == (1.0, None)
+    assert (cfg.metrics.settle_time, cfg.metrics.settle_revolutions) == (0.05, None)
+    # null for the seconds key is "not given", as a resolved config's dict writes it
+    assert load_config({"solver": {"duration": None}}).solver.duration == 1.0
+
+
+def test_revolutions_resolve_to_seconds_at_the_cases_speed():
+    cfg = load_config({"mechanism": {"speed_rpm": 120.0}, "solver": {"revolutions": 3},
+                       "metrics": {"settle_revolutions": 1}})
+    assert cfg.solver.duration == 3 * 60.0 / 120.0 and cfg.solver.revolutions == 3.0
+    assert cfg.metrics.settle_time == 60.0 / 120.0 and cfg.metrics.settle_revolutions == 1.0
+    # what was asked is what the dict (the results' config text) holds: at another speed
+    # the same revolutions, resolved again
+    assert cfg.to_dict()["solver"]["duration"] is None
+    slower = cfg.replace(mechanism__speed_rpm=40.0)
+    assert (slower.solver.duration, slower.metrics.settle_time) == (4.5, 1.5)
+    assert load_config(yaml.safe_load(dump_config(cfg))) == cfg
+
+
+def test_a_later_setting_of_one_unit_replaces_the_others_length(tmp_path):
+    path = write(tmp_path, "solver: {duration: 2.0}\nmetrics: {settle_revolutions: 2}\n")
+    cfg = load_config(path, ["solver.revolutions=5", "metrics.settle_time=0.25"])
+    assert (cfg.solver.duration, cfg.solver.revolutions) == (5.0, 5.0)
+    assert (cfg.metrics.settle_time, cfg.metrics.settle_revolutions) == (0.25, None)
+    # a block of a life run sets its duration over a config asked in revolutions
+    assert cfg.replace(solver__duration=0.5).solver.revolutions is None
+    with pytest.raises(ConfigError, match=r"solver.duration: got 1 \(from --set\); expected one "
+                                          r"of solver.revolutions and solver.duration, not both"):
+        load_config(path, ["solver.revolutions=5", "solver.duration=1"])

@@ -785,9 +785,9 @@ ROUND4_FUZZ = [
     ('validate not utf-8', lambda t, f: ["validate", _bytes(t, "c.yaml", b"name: \xff\xfe\n")],
      2, "('utf-8' codec can't decode byte 0xff in position 6: invalid start byte); expect"),
     ('validate section a list', lambda t, f: ["validate", _case(t, "solver: [1, 2]\n")],
-     2, 'solver: got [1, 2]; expected a mapping with keys dt, duration, save_every, baumg'),
+     2, 'solver: got [1, 2]; expected a mapping with keys dt, duration, revolutions, save_every'),
     ('validate section a string', lambda t, f: ["validate", _case(t, "solver: fast\n")],
-     2, "solver: got 'fast'; expected a mapping with keys dt, duration, save_every, baumg"),
+     2, "solver: got 'fast'; expected a mapping with keys dt, duration, revolutions, save_every"),
     ('validate 400-digit integer in the file (was: OverflowError)',
      lambda t, f: ["validate", _case(t, f"solver: {{duration: {BIG}}}\n")],
      2, 'solver.duration: got 111111111111... (an integer of 400 digits); expected a numb'),
@@ -1262,6 +1262,45 @@ ROUND5_BIFURCATION = [
      "revolution: run for solver.duration >= 2 x 60 / mechanism.speed_rpm s)"),
 ]
 ROWS += ROUND5_BIFURCATION
+
+
+def both_lengths(tmp: Path) -> Path:
+    """A case file that gives the run's length in seconds and in crank revolutions."""
+    path = tmp / "both.yaml"
+    path.write_text("solver: {duration: 2.0, revolutions: 3}\n")
+    return path
+
+
+def speed_sweep(tmp: Path, sweep: str) -> Path:
+    path = tmp / "speeds.yaml"
+    path.write_text("name: speeds\nstore: summary\nbase: {solver: {revolutions: 2}}\n"
+                    f"sweep: {sweep}\n")
+    return path
+
+
+#: A length in crank revolutions (issue 41, item 8): one of each pair of keys.
+REVOLUTIONS = [
+    ("run duration and revolutions both in the file (was: solver.revolutions an unknown key)",
+     lambda t, f: ["run", both_lengths(t), "-o", t / "out.nc"], 2,
+     "solver.revolutions: got 3; expected null when solver.duration is given (2.0): a length "
+     "is given in one of solver.duration [s] and solver.revolutions, not both"),
+    ("validate settle_time and settle_revolutions both (was: an unknown key)",
+     lambda t, f: ["validate", ONE, "--set", "metrics.settle_time=0.1", "--set",
+                   "metrics.settle_revolutions=1"], 2,
+     "metrics.settle_revolutions: got 1 (from --set); expected one of metrics.settle_time and "
+     "metrics.settle_revolutions, not both"),
+    ("sweep zip of duration and revolutions (was: an unknown key)",
+     lambda t, f: ["sweep", speed_sweep(t, "{zip: [{solver.duration: [1, 2], "
+                                            "solver.revolutions: [1, 2]}]}"), "--dry-run"], 2,
+     "sweep.solver.revolutions: got both swept; expected one of solver.duration and "
+     "solver.revolutions swept, not both"),
+    ("sweep of revolutions with --set solver.duration (was: an unknown key)",
+     lambda t, f: ["sweep", speed_sweep(t, "{grid: {solver.revolutions: [1, 2]}}"),
+                   "--set", "solver.duration=3", "--dry-run"], 2,
+     "solver.duration: got 'solver.duration=3'; expected a key other than solver.duration: "
+     "the sweep gives this length in solver.revolutions"),
+]
+ROWS += REVOLUTIONS
 
 
 @pytest.fixture

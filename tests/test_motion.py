@@ -210,6 +210,26 @@ def test_the_settled_window_of_a_sweep_case_comes_from_its_swept_key_or_the_base
     assert settle_time(xr.Dataset()) == 0.0
 
 
+def test_a_sweep_cases_settled_window_in_revolutions_is_resolved_at_its_speed():
+    """configs/bifurcation.yaml gives metrics.settle_revolutions in its base and sweeps the
+    speed: the window of each case starts 10 revolutions in, at that case's speed."""
+    import xarray as xr
+
+    from clearsweep.analysis import settle_time, settled_revolutions
+
+    base = "base: {solver: {revolutions: 110}, metrics: {settle_revolutions: 10}}"
+    case = xr.Dataset(coords={"speed_rpm": 120.0}, attrs={"sweep_config": base})
+    assert settle_time(case) == 5.0 and settled_revolutions(case) == 100.0
+    # a swept key replaces the base's length, in either unit
+    assert settle_time(case.assign_coords(metrics_settle_time=0.5)) == 0.5
+    swept = case.assign_coords(metrics_settle_revolutions=4.0, revolutions=5.0)
+    assert settle_time(swept) == 2.0 and settled_revolutions(swept) == 1.0
+    # a run's own config text: the speed in it, no sweep
+    run = xr.Dataset(attrs={"config": "mechanism: {speed_rpm: 30}\nmetrics: {settle_time: null, "
+                                      "settle_revolutions: 1}\nsolver: {duration: 5}"})
+    assert settle_time(run) == 2.0 and settled_revolutions(run) == 1.5
+
+
 def test_the_poincare_samples_of_the_ideal_mechanism_are_one_point_period_one():
     """Issue 31's check, end to end once the kernel stores the Poincaré samples: the ideal
     mechanism's motion repeats every revolution, so its samples are one point (period 1;

@@ -148,3 +148,40 @@ def test_a_life_run_says_nothing_of_an_ideal_uncoated_joint(short_life_cli):
     assert blocks and all(": max depth B " in ln and "nan" not in ln for ln in blocks)
     for text in (result.stdout, report(out)):
         assert "coating of B" in text and "coating of A" not in text and "nan" not in text
+
+
+def test_report_warns_in_one_line_when_a_settled_window_holds_less_than_a_revolution(tmp_path):
+    """Issue 41, item 8: 0.1 s at 600 r/min settled from 0.05 s holds half a revolution; 2
+    revolutions settled after 1 hold one, and the file records what was asked."""
+    one = str(ROOT / "configs" / "one_clearance.yaml")
+    runs = {"seconds": ["--set", "solver.duration=0.1"],
+            "revolutions": ["--set", "solver.revolutions=2", "--set", "metrics.settle_revolutions=1"]}
+    for name, options in runs.items():
+        result = CliRunner().invoke(main, ["run", one, "-o", str(tmp_path / f"{name}.nc"),
+                                           "--set", "mechanism.speed_rpm=600", *options])
+        assert result.exit_code == 0, result.stderr
+    short = tmp_path / "seconds.nc"
+    result = CliRunner().invoke(main, ["report", str(short)])
+    assert result.exit_code == 0
+    warning = [ln for ln in result.stderr.splitlines() if "warning" in ln]
+    assert warning == [f"clearsweep: warning: {short}: the settled window (t >= 0.05 s) holds 0.5 "
+                       "crank revolutions: its statistics cover part of a cycle; set "
+                       "metrics.settle_revolutions and solver.revolutions for whole revolutions "
+                       "(docs/runs.md)"]
+    assert "warning" not in CliRunner().invoke(main, ["report", str(short), "--format",
+                                                      "csv"]).stderr
+    whole = tmp_path / "revolutions.nc"
+    result = CliRunner().invoke(main, ["report", str(whole)])
+    assert result.exit_code == 0 and "warning" not in result.stderr
+    with xr.open_dataset(whole) as ds:
+        assert (ds.attrs["duration_s"], ds.attrs["revolutions"]) == (0.2, 2.0)
+        assert (ds.attrs["settle_time_s"], ds.attrs["settle_revolutions"]) == (0.1, 1.0)
+        assert "revolutions: 2.0" in ds.attrs["config"]
+
+
+def test_a_sweeps_report_counts_its_designs_with_a_short_settled_window(main_job):
+    """The main job shortened to 0.02 s a case ends before its settled window (0.05 s)."""
+    result = CliRunner().invoke(main, ["report", str(main_job)])
+    warning = [ln for ln in result.stderr.splitlines() if "warning" in ln]
+    assert len(warning) == 1 and "the settled window holds less than one crank revolution in " \
+        "16 of 16 designs (fewest: 0 crank revolutions, t >= 0.05 s, at " in warning[0], warning

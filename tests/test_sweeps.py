@@ -23,6 +23,7 @@ from click.testing import CliRunner
 
 from clearsweep import cli as cli_module
 from clearsweep import sweeping
+from clearsweep.budget import estimate
 from clearsweep.cli import sweep_command
 from clearsweep.config import ConfigError
 from clearsweep.dataset import open_results
@@ -98,6 +99,34 @@ def test_colliding_names_take_the_full_path():
         "friction.enabled": [True, False], "wear.enabled": [True, False], "solver.dt": [1e-5]}}})
     assert list(plan.dims) == ["friction_enabled", "wear_enabled", "dt"]
     assert plan.to_dataset()["wear_enabled"].dtype == bool
+
+
+def test_a_speed_sweep_in_revolutions_resolves_each_cases_seconds():
+    """Issue 41, item 8: no hand-zipped durations; each case's seconds are revolutions * 60
+    / its speed, and the planner's steps follow them."""
+    base = {"joints": {"B": {"clearance": 2.5e-4}},
+            "solver": {"revolutions": 2}, "metrics": {"settle_revolutions": 1}}
+    speeds = [300, 600, 900]
+    plan = expand({"base": base, "sweep": {"grid": {"mechanism.speed_rpm": speeds}}})
+    for rpm, case in zip(speeds, plan.cases):
+        assert case.config.solver.duration == 2 * 60.0 / rpm
+        assert case.config.metrics.settle_time == 60.0 / rpm
+    steps = [estimate(case.config).steps for case in plan.cases]
+    assert steps == [40000, 20000, 13340]       # 2 revolutions of dt = 1e-5 s in rows of 10
+    assert "solver:\n    dt: 1.0e-05\n    duration: null\n    revolutions: 2.0" in plan.text
+
+
+def test_the_revolutions_are_swept_over_a_base_in_seconds():
+    plan = expand({"base": BASE, "sweep": {"grid": {"solver.revolutions": [0.5, 1],
+                                                    "mechanism.speed_rpm": [600, 1200]}}})
+    assert plan.dims == {"revolutions": 2, "speed_rpm": 2}
+    assert [c.config.solver.duration for c in plan.cases] == [0.05, 0.025, 0.1, 0.05]
+    assert [c.config.solver.revolutions for c in plan.cases] == [0.5, 0.5, 1.0, 1.0]
+    # and the settle time in revolutions, by --set on the base
+    plan = expand({"base": BASE, "sweep": {"grid": {"mechanism.speed_rpm": [600, 1200]}}},
+                  ["metrics.settle_revolutions=0.25"])
+    assert [c.config.metrics.settle_time for c in plan.cases] == [0.025, 0.0125]
+    assert [c.config.solver.duration for c in plan.cases] == [0.01, 0.01]
 
 
 def test_values_that_are_lists_become_json_text():

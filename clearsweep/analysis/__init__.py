@@ -58,6 +58,7 @@ from ..summary import (  # noqa: F401
     motion_summary,
     poincare_points,
     settle_time,
+    settled_revolutions,
     wear_table,
     with_attrs,
     worn_arc,
@@ -95,4 +96,9 @@ from .tables import (  # noqa: F401
     metric_table,
     reduction_table,
 )
-from .text import HEADLINE_METRICS, format_sweep_summary, run_summary_text  # noqa: F401
+from .text import (  # noqa: F401
+    HEADLINE_METRICS,
+    format_sweep_summary,
+    run_summary_text,
+    short_settled_window,
+)

@@ -14,7 +14,7 @@ import xarray as xr
 from ..ensemble import MEMBER_DIM
 from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
-from ..summary import case_summary
+from ..summary import case_summary, settle_time, settled_revolutions
 from .factorial import factorial_lines
 from .selection import (
     _MISSING_TEXT,
@@ -29,6 +29,33 @@ from .selection import (
 from .tables import report_summary
 
 # --------------------------------------------------------------------------- text reports
+
+def short_settled_window(ds: xr.Dataset) -> str | None:
+    """What ``report`` warns of where a case's settled window holds less than one crank
+    revolution (its settled statistics then cover part of a cycle), else None.
+
+    One line for the file: the window of a run, or how many designs of a sweep (an
+    ensemble's members share their design's window) and the shortest.
+    """
+    dims = design_dims(ds)
+    frame = xr.Dataset(coords={n: c for n, c in ds.coords.items() if set(c.dims) <= set(dims)},
+                       attrs=ds.attrs)
+    short, cases = [], 0
+    for label, case in iter_points(frame, dims):
+        cases += 1
+        revolutions = settled_revolutions(case)
+        if revolutions < 1.0:
+            short.append((revolutions, label, settle_time(case)))
+    if not short:
+        return None
+    fewest, label, start = min(short, key=lambda item: item[0])
+    held = f"{max(fewest, 0.0):.3g} crank revolution{'' if fewest == 1 else 's'}"
+    where = (f"the settled window (t >= {start:g} s) holds {held}" if not dims else
+             f"the settled window holds less than one crank revolution in {len(short)} of {cases} "
+             f"designs (fewest: {held}, t >= {start:g} s, at {label_text(label)})")
+    return (f"{where}: its statistics cover part of a cycle; set metrics.settle_revolutions "
+            "and solver.revolutions for whole revolutions (docs/runs.md)")
+
 
 def _number(case: xr.Dataset, name: str, spec: str) -> str:
     """``"12.3 m s-2"``, or ``n/a`` when the variable is absent or NaN."""

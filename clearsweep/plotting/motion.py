@@ -45,9 +45,9 @@ def _spectrum_needs(case: xr.Dataset, omega: float, start: float) -> str:
     end = float(finite[-1]) if finite.size else float("nan")
     revolutions = (end - start) * omega / (2.0 * np.pi)
     return (f"--kind spectrum needs at least 2 crank revolutions in the settled window "
-            f"(t >= {start:g} s, metrics.settle_time); the run holds {max(revolutions, 0.0):.2g} "
-            f"there (it ends at {end:g} s, a revolution every {2.0 * np.pi / omega:.3g} s): "
-            "run longer (solver.duration)")
+            f"(t >= {start:g} s, metrics.settle_time or settle_revolutions); the run holds "
+            f"{max(revolutions, 0.0):.2g} there (it ends at {end:g} s, a revolution every "
+            f"{2.0 * np.pi / omega:.3g} s): run longer (solver.duration or solver.revolutions)")
 
 
 def _draw_spectrum(fig: Figure, ds: xr.Dataset) -> None:

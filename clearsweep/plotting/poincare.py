@@ -52,7 +52,8 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
     if taken < MIN_REVOLUTIONS:
         raise PlotError(f"--kind poincare needs at least {MIN_REVOLUTIONS} crank revolutions "
                         f"(one Poincare section each); these results hold {taken}: run for "
-                        "solver.duration >= 2 x 60 / mechanism.speed_rpm s")
+                        "solver.revolutions >= 2 (solver.duration >= 2 x 60 / "
+                        "mechanism.speed_rpm s)")
     offset = ds["poincare_offset"]
     cases = _cases(ds)
     # a joint without offsets gets no panel; an ideal joint (no offsets) is not named

@@ -24,9 +24,11 @@ from .. import variables
 from ..budget import duration_text, estimate, format_bytes, sweep_seconds, sweep_time_text
 from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
+    ALTERNATIVES,
     SWEEP_FILE_KEYS,
     Config,
     ConfigError,
+    alternative_of,
     close_match,
     dump_config,
     field_info,
@@ -34,7 +36,7 @@ from ..config import (
     get_path,
     load_config,
     read_yaml,
-    set_path,
+    set_setting,
     short_repr,
 )
 from ..outputs import MEMBER_DIM, SAMPLE_DIM  # noqa: F401  (also read as plan.MEMBER_DIM, plan.SAMPLE_DIM)
@@ -498,6 +500,11 @@ def _parse_axes(spec, base: Config, source: str, max_cases: int | None = MAX_CAS
         if all_keys.count(key) > 1:
             raise ConfigError(f"sweep.{key}", None, "each key in one grid entry or zip group only",
                               source, got="a key swept twice")
+    for seconds, revolutions in ALTERNATIVES:
+        if seconds in all_keys and revolutions in all_keys:
+            raise ConfigError(f"sweep.{revolutions}", None, f"one of {seconds} and {revolutions} "
+                              "swept, not both (the same length in two units)", source,
+                              got="both swept")
     short = {k: dimension_name(k) for k in all_keys}
     reserved = _reserved_names()
     names = {k: (_full_name(k) if list(short.values()).count(s) > 1 or s in reserved else s)
@@ -624,7 +631,7 @@ def _check_range_ends(key: str, bounds: Sequence[float], base: Config, where: st
     point outside them fails, or not, by the luck of the draw."""
     for end in bounds:
         cfg = base.to_dict()
-        set_path(cfg, key, float(end))
+        set_setting(cfg, key, float(end))
         try:
             load_config(cfg, source_name=source)
         except ConfigError as exc:
@@ -718,6 +725,10 @@ def _check_overrides(overrides: Iterable[str], axes: Sequence[Axis], source: str
     for text in overrides:
         key = str(text).partition("=")[0].strip()
         for k in swept:
+            if key == alternative_of(k):    # every case would replace it by the swept length
+                raise ConfigError(key, text, f"a key other than {key}: the sweep gives this "
+                                  f"length in {k}; change the values of {k} in the sweep file",
+                                  "--set")
             if key == k or k.startswith(key + ".") or key.startswith(k + "."):
                 raise ConfigError(key, text, "a key that the sweep does not vary; change the "
                                   f"values of {k} in the sweep file", "--set")
@@ -801,7 +812,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             continue
         cfg = base.to_dict()
         for key, value in assignment.items():
-            set_path(cfg, key, value)
+            set_setting(cfg, key, value)
         try:
             resolved = load_config(cfg, source_name=source)
             kind.check_case(resolved, source, allow_large, label)

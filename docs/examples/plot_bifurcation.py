@@ -29,12 +29,9 @@ CONFIGS = next(p / "configs" for p in (Path.cwd(), *Path.cwd().parents)
                if (p / "configs" / "life.yaml").is_file())
 
 spec = yaml.safe_load((CONFIGS / "bifurcation.yaml").read_text())
-speeds = [70.0, 80.0, 90.0, 100.0, 110.0, 130.0, 160.0]
-group = spec["sweep"]["zip"][0]
-group["labels"] = speeds
-group["mechanism.speed_rpm"] = speeds
-group["solver.duration"] = [14 * 60.0 / s for s in speeds]      # 14 revolutions
-group["metrics.settle_time"] = [4 * 60.0 / s for s in speeds]   # 4 of start-up
+spec["sweep"]["grid"]["mechanism.speed_rpm"] = [70.0, 80.0, 90.0, 100.0, 110.0, 130.0, 160.0]
+spec["base"]["solver"]["revolutions"] = 14              # at each speed its own seconds
+spec["base"]["metrics"]["settle_revolutions"] = 4       # of start-up
 ds = clearsweep.sweep(spec, workers=1, progress=False)
 
 # %%
