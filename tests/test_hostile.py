@@ -1271,7 +1271,7 @@ def both_lengths(tmp: Path) -> Path:
     return path
 
 
-def speed_sweep(tmp: Path, sweep: str) -> Path:
+def revolutions_sweep(tmp: Path, sweep: str) -> Path:
     path = tmp / "speeds.yaml"
     path.write_text("name: speeds\nstore: summary\nbase: {solver: {revolutions: 2}}\n"
                     f"sweep: {sweep}\n")
@@ -1290,12 +1290,12 @@ REVOLUTIONS = [
      "metrics.settle_revolutions: got 1 (from --set); expected one of metrics.settle_time and "
      "metrics.settle_revolutions, not both"),
     ("sweep zip of duration and revolutions (was: an unknown key)",
-     lambda t, f: ["sweep", speed_sweep(t, "{zip: [{solver.duration: [1, 2], "
+     lambda t, f: ["sweep", revolutions_sweep(t, "{zip: [{solver.duration: [1, 2], "
                                             "solver.revolutions: [1, 2]}]}"), "--dry-run"], 2,
      "sweep.solver.revolutions: got both swept; expected one of solver.duration and "
      "solver.revolutions swept, not both"),
     ("sweep of revolutions with --set solver.duration (was: an unknown key)",
-     lambda t, f: ["sweep", speed_sweep(t, "{grid: {solver.revolutions: [1, 2]}}"),
+     lambda t, f: ["sweep", revolutions_sweep(t, "{grid: {solver.revolutions: [1, 2]}}"),
                    "--set", "solver.duration=3", "--dry-run"], 2,
      "solver.duration: got 'solver.duration=3'; expected a key other than solver.duration: "
      "the sweep gives this length in solver.revolutions"),
