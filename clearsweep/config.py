@@ -661,6 +661,11 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
         # the checked value (normalised by _resolve) in seconds at this case's speed
         turns = get_path(cfg, revolutions)
         length = turns * 60.0 / speed
+        if not math.isfinite(length) and math.isfinite(60.0 / speed):
+            raise ConfigError(revolutions, turns,
+                              f"a number of revolutions that lasts a finite time at "
+                              f"mechanism.speed_rpm = {speed!r} ({revolutions} * 60 / "
+                              f"mechanism.speed_rpm = {length!r} s)", source)
         if not math.isfinite(length):
             raise ConfigError("mechanism.speed_rpm", speed,
                               f"a speed at which {revolutions} ({turns!r}) lasts a finite time "

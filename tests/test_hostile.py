@@ -1355,6 +1355,15 @@ ROUND5_FUZZ = [
                    "metrics.settle_revolutions=1"], 2,
      "mechanism.speed_rpm: got 5e-324 (from --set); expected a speed at which "
      "metrics.settle_revolutions (1.0) lasts a finite time"),
+    ("validate settle_revolutions of 1.7e308 (was: accepted, an infinite settle time)",
+     lambda t, f: ["validate", ONE, "--set", "metrics.settle_revolutions=1.7e308"], 2,
+     "metrics.settle_revolutions: got 1.7e+308 (from --set); expected a number of revolutions "
+     "that lasts a finite time at mechanism.speed_rpm = 60.0"),
+    ("validate revolutions of 1e308 (was: 'solver.duration / solver.dt = inf s / 1e-05 s = inf "
+     "steps')", lambda t, f: ["validate", ONE, "--set", "solver.revolutions=1e308"], 2,
+     "solver.revolutions: got 1e+308 (from --set); expected a number of revolutions that lasts "
+     "a finite time at mechanism.speed_rpm = 60.0 (solver.revolutions * 60 / "
+     "mechanism.speed_rpm = inf s)"),
     ("run revolutions at 1e-300 r/min (was: the step count without the speed that made it)",
      lambda t, f: ["run", ONE, "--set", "mechanism.speed_rpm=1e-300", "--set",
                    "solver.revolutions=0.03", "-o", t / "out.nc"], 2,
