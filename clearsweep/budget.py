@@ -222,6 +222,10 @@ def check_budget(cfg: Config, *, allow_large: bool = False,
         value = cfg.get(key)
         got = (f"{value!r} (solver.duration / solver.dt = {solver.duration!r}"
                f" s / {solver.dt!r} s = {steps:.3g} steps)")
+        if solver.revolutions is not None:      # the seconds come from the speed: name it
+            got = (f"{value!r} (solver.revolutions * 60 / mechanism.speed_rpm = "
+                   f"{solver.revolutions!r} * 60 / {cfg.mechanism.speed_rpm!r} = "
+                   f"{solver.duration:.3g} s, / solver.dt ({solver.dt!r} s) = {steps:.3g} steps)")
         raise ConfigError(key, value,
                           f"a run of at most {MAX_STEPS:.3g} RK4 steps; raise solver.dt, shorten "
                           f"{length_key}, {hint}", source, got=got)

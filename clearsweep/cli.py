@@ -291,6 +291,17 @@ def _wrote(path: str | Path, quiet: bool, detail: str = "") -> None:
         click.echo(f"clearsweep: wrote {path}{detail}", err=True)
 
 
+class _InFile(click.Path):
+    """An input file's path: a name with a NUL byte is refused in one line (click's check
+    of the path ended in a ValueError traceback, "embedded null byte")."""
+
+    def convert(self, value, param, ctx):
+        text = os.fsdecode(value) if isinstance(value, bytes | os.PathLike) else str(value)
+        if "\0" in text:
+            self.fail(f"{text!r} holds a NUL byte, which no file name can", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 class _OutFile(click.Path):
     """An output file's path (``-o/--out``): refused at once where it cannot name a file,
     an empty name or a name ending in ``/`` (before, ``-o ''`` wrote the default file and
@@ -303,6 +314,9 @@ class _OutFile(click.Path):
         text = os.fsdecode(value) if isinstance(value, bytes | os.PathLike) else str(value)
         if text == "":
             self.fail("an empty name; give a file name, such as out.nc", param, ctx)
+        if "\0" in text:
+            self.fail(f"{text!r} holds a NUL byte, which no file name can; give a file name, "
+                      "such as out.nc", param, ctx)
         if text.endswith(("/", os.sep)) or os.path.basename(text) in (".", ".."):
             self.fail(f"{text!r} names a folder; give a file in it, such as "
                       f"{text.rstrip('/' + os.sep) or '.'}/out.nc", param, ctx)
@@ -331,7 +345,7 @@ def main() -> None:
 
 
 @main.command()
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=_InFile(dir_okay=False))
 @click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>.nc in the current folder].")
 @_overrides
@@ -403,7 +417,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
 
 
 @main.command("life")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=_InFile(dir_okay=False))
 @click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>_life.nc in the current folder].")
 @_overrides
@@ -600,7 +614,7 @@ def _preflight(cfg, config: str, allow_large: bool) -> None:
 
 
 @main.command()
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=_InFile(dir_okay=False))
 @_overrides
 @_allow_large
 @click.option("-y", "--yes", is_flag=True,
@@ -635,7 +649,7 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
 
 
 @main.command()
-@click.option("-m", "--materials-file", type=click.Path(dir_okay=False),
+@click.option("-m", "--materials-file", type=_InFile(dir_okay=False),
               help="User materials YAML that adds or overrides materials.")
 @_quiet
 def materials(materials_file: str | None, quiet: bool) -> None:
@@ -728,7 +742,7 @@ def _needs(ds: xr.Dataset, path: str, name: str, what: str) -> None:
 
 
 @main.command("report")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.argument("path", type=_InFile(exists=True, dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(REPORT_FORMATS), default="text", show_default=True,
               help="Output format.")
 @click.option("--reference", multiple=True, metavar="DIM=VALUE",
@@ -821,7 +835,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 
 
 @main.command("plot")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.argument("path", type=_InFile(exists=True, dir_okay=False))
 @click.option("--kind", required=True, type=click.Choice(KINDS), help="Figure to draw.")
 @click.option("-o", "--out", required=True, type=_OUT_FILE,
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
@@ -893,7 +907,7 @@ def _series_selection(text: str | None) -> str | tuple[int, ...]:
 
 
 @main.command("sensitivity")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False))
+@click.argument("path", type=_InFile(exists=True, dir_okay=False))
 @click.option("--metric", required=True, metavar="NAME",
               help="Summary variable to analyse (the ensemble mean where the file is an ensemble).")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
@@ -1003,7 +1017,7 @@ def _program() -> list[str]:
 
 
 @main.command("sweep")
-@click.argument("config", type=click.Path(dir_okay=False))
+@click.argument("config", type=_InFile(dir_okay=False))
 @click.option("-o", "--out", type=_OUT_FILE,
               help="Output netCDF file [default: <config stem>.nc in the current folder]; "
                    "finished cases are kept in OUT.parts/ until it is written.")

@@ -656,12 +656,31 @@ def _given_alternatives(raw: Any, source: str) -> list[tuple[str, str, Any]]:
 def _validate(raw: Any, source: str, base_dir: str) -> Config:
     given = _given_alternatives(raw, source)
     cfg = _resolve(raw, SCHEMA, "", source)
+    speed = cfg["mechanism"]["speed_rpm"]
     for seconds, revolutions, _ in given:
         # the checked value (normalised by _resolve) in seconds at this case's speed
-        set_path(cfg, seconds, get_path(cfg, revolutions) * 60.0 / cfg["mechanism"]["speed_rpm"])
+        turns = get_path(cfg, revolutions)
+        length = turns * 60.0 / speed
+        if not math.isfinite(length) and math.isfinite(60.0 / speed):
+            raise ConfigError(revolutions, turns,
+                              f"a number of revolutions that lasts a finite time at "
+                              f"mechanism.speed_rpm = {speed!r} ({revolutions} * 60 / "
+                              f"mechanism.speed_rpm = {length!r} s)", source)
+        if not math.isfinite(length):
+            raise ConfigError("mechanism.speed_rpm", speed,
+                              f"a speed at which {revolutions} ({turns!r}) lasts a finite time "
+                              f"({revolutions} * 60 / mechanism.speed_rpm = {length!r} s)", source)
+        set_path(cfg, seconds, length)
     for key, op, other in _RELATIONS:
         value, bound = get_path(cfg, key), get_path(cfg, other)
         if not _OPS[op](value, bound):
+            turns = get_path(cfg, "solver.revolutions") if other == "solver.duration" else None
+            if turns is not None:
+                # the length was asked in revolutions: name that key, not the derived seconds
+                raise ConfigError("solver.revolutions", turns,
+                                  f"a run of at least one step: solver.revolutions * 60 / "
+                                  f"mechanism.speed_rpm = {turns!r} * 60 / {speed!r} = {bound:.3g} s, "
+                                  f"below solver.dt ({value!r} s)", source)
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_guide(cfg["joints"]["P"], cfg["wear"]["map"], source)

@@ -8,7 +8,8 @@ of older versions (issue 20, item 6); round 4's resume integrity and the user's 
 (issue 33, items 1 and 2: ``ROUND4_INTEGRITY``), its messages (items 4-6:
 ``ROUND4_MESSAGES``) and its fresh fuzz round (``ROUND4_FUZZ``); round 5's output paths
 and messages of ``--kind bifurcation`` (issue 40, item 10: ``ROUND5_OUTPUTS``,
-``ROUND5_BIFURCATION``). Before, the rows marked
+``ROUND5_BIFURCATION``), its lengths in crank revolutions (``REVOLUTIONS``) and its fresh
+fuzz round (item 11: ``ROUND5_FUZZ``). Before, the rows marked
 "was:" ended as said there.
 Every row is refused before any simulation, or reads a small results file built once.
 """
@@ -78,7 +79,9 @@ def files(tmp_path_factory):
                   "--set", "life.max_blocks=1", "--no-progress", "--workers", "1",
                   "-o", d / "rel.nc"],
                  ["sweep", speed_sweep(d), "--no-progress", "--workers", "1", "-q",
-                  "-o", d / "bif.nc"]):
+                  "-o", d / "bif.nc"],
+                 ["sweep", unlabelled_zip(d), "--no-progress", "--workers", "1", "-q",
+                  "-o", d / "zip.nc"]):
         result = CliRunner().invoke(main, [str(a) for a in argv])
         assert result.exit_code == 0, result.output
     saltelli_file(d / "samp.nc")
@@ -108,6 +111,16 @@ def speed_sweep(tmp: Path) -> Path:
                     "solver: {duration: 0.002}, wear: {map: [6, 12]}}\n"
                     "sweep: {zip: [{name: speed, labels: [60, 600], "
                     "mechanism.speed_rpm: [60.0, 600.0]}]}\n")
+    return path
+
+
+def unlabelled_zip(tmp: Path) -> Path:
+    """A zip group ``g`` without labels (speed and revolutions together), 0.02 revolutions a
+    case: a sweep dimension with no coordinate to select by."""
+    path = tmp / "zip.yaml"
+    path.write_text("name: zip\nstore: summary\nbase: {joints: {B: {clearance: 2.5e-4}}, "
+                    "wear: {map: [6, 12]}}\nsweep: {zip: [{name: g, mechanism.speed_rpm: "
+                    "[300.0, 600.0], solver.revolutions: [0.01, 0.02]}]}\n")
     return path
 
 
@@ -1271,7 +1284,7 @@ def both_lengths(tmp: Path) -> Path:
     return path
 
 
-def revolutions_sweep(tmp: Path, sweep: str) -> Path:
+def speeds_file(tmp: Path, sweep: str) -> Path:
     path = tmp / "speeds.yaml"
     path.write_text("name: speeds\nstore: summary\nbase: {solver: {revolutions: 2}}\n"
                     f"sweep: {sweep}\n")
@@ -1290,17 +1303,93 @@ REVOLUTIONS = [
      "metrics.settle_revolutions: got 1 (from --set); expected one of metrics.settle_time and "
      "metrics.settle_revolutions, not both"),
     ("sweep zip of duration and revolutions (was: an unknown key)",
-     lambda t, f: ["sweep", revolutions_sweep(t, "{zip: [{solver.duration: [1, 2], "
+     lambda t, f: ["sweep", speeds_file(t, "{zip: [{solver.duration: [1, 2], "
                                             "solver.revolutions: [1, 2]}]}"), "--dry-run"], 2,
      "sweep.solver.revolutions: got both swept; expected one of solver.duration and "
      "solver.revolutions swept, not both"),
     ("sweep of revolutions with --set solver.duration (was: an unknown key)",
-     lambda t, f: ["sweep", revolutions_sweep(t, "{grid: {solver.revolutions: [1, 2]}}"),
+     lambda t, f: ["sweep", speeds_file(t, "{grid: {solver.revolutions: [1, 2]}}"),
                    "--set", "solver.duration=3", "--dry-run"], 2,
      "solver.duration: got 'solver.duration=3'; expected a key other than solver.duration: "
      "the sweep gives this length in solver.revolutions"),
 ]
 ROWS += REVOLUTIONS
+
+# --- round 5's fresh fuzz round (issue 40, item 11): lengths in revolutions, -o and input
+# paths, selections of a zip group
+ROUND5_FUZZ = [
+    ("run revolutions shorter than a step (was: 'solver.dt: got 1e-05; expected a number <= "
+     "solver.duration (1e-07)', a key never given)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.speed_rpm=600", "--set", "solver.revolutions=1e-6",
+                   "-o", t / "out.nc"], 2,
+     "solver.revolutions: got 1e-06 (from --set); expected a run of at least one step: "
+     "solver.revolutions * 60 / mechanism.speed_rpm = 1e-06 * 60 / 600.0 = 1e-07 s, below "
+     "solver.dt (1e-05 s)"),
+    ("validate revolutions of 5e-324, 0 s (was: 'solver.dt ... <= solver.duration (5e-324)')",
+     lambda t, f: ["validate", ONE, "--set", "solver.revolutions=5e-324"], 2,
+     "solver.revolutions: got 5e-324 (from --set); expected a run of at least one step"),
+    ("sweep case of revolutions shorter than a step (was: 'solver.dt ... <= solver.duration "
+     "(1e-08)')",
+     lambda t, f: ["sweep", sweep_file(t, "sweep: {grid: {solver.revolutions: [1.0e-7, 0.03]}}",
+                                       base="{mechanism: {speed_rpm: 600}}"), "--dry-run"], 2,
+     "solver.revolutions: got 1e-07; expected a run of at least one step"),
+    ("sweep of speeds where one leaves the revolutions shorter than a step (was: 'solver.dt "
+     "... <= solver.duration (1.8e-09)', the swept speed not named)",
+     lambda t, f: ["sweep", sweep_file(t, "sweep: {grid: {mechanism.speed_rpm: [600, 1.0e9]}}",
+                                       base="{solver: {revolutions: 0.03}}"), "--dry-run"], 2,
+     "mechanism.speed_rpm: got 1000000000.0; expected a value with which solver.revolutions = "
+     "0.03 is a run of at least one step"),
+    ("run revolutions at 1e300 r/min (was: 'solver.dt: got 1e-05; expected a number <= "
+     "solver.duration (6e-299)')",
+     lambda t, f: ["run", ONE, "--set", "mechanism.speed_rpm=1e300", "--set", "solver.revolutions=1",
+                   "-o", t / "out.nc"], 2, "solver.revolutions: got 1.0 (from --set); expected a "
+     "run of at least one step: solver.revolutions * 60 / mechanism.speed_rpm = 1.0 * 60 / 1e+300"),
+    ("run revolutions at 5e-324 r/min (was: 'solver.revolutions: got 0.03 (... = inf s / "
+     "1e-05 s = inf steps)', the speed not named)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.speed_rpm=5e-324", "--set",
+                   "solver.revolutions=0.03", "-o", t / "out.nc"], 2,
+     "mechanism.speed_rpm: got 5e-324 (from --set); expected a speed at which "
+     "solver.revolutions (0.03) lasts a finite time"),
+    ("validate settle_revolutions at 5e-324 r/min (was: accepted, an infinite settle time)",
+     lambda t, f: ["validate", ONE, "--set", "mechanism.speed_rpm=5e-324", "--set",
+                   "metrics.settle_revolutions=1"], 2,
+     "mechanism.speed_rpm: got 5e-324 (from --set); expected a speed at which "
+     "metrics.settle_revolutions (1.0) lasts a finite time"),
+    ("validate settle_revolutions of 1.7e308 (was: accepted, an infinite settle time)",
+     lambda t, f: ["validate", ONE, "--set", "metrics.settle_revolutions=1.7e308"], 2,
+     "metrics.settle_revolutions: got 1.7e+308 (from --set); expected a number of revolutions "
+     "that lasts a finite time at mechanism.speed_rpm = 60.0"),
+    ("validate revolutions of 1e308 (was: 'solver.duration / solver.dt = inf s / 1e-05 s = inf "
+     "steps')", lambda t, f: ["validate", ONE, "--set", "solver.revolutions=1e308"], 2,
+     "solver.revolutions: got 1e+308 (from --set); expected a number of revolutions that lasts "
+     "a finite time at mechanism.speed_rpm = 60.0 (solver.revolutions * 60 / "
+     "mechanism.speed_rpm = inf s)"),
+    ("run revolutions at 1e-300 r/min (was: the step count without the speed that made it)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.speed_rpm=1e-300", "--set",
+                   "solver.revolutions=0.03", "-o", t / "out.nc"], 2,
+     "solver.revolutions: got 0.03 (solver.revolutions * 60 / mechanism.speed_rpm = 0.03 * 60 / "
+     "1e-300 = 1.8e+300 s, / solver.dt (1e-05 s) = 1.8e+305 steps); expected a run of at most"),
+    ("run -o a name with a NUL byte (was: ValueError traceback, 'embedded null byte')",
+     lambda t, f: ["run", ONE, "--set", "solver.duration=0.002", "-o", f"{t}/out\0.nc"], 2,
+     "invalid value for '-o' / '--out': "),
+    ("report a path with a NUL byte (was: ValueError traceback)",
+     lambda t, f: ["report", f"{f}/run\0.nc"], 2, "invalid value for 'PATH': "),
+    ("run a config path with a NUL byte (was: ValueError traceback)",
+     lambda t, f: ["run", "one\0.yaml", "-o", t / "out.nc"], 2, "holds a NUL byte"),
+    ("plot --select a zip group without labels (was: \"unknown sweep dimension 'g'; choose "
+     "from: none\")", lambda t, f: ["plot", f / "zip.nc", "--kind", "slider", "--select", "g=0",
+                                    "-o", t / "out.png"], 2,
+     "sweep dimension 'g' has no values to select by (a zip group without labels: give the "
+     "group labels in the sweep file)"),
+    ("plot bifurcation --select a zip group without labels (was: \"unknown sweep dimension "
+     "'g'; choose from: none\")", lambda t, f: ["plot", f / "zip.nc", "--kind", "bifurcation",
+                                                "--select", "g=0", "-o", t / "out.png"], 2,
+     "sweep dimension 'g' has no values to select by"),
+    ("report --reference a zip group without labels (was: \"unknown sweep dimension 'g'; "
+     "choose from: none\")", lambda t, f: ["report", f / "zip.nc", "--reference", "g=0"], 2,
+     "sweep dimension 'g' has no values to select by"),
+]
+ROWS += ROUND5_FUZZ
 
 
 @pytest.fixture

@@ -179,6 +179,13 @@ def parse_selection(obj: xr.Dataset | xr.DataArray,
             pairs.append((name.strip(), text))
     out = {}
     for name, wanted in pairs:
+        if name not in names and name in dims:
+            # a zip group swept without labels: a dimension with no values to name
+            others = f"; the dimensions with values: {', '.join(names)}" if names else ""
+            raise SelectionError(f"sweep dimension {name!r} has no values to select by (a zip "
+                                 f"group without labels: give the group labels in the sweep "
+                                 f"file){others}", name=name, value=value_text(wanted),
+                                 choices=names)
         if name not in names:
             raise SelectionError(choice_message("sweep dimension", name, names), name=name,
                                  value=value_text(wanted), choices=names)
