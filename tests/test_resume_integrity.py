@@ -348,3 +348,31 @@ def test_a_users_sweep_log_or_lock_file_is_not_taken_for_clearsweeps(tmp_path):
                                          r"\(.lock, sweep.log\)"):
         PartStore(d).open()
     assert (d / "sweep.log").read_text() == "my own notes on the sweep\n"
+
+
+# ------------------------------------------- issue 40, item 7: every part kept, no output
+@pytest.mark.parametrize("config", ["life_sweep.yaml", "reliability.yaml", "mixed_clearances.yaml"])
+def test_the_plan_of_a_sweep_with_every_part_kept_says_nothing_is_left_to_run(config):
+    """Was: a life or reliability sweep with every part kept ended in `IndexError: list
+    index out of range` in the plan's line, before the assembly."""
+    from clearsweep.sweeping import expand
+
+    plan = expand(str(ROOT / "configs" / config), ("reliability.members=2",)
+                  if config == "reliability.yaml" else ())
+    text = plan.describe(2, kept=set(plan.runnable()))
+    assert f"0 to {'run' if plan.store in ('life', 'reliability') else 'simulate'}" in text
+
+
+@pytest.mark.parametrize("quiet", [[], ["-q"]], ids=["", "-q"])
+def test_a_reliability_sweep_with_every_part_kept_assembles_on_resume(folder, quiet):
+    """Was: `sweep --resume` with every part on disk and no output ended in IndexError."""
+    args = ["--set", "reliability.members=2", "--set", "mechanism.speed_rpm=600",
+            "--set", "life.max_blocks=1"]
+    config = ROOT / "configs" / "reliability.yaml"
+    first = invoke("sweep", config, "-o", "rel.nc", "-q", "--keep-parts", *args)
+    assert first.exit_code == 0, first.output
+    (folder / "rel.nc").rename(folder / "first.nc")
+    result = invoke("sweep", config, "-o", "rel.nc", "--resume", *quiet, *args)
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(folder / "first.nc") as a, xr.open_dataset(folder / "rel.nc") as b:
+        xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())

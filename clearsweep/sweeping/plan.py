@@ -300,6 +300,8 @@ class SweepPlan:
             bound.append(cfg.life.max_blocks * steps)
             expected.append(forecast.blocks * steps)
             forecasts.append(forecast)
+        if not forecasts:       # every part is on disk: only the assembly is left
+            return f"{head}: nothing to run"
         most, likely = total(bound), total(expected)
         blocks = sorted({f.blocks for f in forecasts})
         span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
@@ -315,8 +317,7 @@ class SweepPlan:
         return (f"{head}: at most {most:.3g} RK4 steps (life.max_blocks blocks each), at most "
                 f"{sweep_time_text(most, to_run, workers)}; expected about "
                 f"{duration_text(sweep_seconds(likely, to_run, workers))} ({likely:.3g} RK4 "
-                f"steps: {why})" if blocks else
-                f"{head}: nothing to run")
+                f"steps: {why})")
 
     def plan_text(self, workers: int | None = None) -> str:
         """What ``clearsweep validate`` prints for a sweep file: its dimensions, the cases,
