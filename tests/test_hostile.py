@@ -242,14 +242,13 @@ def parts_made_with(tmp: Path, section: str, key: str, value) -> Path:
     """A two-case sweep file whose parts folder ``res.nc.parts`` holds the part of its first
     case as made with ``section.key = value`` in its identity (``run_identity``): other
     materials values or another clearsweep version. Returns the sweep file."""
-    from clearsweep.params import run_identity
     from clearsweep.sweeping import expand
-    from clearsweep.sweeping.parts import case_hash, with_identity, write_part
+    from clearsweep.sweeping.parts import case_hash, part_identity, with_identity, write_part
 
     path = sweep_file(tmp, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n")
-    identity = run_identity(next(iter(expand(path).runnable().values())))
-    if section == "version":
-        identity["version"] = value
+    identity = part_identity(next(iter(expand(path).runnable().values())), "summary")
+    if section in ("version", "store"):
+        identity[section] = value
     else:
         identity[section]["steel"][key] = value
     (tmp / "res.nc.parts").mkdir()
@@ -300,6 +299,11 @@ ROUND4_INTEGRITY = [
      lambda t, f: ["sweep", parts_made_with(t, "version", "", "0.0.1"), "--resume",
                    "-o", t / "res.nc"],
      2, "clearsweep version: '0.0.1' there"),
+    ("sweep --resume of a summary sweep over parts of a full one (issue 40, item 2; was: "
+     "parts reused, exit 0, a file missing the full store's variables)",
+     lambda t, f: ["sweep", parts_made_with(t, "store", "", "full"), "--resume",
+                   "-o", t / "res.nc"],
+     2, "store: 'full' there, 'summary' here"),
     ("life --resume over a checkpoint of other materials values (was: continued, exit 0)",
      lambda t, f: checkpoint_made_with(t, 1e-13) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],

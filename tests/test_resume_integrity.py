@@ -376,3 +376,45 @@ def test_a_reliability_sweep_with_every_part_kept_assembles_on_resume(folder, qu
     assert result.exit_code == 0, result.output
     with xr.open_dataset(folder / "first.nc") as a, xr.open_dataset(folder / "rel.nc") as b:
         xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
+
+
+# ------------------------------------------------- issue 40, item 2: parts of another store
+@pytest.mark.parametrize("first, second", [("full", "summary"), ("summary", "full")])
+def test_parts_resumed_under_another_store_are_refused_naming_both(folder, first, second):
+    """Was: full parts resumed as summary were accepted (variables missing from the file),
+    summary parts resumed as full gave a full sweep file without any time series; exit 0."""
+    (folder / "sw.yaml").write_text(SWEEP.replace("store: summary", f"store: {first}"))
+    assert sweep("--keep-parts").exit_code == 0
+    (folder / "sw.nc").unlink()
+    parts = sorted(p.read_bytes() for p in parts_dir_for(folder / "sw.nc").iterdir())
+    (folder / "sw.yaml").write_text(SWEEP.replace("store: summary", f"store: {second}"))
+    one_error_line(sweep("--resume"), 2, f"store: {first!r} there, {second!r} here")
+    assert not (folder / "sw.nc").exists()
+    assert sorted(p.read_bytes() for p in parts_dir_for(folder / "sw.nc").iterdir()) == parts
+
+
+def test_each_part_records_the_store_it_was_made_for(folder):
+    assert sweep("--keep-parts").exit_code == 0
+    for path in parts_dir_for(folder / "sw.nc").glob("*.nc"):
+        assert P.read_mark(path)[1]["store"] == "summary"
+
+
+def test_assembly_refuses_a_part_made_for_another_store(folder):
+    """A part filed under this sweep's key but recording another store (forged, or an older
+    clearsweep's) is not assembled: the file would lack what the store needs."""
+    assert sweep("--keep-parts").exit_code == 0
+    directory = parts_dir_for(folder / "sw.nc")
+    path = sorted(directory.glob("*.nc"))[0]
+    with xr.open_dataset(path) as ds:
+        part = ds.load()
+    identity = P.read_mark(path)[1] | {"store": "full"}
+    path.unlink()
+    P.write_part(directory, path.stem, P.with_identity(part, identity))
+    from clearsweep.sweeping import expand
+
+    sw = expand("sw.yaml")
+    store = PartStore(directory)
+    with pytest.raises(StoreError, match="made for store: full, not for this sweep's store: summary"):
+        A.write_sweep_netcdf(folder / "again.nc", sweep_dims=sw.dims, sweep_coords=sw.coords,
+                                slots=sw.slots(), store=store, holds=sw.store)
+    assert not (folder / "again.nc").exists()

@@ -104,12 +104,19 @@ def case_hash(cfg: Mapping) -> str:
     return hashlib.sha256(canonical_json(cfg).encode("ascii")).hexdigest()[:HASH_LENGTH]
 
 
-def case_key(cfg: Config) -> str:
-    """The key of a case's part: :func:`case_hash` of its identity
+def part_identity(cfg: Config, store: str) -> dict[str, Any]:
+    """The identity of a sweep case's part: :func:`clearsweep.params.run_identity` of its
+    config and the sweep's ``store`` (what the part holds: a part of one store is never
+    resumed or assembled as another's, issue 40)."""
+    return {**run_identity(cfg), "store": store}
+
+
+def case_key(cfg: Config, store: str) -> str:
+    """The key of a case's part: :func:`case_hash` of its identity and the sweep's store
     (:func:`clearsweep.params.run_identity`: resolved config without the materials file's
     path, the materials values it reads, the clearsweep version). Editing the materials
     file, or another version, gives other keys: earlier parts are then not this run's."""
-    return case_hash(run_identity(cfg))
+    return case_hash(part_identity(cfg, store))
 
 
 def parts_dir_for(out: str | os.PathLike) -> Path:
@@ -478,8 +485,8 @@ class PartStore:
         runs = self.events("run")
         return runs[-1] if runs else None
 
-    def _closest_change(self, foreign: set[str],
-                        configs: Mapping[str, Config] | None) -> tuple[str, bool] | None:
+    def _closest_change(self, foreign: set[str], configs: Mapping[str, Config] | None,
+                        store: str | None = None) -> tuple[str, bool] | None:
         """What changed between a foreign part's recorded identity and the nearest case of
         this sweep, in words, and whether only the inputs besides the config changed (the
         materials values, the version); None where no part records its identity."""
@@ -489,7 +496,8 @@ class PartStore:
                        for identity in [read_mark(self.path(h))[1]] if identity), None)
         if theirs is None:
             return None
-        ours = [run_identity(cfg) for cfg in list(configs.values())[:256]]
+        ours = [run_identity(cfg) if store is None else part_identity(cfg, store)
+                for cfg in list(configs.values())[:256]]
         same_config = [i for i in ours if i["config"] == theirs.get("config")]
         if same_config:
             return identity_changes(theirs, same_config[0]), True
@@ -499,7 +507,7 @@ class PartStore:
     def _foreign_message(self, foreign: set[str], finished: set[str],
                          sweep: Mapping[str, Any] | None,
                          configs: Mapping[str, Config] | None = None) -> str:
-        change = self._closest_change(foreign, configs)
+        change = self._closest_change(foreign, configs, (sweep or {}).get("store"))
         if change is not None and change[1]:
             return (f"{self.directory} holds {len(foreign)} finished case(s) of this sweep made "
                     f"with other inputs ({change[0]}); resuming would mix the results of two "

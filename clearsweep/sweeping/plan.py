@@ -808,7 +808,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             kind.check_case(resolved, source, allow_large, label)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
-        cases.append(Case(index, case_key(resolved), resolved))
+        cases.append(Case(index, case_key(resolved, store), resolved))
 
     if cases and all(c.hash is None for c in cases):
         raise ConfigError("sweep.skip", (spec or {}).get("skip"), "rules that leave at least one "

@@ -16,9 +16,8 @@ import xarray as xr
 
 from .. import variables
 from ..config import Config
-from ..params import run_identity
 from ..summary import case_summary
-from .parts import MESSAGE_ATTRS, STATUS_ATTRS, with_identity, write_part
+from .parts import MESSAGE_ATTRS, STATUS_ATTRS, part_identity, with_identity, write_part
 from .stores import STORES
 
 #: How often a pool worker checks that the driver process still exists [s].
@@ -123,7 +122,7 @@ def _run_and_store(task: CaseTask, parts_dir: str, h: str) -> dict[str, Any]:
     while the cases run.
     """
     part = _run_case(task)
-    write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
+    write_part(parts_dir, h, with_identity(part, part_identity(task.config, task.store)))
     return _receipt(part)
 
 
