@@ -278,6 +278,20 @@ def checkpoint_made_with(tmp: Path, wear_coefficient: float) -> Path:
     return path
 
 
+def checkpoint_with_status(tmp: Path, status: str) -> Path:
+    """A life checkpoint ``res.nc.life-checkpoint`` of LIFE (SHORT_LIFE) of its own inputs and
+    layout after one block whose status reads ``status``; returns the checkpoint."""
+    from clearsweep.config import load_config
+    from clearsweep.service_life import LifeState, checkpoint_path_for, save_checkpoint
+    from clearsweep.variables import JOINTS
+
+    cfg = load_config(LIFE, [o for o in SHORT_LIFE if o != "--set"])
+    wmap, volumes = np.zeros((len(JOINTS), *cfg.wear.map)), np.zeros(len(JOINTS))
+    state = LifeState(wmap, volumes, 1.0, [{"cycle": 1.0, "block_status": status}],
+                      snapshots=[(1.0, wmap)], block_volumes=[volumes])
+    return save_checkpoint(checkpoint_path_for(tmp / "res.nc"), cfg, state, 0.0)
+
+
 def copied(src: Path, dst: Path) -> Path:
     dst.write_bytes(src.read_bytes())
     return dst
@@ -308,6 +322,11 @@ ROUND4_INTEGRITY = [
      lambda t, f: checkpoint_made_with(t, 1e-13) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
      2, "of other inputs (materials MoS2.wear_coefficient_m2_per_N: 1e-13 there"),
+    ("life --resume over a checkpoint with a hand-edited block status (issue 40, item 8; was: "
+     "read as it stood, here a KeyError traceback)",
+     lambda t, f: checkpoint_with_status(t, "garbage") and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
+     2, "row block_status holds 'garbage', not one of"),
     ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
      "exit 0)",
      lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and
