@@ -43,7 +43,7 @@ from .budget import (
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
-from .dataset import history_line, lock_exclusively, replaced_on_success, with_command_line
+from .dataset import ForeignLock, history_line, lock_exclusively, replaced_on_success, with_command_line
 from .params import Packed, identity_changes, joint_configs, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
@@ -825,7 +825,10 @@ def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
         yield
         return
     lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
-    fd = lock_exclusively(lock)
+    try:
+        fd = lock_exclusively(lock)
+    except ForeignLock as exc:
+        raise CheckpointError(str(exc)) from None
     if fd is None:
         raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
                               "output; wait for it to finish or write to another output file")

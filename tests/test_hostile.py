@@ -327,6 +327,17 @@ ROUND4_INTEGRITY = [
      lambda t, f: checkpoint_with_status(t, "garbage") and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
      2, "row block_status holds 'garbage', not one of"),
+    ("life over the user's file at OUT.life-checkpoint.lock (issue 40, item 3; was: deleted "
+     "it, exit 0)",
+     lambda t, f: (t / "res.nc.life-checkpoint.lock").write_text("my notes\n") and
+     ["life", LIFE, *SHORT_LIFE, "-o", t / "res.nc"],
+     2, "res.nc.life-checkpoint.lock is not a lock file clearsweep wrote"),
+    ("sweep over an empty .lock of the user's in OUT.parts (issue 40, item 3; was: deleted "
+     "it, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or (t / "res.nc.parts" / ".lock").touch() or
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.lock)"),
     ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
      "exit 0)",
      lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and

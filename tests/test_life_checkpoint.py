@@ -186,13 +186,17 @@ def test_a_second_life_run_to_the_same_output_is_refused_while_the_first_runs(tm
     with and without --resume, and the first's checkpoint is left as it was."""
     import fcntl
 
+    from clearsweep.dataset import LOCK_MARK
+
     out = tmp_path / "l.nc"
     checkpoint = checkpoint_path_for(out)
     with pytest.raises(LifeInterrupted):
         life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(2))
     before = checkpoint.read_bytes()
     lock = checkpoint.with_name(checkpoint.name + ".lock")
-    with open(lock, "w") as held:       # the first run, still going
+    with open(lock, "wb") as held:      # the first run, still going: its lock holds the mark
+        held.write(LOCK_MARK)
+        held.flush()
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         for extra in ([], ["--resume"], ["--discard-checkpoint"]):
             result = _cli("life", CASE, "-o", out, "-q", *sets(QUICK), *extra)

@@ -418,3 +418,34 @@ def test_assembly_refuses_a_part_made_for_another_store(folder):
         A.write_sweep_netcdf(folder / "again.nc", sweep_dims=sw.dims, sweep_coords=sw.coords,
                                 slots=sw.slots(), store=store, holds=sw.store)
     assert not (folder / "again.nc").exists()
+
+
+# ------------------------------------------- issue 40, item 3: files named like clearsweep's
+def test_an_empty_lock_in_the_parts_folder_is_not_taken_for_clearsweeps(folder):
+    """Was: an empty `.lock` in OUT.parts/ was taken for a sweep's lock and deleted, exit 0.
+    clearsweep's lock holds its mark (dataset.LOCK_MARK)."""
+    parts = parts_dir_for(folder / "sw.nc")
+    parts.mkdir()
+    (parts / ".lock").write_bytes(b"")
+    one_error_line(sweep(), 2, "sw.nc.parts holds 1 file(s) that clearsweep did not write (.lock)")
+    assert [p.name for p in parts.iterdir()] == [".lock"] and not (folder / "sw.nc").exists()
+
+
+def test_a_sweep_lock_holds_clearsweeps_mark_and_goes_after(folder):
+    from clearsweep.dataset import LOCK_MARK
+
+    with PartStore(folder / "o.nc.parts") as store:
+        store.open()
+        assert (store.directory / ".lock").read_bytes() == LOCK_MARK
+        assert store.strangers() == []
+    store.remove()
+    assert not store.directory.exists()
+
+
+def test_a_users_file_named_like_the_life_checkpoints_lock_is_left_alone(folder):
+    """Was: `life -o l.nc` deleted the user's l.nc.life-checkpoint.lock, exit 0."""
+    (folder / "l.nc.life-checkpoint.lock").write_text("my notes\n")
+    result = invoke("life", "case.yaml", "-o", "l.nc", "-q", *sets(QUICK))
+    one_error_line(result, 2, "l.nc.life-checkpoint.lock is not a lock file clearsweep wrote")
+    assert (folder / "l.nc.life-checkpoint.lock").read_text() == "my notes\n"
+    assert not (folder / "l.nc").exists()

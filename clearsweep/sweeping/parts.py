@@ -44,6 +44,8 @@ import xarray as xr
 
 from ..config import Config
 from ..dataset import (
+    ForeignLock,
+    holds_lock_mark,
     lock_exclusively,
     open_results,
     replaced_on_success,
@@ -390,7 +392,10 @@ class PartStore:
                              "cases, overwrite deletes them")
         self._refuse_strangers()        # before the lock file is made in a folder not ours
         self.directory.mkdir(parents=True, exist_ok=True)
-        fd = lock_exclusively(self.directory / LOCK_NAME)
+        try:
+            fd = lock_exclusively(self.directory / LOCK_NAME)
+        except ForeignLock as exc:
+            raise StoreError(str(exc)) from None
         if fd is None:
             raise StoreError(f"{self.directory} is in use by another sweep; wait for it to "
                              "finish or write to another output file")
@@ -449,7 +454,7 @@ class PartStore:
         if name == LOG_NAME:
             return _is_ledger(path)
         if name == LOCK_NAME:
-            return path.stat().st_size == 0       # the lock file is never written to
+            return holds_lock_mark(path)           # it holds the mark clearsweep writes
         if _TEMPORARY.fullmatch(name):
             return True
         if not name.endswith(PART_SUFFIX) or name.startswith("."):
