@@ -338,6 +338,13 @@ ROUND4_INTEGRITY = [
      ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
       "-o", t / "res.nc"],
      2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.lock)"),
+    ("sweep over a user's file in OUT.parts named like a part temporary (issue 40, item 3; "
+     "was: deleted it, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or
+     (t / "res.nc.parts" / ".thesis.nc.v2.tmp").write_text("draft\n") and
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.thesis.nc.v2.tmp)"),
     ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
      "exit 0)",
      lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and

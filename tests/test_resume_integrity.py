@@ -449,3 +449,29 @@ def test_a_users_file_named_like_the_life_checkpoints_lock_is_left_alone(folder)
     one_error_line(result, 2, "l.nc.life-checkpoint.lock is not a lock file clearsweep wrote")
     assert (folder / "l.nc.life-checkpoint.lock").read_text() == "my notes\n"
     assert not (folder / "l.nc").exists()
+
+
+def test_a_users_file_named_like_a_part_temporary_is_left_alone(folder):
+    """Was: `.thesis.nc.v2.tmp` in OUT.parts/ was taken for a part's temporary file and
+    deleted, exit 0. A temporary is clearsweep's only when named with a case key and begun
+    as the netCDF4 file it writes."""
+    assert sweep("--keep-parts").exit_code == 0
+    (folder / "sw.nc").unlink()
+    parts = parts_dir_for(folder / "sw.nc")
+    (parts / ".thesis.nc.v2.tmp").write_text("draft\n")
+    (parts / ".0123456789abcdef.nc.42.abc_9.tmp").write_text("mine too\n")
+    one_error_line(sweep("--resume"), 2, "holds 2 file(s) that clearsweep did not write "
+                   "(.0123456789abcdef.nc.42.abc_9.tmp, .thesis.nc.v2.tmp)")
+    assert (parts / ".thesis.nc.v2.tmp").read_text() == "draft\n"
+    assert (parts / ".0123456789abcdef.nc.42.abc_9.tmp").read_text() == "mine too\n"
+
+
+def test_a_temporary_a_killed_part_write_left_is_removed_on_resume(folder):
+    assert sweep("--keep-parts").exit_code == 0
+    (folder / "sw.nc").unlink()
+    parts = parts_dir_for(folder / "sw.nc")
+    part = sorted(parts.glob("*.nc"))[0]
+    left = parts / f".{part.name}.4242.k1lled.tmp"
+    left.write_bytes(part.read_bytes()[:2048])        # cut short, as a kill leaves it
+    assert sweep("--resume").exit_code == 0
+    assert not left.exists() and (folder / "sw.nc").exists()

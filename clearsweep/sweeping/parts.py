@@ -67,8 +67,24 @@ KEY_ATTR = "clearsweep_case_key"
 #: (:func:`clearsweep.params.run_identity`), to say what changed when it is refused.
 IDENTITY_ATTR = "clearsweep_case_identity"
 #: The temporary file of a part being written (``replaced_on_success``'s naming,
-#: ``.KEY.nc.PID.XXXX.tmp``).
-_TEMPORARY = re.compile(r"\.[^/]+\.nc\.[A-Za-z0-9_.]+\.tmp")
+#: ``.KEY.nc.PID.XXXX.tmp``, KEY a case key); it is clearsweep's only when it also begins as
+#: the netCDF4 (HDF5) file it writes does (:data:`_HDF5_SIGNATURE`, :func:`_is_temporary`).
+_TEMPORARY = re.compile(r"\.[0-9a-f]{%d}\.nc\.[0-9]+\.[A-Za-z0-9_]+\.tmp" % HASH_LENGTH)
+#: The first bytes netCDF4 writes in a new file (HDF5's superblock signature).
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _is_temporary(path: Path) -> bool:
+    """Whether ``path`` is a part's temporary file that clearsweep wrote: named as
+    :data:`_TEMPORARY`, a plain file that begins with :data:`_HDF5_SIGNATURE`. A user's file
+    named alike (``.thesis.nc.v2.tmp``) was deleted before (issue 40, item 3)."""
+    if not _TEMPORARY.fullmatch(path.name) or path.is_symlink() or not path.is_file():
+        return False
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(_HDF5_SIGNATURE)) == _HDF5_SIGNATURE
+    except OSError:
+        return False
 #: Compression of numeric variables, in parts and in the assembled file.
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.
@@ -456,7 +472,7 @@ class PartStore:
         if name == LOCK_NAME:
             return holds_lock_mark(path)           # it holds the mark clearsweep writes
         if _TEMPORARY.fullmatch(name):
-            return True
+            return _is_temporary(path)
         if not name.endswith(PART_SUFFIX) or name.startswith("."):
             return False
         h = name[: -len(PART_SUFFIX)]
@@ -576,7 +592,7 @@ class PartStore:
 
     def _remove_temporaries(self) -> None:
         for tmp in self.directory.glob(".*.tmp"):
-            if _TEMPORARY.fullmatch(tmp.name):
+            if _is_temporary(tmp):
                 tmp.unlink(missing_ok=True)
 
     # ------------------------------------------------------------------ parts
