@@ -292,6 +292,16 @@ def checkpoint_with_status(tmp: Path, status: str) -> Path:
     return save_checkpoint(checkpoint_path_for(tmp / "res.nc"), cfg, state, 0.0)
 
 
+def users_part_in_ledger(tmp: Path) -> Path:
+    """``res.nc.parts`` holding a user's netCDF file named like a part and a ledger whose
+    ``done`` line names it (without the content hash clearsweep records)."""
+    parts = tmp / "res.nc.parts"
+    parts.mkdir()
+    xr.Dataset({"x": ("i", [1.0, 2.0])}).to_netcdf(parts / "fedcba9876543210.nc")
+    (parts / "sweep.log").write_text('{"event": "done", "hash": "fedcba9876543210"}\n')
+    return parts
+
+
 def copied(src: Path, dst: Path) -> Path:
     dst.write_bytes(src.read_bytes())
     return dst
@@ -345,6 +355,12 @@ ROUND4_INTEGRITY = [
      ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
       "-o", t / "res.nc"],
      2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.thesis.nc.v2.tmp)"),
+    ("sweep --overwrite over a user's netCDF named like a part and named in a ledger line "
+     "(issue 40, item 3; was: deleted it, exit 0)",
+     lambda t, f: users_part_in_ledger(t) and
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "--overwrite", "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (fedcba9876543210.nc)"),
     ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
      "exit 0)",
      lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and
@@ -1414,7 +1430,10 @@ def test_the_skip_rule_the_wear_through_message_names_runs_the_coated_designs(tm
 def test_a_damaged_part_is_named_and_its_case_runs_again(tmp_path):
     """Before: "cannot write OUT.parts/H.nc: NetCDF: HDF error; ... make room and run again
     with --resume", and every --resume ended the same way. Now --resume names the damaged
-    part, counts it as a case to simulate, deletes it and runs its case again."""
+    part, counts it as a case to simulate, deletes it and runs its case again. A part damaged
+    past its mark is no longer provably clearsweep's (issue 40, item 3: the ledger line holds
+    the content hash of what was written): it is refused, named and left alone, and once
+    moved away its case runs again."""
     config, out = two_case_sweep(tmp_path), tmp_path / "two.nc"
     argv = ["sweep", config, "-o", str(out), "--workers", "1", "--no-progress"]
     assert CliRunner().invoke(main, [*argv, "--keep-parts"]).exit_code == 0
@@ -1424,11 +1443,12 @@ def test_a_damaged_part_is_named_and_its_case_runs_again(tmp_path):
     part = sorted((tmp_path / "two.nc.parts").glob("*.nc"))[0]
     part.write_bytes(part.read_bytes()[:300])
     result = CliRunner().invoke(main, [*argv, "--resume"])
+    assert result.exit_code == 2 and f"did not write ({part.name})" in result.stderr
+    assert len(part.read_bytes()) == 300
+    part.unlink()
+    result = CliRunner().invoke(main, [*argv, "--resume"])
     assert result.exit_code == 0, result.output
     assert "2 cases, 1 to simulate (1 finished before, kept)" in result.stderr
-    assert (f"clearsweep: warning: the finished part {part} cannot be read or does not hold "
-            "the case it is filed under (truncated, renamed or swapped): deleted, its case "
-            "runs again") in result.stderr.splitlines()
     with xr.open_dataset(out) as ds:
         for name in ("wear_volume", "status"):
             np.testing.assert_array_equal(ds[name].values, reference[name].values)

@@ -325,6 +325,19 @@ def _mark_attributes(path: str, inode: int, size: int, mtime_ns: int) -> tuple[A
         return None, None
 
 
+def file_sha256(path: str | os.PathLike) -> str | None:
+    """Hex SHA-256 of the file at ``path`` (None where it cannot be read): what a ledger's
+    ``done`` line records of the part it names."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return None
+    return digest.hexdigest()
+
+
 def _is_ledger(path: Path) -> bool:
     """Whether ``path`` is a ledger clearsweep wrote: empty, or its first line one JSON event."""
     try:
@@ -461,9 +474,10 @@ class PartStore:
                      "filed under (renamed, swapped or truncated): its case runs again")
         return finished
 
-    def _own(self, name: str, ledger: Collection[str]) -> bool:
+    def _own(self, name: str, ledger: Mapping[str, str]) -> bool:
         """Whether the entry ``name`` of the folder is a file clearsweep wrote: the log, the
-        lock, a part's temporary file, or a part that carries the mark or that the ledger names."""
+        lock, a part's temporary file, or a part that carries the mark or whose name and
+        content hash (:func:`file_sha256`) a ``done`` line of the ledger records."""
         path = self.directory / name
         if path.is_symlink() or not path.is_file():
             return False
@@ -476,11 +490,17 @@ class PartStore:
         if not name.endswith(PART_SUFFIX) or name.startswith("."):
             return False
         h = name[: -len(PART_SUFFIX)]
-        return h in ledger or read_mark(path)[0] is not None
+        if read_mark(path)[0] is not None:
+            return True
+        digest = ledger.get(h)
+        return digest is not None and digest == file_sha256(path)
 
-    def _ledger(self) -> set[str]:
-        """Keys of the parts the ledger (``sweep.log``) says a sweep wrote here."""
-        return {str(r["hash"]) for r in self.events("done") if r.get("hash")}
+    def _ledger(self) -> dict[str, str]:
+        """Key -> content hash (SHA-256) of the parts the ledger (``sweep.log``) says a sweep
+        wrote here; a line of an older ledger, without the hash, proves nothing (issue 40,
+        item 3: a user's file named like a part, plus a ledger line naming it, was deleted)."""
+        return {str(r["hash"]): str(r["sha256"]) for r in self.events("done")
+                if r.get("hash") and isinstance(r.get("sha256"), str)}
 
     def strangers(self) -> list[str]:
         """Names of the entries in the folder that clearsweep did not write (sorted)."""

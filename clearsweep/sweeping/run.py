@@ -32,7 +32,7 @@ from ..dataset import (
 from .assemble import write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .guard import require_main_guard
-from .parts import NOT_FAILED, PartStore, part_identity, parts_dir_for, with_identity
+from .parts import NOT_FAILED, PartStore, file_sha256, part_identity, parts_dir_for, with_identity
 from .plan import MAX_CASES, SweepPlan, expand
 from .stores import STORES
 from .worker import CaseTask, _receipt, _worker_died
@@ -390,7 +390,8 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         if isinstance(result, xr.Dataset):
             store.write(h, with_identity(result, part_identity(runnable[h], plan.store)))
             result = _receipt(result)
-        store.log("done", hash=h, **result)
+        # the part's content hash: a ledger line proves a file clearsweep's only with it
+        store.log("done", hash=h, sha256=file_sha256(store.path(h)), **result)
         failed += result["status"] not in NOT_FAILED
         done += 1
         bar.set_postfix(failed=failed, refresh=False)
