@@ -15,13 +15,16 @@ A sweep writing ``OUT.nc`` keeps its finished cases in the folder
   most a temporary ``.<key>.nc.PID.XXXX.tmp`` file, which the next run removes.
 - ``sweep.log``: the folder's ledger, one JSON line per event (``run``, ``done``,
   ``interrupted``, ``assembled``), appended by the driver; ``done`` lines carry the
-  case key, its status and the run id, so a log tells which run computed which case.
-- ``.lock``: an exclusive ``flock`` held while a sweep uses the folder, so
+  case key, the part's content hash (SHA-256), its status and the run id, so a log tells
+  which run computed which case.
+- ``.lock``: holding ``dataset.LOCK_MARK``, an exclusive ``flock`` held while a sweep uses
+  the folder, so
   two sweeps cannot write the same parts; the kernel drops it when the
   process ends, however it ends.
 
 clearsweep deletes only these files, and only its own: a part is its own when it
-carries the mark or the ledger names it. A folder that holds anything else (a file the
+carries the mark or a ledger line names it with its content hash; a temporary when it
+begins as a netCDF4 file; a lock when it holds the lock's mark. A folder that holds anything else (a file the
 user put there, a part of another tool) is refused in one line, whatever the options,
 and after a sweep is written the folder is removed only if nothing else is in it.
 """
