@@ -10,6 +10,7 @@ import re
 import shutil
 import sys
 import tempfile
+import time
 from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
@@ -228,9 +229,45 @@ def replaced_on_success(path: str | os.PathLike):
     os.replace(tmp, path)
 
 
+#: What a lock file that clearsweep makes holds: a file at a lock's path is taken (and
+#: removed after) only when it holds exactly this (issue 40, item 3: a user's file named
+#: like a lock was deleted).
+LOCK_MARK = b"clearsweep lock\n"
+
+
+class ForeignLock(OSError):
+    """A file at a lock's path that clearsweep did not write (:data:`LOCK_MARK`)."""
+
+    def __init__(self, path: Path):
+        super().__init__(f"{path} is not a lock file clearsweep wrote; clearsweep deletes only "
+                         "its own files: move it away, or write to another output file")
+        self.path = path
+
+
+def holds_lock_mark(path: str | os.PathLike, fd: int | None = None) -> bool:
+    """Whether the file at ``path`` (or open as ``fd``) holds :data:`LOCK_MARK` only. A lock
+    file is created and its mark written at once; an empty one is read again for up to 0.5 s
+    before it is taken for another file."""
+    for _ in range(50):
+        try:
+            if fd is not None:
+                data = os.pread(fd, len(LOCK_MARK) + 1, 0)
+            else:
+                with open(path, "rb") as f:
+                    data = f.read(len(LOCK_MARK) + 1)
+        except OSError:
+            return False
+        if data:
+            return data == LOCK_MARK
+        time.sleep(0.01)
+    return False
+
+
 def lock_exclusively(path: str | os.PathLike) -> int | None:
-    """Open ``path`` (created, with its folder, where missing) and take an exclusive
-    ``flock`` on it without waiting; the descriptor, or None where another process holds it.
+    """Open ``path`` (created, with its folder, where missing, holding :data:`LOCK_MARK`) and
+    take an exclusive ``flock`` on it without waiting; the descriptor, or None where another
+    process holds it. A file already at ``path`` that does not hold the mark is not
+    clearsweep's: :class:`ForeignLock`, the file untouched.
 
     The lock counts only once the file locked is still the one at ``path``: a process that
     opened the file just before its holder removed it (holders remove their lock file while
@@ -240,7 +277,18 @@ def lock_exclusively(path: str | os.PathLike) -> int | None:
     path = Path(path)
     while True:
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
+            os.write(fd, LOCK_MARK)
+        except FileExistsError:
+            try:
+                fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+            except FileNotFoundError:   # removed by its holder in between: make it again
+                continue
+            except OSError:             # a link, or a file not ours to open
+                raise ForeignLock(path) from None
+            if not holds_lock_mark(path, fd):
+                os.close(fd)
+                raise ForeignLock(path) from None
         except FileNotFoundError:       # the folder was removed by the holder: make it again
             path.parent.mkdir(parents=True, exist_ok=True)
             continue

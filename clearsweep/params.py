@@ -214,7 +214,8 @@ def identity_changes(theirs: dict[str, Any], ours: dict[str, Any], limit: int = 
 
     def name(key: str) -> str:
         section, _, rest = key.partition(".")
-        return {"config": rest, "materials": f"materials {rest}"}.get(section, "clearsweep version")
+        return {"config": rest, "materials": f"materials {rest}",
+                "store": "store"}.get(section, "clearsweep version")
 
     def shown(key: str, values: dict[str, Any]) -> str:
         return repr(values[key]) if key in values else "absent"

@@ -43,7 +43,7 @@ from .budget import (
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
-from .dataset import history_line, lock_exclusively, replaced_on_success, with_command_line
+from .dataset import ForeignLock, history_line, lock_exclusively, replaced_on_success, with_command_line
 from .params import Packed, identity_changes, joint_configs, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
@@ -542,6 +542,49 @@ def _checkpoint_layout_problem(saved: dict[str, np.ndarray], keys: list[str],
     for key, column in columns.items():
         if (column.dtype.kind in "US") != (key == "block_status"):
             return f"row {key} holds {column.dtype} values"
+    return _checkpoint_invariant_problem(saved, columns, min(lengths))
+
+
+def _checkpoint_invariant_problem(saved: dict[str, np.ndarray], columns: dict[str, np.ndarray],
+                                  blocks: int) -> str | None:
+    """What breaks the invariants of a life run's state in a checkpoint of the right layout,
+    naming the field, or None: wear only adds (depths and volumes non-negative, the volumes
+    non-decreasing from block to block, each block's volume non-negative), the cycles increase,
+    every block has its volume, and each block's status is one the kernel reports. A
+    hand-edited checkpoint was resumed, some with exit 0 (issue 40, item 8)."""
+    from .variables import JOINTS
+
+    volumes = saved["block_volumes"]
+    if volumes.dtype.kind not in "fiu" or volumes.shape != (blocks, len(JOINTS)):
+        return (f"block_volumes has shape {volumes.shape}, expected {(blocks, len(JOINTS))} "
+                "(one row of joint volumes a block)")
+    for name, array in (("wmap", saved["wmap"]), ("wvol", saved["wvol"]),
+                        ("block_volumes", volumes)):
+        if not (np.isfinite(array).all() and (array >= 0.0).all()):
+            return f"{name} holds values that are not finite numbers >= 0"
+    worn = columns.get("wear_volume")
+    if worn is not None:
+        if worn.dtype.kind not in "fiu" or not (np.isfinite(worn).all() and (worn >= 0.0).all()):
+            return "row wear_volume holds values that are not finite numbers >= 0"
+        if (np.diff(worn, axis=0) < 0.0).any() or (saved["wvol"] < worn[-1]).any():
+            return "row wear_volume decreases from one block to the next (wear only adds)"
+    cycle = columns.get("cycle")
+    if cycle is not None and (cycle.dtype.kind not in "fiu" or cycle.ndim != 1
+                              or not np.isfinite(cycle).all() or (cycle <= 0.0).any()
+                              or (np.diff(cycle) <= 0.0).any()
+                              or cycle[-1] > saved["cycles"]):
+        return ("row cycle is not increasing positive revolutions up to the checkpoint's "
+                "cycles")
+    snapshots = saved["snapshot_cycle"]
+    if not np.isfinite(snapshots).all() or (np.diff(snapshots) <= 0.0).any():
+        return "snapshot_cycle is not increasing"
+    status = columns.get("block_status")
+    known = set(L.STATUS_NAMES.values())
+    if status is not None:
+        unknown = sorted({str(s) for s in np.ravel(status)} - known)
+        if unknown:
+            return (f"row block_status holds {unknown[0]!r}, not one of "
+                    f"{', '.join(sorted(known))}")
     return None
 
 
@@ -782,7 +825,10 @@ def checkpoint_lock(checkpoint: str | os.PathLike | None) -> Iterator[None]:
         yield
         return
     lock = Path(checkpoint).with_name(Path(checkpoint).name + ".lock")
-    fd = lock_exclusively(lock)
+    try:
+        fd = lock_exclusively(lock)
+    except ForeignLock as exc:
+        raise CheckpointError(str(exc)) from None
     if fd is None:
         raise CheckpointError(f"{checkpoint} is in use by another life run writing the same "
                               "output; wait for it to finish or write to another output file")

@@ -272,14 +272,13 @@ def parts_made_with(tmp: Path, section: str, key: str, value) -> Path:
     """A two-case sweep file whose parts folder ``res.nc.parts`` holds the part of its first
     case as made with ``section.key = value`` in its identity (``run_identity``): other
     materials values or another clearsweep version. Returns the sweep file."""
-    from clearsweep.params import run_identity
     from clearsweep.sweeping import expand
-    from clearsweep.sweeping.parts import case_hash, with_identity, write_part
+    from clearsweep.sweeping.parts import case_hash, part_identity, with_identity, write_part
 
     path = sweep_file(tmp, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n")
-    identity = run_identity(next(iter(expand(path).runnable().values())))
-    if section == "version":
-        identity["version"] = value
+    identity = part_identity(next(iter(expand(path).runnable().values())), "summary")
+    if section in ("version", "store"):
+        identity[section] = value
     else:
         identity[section]["steel"][key] = value
     (tmp / "res.nc.parts").mkdir()
@@ -309,6 +308,30 @@ def checkpoint_made_with(tmp: Path, wear_coefficient: float) -> Path:
     return path
 
 
+def checkpoint_with_status(tmp: Path, status: str) -> Path:
+    """A life checkpoint ``res.nc.life-checkpoint`` of LIFE (SHORT_LIFE) of its own inputs and
+    layout after one block whose status reads ``status``; returns the checkpoint."""
+    from clearsweep.config import load_config
+    from clearsweep.service_life import LifeState, checkpoint_path_for, save_checkpoint
+    from clearsweep.variables import JOINTS
+
+    cfg = load_config(LIFE, [o for o in SHORT_LIFE if o != "--set"])
+    wmap, volumes = np.zeros((len(JOINTS), *cfg.wear.map)), np.zeros(len(JOINTS))
+    state = LifeState(wmap, volumes, 1.0, [{"cycle": 1.0, "block_status": status}],
+                      snapshots=[(1.0, wmap)], block_volumes=[volumes])
+    return save_checkpoint(checkpoint_path_for(tmp / "res.nc"), cfg, state, 0.0)
+
+
+def users_part_in_ledger(tmp: Path) -> Path:
+    """``res.nc.parts`` holding a user's netCDF file named like a part and a ledger whose
+    ``done`` line names it (without the content hash clearsweep records)."""
+    parts = tmp / "res.nc.parts"
+    parts.mkdir()
+    xr.Dataset({"x": ("i", [1.0, 2.0])}).to_netcdf(parts / "fedcba9876543210.nc")
+    (parts / "sweep.log").write_text('{"event": "done", "hash": "fedcba9876543210"}\n')
+    return parts
+
+
 def copied(src: Path, dst: Path) -> Path:
     dst.write_bytes(src.read_bytes())
     return dst
@@ -330,10 +353,44 @@ ROUND4_INTEGRITY = [
      lambda t, f: ["sweep", parts_made_with(t, "version", "", "0.0.1"), "--resume",
                    "-o", t / "res.nc"],
      2, "clearsweep version: '0.0.1' there"),
+    ("sweep --resume of a summary sweep over parts of a full one (issue 40, item 2; was: "
+     "parts reused, exit 0, a file missing the full store's variables)",
+     lambda t, f: ["sweep", parts_made_with(t, "store", "", "full"), "--resume",
+                   "-o", t / "res.nc"],
+     2, "store: 'full' there, 'summary' here"),
     ("life --resume over a checkpoint of other materials values (was: continued, exit 0)",
      lambda t, f: checkpoint_made_with(t, 1e-13) and
      ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
      2, "of other inputs (materials MoS2.wear_coefficient_m2_per_N: 1e-13 there"),
+    ("life --resume over a checkpoint with a hand-edited block status (issue 40, item 8; was: "
+     "read as it stood, here a KeyError traceback)",
+     lambda t, f: checkpoint_with_status(t, "garbage") and
+     ["life", LIFE, *SHORT_LIFE, "--resume", "-o", t / "res.nc"],
+     2, "row block_status holds 'garbage', not one of"),
+    ("life over the user's file at OUT.life-checkpoint.lock (issue 40, item 3; was: deleted "
+     "it, exit 0)",
+     lambda t, f: (t / "res.nc.life-checkpoint.lock").write_text("my notes\n") and
+     ["life", LIFE, *SHORT_LIFE, "-o", t / "res.nc"],
+     2, "res.nc.life-checkpoint.lock is not a lock file clearsweep wrote"),
+    ("sweep over an empty .lock of the user's in OUT.parts (issue 40, item 3; was: deleted "
+     "it, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or (t / "res.nc.parts" / ".lock").touch() or
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.lock)"),
+    ("sweep over a user's file in OUT.parts named like a part temporary (issue 40, item 3; "
+     "was: deleted it, exit 0)",
+     lambda t, f: (t / "res.nc.parts").mkdir() or
+     (t / "res.nc.parts" / ".thesis.nc.v2.tmp").write_text("draft\n") and
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (.thesis.nc.v2.tmp)"),
+    ("sweep --overwrite over a user's netCDF named like a part and named in a ledger line "
+     "(issue 40, item 3; was: deleted it, exit 0)",
+     lambda t, f: users_part_in_ledger(t) and
+     ["sweep", sweep_file(t, "sweep:\n  grid:\n    joints.B.clearance: [1.0e-4, 2.0e-4]\n"),
+      "--overwrite", "-o", t / "res.nc"],
+     2, "res.nc.parts holds 1 file(s) that clearsweep did not write (fedcba9876543210.nc)"),
     ("life --discard-checkpoint over the user's file at OUT.life-checkpoint (was: deleted it, "
      "exit 0)",
      lambda t, f: (t / "res.nc.life-checkpoint").write_text("my notes\n") and
@@ -1577,7 +1634,10 @@ def test_the_skip_rule_the_wear_through_message_names_runs_the_coated_designs(tm
 def test_a_damaged_part_is_named_and_its_case_runs_again(tmp_path):
     """Before: "cannot write OUT.parts/H.nc: NetCDF: HDF error; ... make room and run again
     with --resume", and every --resume ended the same way. Now --resume names the damaged
-    part, counts it as a case to simulate, deletes it and runs its case again."""
+    part, counts it as a case to simulate, deletes it and runs its case again. A part damaged
+    past its mark is no longer provably clearsweep's (issue 40, item 3: the ledger line holds
+    the content hash of what was written): it is refused, named and left alone, and once
+    moved away its case runs again."""
     config, out = two_case_sweep(tmp_path), tmp_path / "two.nc"
     argv = ["sweep", config, "-o", str(out), "--workers", "1", "--no-progress"]
     assert CliRunner().invoke(main, [*argv, "--keep-parts"]).exit_code == 0
@@ -1587,11 +1647,12 @@ def test_a_damaged_part_is_named_and_its_case_runs_again(tmp_path):
     part = sorted((tmp_path / "two.nc.parts").glob("*.nc"))[0]
     part.write_bytes(part.read_bytes()[:300])
     result = CliRunner().invoke(main, [*argv, "--resume"])
+    assert result.exit_code == 2 and f"did not write ({part.name})" in result.stderr
+    assert len(part.read_bytes()) == 300
+    part.unlink()
+    result = CliRunner().invoke(main, [*argv, "--resume"])
     assert result.exit_code == 0, result.output
     assert "2 cases, 1 to simulate (1 finished before, kept)" in result.stderr
-    assert (f"clearsweep: warning: the finished part {part} cannot be read or does not hold "
-            "the case it is filed under (truncated, renamed or swapped): deleted, its case "
-            "runs again") in result.stderr.splitlines()
     with xr.open_dataset(out) as ds:
         for name in ("wear_volume", "status"):
             np.testing.assert_array_equal(ds[name].values, reference[name].values)

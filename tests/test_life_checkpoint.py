@@ -186,13 +186,17 @@ def test_a_second_life_run_to_the_same_output_is_refused_while_the_first_runs(tm
     with and without --resume, and the first's checkpoint is left as it was."""
     import fcntl
 
+    from clearsweep.dataset import LOCK_MARK
+
     out = tmp_path / "l.nc"
     checkpoint = checkpoint_path_for(out)
     with pytest.raises(LifeInterrupted):
         life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(2))
     before = checkpoint.read_bytes()
     lock = checkpoint.with_name(checkpoint.name + ".lock")
-    with open(lock, "w") as held:       # the first run, still going
+    with open(lock, "wb") as held:      # the first run, still going: its lock holds the mark
+        held.write(LOCK_MARK)
+        held.flush()
         fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
         for extra in ([], ["--resume"], ["--discard-checkpoint"]):
             result = _cli("life", CASE, "-o", out, "-q", *sets(QUICK), *extra)
@@ -216,3 +220,45 @@ def test_a_run_stopped_by_max_blocks_ends_on_its_last_block_s_map():
         assert float(ds.wear_map.sel(joint=joint).max()) == float(last.wear_depth_max.sel(joint=joint))
     assert float(ds.snapshot_cycle[-1]) == float(ds.cycle[-1])
     np.testing.assert_array_equal(ds.wear_map_snapshot.isel(snapshot=-1).values, ds.wear_map.values)
+
+
+def _edited(path, name: str, edit) -> None:
+    """Rewrite the checkpoint at ``path`` with ``edit`` applied to its array ``name``."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays[name] = edit(arrays[name])
+    with open(path, "wb") as f:
+        np.savez(f, **arrays)
+
+
+#: Hand edits of a checkpoint that keep its layout and break its invariants (issue 40, item
+#: 8): (array, edit, the field the refusal names).
+EDITS = [
+    ("wvol", lambda a: -np.abs(a) - 1e-12, "wvol holds values that are not finite numbers >= 0"),
+    ("row_wear_volume", lambda a: a[::-1], "row wear_volume decreases"),
+    ("row_cycle", lambda a: a[::-1], "row cycle is not increasing"),
+    ("snapshot_cycle", lambda a: a[::-1], "snapshot_cycle is not increasing"),
+    ("row_block_status", lambda a: np.array(["garbage"] * len(a)), "row block_status holds "
+                                                                  "'garbage'"),
+    ("block_volumes", lambda a: a[:-1], "block_volumes has shape"),
+    ("block_volumes", lambda a: -np.abs(a) - 1e-18, "block_volumes holds values"),
+]
+
+
+@pytest.mark.parametrize("name, edit, words", EDITS,
+                         ids=[f"{e[0]}-{i}" for i, e in enumerate(EDITS)])
+def test_a_hand_edited_checkpoint_is_refused_naming_the_field(tmp_path, name, edit, words):
+    """Was: a negative worn volume, reversed cycles, garbage block statuses and truncated
+    block volumes were resumed, some with exit 0."""
+    out = tmp_path / "l.nc"
+    checkpoint = checkpoint_path_for(out)
+    with pytest.raises(LifeInterrupted):
+        life(CASE, QUICK, checkpoint=checkpoint, progress=_interrupt_at_block(4))
+    _edited(checkpoint, name, edit)
+    before = checkpoint.read_bytes()
+    result = _cli("life", CASE, "-o", out, "-q", "--resume", *sets(QUICK))
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("clearsweep: error: "), result.stderr
+    assert words in lines[0] and str(checkpoint) in lines[0], lines[0]
+    assert checkpoint.read_bytes() == before and not out.exists()

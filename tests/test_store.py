@@ -104,7 +104,8 @@ def test_written_files_have_ordinary_permissions(tmp_path, parts):
 def test_open_removes_temporaries_of_a_killed_run(tmp_path):
     d = tmp_path / "o.nc.parts"
     d.mkdir()
-    (d / ".cccc.nc.x1y2.tmp").write_bytes(b"half a file")
+    # replaced_on_success's name for a case key, begun as netCDF4 (HDF5) begins a file
+    (d / ".cccccccccccccccc.nc.123.x1y2.tmp").write_bytes(b"\x89HDF\r\n\x1a\nhalf a file")
     with P.PartStore(d) as store:
         assert store.open() == set()
     assert not list(d.glob("*.tmp"))

@@ -12,6 +12,7 @@ case, the coordinates and, within a budget, the small values, never the sweep's 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import sys
 from collections.abc import Callable, Mapping, Sequence
@@ -26,6 +27,7 @@ import numpy as np
 from ..dataset import replaced_on_success, write_errors_as_oserror
 from .parts import (
     COMPRESSION,
+    IDENTITY_ATTR,
     KEY_ATTR,
     MESSAGE_ATTRS,
     NOT_FAILED,
@@ -185,7 +187,18 @@ def _union(old: np.ndarray | None, new: np.ndarray) -> np.ndarray:
     return np.array(list(seen), dtype=object if _is_text(old.dtype) else None)
 
 
-def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
+def _made_for(nc) -> str:
+    """The ``store`` the part ``nc`` records it was made for (``"none recorded"`` for a part
+    of an older clearsweep)."""
+    try:
+        made = json.loads(getattr(nc, IDENTITY_ATTR, "null") or "null")
+    except (TypeError, json.JSONDecodeError):
+        made = None
+    store = made.get("store") if isinstance(made, dict) else None
+    return store if isinstance(store, str) else "none recorded"
+
+
+def _scan(slots: Sequence[SweepSlot], store: PartStore, holds: str | None = None) -> _Template:
     """First pass: variables, dtypes, attributes and case coordinates of every part, and
     what the copy pass needs of each (:class:`_PartCopy`: all but the whole-case chunks),
     within :data:`SCAN_CACHE_BYTES`."""
@@ -202,6 +215,10 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore) -> _Template:
                                  "no case key") + f", not the case {h} it is filed under "
                                  "(renamed or swapped); run the sweep again with --resume, "
                                  "which computes that case again")
+            if holds is not None and (made := _made_for(nc)) != holds:
+                raise StoreError(f"{store.path(h)} was made for store: {made}, not for this "
+                                 f"sweep's store: {holds}; resume that sweep with its own store, "
+                                 "or run this one with --overwrite")
             tpl.statuses[h] = str(_values(nc["status"]).ravel()[0])
             for dim, d in nc.dimensions.items():
                 if dim in nc.variables:
@@ -479,7 +496,8 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                        slots: Sequence[SweepSlot], store: PartStore,
                        attrs: Mapping | None = None,
                        check: Callable[[], None] | None = None,
-                       finish: Callable[[Path], None] | None = None) -> dict[str, int]:
+                       finish: Callable[[Path], None] | None = None,
+                       holds: str | None = None) -> dict[str, int]:
     """Assemble the parts into one netCDF4 file, one case at a time, and rename it into place.
 
     Parameters
@@ -504,6 +522,9 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     finish
         Called with the complete temporary file before it is renamed into
         place, to add variables computed from it (the ensemble statistics).
+    holds
+        The sweep's ``store``: every part must record that it was made for it (its
+        identity, :func:`clearsweep.sweeping.parts.part_identity`), or nothing is written.
 
     Returns
     -------
@@ -530,7 +551,7 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     shape = tuple(sweep_dims.values())
     if int(np.prod(shape)) != len(slots):
         raise ValueError(f"{len(slots)} slots for a sweep of shape {shape}")
-    tpl = _scan(slots, store)
+    tpl = _scan(slots, store, holds)
     counts = {"cases": len(slots),
               "failed": sum(1 for s in slots if s.hash is not None
                             and tpl.statuses[s.hash] not in NOT_FAILED),

@@ -15,13 +15,16 @@ A sweep writing ``OUT.nc`` keeps its finished cases in the folder
   most a temporary ``.<key>.nc.PID.XXXX.tmp`` file, which the next run removes.
 - ``sweep.log``: the folder's ledger, one JSON line per event (``run``, ``done``,
   ``interrupted``, ``assembled``), appended by the driver; ``done`` lines carry the
-  case key, its status and the run id, so a log tells which run computed which case.
-- ``.lock``: an exclusive ``flock`` held while a sweep uses the folder, so
+  case key, the part's content hash (SHA-256), its status and the run id, so a log tells
+  which run computed which case.
+- ``.lock``: holding ``dataset.LOCK_MARK``, an exclusive ``flock`` held while a sweep uses
+  the folder, so
   two sweeps cannot write the same parts; the kernel drops it when the
   process ends, however it ends.
 
 clearsweep deletes only these files, and only its own: a part is its own when it
-carries the mark or the ledger names it. A folder that holds anything else (a file the
+carries the mark or a ledger line names it with its content hash; a temporary when it
+begins as a netCDF4 file; a lock when it holds the lock's mark. A folder that holds anything else (a file the
 user put there, a part of another tool) is refused in one line, whatever the options,
 and after a sweep is written the folder is removed only if nothing else is in it.
 """
@@ -45,6 +48,8 @@ from xarray.backends.locks import NETCDFC_LOCK
 
 from ..config import Config
 from ..dataset import (
+    ForeignLock,
+    holds_lock_mark,
     lock_exclusively,
     open_results,
     replaced_on_success,
@@ -66,11 +71,28 @@ KEY_ATTR = "clearsweep_case_key"
 #: (:func:`clearsweep.params.run_identity`), to say what changed when it is refused.
 IDENTITY_ATTR = "clearsweep_case_identity"
 #: The temporary file of a part being written (``replaced_on_success``'s naming,
-#: ``.KEY.nc.PID.XXXX.tmp``).
-_TEMPORARY = re.compile(r"\.[^/]+\.nc\.[A-Za-z0-9_.]+\.tmp")
+#: ``.KEY.nc.PID.XXXX.tmp``, KEY a case key); it is clearsweep's only when it also begins as
+#: the netCDF4 (HDF5) file it writes does (:data:`_HDF5_SIGNATURE`, :func:`_is_temporary`).
+_TEMPORARY = re.compile(r"\.[0-9a-f]{%d}\.nc\.[0-9]+\.[A-Za-z0-9_]+\.tmp" % HASH_LENGTH)
+#: The first bytes netCDF4 writes in a new file (HDF5's superblock signature).
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
 #: Held while this process writes a part with netCDF4 (:func:`_write_plain`): xarray's own
 #: lock of the netCDF-C library, which its reads and writes in this process take too.
 _NETCDF_LOCK = NETCDFC_LOCK
+
+
+def _is_temporary(path: Path) -> bool:
+    """Whether ``path`` is a part's temporary file that clearsweep wrote: named as
+    :data:`_TEMPORARY`, a plain file that begins with :data:`_HDF5_SIGNATURE`. A user's file
+    named alike (``.thesis.nc.v2.tmp``) was deleted before (issue 40, item 3)."""
+    if not _TEMPORARY.fullmatch(path.name) or path.is_symlink() or not path.is_file():
+        return False
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(_HDF5_SIGNATURE)) == _HDF5_SIGNATURE
+    except OSError:
+        return False
 #: Compression of numeric variables, in parts and in the assembled file.
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.
@@ -108,12 +130,19 @@ def case_hash(cfg: Mapping) -> str:
     return hashlib.sha256(canonical_json(cfg).encode("ascii")).hexdigest()[:HASH_LENGTH]
 
 
-def case_key(cfg: Config) -> str:
-    """The key of a case's part: :func:`case_hash` of its identity
+def part_identity(cfg: Config, store: str) -> dict[str, Any]:
+    """The identity of a sweep case's part: :func:`clearsweep.params.run_identity` of its
+    config and the sweep's ``store`` (what the part holds: a part of one store is never
+    resumed or assembled as another's, issue 40)."""
+    return {**run_identity(cfg), "store": store}
+
+
+def case_key(cfg: Config, store: str) -> str:
+    """The key of a case's part: :func:`case_hash` of its identity and the sweep's store
     (:func:`clearsweep.params.run_identity`: resolved config without the materials file's
     path, the materials values it reads, the clearsweep version). Editing the materials
     file, or another version, gives other keys: earlier parts are then not this run's."""
-    return case_hash(run_identity(cfg))
+    return case_hash(part_identity(cfg, store))
 
 
 def parts_dir_for(out: str | os.PathLike) -> Path:
@@ -306,6 +335,19 @@ def _mark_attributes(path: str, inode: int, size: int, mtime_ns: int) -> tuple[A
         return None, None
 
 
+def file_sha256(path: str | os.PathLike) -> str | None:
+    """Hex SHA-256 of the file at ``path`` (None where it cannot be read): what a ledger's
+    ``done`` line records of the part it names."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    except OSError:
+        return None
+    return digest.hexdigest()
+
+
 def _is_ledger(path: Path) -> bool:
     """Whether ``path`` is a ledger clearsweep wrote: empty, or its first line one JSON event."""
     try:
@@ -389,7 +431,10 @@ class PartStore:
                              "cases, overwrite deletes them")
         self._refuse_strangers()        # before the lock file is made in a folder not ours
         self.directory.mkdir(parents=True, exist_ok=True)
-        fd = lock_exclusively(self.directory / LOCK_NAME)
+        try:
+            fd = lock_exclusively(self.directory / LOCK_NAME)
+        except ForeignLock as exc:
+            raise StoreError(str(exc)) from None
         if fd is None:
             raise StoreError(f"{self.directory} is in use by another sweep; wait for it to "
                              "finish or write to another output file")
@@ -439,26 +484,33 @@ class PartStore:
                      "filed under (renamed, swapped or truncated): its case runs again")
         return finished
 
-    def _own(self, name: str, ledger: Collection[str]) -> bool:
+    def _own(self, name: str, ledger: Mapping[str, str]) -> bool:
         """Whether the entry ``name`` of the folder is a file clearsweep wrote: the log, the
-        lock, a part's temporary file, or a part that carries the mark or that the ledger names."""
+        lock, a part's temporary file, or a part that carries the mark or whose name and
+        content hash (:func:`file_sha256`) a ``done`` line of the ledger records."""
         path = self.directory / name
         if path.is_symlink() or not path.is_file():
             return False
         if name == LOG_NAME:
             return _is_ledger(path)
         if name == LOCK_NAME:
-            return path.stat().st_size == 0       # the lock file is never written to
+            return holds_lock_mark(path)           # it holds the mark clearsweep writes
         if _TEMPORARY.fullmatch(name):
-            return True
+            return _is_temporary(path)
         if not name.endswith(PART_SUFFIX) or name.startswith("."):
             return False
         h = name[: -len(PART_SUFFIX)]
-        return h in ledger or read_mark(path)[0] is not None
+        if read_mark(path)[0] is not None:
+            return True
+        digest = ledger.get(h)
+        return digest is not None and digest == file_sha256(path)
 
-    def _ledger(self) -> set[str]:
-        """Keys of the parts the ledger (``sweep.log``) says a sweep wrote here."""
-        return {str(r["hash"]) for r in self.events("done") if r.get("hash")}
+    def _ledger(self) -> dict[str, str]:
+        """Key -> content hash (SHA-256) of the parts the ledger (``sweep.log``) says a sweep
+        wrote here; a line of an older ledger, without the hash, proves nothing (issue 40,
+        item 3: a user's file named like a part, plus a ledger line naming it, was deleted)."""
+        return {str(r["hash"]): str(r["sha256"]) for r in self.events("done")
+                if r.get("hash") and isinstance(r.get("sha256"), str)}
 
     def strangers(self) -> list[str]:
         """Names of the entries in the folder that clearsweep did not write (sorted)."""
@@ -484,8 +536,8 @@ class PartStore:
         runs = self.events("run")
         return runs[-1] if runs else None
 
-    def _closest_change(self, foreign: set[str],
-                        configs: Mapping[str, Config] | None) -> tuple[str, bool] | None:
+    def _closest_change(self, foreign: set[str], configs: Mapping[str, Config] | None,
+                        store: str | None = None) -> tuple[str, bool] | None:
         """What changed between a foreign part's recorded identity and the nearest case of
         this sweep, in words, and whether only the inputs besides the config changed (the
         materials values, the version); None where no part records its identity."""
@@ -495,7 +547,8 @@ class PartStore:
                        for identity in [read_mark(self.path(h))[1]] if identity), None)
         if theirs is None:
             return None
-        ours = [run_identity(cfg) for cfg in list(configs.values())[:256]]
+        ours = [run_identity(cfg) if store is None else part_identity(cfg, store)
+                for cfg in list(configs.values())[:256]]
         same_config = [i for i in ours if i["config"] == theirs.get("config")]
         if same_config:
             return identity_changes(theirs, same_config[0]), True
@@ -505,7 +558,7 @@ class PartStore:
     def _foreign_message(self, foreign: set[str], finished: set[str],
                          sweep: Mapping[str, Any] | None,
                          configs: Mapping[str, Config] | None = None) -> str:
-        change = self._closest_change(foreign, configs)
+        change = self._closest_change(foreign, configs, (sweep or {}).get("store"))
         if change is not None and change[1]:
             return (f"{self.directory} holds {len(foreign)} finished case(s) of this sweep made "
                     f"with other inputs ({change[0]}); resuming would mix the results of two "
@@ -569,7 +622,7 @@ class PartStore:
 
     def _remove_temporaries(self) -> None:
         for tmp in self.directory.glob(".*.tmp"):
-            if _TEMPORARY.fullmatch(tmp.name):
+            if _is_temporary(tmp):
                 tmp.unlink(missing_ok=True)
 
     # ------------------------------------------------------------------ parts

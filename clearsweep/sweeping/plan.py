@@ -302,6 +302,8 @@ class SweepPlan:
             bound.append(cfg.life.max_blocks * steps)
             expected.append(forecast.blocks * steps)
             forecasts.append(forecast)
+        if not forecasts:       # every part is on disk: only the assembly is left
+            return f"{head}: nothing to run"
         most, likely = total(bound), total(expected)
         blocks = sorted({f.blocks for f in forecasts})
         span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
@@ -317,8 +319,7 @@ class SweepPlan:
         return (f"{head}: at most {most:.3g} RK4 steps (life.max_blocks blocks each), at most "
                 f"{sweep_time_text(most, to_run, workers)}; expected about "
                 f"{duration_text(sweep_seconds(likely, to_run, workers))} ({likely:.3g} RK4 "
-                f"steps: {why})" if blocks else
-                f"{head}: nothing to run")
+                f"steps: {why})")
 
     def plan_text(self, workers: int | None = None) -> str:
         """What ``clearsweep validate`` prints for a sweep file: its dimensions, the cases,
@@ -818,7 +819,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
             kind.check_case(resolved, source, allow_large, label)
         except ConfigError as exc:
             raise _case_error(exc, assignment, label, source) from None
-        cases.append(Case(index, case_key(resolved), resolved))
+        cases.append(Case(index, case_key(resolved, store), resolved))
 
     if cases and all(c.hash is None for c in cases):
         raise ConfigError("sweep.skip", (spec or {}).get("skip"), "rules that leave at least one "

@@ -30,11 +30,10 @@ from ..dataset import (
     versions,
     with_command_line,
 )
-from ..params import run_identity
 from .assemble import write_sweep_netcdf
 from .backends import _backend, _InterruptGuard, _Serial
 from .guard import require_main_guard
-from .parts import NOT_FAILED, PartStore, parts_dir_for, with_identity
+from .parts import NOT_FAILED, PartStore, file_sha256, part_identity, parts_dir_for, with_identity
 from .plan import MAX_CASES, SweepPlan, expand
 from .stores import STORES
 from .worker import CaseTask, _receipt, _worker_died, reissue
@@ -291,7 +290,7 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
             runnable = plan.runnable()
             finished = store.open(resume=resume, overwrite=overwrite, expected=set(runnable),
                                   discard_foreign=discard_parts, configs=runnable,
-                                  sweep={"name": plan.name, "source": plan.source,
+                                  sweep={"name": plan.name, "source": plan.source, "store": plan.store,
                                          "cases": len(plan.cases)})
             # OUT is ours while we hold the lock: drop what a killed assembly left beside it
             remove_stale_temporaries(out)
@@ -306,7 +305,8 @@ def run_sweep(config_or_path: str | os.PathLike | Mapping | SweepPlan, out: str 
                 try:
                     counts = write_sweep_netcdf(out, sweep_dims=plan.dims, sweep_coords=plan.coords,
                                                 slots=plan.slots(), store=store, attrs=_attrs(plan),
-                                                check=guard.check, finish=finish)
+                                                check=guard.check, finish=finish,
+                                                holds=plan.store)
                 except KeyboardInterrupt:
                     store.log("interrupted", finished=len(runnable), total=len(runnable))
                     raise SweepInterrupted(len(runnable), len(runnable), store.directory) from None
@@ -412,10 +412,11 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
     def on_result(h: str, result) -> None:
         nonlocal failed, done
         if isinstance(result, xr.Dataset):
-            store.write(h, with_identity(result, run_identity(runnable[h])))
+            store.write(h, with_identity(result, part_identity(runnable[h], plan.store)))
             result = _receipt(result)
         result = reissue(result, warned)
-        store.log("done", hash=h, **result)
+        # the part's content hash: a ledger line proves a file clearsweep's only with it
+        store.log("done", hash=h, sha256=file_sha256(store.path(h)), **result)
         failed += result["status"] not in NOT_FAILED
         done += 1
         bar.set_postfix(failed=failed, refresh=False)

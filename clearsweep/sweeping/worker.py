@@ -18,9 +18,8 @@ import xarray as xr
 
 from .. import variables
 from ..config import Config
-from ..params import run_identity
 from ..summary import case_summary
-from .parts import MESSAGE_ATTRS, STATUS_ATTRS, with_identity, write_part
+from .parts import MESSAGE_ATTRS, STATUS_ATTRS, part_identity, with_identity, write_part
 from .stores import STORES
 
 #: The receipt's key of the warnings a case raised in a pool worker process.
@@ -131,12 +130,12 @@ def _run_and_store(task: CaseTask, parts_dir: str, h: str) -> dict[str, Any]:
         # a thread of the caller's executor or of a Dask worker: warnings are the process's,
         # and catching them here would change them for every thread at once
         part = _run_case(task)
-        write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
+        write_part(parts_dir, h, with_identity(part, part_identity(task.config, task.store)))
         return _receipt(part)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")     # the driver's filters decide (:func:`reissue`)
         part = _run_case(task)
-        write_part(parts_dir, h, with_identity(part, run_identity(task.config)))
+        write_part(parts_dir, h, with_identity(part, part_identity(task.config, task.store)))
     receipt = _receipt(part)
     if caught:
         receipt[WARNINGS_KEY] = [(str(w.message), _portable(w.category), w.filename, w.lineno)
