@@ -59,3 +59,26 @@ def test_run_of_a_refused_size_writes_no_file(tmp_path, setting):
     out = tmp_path / "out.nc"
     result = CliRunner().invoke(main, ["run", ONE, "--set", setting, "-o", str(out)])
     assert result.exit_code == 2 and not list(tmp_path.iterdir()), result.output
+
+
+@pytest.mark.parametrize("joint", ["O", "B"])
+def test_validate_warns_of_a_clearance_below_the_hertz_sink(joint):
+    """Below its Hertz sink (static penetration under the start's joint reaction) a clearance
+    stops the run at once on penetration_exceeded: validate says so, naming the joint."""
+    result = CliRunner().invoke(main, ["validate", "-q", ONE, "--set", f"joints.{joint}.clearance=1e-9"])
+    assert result.exit_code == 0, result.output
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("clearsweep: warning:")]
+    assert len(warnings) == 1 and f"joint {joint}'s Hertz sink" in warnings[0], result.stderr
+    well_above = CliRunner().invoke(main, ["validate", "-q", ONE, "--set", f"joints.{joint}.clearance=1e-6"])
+    assert well_above.exit_code == 0 and "warning" not in well_above.stderr, well_above.stderr
+
+
+def test_the_hertz_sink_warning_follows_the_clearance():
+    """The Python helper gives the warning for 1 nm at B and none for the shipped 0.25 mm."""
+    from clearsweep.config import load_config, resolve_materials
+    from clearsweep.params import hertz_sink_warnings
+
+    cfg = load_config(ONE, ["joints.B.clearance=1e-9"])
+    assert hertz_sink_warnings(cfg, resolve_materials(cfg))
+    cfg = load_config(ONE, ["joints.B.clearance=2.5e-4"])
+    assert not hertz_sink_warnings(cfg, resolve_materials(cfg))
