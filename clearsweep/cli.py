@@ -642,6 +642,11 @@ def validate(config: str, overrides: tuple[str, ...], allow_large: bool, yes: bo
     cfg = load_config(config, overrides)
     est = check_budget(cfg, allow_large=allow_large, source=config)
     _preflight(cfg, config, allow_large)
+    from .config import resolve_materials
+    from .params import hertz_sink_warnings
+
+    for text in hertz_sink_warnings(cfg, resolve_materials(cfg)):
+        click.echo(f"clearsweep: warning: {config}: {text}", err=True)
     if not quiet:
         click.echo(dump_config(cfg), nl=False)
         click.echo(f"clearsweep: {config}: a valid case config: {est.steps:,} RK4 steps, memory "

@@ -506,6 +506,60 @@ def field_info(key: str) -> tuple[str | None, str] | None:
 #: does not describe: such a case ran "ok" with a penetration hundreds of times its radius.
 MIN_BALL_RADIUS_FRACTION = 0.5
 
+#: The mechanism's crank length and longest link [m], the same in both presets
+#: (clearsweep.params.PRESETS; tests/test_config.py checks they agree): joint O's bearing
+#: sits on the crank, so its radius is at most the crank's length, and no length of a joint
+#: (bearing length, base, coating, block side) exceeds the longest link, the rod.
+CRANK_LENGTH_M = 0.14
+LONGEST_LINK_M = 0.38
+#: Smallest nonzero clearance [m]: below an atomic spacing a gap is no clearance, and the
+#: contact law divides by it (a denormal 5e-324 m ended in ZeroDivisionError).
+MIN_CLEARANCE_M = 1.0e-10
+#: Smallest bearing radius and corner radius [m]: a Hertz patch of steel under the
+#: mechanism's loads is tens of micrometres wide, so a smaller radius leaves the law's validity
+#: (a 1 um bearing and a 1e-300 m corner ended in ValueError).
+MIN_BEARING_RADIUS_M = 1.0e-3
+MIN_CORNER_RADIUS_M = 1.0e-5
+#: Largest Archard coefficient [m^2/N]: k / H for the dirtiest dry wear (k ~ 1e-2) on the
+#: softest coating (H ~ 1e8 Pa) is 1e-10; the shipped materials are about 1e-14.
+MAX_WEAR_COEFFICIENT = 1.0e-9
+
+
+def _check_sizes(joints: Mapping[str, Any], source: str) -> None:
+    """Every geometric input of the joints bounded against the mechanism (issue 40 item 9)."""
+    for joint, spec in joints.items():
+        for key in ("clearance", "clearance_y", "clearance_z"):
+            if key in spec and 0.0 < spec[key] < MIN_CLEARANCE_M:
+                raise ConfigError(f"joints.{joint}.{key}", spec[key],
+                                  f"0 (an ideal joint) or a number >= {MIN_CLEARANCE_M:g} m", source)
+        k = spec.get("wear_coefficient")
+        if k is not None and k > MAX_WEAR_COEFFICIENT:
+            raise ConfigError(f"joints.{joint}.wear_coefficient", k,
+                              f"null or a number <= {MAX_WEAR_COEFFICIENT:g} m^2/N", source)
+        for key in ("length", "base_thickness", "coating_thickness"):
+            if key in spec and spec[key] > LONGEST_LINK_M:
+                raise ConfigError(f"joints.{joint}.{key}", spec[key],
+                                  f"a number <= {LONGEST_LINK_M:g} m, the mechanism's longest "
+                                  "link (the rod)", source)
+    bearing = joints["O"]
+    radius = bearing["bearing_radius"]
+    if not MIN_BEARING_RADIUS_M <= radius <= CRANK_LENGTH_M:
+        raise ConfigError("joints.O.bearing_radius", radius,
+                          f"a number with {MIN_BEARING_RADIUS_M:g} <= x <= {CRANK_LENGTH_M:g} m "
+                          "(the crank's length)", source)
+    if bearing["coating_thickness"] >= radius:
+        raise ConfigError("joints.O.coating_thickness", bearing["coating_thickness"],
+                          f"a number < joints.O.bearing_radius ({radius:g} m)", source)
+    guide = joints["P"]
+    if guide["corner_radius"] < MIN_CORNER_RADIUS_M:
+        raise ConfigError("joints.P.corner_radius", guide["corner_radius"],
+                          f"a number >= {MIN_CORNER_RADIUS_M:g} m", source)
+    if max(guide["block"]) > LONGEST_LINK_M:
+        raise ConfigError("joints.P.block", guide["block"],
+                          f"sides <= {LONGEST_LINK_M:g} m, the mechanism's longest link (the rod)",
+                          source)
+
+
 #: Relations between fields, checked after each field on its own: (key, op, other).
 _RELATIONS = [
     ("friction.v1", ">", "friction.v0"),
@@ -683,6 +737,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                                   f"below solver.dt ({value!r} s)", source)
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
+    _check_sizes(cfg["joints"], source)
     _check_guide(cfg["joints"]["P"], cfg["wear"]["map"], source)
     for joint, spec in cfg["joints"].items():
         if joint == "P":

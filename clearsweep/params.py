@@ -353,6 +353,44 @@ def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float
     return delta
 
 
+def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
+    """One text per clearance joint (A, B, O) whose clearance is below its Hertz sink: the
+    static penetration under the joint's static load, here the ideal mechanism's joint
+    reaction at the start (weights and inertia at cfg.mechanism.theta0 and speed), through
+    the joint's own contact law and modulus (:func:`static_penetration`,
+    :func:`equivalent_modulus`). Such a case stops at its first steps on
+    penetration_exceeded, the penetration being contact.max_penetration_fraction of c."""
+    from .core.dynamics import ideal_joint_forces
+    from .core.revolute import journal_law
+
+    packed = pack(cfg, materials)
+    p, jp = packed.p, packed.jp
+    preset = PRESETS[cfg.mechanism.preset]
+    forces = ideal_joint_forces(0.0, initial_state(preset, cfg.mechanism.theta0,
+                                                   cfg.mechanism.omega_rad_s), p, jp)
+    fraction = cfg.contact.max_penetration_fraction
+    out = []
+    for j, joint in enumerate(JOINTS):
+        if jp[j, L.J_CLEARANCE] == 0.0 or joint.type == "prismatic":
+            continue
+        f = forces[j].copy()
+        law = p[L.P_EXPONENT]
+        if joint.type == "revolute":
+            f[0] = 0.0
+            law = journal_law(p)
+        size = float(np.linalg.norm(f))
+        if not (math.isfinite(size) and size > 0.0):
+            continue
+        c = jp[j, L.J_C]
+        sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], law)
+        if sink >= fraction * c:
+            out.append(f"joints.{joint.name}.clearance ({c:g} m) is below joint {joint.name}'s "
+                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, beyond "
+                       f"contact.max_penetration_fraction ({fraction:g}) of the clearance; the "
+                       "run will stop on penetration_exceeded")
+    return out
+
+
 def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
                  p: np.ndarray) -> tuple[float, float]:
     """Local clearance c_eff [m] and modulus [Pa] (jp[J_EW]) that the kernel's contact law uses in

@@ -11,6 +11,7 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import clearsweep.config as config_module
 from clearsweep.config import (
     DEFAULTS,
     MAX_YAML_ALIASES,
@@ -245,7 +246,22 @@ def _configs(schema=SCHEMA):
 
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
+    for joint in raw["joints"].values():      # sizes bounded against the mechanism
+        for key in ("clearance", "clearance_y", "clearance_z"):
+            if key in joint and joint[key] < config_module.MIN_CLEARANCE_M:
+                joint[key] = 0.0
+        if joint["wear_coefficient"] is not None:
+            joint["wear_coefficient"] = min(joint["wear_coefficient"], config_module.MAX_WEAR_COEFFICIENT)
+        for key in ("length", "base_thickness", "coating_thickness"):
+            if key in joint:
+                joint[key] = min(joint[key], config_module.LONGEST_LINK_M)
+    bearing = raw["joints"]["O"]
+    bearing["bearing_radius"] = min(max(bearing["bearing_radius"], config_module.MIN_BEARING_RADIUS_M), 0.035)
+    bearing["clearance"] = min(bearing["clearance"], 0.25 * bearing["bearing_radius"])
+    bearing["coating_thickness"] = min(bearing["coating_thickness"], 0.5 * bearing["bearing_radius"])
     guide = raw["joints"]["P"]
+    guide["corner_radius"] = min(max(guide["corner_radius"], config_module.MIN_CORNER_RADIUS_M), 0.01)
+    guide["block"] = [min(side, config_module.LONGEST_LINK_M) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
         guide["clearance_z"] = guide["clearance_y"]
     guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]

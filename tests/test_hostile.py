@@ -1447,6 +1447,48 @@ ROUND5_FUZZ = [
      "sweep dimension 'g' has no values to select by"),
 ]
 ROWS += ROUND5_FUZZ
+#: Issue 40 item 9: every geometric input of joints O and P bounded against the mechanism.
+ROUND5_SIZES = [
+    ("O denormal clearance (was: ZeroDivisionError traceback, in validate too)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.clearance=5e-324"], 2,
+     "joints.O.clearance: got 5e-324 (from --set); expected 0 (an ideal joint) or a number >= 1e-10 m"),
+    ("P denormal clearances (was: ZeroDivisionError traceback, in validate too)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.clearance_y=5e-324",
+                   "--set", "joints.P.clearance_z=5e-324"], 2,
+     "joints.P.clearance_y: got 5e-324"),
+    ("O 1 um bearing (was: ValueError traceback)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.bearing_radius=1e-6"], 2,
+     "joints.O.bearing_radius: got 1e-06 (from --set); expected a number with 0.001 <= x <= 0.14 m"),
+    ("P 1e-300 m corner radius (was: ValueError traceback)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.corner_radius=1e-300"], 2,
+     "joints.P.corner_radius: got 1e-300 (from --set); expected a number >= 1e-05 m"),
+    ("O 1 km bearing on a 0.14 m crank (was: accepted and run)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.bearing_radius=1000", "-o", t / "out.nc"], 2,
+     "joints.O.bearing_radius: got 1000.0 (from --set); expected a number with 0.001 <= x <= 0.14 m "
+     "(the crank's length)"),
+    ("O 1e300 m bearing length (was: accepted and run)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.length=1e300", "-o", t / "out.nc"], 2,
+     "joints.O.length: got 1e+300 (from --set); expected a number <= 0.38 m"),
+    ("O 1e300 m base (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.base_thickness=1e300"], 2,
+     "joints.O.base_thickness: got 1e+300"),
+    ("P 1e300 m base (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.base_thickness=1e300"], 2,
+     "joints.P.base_thickness: got 1e+300"),
+    ("O 5 cm coating on a 1 cm bearing (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.coating_thickness=0.05"], 2,
+     "joints.O.coating_thickness: got 0.05 (from --set); expected a number < joints.O.bearing_radius"),
+    ("O wear k = 1e300 (was: a 3.7e303 m wear depth at O, status ok)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.wear_coefficient=1e300", "-o", t / "out.nc"], 2,
+     "joints.O.wear_coefficient: got 1e+300 (from --set); expected null or a number <= 1e-09 m^2/N"),
+    ("P wear k = 1e300 (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.wear_coefficient=1e300"], 2,
+     "joints.P.wear_coefficient: got 1e+300"),
+    ("P 1 km block (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.block=[1000,0.06,0.06]"], 2,
+     "joints.P.block: got [1000"),
+]
+ROWS += ROUND5_SIZES
 
 
 @pytest.fixture

@@ -233,7 +233,7 @@ def test_joint_o_is_sweepable_and_validated_per_case():
     cfg = load_config(O_ONLY, ["joints.O.coating=PTFE", "joints.O.length=0.03"])
     assert cfg.joints.O.coating == "PTFE" and cfg.joints.O.length == 0.03
     with pytest.raises(ConfigError, match="joints.O.clearance"):
-        load_config(O_ONLY, ["joints.O.bearing_radius=1e-4"])
+        load_config(O_ONLY, ["joints.O.bearing_radius=2e-3", "joints.O.clearance=1.5e-3"])
 
 
 @pytest.mark.parametrize("kind", ["wear-map", "orbit", "wear-polar", "forces"])
