@@ -354,13 +354,19 @@ def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float
 
 
 def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
-    """One text per clearance joint (A, B, O) whose clearance is below its Hertz sink: the
-    static penetration under the joint's static load, here the ideal mechanism's joint
-    reaction at the start (weights and inertia at cfg.mechanism.theta0 and speed), through
-    the joint's own contact law and modulus (:func:`static_penetration`,
-    :func:`equivalent_modulus`). Such a case stops at its first steps on
-    penetration_exceeded, the penetration being contact.max_penetration_fraction of c."""
+    """One text per clearance joint whose clearance is below its Hertz sink: the static
+    penetration under the joint's static load, here the ideal mechanism's joint reaction at
+    the start (weights and inertia at cfg.mechanism.theta0 and speed), through the joint's
+    own contact law and modulus (:func:`static_penetration`, :func:`equivalent_modulus`).
+    Such a case stops at its first steps on penetration_exceeded, the penetration being
+    contact.max_penetration_fraction of c (at P, of the smaller of its two clearances).
+
+    At the guide P the reaction's component across each pair of walls (y, z) is shared by
+    the four corners of the block's face that meets the wall, the block lying flat: the
+    least sink a case can have (a tilted block carries the load on fewer corners, deeper).
+    """
     from .core.dynamics import ideal_joint_forces
+    from .core.prismatic import corner_law
     from .core.revolute import journal_law
 
     packed = pack(cfg, materials)
@@ -371,7 +377,29 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     fraction = cfg.contact.max_penetration_fraction
     out = []
     for j, joint in enumerate(JOINTS):
-        if jp[j, L.J_CLEARANCE] == 0.0 or joint.type == "prismatic":
+        if jp[j, L.J_CLEARANCE] == 0.0:
+            continue
+        c = jp[j, L.J_C]
+        if joint.type == "prismatic":
+            # the reaction across the y walls and across the z walls, four corners each
+            # the stop compares the deepest corner with the smaller clearance (jp[J_C])
+            key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
+            for axis in (1, 2):
+                corner_load = abs(float(forces[j][axis])) / 4.0
+                if not (math.isfinite(corner_load) and corner_load > 0.0):
+                    continue
+                # the corner's power law A c (delta / c)^n, A = 4 E* sqrt(r_c c) / 3: Hertz's
+                # sphere on a plane, as the kernel and :func:`seated_block` take it
+                sink = static_penetration(corner_load, c, jp[j, L.J_EW], jp[j, L.J_RI], c,
+                                          corner_law(p))
+                if sink >= fraction * c:
+                    out.append(f"joints.{joint.name}.{key} ({c:g} m) is below joint "
+                               f"{joint.name}'s Hertz sink: {sink:.3g} m at each of the four "
+                               f"corners on its {'yz'[axis - 1]} walls under a static load of "
+                               f"{4.0 * corner_load:.3g} N, beyond contact.max_penetration_fraction "
+                               f"({fraction:g}) of the smaller clearance; the run will stop on "
+                               "penetration_exceeded")
+                    break
             continue
         f = forces[j].copy()
         law = p[L.P_EXPONENT]
@@ -381,7 +409,6 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
         size = float(np.linalg.norm(f))
         if not (math.isfinite(size) and size > 0.0):
             continue
-        c = jp[j, L.J_C]
         sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], law)
         if sink >= fraction * c:
             out.append(f"joints.{joint.name}.clearance ({c:g} m) is below joint {joint.name}'s "

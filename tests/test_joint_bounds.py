@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import xarray as xr
 from click.testing import CliRunner
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
@@ -13,7 +14,8 @@ import clearsweep.config as config_module
 from clearsweep.cli import main
 from clearsweep.params import PRESETS
 
-ONE = str(Path(__file__).resolve().parents[1] / "configs" / "one_clearance.yaml")
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+ONE = str(CONFIGS / "one_clearance.yaml")
 
 #: Each key of O and P, and A/B's where the same hole exists.
 KEYS = ["joints.O.clearance", "joints.O.bearing_radius", "joints.O.length",
@@ -82,3 +84,28 @@ def test_the_hertz_sink_warning_follows_the_clearance():
     assert hertz_sink_warnings(cfg, resolve_materials(cfg))
     cfg = load_config(ONE, ["joints.B.clearance=2.5e-4"])
     assert not hertz_sink_warnings(cfg, resolve_materials(cfg))
+
+
+#: The clearance keys of each joint that the sink warning covers (P: both of its gaps).
+SINK_KEYS = {"O": ["joints.O.clearance"], "B": ["joints.B.clearance"],
+             "P": ["joints.P.clearance_y", "joints.P.clearance_z"]}
+
+
+@pytest.mark.parametrize("joint", sorted(SINK_KEYS))
+@pytest.mark.parametrize("clearance_m", [1e-9, 1e-7, 1e-6])
+def test_the_hertz_sink_warning_foretells_the_penetration_stop(joint, clearance_m, tmp_path):
+    """validate warns of a clearance exactly when a run of it stops on penetration_exceeded in
+    its first 2 ms: the warning is the kernel's stop told before any run (the guide P
+    included, its load shared by the four corners of the loaded face)."""
+    sets = [a for key in SINK_KEYS[joint] for a in ("--set", f"{key}={clearance_m}")]
+    if joint != "B":
+        sets += ["--set", "joints.B.clearance=0"]
+    base = [str(CONFIGS / "ideal.yaml"), *sets, "--set", "wear.map=[6,12]"]
+    checked = CliRunner().invoke(main, ["validate", "-q", *base])
+    assert checked.exit_code == 0, checked.output
+    warned = "Hertz sink" in checked.stderr
+    out = tmp_path / "run.nc"
+    CliRunner().invoke(main, ["run", "-q", *base, "--set", "solver.duration=0.002", "-o", str(out)])
+    with xr.open_dataset(out) as ds:
+        stopped = str(ds["status"].values) == "penetration_exceeded"
+    assert warned == stopped, (warned, str(checked.stderr))
