@@ -300,3 +300,25 @@ def test_a_figure_of_the_ideal_mechanism_is_refused_in_one_line(kind, tmp_path):
     assert len(lines) == 1 and lines[0].startswith("clearsweep: error: "), result.output
     assert f"--kind {kind} draws the joints with a clearance" in lines[0]
     assert not (tmp_path / "f.png").exists()
+
+
+@pytest.mark.parametrize("shipped", ["revolute_clearance", "contact_laws"])
+def test_a_sweep_files_figures_name_the_start_its_base_config_gives(tmp_path, monkeypatch, shipped):
+    """Every figure of these sweeps said "start: seated" though their base starts centred: a
+    sweep file has no run ``config`` attribute, and the empty one was read as an empty config
+    before the sweep's own ``sweep_config`` (issue 45)."""
+    from pathlib import Path
+
+    import yaml
+
+    from clearsweep.sweeping import run_sweep
+
+    spec = yaml.safe_load((Path(__file__).parents[1] / "configs" / f"{shipped}.yaml").read_text())
+    start = spec["base"]["initial"]["joints"]
+    key = next(iter(spec["sweep"]["grid"]))
+    spec["sweep"] = {"grid": {key: spec["sweep"]["grid"][key][:1]}}
+    monkeypatch.chdir(tmp_path)
+    ds = run_sweep(spec, workers=1, overrides=["solver.duration=0.002"], progress=False)
+    assert "config" not in ds.attrs
+    title = figure(ds, "slider").get_suptitle()
+    assert f"start: {start}" in title and start != "seated"

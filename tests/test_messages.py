@@ -172,11 +172,28 @@ def test_plot_sweep_of_a_life_run_points_to_kind_life(short_life, tmp_path):
     assert "slider_acceleration" not in result.stderr     # no default metric the user never typed
 
 
-def test_the_sweep_progress_rate_counts_from_the_first_finished_case(tmp_path, monkeypatch):
-    """The first estimate of the time left read 5:28:01: the fixed costs before the first
-    case (pool start, kernel load) counted as the cost of a case."""
-    import time
+def test_the_sweep_time_left_is_a_steps_weighted_rate_that_never_restarts():
+    """The bifurcation's time left jumped from 42 min to 20 s: the bar's clock restarted at
+    the first finished case and every case counted alike, whatever its steps (issue 45)."""
+    from clearsweep.sweeping.run import StepEta
 
+    now = [100.0]
+    eta = StepEta({"a": 1000.0, "b": 3000.0, "c": 6000.0}, lambda: now[0])
+    assert eta.seconds_left() is None and eta.text() == "?"
+    now[0] += 10.0                      # 10 s for the first 1000 steps, start-up included
+    eta.finished("a")
+    assert eta.seconds_left() == pytest.approx(10.0 * 9000.0 / 1000.0)
+    now[0] += 30.0                      # the next 3000 steps at the same rate
+    eta.finished("b")
+    # one clock from the start: 40 s for 4000 steps, so 6000 steps left take 60 s
+    assert eta.seconds_left() == pytest.approx(60.0)
+    now[0] += 60.0
+    eta.finished("c")
+    assert eta.seconds_left() == 0.0
+
+
+def test_the_sweep_progress_bar_keeps_its_clock_and_shows_the_steps_weighted_time_left(
+        tmp_path, monkeypatch):
     import tqdm.auto
 
     from clearsweep.sweeping import run_sweep
@@ -189,22 +206,12 @@ def test_the_sweep_progress_rate_counts_from_the_first_finished_case(tmp_path, m
         return bars[-1]
 
     monkeypatch.setattr(tqdm.auto, "tqdm", keep)
-    calls = []
-
-    def slow_first(config):
-        from clearsweep.simulation import simulate
-
-        if not calls:
-            time.sleep(1.0)         # the fixed cost of the first case
-        calls.append(time.perf_counter())
-        return simulate(config)
-
     spec = {"base": str(ROOT / "configs/two_clearances.yaml"),
             "sweep": {"grid": {"joints.B.coating": ["none", "PTFE", "lead"]}}}
-    run_sweep(spec, workers=1, _simulate=slow_first, overrides=["solver.duration=0.002"])
+    run_sweep(spec, workers=1, overrides=["solver.duration=0.002"])
     (bar,) = bars
-    assert bar.smoothing == 0 and bar.initial == 1      # the clock restarted at the first case
-    assert bar.start_t >= calls[0]
+    assert bar.initial == 0                     # the clock was not restarted at the first case
+    assert "left=0 s" in bar.postfix and "{remaining}" not in bar.bar_format
 
 
 def test_a_life_run_gives_its_expected_time_left_from_the_blocks_so_far():

@@ -47,8 +47,10 @@ COLOURBAR_LABEL_CHARACTERS = 36
 def run_config(ds: xr.Dataset) -> dict:
     """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable."""
     for name in ("config", "sweep_config"):
+        if not ds.attrs.get(name):
+            continue        # a sweep file has no run config: its base is in sweep_config
         try:
-            doc = yaml.safe_load(str(ds.attrs.get(name) or "")) or {}
+            doc = yaml.safe_load(str(ds.attrs[name])) or {}
         except yaml.YAMLError:
             continue
         if isinstance(doc, dict):

@@ -93,6 +93,8 @@ def _is_temporary(path: Path) -> bool:
             return f.read(len(_HDF5_SIGNATURE)) == _HDF5_SIGNATURE
     except OSError:
         return False
+
+
 #: Compression of numeric variables, in parts and in the assembled file.
 COMPRESSION = {"zlib": True, "complevel": 1, "shuffle": True}
 #: Statuses that do not count as failures.

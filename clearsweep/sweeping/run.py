@@ -13,6 +13,7 @@ import os
 import shutil
 import sys
 import tempfile
+import time
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures.process import BrokenProcessPool
@@ -21,6 +22,7 @@ from typing import Any
 
 import xarray as xr
 
+from ..budget import duration_text, estimate
 from ..config import ConfigError
 from ..dataset import (
     file_size_limit_text,
@@ -382,6 +384,37 @@ def _failed(exc: Exception, label: str, directory: Path, kept: int, total: int) 
                        "the sweep")
 
 
+class StepEta:
+    """Time left of a sweep: the wall time since this run's start, over the RK4 steps of the
+    cases it finished, times the steps still to run (each case weighted by its steps).
+
+    The clock starts once and never restarts, so the fixed costs before the first finished
+    case (the pool's start, each worker loading the kernel) stay in the rate instead of being
+    dropped or shown as hours; ``clock`` is injectable for tests."""
+
+    def __init__(self, steps: Mapping[str, float], clock: Callable[[], float]):
+        self.steps = dict(steps)
+        self.clock = clock
+        self.start = clock()
+        self.done = 0.0
+        self.left = float(sum(self.steps.values()))
+
+    def finished(self, h: str) -> None:
+        weight = self.steps.pop(h, 0.0)
+        self.done += weight
+        self.left -= weight
+
+    def seconds_left(self) -> float | None:
+        """``None`` until some work is finished (no rate to go by)."""
+        if self.done <= 0.0:
+            return None
+        return (self.clock() - self.start) * max(self.left, 0.0) / self.done
+
+    def text(self) -> str:
+        left = self.seconds_left()
+        return "?" if left is None else duration_text(left)
+
+
 def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers, client,
              progress: bool, guard: _InterruptGuard, cuda: dict | None = None) -> None:
     """Run ``todo`` on the chosen backend, writing each finished case at once."""
@@ -399,12 +432,14 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
                           f"{type(exc).__name__}: {exc}") from exc
     store.log("run", name=plan.name, source=plan.source, cases=len(plan.cases), to_run=len(todo), kept=kept,
               backend=backend.label, command=plan.command)
-    # smoothing=0: the rate is the average since the clock's start, which the first finished
-    # case resets (below), so the fixed costs before it (the pool's start, the kernel loaded
-    # from the cache in each worker) do not make the first estimates hours long
+    # tqdm's own time left counts cases, all alike; a sweep's cases differ in steps, so the
+    # time left is StepEta's (steps-weighted, one clock from the start) in the postfix
+    eta = StepEta({h: float(estimate(runnable[h]).steps) for h, _ in todo if h in runnable},
+                  time.monotonic)
     bar = tqdm(total=total, initial=kept, desc=plan.name, unit="case", disable=not progress,
-               file=sys.stderr, dynamic_ncols=True, smoothing=0)
-    bar.set_postfix(failed=failed)
+               file=sys.stderr, dynamic_ncols=True, smoothing=0,
+               bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}{postfix}]")
+    bar.set_postfix(failed=failed, left=eta.text())
     done = kept
 
     warned: set = set()
@@ -419,12 +454,9 @@ def _execute(plan: SweepPlan, store: PartStore, todo: list, total: int, workers,
         store.log("done", hash=h, sha256=file_sha256(store.path(h)), **result)
         failed += result["status"] not in NOT_FAILED
         done += 1
-        bar.set_postfix(failed=failed, refresh=False)
+        eta.finished(h)
+        bar.set_postfix(failed=failed, left=eta.text(), refresh=False)
         bar.update()
-        if done == kept + 1 and not bar.disable:   # the first case of this run: time from here
-            # shown at the new start, else tqdm's close() would not print the last state
-            bar.initial, bar.start_t = bar.n, bar._time()
-            bar.last_print_t = bar.start_t
 
     interrupted = stopped = False
     failure: Exception | None = None
