@@ -523,6 +523,9 @@ MIN_CORNER_RADIUS_M = 1.0e-5
 #: Largest Archard coefficient [m^2/N]: k / H for the dirtiest dry wear (k ~ 1e-2) on the
 #: softest coating (H ~ 1e8 Pa) is 1e-10; the shipped materials are about 1e-14.
 MAX_WEAR_COEFFICIENT = 1.0e-9
+#: Thinnest coating or base layer [m]: a layer of a few atoms is no elastic layer (a 5e-324 m
+#: coating or base ran to numbers as if it were one).
+MIN_LAYER_M = 1.0e-9
 
 
 def _check_sizes(joints: Mapping[str, Any], source: str) -> None:
@@ -536,6 +539,11 @@ def _check_sizes(joints: Mapping[str, Any], source: str) -> None:
         if k is not None and k > MAX_WEAR_COEFFICIENT:
             raise ConfigError(f"joints.{joint}.wear_coefficient", k,
                               f"null or a number <= {MAX_WEAR_COEFFICIENT:g} m^2/N", source)
+        for key in ("base_thickness", "coating_thickness"):
+            if key in spec and 0.0 < spec[key] < MIN_LAYER_M:
+                raise ConfigError(f"joints.{joint}.{key}", spec[key],
+                                  f"a number >= {MIN_LAYER_M:g} m (a layer of more than a few "
+                                  "atoms)", source)
         for key in ("length", "base_thickness", "coating_thickness"):
             if key in spec and spec[key] > LONGEST_LINK_M:
                 raise ConfigError(f"joints.{joint}.{key}", spec[key],

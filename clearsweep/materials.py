@@ -25,12 +25,20 @@ from .schema import ConfigError, Field, close_match, read_yaml
 __all__ = ["Material", "Materials", "UnknownMaterialError", "FIELDS", "load_materials",
            "format_materials"]
 
+#: The largest values a material admits: a friction coefficient of clean metals in air
+#: reaches about 1, and 2 is beyond any measured dry pairing (mu = 1e300 overflowed the
+#: seated start); the Archard bound of the joints' ``wear_coefficient``
+#: (config.MAX_WEAR_COEFFICIENT: k / H of the dirtiest dry wear on the softest coating is
+#: about 1e-10 m^2/N).
+MAX_FRICTION = 2.0
+MAX_WEAR = 1.0e-9
+
 #: Fields of a material, their units and the values they admit.
 FIELDS: dict[str, Field] = {
     "youngs_modulus_Pa": Field(None, lo=0.0, lo_open=True),                        # E [Pa]
     "poisson_ratio": Field(None, lo=-1.0, lo_open=True, hi=0.5, hi_open=True),     # nu [-]
-    "friction_coefficient": Field(None, lo=0.0),                                   # mu [-]
-    "wear_coefficient_m2_per_N": Field(None, lo=0.0),                              # k [m^2/N]
+    "friction_coefficient": Field(None, lo=0.0, hi=MAX_FRICTION),                  # mu [-]
+    "wear_coefficient_m2_per_N": Field(None, lo=0.0, hi=MAX_WEAR),                 # k [m^2/N]
 }
 _WEAR = "wear_coefficient_m2_per_N"
 _SHIPPED = "clearsweep/data/materials.yaml"

@@ -255,6 +255,8 @@ def _consistent(raw):
         for key in ("length", "base_thickness", "coating_thickness"):
             if key in joint:
                 joint[key] = min(joint[key], config_module.LONGEST_LINK_M)
+                if key != "length" and 0.0 < joint[key] < config_module.MIN_LAYER_M:
+                    joint[key] = config_module.MIN_LAYER_M
     bearing = raw["joints"]["O"]
     bearing["bearing_radius"] = min(max(bearing["bearing_radius"], config_module.MIN_BEARING_RADIUS_M), 0.035)
     bearing["clearance"] = min(bearing["clearance"], 0.25 * bearing["bearing_radius"])

@@ -1491,6 +1491,38 @@ ROUND5_SIZES = [
 ROWS += ROUND5_SIZES
 
 
+def friction_materials(tmp: Path, mu: str) -> str:
+    """A user materials file giving PTFE the friction coefficient ``mu``."""
+    path = tmp / "m.yaml"
+    path.write_text(f"PTFE: {{friction_coefficient: {{value: {mu}, source: a test}}}}\n")
+    return f"materials_file={path}"
+
+
+# --- round 5 (issue 40, items 9 and 11): layers and materials of the fuzz round's last probes
+ROUND5_LAYERS = [
+    ("O denormal coating (was: accepted and run as an elastic layer)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.clearance=1e-4", "--set",
+                   "joints.O.coating=PTFE", "--set", "joints.O.coating_thickness=5e-324"], 2,
+     "joints.O.coating_thickness: got 5e-324 (from --set); expected a number >= 1e-09 m"),
+    ("O denormal base under a coating (was: accepted and run)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.clearance=1e-4", "--set", "joints.O.coating=PTFE",
+                   "--set", "joints.O.base_thickness=5e-324", "-o", t / "out.nc"], 2,
+     "joints.O.base_thickness: got 5e-324 (from --set); expected a number >= 1e-09 m"),
+    ("P denormal coating (was: accepted and run)",
+     lambda t, f: ["validate", ONE, "--set", "joints.P.coating=MoS2", "--set",
+                   "joints.P.coating_thickness=5e-324"], 2, "joints.P.coating_thickness: got 5e-324"),
+    ("a friction coefficient of 1e300 (was: an overflow warning, then singular_constraints, exit 1)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.clearance=1e-4", "--set", "joints.O.coating=PTFE",
+                   "--set", friction_materials(t, "1e300"), "-o", t / "out.nc"], 2,
+     "PTFE.friction_coefficient.value: got 1e+300; expected a number with 0 <= x <= 2"),
+    ("a friction coefficient of 10 (was: unstable_step, exit 1)",
+     lambda t, f: ["validate", ONE, "--set", "joints.B.coating=PTFE",
+                   "--set", friction_materials(t, "10")], 2,
+     "PTFE.friction_coefficient.value: got 10"),
+]
+ROWS += ROUND5_LAYERS
+
+
 @pytest.fixture
 def device(monkeypatch):
     """The CUDA device as the row needs it: none for ``--backend cuda``, a stand-in for

@@ -83,7 +83,7 @@ bronze:
 BAD_FILES = [
     # (file text, key named, value received, words expected)
     ("PTFE:\n  friction_coefficient: {value: high, source: x}\n", "PTFE.friction_coefficient.value",
-     "high", "a number >= 0"),
+     "high", "a number with 0 <= x <= 2"),
     ("PTFE:\n  friction_coefficient: {value: 0.2}\n", "PTFE.friction_coefficient.source", None,
      "a non-empty text"),
     ("PTFE:\n  friction_coefficient: 0.2\n", "PTFE.friction_coefficient", 0.2, "a mapping {value"),
