@@ -478,8 +478,9 @@ def peak_force_source(summary: xr.Dataset) -> xr.DataArray | None:
     # has NaN settled peaks but settled counts of 0
     peak = summary.get("slider_acceleration_peak_settled")
     settled = None if peak is None else peak.notnull()
-    stats = {n: _statistic(summary, n, settled) for n in names}
-    if any(v is None for v in stats.values()) or "joint" not in stats["impact_count"].dims:
+    found = {n: _statistic(summary, n, settled) for n in names}
+    stats = {n: v for n, v in found.items() if v is not None}
+    if len(stats) < len(names) or "joint" not in stats["impact_count"].dims:
         return None
     impacts = stats["impact_count"].transpose(..., "joint")
     contact = stats["contact_fraction"].transpose(..., "joint")

@@ -8,12 +8,15 @@ in a burst at crank angles 155-195 degrees (t = 0.43-0.54 s at 60 r/min), so a 0
 holds it.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.signal import detrend
 
 from clearsweep.analysis import format_statistics_table, format_wear_table
 from clearsweep.analysis.tables import report_summary
+from clearsweep.materials import load_materials
 from clearsweep.simulation import simulate
 from clearsweep.summary import (
     OSCILLATION_CREST_FACTOR,
@@ -99,3 +102,51 @@ def test_oscillation_frequency(ptfe):
     power = np.abs(np.fft.rfft(a * np.hanning(a.size), n)) ** 2
     dominant = freq[np.argmax(power)]
     assert BAND_HZ[0] < dominant < BAND_HZ[1], dominant
+
+
+ROOT = Path(__file__).resolve().parents[1]
+MEASURED = ROOT / "clearsweep" / "data" / "materials_measured.yaml"
+
+
+def test_measured_friction_file_overrides_only_friction():
+    """The measured file changes the friction coefficients it names and nothing else; lead
+    keeps the paper's (docs/modelling.md, "Friction coefficients")."""
+    paper, measured = load_materials(), load_materials(MEASURED)
+    assert {n: measured[n].friction_coefficient for n in measured} == {
+        "steel": 0.10, "MoS2": 0.05, "lead": paper["lead"].friction_coefficient, "PTFE": 0.10}
+    for name in paper:
+        assert measured[name].youngs_modulus_Pa == paper[name].youngs_modulus_Pa
+        assert measured[name].wear_coefficient_m2_per_N == paper[name].wear_coefficient_m2_per_N
+    for name in ("steel", "MoS2", "PTFE"):
+        assert "Jing" not in measured[name].sources["friction_coefficient"]
+
+
+def _docs_rows() -> dict[tuple[str, str], list[str]]:
+    """docs/modelling.md's example table: (socket, coefficients) -> its printed cells."""
+    text = (ROOT / "docs" / "modelling.md").read_text()
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 6 and cells[0] in ("steel", "PTFE") and cells[1][:5] in ("paper", "measu"):
+            rows[(cells[0], cells[1].split()[0])] = cells[2:]
+    return rows
+
+
+def test_measured_friction_example_matches_the_docs():
+    """configs/measured_friction.yaml's four cases against the numbers docs/modelling.md
+    prints, to their printed digits."""
+    rows = _docs_rows()
+    assert len(rows) == 4
+    for (socket, coefficients), cells in rows.items():
+        materials = ROOT / "clearsweep" / "data" / (
+            "materials.yaml" if coefficients == "paper" else "materials_measured.yaml")
+        ds = simulate({"joints": {"A": {"clearance": 0.0},
+                                  "B": {"clearance": 5.0e-5,
+                                        "coating": "none" if socket == "steel" else "PTFE"}},
+                       "materials_file": str(materials), "solver": {"duration": 1.0}})
+        got = [float(ds["slider_acceleration_peak_settled"]),
+               float(ds["slider_acceleration_rms_settled"]),
+               float(ds["normal_force_peak_settled"].sel(joint="B"))]
+        for printed, value in zip(cells[:3], got):
+            assert f"{value:.4g}" == printed, (socket, coefficients, printed, value)
+        assert source(ds) == cells[3], (socket, coefficients)
