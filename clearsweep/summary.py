@@ -438,3 +438,69 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
     summary = xr.Dataset({name: out[name] for name in SUMMARY_ORDER if name in out}, coords=coords)
     summary.attrs = dict(ds.attrs)
     return summary
+
+
+#: Crest factor (peak / RMS) of the slider acceleration above which a case whose clearance
+#: joints stay in contact without impacts reads as an in-contact oscillation
+#: (:func:`peak_force_source`). A steady one-revolution motion stays well below it: the ideal
+#: mechanism's settled crest factor is 2.395 / 1.427 = 1.68 at 60 r/min, a sine's sqrt(2);
+#: PTFE at B with 0.05 mm clearance reads 17.5 (35.42 / 2.027, 1 s), 1.68 with friction off
+#: (docs/physics.md section 3.3).
+OSCILLATION_CREST_FACTOR = 3.0
+#: What :func:`peak_force_source` says sets a case's peak force.
+PEAK_BY_IMPACTS = "impacts"
+PEAK_BY_OSCILLATION = "in-contact oscillation"
+PEAK_BY_LOAD = "quasi-static"
+
+
+def _statistic(summary: xr.Dataset, name: str, settled: xr.DataArray | None) -> xr.DataArray | None:
+    """The statistic ``name`` of the settled window where ``settled`` (the cases whose run
+    reaches it), else of the whole run."""
+    whole = summary.get(name)
+    if settled is None or name + "_settled" not in summary:
+        return whole
+    return summary[name + "_settled"].where(settled, whole) if whole is not None else None
+
+
+def peak_force_source(summary: xr.Dataset) -> xr.DataArray | None:
+    """What sets each case's peak contact force, from the kernel's statistics (docs/physics.md
+    section 3.3): ``impacts (J...)`` where clearance joints J began contact episodes (impact
+    count > 0); else ``in-contact oscillation (J...)`` where clearance joints J stayed in
+    contact (contact fraction > 0) and the slider acceleration's crest factor, peak / RMS,
+    exceeds ``OSCILLATION_CREST_FACTOR``: the force grows in an oscillation that never
+    leaves contact (with friction, the ball's whirl around its socket); else ``quasi-static``:
+    the load the mechanism's motion puts through its joints (the ideal mechanism, or a ball
+    that rides its socket smoothly). The settled window's statistics where the case has them,
+    else the whole run's. None where ``summary`` lacks the statistics."""
+    names = ("impact_count", "contact_fraction", "slider_acceleration_peak",
+             "slider_acceleration_rms")
+    # one window for every statistic of a case: a run that ends before the settled window
+    # has NaN settled peaks but settled counts of 0
+    peak = summary.get("slider_acceleration_peak_settled")
+    settled = None if peak is None else peak.notnull()
+    found = {n: _statistic(summary, n, settled) for n in names}
+    stats = {n: v for n, v in found.items() if v is not None}
+    if len(stats) < len(names) or "joint" not in stats["impact_count"].dims:
+        return None
+    impacts = stats["impact_count"].transpose(..., "joint")
+    contact = stats["contact_fraction"].transpose(..., "joint")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        crest = (stats["slider_acceleration_peak"] / stats["slider_acceleration_rms"])
+    dims = tuple(str(d) for d in impacts.dims if d != "joint")
+    crest_v = crest.broadcast_like(impacts.isel(joint=0, drop=True)).transpose(*dims).values
+    joints = [str(j) for j in impacts["joint"].values]
+    impacts_v, contact_v = impacts.values, contact.values
+    out = np.empty(impacts.shape[:-1], dtype=object)
+    for index in np.ndindex(*out.shape):
+        hit = [j for j, n in zip(joints, impacts_v[index]) if n > 0]
+        touching = [j for j, f in zip(joints, contact_v[index]) if f > 0]
+        if hit:
+            out[index] = f"{PEAK_BY_IMPACTS} ({', '.join(hit)})"
+        elif touching and crest_v[index] > OSCILLATION_CREST_FACTOR:
+            out[index] = f"{PEAK_BY_OSCILLATION} ({', '.join(touching)})"
+        else:
+            out[index] = PEAK_BY_LOAD
+    coords = {k: v for k, v in impacts.coords.items() if "joint" not in v.dims}
+    return with_attrs(xr.DataArray(out.astype(str), dims=dims, coords=coords), "peak_force_source",
+                      oscillation_crest_factor=OSCILLATION_CREST_FACTOR)
+

@@ -231,6 +231,12 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
         (), "1", "share of the slider acceleration's power above the high_order attribute",
         "power of the Welch spectrum's bins above crank order high_order over that of every "
         "bin above order 0, settled window; NaN where it holds fewer than 2 crank revolutions"),
+    "peak_force_source": VariableSpec(
+        (), "", "what sets the case's peak contact force",
+        "impacts (J...): clearance joints J began contact episodes; else in-contact "
+        "oscillation (J...): joints J stayed in contact and the slider acceleration's peak / "
+        "RMS exceeds the oscillation_crest_factor attribute; else quasi-static; settled "
+        "window's statistics where the case has them, else the whole run's"),
     "period": VariableSpec(
         (), "1", "period of the motion in crank revolutions",
         "smallest n with every settled Poincare sample (slider acceleration, clearance joints' "

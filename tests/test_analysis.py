@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -318,7 +319,8 @@ def test_report_cli_every_format(sweep_file, fmt):
     elif fmt == "csv":
         rows = list(csv.reader(io.StringIO(out)))
         assert rows[0][:5] == ["B_coating", "B_clearance", "status", "joint", "axis"]
-        assert rows[0][5] == "Peak slider acc., settled [m s-2]"   # the statistics, then the wear
+        # what sets the peak force, the statistics, then the wear
+        assert rows[0][5:7] == ["Peak force set by", "Peak slider acc., settled [m s-2]"]
         assert "Max projected depth [m]" in rows[0]     # csv and json stay SI
         assert len(rows) == 1 + 4 * 2 * 3
     elif fmt == "markdown":
@@ -456,9 +458,12 @@ def test_statistics_table_puts_settled_first_with_whole_run_beside(sweep_ds):
     assert second.index("settled") < second.index("whole run")
     assert max(len(line) for line in lines) <= 100
     assert "settled = t >= 0.05 s" in text
-    rows = [line.split() for line in text.splitlines() if line.startswith(("none ", "PTFE "))]
+    # the cells, what sets the peak force ("impacts (A, B)") one of them
+    rows = [re.split(r"\s{2,}", line) for line in text.splitlines()
+            if line.startswith(("none ", "PTFE "))]
+    assert {r[2] for r in rows[:4]} == {"impacts (A, B)"}
     # settled peak = the coating's acceleration level, whole-run peak = the start-up spike
-    assert {(r[0], float(r[2]), float(r[3])) for r in rows[:4]} == {
+    assert {(r[0], float(r[3]), float(r[4])) for r in rows[:4]} == {
         ("none", syn.SWEEP_ACC_LEVEL["none"], syn.ACC_SPIKE),
         ("PTFE", syn.SWEEP_ACC_LEVEL["PTFE"], syn.ACC_SPIKE)}
 

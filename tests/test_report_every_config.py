@@ -152,6 +152,7 @@ FIGURES = {
     "ideal": lambda ds: dict.fromkeys(("slider", "forces", "spectrum", "poincare"), []),
     "life": lambda ds: {"wear-map": [], "life": []},
     "life_sweep": lambda ds: {"sweep": ["--metric", "cycles_reached"]},
+    "measured_friction": lambda ds: {"poincare": [], "sweep": first(ds, "materials")},
     "mixed_clearances": lambda ds: {
         "sweep": first(ds, "O_clearance", "A_clearance", "B_clearance"), "effects": []},
     "one_clearance": lambda ds: dict.fromkeys(

@@ -18,7 +18,13 @@ import xarray as xr
 from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
 from ..motion import HIGH_ORDER, PERIOD_UNKNOWN
-from ..summary import WEAR_THRESHOLD_FRACTION, case_summary, wear_table, with_attrs
+from ..summary import (
+    WEAR_THRESHOLD_FRACTION,
+    case_summary,
+    peak_force_source,
+    wear_table,
+    with_attrs,
+)
 from ..variables import JOINT_TYPES, length_unit
 from .selection import (
     _MISSING_TEXT,
@@ -99,7 +105,8 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
 
 
 def report_summary(ds: xr.Dataset) -> xr.Dataset:
-    """:func:`clearsweep.summary.case_summary` of ``ds`` as the reports read it: a ``period``
+    """:func:`clearsweep.summary.case_summary` of ``ds`` as the reports read it, with what sets
+    each case's peak force (:func:`clearsweep.summary.peak_force_source`): a ``period``
     that a case lacks (a run too short for a Poincaré section, beside cases that have them:
     NaN in the sweep's file) is ``PERIOD_UNKNOWN``, as a run's own undetermined period is,
     and the periods are integers."""
@@ -108,6 +115,9 @@ def report_summary(ds: xr.Dataset) -> xr.Dataset:
         values = summary["period"].values
         summary["period"] = summary["period"].copy(
             data=np.where(np.isnan(values), PERIOD_UNKNOWN, values).astype(np.int64))
+    source = peak_force_source(summary)
+    if source is not None:
+        summary["peak_force_source"] = source
     return summary
 
 
@@ -422,6 +432,7 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
 
 
 _MOTION_COLUMNS = (
+    _Column("peak_force_source", "Peak force set by", ""),
     _Column("slider_acceleration_peak_settled", "Peak slider acc., settled", ".4g"),
     _Column("slider_acceleration_peak", "Peak slider acc., whole run", ".4g"),
     _Column("slider_acceleration_rms_settled", "RMS slider acc., settled", ".4g"),
