@@ -1,4 +1,5 @@
-"""clearsweep: dynamics and wear of the RSSP mechanism with clearance and coated spherical joints."""
+"""clearsweep: dynamics and wear of the RSSP mechanism with clearance and coatings in any of its
+joints (the crank's bearing O, the spherical joints A and B, the slider's guide P)."""
 
 from .version import __version__
 

@@ -344,7 +344,8 @@ _overrides = click.option(
 @click.group("clearsweep", cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="clearsweep")
 def main() -> None:
-    """Dynamics and wear of the RSSP mechanism with clearance and coated spherical joints."""
+    """Dynamics and wear of the RSSP mechanism with clearance and coatings in any of its
+    joints: the crank's bearing O, the spherical joints A and B, the slider's guide P."""
 
 
 @main.command()
@@ -848,10 +849,12 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 @click.option("-o", "--out", required=True, type=_OUT_FILE,
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
-              help="Draw only the sweep cases with this coordinate value (repeatable).")
+              help="Draw only the sweep cases with this coordinate value; DIM may be the "
+                   "dotted config key (repeatable).")
 @click.option("--x", "x_axis", default=None, metavar="AXIS",
               help="Abscissa of time series: angle (crank angle [degree], the default) or "
-                   "time [s]; of --kind bifurcation, the swept key (default: the only one).")
+                   "time [s]; of --kind bifurcation, the swept key, by its dimension or its "
+                   "dotted config key (default: the only one).")
 @click.option("--metric", default=None, metavar="NAME",
               help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
 @click.option("--dpi", type=click.IntRange(*DPI_RANGE), default=FIGURE_DPI, show_default=True,

@@ -659,6 +659,49 @@ def joint_configs(cfg: Config) -> list[tuple[str, AnyJoint]]:
     return [(joint.name, getattr(cfg.joints, joint.name)) for joint in JOINTS]
 
 
+
+#: The per-joint attributes of a run's results (:func:`joint_attributes`): the suffix of
+#: ``joint_<J>_<suffix>`` and what it holds (docs/runs.md, "Joint attributes").
+JOINT_ATTRIBUTES = {
+    "type": "the joint's type (spherical, revolute, prismatic)",
+    "contact": "'ideal' (no clearance, no contact law) or the elastic law its contact takes",
+    "clearance_m": "the packed clearance jp[J_C] [m] (P: the smaller of its two)",
+    "coating": "the socket's (bearing's, guide's) coating, 'none' if uncoated",
+    "surface_material": "the material of the socket's surface (the coating where coated)",
+    "base_material": "the socket's base and the ball's material",
+    "modulus_Pa": "the modulus of the contact law, jp[J_EW] [Pa] (NaN: ideal)",
+    "friction_coefficient": "jp[J_MU] (NaN: ideal)",
+    "wear_coefficient_m2_per_N": "Archard's k, jp[J_K] [m^2/N] (NaN: ideal)",
+}
+
+
+def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
+    """Each joint's type, materials and the contact values the kernel ran with, read from the
+    packed ``jp`` rows: ``joint_<J>_<suffix>`` for every suffix of :data:`JOINT_ATTRIBUTES`.
+    An ideal joint's ``contact`` is ``"ideal"`` and its contact values NaN: no contact law
+    applies there."""
+    exponent = float(packed.p[L.P_EXPONENT])
+    out: dict[str, Any] = {}
+    for j, (name, joint) in enumerate(joint_configs(cfg)):
+        row, kind = packed.jp[j], JOINTS[j].type
+        ideal = row[L.J_CLEARANCE] == 0.0
+        law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
+            f"layered law, E_w ({cfg.contact.layer_rule})"
+        values = {
+            "type": kind,
+            "contact": "ideal" if ideal else law,
+            "clearance_m": float(row[L.J_C]),
+            "coating": joint.coating,
+            "surface_material": BASE_MATERIAL if joint.coating == "none" else joint.coating,
+            "base_material": BASE_MATERIAL,
+            "modulus_Pa": math.nan if ideal else float(row[L.J_EW]),
+            "friction_coefficient": math.nan if ideal else float(row[L.J_MU]),
+            "wear_coefficient_m2_per_N": math.nan if ideal else float(row[L.J_K]),
+        }
+        out.update({f"joint_{name}_{key}": value for key, value in values.items()})
+    return out
+
+
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
          seat: bool = True) -> Packed:
     """Resolved config (config.load_config) + materials -> kernel vectors (SI).

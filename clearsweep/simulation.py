@@ -18,7 +18,7 @@ from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, res
 from .core import layout as L
 from .core.contact import elastic_force
 from .core.work import Case, Out
-from .params import PRESETS, Packed, as_python, pack
+from .params import PRESETS, Packed, as_python, joint_attributes, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -266,12 +266,8 @@ def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
         "rod_spin_constraint": "gamma3 = 0 (paper Eq. 24)",
         "preset": cfg.mechanism.preset,
         "preset_source": PRESETS[cfg.mechanism.preset].source,
-        "equivalent_modulus_A_Pa": float(packed.jp[0, L.J_EW]),
-        "equivalent_modulus_B_Pa": float(packed.jp[1, L.J_EW]),
-        "friction_coefficient_A": float(packed.jp[0, L.J_MU]),
-        "friction_coefficient_B": float(packed.jp[1, L.J_MU]),
-        "wear_coefficient_A_m2_per_N": float(packed.jp[0, L.J_K]),
-        "wear_coefficient_B_m2_per_N": float(packed.jp[1, L.J_K]),
+        # every joint: its type, materials and the contact values the kernel ran with
+        **joint_attributes(cfg, packed),
         # where the run ended (the stop, for a failed case: rows after the last saved
         # one are NaN, while wear_map, wear_projection and wear_volume hold the wear up
         # to this time)

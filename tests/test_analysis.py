@@ -247,6 +247,16 @@ def test_selection_matches_numbers_by_value(sweep_ds):
         parse_selection(sweep_ds, ["B_clearance=3e-4"])
 
 
+def test_selection_takes_the_swept_dotted_config_key_as_well_as_the_dimension(sweep_ds):
+    ds = sweep_ds.copy()
+    ds["B_coating"].attrs["config_key"] = "joints.B.coating"     # as a sweep file writes it
+    ds["B_clearance"].attrs["config_key"] = "joints.B.clearance"
+    assert parse_selection(ds, ["joints.B.coating=PTFE", "joints.B.clearance=2.5e-4"]) == {
+        "B_coating": "PTFE", "B_clearance": 2.5e-4}
+    with pytest.raises(SelectionError, match="unknown sweep dimension 'joints.A.coating'"):
+        parse_selection(ds, ["joints.A.coating=PTFE"])
+
+
 def test_metric_table(sweep_ds):
     values = metric_table(sweep_ds, "slider_acceleration_peak_settled")
     assert values.dims == ("B_coating", "B_clearance")

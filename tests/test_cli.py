@@ -1,6 +1,7 @@
 """The command-line interface through its real entry points: exit codes, messages, files."""
 
 import errno
+import re
 import shutil
 import subprocess
 import sys
@@ -225,6 +226,17 @@ def test_version_and_help_list_every_command():
         assert result.exit_code == 0 and result.stderr == ""
         listed = result.stdout.split("Commands:\n", 1)[1].splitlines()
         assert sorted(line.split()[0] for line in listed) == sorted(main.commands)
+
+
+def test_help_names_every_joint_of_the_mechanism():
+    """The help describes the mechanism as it is: clearance in the bearing O, the spherical
+    joints A and B and the guide P (it once spoke of spherical joints only)."""
+    from clearsweep.core.joints import JOINTS
+
+    text = " ".join(CliRunner().invoke(main, ["--help"]).stdout.split("Options:")[0].split())
+    for joint in JOINTS:
+        assert re.search(rf"\b{joint.name}\b", text), joint.name
+    assert "bearing O" in text and "guide P" in text
 
 
 def test_a_broken_module_is_an_error_not_an_unknown_command(tmp_path, monkeypatch):

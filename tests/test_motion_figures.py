@@ -257,3 +257,19 @@ def test_the_shipped_bifurcation_sweep_runs_110_revolutions_a_speed_with_10_of_s
     assert speeds == [50.0 + 10.0 * k for k in range(60)]
     text = path.read_text()
     assert "solver.duration" not in text and "metrics.settle_time" not in text
+
+
+def test_the_swept_key_is_named_by_its_dotted_config_key_as_well(tmp_path, bifurcation):
+    """The sweep file names the key ``mechanism.speed_rpm``, the results file's coordinate
+    ``speed_rpm`` (with ``config_key`` naming the key): ``--x`` takes either."""
+    ds = bifurcation.copy()
+    ds["speed_rpm"].attrs["config_key"] = "mechanism.speed_rpm"
+    path = write_netcdf_atomic(ds, tmp_path / "bif.nc")
+    for x in ("speed_rpm", "mechanism.speed_rpm"):
+        result = plot_cli(path, "--kind", "bifurcation", "--x", x, "-o", tmp_path / f"{x}.png")
+        assert result.exit_code == 0, result.output
+    by_key = figure(ds, "bifurcation", x="mechanism.speed_rpm")
+    by_dim = figure(ds, "bifurcation", x="speed_rpm")
+    for a, b in zip(by_key.axes[0].get_lines(), by_dim.axes[0].get_lines(), strict=True):
+        np.testing.assert_array_equal(a.get_xydata(), b.get_xydata())
+    assert by_key.axes[-1].get_xlabel() == by_dim.axes[-1].get_xlabel()

@@ -69,6 +69,7 @@ from .selection import (  # noqa: F401
     SelectionError,
     choice_message,
     configured_clearances,
+    coordinate_for_key,
     design_dims,
     ideal_joints,
     is_ensemble,

@@ -136,6 +136,16 @@ def _match_value(coord: xr.DataArray, name: str, wanted) -> object:
                          name=name, value=text, choices=[value_text(v) for v in candidates])
 
 
+def coordinate_for_key(obj: xr.Dataset | xr.DataArray, name: str) -> str:
+    """The coordinate that ``name`` names: ``name`` itself where ``obj`` has it, else the
+    coordinate swept over the dotted config key ``name`` (its ``config_key`` attribute:
+    ``mechanism.speed_rpm`` -> ``speed_rpm``); ``name`` unchanged where none is."""
+    if name in obj.coords or "." not in name:
+        return name
+    return next((str(n) for n, c in obj.coords.items() if c.attrs.get("config_key") == name),
+                name)
+
+
 def parse_selection(obj: xr.Dataset | xr.DataArray,
                     items: Mapping[str, object] | Iterable[str] | None, *,
                     dims_only: bool = False) -> dict[str, object]:
@@ -146,8 +156,9 @@ def parse_selection(obj: xr.Dataset | xr.DataArray,
     obj
         Dataset (or array) with sweep dimensions.
     items
-        ``["B_coating=PTFE", "B_clearance=2.5e-4"]`` or ``{"B_coating": "PTFE"}``.
-        Values match a coordinate value by text, or numerically for numbers.
+        ``["B_coating=PTFE", "B_clearance=2.5e-4"]`` or ``{"B_coating": "PTFE"}``; a name
+        may be the swept dotted config key (``joints.B.coating=PTFE``,
+        :func:`coordinate_for_key`). Values match a coordinate value by text, or numerically for numbers.
     dims_only
         Accept only sweep dimensions, not other indexed coordinates
         (levels of a stacked ``case`` dimension).
@@ -179,6 +190,7 @@ def parse_selection(obj: xr.Dataset | xr.DataArray,
             pairs.append((name.strip(), text))
     out = {}
     for name, wanted in pairs:
+        name = coordinate_for_key(obj, name)
         if name not in names and name in dims:
             # a zip group swept without labels: a dimension with no values to name
             others = f"; the dimensions with values: {', '.join(names)}" if names else ""

@@ -72,7 +72,7 @@ import xarray as xr
 import yaml
 from matplotlib.figure import Figure
 
-from ..analysis import SelectionError, choice_message, parse_selection, sweep_dims
+from ..analysis import SelectionError, choice_message, coordinate_for_key, parse_selection, sweep_dims
 from ..choices import (  # noqa: F401
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -181,7 +181,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
         ``["DIM=VALUE", ...]`` or ``{dim: value}``: the cases to draw.
     x
         Abscissa of time series: ``"angle"`` (crank angle [degree], ``None``'s) or ``"time"``
-        [s]; of ``kind="bifurcation"``, the swept key (``None``: the only one).
+        [s]; of ``kind="bifurcation"``, the swept key, by its coordinate's name or its dotted
+        config key (``speed_rpm`` or ``mechanism.speed_rpm``; ``None``: the only one).
     metric
         Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
     b10
@@ -203,6 +204,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
         if x not in X_AXES:
             raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
                                  choices=X_AXES)
+    elif x is not None:     # the swept key as the sweep file names it, or its dimension
+        x = coordinate_for_key(ds, x)
     spec = FIGURES[kind]
     if metric is not None and "metric" not in spec.options:
         raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")

@@ -124,6 +124,8 @@ class _Template:
     dim_attrs: dict[str, dict] = field(default_factory=dict)
     dim_sizes: dict[str, int] = field(default_factory=dict)
     statuses: dict[str, str] = field(default_factory=dict)
+    #: Part key -> its per-joint global attributes (``joint_*``, :data:`JOINT_ATTR_PREFIX`).
+    joint_attrs: dict[str, dict] = field(default_factory=dict)
     #: Part key -> what the copy pass needs of it, read by the scan (:class:`_PartCopy`);
     #: a part missing here is opened again.
     copies: dict[str, _PartCopy] = field(default_factory=dict)
@@ -220,6 +222,8 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore, holds: str | None = None
                                  f"sweep's store: {holds}; resume that sweep with its own store, "
                                  "or run this one with --overwrite")
             tpl.statuses[h] = str(_values(nc["status"]).ravel()[0])
+            tpl.joint_attrs[h] = {k: nc.getncattr(k) for k in nc.ncattrs()
+                                  if k.startswith(JOINT_ATTR_PREFIX)}
             for dim, d in nc.dimensions.items():
                 if dim in nc.variables:
                     tpl.dim_values[dim] = _union(tpl.dim_values.get(dim), _values(nc[dim]))
@@ -248,6 +252,47 @@ def _scan(slots: Sequence[SweepSlot], store: PartStore, holds: str | None = None
     for dim, values in tpl.dim_values.items():
         tpl.dim_sizes[dim] = len(values)
     return tpl
+
+
+#: The prefix of a case's per-joint global attributes (``clearsweep.params.joint_attributes``).
+JOINT_ATTR_PREFIX = "joint_"
+
+#: Units of a per-joint attribute, by the suffix of its name.
+_JOINT_UNITS = {"_Pa": "Pa", "_m": "m", "_m2_per_N": "m2 N-1"}
+
+
+def _same(a, b) -> bool:
+    """Whether two attribute values are equal (NaN equals NaN)."""
+    if isinstance(a, str) or isinstance(b, str):
+        return isinstance(a, str) and isinstance(b, str) and a == b
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and bool(np.all((a == b) | (np.isnan(a) & np.isnan(b))))
+
+
+def _joint_attrs(tpl: _Template) -> tuple[dict, dict[str, np.dtype]]:
+    """The parts' per-joint attributes split in two: those every part that has them agrees
+    on (global attributes of the sweep file) and those that vary from case to case (each a
+    variable over the sweep dims: its dtype)."""
+    constant: dict = {}
+    varying: dict[str, np.dtype] = {}
+    for values in tpl.joint_attrs.values():
+        for name, value in values.items():
+            if name in varying:
+                continue
+            if name not in constant:
+                constant[name] = value
+            elif not _same(constant[name], value):
+                del constant[name]
+                varying[name] = np.dtype(object) if isinstance(value, str) else np.dtype(float)
+    return constant, varying
+
+
+def _joint_attr_variable_attrs(name: str) -> dict:
+    out = {"long_name": f"{name} of each case (a per-joint attribute that varies across the sweep)"}
+    unit = next((u for suffix, u in _JOINT_UNITS.items() if name.endswith(suffix)), None)
+    if unit is not None:
+        out["units"] = unit
+    return out
 
 
 def _nc_type(dtype: np.dtype):
@@ -540,6 +585,11 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
     (NaN for floats). Cases without a variable (failed or skipped ones) read
     as fill values.
 
+    A case's per-joint global attributes (``joint_*``: type, materials, the contact values
+    the kernel ran with) that every part agrees on become global attributes of the sweep
+    file; those that differ between cases become variables of the same name over the sweep
+    dims (fill values where a case has none: a failed or skipped one).
+
     Three passes over the parts: the headers (variables, dtypes, case coordinates) and
     every value but the whole-case arrays stored as one chunk (kept up to
     :data:`SCAN_CACHE_BYTES`, so that a part is opened once), then netCDF4 writes of those
@@ -556,7 +606,10 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
               "failed": sum(1 for s in slots if s.hash is not None
                             and tpl.statuses[s.hash] not in NOT_FAILED),
               "skipped": sum(1 for s in slots if s.hash is None)}
-    attrs = {**(attrs or {}), **{f"sweep_{k}": v for k, v in counts.items()}}
+    constant, varying = _joint_attrs(tpl)
+    attrs = {**(attrs or {}), **constant, **{f"sweep_{k}": v for k, v in counts.items()}}
+    for name, dtype in varying.items():
+        tpl.variables[name] = _VarInfo((), dtype, _joint_attr_variable_attrs(name), False)
     raw = []
     with write_errors_as_oserror(path), replaced_on_success(path) as tmp:
         with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
@@ -579,6 +632,10 @@ def write_sweep_netcdf(path: str | os.PathLike, *, sweep_dims: Mapping[str, int]
                         names = _copy_case(part, where, variables, tpl, writes)
                 if names:
                     raw.append((where, store.path(slot.hash), names))
+                for name in varying:
+                    value = tpl.joint_attrs[slot.hash].get(name)
+                    if value is not None:
+                        writes.write(name, where, value, isinstance(value, str))
             writes.flush()
         _copy_chunks(Path(tmp), raw, check)
         if finish is not None:
