@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.signal import detrend
 
-from clearsweep.analysis import format_statistics_table, format_wear_table
+from clearsweep.analysis import format_statistics_table, format_wear_table, run_summary_text
 from clearsweep.analysis.tables import report_summary
 from clearsweep.materials import load_materials
 from clearsweep.simulation import simulate
@@ -74,12 +74,13 @@ def test_impacts_read_as_impacts():
     assert source(ds) == f"{PEAK_BY_IMPACTS} (B)"
 
 
-def test_report_text_and_csv_name_the_source(ptfe):
+def test_report_run_text_and_csv_name_the_source(ptfe):
     assert f"{PEAK_BY_OSCILLATION} (B)" in format_statistics_table(ptfe)
     csv_text = format_wear_table(ptfe, "csv", with_statistics=True)
     header, first = csv_text.splitlines()[:2]
     assert "Peak force set by" in header
     assert f"{PEAK_BY_OSCILLATION} (B)" in first
+    assert f"peak force set by: {PEAK_BY_OSCILLATION} (B)" in run_summary_text(ptfe)
 
 
 def test_friction_drives_the_oscillation(ptfe, ptfe_frictionless):
