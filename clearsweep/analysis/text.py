@@ -112,6 +112,8 @@ def run_summary_text(ds: xr.Dataset) -> str:
                 values = ", ".join(f"{value_text(j)} {_pair(case.sel(joint=j), name, spec)}"
                                    for j in case["joint"].values)
                 lines.append(f"  {heading}: {values}")
+        if "peak_force_source" in case and case["peak_force_source"].ndim == 0:
+            lines.append(f"  peak force set by: {value_text(case['peak_force_source'].values[()])}")
         lines += _run_motion_lines(case)
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
