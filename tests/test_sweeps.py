@@ -724,3 +724,16 @@ def test_sweep_coordinates_carry_units_and_long_names(tmp_path):
     assert "units" not in coords["B_coating"].attrs
     assert coords["B_coating"].attrs["long_name"] == "socket coating of joint B"
     assert all(c.attrs["config_key"] for c in coords.coords.values())
+
+
+def test_a_swept_materials_file_is_taken_from_the_sweep_files_folder(tmp_path, monkeypatch):
+    """configs/measured_friction.yaml sweeps two materials files by relative paths: they are
+    read from the sweep file's folder, as the base's materials_file is, whatever the current
+    folder (they were read from the current one: the sweep ran only from the repository)."""
+    from clearsweep.sweeping.plan import expand
+
+    monkeypatch.chdir(tmp_path)
+    plan = expand(ROOT / "configs" / "measured_friction.yaml")
+    files = {case.materials_file for case in plan.runnable().values()}
+    data = ROOT / "clearsweep" / "data"
+    assert files == {str(data / "materials.yaml"), str(data / "materials_measured.yaml")}

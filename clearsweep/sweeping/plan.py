@@ -374,6 +374,23 @@ def _check_keys(mapping: Mapping, allowed: Sequence[str], where: str | None, sou
                               got="an unknown key")
 
 
+def _files_from(spec: Any, base_dir: Path) -> Any:
+    """``spec`` (a sweep section) with each swept ``materials_file`` that is a relative path
+    taken from the sweep file's folder, as the base's own ``materials_file`` is (a relative
+    path was read from the current folder: the shipped sweep ran only from the repository's
+    root)."""
+    if not isinstance(spec, Mapping):
+        return spec
+    spec = copy.deepcopy(dict(spec))
+    groups = [spec.get("grid")] + list(spec.get("zip") or [])
+    for group in groups:
+        if isinstance(group, dict) and isinstance(group.get("materials_file"), list):
+            group["materials_file"] = [
+                str(base_dir / v) if isinstance(v, str) and not os.path.isabs(os.path.expanduser(v))
+                else v for v in group["materials_file"]]
+    return spec
+
+
 def _load_base(base, base_dir: Path, source: str, overrides: Sequence[str]) -> Config:
     if base is None:
         base = {}
@@ -783,7 +800,7 @@ def expand(config_or_path: str | os.PathLike | Mapping, overrides: Iterable[str]
         raise ConfigError("store", store, " or ".join(STORE_MODES), source, close_match(store, STORE_MODES))
     kind = STORES[store]
     base = _load_base(doc.get("base"), base_dir, source, overrides)
-    spec = doc.get("sweep")
+    spec = _files_from(doc.get("sweep"), base_dir)
     kind.check_base(base, source)
     member_axis = member_axes(base, store)
     members = member_axis[0].size if member_axis else 1
