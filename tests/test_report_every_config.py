@@ -91,6 +91,9 @@ def shortened(path: Path) -> tuple[dict, list[str]]:
         sweep["grid"][key] = [values[0], values[-1]] if key == "mechanism.speed_rpm" else values[:2]
     if "sample" in sweep:
         sweep["sample"]["n"] = 4
+    for group in [sweep.get("grid") or {}, *(sweep.get("zip") or [])]:
+        if "materials_file" in group:   # taken from the config's folder, which the copy leaves
+            group["materials_file"] = [str(CONFIGS / v) for v in group["materials_file"]]
     for group in sweep.get("zip") or []:
         keys = [k for k in group if k != "name"]
         if len(group[keys[0]]) > MAX_ZIP:
