@@ -501,14 +501,14 @@ def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: i
     """The seated journal's normal and load under friction (docs/physics.md 3.6): the
     direction -n [-] (unit, in the bearing's plane) and the normal force F_N [N] at which
     the contact's force, F_N (-n) plus the friction of the journal spinning in its bearing,
-    equals the ideal reaction |F| u on the crank.
+    equals the ideal reaction ``|F| u`` on the crank.
 
     The journal turns with the crank at omega about x while its centre stays put, so its
-    contact point slips at R_j |omega| along sign(omega) x x n, and friction adds
-    mu' F_N sign(omega) x x (-n), mu' = mu c_d(R_j |omega|) (section 3.3). The sum is
+    contact point slips at ``R_j |omega|`` along sign(omega) x x n, and friction adds
+    mu' F_N sign(omega) x x (-n), ``mu' = mu c_d(R_j |omega|)`` (section 3.3). The sum is
     F_N sqrt(1 + mu'^2) times -n turned by sign(omega) atan(mu') about x: -n is u turned
-    back by the friction angle, and F_N = |F| / sqrt(1 + mu'^2). Friction off, or no
-    slip: u and |F| unchanged. ``wmap``: a worn bearing, whose friction coefficient is the
+    back by the friction angle, and ``F_N = |F| / sqrt(1 + mu'^2)``. Friction off, or no
+    slip: u and ``|F|`` unchanged. ``wmap``: a worn bearing, whose friction coefficient is the
     base's where its coating is worn through at u's direction."""
     from .core import revolute
     from .core.contact import friction_factor
