@@ -159,3 +159,45 @@ def test_category_texts():
     assert category_text(3) == "period 3"
     assert category_text(PERIOD_NONE).startswith("none")
     assert category_text(PERIOD_UNKNOWN) == "undetermined"
+
+
+def test_report_names_the_periodic_windows_of_a_map():
+    """One line per period found: its cells' ranges along the speed at each clearance; a
+    case that did not finish ok is left out, non-periodic and undetermined cases are not
+    windows."""
+    from clearsweep.analysis.text import _periodic_window_lines
+
+    speed = xr.DataArray([80.0, 85.0, 90.0, 95.0], dims="speed_rpm",
+                         attrs={"units": "min-1", "config_key": "mechanism.speed_rpm"})
+    clearance = xr.DataArray([2.0e-4, 2.5e-4], dims="B_clearance",
+                             attrs={"units": "m", "config_key": "joints.B.clearance"})
+    period = xr.DataArray([[1, 1, 0, 2], [1, 3, 1, PERIOD_UNKNOWN]],
+                          dims=("B_clearance", "speed_rpm"),
+                          coords={"B_clearance": clearance, "speed_rpm": speed})
+    ds = xr.Dataset({"period": period})
+    usable = xr.DataArray([[True, True, True, True], [True, False, True, True]],
+                          dims=("B_clearance", "speed_rpm"))
+    lines = _periodic_window_lines(ds, ds, usable, ("B_clearance", "speed_rpm"))
+    assert lines[1].startswith("Periodic windows over speed_rpm x B_clearance")
+    assert [line for line in lines if line.startswith(("-", "    "))] == [
+        "- period 1: B_clearance 0.0002 m: speed_rpm 80-85 min-1; B_clearance 0.00025 m: "
+        "speed_rpm 80 min-1,",
+        "    speed_rpm 90 min-1",
+        "- period 2: B_clearance 0.0002 m: speed_rpm 95 min-1"]
+    none = _periodic_window_lines(ds, ds.assign(period=period * 0), usable,
+                                  ("B_clearance", "speed_rpm"))
+    assert none[-1] == "- none: no case has a period up to 8"
+    assert _periodic_window_lines(ds.isel(B_clearance=[0]), ds.isel(B_clearance=[0]),
+                                  usable.isel(B_clearance=[0]), ("B_clearance", "speed_rpm")) == []
+
+
+def test_report_of_the_small_map_says_it_found_no_window(small_map):
+    result = invoke("report", small_map)
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(small_map) as ds:
+        periods = report_summary(ds)["period"].values
+    if (periods > 0).any():
+        assert "- period " in result.stdout
+    else:
+        assert "- none: no case has a period up to 8" in result.stdout
+    assert "Periodic windows over speed_rpm x B_clearance" in result.stdout

@@ -149,6 +149,11 @@ FIGURES = {
         **dict.fromkeys(("slider", "forces", "wear-polar", "orbit", "poincare", "spectrum",
                          "sweep", "bifurcation"), []),
         "wear-map": first(ds, "damping")},
+    # a two-key grid: the map over both, the bifurcation over speed at one clearance
+    "dynamics_map": lambda ds: {
+        "poincare": [], "sweep": [],
+        "bifurcation": ["--x", "speed_rpm", *first(ds, "B_clearance")],
+        "dynamics-map": ["--x", "mechanism.speed_rpm", "--y", "B_clearance"]},
     "ideal": lambda ds: dict.fromkeys(("slider", "forces", "spectrum", "poincare"), []),
     "life": lambda ds: {"wear-map": [], "life": []},
     "life_sweep": lambda ds: {"sweep": ["--metric", "cycles_reached"]},
