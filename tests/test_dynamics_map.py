@@ -201,3 +201,17 @@ def test_report_of_the_small_map_says_it_found_no_window(small_map):
     else:
         assert "- none: no case has a period up to 8" in result.stdout
     assert "Periodic windows over speed_rpm x B_clearance" in result.stdout
+
+
+def test_a_sweep_whose_runs_end_before_a_section_is_refused_saying_so(tmp_path):
+    doc = yaml.safe_load((ROOT / "configs" / "dynamics_map.yaml").read_text())
+    doc["base"]["solver"] = {"dt": 1.0e-5, "duration": 0.01}
+    doc["base"]["metrics"] = {"settle_time": 0.005}
+    doc["sweep"]["grid"] = {"mechanism.speed_rpm": SPEEDS, "joints.B.clearance": CLEARANCES}
+    config = tmp_path / "short.yaml"
+    config.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "short.nc"
+    result = invoke("sweep", config, "--workers", "1", "--no-progress", "-q", "-o", out)
+    assert result.exit_code == 0, result.output
+    line = _refused(out, tmp_path, "--x", "speed_rpm", "--y", "B_clearance")
+    assert "ended before their first section" in line

@@ -99,9 +99,13 @@ def _draw_dynamics_map(fig: Figure, ds: xr.Dataset, x: str | None, y: str | None
     x, y = map_axes(ds, x, y)
     summary = report_summary(ds)
     if "period" not in summary:
-        raise PlotError("--kind dynamics-map needs each case's period (from the Poincaré "
-                        "samples, poincare_time and poincare_slider_acc), which this file "
-                        "lacks: run the sweep again (every store keeps them)")
+        # a file holds the samples where a case lasted a revolution: both causes are said
+        raise PlotError("--kind dynamics-map needs each case's period, from the Poincaré "
+                        "samples (poincare_time, poincare_slider_acc), which this file lacks: "
+                        "its runs ended before their first section (one a crank revolution: "
+                        "run for solver.revolutions >= 2, and 100 settled ones for the 0-1 "
+                        "test), or it is a file of an older version of clearsweep (run the "
+                        "sweep again: every store keeps them)")
     period = summary["period"].transpose(y, x).values.astype(np.int64)
     chaos = (summary["chaos_k"].transpose(y, x).values.astype(float) if "chaos_k" in summary
              else np.full(period.shape, np.nan))
