@@ -100,6 +100,14 @@ def test_the_map_draws_each_cells_period_and_k_as_the_file_holds_them(small_map,
     assert "K" in fig.axes[-1].get_ylabel()      # the colour bar of the 0-1 test
 
 
+def test_the_maps_texts_stay_inside_the_figure_and_apart(small_map):
+    from test_figure_layout import layout_problems
+
+    with xr.open_dataset(small_map) as ds:
+        fig = figure(ds, "dynamics-map", x="speed_rpm", y="B_clearance")
+    assert layout_problems(fig) == []
+
+
 def test_the_cli_draws_the_map(small_map, tmp_path):
     out = tmp_path / "map.png"
     result = invoke("plot", small_map, "--kind", "dynamics-map", "--x", "speed_rpm",
@@ -215,3 +223,10 @@ def test_a_sweep_whose_runs_end_before_a_section_is_refused_saying_so(tmp_path):
     assert result.exit_code == 0, result.output
     line = _refused(out, tmp_path, "--x", "speed_rpm", "--y", "B_clearance")
     assert "ended before their first section" in line
+
+
+def test_a_period_per_member_is_refused_not_drawn(small_map):
+    with xr.open_dataset(small_map) as ds:
+        members = xr.concat([ds, ds], dim="member")
+    with pytest.raises(PlotError, match="one per member too: choose one with --select"):
+        figure(members, "dynamics-map", x="speed_rpm", y="B_clearance")

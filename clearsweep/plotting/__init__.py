@@ -209,7 +209,7 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
     if kind not in KINDS:
         raise SelectionError(choice_message("plot kind", kind, list(KINDS)), name="kind",
                              value=kind, choices=KINDS)
-    if y is not None and "y" not in FIGURES.get(kind, FIGURES["slider"]).options:
+    if y is not None and "y" not in FIGURES[kind].options:
         raise PlotError(f"--y applies to --kind {_kinds_taking('y')} only")
     if kind not in SWEPT_X_KINDS:
         x = "angle" if x is None else x

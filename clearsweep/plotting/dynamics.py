@@ -106,6 +106,11 @@ def _draw_dynamics_map(fig: Figure, ds: xr.Dataset, x: str | None, y: str | None
                         "run for solver.revolutions >= 2, and 100 settled ones for the 0-1 "
                         "test), or it is a file of an older version of clearsweep (run the "
                         "sweep again: every store keeps them)")
+    extra = [str(d) for d in summary["period"].dims if d not in (x, y)]
+    if extra:       # an ensemble's members: one period each, not one a cell
+        raise PlotError(f"--kind dynamics-map draws one period a cell; this file holds one per "
+                        f"{', '.join(extra)} too: choose one with --select "
+                        f"{extra[0]}=VALUE")
     period = summary["period"].transpose(y, x).values.astype(np.int64)
     chaos = (summary["chaos_k"].transpose(y, x).values.astype(float) if "chaos_k" in summary
              else np.full(period.shape, np.nan))
