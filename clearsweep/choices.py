@@ -10,8 +10,11 @@ REPORT_FORMATS = ("text", "markdown", "csv", "json")
 
 #: Figure kinds of ``clearsweep plot`` (:mod:`clearsweep.plotting`).
 KINDS = ("slider", "forces", "wear-map", "wear-polar", "orbit", "poincare", "sweep", "life",
-         "reliability", "spectrum", "bifurcation", "effects")
-#: Abscissae of time-series figures (``--kind bifurcation`` takes a swept key instead).
+         "reliability", "spectrum", "bifurcation", "effects", "dynamics-map")
+#: Abscissae of time-series figures (``--kind bifurcation`` and ``dynamics-map`` take swept
+#: keys instead).
+#: The figure kinds whose ``--x`` is a swept key.
+SWEPT_X_KINDS = ("bifurcation", "dynamics-map")
 X_AXES = ("angle", "time")
 #: Output file suffixes of figures (the suffix sets the format).
 OUTPUT_SUFFIXES = (".png", ".pdf", ".svg")

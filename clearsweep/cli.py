@@ -50,6 +50,7 @@ from .choices import (
     OUTPUT_SUFFIXES,
     REPORT_FORMATS,
     SWEEP_BACKENDS,
+    SWEPT_X_KINDS,
     X_AXES,
 )
 from .config import ConfigError, dump_config, file_kind, load_config, parse_yaml, read_yaml
@@ -854,7 +855,11 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
 @click.option("--x", "x_axis", default=None, metavar="AXIS",
               help="Abscissa of time series: angle (crank angle [degree], the default) or "
                    "time [s]; of --kind bifurcation, the swept key, by its dimension or its "
-                   "dotted config key (default: the only one).")
+                   "dotted config key (default: the only one); of --kind dynamics-map, the "
+                   "swept key along the abscissa.")
+@click.option("--y", "y_axis", default=None, metavar="KEY",
+              help="--kind dynamics-map: the swept key along the ordinate, by its dimension "
+                   "or its dotted config key.")
 @click.option("--metric", default=None, metavar="NAME",
               help=f"Summary metric of --kind sweep [default: {DEFAULT_SWEEP_METRIC}].")
 @click.option("--dpi", type=click.IntRange(*DPI_RANGE), default=FIGURE_DPI, show_default=True,
@@ -865,21 +870,24 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
               help="Replace an existing OUT that is not a figure clearsweep drew.")
 @_quiet
 def plot_command(path: str, kind: str, out: str, select_items: tuple[str, ...], x_axis: str,
-                 metric: str | None, dpi: int, b10: bool, overwrite: bool, quiet: bool) -> None:
+                 y_axis: str | None, metric: str | None, dpi: int, b10: bool, overwrite: bool,
+                 quiet: bool) -> None:
     """Draw a figure from the results file PATH."""
     from .analysis import SelectionError
     from .plotting import PlotError, plot
 
-    if kind != "bifurcation" and x_axis is not None and x_axis not in X_AXES:
+    if kind not in SWEPT_X_KINDS and x_axis is not None and x_axis not in X_AXES:
         raise click.BadParameter(f"{x_axis!r} is not one of {', '.join(map(repr, X_AXES))}"
-                                 " (a swept key is the abscissa of --kind bifurcation only)",
+                                 " (a swept key is the abscissa of --kind bifurcation and "
+                                 "dynamics-map only)",
                                  param_hint="'--x'")
     _check_figure_suffix(out, "'-o' / '--out'")
     _check_figure(out, "-o/--out", [("the results file", path)], overwrite)
     with open_input(path) as ds:
         _check_plot_kind(ds, path, kind, metric)
         try:
-            plot(ds, kind, out, select_items, x=x_axis, metric=metric, dpi=dpi, b10=b10)
+            plot(ds, kind, out, select_items, x=x_axis, y=y_axis, metric=metric, dpi=dpi,
+                 b10=b10)
         except (SelectionError, PlotError) as exc:
             raise click.UsageError(str(exc)) from exc
         except OSError as exc:      # as `run`: an output that cannot be written exits 1

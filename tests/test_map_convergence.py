@@ -48,11 +48,11 @@ def test_every_shipped_config_that_reports_a_depth_is_in_the_table():
     shipped = {p.stem for p in (ROOT / "configs").glob("*.yaml")}
     # ideal has no clearance (no wear); life_sweep runs life.yaml's map; sensitivity asks for
     # accelerations and forces, no wear depth, on a coarse map that its header states;
-    # bifurcation asks for the motion's period and spectrum, no wear depth; mixed_clearances
-    # answers with worn volumes, which the map does not change; measured_friction compares
-    # accelerations and forces under two friction data sets, no wear depth
+    # bifurcation and dynamics_map ask for the motion's period and spectrum, no wear depth;
+    # mixed_clearances answers with worn volumes, which the map does not change;
+    # measured_friction compares accelerations and forces under two friction data sets
     assert shipped - set(mc.CONFIGS) == {"ideal", "life_sweep", "sensitivity", "bifurcation",
-                                         "mixed_clearances", "measured_friction"}
+                                         "dynamics_map", "mixed_clearances", "measured_friction"}
     assert set(TABLE) == set(mc.CONFIGS)
     assert expand(ROOT / "configs" / "life_sweep.yaml").base.wear.map == tuple(TABLE["life"][0])
 

@@ -59,9 +59,10 @@ def assert_rendered(path, fig) -> None:
 #: ``reliability`` a reliability sweep: tests/test_reliability.py; ``spectrum`` two settled
 #: revolutions, which the synthetic 0.2 s do not hold, and ``bifurcation`` Poincaré samples:
 #: tests/test_motion_figures.py; ``effects`` a sweep that switches joints' clearance on and
-#: off: tests/test_factorial.py)
+#: off: tests/test_factorial.py; ``dynamics-map`` a grid over two keys with Poincaré samples:
+#: tests/test_dynamics_map.py)
 CASE_KINDS = [k for k in KINDS if k not in ("life", "reliability", "spectrum", "bifurcation",
-                                            "effects")]
+                                            "effects", "dynamics-map")]
 
 
 @pytest.mark.parametrize("kind", [k for k in CASE_KINDS if k != "sweep"])

@@ -152,6 +152,10 @@ FIGURES = {
         **dict.fromkeys(("slider", "forces", "wear-polar", "orbit", "poincare", "spectrum",
                          "sweep", "bifurcation"), []),
         "wear-map": first(ds, "damping")},
+    # a two-key grid cut to 80 and 110 r/min for 0.25 s: no case reaches a section, so the
+    # map, the bifurcation and the sections are refused, saying so (tests/test_dynamics_map.py
+    # draws a map of runs that do)
+    "dynamics_map": lambda ds: {"sweep": first(ds, "B_clearance")},
     "ideal": lambda ds: dict.fromkeys(("slider", "forces", "spectrum", "poincare"), []),
     "life": lambda ds: {"wear-map": [], "life": []},
     "life_sweep": lambda ds: {"sweep": ["--metric", "cycles_reached"]},

@@ -96,6 +96,7 @@ from .tables import (  # noqa: F401
     format_wear_table,
     metric_table,
     reduction_table,
+    report_summary,
 )
 from .text import (  # noqa: F401
     HEADLINE_METRICS,

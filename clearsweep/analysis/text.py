@@ -197,6 +197,58 @@ def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple
     return lines
 
 
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) index of each run of consecutive True in ``flags``."""
+    runs: list[tuple[int, int]] = []
+    for i in np.flatnonzero(flags):
+        if runs and runs[-1][1] == i - 1:
+            runs[-1] = (runs[-1][0], int(i))
+        else:
+            runs.append((int(i), int(i)))
+    return runs
+
+
+def _coordinate_text(ds: xr.Dataset, dim: str, first: int, last: int) -> str:
+    """``"speed_rpm 80-95 min-1"``: a dimension's values from ``first`` to ``last``."""
+    values = ds[dim].values
+    units = str(ds[dim].attrs.get("units", ""))
+    span = value_text(values[first]) + ("" if first == last else f"-{value_text(values[last])}")
+    return f"{dim} {span}" + (f" {units}" if units and units != "1" else "")
+
+
+def _periodic_window_lines(ds: xr.Dataset, summary: xr.Dataset, usable,
+                           dims: tuple[str, ...]) -> list[str]:
+    """A two-key grid's periodic windows (a dynamics map, ``plot --kind dynamics-map``): one
+    line per period found, the ranges of its cells along the first key at each value of the
+    second; cases whose status is not ok are left out."""
+    varying = [d for d in dims if ds.sizes[d] > 1]
+    if "period" not in summary or len(varying) != 2 or len(dims) != 2:
+        return []
+    if not all(d in ds.coords for d in varying):
+        return []
+    y, x = varying          # the ranges run along the last dimension of the data
+    period = summary["period"].transpose(y, x).values
+    ok = np.broadcast_to(np.asarray(usable.broadcast_like(summary["period"]).transpose(y, x)
+                                    if getattr(usable, "ndim", 0) else usable, dtype=bool),
+                         period.shape)
+    found = sorted({int(p) for p, good in zip(period.ravel(), ok.ravel()) if good and p > 0})
+    lines = ["", *textwrap.wrap(f"Periodic windows over {x} x {y} (periods in crank "
+                                "revolutions; --kind dynamics-map draws the map):",
+                                REPORT_LINE_CHARACTERS, break_on_hyphens=False)]
+    if not found:
+        return lines + [f"- none: no case has a period up to {MAX_PERIOD}"]
+    for p in found:
+        parts = []
+        for row in range(period.shape[0]):
+            runs = _runs((period[row] == p) & ok[row])
+            if runs:
+                spans = ", ".join(_coordinate_text(ds, x, a, b) for a, b in runs)
+                parts.append(f"{_coordinate_text(ds, y, row, row)}: {spans}")
+        lines += textwrap.wrap(f"- period {p}: " + "; ".join(parts), REPORT_LINE_CHARACTERS,
+                               subsequent_indent="    ", break_on_hyphens=False)
+    return lines
+
+
 # --------------------------------------------------------------------------- sweep summary
 
 #: Headline metrics of a sweep's summary, in order (lower is better for each); a settled
@@ -372,7 +424,9 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
                                        subsequent_indent=" " * 30, break_on_hyphens=False)
             lines.append(f"    {spread}")
     if not ensemble:
-        lines += _sweep_motion_lines(ds, report_summary(ds), usable, dims)
+        summary = report_summary(ds)
+        lines += _sweep_motion_lines(ds, summary, usable, dims)
+        lines += _periodic_window_lines(ds, summary, usable, dims)
     lines += factorial_lines(ds)
     lines.append("")
     lines.append("Every case's tables: --full (text), or --format csv / json.")

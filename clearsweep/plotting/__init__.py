@@ -59,6 +59,10 @@ Kinds (``KINDS``):
     against the swept value, one panel for the slider acceleration and one per clearance
     joint (the offset component, scaled by the clearance, along which the samples spread
     most).
+``dynamics-map``
+    a grid sweep over two parameters (``x`` and ``y``: swept keys; every other swept key
+    fixed by ``select``): each case's period (1 to 8, none, undetermined) as a categorical
+    map with a discrete legend, and the 0-1 test's K on a continuous scale beside it.
 """
 
 from __future__ import annotations
@@ -79,6 +83,7 @@ from ..choices import (  # noqa: F401
     FIGURE_DPI,
     KINDS,
     OUTPUT_SUFFIXES,
+    SWEPT_X_KINDS,
     X_AXES,
 )
 from ..dataset import replaced_on_success
@@ -103,6 +108,7 @@ from .common import (  # noqa: F401
     selection_text,
     wrapped_label,
 )
+from .dynamics import _draw_dynamics_map, map_axes  # noqa: F401
 from .effects import _draw_effects
 from .life import LIFE_SNAPSHOT_PANELS, _draw_life, snapshot_note  # noqa: F401
 from .motion import (  # noqa: F401
@@ -159,6 +165,7 @@ FIGURES = {
     "spectrum": FigureKind((9, 5.5), _draw_spectrum),
     "bifurcation": FigureKind((10, 9), _draw_bifurcation, ("x",)),
     "effects": FigureKind((15, 8), _draw_effects),
+    "dynamics-map": FigureKind((13, 5.5), _draw_dynamics_map, ("x", "y")),
 }
 
 
@@ -168,7 +175,7 @@ def _kinds_taking(option: str) -> str:
 
 
 def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
-           metric: str | None = None, b10: bool = False) -> Figure:
+           y: str | None = None, metric: str | None = None, b10: bool = False) -> Figure:
     """Build the figure of ``kind`` from ``ds`` (see the module docstring).
 
     Parameters
@@ -182,7 +189,10 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
     x
         Abscissa of time series: ``"angle"`` (crank angle [degree], ``None``'s) or ``"time"``
         [s]; of ``kind="bifurcation"``, the swept key, by its coordinate's name or its dotted
-        config key (``speed_rpm`` or ``mechanism.speed_rpm``; ``None``: the only one).
+        config key (``speed_rpm`` or ``mechanism.speed_rpm``; ``None``: the only one); of
+        ``kind="dynamics-map"``, the swept key along the abscissa, named the same way.
+    y
+        ``kind="dynamics-map"``: the swept key along the ordinate.
     metric
         Summary metric of ``kind="sweep"`` (default ``DEFAULT_SWEEP_METRIC``).
     b10
@@ -199,13 +209,17 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
     if kind not in KINDS:
         raise SelectionError(choice_message("plot kind", kind, list(KINDS)), name="kind",
                              value=kind, choices=KINDS)
-    if kind != "bifurcation":
+    if y is not None and "y" not in FIGURES[kind].options:
+        raise PlotError(f"--y applies to --kind {_kinds_taking('y')} only")
+    if kind not in SWEPT_X_KINDS:
         x = "angle" if x is None else x
         if x not in X_AXES:
             raise SelectionError(choice_message("abscissa", x, list(X_AXES)), name="x", value=x,
                                  choices=X_AXES)
     elif x is not None:     # the swept key as the sweep file names it, or its dimension
         x = coordinate_for_key(ds, x)
+    if y is not None:
+        y = coordinate_for_key(ds, y)
     spec = FIGURES[kind]
     if metric is not None and "metric" not in spec.options:
         raise PlotError(f"a metric applies to --kind {_kinds_taking('metric')} only")
@@ -215,9 +229,15 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
         ds, select = _life_wear_map(ds, select), None       # a life run: no sweep dimensions
     selection = (bifurcation_selection(ds, select, x) if kind == "bifurcation"
                  else parse_selection(ds, select))
+    if kind == "dynamics-map":
+        for option, key in (("--x", x), ("--y", y)):
+            if key is not None and key in selection:
+                raise PlotError(f"--select {key}=...: fixes the dimension of {option} {key}, "
+                                "which --kind dynamics-map draws; --select fixes the other "
+                                "swept dimensions")
     ds = ds.sel(selection) if selection else ds
     fig = Figure(figsize=spec.size_inches, layout="constrained")
-    options = {"x": x, "metric": metric, "b10": b10}
+    options = {"x": x, "y": y, "metric": metric, "b10": b10}
     spec.draw(fig, ds, *(options[name] for name in spec.options))
     plain_ticks(fig)
     _name_selection(fig, "; ".join(filter(None, [selection_text(ds, selection) or case_text(ds),
@@ -295,7 +315,8 @@ def overrides_text(ds: xr.Dataset) -> str:
 
 
 def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str | None = None,
-         metric: str | None = None, dpi: int = FIGURE_DPI, b10: bool = False) -> Figure:
+         y: str | None = None, metric: str | None = None, dpi: int = FIGURE_DPI,
+         b10: bool = False) -> Figure:
     """Draw ``kind`` from ``ds`` and save it to ``out_path`` (.png, .pdf or .svg).
 
     Parameters and errors as ``figure``; ``dpi`` sets the raster resolution.
@@ -311,7 +332,7 @@ def plot(ds: xr.Dataset, kind: str, out_path, select=None, *, x: str | None = No
     if out_path.suffix.lower() not in OUTPUT_SUFFIXES:
         raise SelectionError(choice_message("output suffix", out_path.suffix, list(OUTPUT_SUFFIXES)),
                              name="output", value=out_path.suffix, choices=OUTPUT_SUFFIXES)
-    fig = figure(ds, kind, select, x=x, metric=metric, b10=b10)
+    fig = figure(ds, kind, select, x=x, y=y, metric=metric, b10=b10)
     # a temporary file renamed into place: a full disk or a kill leaves no partial figure
     with replaced_on_success(out_path) as tmp:
         fig.savefig(tmp, dpi=dpi, format=out_path.suffix.lower()[1:],
