@@ -63,7 +63,7 @@ def clearance_text(ds: xr.Dataset) -> str:
     or selected clearance as the case ran, else its config's); ``"no clearance (ideal
     joints)"``; "" where the cases drawn differ in which joints have one (their legend
     or selection names them) or the file does not say."""
-    clearances = joint_clearances(ds) if "joint" in ds.coords else None
+    clearances = joint_clearances(ds) if "joint" in ds.dims and "joint" in ds.coords else None
     if clearances is None:
         return ""
     cases = [d for d in clearances.dims if d != "joint"]
