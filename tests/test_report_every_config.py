@@ -413,3 +413,16 @@ def test_every_figure_of_every_shipped_config_names_the_start_and_clearances_it_
             text = "clearance at " + ", ".join(sorted(joints)) if joints else "no clearance"
             assert len(said) == 1 and said[0].startswith(text), (kind, parts)
             assert said[0] == text or not joints, (kind, parts)
+
+
+def test_a_zip_group_case_chosen_by_its_label_is_titled_with_the_values_it_ran(shipped):
+    """configs/paper.yaml's case ``coating_joints=B`` was titled with the label alone, not
+    the coatings it ran with (issue 45)."""
+    from clearsweep.plotting import figure
+
+    with xr.open_dataset(shipped["paper"]) as ds:
+        ds = ds.load()
+    title = " ".join(figure(ds, "wear-map", ["clearance_joints=AB", "coating_joints=B"])
+                     .get_suptitle().split())
+    assert "coating_joints=B (A_coating none, B_coating PTFE)" in title
+    assert "clearance_joints=AB (A_clearance 0.00025 m, B_clearance 0.00025 m)" in title

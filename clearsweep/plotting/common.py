@@ -386,13 +386,19 @@ def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
 
 
 def selection_text(ds: xr.Dataset, selection: dict) -> str:
-    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB, ..."``;
-    numbers with the coordinate's units."""
+    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB (A_clearance
+    0.00025 m, B_clearance 0.00025 m), ..."``; numbers with the coordinate's units, a zip
+    group's label with the values the case ran with."""
     if not selection:
         return ""
     parts = []
     for name, value in selection.items():
         unit = ds[name].attrs.get("units", "") if name in ds.coords else ""
-        parts.append(f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else ""))
+        text = f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+        keys = str(ds[name].attrs.get("config_keys", "")).split() if name in ds.coords else []
+        # a zip group's label: the values the case ran with ("AB (A_coating PTFE, ...)")
+        zipped = [coordinate_text(c, c.values) for n, c in ds.coords.items()
+                  if n != name and c.ndim == 0 and c.attrs.get("config_key") in keys]
+        parts.append(text + (f" ({', '.join(zipped)})" if zipped else ""))
     return "selection: " + ", ".join(parts)
 
