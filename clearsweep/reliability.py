@@ -428,7 +428,7 @@ def reliability_estimate(ds: xr.Dataset, level: float = CONFIDENCE_LEVEL) -> xr.
     correlations, per limit (module docstring)."""
     import xarray as xr
 
-    from .schema import parse_yaml
+    from .analysis import file_config
 
     rev = ds["revolutions_to_limit"]
     design_dims = [d for d in rev.dims if d not in ("member", "limit")]
@@ -441,7 +441,7 @@ def reliability_estimate(ds: xr.Dataset, level: float = CONFIDENCE_LEVEL) -> xr.
     times = rev.transpose(*order).to_numpy().astype(float).reshape(n_design, n_member, n_limit)
     cens = ds["censored"].transpose(*order).to_numpy().reshape(n_design, n_member, n_limit)
     times = np.where(ok[..., None], times, np.nan)
-    base = (parse_yaml(ds.attrs["sweep_config"]) or {}).get("base", {})
+    base = file_config(ds)      # the sweep's base, as the figures and the report read it
     # from half the earliest revolutions observed (at least one block) to the largest
     first = float(base.get("life", {}).get("block_revolutions", 1))
     seen = np.isfinite(times).any()

@@ -352,8 +352,8 @@ def test_a_run_records_its_command_line_and_its_figure_names_the_overrides(tmp_p
         f"clearsweep run {CONFIG} --set solver.duration=0.004 --set joints.B.coating=PTFE "
         f"-o {out} -q")
     title = " ".join(figure(ds, "slider").get_suptitle().split())
-    assert "case: one_clearance; start: seated; --set solver.duration=0.004, joints.B.coating=PTFE" \
-        in title
+    assert ("case: one_clearance; start: seated; clearance at B; --set solver.duration=0.004, "
+            "joints.B.coating=PTFE") in title
 
 
 @pytest.mark.slow

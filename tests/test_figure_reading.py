@@ -322,3 +322,61 @@ def test_a_sweep_files_figures_name_the_start_its_base_config_gives(tmp_path, mo
     assert "config" not in ds.attrs
     title = figure(ds, "slider").get_suptitle()
     assert f"start: {start}" in title and start != "seated"
+
+
+def said(title: str, part: str) -> bool:
+    """Whether a part of ``title`` (parts end at ";" or the title's end; the title's lines
+    rejoined where it was wrapped) ends in ``part``."""
+    return any(p.strip().endswith(part) for p in " ".join(title.split()).split(";"))
+
+
+@pytest.fixture(scope="module")
+def start_and_clearance_sweep(tmp_path_factory):
+    """A sweep of the start (seated, centred) by A's clearance (none, 0.25 mm), B at 0.25 mm
+    in its base: four cases of 2 ms."""
+    from clearsweep.sweeping import run_sweep
+
+    spec = {"base": {"name": "starts", "mechanism": {"speed_rpm": 600.0},
+                     "joints": {"A": {"clearance": 0.0}, "B": {"clearance": 2.5e-4}},
+                     "solver": {"duration": 0.002, "dt": 1e-5},
+                     "metrics": {"settle_time": 0.001}, "wear": {"map": [6, 12]}},
+            "sweep": {"grid": {"initial.joints": ["seated", "centred"],
+                               "joints.A.clearance": [0.0, 2.5e-4]}}}
+    return run_sweep(spec, workers=1, progress=False)
+
+
+@pytest.mark.parametrize("kind", ["slider", "forces", "wear-map", "wear-polar", "orbit"])
+@pytest.mark.parametrize(("start", "a_clearance", "joints"),
+                         [("centred", "0", "B"), ("seated", "2.5e-4", "A, B"),
+                          ("centred", "2.5e-4", "A, B")])
+def test_a_selected_case_s_title_names_its_own_start_and_joints_with_clearance(
+        start_and_clearance_sweep, kind, start, a_clearance, joints):
+    """One case chosen with --select was titled with the base's start ("seated") whatever
+    start it ran, and no figure said which joints had a clearance (issue 45)."""
+    ds = start_and_clearance_sweep
+    title = figure(ds, kind, [f"initial_joints={start}", f"A_clearance={a_clearance}"]).get_suptitle()
+    assert said(title, f"start: {start}") and said(title, f"clearance at {joints}")
+
+
+def test_cases_drawn_together_are_titled_with_what_they_share_only(start_and_clearance_sweep):
+    """Overlaid cases of both starts have no "start:" in the title; those of one start that
+    differ in A's clearance name neither A nor B as the joints with clearance."""
+    ds = start_and_clearance_sweep
+    both = figure(ds, "slider", ["A_clearance=0"]).get_suptitle()
+    assert "start:" not in both and said(both, "clearance at B")
+    one = figure(ds, "slider", ["initial_joints=centred"]).get_suptitle()
+    assert said(one, "start: centred") and "clearance at" not in one
+
+
+def test_a_life_figure_draws_and_names_the_joint_its_config_gives_a_clearance():
+    """A life run with a clearance at the bearing O only: its wear maps were of joint B (an
+    ideal joint, zero wear), chosen between A and B alone (issue 45)."""
+    from test_figure_layout import CONFIG, TINY_LIFE
+
+    from clearsweep.config import load_config
+    from clearsweep.service_life import life
+
+    ds = life(load_config(CONFIG, [*TINY_LIFE, "joints.B.clearance=0", "joints.O.clearance=1e-4",
+                                   "life.max_blocks=2"]))
+    title = figure(ds, "life").get_suptitle()
+    assert "wear maps of joint O" in title and said(title, "clearance at O")

@@ -95,6 +95,8 @@ def shortened(path: Path) -> tuple[dict, list[str]]:
         if "materials_file" in group:   # taken from the config's folder, which the copy leaves
             group["materials_file"] = [str(CONFIGS / v) for v in group["materials_file"]]
     for group in sweep.get("zip") or []:
+        if "materials_file" in group:   # relative to the config's folder, and this one is copied
+            group["materials_file"] = [str(CONFIGS / f) for f in group["materials_file"]]
         keys = [k for k in group if k != "name"]
         if len(group[keys[0]]) > MAX_ZIP:
             for key in keys:
@@ -343,3 +345,91 @@ def test_report_of_a_run_with_clearance_at_any_subset_of_the_joints(subsets, sub
             assert len(rows) == 1 and rows[0]["joint"] in ("", None)
             assert float(rows[0]["slider_acceleration_peak" if fmt == "json"
                                  else "Peak slider acc., whole run [m s-2]"]) > 0
+
+
+# --------------------------------------------------------------------------- issue 45 item 1
+
+def _title_parts(title: str) -> list[str]:
+    """A figure title's parts (ended by ";" or the title's end), its wrapped lines rejoined."""
+    return [p.strip() for p in " ".join(title.split()).split(";")]
+
+
+def _configured(doc: dict) -> tuple[object, dict[str, float]]:
+    """The start (``initial.joints``, seated by default) and each joint's radial clearance [m]
+    (a guide's smaller of its two) that a config file gives its cases, read from the file."""
+    base = _base(doc)
+    start = (base.get("initial") or {}).get("joints", "seated")
+    clearances = {}
+    for joint in "OABP":
+        spec = (base.get("joints") or {}).get(joint) or {}
+        given = [float(spec[k]) for k in ("clearance", "clearance_y", "clearance_z") if k in spec]
+        clearances[joint] = min(given) if given else 0.0
+    return start, clearances
+
+
+def _case_values(case: xr.Dataset, key: str) -> tuple[bool, object]:
+    """(swept, its one value in ``case`` or None where the cases drawn differ) of ``key``."""
+    coord = next((c for c in case.coords.values() if c.attrs.get("config_key") == key), None)
+    if coord is None:
+        return False, None
+    values = set(coord.values.ravel().tolist())
+    return True, values.pop() if len(values) == 1 else None
+
+
+@pytest.mark.parametrize("name", sorted(FIGURES))
+def test_every_figure_of_every_shipped_config_names_the_start_and_clearances_it_ran(shipped, name):
+    """The title of each figure that the short results of a shipped config draw names the
+    start and the joints with clearance that the config (its base, and the swept values of
+    the cases drawn) gives them; a start or a set of joints the cases drawn differ in is not
+    named. Every figure of configs/revolute_clearance.yaml and configs/contact_laws.yaml said
+    "start: seated" of centred runs, and no title named the joints with clearance (issue 45)."""
+    from clearsweep.analysis import select_cases
+    from clearsweep.plotting import figure
+
+    doc = yaml.safe_load((CONFIGS / f"{name}.yaml").read_text())
+    if isinstance(doc.get("base"), str):
+        doc["base"] = str(CONFIGS / doc["base"])
+    start, clearances = _configured(doc)
+    with xr.open_dataset(shipped[name]) as ds:
+        ds = ds.load()
+    for kind, args in FIGURES[name](ds).items():
+        options = dict(zip(args[::2], args[1::2]))
+        selects = [b for a, b in zip(args[::2], args[1::2]) if a == "--select"]
+        parts = _title_parts(figure(ds, kind, selects or None, x=options.get("--x"),
+                                    metric=options.get("--metric")).get_suptitle())
+        case = select_cases(ds, selects) if selects else ds
+        swept, value = _case_values(case, "initial.joints")
+        expected_start = value if swept else start
+        said_start = [p for p in parts if "start: " in p]
+        if expected_start is None:
+            assert not said_start, (kind, parts)
+        else:
+            assert len(said_start) == 1 and said_start[0].endswith(f"start: {expected_start}"), \
+                (kind, parts)
+        joints, known = [], True
+        for joint, configured in clearances.items():
+            key = f"joints.{joint}.clearance"
+            found = [_case_values(case, k) for k in (key, key + "_y", key + "_z")]
+            values = [v for s, v in found if s]
+            if any(v is None for v in values):
+                known = False           # the cases drawn differ in this joint's clearance
+            elif (min(float(v) for v in values) if values else configured) > 0.0:
+                joints.append(joint)
+        said = [p for p in parts if p.startswith("clearance at") or p.startswith("no clearance")]
+        if known:
+            text = "clearance at " + ", ".join(sorted(joints)) if joints else "no clearance"
+            assert len(said) == 1 and said[0].startswith(text), (kind, parts)
+            assert said[0] == text or not joints, (kind, parts)
+
+
+def test_a_zip_group_case_chosen_by_its_label_is_titled_with_the_values_it_ran(shipped):
+    """configs/paper.yaml's case ``coating_joints=B`` was titled with the label alone, not
+    the coatings it ran with (issue 45)."""
+    from clearsweep.plotting import figure
+
+    with xr.open_dataset(shipped["paper"]) as ds:
+        ds = ds.load()
+    title = " ".join(figure(ds, "wear-map", ["clearance_joints=AB", "coating_joints=B"])
+                     .get_suptitle().split())
+    assert "coating_joints=B (A_coating none, B_coating PTFE)" in title
+    assert "clearance_joints=AB (A_clearance 0.00025 m, B_clearance 0.00025 m)" in title

@@ -71,6 +71,7 @@ from .selection import (  # noqa: F401
     configured_clearances,
     coordinate_for_key,
     design_dims,
+    file_config,
     ideal_joints,
     is_ensemble,
     iter_cases,

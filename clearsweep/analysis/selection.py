@@ -213,6 +213,27 @@ def select_cases(obj: xr.Dataset | xr.DataArray, items) -> xr.Dataset | xr.DataA
 
 # --------------------------------------------------------------------------- ideal joints
 
+def file_config(ds: xr.Dataset) -> dict:
+    """The case config a results file was made from: a run's or a life run's ``config``
+    attribute, else the ``base`` of its sweep's ``sweep_config`` (a sweep, an ensemble, a
+    reliability sweep: the base as resolved, ``--set`` items applied); {} where neither
+    can be read as a mapping."""
+    import yaml
+
+    for name in ("config", "sweep_config"):
+        if not ds.attrs.get(name):
+            continue        # a sweep file has no run config: its base is in sweep_config
+        try:
+            doc = yaml.safe_load(str(ds.attrs[name])) or {}
+        except yaml.YAMLError:
+            continue
+        if isinstance(doc, dict):
+            base = doc.get("base", doc) if name == "sweep_config" else doc
+            if isinstance(base, dict):
+                return base
+    return {}
+
+
 def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
     """Radial clearance [m] of each joint in the configuration text; empty when there is none.
 

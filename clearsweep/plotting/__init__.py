@@ -6,7 +6,8 @@ file's suffix names. Every axis and colour-bar label carries the units of the
 variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
 or categorical quantity. Lengths and forces are drawn in the unit that reads
 directly (nm, µm, mm, kN: ``variables.DISPLAY_UNITS``), never with offset text. The
-title names the case or ``--select`` slice, the start (seated or centred) and every
+title names the case or ``--select`` slice, the start (seated or centred), the joints with
+clearance (the case's own, swept values included) and every
 ``--set`` override of the command line the file's ``history`` records. A joint that is ideal
 in every case drawn (``analysis.ideal_joints``) has no panel and is named nowhere; a
 per-joint kind of results whose joints are all ideal is refused (``PlotError``). The forces
@@ -99,6 +100,7 @@ from .common import (  # noqa: F401
     TITLE_CHARACTERS_PER_INCH,
     PlotError,
     axis_label,
+    clearance_text,
     coordinate_text,
     file_figures,
     keep_relative_span,
@@ -106,6 +108,7 @@ from .common import (  # noqa: F401
     point_text,
     run_config,
     selection_text,
+    swept_config_value,
     wrapped_label,
 )
 from .dynamics import _draw_dynamics_map, map_axes  # noqa: F401
@@ -241,7 +244,8 @@ def figure(ds: xr.Dataset, kind: str, select=None, *, x: str | None = None,
     spec.draw(fig, ds, *(options[name] for name in spec.options))
     plain_ticks(fig)
     _name_selection(fig, "; ".join(filter(None, [selection_text(ds, selection) or case_text(ds),
-                                                 start_text(ds), overrides_text(ds)])))
+                                                 start_text(ds), clearance_text(ds),
+                                                 overrides_text(ds)])))
     fit_cell_values(fig)
     return fig
 
@@ -272,13 +276,15 @@ def case_text(ds: xr.Dataset) -> str:
 
 
 def start_text(ds: xr.Dataset) -> str:
-    """``"start: seated"``: where the balls of the clearance joints started (``initial.joints``
-    of the config, or of a ``--set`` on the command line; a sweep's file keeps its config as
-    written), unless a sweep dimension varies it; "" for a file without a config."""
+    """``"start: seated"``: where the balls of the clearance joints started in the cases drawn:
+    a swept ``initial.joints`` as the case ran it (one case chosen with ``--select``), else
+    ``initial.joints`` of the config, or of a ``--set`` on the command line; "" where the
+    cases drawn started differently or the file has no config."""
     if not {"config", "sweep_config"} & set(ds.attrs):
         return ""
-    if any(str(d).endswith("initial_joints") for d in sweep_dims(ds)):
-        return ""
+    swept, start = swept_config_value(ds, "initial.joints")
+    if swept:
+        return f"start: {start}" if start is not None else ""
     initial = run_config(ds).get("initial")
     start = initial.get("joints") if isinstance(initial, dict) else None
     for override in _overrides(ds):

@@ -10,10 +10,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-import yaml
 from matplotlib import colormaps
 
-from ..analysis import ideal_joints, iter_cases, label_text, results_kind, sweep_dims, value_text
+from ..analysis import (
+    file_config,
+    ideal_joints,
+    iter_cases,
+    joint_clearances,
+    label_text,
+    results_kind,
+    sweep_dims,
+    value_text,
+)
 from ..outputs import RESULTS_KINDS
 from ..variables import display_unit
 
@@ -45,19 +53,36 @@ COLOURBAR_LABEL_CHARACTERS = 36
 
 
 def run_config(ds: xr.Dataset) -> dict:
-    """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable."""
-    for name in ("config", "sweep_config"):
-        if not ds.attrs.get(name):
-            continue        # a sweep file has no run config: its base is in sweep_config
-        try:
-            doc = yaml.safe_load(str(ds.attrs[name])) or {}
-        except yaml.YAMLError:
-            continue
-        if isinstance(doc, dict):
-            base = doc.get("base", doc) if name == "sweep_config" else doc
-            if isinstance(base, dict):
-                return base
-    return {}
+    """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable
+    (:func:`clearsweep.analysis.file_config`)."""
+    return file_config(ds)
+
+
+def clearance_text(ds: xr.Dataset) -> str:
+    """``"clearance at A, B"``: the joints with a clearance in every case of ``ds`` (a swept
+    or selected clearance as the case ran, else its config's); ``"no clearance (ideal
+    joints)"``; "" where the cases drawn differ in which joints have one (their legend
+    or selection names them) or the file does not say."""
+    clearances = joint_clearances(ds) if "joint" in ds.dims and "joint" in ds.coords else None
+    if clearances is None:
+        return ""
+    cases = [d for d in clearances.dims if d != "joint"]
+    has = (clearances > 0.0).transpose("joint", *cases).values.reshape(clearances.sizes["joint"], -1)
+    if not (has.all(axis=1) | ~has.any(axis=1)).all():
+        return ""
+    joints = [value_text(j) for j, row in zip(clearances["joint"].values, has) if row.all()]
+    return "clearance at " + ", ".join(joints) if joints else "no clearance (ideal joints)"
+
+
+def swept_config_value(ds: xr.Dataset, key: str) -> tuple[bool, object]:
+    """Whether a sweep coordinate sets the dotted config ``key`` in ``ds``, and its one value
+    over the cases of ``ds`` (a case chosen with ``--select`` keeps it as a scalar
+    coordinate); None where the cases drawn differ in it."""
+    coord = next((c for c in ds.coords.values() if c.attrs.get("config_key") == key), None)
+    if coord is None:
+        return False, None
+    values = {value_text(v) for v in np.ravel(coord.values)}
+    return True, (values.pop() if len(values) == 1 else None)
 
 
 _SINGLE_CASE_COLOUR = "tab:red"
@@ -361,13 +386,19 @@ def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
 
 
 def selection_text(ds: xr.Dataset, selection: dict) -> str:
-    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB, ..."``;
-    numbers with the coordinate's units."""
+    """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB (A_clearance
+    0.00025 m, B_clearance 0.00025 m), ..."``; numbers with the coordinate's units, a zip
+    group's label with the values the case ran with."""
     if not selection:
         return ""
     parts = []
     for name, value in selection.items():
         unit = ds[name].attrs.get("units", "") if name in ds.coords else ""
-        parts.append(f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else ""))
+        text = f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+        keys = str(ds[name].attrs.get("config_keys", "")).split() if name in ds.coords else []
+        # a zip group's label: the values the case ran with ("AB (A_coating PTFE, ...)")
+        zipped = [coordinate_text(c, c.values) for n, c in ds.coords.items()
+                  if n != name and c.ndim == 0 and c.attrs.get("config_key") in keys]
+        parts.append(text + (f" ({', '.join(zipped)})" if zipped else ""))
     return "selection: " + ", ".join(parts)
 

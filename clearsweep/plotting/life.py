@@ -4,18 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 import xarray as xr
-import yaml
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
 from .common import (
     AXIS_LABEL_CHARACTERS,
+    _clearance_joints,
     _edges,
     _note_span,
     _require,
     axis_label,
     log_ticks,
+    run_config,
     scaled,
     wrapped_label,
 )
@@ -32,12 +33,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     limits = {"wear_depth_max": "life.max_clearance_growth",
               "normal_force_peak_settled": "life.max_normal_force",
               "slider_acceleration_rms_settled": "life.max_rms_acceleration"}
-    try:
-        config = yaml.safe_load(ds.attrs.get("config") or "") or {}
-    except yaml.YAMLError:
-        config = {}
-    if not isinstance(config, dict):     # a config attribute edited into a list or a scalar
-        config = {}
+    config = run_config(ds)     # {} where the config attribute is not a mapping
     panels = ("wear_depth_max", "clearance_effective", "coating_remaining", "normal_force_peak_settled",
               "slider_acceleration_rms_settled", "impacts_per_revolution")
     grid = fig.add_gridspec(3, 4)
@@ -72,7 +68,9 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="x-small")
     snaps = ds["wear_map_snapshot"]
-    joint = "B" if float(snaps.sel(joint="B").max()) >= float(snaps.sel(joint="A").max()) else "A"
+    # the most worn of the joints the run's config gives a clearance (B where none wore)
+    joints = [value_text(j) for j in _clearance_joints(ds, snaps, "life")]
+    joint = max(joints, key=lambda j: (float(snaps.sel(joint=j).max()), j == "B"))
     picks = np.unique(np.linspace(0, snaps.sizes["snapshot"] - 1, LIFE_SNAPSHOT_PANELS)
                       .round().astype(int))
     factor, unit = scaled(snaps)
