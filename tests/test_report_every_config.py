@@ -95,8 +95,6 @@ def shortened(path: Path) -> tuple[dict, list[str]]:
         if "materials_file" in group:   # taken from the config's folder, which the copy leaves
             group["materials_file"] = [str(CONFIGS / v) for v in group["materials_file"]]
     for group in sweep.get("zip") or []:
-        if "materials_file" in group:   # relative to the config's folder, and this one is copied
-            group["materials_file"] = [str(CONFIGS / f) for f in group["materials_file"]]
         keys = [k for k in group if k != "name"]
         if len(group[keys[0]]) > MAX_ZIP:
             for key in keys:
