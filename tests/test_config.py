@@ -279,6 +279,10 @@ def _consistent(raw):
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
+    if raw["solver"]["revolutions"] is not None or raw["metrics"]["settle_revolutions"] is not None:
+        # revolutions at a speed that gives them a finite length in seconds (a denormal speed
+        # is refused, naming it)
+        raw["mechanism"]["speed_rpm"] = max(raw["mechanism"]["speed_rpm"], 1e-3)
     if raw["solver"]["revolutions"] is not None:    # one length of the two; at least dt
         raw["solver"]["duration"] = None
         raw["solver"]["revolutions"] += 2.0 * raw["solver"]["dt"] * raw["mechanism"]["speed_rpm"] / 60.0
