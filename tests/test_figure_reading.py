@@ -322,3 +322,36 @@ def test_a_sweep_files_figures_name_the_start_its_base_config_gives(tmp_path, mo
     assert "config" not in ds.attrs
     title = figure(ds, "slider").get_suptitle()
     assert f"start: {start}" in title and start != "seated"
+
+
+# --- the guide P drawn as what it is (issue 45 item 5) ---------------------------------------
+
+@pytest.fixture(scope="module")
+def guide_run() -> xr.Dataset:
+    """A short one_clearance run with a clearance in the guide P: 0.2 mm across y, 0.1 mm
+    across z, so that the gap is not a circle."""
+    from clearsweep.simulation import simulate
+
+    return simulate("configs/one_clearance.yaml", ["joints.P.clearance_y=2e-4",
+                                                   "joints.P.clearance_z=1e-4",
+                                                   "solver.duration=0.05"])
+
+
+def test_the_orbit_draws_the_guide_gap_as_a_rectangle_with_the_block_inside(guide_run):
+    from clearsweep.plotting.common import scaled
+
+    fig = figure(guide_run, "orbit")
+    factor, _ = scaled(guide_run["ball_offset"])
+    (ax,) = [a for a in fig.axes if "P" in a.get_title()]       # one panel: across the guide
+    assert "yz" in ax.get_title()
+    d = guide_run["ball_offset"].sel(joint="P")
+    y, z = d.sel(axis="y").values, d.sel(axis="z").values
+    gaps = [ln for ln in ax.get_lines() if "gap" in str(ln.get_label())]
+    assert len(gaps) == 1
+    gx, gy = gaps[0].get_xdata() * factor, gaps[0].get_ydata() * factor
+    # the rectangle's corners are the configured half-gaps [m]
+    assert max(gx) == pytest.approx(2e-4) and max(gy) == pytest.approx(1e-4)
+    assert min(gx) == pytest.approx(-2e-4) and min(gy) == pytest.approx(-1e-4)
+    # the block's path lies inside it (up to the contact's penetration, well under 5 %)
+    assert np.abs(y).max() > 1.2e-4                 # beyond the smaller clearance: no circle holds it
+    assert np.abs(y).max() <= max(gx) * 1.05 and np.abs(z).max() <= max(gy) * 1.05

@@ -70,6 +70,7 @@ from .selection import (  # noqa: F401
     choice_message,
     configured_clearances,
     design_dims,
+    guide_gap,
     ideal_joints,
     is_ensemble,
     iter_cases,
