@@ -355,3 +355,13 @@ def test_the_orbit_draws_the_guide_gap_as_a_rectangle_with_the_block_inside(guid
     # the block's path lies inside it (up to the contact's penetration, well under 5 %)
     assert np.abs(y).max() > 1.2e-4                 # beyond the smaller clearance: no circle holds it
     assert np.abs(y).max() <= max(gx) * 1.05 and np.abs(z).max() <= max(gy) * 1.05
+
+
+def test_the_wear_polar_figure_calls_the_guide_not_applicable_not_unworn(guide_run):
+    # the guide's walls wear (wear-map shows it), but a profile about an axis is not theirs
+    assert float(guide_run["wear_map"].sel(joint="P").max()) > 0.0
+    fig = figure(guide_run, "wear-polar")
+    title = " ".join(fig.get_suptitle().split())
+    assert "guide P: not applicable" in title
+    assert "P: no wear" not in title
+    assert not [a for a in fig.axes if "P" in a.get_title()]
