@@ -398,3 +398,40 @@ def test_a_poincare_figure_keeps_its_text_apart(poincare_runs, select):
     fig = figure(poincare_runs, "poincare", select)
     assert layout_problems(fig) == []
     assert len(fig.axes) == 2       # joint B (A is ideal) and the slider acceleration
+
+
+# --- tick labels on every axis that has data (issue 45 item 6) -------------------------------
+
+def _unlabelled_axes(fig) -> list[str]:
+    """The x or y axes of panels with data whose drawn tick labels are all empty."""
+    fig.canvas.draw()
+    missing = []
+    for ax in fig.axes:
+        if not (ax.get_lines() or ax.collections or ax.patches) or ax.name == "polar":
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            texts = [t.get_text() for t in axis.get_ticklabels(which="both")
+                     if t.get_visible() and axis.get_visible()]
+            if not any(t.strip() for t in texts):
+                missing.append(f"{ax.get_title()!r}: {name}")
+    return missing
+
+
+@pytest.mark.parametrize("b10", [False, True])
+def test_a_reliability_figure_labels_the_ticks_of_every_axis_with_data(reliability_ds, b10):
+    assert _unlabelled_axes(figure(reliability_ds, "reliability", b10=b10)) == []
+
+
+def test_a_log_axis_narrower_than_its_one_two_three_five_steps_still_has_tick_labels():
+    # a B10 axis of designs between 1.2e5 and 1.8e5 revolutions had no label at all
+    from matplotlib.figure import Figure
+
+    from clearsweep.plotting.common import log_ticks
+
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax.bar([0, 1], [1.2e5, 1.8e5])
+    ax.set_yscale("log")
+    ax.set_ylim(1.15e5, 1.85e5)
+    log_ticks(ax.yaxis, *ax.get_ylim())
+    assert _unlabelled_axes(fig) == []

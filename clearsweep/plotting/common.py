@@ -128,9 +128,21 @@ def log_ticks(axis, low: float, high: float) -> None:
     subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0) if high / low > 10 else (1.0, 2.0, 3.0, 5.0)
     ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
              if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
+    formatter = _power_text
+    if len(ticks) < 2:      # a view narrower than 1-2-3-5 steps: plain values, never no label
+        from matplotlib.ticker import MaxNLocator
+
+        ticks = [t for t in MaxNLocator(4).tick_values(low, high)
+                 if low * (1 - 1e-9) <= t <= high * (1 + 1e-9)]
+        formatter = _plain_text
     axis.set_major_locator(FixedLocator(ticks))
-    axis.set_major_formatter(FuncFormatter(_power_text))
+    axis.set_major_formatter(FuncFormatter(formatter))
     axis.set_minor_formatter(NullFormatter())
+
+
+def _plain_text(value: float, _position=None) -> str:
+    """``"1.5e+05"``, ``"250"``: a tick label of a log axis narrower than its 1-2-3-5 steps."""
+    return f"{value:.3g}"
 
 
 def _power_text(value: float, _position=None) -> str:
