@@ -365,3 +365,11 @@ def test_the_wear_polar_figure_calls_the_guide_not_applicable_not_unworn(guide_r
     assert "guide P: not applicable" in title
     assert "P: no wear" not in title
     assert not [a for a in fig.axes if "P" in a.get_title()]
+
+
+@pytest.mark.parametrize("attrs", [{"units": "min-1"}, {}])
+def test_a_speed_in_revolutions_per_minute_is_labelled_r_per_min(attrs):
+    from clearsweep.plotting.common import axis_label
+
+    speed = xr.DataArray([60.0, 120.0], dims="speed_rpm", name="speed_rpm", attrs=attrs)
+    assert axis_label(speed).endswith("[r/min]")

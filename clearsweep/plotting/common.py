@@ -78,6 +78,10 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     """
     name = text or obj.attrs.get("long_name") or str(obj.name)
     unit = obj.attrs.get("units", "") if units is None else units
+    # a speed in revolutions per minute reads r/min (its units attribute is "min-1", and a
+    # swept ``speed_rpm`` written without one is no dimensionless number)
+    if unit == "min-1" or (unit in ("", "1") and str(obj.name).endswith("speed_rpm")):
+        unit = "r/min"
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
 
 
