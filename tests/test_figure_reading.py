@@ -373,3 +373,10 @@ def test_a_speed_in_revolutions_per_minute_is_labelled_r_per_min(attrs):
 
     speed = xr.DataArray([60.0, 120.0], dims="speed_rpm", name="speed_rpm", attrs=attrs)
     assert axis_label(speed).endswith("[r/min]")
+
+
+def test_the_orbit_names_the_guide_p_a_guide(guide_run):
+    titles = [a.get_title() for a in figure(guide_run, "orbit").axes]
+    assert any(t.startswith("guide P") for t in titles)
+    assert any(t.startswith("joint B") for t in titles)
+    assert not any(t.startswith("joint P") for t in titles)

@@ -66,6 +66,15 @@ class PlotError(ValueError):
     """The dataset cannot give the figure asked for (missing variables, too many cases)."""
 
 
+def joint_name(joint) -> str:
+    """``"bearing O"``, ``"guide P"``, ``"joint A"``: a joint named as what it is."""
+    from ..variables import JOINT_TYPES
+
+    name = str(joint)
+    kind = JOINT_TYPES.get(name)
+    return f"{'bearing' if kind == 'revolute' else 'guide' if kind == 'prismatic' else 'joint'} {name}"
+
+
 def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = None) -> str:
     """``"text [units]"`` from a variable's attributes.
 

@@ -17,6 +17,7 @@ from .common import (
     _require,
     axis_label,
     figure_legend,
+    joint_name,
     scaled,
 )
 
@@ -109,7 +110,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             for radius, source in sorted(clearances.items()) if not gaps else ():
                 ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
-                        label=f"joint {value_text(joint)} clearance {radius / factor:.3g} {unit} "
+                        label=f"{joint_name(value_text(joint))} clearance {radius / factor:.3g} {unit} "
                               f"({source})")
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
@@ -117,7 +118,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ideal = "" if clearances else " (ideal joint)"
             where = ("journal in the bearing's plane, yz" if bearing
                      else "block across its guide, yz" if guide else f"{a}{b} plane")
-            ax.set_title(f"joint {value_text(joint)}{ideal}: {where}", fontsize="small")
+            ax.set_title(f"{joint_name(value_text(joint))}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
     figure_legend(fig)
