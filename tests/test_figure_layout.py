@@ -435,3 +435,13 @@ def test_a_log_axis_narrower_than_its_one_two_three_five_steps_still_has_tick_la
     ax.set_ylim(1.15e5, 1.85e5)
     log_ticks(ax.yaxis, *ax.get_ylim())
     assert _unlabelled_axes(fig) == []
+
+
+def test_a_poincare_fixed_point_draws_as_one_point(poincare_runs):
+    # period 1: the section's slider acceleration repeats to round-off (a 1e-11 relative spread)
+    acc = poincare_runs["poincare_slider_acc"]
+    level = float(np.abs(acc).max())
+    fixed = poincare_runs.assign(poincare_slider_acc=acc * 0 + level * (1 + 1e-11 * (acc.revolution % 3)))
+    ax = figure(fixed, "poincare").axes[-1]
+    low, high = ax.get_ylim()
+    assert high - low > 1e-3 * level
