@@ -445,3 +445,19 @@ def test_a_poincare_fixed_point_draws_as_one_point(poincare_runs):
     ax = figure(fixed, "poincare").axes[-1]
     low, high = ax.get_ylim()
     assert high - low > 1e-3 * level
+
+
+def test_a_life_limit_far_above_the_data_does_not_set_the_axis(life_ds):
+    import re
+
+    from clearsweep.plotting.common import scaled
+
+    depth = float(life_ds["wear_depth_max"].max())
+    config = re.sub(r"max_clearance_growth: .*", f"max_clearance_growth: {100 * depth!r}",
+                    life_ds.attrs["config"])
+    assert config != life_ds.attrs["config"]
+    fig = figure(life_ds.assign_attrs(config=config), "life")
+    factor, _ = scaled(life_ds["wear_depth_max"])
+    (ax,) = [a for a in fig.axes if a.get_ylabel().startswith("maximum wear depth")]
+    assert ax.get_ylim()[1] < 2.0 * depth / factor      # the axis stays on the data
+    assert any("max_clearance_growth" in t.get_text() for t in ax.texts)   # the limit is noted
