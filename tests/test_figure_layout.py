@@ -398,3 +398,66 @@ def test_a_poincare_figure_keeps_its_text_apart(poincare_runs, select):
     fig = figure(poincare_runs, "poincare", select)
     assert layout_problems(fig) == []
     assert len(fig.axes) == 2       # joint B (A is ideal) and the slider acceleration
+
+
+# --- tick labels on every axis that has data (issue 45 item 6) -------------------------------
+
+def _unlabelled_axes(fig) -> list[str]:
+    """The x or y axes of panels with data whose drawn tick labels are all empty."""
+    fig.canvas.draw()
+    missing = []
+    for ax in fig.axes:
+        if not (ax.get_lines() or ax.collections or ax.patches) or ax.name == "polar":
+            continue
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            texts = [t.get_text() for t in axis.get_ticklabels(which="both")
+                     if t.get_visible() and axis.get_visible()]
+            if not any(t.strip() for t in texts):
+                missing.append(f"{ax.get_title()!r}: {name}")
+    return missing
+
+
+@pytest.mark.parametrize("b10", [False, True])
+def test_a_reliability_figure_labels_the_ticks_of_every_axis_with_data(reliability_ds, b10):
+    assert _unlabelled_axes(figure(reliability_ds, "reliability", b10=b10)) == []
+
+
+def test_a_log_axis_narrower_than_its_one_two_three_five_steps_still_has_tick_labels():
+    # a B10 axis of designs between 1.2e5 and 1.8e5 revolutions had no label at all
+    from matplotlib.figure import Figure
+
+    from clearsweep.plotting.common import log_ticks
+
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax.bar([0, 1], [1.2e5, 1.8e5])
+    ax.set_yscale("log")
+    ax.set_ylim(1.15e5, 1.85e5)
+    log_ticks(ax.yaxis, *ax.get_ylim())
+    assert _unlabelled_axes(fig) == []
+
+
+def test_a_poincare_fixed_point_draws_as_one_point(poincare_runs):
+    # period 1: the section's slider acceleration repeats to round-off (a 1e-11 relative spread)
+    acc = poincare_runs["poincare_slider_acc"]
+    level = float(np.abs(acc).max())
+    fixed = poincare_runs.assign(poincare_slider_acc=acc * 0 + level * (1 + 1e-11 * (acc.revolution % 3)))
+    ax = figure(fixed, "poincare").axes[-1]
+    low, high = ax.get_ylim()
+    assert high - low > 1e-3 * level
+
+
+def test_a_life_limit_far_above_the_data_does_not_set_the_axis(life_ds):
+    import re
+
+    from clearsweep.plotting.common import scaled
+
+    depth = float(life_ds["wear_depth_max"].max())
+    config = re.sub(r"max_clearance_growth: .*", f"max_clearance_growth: {100 * depth!r}",
+                    life_ds.attrs["config"])
+    assert config != life_ds.attrs["config"]
+    fig = figure(life_ds.assign_attrs(config=config), "life")
+    factor, _ = scaled(life_ds["wear_depth_max"])
+    (ax,) = [a for a in fig.axes if a.get_ylabel().startswith("maximum wear depth")]
+    assert ax.get_ylim()[1] < 2.0 * depth / factor      # the axis stays on the data
+    assert any("max_clearance_growth" in t.get_text() for t in ax.texts)   # the limit is noted

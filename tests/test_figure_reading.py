@@ -380,3 +380,59 @@ def test_a_life_figure_draws_and_names_the_joint_its_config_gives_a_clearance():
                                    "life.max_blocks=2"]))
     title = figure(ds, "life").get_suptitle()
     assert "wear maps of joint O" in title and said(title, "clearance at O")
+# --- the guide P drawn as what it is (issue 45 item 5) ---------------------------------------
+
+@pytest.fixture(scope="module")
+def guide_run() -> xr.Dataset:
+    """A short one_clearance run with a clearance in the guide P: 0.2 mm across y, 0.1 mm
+    across z, so that the gap is not a circle."""
+    from clearsweep.simulation import simulate
+
+    return simulate("configs/one_clearance.yaml", ["joints.P.clearance_y=2e-4",
+                                                   "joints.P.clearance_z=1e-4",
+                                                   "solver.duration=0.05"])
+
+
+def test_the_orbit_draws_the_guide_gap_as_a_rectangle_with_the_block_inside(guide_run):
+    from clearsweep.plotting.common import scaled
+
+    fig = figure(guide_run, "orbit")
+    factor, _ = scaled(guide_run["ball_offset"])
+    (ax,) = [a for a in fig.axes if "P" in a.get_title()]       # one panel: across the guide
+    assert "yz" in ax.get_title()
+    d = guide_run["ball_offset"].sel(joint="P")
+    y, z = d.sel(axis="y").values, d.sel(axis="z").values
+    gaps = [ln for ln in ax.get_lines() if "gap" in str(ln.get_label())]
+    assert len(gaps) == 1
+    gx, gy = gaps[0].get_xdata() * factor, gaps[0].get_ydata() * factor
+    # the rectangle's corners are the configured half-gaps [m]
+    assert max(gx) == pytest.approx(2e-4) and max(gy) == pytest.approx(1e-4)
+    assert min(gx) == pytest.approx(-2e-4) and min(gy) == pytest.approx(-1e-4)
+    # the block's path lies inside it (up to the contact's penetration, well under 5 %)
+    assert np.abs(y).max() > 1.2e-4                 # beyond the smaller clearance: no circle holds it
+    assert np.abs(y).max() <= max(gx) * 1.05 and np.abs(z).max() <= max(gy) * 1.05
+
+
+def test_the_wear_polar_figure_calls_the_guide_not_applicable_not_unworn(guide_run):
+    # the guide's walls wear (wear-map shows it), but a profile about an axis is not theirs
+    assert float(guide_run["wear_map"].sel(joint="P").max()) > 0.0
+    fig = figure(guide_run, "wear-polar")
+    title = " ".join(fig.get_suptitle().split())
+    assert "guide P: not applicable" in title
+    assert "P: no wear" not in title
+    assert not [a for a in fig.axes if "P" in a.get_title()]
+
+
+@pytest.mark.parametrize("attrs", [{"units": "min-1"}, {}])
+def test_a_speed_in_revolutions_per_minute_is_labelled_r_per_min(attrs):
+    from clearsweep.plotting.common import axis_label
+
+    speed = xr.DataArray([60.0, 120.0], dims="speed_rpm", name="speed_rpm", attrs=attrs)
+    assert axis_label(speed).endswith("[r/min]")
+
+
+def test_the_orbit_names_the_guide_p_a_guide(guide_run):
+    titles = [a.get_title() for a in figure(guide_run, "orbit").axes]
+    assert any(t.startswith("guide P") for t in titles)
+    assert any(t.startswith("joint B") for t in titles)
+    assert not any(t.startswith("joint P") for t in titles)

@@ -89,7 +89,7 @@ def test_a_bifurcation_diagram_draws_the_last_revolutions_of_each_case_per_clear
     assert titles == ["slider acceleration at the section",
                       "joint B: ball-centre offset x (socket frame)"]
     assert fig.axes[1].get_ylabel() == "offset x / clearance [-]"
-    assert fig.axes[-1].get_xlabel() == "crank speed [min-1]"
+    assert fig.axes[-1].get_xlabel() == "crank speed [r/min]"
     xs, ys = fig.axes[1].get_lines()[0].get_data()
     for r, period in zip(R_VALUES, PERIODS):
         column = ys[(xs == r) & np.isfinite(ys)]
@@ -234,7 +234,7 @@ def test_a_zip_groups_diagram_is_drawn_against_its_first_key_by_default(bifurcat
     ds["speed"].attrs = {"long_name": "sweep zip group speed",
                          "config_keys": "mechanism.speed_rpm solver.duration"}
     fig = figure(ds, "bifurcation")
-    assert fig.axes[-1].get_xlabel() == "crank speed in revolutions per minute [min-1]"
+    assert fig.axes[-1].get_xlabel() == "crank speed in revolutions per minute [r/min]"
 
 
 def test_the_shipped_bifurcation_sweep_runs_110_revolutions_a_speed_with_10_of_start_up():

@@ -72,6 +72,7 @@ from .selection import (  # noqa: F401
     coordinate_for_key,
     design_dims,
     file_config,
+    guide_gap,
     ideal_joints,
     is_ensemble,
     iter_cases,

@@ -256,6 +256,16 @@ def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
     return {}
 
 
+def guide_gap(ds: xr.Dataset) -> tuple[float, float] | None:
+    """The guide P's clearances (``clearance_y``, ``clearance_z``) [m] from the file's config
+    (:func:`file_config`); None where the config text gives no guide with both."""
+    try:
+        spec = file_config(ds)["joints"]["P"]
+        return float(spec["clearance_y"]), float(spec["clearance_z"])
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
 def joint_clearances(ds: xr.Dataset) -> xr.DataArray | None:
     """Radial clearance [m] of every joint in every case: (sweep dims..., joint), 0 for an
     ideal joint; ``None`` where the file says neither by a sweep coordinate nor its config.

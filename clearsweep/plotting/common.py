@@ -91,6 +91,15 @@ class PlotError(ValueError):
     """The dataset cannot give the figure asked for (missing variables, too many cases)."""
 
 
+def joint_name(joint) -> str:
+    """``"bearing O"``, ``"guide P"``, ``"joint A"``: a joint named as what it is."""
+    from ..variables import JOINT_TYPES
+
+    name = str(joint)
+    kind = JOINT_TYPES.get(name)
+    return f"{'bearing' if kind == 'revolute' else 'guide' if kind == 'prismatic' else 'joint'} {name}"
+
+
 def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = None) -> str:
     """``"text [units]"`` from a variable's attributes.
 
@@ -103,6 +112,10 @@ def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = N
     """
     name = text or obj.attrs.get("long_name") or str(obj.name)
     unit = obj.attrs.get("units", "") if units is None else units
+    # a speed in revolutions per minute reads r/min (its units attribute is "min-1", and a
+    # swept ``speed_rpm`` written without one is no dimensionless number)
+    if unit == "min-1" or (unit in ("", "1") and str(obj.name).endswith("speed_rpm")):
+        unit = "r/min"
     return f"{name} [{DIMENSIONLESS if unit in ('', '1') else unit}]"
 
 
@@ -153,9 +166,21 @@ def log_ticks(axis, low: float, high: float) -> None:
     subs = (1.0,) if last - first > 2 else (1.0, 2.0, 5.0) if high / low > 10 else (1.0, 2.0, 3.0, 5.0)
     ticks = [m * 10.0 ** d for d in range(first, last + 1) for m in subs
              if low * (1 - 1e-9) <= m * 10.0 ** d <= high * (1 + 1e-9)]
+    formatter = _power_text
+    if len(ticks) < 2:      # a view narrower than 1-2-3-5 steps: plain values, never no label
+        from matplotlib.ticker import MaxNLocator
+
+        ticks = [t for t in MaxNLocator(4).tick_values(low, high)
+                 if low * (1 - 1e-9) <= t <= high * (1 + 1e-9)]
+        formatter = _plain_text
     axis.set_major_locator(FixedLocator(ticks))
-    axis.set_major_formatter(FuncFormatter(_power_text))
+    axis.set_major_formatter(FuncFormatter(formatter))
     axis.set_minor_formatter(NullFormatter())
+
+
+def _plain_text(value: float, _position=None) -> str:
+    """``"1.5e+05"``, ``"250"``: a tick label of a log axis narrower than its 1-2-3-5 steps."""
+    return f"{value:.3g}"
 
 
 def _power_text(value: float, _position=None) -> str:

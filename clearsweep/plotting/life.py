@@ -57,8 +57,12 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         else:
             ax.plot(cycles, var.values / factor, marker=".")
         limit = _life_limit(config, limits.get(name))
-        if limit is not None:
+        top = float(np.nanmax(np.abs(var.values))) / factor if np.isfinite(var.values).any() else 0.0
+        if limit is not None and limit / factor <= 2.0 * top:
             ax.axhline(limit / factor, color="r", linestyle="--", label=limits[name])
+        elif limit is not None:     # far above the data: a note, the axis stays on the data
+            ax.text(0.02, 0.98, f"{limits[name]} = {limit / factor:.3g} {unit} (above the axis)",
+                    transform=ax.transAxes, ha="left", va="top", fontsize="x-small", color="r")
         _note_span(ax, var.values / factor)
         ax.set_xscale("log")
         if cycles.size and np.nanmin(cycles) > 0:

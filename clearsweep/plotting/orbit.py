@@ -1,4 +1,5 @@
-"""``orbit``: the ball-centre offset in the socket frame inside the clearance circle."""
+"""``orbit``: the ball-centre offset in the socket frame inside the clearance circle, and the
+guide block's centre inside its rectangular gap."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis import configured_clearances, value_text
+from ..analysis import configured_clearances, guide_gap, value_text
 from ..variables import JOINT_TYPES
 from .common import (
     _case_label,
@@ -16,6 +17,7 @@ from .common import (
     _require,
     axis_label,
     figure_legend,
+    joint_name,
     scaled,
 )
 
@@ -43,6 +45,21 @@ def _clearance(case: xr.Dataset, joint: str, configured: dict[str, float]) -> tu
     return None
 
 
+def _gap(case: xr.Dataset, configured: tuple[float, float] | None) -> tuple[float, float] | None:
+    """The guide P's half-gaps (y, z) [m] in ``case``: a swept ``P_clearance_y``/``_z`` wins over
+    the ``configured`` one; None where neither gives both."""
+    if configured is None:
+        return None
+    cy, cz = configured
+    for name in ("P_clearance_y", "joints_P_clearance_y"):
+        if name in case.coords and case[name].ndim == 0:
+            cy = float(case[name])
+    for name in ("P_clearance_z", "joints_P_clearance_z"):
+        if name in case.coords and case[name].ndim == 0:
+            cz = float(case[name])
+    return (cy, cz) if cy > 0 and cz > 0 else None
+
+
 def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     _require(ds, ("ball_offset",), "--kind orbit")
     offset = ds["ball_offset"]
@@ -50,6 +67,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     configured = configured_clearances(ds)
+    gap = guide_gap(ds)
     # a ball that stays in the centre gets no panel of a point at the origin; an ideal
     # joint's is not named either
     named = _clearance_joints(ds, offset, "orbit")
@@ -73,24 +91,34 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     for j, (joint, clearances) in enumerate(zip(joints, per_joint)):
         # a journal moves in its bearing's plane (y, z) only: one panel
         bearing = JOINT_TYPES.get(value_text(joint)) == "revolute"
-        for p, (a, b) in enumerate(planes[2:] if bearing else planes):
+        # the guide block moves across its guide (y, z) only, in a rectangular gap
+        guide = JOINT_TYPES.get(value_text(joint)) == "prismatic"
+        gaps = {g for g in (_gap(case, gap) for _, case, _ in cases) if g is not None} if guide else set()
+        for p, (a, b) in enumerate(planes[2:] if bearing or guide else planes):
             ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
                 ax.plot(d.sel(axis=a).values / factor, d.sel(axis=b).values / factor, lw=0.6,
                         color=colour,
                         label=_case_label(text, len(cases), "ball or journal centre"))
-            for radius, source in sorted(clearances.items()):
+            for k, (cy, cz) in enumerate(sorted(gaps)):
+                ax.plot(np.array([-cy, cy, cy, -cy, -cy]) / factor,
+                        np.array([-cz, -cz, cz, cz, -cz]) / factor, lw=0.9,
+                        ls=_CIRCLE_STYLES[k % len(_CIRCLE_STYLES)], color="0.3",
+                        label=f"guide {value_text(joint)} gap \u00b1{cy / factor:.3g} x "
+                              f"\u00b1{cz / factor:.3g} {unit}")
+            for radius, source in sorted(clearances.items()) if not gaps else ():
                 ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
-                        label=f"joint {value_text(joint)} clearance {radius / factor:.3g} {unit} "
+                        label=f"{joint_name(value_text(joint))} clearance {radius / factor:.3g} {unit} "
                               f"({source})")
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
             ax.set_ylabel(axis_label(offset, f"d_{b}", unit))
             ideal = "" if clearances else " (ideal joint)"
-            where = "journal in the bearing's plane, yz" if bearing else f"{a}{b} plane"
-            ax.set_title(f"joint {value_text(joint)}{ideal}: {where}", fontsize="small")
+            where = ("journal in the bearing's plane, yz" if bearing
+                     else "block across its guide, yz" if guide else f"{a}{b} plane")
+            ax.set_title(f"{joint_name(value_text(joint))}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
     figure_legend(fig)

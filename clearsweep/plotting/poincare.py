@@ -24,6 +24,7 @@ from .common import (
     axis_label,
     figure_legend,
     file_figures,
+    keep_relative_span,
 )
 
 #: Fewest revolutions a ``poincare`` figure draws: one section shows no return.
@@ -87,7 +88,10 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
                 marker="o", ms=3.5, color=colour, label=_case_label(text, len(cases), "section"))
     ax.set_xlabel(axis_label(ds["revolution"], "revolution"))
     ax.set_ylabel(axis_label(acc, "slider acceleration"))
-    ax.set_title("slider acceleration at the section", fontsize="small")
+    # a fixed point (a spread of round-off) draws as one point, not as that spread at full scale
+    note = keep_relative_span(ax, acc.values)
+    ax.set_title("slider acceleration at the section" + (f"\n({note})" if note else ""),
+                 fontsize="small")
     ax.grid(alpha=0.3)
     figure_legend(fig)
     left_out = f"\nnot drawn: joint {', '.join(empty)}, no section" if empty else ""

@@ -229,8 +229,13 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     # a joint with a clearance but no wear gets no row of unworn circles: the title says so;
     # an ideal joint is not named
     named = _clearance_joints(ds, projection, "wear-polar")
+    # the guide P's walls are flat: a profile about an axis does not apply to them (wear-map
+    # draws their strips)
+    guides = [j for j in named if JOINT_TYPES.get(value_text(j)) == "prismatic"]
+    named = [j for j in named if j not in guides]
     joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
     scales = [f"joint {value_text(j)}: no wear" for j in named if j not in joints]
+    scales += [f"guide {value_text(j)}: not applicable (flat walls, see wear-map)" for j in guides]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):
@@ -256,9 +261,10 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_yticks([])
             ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
-    handles, labels = fig.axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
-               fontsize="small")
+    if fig.axes:
+        handles, labels = fig.axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
+                   fontsize="small")
     fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
                  f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})"
                  + _legend_note(len(cases)), fontsize="medium")
