@@ -263,13 +263,20 @@ def _require(ds: xr.Dataset, names: tuple[str, ...], what: str) -> None:
                         + file_figures(ds).lacks(ds))
 
 
+def values_offer(ds: xr.Dataset, dims) -> str:
+    """The values of each of ``dims`` a --select may choose ("DIM: v1, v2; ..."), or the
+    count of its cases where it has no coordinate: what a refusal that asks for --select
+    offers."""
+    return "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
+                     if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in dims)
+
+
 def _one_case(ds: xr.Dataset, kind: str) -> xr.Dataset:
     dims = sweep_dims(ds)
     if not dims:
         return ds
-    offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
-                      if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in dims)
-    raise PlotError(f"--kind {kind} draws one case; choose it with --select DIM=VALUE ({offer})")
+    raise PlotError(f"--kind {kind} draws one case; choose it with --select DIM=VALUE "
+                    f"({values_offer(ds, dims)})")
 
 
 def _clearance_joints(ds: xr.Dataset, values: xr.DataArray, kind: str) -> list:

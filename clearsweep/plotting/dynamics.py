@@ -19,7 +19,7 @@ from ..analysis import (
     report_summary,
     value_text,
 )
-from .common import DIMENSIONLESS, PlotError
+from .common import DIMENSIONLESS, PlotError, values_offer
 
 #: The colours of the categories: undetermined, none, then periods 1 to ``MAX_PERIOD``.
 UNDETERMINED_COLOUR = "#ffffff"
@@ -72,8 +72,7 @@ def map_axes(ds: xr.Dataset, x: str | None, y: str | None) -> tuple[str, str]:
                         "swept keys")
     others = [d for d in dims if d not in (x, y)]
     if others:
-        offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
-                          if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in others)
+        offer = values_offer(ds, others)
         raise PlotError(f"--kind dynamics-map draws two swept keys; this file also sweeps "
                         f"{', '.join(others)}: choose one value of each with --select "
                         f"DIM=VALUE ({offer})")

@@ -29,6 +29,7 @@ from .common import (
     _require,
     axis_label,
     percent_text,
+    values_offer,
 )
 
 #: Highest crank order the spectrum's abscissa shows.
@@ -110,8 +111,7 @@ def bifurcation_axis(ds: xr.Dataset, x: str | None) -> tuple[str, str]:
                         f"against one of {', '.join(sorted(along))}")
     others = [d for d in dims if d != along[x]]
     if others:
-        offer = "; ".join(f"{d}: {', '.join(value_text(v) for v in ds[d].values)}"
-                          if d in ds.coords else f"{d}: {ds.sizes[d]} cases" for d in others)
+        offer = values_offer(ds, others)
         raise PlotError(f"--kind bifurcation draws a sweep over one parameter; this file also "
                         f"sweeps {', '.join(others)}: choose one value of each with --select "
                         f"DIM=VALUE ({offer})")
