@@ -4,7 +4,8 @@ compile of both), each shipped case config's throughput, ns per right-hand side,
 same right-hand side driven by scipy.integrate.solve_ivp.
 
 Run: ``python benchmarks/bench_engine.py [--baseline REV] [--repeats 5] [--duration 1.0]
-[--out FILE]``. The baseline defaults to the merge-base of HEAD with ``main``; it is
+[--out FILE] [--rates-only]`` (``--rates-only``: the side-by-side steps/s alone, no cold
+compile, shipped configs or solve_ivp). The baseline defaults to the merge-base of HEAD with ``main``; it is
 exported with ``git archive`` into a temporary folder. Writes markdown to stdout (and to
 ``--out`` if given).
 """
@@ -44,9 +45,11 @@ print(time.perf_counter() - t0)
 ROOT = Path(__file__).resolve().parent.parent
 
 #: Times every case of CASES once with the kernel of the tree it runs in (argv[1]: the
-#: simulated duration); prints {case: [RK4 grid steps, wall seconds]} as JSON.
+#: simulated duration); prints {case: [RK4 grid steps, wall seconds, CPU seconds]} as JSON
+#: (the process's CPU time around the run: on a loaded machine, where the wall time counts
+#: the waits for a core, the steadier measure).
 RATE_SNIPPET = """
-import json, sys
+import json, sys, time
 from clearsweep.config import load_config
 from clearsweep.simulation import preflight, prepare_kernel, run_kernel
 cases = json.loads(sys.argv[2])
@@ -55,9 +58,11 @@ out = {}
 for name, overrides in cases.items():
     packed = preflight(load_config({"solver": {"duration": float(sys.argv[1])}}, overrides))
     run_kernel(packed)
+    cpu = time.process_time()
     res = run_kernel(packed)
+    cpu = time.process_time() - cpu
     # a KernelRun (a dict in revisions before it): this snippet also times older trees
-    out[name] = [packed.n_steps, res["wall_time"] if isinstance(res, dict) else res.wall_time]
+    out[name] = [packed.n_steps, res["wall_time"] if isinstance(res, dict) else res.wall_time, cpu]
 print(json.dumps(out))
 """
 
@@ -97,17 +102,19 @@ def default_baseline() -> str:
     return res.stdout.strip() if res.returncode == 0 else "HEAD"
 
 
-def side_by_side(trees: dict[str, Path], duration: float, repeats: int) -> dict:
+def side_by_side(trees: dict[str, Path], duration: float, repeats: int,
+                 cpu: bool = False) -> dict:
     """{tree label: {case: median steps/s}}: the trees' kernels timed alternately, each
-    repeat in a fresh process per tree."""
+    repeat in a fresh process per tree; per CPU second of the process with ``cpu``, else
+    per wall second."""
     rates: dict[str, dict[str, list[float]]] = {label: {c: [] for c in CASES} for label in trees}
     for label, tree in trees.items():  # warm the on-disk caches
         in_tree(tree, RATE_SNIPPET, "1e-3", json.dumps(CASES))
     for _ in range(repeats):
         for label, tree in trees.items():
             res = json.loads(in_tree(tree, RATE_SNIPPET, str(duration), json.dumps(CASES)))
-            for case, (steps, wall) in res.items():
-                rates[label][case].append(steps / wall)
+            for case, (steps, wall, seconds) in res.items():
+                rates[label][case].append(steps / (seconds if cpu else wall))
     return {label: {c: statistics.median(v) for c, v in r.items()} for label, r in rates.items()}
 
 
@@ -274,6 +281,14 @@ def main(argv=None) -> str:
     ap.add_argument("--repeats", type=int, default=5, help="alternating runs per tree")
     ap.add_argument("--config-duration", type=float, default=0.1,
                     help="simulated time per shipped config [s]")
+    ap.add_argument("--rates-only", action="store_true",
+                    help="the side-by-side steps/s alone (no compile times, configs, solve_ivp)")
+    ap.add_argument("--baseline-tree", default=None,
+                    help="a copy of the baseline tree to time in place of exporting --baseline "
+                         "(then its label; the copy's kernel cache stays warm between runs)")
+    ap.add_argument("--cpu-time", action="store_true",
+                    help="steps per CPU second of each run's process (a loaded machine) rather "
+                         "than per wall second")
     args = ap.parse_args(argv)
 
     lines = [
@@ -282,25 +297,45 @@ def main(argv=None) -> str:
         "",
     ]
     with tempfile.TemporaryDirectory() as tmp:
-        commit = export_revision(args.baseline or default_baseline(), Path(tmp))
+        if args.baseline_tree:
+            base = Path(args.baseline_tree)
+            commit = args.baseline or base.name       # the label: the revision it holds
+        else:
+            base = Path(tmp)
+            commit = export_revision(args.baseline or default_baseline(), base)
         print(f"baseline: {commit}", file=sys.stderr)
-        trees = {commit: Path(tmp), "this tree": ROOT}
-        colds = {label: compile_times(tree) for label, tree in trees.items()}
-        rates = side_by_side(trees, args.duration, args.repeats)
+        trees = {commit: base, "this tree": ROOT}
+        colds = {} if args.rates_only else {label: compile_times(tree) for label, tree in trees.items()}
+        load = os.getloadavg()[0]
+        rates = side_by_side(trees, args.duration, args.repeats, args.cpu_time)
+    if colds:
+        lines += [
+            "JIT compile (import + 10-step two-clearance case, fresh interpreter, empty cache):",
+            "",
+            "| tree | cold [s] | cached [s] |",
+            "|---|---|---|",
+            *(f"| {label} | {cold:.1f} | {cached:.2f} |" for label, (cold, cached) in colds.items()),
+            "",
+        ]
     lines += [
-        "JIT compile (import + 10-step two-clearance case, fresh interpreter, empty cache):",
-        "",
-        "| tree | cold [s] | cached [s] |",
-        "|---|---|---|",
-        *(f"| {label} | {cold:.1f} | {cached:.2f} |" for label, (cold, cached) in colds.items()),
-        "",
-        f"RK4 steps/s, {args.duration:g} s simulated per case, median of {args.repeats} "
-        f"alternating runs (a fresh process per tree and run):",
+        f"RK4 steps per {'CPU' if args.cpu_time else 'wall'} second, {args.duration:g} s simulated "
+        f"per case, median of {args.repeats} alternating runs (a fresh process per tree and run):",
         "",
         f"| case | {commit} | this tree | ratio |",
         "|---|---|---|---|",
         *(f"| {case} | {rates[commit][case]:,.0f} | {rates['this tree'][case]:,.0f} | "
           f"{rates['this tree'][case] / rates[commit][case]:.2f} |" for case in CASES),
+        "",
+        f"load average (1 min) before the timed runs: {load:.1f}, after: {os.getloadavg()[0]:.1f}",
+    ]
+    if args.rates_only:
+        text = "\n".join(lines)
+        print(text)
+        if args.out:
+            with open(args.out, "w") as fh:
+                fh.write(text + "\n")
+        return text
+    lines += [
         "",
         f"Shipped case configs, {args.config_duration:g} s simulated each (warm, this tree):",
         "",

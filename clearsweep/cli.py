@@ -53,7 +53,7 @@ from .choices import (
     SWEPT_X_KINDS,
     X_AXES,
 )
-from .config import ConfigError, dump_config, file_kind, load_config, parse_yaml, read_yaml
+from .config import Config, ConfigError, dump_config, file_kind, load_config, parse_yaml, read_yaml
 from .outputs import (
     OVERWRITE_REMEDY,
     RESULTS_SOURCE,
@@ -180,19 +180,22 @@ _allow_large = click.option(
 COMPILE_ESTIMATE_S = 80
 
 
-def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> None:
-    """Compile the integrators ``methods`` (solver.method) now, saying so, where neither
-    this process nor the cache has them."""
+def announce_compile(quiet: bool = False, cases: Iterable[Config] = ()) -> None:
+    """Compile the kernel builds that the ``cases`` run (their solver.method and joint set,
+    ``params.kernel_build``) now, saying so, where neither this process nor the cache
+    has them."""
+    from .core.jointset import label
+    from .params import kernel_build
     from .simulation import kernel_needs_compiling, prepare_kernel
 
-    for method in dict.fromkeys(methods):
-        if kernel_needs_compiling(method):
+    for method, build in dict.fromkeys((cfg.solver.method, kernel_build(cfg)) for cfg in cases):
+        if kernel_needs_compiling(method, build):
             if not quiet:
                 name = "kernel" if method == "rk4" else f"{method} kernel"
-                click.echo(f"compiling the {name} (once, about {COMPILE_ESTIMATE_S} s on a 2-core "
-                           "machine) ...",
+                click.echo(f"compiling the {name} for clearance at {label(build)} (once, about "
+                           f"{COMPILE_ESTIMATE_S} s on a 2-core machine) ...",
                            err=True)
-            seconds = prepare_kernel(method)
+            seconds = prepare_kernel(method, build)
             if not quiet:
                 click.echo(f"compiled in {seconds:.0f} s; cached for later runs", err=True)
 
@@ -397,7 +400,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
     from .simulation import simulate
 
     replacing = _replacing(out, "config", dump_config(cfg))
-    announce_compile(quiet, [cfg.solver.method])
+    announce_compile(quiet, [cfg])
     try:
         ds = simulate(cfg, allow_large=allow_large)
     except ConfigError as exc:
@@ -478,7 +481,7 @@ def life_command(config: str, out: str | None, overrides: tuple[str, ...], allow
     if not quiet:       # the plan's time, as a sweep prints its plan before it runs
         click.echo(f"clearsweep: a life run of at most {cfg.life.max_blocks:,} blocks: "
                    f"{life_time_text(cfg, block_steps(cfg))}", err=True)
-    announce_compile(quiet, [cfg.solver.method])
+    announce_compile(quiet, [cfg])
 
     started, blocks = time.perf_counter(), [0]
     depths: list[tuple[float, float]] = []      # (revolutions, deepest bin [m]) per block
@@ -555,7 +558,7 @@ def _run_ensemble(config: str, cfg, out: str, overrides: tuple[str, ...],
     if dry_run:
         click.echo(plan.plan_text(_plan_workers(plan, workers)))
         return
-    announce_compile(quiet, [cfg.solver.method])
+    announce_compile(quiet, [cfg])
     ds = _run_sweep_or_fail(plan, str(path), "run", config, overrides, workers=workers,
                             progress=not quiet, allow_large=allow_large, resume=resume,
                             overwrite=overwrite, discard_parts=discard_parts)
@@ -1129,7 +1132,7 @@ def sweep_command(config: str, out: str | None, workers: int | None, resume: boo
             click.echo(f"clearsweep: {plan.describe(cores, kept)}", err=True)
         if not scheduler and (backend != "cuda" or series):
             # compile once here so that the workers load the cached kernel
-            announce_compile(quiet, [c.solver.method for c in plan.runnable().values()])
+            announce_compile(quiet, plan.runnable().values())
         client: Any = scheduler
         if dask_local:
             from distributed import Client, LocalCluster

@@ -9,7 +9,9 @@ sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
 projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
 other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
-Cases are grouped by wear-map shape and run in batches that fit the device's free memory.
+Cases are grouped by wear-map shape and kernel build (``params.build_of`` their joints
+with clearance: one compiled kernel per joint set) and run in batches that fit the device's
+free memory.
 """
 
 from __future__ import annotations
@@ -22,9 +24,10 @@ from typing import Any
 import numpy as np
 
 from .config import Config, resolve_materials
+from .core import jointset
 from .core import layout as L
 from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
-from .params import Packed, pack
+from .params import Packed, build_of, pack
 from .simulation import KernelRun, check_step, section_rows
 
 #: What a sweep or the CLI reports when no device is there.
@@ -146,21 +149,22 @@ def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
     return arrays
 
 
-def _run_on_device(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Launch one batch; the arrays it gives back (``core.device.RESULTS``: wmap, proj,
-    wvol, info, stats, track and the work array ``pairs``, which holds the first impact
-    times) on the host, by name."""
+def _run_on_device(arrays: dict[str, np.ndarray], build: int) -> dict[str, np.ndarray]:
+    """Launch one batch on the kernel built for the joint set ``build``; the arrays it gives
+    back (``core.device.RESULTS``: wmap, proj, wvol, info, stats, track and the work array
+    ``pairs``, which holds the first impact times) on the host, by name."""
     from .core import device
 
+    case_sets = [jointset.of(jp) for jp in arrays["jp"]]
     if simulated():
-        device.launch(arrays)
+        device.launch(arrays, build, case_sets)
         return {name: arrays[name] for name in device.RESULTS}
     from numba import cuda
 
     stream = cuda.stream()
     on_device = {name: cuda.to_device(a, stream=stream) for name, a in arrays.items()}
     stream.synchronize()
-    device.launch(on_device)
+    device.launch(on_device, build, case_sets)
     return {name: on_device[name].copy_to_host() for name in device.RESULTS}
 
 
@@ -169,17 +173,18 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
     NaN row for the time series (none is kept) and the batch's wall time shared out."""
     device_name()
     out: list[KernelRun | None] = [None] * len(packed)
-    by_shape: dict[tuple[int, ...], list[int]] = {}
+    # one batch holds cases of one map shape and one kernel build (params.build_of)
+    by_shape: dict[tuple[tuple[int, ...], int], list[int]] = {}
     for i, pk in enumerate(packed):
-        by_shape.setdefault(tuple(pk.map_shape), []).append(i)
-    for shape, members in by_shape.items():
+        by_shape.setdefault((tuple(pk.map_shape), build_of(jointset.of(pk.jp))), []).append(i)
+    for (shape, build), members in by_shape.items():
         rows = max(section_rows(packed[i]) for i in members)
         need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL]), rows) for i in members)
         size = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
         for start in range(0, len(members), size):
             batch = members[start:start + size]
             began = time.perf_counter()
-            res = _run_on_device(_allocate([packed[i] for i in batch]))
+            res = _run_on_device(_allocate([packed[i] for i in batch]), build)
             wall = (time.perf_counter() - began) / len(batch)
             for k, i in enumerate(batch):
                 out[i] = _raw(packed[i], res["wmap"][k], res["proj"][k], res["wvol"][k],

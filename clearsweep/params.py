@@ -23,6 +23,7 @@ from .config import (
     RevoluteJointConfig,
     resolve_materials,
 )
+from .core import jointset
 from .core import layout as L
 from .core.contact import hysteresis_fraction
 from .core.joints import BODIES, JOINTS
@@ -659,6 +660,34 @@ def joint_configs(cfg: Config) -> list[tuple[str, AnyJoint]]:
     return [(joint.name, getattr(cfg.joints, joint.name)) for joint in JOINTS]
 
 
+def joint_set(cfg: Config) -> int:
+    """The case's joints with clearance, as a ``core.jointset`` bitmask (bit j: row j of
+    the joint table): the flags :func:`pack` writes into ``jp[:, J_CLEARANCE]``, which
+    ``jointset.of`` reads back; the kernel build that runs the case is
+    :func:`kernel_build` of it."""
+    return sum(1 << j for j, (_, joint) in enumerate(joint_configs(cfg)) if joint.clearance > 0.0)
+
+
+#: The joints on which kernel builds are specialised (``core.jointset``: a build per set
+#: of them, compiled and cached once each); a build always holds the others, tested at run
+#: time. Chosen from the cold compile of a build against what folding a joint away saves
+#: (benchmarks/README.md, "Builds per joint set").
+SPECIALISED_JOINTS = jointset.ALL
+
+
+def build_of(case_set: int) -> int:
+    """The joint set of the kernel build that runs a case of joint set ``case_set``
+    (``core.jointset.of`` of its packed flags): the case's joints among
+    :data:`SPECIALISED_JOINTS`, and every other joint."""
+    return (int(case_set) & SPECIALISED_JOINTS) | (jointset.ALL & ~SPECIALISED_JOINTS)
+
+
+def kernel_build(cfg: Config) -> int:
+    """The joint set of the kernel build that runs the case (:func:`build_of` its
+    :func:`joint_set`): one compile, cached on disk, per set and method."""
+    return build_of(joint_set(cfg))
+
+
 
 #: The per-joint attributes of a run's results (:func:`joint_attributes`): the suffix of
 #: ``joint_<J>_<suffix>`` and what it holds (docs/runs.md, "Joint attributes").
@@ -761,10 +790,11 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     p[L.P_ONSET_TOL] = solver.onset_tolerance
     p[L.P_INTERP] = 1.0 if wear.interpolate else 0.0
     jp = np.zeros((L.N_JOINTS, L.N_JP))
+    clear = joint_set(cfg)
     for j, (_, joint) in enumerate(joint_configs(cfg)):
         surface = surface_material(joint, materials)
         c = joint.clearance
-        jp[j, L.J_CLEARANCE] = 1.0 if c > 0.0 else 0.0
+        jp[j, L.J_CLEARANCE] = 1.0 if clear >> j & 1 else 0.0
         jp[j, L.J_C] = c
         jp[j, L.J_RI] = joint.socket_radius
         jp[j, L.J_RJ] = joint.socket_radius - c

@@ -8,8 +8,10 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY]`` prints them, keeping the PTX text in
-PTX_FILE if given (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--joints A,B]`` prints them for the
+kernel built for a joint set (``core.jointset``; default every joint, the generic build),
+keeping the PTX text in PTX_FILE if given (tests/test_ptx.py checks them in CI;
+benchmarks/README.md records them per joint set).
 """
 
 from __future__ import annotations
@@ -67,18 +69,21 @@ def _device_of_capability(cc: tuple[int, int]):
     return stand_in_device(_StandInDevice(cc))
 
 
-def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC) -> str:
-    """PTX of ``core.device.run_cases`` for compute capability cc; needs numba-cuda with NVVM
-    (``pip install numba-cuda[cu12]``), no device. About a minute on one core: the whole
-    kernel is compiled, every device function inlined."""
+def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, spec: int | None = None) -> str:
+    """PTX of ``core.device.run_cases`` built for the joint set ``spec`` (``core.jointset``;
+    None: every joint, the generic build) for compute capability cc; needs numba-cuda with
+    NVVM (``pip install numba-cuda[cu12]``), no device. About a minute on one core: the
+    whole kernel is compiled, every device function inlined."""
     from numba import cuda
 
     from .core import device
+    from .core.jointset import ALL
 
     if device.SIMULATED:
         raise RuntimeError("NUMBA_ENABLE_CUDASIM is set: the simulator compiles no PTX")
     with _device_of_capability(cc):
-        ptx, _ = cuda.compile_ptx(device.run_cases.py_func, run_cases_signature(), cc=cc)
+        ptx, _ = cuda.compile_ptx(device.kernel_source(ALL if spec is None else spec),
+                                  run_cases_signature(), cc=cc)
     return ptx
 
 
@@ -161,14 +166,32 @@ def parse_args(argv: list[str] | None = None):
     parser.add_argument("--arch", default=f"sm_{DEFAULT_CC[0]}{DEFAULT_CC[1]}",
                         help="the compute capability to build for, as sm_XY "
                              "(default: %(default)s, an H100)")
+    parser.add_argument("--joints", default="all",
+                        help="the joint set to build the kernel for: the joints with "
+                             "clearance, comma-separated (A,B), 'none', or 'all' (default: "
+                             "%(default)s, the generic build)")
     args = parser.parse_args(argv)
     match = re.fullmatch(r"sm_(\d+)(\d)", args.arch)
     if match is None:
         parser.error(f"--arch: expected sm_XY (for example sm_90), got {args.arch!r}")
     args.cc = (int(match.group(1)), int(match.group(2)))
+    from .core import jointset
+
+    try:
+        args.spec = (jointset.ALL if args.joints == "all" else jointset.NONE if args.joints == "none"
+                     else jointset.named(*(name.strip() for name in args.joints.split(","))))
+    except ValueError as exc:
+        parser.error(f"--joints: {exc}")
     if args.output is not None and args.output.is_dir():
         parser.error(f"output: {str(args.output)!r} is a folder; give a file path for the PTX")
     return args
+
+
+def jointset_label(spec: int) -> str:
+    """A joint set in words (``core.jointset.label``)."""
+    from .core.jointset import label
+
+    return label(spec)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -176,8 +199,9 @@ def main(argv: list[str] | None = None) -> None:
     default)."""
     args = parse_args(argv)
     began = time.perf_counter()
-    ptx = compile_run_cases_ptx(args.cc)
-    print(f"PTX: {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
+    ptx = compile_run_cases_ptx(args.cc, args.spec)
+    print(f"PTX (clearance at {jointset_label(args.spec)}): {len(ptx):,} characters in "
+          f"{time.perf_counter() - began:.0f} s")
     if args.output is not None:
         args.output.write_text(ptx)
         print(f"PTX kept in {args.output}")

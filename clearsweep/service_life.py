@@ -44,7 +44,7 @@ from .budget import (
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import ForeignLock, history_line, lock_exclusively, replaced_on_success, with_command_line
-from .params import Packed, identity_changes, joint_attributes, joint_configs, pack, run_identity
+from .params import Packed, identity_changes, joint_attributes, joint_configs, kernel_build, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
 from .version import IDENTITY_VERSION
@@ -849,7 +849,7 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     period = 60.0 / cfg.mechanism.speed_rpm
     block_cfg, packed = life_block(cfg, allow_large=allow_large)
     materials = resolve_materials(block_cfg)
-    prepare_kernel(cfg.solver.method)
+    prepare_kernel(cfg.solver.method, kernel_build(block_cfg))
     jp = packed.jp
     clearance = np.where(jp[:, L.J_CLEARANCE] != 0.0, jp[:, L.J_C], 0.0)
     coat = np.where(clearance > 0.0, jp[:, L.J_COAT], math.inf)

@@ -15,10 +15,11 @@ if TYPE_CHECKING:
 
 from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
+from .core import jointset
 from .core import layout as L
 from .core.contact import elastic_force
 from .core.work import Case, Out
-from .params import PRESETS, Packed, as_python, joint_attributes, pack
+from .params import PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -104,30 +105,50 @@ def _kernel(method: str = "rk4"):
     return integrate
 
 
-def kernel_needs_compiling(method: str = "rk4") -> bool:
-    """True when neither this process nor the on-disk cache holds the compiled kernel."""
+def _compiled_for(kernel, build: int) -> bool:
+    """Whether this process holds ``kernel`` compiled for the joint set ``build``."""
+    signatures = getattr(kernel, "signatures", None)
+    if signatures is None:      # plain Python (NUMBA_DISABLE_JIT)
+        return True
+    return any(getattr(sig[-1], "literal_value", None) == build for sig in signatures)
+
+
+def kernel_needs_compiling(method: str = "rk4", build: int | None = None) -> bool:
+    """True when neither this process nor the on-disk cache holds the kernel of ``method``
+    compiled for the joint set ``build`` (``params.kernel_build``; None: A and B's)."""
+    if build is None:
+        build = build_of(jointset.named("A", "B"))
     kernel = _kernel(method)
-    if getattr(kernel, "signatures", True):    # compiled, or plain Python (NUMBA_DISABLE_JIT)
+    if _compiled_for(kernel, build):
         return False
-    index = getattr(getattr(getattr(kernel, "_cache", None), "_cache_file", None),
-                    "_index_path", None)
-    return not (index and os.path.exists(index))
+    cache = getattr(kernel, "_cache", None)
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    if not (index and os.path.exists(index)):
+        return True
+    try:
+        cached = cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - an unreadable index: Numba compiles again
+        return True
+    return not any(getattr(key[0][-1], "literal_value", None) == build for key in cached)
 
 
-def prepare_kernel(method: str = "rk4") -> float:
-    """Compile (or load from the cache) the kernel with a run of no steps; seconds taken.
+def prepare_kernel(method: str = "rk4", build: int | None = None) -> float:
+    """Compile (or load from the cache) the kernel of ``method`` for the joint set
+    ``build`` (``params.kernel_build``; None: the two-clearance case's, A and B) with a
+    run of no steps; seconds taken.
 
     Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
     """
     start = time.perf_counter()
-    if getattr(_kernel(method), "signatures", True):
+    if build is None:
+        build = build_of(jointset.named("A", "B"))
+    if _compiled_for(_kernel(method), build):
         return 0.0
-    cfg = DEFAULTS.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4,
-                           solver__method=method)
+    cfg = DEFAULTS.replace(solver__method=method)     # ideal: any build runs it
     packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
-    run_kernel(packed)
+    run_kernel(packed, build=build)
     return time.perf_counter() - start
 
 
@@ -180,7 +201,7 @@ def section_rows(packed: Packed) -> int:
 
 
 def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
-               wvol0: np.ndarray | None = None) -> KernelRun:
+               wvol0: np.ndarray | None = None, *, build: int | None = None) -> KernelRun:
     """Run the Numba kernel on packed inputs: the saved rows, wear, statistics, counters.
 
     ``wmap0`` (float64[2, npolar, nazim], [m]) and ``wvol0`` (float64[2], [m^3]): the wear
@@ -188,8 +209,15 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     run); copied, not changed. Default: unworn. ``wall_time`` times the integration call
     alone (compiling included when the kernel has not been compiled yet: ``simulate``
     calls ``prepare_kernel`` first).
+
+    ``build``: the joint set of the kernel build to run (``core.jointset``); default the
+    case's own, ``params.build_of`` the joints it has with clearance. ValueError for a
+    build without one of them (it would run the joint as ideal).
     """
     integrate = _kernel(packed.method)
+    case_set = jointset.of(packed.jp)
+    build = build_of(case_set) if build is None else int(build)
+    jointset.check(case_set, build)
     n_save = packed.n_steps // packed.save_every + 1
     wmap = np.zeros((L.N_JOINTS,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
     if wmap.shape != (L.N_JOINTS,) + tuple(packed.map_shape):
@@ -208,7 +236,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK),
               np.zeros(L.N_JOINTS), sec)
     t0 = time.perf_counter()
-    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out)
+    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out, build)
     wall = time.perf_counter() - t0
     out_wmax[int(info[L.I_SAVED]):] = np.nan
     out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
@@ -240,7 +268,7 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     """
     cfg = load_config(config, overrides)
     packed = preflight(cfg, allow_large=allow_large)
-    prepare_kernel(cfg.solver.method)
+    prepare_kernel(cfg.solver.method, kernel_build(cfg))
     return case_dataset(cfg, packed, run_kernel(packed))
 
 

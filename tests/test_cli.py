@@ -17,6 +17,7 @@ from click.testing import CliRunner
 from clearsweep import __version__
 from clearsweep.cli import main
 from clearsweep.config import ConfigError, load_config
+from clearsweep.core.jointset import named
 
 # (name, file text or None for the --set case, overrides, key, value received)
 BAD_INPUTS = [
@@ -50,8 +51,8 @@ def fake_run(monkeypatch):
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
         simulate=simulate, preflight=lambda cfg, allow_large=False, seat=True: None,
-        kernel_needs_compiling=lambda method="rk4": False,
-        prepare_kernel=lambda method="rk4": 0.0))
+        kernel_needs_compiling=lambda method="rk4", build=None: False,
+        prepare_kernel=lambda method="rk4", build=None: 0.0))
     monkeypatch.setitem(sys.modules, "clearsweep.analysis", types.SimpleNamespace(
         run_summary_text=lambda ds: f"summary: status {ds['status'].item()}"))
     return calls
@@ -188,8 +189,8 @@ def test_other_exceptions_propagate(tmp_path, monkeypatch):
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
         simulate=simulate, preflight=lambda cfg, allow_large=False, seat=True: None,
-        kernel_needs_compiling=lambda method="rk4": False,
-        prepare_kernel=lambda method="rk4": 0.0))
+        kernel_needs_compiling=lambda method="rk4", build=None: False,
+        prepare_kernel=lambda method="rk4", build=None: 0.0))
     result, _, out = run_case(tmp_path, "name: x\n")
     assert result.exit_code != 0 and isinstance(result.exception, RuntimeError)
     assert not out.exists()
@@ -303,16 +304,17 @@ def test_run_says_when_it_compiles_and_times_stepping_only(tmp_path, monkeypatch
     import clearsweep.simulation as simulation
 
     calls = []
-    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method="rk4": True)
+    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method="rk4", build=None: True)
     real = simulation.prepare_kernel
     monkeypatch.setattr(simulation, "prepare_kernel",
-                        lambda method="rk4": calls.append(method) or real(method))
+                        lambda method="rk4", build=None: calls.append((method, build)) or real(method, build))
     cfg = tmp_path / "c.yaml"
     cfg.write_text("joints: {A: {clearance: 2.5e-4}, B: {clearance: 2.5e-4}}\n"
                    "solver: {duration: 0.01}\n")
     result = CliRunner().invoke(main, ["run", str(cfg), "-o", str(tmp_path / "o.nc")])
     assert result.exit_code == 0, result.output
-    assert "compiling the kernel (once, about" in result.stderr
-    assert calls and set(calls) == {"rk4"}  # compiled before the run: the integrator asked for
+    assert "compiling the kernel for clearance at A,B (once, about" in result.stderr
+    # compiled before the run: the integrator asked for, built for the case's joint set
+    assert calls and set(calls) == {("rk4", named("A", "B"))}
     quiet = CliRunner().invoke(main, ["run", str(cfg), "-q", "-o", str(tmp_path / "q.nc")])
     assert quiet.exit_code == 0 and "compiling" not in quiet.stderr

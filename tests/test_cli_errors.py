@@ -165,8 +165,8 @@ def test_an_interrupted_case_is_one_line_exit_130(files, monkeypatch):
 
     monkeypatch.setitem(sys.modules, "clearsweep.simulation", types.SimpleNamespace(
         simulate=interrupted, preflight=lambda cfg, allow_large=False, seat=True: None,
-        kernel_needs_compiling=lambda method="rk4": False,
-        prepare_kernel=lambda method="rk4": 0.0))
+        kernel_needs_compiling=lambda method="rk4", build=None: False,
+        prepare_kernel=lambda method="rk4", build=None: 0.0))
     assert_error(invoke("run", "case.yaml", "-o", "o.nc"), 130, "stopped by Ctrl-C")
     assert not (files / "o.nc").exists()
 

@@ -44,6 +44,10 @@ def sources():
     (r"def bin_area\b", {"core/wear.py"}),
     # the coating thickness is compared with the depth in one place
     (r">= coat\b|>= jp\[.*J_COAT\]", {"core/wear.py"}),
+    # the kernel tests a joint's clearance in one place, the build's joint set first
+    # (jointset.has_clearance: a compile-time constant that folds an absent joint away);
+    # the host reads the packed flags where it packs and reports
+    (r"J_CLEARANCE\]\s*[!=]=", {"core/jointset.py", "params.py", "simulation.py", "service_life.py"}),
 ])
 def test_a_rule_is_written_in_one_module(pattern, allowed):
     found = {name for name, text in sources().items() if re.search(pattern, text)}

@@ -12,6 +12,7 @@ import pytest
 
 from clearsweep.config import load_config
 from clearsweep.core import layout as L
+from clearsweep.params import kernel_build
 from clearsweep.simulation import preflight, prepare_kernel, simulate
 from clearsweep.variables import POINCARE, STATISTICS
 
@@ -104,7 +105,8 @@ def test_taking_sections_changes_nothing_else():
     cfg = load_config(str(CONFIGS / "two_clearances.yaml"),
                       ["initial.joints=centred", "solver.duration=0.02", "mechanism.speed_rpm=3000"])
     packed = preflight(cfg)
-    prepare_kernel()
+    build = kernel_build(cfg)
+    prepare_kernel("rk4", build)
     results = []
     for rows in (0, 1):
         n_save = packed.n_steps // packed.save_every + 1
@@ -115,7 +117,7 @@ def test_taking_sections_changes_nothing_else():
         wear = [np.zeros((L.N_JOINTS,) + packed.map_shape), np.zeros((L.N_JOINTS, 3, L.N_ANGLE_BINS)),
                 np.zeros(L.N_JOINTS)]
         res = integrate(Case(packed.p, packed.jp, packed.y0, *wear), 0.0, packed.n_steps,
-                        packed.save_every, Out(*arrays))
+                        packed.save_every, Out(*arrays), build)
         results.append((arrays, wear, res))
     (a0, w0, r0), (a1, w1, r1) = results
     assert np.isfinite(a1[-1][0, L.SEC_OFFSET:L.SEC_OFFSET + 6]).all()   # a section taken

@@ -13,6 +13,7 @@ import dataclasses
 import pytest
 
 from clearsweep import ptx
+from clearsweep.core import jointset
 
 #: Spill stores [bytes per thread] of run_cases for sm_90 that this code reaches: 3,100
 #: (``python -m clearsweep.ptx``; 1,224 before joint P, whose corner contacts NVVM inlines
@@ -133,8 +134,8 @@ def test_main_keeps_the_ptx_where_asked(tmp_path, monkeypatch, capsys):
     compile and to ptxas (the compile itself stubbed: it takes about a minute)."""
     calls = []
 
-    def compile_stub(cc=ptx.DEFAULT_CC):
-        calls.append(cc)
+    def compile_stub(cc=ptx.DEFAULT_CC, spec=None):
+        calls.append((cc, spec))
         return "// PTX text"
 
     monkeypatch.setattr(ptx, "compile_run_cases_ptx", compile_stub)
@@ -143,10 +144,16 @@ def test_main_keeps_the_ptx_where_asked(tmp_path, monkeypatch, capsys):
     out = tmp_path / "kernel.ptx"
     ptx.main([str(out), "--arch", "sm_80"])
     assert out.read_text() == "// PTX text"
-    assert calls == [(8, 0)]
+    assert calls == [((8, 0), jointset.ALL)]
     assert "sm_80: 255 registers" in capsys.readouterr().out
     ptx.main([])
-    assert calls[-1] == ptx.DEFAULT_CC
+    assert calls[-1] == (ptx.DEFAULT_CC, jointset.ALL)
+    # --joints picks the joint set the kernel is built for
+    ptx.main(["--joints", "A,B"])
+    assert calls[-1] == (ptx.DEFAULT_CC, jointset.named("A", "B"))
+    assert "PTX (clearance at A,B)" in capsys.readouterr().out
+    ptx.main(["--joints", "none"])
+    assert calls[-1] == (ptx.DEFAULT_CC, jointset.NONE)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kernel.ptx"]
 
 
@@ -154,9 +161,10 @@ def test_main_keeps_the_ptx_where_asked(tmp_path, monkeypatch, capsys):
     (["--arch", "90"], "--arch: expected sm_XY"),
     (["--no-such-option"], "unrecognized arguments"),
     (["."], "is a folder"),
+    (["--joints", "A,Q"], "--joints: no joint 'Q'"),
 ])
 def test_bad_arguments_are_refused_before_the_compile(argv, message, monkeypatch, capsys):
-    monkeypatch.setattr(ptx, "compile_run_cases_ptx", lambda cc=None: pytest.fail("compiled"))
+    monkeypatch.setattr(ptx, "compile_run_cases_ptx", lambda cc=None, spec=None: pytest.fail("compiled"))
     with pytest.raises(SystemExit) as exc:
         ptx.main(argv)
     assert exc.value.code == 2

@@ -36,6 +36,7 @@ import numba
 from numba import cuda, types
 
 from .dynamics import NZ, VZ_ROWS
+from .jointset import ALL, check
 from .layout import N_ANGLE_BINS, N_CAP, N_CAP_ROWS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
@@ -123,39 +124,62 @@ else:
     _advance = _cpu_advance
 
 
-@cuda.jit
-def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
-              diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
-              rows_d, rows_wmax):
-    """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); the grouped work
-    arrays of ``rk4.work_shapes`` are handed to advance row by row; ``rows_*`` are
-    placeholders (one row per case) that ``keep_rows = False`` leaves untouched."""
-    i = cuda.grid(1)
-    if i < p.shape[0]:
-        case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
-                    block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS)), wvol[i])
-        out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
-                  block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)),
-                  sec[i])
-        work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
-                       block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
-                       block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
-                       block(vec, i, 6, (N_Y,)),
-                       block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
-                       block(cstate, i, 0, (N_JOINTS, N_S)),
-                       block(cstate, i, 1, (N_JOINTS, N_S)),
-                       block(msave, i, 0, (N_WINDOWS, N_M)),
-                       block(pairs, i, 0, (N_JOINTS,)), block(pairs, i, 1, (N_JOINTS,)),
-                       block(pairs, i, 2, (N_JOINTS,)),
-                       block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
-                       block(mats, i, 0, (NZ, NZ)), block(mats, i, 1, (NZ, NZ)),
-                       block(mats, i, 2, (NZ, NZ)), block(vz, i, 0, (VZ_ROWS, NZ)),
-                       buf_i[i], buf_v[i], block(caps, i, 0, (N_CAP_ROWS, N_CAP)),
-                       block(caps, i, 1, (N_CAP_ROWS, N_CAP)), scratch[i],
-                       block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)),
-                       block(vec, i, 8, (N_Y,)), block(vec, i, 9, (N_Y,)))
-        _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
+def kernel_source(spec):
+    """The Python source of the batch kernel built for the joint set ``spec``
+    (``core.jointset``): :func:`run_cases` with ``spec`` a constant of its closure, which
+    Numba compiles as a literal, so that advance and everything it calls are built for that
+    set (the joints outside it folded away)."""
 
+    def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
+                  diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
+                  rows_d, rows_wmax):
+        """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`) on the
+        kernel's joint set; the grouped work arrays of ``rk4.work_shapes`` are handed to
+        advance row by row; ``rows_*`` are placeholders (one row per case) that
+        ``keep_rows = False`` leaves untouched."""
+        i = cuda.grid(1)
+        if i < p.shape[0]:
+            case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
+                        block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS)), wvol[i])
+            out = Out(rows_t[i], rows_y[i], rows_d[i], rows_wmax[i], info[i],
+                      block(stats, i, 0, (N_WINDOWS, N_M)), track[i], block(pairs, i, PAIR_FIRST, (N_JOINTS,)),
+                      sec[i])
+            work = Rk4Work(block(vec, i, 0, (N_Y,)), block(vec, i, 1, (N_Y,)),
+                           block(vec, i, 2, (N_Y,)), block(vec, i, 3, (N_Y,)),
+                           block(vec, i, 4, (N_Y,)), block(vec, i, 5, (N_Y,)),
+                           block(vec, i, 6, (N_Y,)),
+                           block(diag, i, 0, (N_D,)), block(diag, i, 1, (N_D,)),
+                           block(cstate, i, 0, (N_JOINTS, N_S)),
+                           block(cstate, i, 1, (N_JOINTS, N_S)),
+                           block(msave, i, 0, (N_WINDOWS, N_M)),
+                           block(pairs, i, 0, (N_JOINTS,)), block(pairs, i, 1, (N_JOINTS,)),
+                           block(pairs, i, 2, (N_JOINTS,)),
+                           block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,)),
+                           block(mats, i, 0, (NZ, NZ)), block(mats, i, 1, (NZ, NZ)),
+                           block(mats, i, 2, (NZ, NZ)), block(vz, i, 0, (VZ_ROWS, NZ)),
+                           buf_i[i], buf_v[i], block(caps, i, 0, (N_CAP_ROWS, N_CAP)),
+                           block(caps, i, 1, (N_CAP_ROWS, N_CAP)), scratch[i],
+                           block(vec, i, 7, (N_Y,)), block(diag, i, 2, (N_D,)),
+                           block(vec, i, 8, (N_Y,)), block(vec, i, 9, (N_Y,)))
+            _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+
+    return run_cases
+
+
+#: The batch kernels built so far, by joint set (:func:`kernel`).
+_KERNELS: dict = {}
+
+
+def kernel(spec: int = ALL):
+    """The CUDA batch kernel built for the joint set ``spec`` (``params.build_of`` its
+    cases' sets), compiled on its first launch."""
+    if spec not in _KERNELS:
+        _KERNELS[spec] = cuda.jit(kernel_source(int(spec)))
+    return _KERNELS[spec]
+
+
+#: The generic kernel, every joint's clearance tested at run time.
+run_cases = kernel(ALL)
 
 #: run_cases' arguments by name, in launch order (inputs, results, the work arrays of
 #: ``rk4.work_shapes``, the row placeholders): :func:`launch` takes them by name.
@@ -175,10 +199,14 @@ FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
                      if name not in ("buf_i", "buf_v", "scratch")})
 
 
-def launch(arrays: dict) -> None:
-    """Run :func:`run_cases` over every case of ``arrays`` (its arguments by name, device or
-    host arrays) and wait for it to finish. ValueError if an argument is missing or unknown,
-    or if its per-case shape is not the one run_cases addresses it by (FIXED_SHAPES)."""
+def launch(arrays: dict, spec: int = ALL, case_sets=()) -> None:
+    """Run the kernel of the joint set ``spec`` (:func:`kernel`) over every case of
+    ``arrays`` (its arguments by name, device or host arrays) and wait for it to finish.
+    ValueError if an argument is missing or unknown, if its per-case shape is not the one
+    run_cases addresses it by (FIXED_SHAPES), or if one of ``case_sets`` (the cases' joint
+    sets, ``jointset.of``) has a joint with clearance outside ``spec``."""
+    for case_set in case_sets:
+        check(case_set, spec)
     if set(arrays) != set(ARGS):
         raise ValueError(f"run_cases arguments: missing {sorted(set(ARGS) - set(arrays))}, "
                          f"unknown {sorted(set(arrays) - set(ARGS))}")
@@ -188,5 +216,5 @@ def launch(arrays: dict) -> None:
                              f"{arrays[name].shape[1:]}, expected {shape}")
     n = arrays["p"].shape[0]
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-    run_cases[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
+    kernel(spec)[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()

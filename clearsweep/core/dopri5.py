@@ -15,11 +15,12 @@ method's 4th-order continuous extension, with the diagnostics evaluated there.
 import math
 
 import numpy as np
-from numba import njit
+from numba import literally, njit
 
 from . import prismatic
 from .compiled import compiled
 from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
+from .jointset import has_clearance
 from .layout import (
     D_DELTA,
     D_KE,
@@ -141,10 +142,11 @@ def error_norm(p, h, y0, y1, k1, k3, k4, k5, k6, k7):
 
 
 @compiled(locals=_NOT_LITERAL)
-def dopri5_trial(t, h, work, model, solve):
+def dopri5_trial(t, h, work, model, solve, spec):
     """Stages 2-7 of one trial step of length h from (t, y) with k1 = f(t, y): the 5th-order
     solution into y1, k7 = f(t + h, y1) with its diagnostics (energies, rates) into dg1
-    (y, k1 ... k7, yt, y1, dg1: fields of ``work``, a :data:`work.Dopri5Work`)."""
+    (y, k1 ... k7, yt, y1, dg1: fields of ``work``, a :data:`work.Dopri5Work`; ``spec``: the
+    build's joint set, ``jointset``)."""
     y = work.y
     k1 = work.k1
     k2 = work.k2
@@ -162,34 +164,34 @@ def dopri5_trial(t, h, work, model, solve):
     scratch = dg1
     for i in range(n):
         yt[i] = y[i] + h * A21 * k1[i]
-    st = evaluate(t + C2 * h, yt, model, k2, scratch, stage, solve)
+    st = evaluate(t + C2 * h, yt, model, k2, scratch, stage, solve, spec)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i])
-    st = evaluate(t + C3 * h, yt, model, k3, scratch, stage, solve)
+    st = evaluate(t + C3 * h, yt, model, k3, scratch, stage, solve, spec)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i])
-    st = evaluate(t + C4 * h, yt, model, k4, scratch, stage, solve)
+    st = evaluate(t + C4 * h, yt, model, k4, scratch, stage, solve, spec)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i])
-    st = evaluate(t + C5 * h, yt, model, k5, scratch, stage, solve)
+    st = evaluate(t + C5 * h, yt, model, k5, scratch, stage, solve, spec)
     if st != ST_OK:
         return st
     for i in range(n):
         yt[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i]
                             + A65 * k5[i])
-    st = evaluate(t + h, yt, model, k6, scratch, stage, solve)
+    st = evaluate(t + h, yt, model, k6, scratch, stage, solve, spec)
     if st != ST_OK:
         return st
     for i in range(n):
         y1[i] = y[i] + h * (A71 * k1[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i]
                             + A76 * k6[i])
-    return evaluate(t + h, y1, model, k7, dg1, step_end, solve)
+    return evaluate(t + h, y1, model, k7, dg1, step_end, solve, spec)
 
 
 @compiled(inline="always")
@@ -231,7 +233,7 @@ def onset_step(p, jp, dg0, dg1, h, model, y0, y1):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate_dopri5(case, t0, n_steps, save_every, out):
+def integrate_dopri5(case, t0, n_steps, save_every, out, spec):
     """Integrate one case to t0 + n_steps * p[P_DT] with adaptive Dormand-Prince 5(4).
 
     Arguments and outputs as :func:`.rk4.integrate`; output rows at the same times
@@ -239,8 +241,10 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
     shortest accepted step (h >= p[P_DT] / 2^k), ``info[I_SUBSTEPS]`` the accepted steps.
     Steps are bounded by p[P_HMAX] and p[P_DT] / 2^P_MAX_LEVEL; a step that the error
     control would make shorter stops the case with ST_UNSTABLE_STEP. Allocates the work
-    arrays and runs :func:`advance_dopri5`.
+    arrays and runs :func:`advance_dopri5`; ``spec``, the joint set of the build, a
+    compile-time constant as :func:`.rk4.integrate`'s.
     """
+    literally(spec)
     ny = N_Y
     work = Dopri5Work(np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
                       np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny), np.zeros(ny),
@@ -251,19 +255,19 @@ def integrate_dopri5(case, t0, n_steps, save_every, out):
                       np.zeros((N_JOINTS, 4), dtype=np.int64), np.zeros((N_JOINTS, 4)),
                       np.zeros((N_CAP_ROWS, N_CAP)), np.zeros((N_CAP_ROWS, N_CAP)),
                       np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_D))
-    advance_dopri5(case, t0, n_steps, save_every, out, work)
+    advance_dopri5(case, t0, n_steps, save_every, out, work, spec)
     if out.info[I_SAVED] == 0 and out.info[I_STATUS] != ST_OK:
         return np.full(N_R, np.nan)
     return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance_dopri5(case, t0, n_steps, save_every, out, work):
+def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
     """:func:`integrate_dopri5` without allocation: every work array is a field of ``work``
     (a :data:`work.Dopri5Work`; their contents on entry do not matter). ``out.track`` and
     ``out.first`` receive what :func:`.rk4.kernel_result` reports. Every status an
     evaluation returns stops the case, the dense-output evaluations of the sample rows
-    included.
+    included. ``spec``: the build's joint set (``jointset``).
     """
     model, solve, wear = case_views(case, work)
     p = case.p
@@ -317,7 +321,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
     ksec = 0
     tsec = section_time(p, t0, ksec)
 
-    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, work.prev)
+    status = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, work.prev, spec)
     if status != ST_OK:
         out.info[I_STATUS] = status
         out.info[I_SAVED] = 0
@@ -339,7 +343,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         if hh < hmin and not last:
             status = ST_UNSTABLE_STEP
             break
-        st = dopri5_trial(t, hh, work, model, solve)
+        st = dopri5_trial(t, hh, work, model, solve, spec)
         if st != ST_OK:
             if hh <= hmin:
                 status = st
@@ -365,21 +369,21 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         for j in range(N_CAP_ROWS):
             for i in range(N_CAP):
                 cur[j, i] = 0.0
-        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev)
-        if jp[JOINT_P, J_CLEARANCE] != 0.0 and accept_prismatic(hh, in_settled, model, stats,
+        changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev, spec)
+        if has_clearance(spec, jp, JOINT_P) and accept_prismatic(hh, in_settled, model, stats,
                                                                  cur, y1):
             changed = True
         note_first_impact(out.first, stats, t + hh)
         if changed:
-            st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve)
+            st = evaluate(t + hh, y1, model, k7, dg1, step_end, solve, spec)
             if st != ST_OK:
                 status = st
                 break
         keep_ends(work.prev, dg, y)
         record_sample(stats, work.prev, dg1, y1, jp, hh,
-                      max(0.0, (settle - t) / hh) if in_settled else -1.0)
+                      max(0.0, (settle - t) / hh) if in_settled else -1.0, spec)
         merge_wear(wmap, cur, pend, wmax, scratch)
-        if jp[JOINT_P, J_CLEARANCE] != 0.0:
+        if has_clearance(spec, jp, JOINT_P):
             deposit_prismatic(wmap, cur, wmax, jp, case.wvol)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
@@ -393,7 +397,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
                 dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
                 for i in range(ny):
                     yrow[i] = row[0, i]
-                st = evaluate(ts, yrow, model, kt, dgo, step_end, solve)
+                st = evaluate(ts, yrow, model, kt, dgo, step_end, solve, spec)
                 if st != ST_OK:
                     status = st
                     break
@@ -411,7 +415,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
             for i in range(ny):
                 yrow[i] = row[0, i]
             section_offsets(p, jp, yrow, sec, ksec)
-            st = evaluate(tsec, yrow, model, kt, dgo, step_end, solve)
+            st = evaluate(tsec, yrow, model, kt, dgo, step_end, solve, spec)
             sec[ksec, SEC_SLIDER_ACC] = dgo[D_SLIDER_ACC] if st == ST_OK else math.nan
             sec[ksec, SEC_TIME] = tsec
             ksec += 1
@@ -423,7 +427,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work):
         accepted += 1
         if not last:
             h_small = min(h_small, hh)
-        status = step_checks(y, dg, p, jp, status, e0, out.track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track, spec)
         grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
         h = min(hh * grow, hmax)
     flush_all_wear(wmap, pend, wmax, scratch)

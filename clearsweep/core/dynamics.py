@@ -32,6 +32,7 @@ from . import prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .joints import INDEX
+from .jointset import ALL, NONE, has_clearance
 from .kinematics import (
     add,
     cross,
@@ -132,18 +133,19 @@ GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 
 
 
 @compiled(inline="always")
-def o_free(jp):
-    """Whether joint O has clearance, its journal free in the bearing's plane: read from jp
-    where it is needed rather than kept live through the right-hand side (a GPU thread's
-    registers: 16 B fewer spill stores, ``python -m clearsweep.ptx``)."""
-    return jp[JOINT_O, J_CLEARANCE] != 0.0
+def o_free(spec, jp):
+    """Whether joint O has clearance, its journal free in the bearing's plane (in the
+    build's joint set ``spec``, then in the case): read from jp where it is needed rather
+    than kept live through the right-hand side (a GPU thread's registers: 16 B fewer spill
+    stores, ``python -m clearsweep.ptx``)."""
+    return has_clearance(spec, jp, JOINT_O)
 
 
 @compiled(inline="always")
-def p_free(jp):
+def p_free(spec, jp):
     """Whether joint P has clearance, the slider's block free across its guide and in its
     three angles (read from jp where needed, as :func:`o_free`)."""
-    return jp[JOINT_P, J_CLEARANCE] != 0.0
+    return has_clearance(spec, jp, JOINT_P)
 
 
 @compiled
@@ -487,12 +489,15 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
 
 
 @compiled(inline="always")
-def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
+def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
     rows written and the largest position violation of these joints [m]. Where O has
     clearance the crank's centroid acceleration in the bearing's plane (rdd2's y, z) is
-    free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side."""
+    free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side.
+    ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
+    p = model.p
+    jp = model.jp
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
@@ -500,8 +505,8 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
-    if jp[JOINT_A, J_CLEARANCE] == 0.0:
-        free = o_free(jp)
+    if not has_clearance(spec, jp, JOINT_A):
+        free = o_free(spec, jp)
         if free:
             rdd2 = (rdd2[0], 0.0, 0.0)
         r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
@@ -529,7 +534,7 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
                                   - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
         nc += 3
-    if jp[JOINT_B, J_CLEARANCE] == 0.0:
+    if not has_clearance(spec, jp, JOINT_B):
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
@@ -541,7 +546,7 @@ def ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
         cvel = sub(v4, v3B)
         quad = point_accel_quadratic(R3, w3, gq3, uB3)
         # the slider's y, z: fixed by its guide, or free (columns 8, 9) where P has clearance
-        slide = p_free(jp)
+        slide = p_free(spec, jp)
         known4 = (0.0, 0.0, 0.0) if slide else (0.0, ydd4, zdd4)
         for i in range(3):
             for k in range(NZ):
@@ -632,7 +637,7 @@ _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types
 
 
 @compiled(locals=_NOT_LITERAL)
-def evaluate(t, y, model, dy, dg, full, solve):
+def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
 
     Parameters
@@ -655,6 +660,10 @@ def evaluate(t, y, model, dy, dg, full, solve):
         dopri5's inner stages need the derivative only.
     solve : work.Solve
         The float64 work arrays C, S, L (NZ x NZ) and vz (VZ_ROWS x NZ).
+    spec : int
+        The build's joint set (``jointset``: the joints that may have clearance), a
+        compile-time constant of the integrators' builds: the joints outside it are ideal
+        and their code is folded away. Default: every joint, each tested at run time.
 
     Returns
     -------
@@ -710,7 +719,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
-    if jp[JOINT_A, J_CLEARANCE] != 0.0:
+    if has_clearance(spec, jp, joint_a):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
@@ -725,7 +734,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         if full:
             store_contact(dg, joint_a, cA)
     # joint B: ball = rod end, socket = slider (socket frame: slider)
-    if jp[JOINT_B, J_CLEARANCE] != 0.0:
+    if has_clearance(spec, jp, joint_b):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
@@ -735,13 +744,13 @@ def evaluate(t, y, model, dy, dg, full, solve):
         F3 = add(F3, fB)
         N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
         F4 = sub(F4, fB)
-        if p_free(jp):
+        if p_free(spec, jp):
             N4 = sub(N4, body_moment(R4, r4, cB.q_socket, fB))
         pdiss += cB.diss_power
         if full:
             store_contact(dg, joint_b, cB)
     # joint O: ball = crank journal, socket = the ground's bearing (socket frame: global)
-    if o_free(jp):
+    if o_free(spec, jp):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         gr, gv, gR, gw = GROUND
@@ -758,7 +767,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
                 dg[D_JOINT_FORCE + 3 * JOINT_O + i] = cO.force[i]
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
-    if p_free(jp):
+    if p_free(spec, jp):
         fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy)
         if not ok:
             return ST_SINGULAR
@@ -767,7 +776,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
-    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy, not p_free(jp))
+    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy, not p_free(spec, jp))
 
     # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
@@ -776,22 +785,22 @@ def evaluate(t, y, model, dy, dg, full, solve):
         return ST_SINGULAR
     # the crank's centroid in the bearing's plane: free where O has clearance (forces
     # gravity, O's contact and A's contact, inverse mass 1/m2), else held (zero, 0)
-    vz[VZ_FORCE, 6] = F2[1] if o_free(jp) else 0.0
-    vz[VZ_FORCE, 7] = F2[2] if o_free(jp) else 0.0
+    vz[VZ_FORCE, 6] = F2[1] if o_free(spec, jp) else 0.0
+    vz[VZ_FORCE, 7] = F2[2] if o_free(spec, jp) else 0.0
     # the slider across its guide likewise, where P has clearance (forces gravity, P's and
     # B's contacts)
-    vz[VZ_FORCE, 8] = F4[1] if p_free(jp) else 0.0
-    vz[VZ_FORCE, 9] = F4[2] if p_free(jp) else 0.0
-    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(jp) else 0.0,
-            1.0 / p[P_M4] if p_free(jp) else 0.0)
-    nc, cons = ideal_joint_rows(jp, p, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
+    vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) else 0.0
+    vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
+    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
+            1.0 / p[P_M4] if p_free(spec, jp) else 0.0)
+    nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
     zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
            vz[VZ_ZDD, 5])
-    if o_free(jp):
+    if o_free(spec, jp):
         rdd2 = (rdd2[0], vz[VZ_ZDD, 6], vz[VZ_ZDD, 7])
-    if p_free(jp):
+    if p_free(spec, jp):
         ydd4 = vz[VZ_ZDD, 8]
         zdd4 = vz[VZ_ZDD, 9]
 
@@ -816,7 +825,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
-    if jp[JOINT_A, J_CLEARANCE] == 0.0:
+    if not has_clearance(spec, jp, joint_a):
         fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
         r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
@@ -824,7 +833,7 @@ def evaluate(t, y, model, dy, dg, full, solve):
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
-    if jp[JOINT_B, J_CLEARANCE] == 0.0:
+    if not has_clearance(spec, jp, joint_b):
         fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
     # with O's clearance, lamO keeps the axial reaction only (its y, z vanish to rounding)
     torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
@@ -838,12 +847,12 @@ def evaluate(t, y, model, dy, dg, full, solve):
     for i in range(3):
         # the bearing's force on the crank: the ideal revolute's reaction, or O's contact
         # force (stored with the contact) and the axial reaction
-        f_o = dg[D_JOINT_FORCE + 3 * JOINT_O + i] if o_free(jp) else 0.0
+        f_o = dg[D_JOINT_FORCE + 3 * JOINT_O + i] if o_free(spec, jp) else 0.0
         dg[D_REACTION_O + i] = f_o - lamO[i]
         dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
         dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
         dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
-    if not p_free(jp):
+    if not p_free(spec, jp):
         # the ideal guide's reaction on the slider, from the slider's equations: across the
         # guide only (the guide takes no load along it)
         dg[D_JOINT_FORCE + 3 * JOINT_P] = 0.0
@@ -858,16 +867,16 @@ def evaluate(t, y, model, dy, dg, full, solve):
     dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
     R2 = rotation(t2)
     pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
-    if o_free(jp):
+    if o_free(spec, jp):
         cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
     else:
         cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
-    if not p_free(jp):
+    if not p_free(spec, jp):
         cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0:
+        if not has_clearance(spec, jp, j):
             continue
         if j == JOINT_P:
             rate = max(rate, dg[D_PRATE])   # the corners' own, prismatic.contact
@@ -981,13 +990,22 @@ def store_contact(dg, j, cres):
         dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
 
 
+@compiled
+def evaluate_ideal(t, y, model, dy, dg, full, solve):
+    """:func:`evaluate` in the build of the ideal mechanism (joint set ``jointset.NONE``:
+    every joint's clearance folded away, the smallest build), for the seated start; the
+    same build as ideal cases' kernel, where they run on one of that set."""
+    return evaluate(t, y, model, dy, dg, full, solve, NONE)
+
+
 def ideal_joint_forces(t, y, p, jp):
     """Forces on the balls [N] (N_JOINTS x 3, global frame; O's: on the crank's journal) of
     the mechanism with every joint ideal, at state y and time t: the reactions a seated
     start leans the balls on.
 
-    Plain Python around the compiled :func:`evaluate` (the argument types that
-    rk4.integrate uses): a compiled wrapper would optimise evaluate's code once more.
+    Plain Python around the compiled :func:`evaluate_ideal` (the argument types that
+    rk4.integrate uses): a compiled wrapper of its own would optimise evaluate's code once
+    more.
     """
     jp_ideal = jp.copy()
     jp_ideal[:, J_CLEARANCE] = 0.0
@@ -1000,8 +1018,8 @@ def ideal_joint_forces(t, y, p, jp):
     L = np.zeros((NZ, NZ))
     vz = np.zeros((VZ_ROWS, NZ))
     out = np.full((N_JOINTS, 3), np.nan)
-    if evaluate(float(t), np.ascontiguousarray(y, dtype=np.float64), Model(p, jp_ideal, s, wmap),
-                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
+    if evaluate_ideal(float(t), np.ascontiguousarray(y, dtype=np.float64),
+                      Model(p, jp_ideal, s, wmap), dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
         return out
     for j in range(N_JOINTS):
         for i in range(3):

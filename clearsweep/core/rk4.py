@@ -11,13 +11,14 @@ contact angle advance once per accepted sub-step.
 import math
 
 import numpy as np
-from numba import njit, types
+from numba import literally, njit, types
 
 from . import prismatic, revolute
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
 from .dynamics import JOINT_O, JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
 from .joints import BODIES, JOINTS
+from .jointset import ALL, has_clearance
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
 from .kinematics import sub as vsub
 from .layout import (
@@ -154,11 +155,11 @@ _NOT_LITERAL = {"stage": types.boolean, "step_end": types.boolean, "whole": type
 
 
 @compiled(inline="always", locals=_NOT_LITERAL)
-def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve, stage):
+def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve, stage, spec):
     """One RK4 step of size hs from (t, y) with k1 = f(t, y) given; y is advanced in place
     (``model``, ``solve``: :func:`dynamics.evaluate`'s; ``stage``: False, the caller's
     variable typed as a plain boolean: the stage derivatives only, no energies, no stiff
-    rates).
+    rates; ``spec``: the build's joint set, ``jointset``).
 
     The stage derivatives k2, k3, k4 (at t + c hs, c = 1/2, 1/2, 1) come from one call of
     evaluate in a loop, each into the work array ``kst``; the work array ``ksum`` keeps
@@ -182,7 +183,7 @@ def rk4_substep(t, hs, y, k1, ksum, kst, yt, dg, model, solve, stage):
         c = 1.0 if i_stage == 2 else 0.5
         for i in range(n):
             yt[i] = y[i] + c * hs * kst[i]
-        st = evaluate(t + c * hs, yt, model, kst, dg, stage, solve)
+        st = evaluate(t + c * hs, yt, model, kst, dg, stage, solve, spec)
         if st != ST_OK:
             return st
         if i_stage == 0:
@@ -390,7 +391,7 @@ def fold_peak(m, i, peak, settled_lo, f0, f1, m0, m1, absolute):
 
 
 @compiled
-def record_windows(m, prev, dg, y, jp, weight, settled_lo):
+def record_windows(m, prev, dg, y, jp, weight, settled_lo, spec):
     """:func:`record_sample`'s statistics in a loop over the windows (the device build's
     arrangement): the same values, one copy of the peak search where the build inlines it."""
     for w in range(N_WINDOWS if settled_lo >= 0.0 else 1):
@@ -414,7 +415,7 @@ def record_windows(m, prev, dg, y, jp, weight, settled_lo):
         m[w, M_TIME] += weight
         m[w, M_SAMPLES] += 1.0
         for j in range(N_JOINTS):
-            if jp[j, J_CLEARANCE] == 0.0:
+            if not has_clearance(spec, jp, j):
                 continue
             fn_peak = dg[D_FN + j]
             pen_peak = dg[D_DELTA + j]
@@ -436,12 +437,13 @@ def record_windows(m, prev, dg, y, jp, weight, settled_lo):
 
 
 @compiled
-def record_sample(m, prev, dg, y, jp, weight, settled_lo):
+def record_sample(m, prev, dg, y, jp, weight, settled_lo, spec):
     """Fold one accepted (sub-)step into the running statistics m: the step from the start
     that ``prev`` holds (:func:`keep_ends`) to the state y (diagnostics dg), of length
     ``weight`` [s] (0: the initial state alone, prev unused), into the whole-run window
     and, where ``settled_lo`` >= 0, the settled one over the step's part u >= settled_lo;
-    then prev keeps this step's end for the next.
+    then prev keeps this step's end for the next. ``spec``: the build's joint set
+    (``jointset``), whose joints alone have peaks to read.
 
     Time integrals (RMS, time in contact) use the right-end value over each (sub-)step.
     Peaks are read within the step (u = (t - t_start) / weight in [0, 1], or [settled_lo,
@@ -470,7 +472,7 @@ def record_sample(m, prev, dg, y, jp, weight, settled_lo):
     over the windows instead, with one copy of the search (fewer registers spilled).
     """
     if on_device():
-        record_windows(m, prev, dg, y, jp, weight, settled_lo)
+        record_windows(m, prev, dg, y, jp, weight, settled_lo, spec)
         keep_ends(prev, dg, y)
         return
     settled = settled_lo >= 0.0
@@ -498,7 +500,7 @@ def record_sample(m, prev, dg, y, jp, weight, settled_lo):
         m[w, M_TIME] += weight
         m[w, M_SAMPLES] += 1.0
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0:
+        if not has_clearance(spec, jp, j):
             continue
         d1 = dg[D_DELTA + j]
         f1 = dg[D_FN + j]
@@ -704,7 +706,7 @@ def section_offsets(p, jp, ys, sec, k):
 
 
 @compiled
-def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
+def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec=ALL):
     """What an accepted (sub-)step of length hs changes besides the state: wear (into the
     projections, the worn volume, the step's cap ``cur`` and the undo buffer at row ``nbuf``
     of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
@@ -714,8 +716,9 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     beside this where the joint has clearance): their wear waits in ``cur`` until the step
     is accepted, and needs no undo.
 
-    Returns (whether the contact state changed, so that the step-end evaluation must be
-    redone; the next free undo-buffer row).
+    ``spec``: the build's joint set (``jointset``; default every joint, each tested at
+    run time). Returns (whether the contact state changed, so that the step-end evaluation
+    must be redone; the next free undo-buffer row).
     """
     p = model.p
     jp = model.jp
@@ -730,7 +733,7 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev):
     ampl = p[P_AMPL]
     changed = False
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0 or j == JOINT_P:
+        if not has_clearance(spec, jp, j) or j == JOINT_P:
             continue
         ddot = dg[D_DDOT + j]
         if dg[D_DELTA + j] > 0.0:
@@ -815,10 +818,11 @@ def accept_prismatic(hs, in_settled, model, stats, cur, y):
 
 
 @compiled
-def step_checks(y, dg, p, jp, status, e0, track):
+def step_checks(y, dg, p, jp, status, e0, track, spec):
     """Status after an accepted output-grid step (docs/physics.md section 4): non-finite
     state, Euler-angle limit, penetration, constraint drift, energy residual. ``track``
-    (peak kinetic energy, largest |drive work|, largest |residual| [J]) is updated in place.
+    (peak kinetic energy, largest |drive work|, largest |residual| [J]) is updated in place;
+    ``spec``: the build's joint set (``jointset``).
     """
     for i in range(N_Y):
         if not math.isfinite(y[i]):
@@ -826,7 +830,7 @@ def step_checks(y, dg, p, jp, status, e0, track):
     if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
         status = ST_EULER
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
+        if has_clearance(spec, jp, j) and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
             status = ST_PENETRATION
     track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
     track[T_WORK_MAX] = max(track[T_WORK_MAX], abs(y[Y_WORK]))
@@ -894,10 +898,11 @@ def case_views(case, work):
 
 
 @compiled(locals=_NOT_LITERAL)
-def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
+def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec):
     """First evaluation of a case at (t0, y) into k1 and dg; seated balls start in contact
     (their episode begins without an impact); statistics cleared and the initial state
-    recorded. Returns the evaluation's status."""
+    recorded (``spec``: the build's joint set, ``jointset``). Returns the evaluation's
+    status."""
     p = model.p
     jp = model.jp
     s = model.s
@@ -913,7 +918,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
     # evaluated again (one call site: see rk4_substep) when a ball starts on the socket wall
     # (seated start): it is in contact, not an impact
     for again in range(2):
-        st = evaluate(t0, y, model, k1, dg, step_end, solve)
+        st = evaluate(t0, y, model, k1, dg, step_end, solve, spec)
         if st != ST_OK:
             return st
         if again == 1:
@@ -921,11 +926,11 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
         seated = False
         for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
-            if j == JOINT_P and jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+            if j == JOINT_P and has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
                 prismatic.seat(j, model, slider_state(y))
                 seated = True
                 continue
-            if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > 0.0:
+            if has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
                 s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
                 if j != JOINT_O:
                     s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j],
@@ -933,7 +938,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev):
                 seated = True
         if not seated:
             break
-    record_sample(stats, prev, dg, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0)
+    record_sample(stats, prev, dg, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0, spec)
     return ST_OK
 
 
@@ -994,7 +999,7 @@ def kernel_result(track, first):
 
 
 @njit(cache=True, locals=_NOT_LITERAL)
-def integrate(case, t0, n_steps, save_every, out):
+def integrate(case, t0, n_steps, save_every, out, spec):
     """Integrate one case over n_steps output-grid steps of size p[P_DT].
 
     Parameters
@@ -1019,9 +1024,15 @@ def integrate(case, t0, n_steps, save_every, out):
     float64[N_R] : (largest |energy residual| [J], peak kinetic energy [J], first impact time
         at A and at B [s], NaN where none; layout.R_*); see kernel_result.
 
+    spec : int
+        The joint set the kernel is built for (``params.build_of``, at least the case's
+        ``jointset.of(case.jp)``): a compile-time constant (``numba.literally``), one build,
+        cached on disk, per set.
+
     The CPU entry point: allocates every work array on its own (no row views) and runs
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
     """
+    literally(spec)
     nbuf_max = undo_rows(int(case.p[P_MAX_LEVEL]))
     work = Rk4Work(np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y), np.zeros(N_Y),
                    np.zeros(N_Y), np.zeros(N_Y),
@@ -1033,12 +1044,12 @@ def integrate(case, t0, n_steps, save_every, out):
                    np.zeros((N_CAP_ROWS, N_CAP)), np.zeros((N_CAP_ROWS, N_CAP)),
                    np.zeros((4 * case.wmap.shape[1], 3)), np.zeros(N_Y), np.zeros(N_D),
                    np.zeros(N_Y), np.zeros(N_Y))
-    advance(case, t0, n_steps, save_every, True, out, work)
+    advance(case, t0, n_steps, save_every, True, out, work, spec)
     return kernel_result(out.track, out.first)
 
 
 @compiled(locals=_NOT_LITERAL)
-def advance(case, t0, n_steps, save_every, keep_rows, out, work):
+def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     """:func:`integrate` without allocation: every work array is a field of ``work`` (a
     :data:`work.Rk4Work`, one array each, so that the CPU path passes no views; the CUDA
     kernel passes rows of :func:`work_shapes`' groups), their contents on entry do not
@@ -1046,7 +1057,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     touched; info[I_SAVED] still counts the rows a run would save). ``out.track``
     (float64[N_TRACK]) receives the peak kinetic energy, the largest |drive work| and the
     largest |energy residual| [J] (layout.T_*); ``out.first`` (float64[2]) each joint's
-    first impact time [s] (-1: none).
+    first impact time [s] (-1: none). ``spec``: the joint set of the build (``jointset``),
+    a compile-time constant in both builds.
     """
     p = case.p
     jp = case.jp
@@ -1092,7 +1104,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
     stab = p[P_STAB]
     settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
-    slides = jp[JOINT_P, J_CLEARANCE] != 0.0    # the slider's block free in its guide
+    slides = has_clearance(spec, jp, JOINT_P)   # the slider's block free in its guide
     zero_rows(msave)
     zero_rows(vz)
     zero_rows(buf_v)
@@ -1133,7 +1145,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         out.info[i] = 0
 
     status = ST_OK
-    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev)
+    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec)
     if st != ST_OK:
         out.info[I_STATUS] = st
         out.info[I_SAVED] = 0
@@ -1187,9 +1199,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     # a section in this sub-step: its start for the cubic Hermite
                     copy_into(ysub, y)
                     copy_into(k1sub, k1)
-                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve, stage)
+                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve, stage, spec)
                 if st == ST_OK:
-                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
                 if st != ST_OK:
                     status = st
                     break
@@ -1198,17 +1210,17 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     break
                 in_settled = ts + hs >= settle
                 changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                               ddot_prev)
+                                               ddot_prev, spec)
                 if slides and accept_prismatic(hs, in_settled, model, stats, cur, y):
                     changed = True
                 note_first_impact(out.first, stats, ts + hs)
                 if changed:
-                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve)
+                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
                     if st != ST_OK:
                         status = st
                         break
                 record_sample(stats, prev, dg, y, jp, hs,
-                              max(0.0, (settle - ts) / hs) if in_settled else -1.0)
+                              max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
                 due, tk = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
                 if due:
                     # the section inside this sub-step: the slider acceleration from the cubic
@@ -1267,7 +1279,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             section_offsets(p, jp, k1sub, sec, k)
             next_section(sec, secnext, k + 1)
 
-        status = step_checks(y, dg, p, jp, status, e0, out.track)
+        status = step_checks(y, dg, p, jp, status, e0, out.track, spec)
         if (step + 1) % save_every == 0:
             if keep_rows:
                 out.t[n_saved] = t + h

@@ -1,0 +1,75 @@
+"""The joint set a kernel build is compiled for: which joints of the table may have clearance.
+
+A joint set is a bitmask over the rows of ``joints.JOINTS`` (bit j: joint j). The
+integrators take it as their last argument and hand it down to every function that tests a
+joint for clearance (``dynamics.evaluate``, ``rk4.advance``, ``rk4.accept_substep``,
+``rk4.record_sample``, ``dopri5.advance_dopri5``, ...); the CPU entry points make it a
+compile-time constant (``numba.literally``: Numba compiles, and caches on disk, one build
+per set, the set in the cached signature), the CUDA kernel closes over it
+(``device.kernel``). :func:`has_clearance` reads the bit before the case's packed flag
+(``jp[j, J_CLEARANCE]``): where the bit is clear the test is a constant False, and LLVM
+folds the joint's contact, its free coordinates and its wear away.
+
+A build's set may hold joints that the case has not (an ideal joint in a build with its
+bit set takes the ideal branch at run time, as every joint did before builds were
+specialised), never fewer: :func:`check` refuses such a pair. A case's set is read from
+its packed flags by :func:`of`; which build runs it is the host's choice
+(``params.kernel_build``).
+"""
+
+from .compiled import compiled
+from .joints import INDEX, JOINTS, N_JOINTS
+from .layout import J_CLEARANCE
+
+#: Every joint: the generic build, in which each joint's clearance is tested at run time.
+ALL = (1 << N_JOINTS) - 1
+
+#: No joint with clearance: the ideal mechanism.
+NONE = 0
+
+
+def of(jp) -> int:
+    """The set of joints with clearance of a packed case (its ``jp``, the flags that the
+    kernel tests): bit j where ``jp[j, J_CLEARANCE]`` is not 0."""
+    mask = 0
+    for j in range(N_JOINTS):
+        if jp[j, J_CLEARANCE] != 0.0:
+            mask |= 1 << j
+    return mask
+
+
+def named(*names: str) -> int:
+    """The set of the joints named (``"A"``, ``"P"``: rows of the joint table)."""
+    mask = 0
+    for name in names:
+        if name not in INDEX:
+            raise ValueError(f"no joint {name!r}: the joints are {', '.join(INDEX)}")
+        mask |= 1 << INDEX[name]
+    return mask
+
+
+def names(mask: int) -> tuple[str, ...]:
+    """The names of the joints in ``mask``, in the table's order."""
+    return tuple(joint.name for j, joint in enumerate(JOINTS) if mask >> j & 1)
+
+
+def label(mask: int) -> str:
+    """``mask`` in words: the joints' names joined by commas, or ``none``."""
+    return ",".join(names(mask)) or "none"
+
+
+def check(case_set: int, build_set: int) -> None:
+    """ValueError unless a build of ``build_set`` can run a case of ``case_set``: every
+    joint with clearance in the case must be in the build (a build without it would treat
+    the joint as ideal)."""
+    missing = int(case_set) & ~int(build_set)
+    if missing or not 0 <= int(build_set) <= ALL:
+        raise ValueError(f"a case with clearance at {label(case_set)} cannot run on the "
+                         f"kernel built for {label(build_set)}")
+
+
+@compiled(inline="always")
+def has_clearance(spec, jp, j):
+    """Whether joint j has clearance: in the build's joint set ``spec`` (a constant of the
+    build: a clear bit folds the test, and what it guards, away) and in the case (``jp``)."""
+    return (spec >> j) & 1 != 0 and jp[j, J_CLEARANCE] != 0.0
