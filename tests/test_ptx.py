@@ -27,6 +27,12 @@ from clearsweep.core import jointset
 #: room for ptxas' allocation moving with unrelated edits.
 SPILL_STORE_BOUND = 3420
 
+#: Spill stores of the kernel built for clearance at A and B alone (the joint set of the
+#: two-clearance cases, O and P folded away: core/jointset.py): 1,660 (benchmarks/README.md,
+#: "Builds per joint set"). The issue's goal, below 1,024, is not met; the bound keeps the
+#: same room as SPILL_STORE_BOUND's.
+SPILL_STORE_BOUND_AB = 1760
+
 LOG = """\
 ptxas info    : Compiling entry function '_Z9run_cases' for 'sm_90'
 ptxas info    : Function properties for _Z9run_cases
@@ -190,24 +196,30 @@ def _build_key(ptxas) -> str:
     return digest.hexdigest()
 
 
-@pytest.fixture(scope="module")
-def report(request):
-    """ptxas' figures for run_cases, built once per change of what the build depends on
-    (:func:`_build_key`): kept in pytest's cache (.pytest_cache), as Numba keeps its compiled
-    kernels, so a warm run skips the minute of NVVM and ptxas."""
+def _report(request, spec: int) -> ptx.PtxasReport:
+    """ptxas' figures for run_cases built for the joint set ``spec``, built once per change
+    of what the build depends on (:func:`_build_key`): kept in pytest's cache
+    (.pytest_cache), as Numba keeps its compiled kernels, so a warm run skips the minutes of
+    NVVM and ptxas."""
     try:
         ptxas = ptx.find_ptxas()
     except FileNotFoundError as exc:
         pytest.fail(str(exc))
     cache = getattr(request.config, "cache", None)        # None under -p no:cacheprovider
-    key = f"clearsweep/ptxas_report/{_build_key(ptxas)}"
+    key = f"clearsweep/ptxas_report/{_build_key(ptxas)}/{spec}"
     cached = cache.get(key, None) if cache is not None else None
     if cached is not None:
         return ptx.PtxasReport(**cached)
-    built = ptx.ptxas_report(ptx.compile_run_cases_ptx())
+    built = ptx.ptxas_report(ptx.compile_run_cases_ptx(spec=spec))
     if cache is not None:
         cache.set(key, dataclasses.asdict(built))
     return built
+
+
+@pytest.fixture(scope="module")
+def report(request):
+    """The generic build's figures (every joint tested at run time)."""
+    return _report(request, jointset.ALL)
 
 
 @pytest.mark.slow
@@ -218,3 +230,14 @@ def test_run_cases_compiles_and_assembles_for_sm_90(report, record_property, cap
     assert report.arch == "sm_90"
     assert 0 < report.registers <= 255
     assert report.spill_store_bytes < SPILL_STORE_BOUND, report.line()
+
+
+@pytest.mark.slow
+def test_the_build_for_a_and_b_spills_less_than_the_generic_one(request, report, capsys):
+    """Folding O and P away (the two-clearance cases' build) halves the spill stores."""
+    built = _report(request, jointset.named("A", "B"))
+    with capsys.disabled():
+        print(f"\nPTX (clearance at A,B) {built.line()}")
+    assert 0 < built.registers <= 255
+    assert built.spill_store_bytes < SPILL_STORE_BOUND_AB, built.line()
+    assert built.spill_store_bytes < report.spill_store_bytes
