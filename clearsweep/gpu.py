@@ -176,7 +176,7 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
     # one batch holds cases of one map shape and one kernel build (params.build_of)
     by_shape: dict[tuple[tuple[int, ...], int], list[int]] = {}
     for i, pk in enumerate(packed):
-        by_shape.setdefault((tuple(pk.map_shape), build_of(jointset.of(pk.jp))), []).append(i)
+        by_shape.setdefault((tuple(pk.map_shape), build_of(jointset.of(pk.jp), device=True)), []).append(i)
     for (shape, build), members in by_shape.items():
         rows = max(section_rows(packed[i]) for i in members)
         need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL]), rows) for i in members)

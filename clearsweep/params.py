@@ -668,18 +668,28 @@ def joint_set(cfg: Config) -> int:
     return sum(1 << j for j, (_, joint) in enumerate(joint_configs(cfg)) if joint.clearance > 0.0)
 
 
-#: The joints on which kernel builds are specialised (``core.jointset``: a build per set
-#: of them, compiled and cached once each); a build always holds the others, tested at run
-#: time. Chosen from the cold compile of a build against what folding a joint away saves
-#: (benchmarks/README.md, "Builds per joint set").
-SPECIALISED_JOINTS = jointset.ALL
+#: The joints on which the CPU's kernel builds are specialised (``core.jointset``: a build
+#: per set of them, compiled and cached once each); a build always holds the others, tested
+#: at run time. The spherical joints A and B: folding them away is what gains on the CPU
+#: (the ideal case 1.18x the generic build, folding O and P alone 1.03x at most), while each
+#: build costs a cold compile of about 45 CPU seconds (the mixed-clearance study's 16 sets
+#: would compile 16 builds for a run of 40 s: benchmarks/README.md, "Builds per joint
+#: set"). Four builds at most.
+SPECIALISED_JOINTS = jointset.named("A", "B")
+
+#: The device's: every joint. Folding O and P away halves the CUDA kernel's spill stores
+#: (``python -m clearsweep.ptx --joints``), and a device build is compiled in each process
+#: that launches it, cached or not.
+SPECIALISED_JOINTS_DEVICE = jointset.ALL
 
 
-def build_of(case_set: int) -> int:
+def build_of(case_set: int, device: bool = False) -> int:
     """The joint set of the kernel build that runs a case of joint set ``case_set``
-    (``core.jointset.of`` of its packed flags): the case's joints among
-    :data:`SPECIALISED_JOINTS`, and every other joint."""
-    return (int(case_set) & SPECIALISED_JOINTS) | (jointset.ALL & ~SPECIALISED_JOINTS)
+    (``core.jointset.of`` of its packed flags) on the CPU, or with ``device`` on a CUDA
+    device: the case's joints among :data:`SPECIALISED_JOINTS` (or
+    :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint."""
+    mask = SPECIALISED_JOINTS_DEVICE if device else SPECIALISED_JOINTS
+    return (int(case_set) & mask) | (jointset.ALL & ~mask)
 
 
 def kernel_build(cfg: Config) -> int:

@@ -236,7 +236,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK),
               np.zeros(L.N_JOINTS), sec)
     t0 = time.perf_counter()
-    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out, build)
+    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out, jointset.Build(build))
     wall = time.perf_counter() - t0
     out_wmax[int(info[L.I_SAVED]):] = np.nan
     out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every

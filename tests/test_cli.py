@@ -17,7 +17,8 @@ from click.testing import CliRunner
 from clearsweep import __version__
 from clearsweep.cli import main
 from clearsweep.config import ConfigError, load_config
-from clearsweep.core.jointset import named
+from clearsweep.core.jointset import label, named
+from clearsweep.params import build_of
 
 # (name, file text or None for the --set case, overrides, key, value received)
 BAD_INPUTS = [
@@ -313,8 +314,9 @@ def test_run_says_when_it_compiles_and_times_stepping_only(tmp_path, monkeypatch
                    "solver: {duration: 0.01}\n")
     result = CliRunner().invoke(main, ["run", str(cfg), "-o", str(tmp_path / "o.nc")])
     assert result.exit_code == 0, result.output
-    assert "compiling the kernel for clearance at A,B (once, about" in result.stderr
+    build = build_of(named("A", "B"))
+    assert f"compiling the kernel for clearance at {label(build)} (once, about" in result.stderr
     # compiled before the run: the integrator asked for, built for the case's joint set
-    assert calls and set(calls) == {("rk4", named("A", "B"))}
+    assert calls and set(calls) == {("rk4", build)}
     quiet = CliRunner().invoke(main, ["run", str(cfg), "-q", "-o", str(tmp_path / "q.nc")])
     assert quiet.exit_code == 0 and "compiling" not in quiet.stderr

@@ -20,7 +20,7 @@ from numba import literally, njit
 from . import prismatic
 from .compiled import compiled
 from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
-from .jointset import has_clearance
+from .jointset import ALL, has_clearance
 from .layout import (
     D_DELTA,
     D_KE,
@@ -31,7 +31,6 @@ from .layout import (
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
-    J_CLEARANCE,
     N_CAP,
     N_CAP_ROWS,
     N_D,
@@ -207,18 +206,19 @@ def onset_within(d0, d1, h, tol, shorter):
 
 
 @compiled
-def onset_step(p, jp, dg0, dg1, h, model, y0, y1):
+def onset_step(p, jp, dg0, dg1, h, model, y0, y1, spec=ALL):
     """0 when no clearance joint's gap closes over the step, or the step is within the
     onset tolerance; else a shorter step that ends just after the estimated onset. A
     prismatic joint's gaps are its 16 corner-wall pairs', from the block's states y0 and y1
     (its diagnostics hold the deepest pair's only, which stays in contact while others
-    close)."""
+    close). ``spec``: the build's joint set (``jointset``; default every joint, each tested
+    at run time)."""
     tol = p[P_ONSET_TOL]
     if h <= tol:
         return 0.0
     shorter = 0.0
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] == 0.0:
+        if not has_clearance(spec, jp, j):
             continue
         if j == JOINT_P:
             s0 = slider_state(y0)
@@ -360,7 +360,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
                 status = ST_UNSTABLE_STEP
                 break
             continue
-        shorter = onset_step(p, jp, dg, dg1, hh, model, y, y1)
+        shorter = onset_step(p, jp, dg, dg1, hh, model, y, y1, spec)
         if shorter > 0.0:
             h = shorter
             continue
@@ -414,7 +414,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
             dense_row(row, 0, theta, hh, y, y1, k1, k3, k4, k5, k6, k7)
             for i in range(ny):
                 yrow[i] = row[0, i]
-            section_offsets(p, jp, yrow, sec, ksec)
+            section_offsets(p, jp, yrow, sec, ksec, spec)
             st = evaluate(tsec, yrow, model, kt, dgo, step_end, solve, spec)
             sec[ksec, SEC_SLIDER_ACC] = dgo[D_SLIDER_ACC] if st == ST_OK else math.nan
             sec[ksec, SEC_TIME] = tsec

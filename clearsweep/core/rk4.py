@@ -47,7 +47,6 @@ from .layout import (
     I_STEPS,
     I_SUBSTEPS,
     J_C,
-    J_CLEARANCE,
     J_CY,
     J_CZ,
     J_LENGTH,
@@ -666,19 +665,20 @@ def attachment_state(p, y, row):
 
 
 @compiled
-def section_offsets(p, jp, ys, sec, k):
+def section_offsets(p, jp, ys, sec, k, spec):
     """Section row k's offsets from the state ys at the section: each clearance joint's
     ball-centre offset d_s = R_s^T (p_ball - p_socket) in its socket frame over c (as the
     diagnostics D_OFFSET), and its rate R_s^T (v_ball - v_socket) - w_s x d_s over c, from
     the joint table's attachments (kinematics alone: no evaluation of the equations of
-    motion, whose every call site a device build inlines)."""
+    motion, whose every call site a device build inlines); ``spec``: the build's joint set
+    (``jointset``)."""
     # one loop over the attachments, ball then socket of each joint (one copy of
     # attachment_state where a device build inlines it)
     pb = (0.0, 0.0, 0.0)
     vb = (0.0, 0.0, 0.0)
     for row in range(2 * N_JOINTS):
         j = row // 2
-        if jp[j, J_CLEARANCE] == 0.0:
+        if not has_clearance(spec, jp, j):
             continue
         pos, vel, R, w = attachment_state(p, ys, row)
         if row % 2 == 0:
@@ -1026,8 +1026,9 @@ def integrate(case, t0, n_steps, save_every, out, spec):
 
     spec : int
         The joint set the kernel is built for (``params.build_of``, at least the case's
-        ``jointset.of(case.jp)``): a compile-time constant (``numba.literally``), one build,
-        cached on disk, per set.
+        ``jointset.of(case.jp)``): a compile-time constant (a ``jointset.Build``, typed as
+        the literal it holds, or an int made one by ``numba.literally``), one build, cached
+        on disk, per set.
 
     The CPU entry point: allocates every work array on its own (no row views) and runs
     :func:`advance`, which the CUDA batch kernel (core/device.py) runs per thread too.
@@ -1276,7 +1277,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
         if due:
             k = int(secnext[SN_ROW])
             sec[k, SEC_SLIDER_ACC] = secnext[SN_ACC]
-            section_offsets(p, jp, k1sub, sec, k)
+            section_offsets(p, jp, k1sub, sec, k, spec)
             next_section(sec, secnext, k + 1)
 
         status = step_checks(y, dg, p, jp, status, e0, out.track, spec)
