@@ -197,3 +197,44 @@ def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
                                                     "SC_PAGE_SIZE": 4096}[name])
     assert gpu.batch_window(cases) == gib // per_case        # a quarter of 4 GiB
     assert gpu.batch_window(cases[:3]) == 3
+
+
+LAYOUT_SCRIPT = r"""
+import sys
+import numpy as np
+from clearsweep.config import DEFAULTS, resolve_materials
+from clearsweep.params import pack
+from clearsweep import gpu
+
+base = DEFAULTS.replace(solver__duration=0.002, wear__map=[6, 12], wear__amplification=1000.0,
+                        metrics__settle_time=0.001, outputs__poincare_phase_deg=0.72)
+cfgs = [base.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4),
+        base.replace(joints__B__clearance=2.5e-4, joints__O__clearance=2.5e-4,
+                     initial__joints="centred"),
+        base]
+packed = [pack(c, resolve_materials(c)) for c in cfgs]
+aos = gpu.run_packed(packed, layout="aos")
+soa = gpu.run_packed(packed, layout="soa")
+for k, (a, b) in enumerate(zip(aos, soa)):
+    assert a.status == b.status == "ok", (k, a.status, b.status)
+    for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+        x, y = np.asarray(getattr(a, name)), np.asarray(getattr(b, name))
+        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), (k, name)
+    assert (a.residual_max, a.ke_peak, a.rk4_steps, a.deepest) == (b.residual_max, b.ke_peak, b.rk4_steps, b.deepest), k
+impacts = float(aos[1].stats[0].max())
+print("compared", len(aos), "cases; largest statistic", impacts)
+"""
+
+
+@pytest.mark.slow
+def test_simulated_layouts_agree_bit_for_bit():
+    """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity)
+    and the case-by-case one compute the same bits in the simulator, where both run the
+    kernel's Python source: clearance at A and B, at B and O from the centred start
+    (impacts), and ideal joints, in one batch."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", LAYOUT_SCRIPT], capture_output=True, text=True,
+                          env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    assert "compared 3 cases" in proc.stdout
