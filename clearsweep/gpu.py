@@ -57,6 +57,51 @@ class NoCudaDevice(RuntimeError):
         super().__init__(NO_DEVICE + (f" ({detail})" if detail else ""))
 
 
+class CudaPairing(NoCudaDevice):
+    """numba-cuda and numpy releases that do not compile the kernel together: no usable
+    device, said in one line before any case runs."""
+
+    def __init__(self, message: str):
+        RuntimeError.__init__(self, message)
+
+
+#: numba-cuda releases (major, minor) and the numpy (major, minor) below which each
+#: compiles the kernel: numba-cuda 0.30 (0.30.4 on the device image) fails with numpy 2.5,
+#: whose removal of np.row_stack breaks its compiler, and every case of a sweep came back
+#: ``failed`` with numpy's message (benchmarks/README.md, "CUDA backend"). pyproject.toml's
+#: ``cuda`` and ``test`` extras pin the same pairing (tests/test_gpu.py checks they agree).
+NUMPY_BELOW = {(0, 30): (2, 5)}
+
+
+def _minor(version: str) -> tuple[int, int]:
+    parts = [int("".join(c for c in p if c.isdigit()) or 0) for p in version.split(".")[:2]]
+    return (parts + [0, 0])[0], (parts + [0, 0])[1]
+
+
+def installed_versions() -> tuple[str, str | None]:
+    """(numpy's version, numba-cuda's; None where numba-cuda is not installed)."""
+    from importlib import metadata
+
+    try:
+        numba_cuda: str | None = metadata.version("numba-cuda")
+    except metadata.PackageNotFoundError:
+        numba_cuda = None
+    return np.__version__, numba_cuda
+
+
+def pairing_problem(numpy_version: str, numba_cuda_version: str | None) -> str | None:
+    """The one-line message for a numpy and numba-cuda pairing that does not compile the
+    kernel (:data:`NUMPY_BELOW`), None for one that does or is not known not to."""
+    if numba_cuda_version is None:
+        return None
+    below = NUMPY_BELOW.get(_minor(numba_cuda_version))
+    if below is None or _minor(numpy_version) < below:
+        return None
+    return (f"numba-cuda {numba_cuda_version} does not compile the kernel with numpy "
+            f"{numpy_version}: install numpy below {below[0]}.{below[1]} "
+            "(pip install 'clearsweep[cuda]'), or use --backend processes")
+
+
 def simulated() -> bool:
     """Whether numba's CUDA simulator stands in for the device (``NUMBA_ENABLE_CUDASIM=1``)."""
     import numba
@@ -65,9 +110,14 @@ def simulated() -> bool:
 
 
 def device_name() -> str:
-    """The CUDA device's name; raises :class:`NoCudaDevice` when there is none."""
+    """The CUDA device's name; raises :class:`NoCudaDevice` when there is none, and
+    :class:`CudaPairing` (one of them) when the installed numpy and numba-cuda do not compile
+    the kernel together (:data:`NUMPY_BELOW`), before anything is compiled or run."""
     if simulated():
         return "numba CUDA simulator"
+    problem = pairing_problem(*installed_versions())
+    if problem is not None:
+        raise CudaPairing(problem)
     try:
         from numba import cuda
 

@@ -238,3 +238,63 @@ def test_simulated_layouts_agree_bit_for_bit():
                           env=env, cwd=ROOT, timeout=600)
     assert proc.returncode == 0, proc.stderr[-4000:]
     assert "compared 3 cases" in proc.stdout
+
+
+def test_the_numpy_numba_cuda_pairing_is_pinned_as_the_check_states():
+    """pyproject's cuda and test extras pin numba-cuda to the releases gpu.NUMPY_BELOW knows,
+    with the numpy bound it states for them (numba-cuda 0.30.4 failed every case under
+    numpy 2.5 on a device)."""
+    import re
+    import tomllib
+
+    from clearsweep import gpu
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    for name in ("cuda", "test"):
+        reqs = {re.split(r"[\[<>=!~ ]", r, maxsplit=1)[0]: r for r in extras[name]}
+        nc = re.fullmatch(r"numba-cuda(\[cu12\])?>=(\d+)\.(\d+)\.\d+,<(\d+)\.(\d+)", reqs["numba-cuda"])
+        assert nc is not None, reqs["numba-cuda"]
+        low, high = (int(nc.group(2)), int(nc.group(3))), (int(nc.group(4)), int(nc.group(5)))
+        assert high == (low[0], low[1] + 1), "one numba-cuda minor release"
+        below = gpu.NUMPY_BELOW[low]
+        assert reqs["numpy"] == f"numpy<{below[0]}.{below[1]}"
+
+
+@pytest.mark.parametrize("numpy_version, numba_cuda, refused", [
+    ("2.4.6", "0.30.4", False), ("2.5.0", "0.30.4", True), ("2.5.0rc1", "0.30.9", True),
+    ("3.0.0", "0.30.4", True), ("2.5.0", None, False), ("2.5.0", "0.31.0", False)])
+def test_pairing_problem(numpy_version, numba_cuda, refused):
+    from clearsweep import gpu
+
+    message = gpu.pairing_problem(numpy_version, numba_cuda)
+    assert (message is not None) == refused
+    if refused:
+        assert "\n" not in message and f"numpy {numpy_version}" in message
+        assert "numpy below 2.5" in message and "--backend processes" in message
+
+
+def test_a_mismatched_pairing_is_one_line_before_any_case_runs(tmp_path, monkeypatch):
+    """numba-cuda 0.30.4 with numpy 2.5 (faked): the sweep stops with one error line naming
+    both versions and the fix, exit 2, before a case is packed or a file written; the same
+    refusal from Python, before the device is even asked for."""
+    from clearsweep import gpu
+    from clearsweep.sweeping import run_sweep
+
+    if gpu.simulated():
+        pytest.skip("the simulator is on in this process")
+    monkeypatch.setattr(gpu, "installed_versions", lambda: ("2.5.0", "0.30.4"))
+    ran = []
+    monkeypatch.setattr(gpu, "run_packed", lambda *a, **k: ran.append(a) or [])
+    path = tmp_path / "s.yaml"
+    path.write_text(json.dumps(SWEEP))
+    result = CliRunner().invoke(sweep_command, [str(path), "--backend", "cuda", "-o",
+                                                str(tmp_path / "s.nc")])
+    assert result.exit_code == 2
+    errors = [line for line in result.output.splitlines() if line.startswith("clearsweep: error")]
+    assert errors == ["clearsweep: error: numba-cuda 0.30.4 does not compile the kernel with "
+                      "numpy 2.5.0: install numpy below 2.5 (pip install 'clearsweep[cuda]'), "
+                      "or use --backend processes"], result.output
+    assert not (tmp_path / "s.nc").exists() and ran == []
+    with pytest.raises(gpu.NoCudaDevice, match="numba-cuda 0.30.4 does not compile"):
+        run_sweep(SWEEP, tmp_path / "t.nc", backend="cuda", progress=False)
+    assert not (tmp_path / "t.nc").exists() and ran == []
