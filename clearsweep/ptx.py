@@ -94,6 +94,19 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
     return ptx
 
 
+def build_kernel(layout: str = "soa", capacity: int = DEFAULT_CAPACITY) -> float:
+    """Compile the batch kernel of ``layout`` (and ``capacity``) for the current CUDA device
+    with the launch signature, as a sweep's first launch would; seconds taken. With
+    ``CLEARSWEEP_CUDA_CACHE=1`` the build lands in Numba's on-disk cache, which later
+    processes load (benchmarks/device_suite.py builds each kernel so, in parallel)."""
+    from .core import device
+
+    kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
+    began = time.perf_counter()
+    kernel.compile(run_cases_signature())
+    return time.perf_counter() - began
+
+
 def find_ptxas() -> Path:
     """The ``ptxas`` of the nvidia-cuda-nvcc wheel; FileNotFoundError saying what to install."""
     spec = importlib.util.find_spec("nvidia.cuda_nvcc") if importlib.util.find_spec("nvidia") else None

@@ -31,6 +31,7 @@ The build for a device is checked without one by ``python -m clearsweep.ptx``.
 
 import inspect
 import math
+import os
 
 import numba
 from numba import cuda, types
@@ -59,6 +60,13 @@ from .target import on_device
 from .work import Case, Out, Rk4Work
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
+
+#: ``CLEARSWEEP_CUDA_CACHE=1``: the kernels are kept in Numba's on-disk cache (the folder of
+#: ``numba_compat.cache_dir``), so that processes after the first load the build of each
+#: layout and capacity instead of compiling it (benchmarks/device_suite.py builds them in
+#: parallel processes first). Off by default: tried on a device by that script alone.
+CACHE_KERNELS = os.environ.get("CLEARSWEEP_CUDA_CACHE") == "1" and not SIMULATED
+_jit = cuda.jit(cache=True) if CACHE_KERNELS else cuda.jit
 
 #: Threads per block. The kernel is register- and local-memory-heavy (the right-hand side
 #: keeps its 3-vectors and 3x3 matrices in registers): small blocks keep occupancy even.
@@ -207,7 +215,7 @@ else:
     _advance = _cpu_advance
 
 
-@cuda.jit
+@_jit
 def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
               diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
               rows_d, rows_wmax):
@@ -280,7 +288,7 @@ def soa_kernel(capacity: int):
         return _SOA_KERNELS[capacity]
     cap = capacity      # a constant of the kernel (a closure variable)
 
-    @cuda.jit
+    @_jit
     def run_cases_soa(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track,
                       sec, vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps,
                       scratch, rows_t, rows_y, rows_d, rows_wmax):
