@@ -176,6 +176,8 @@ def parse_args(argv: list[str] | None = None):
     and the compute capability to build for."""
     import argparse
 
+    from .core.device import CAPACITIES
+
     parser = argparse.ArgumentParser(
         prog="python -m clearsweep.ptx",
         description="Compile core.device.run_cases to PTX for a GPU without one (numba-cuda's "
@@ -191,10 +193,11 @@ def parse_args(argv: list[str] | None = None):
                              "case")
     parser.add_argument("--capacity", type=int, default=DEFAULT_CAPACITY,
                         help="the launch capacity of the soa layout (default: %(default)s; "
-                             "one of 64, 1024, 4096, 16384, 32768)")
+                             f"one of {', '.join(map(str, CAPACITIES))})")
     args = parser.parse_args(argv)
-    if args.capacity not in (64, 1024, 4096, 16384, 32768):
-        parser.error(f"--capacity: expected one of 64, 1024, 4096, 16384, 32768, got {args.capacity}")
+    if args.capacity not in CAPACITIES:
+        parser.error(f"--capacity: expected one of {', '.join(map(str, CAPACITIES))}, "
+                     f"got {args.capacity}")
     match = re.fullmatch(r"sm_(\d+)(\d)", args.arch)
     if match is None:
         parser.error(f"--arch: expected sm_XY (for example sm_90), got {args.arch!r}")
