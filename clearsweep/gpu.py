@@ -316,10 +316,12 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
             res = _run_on_device(_allocate([packed[i] for i in batch], layout, cap), layout)
             wall = (time.perf_counter() - began) / len(batch)
             for k, i in enumerate(batch):
-                out[i] = _raw(packed[i], res["wmap"][k], res["proj"][k], res["wvol"][k],
-                              res["info"][k], res["stats"][k], res["track"][k],
-                              res["pairs"][k][PAIR_FIRST], res["sec"][k][:section_rows(packed[i])],
-                              wall)
+                # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
+                # batch gives strided views), one case at a time
+                one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
+                out[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
+                              one["stats"], one["track"], one["pairs"][PAIR_FIRST],
+                              one["sec"][:section_rows(packed[i])], wall)
     return [r for r in out if r is not None]
 
 

@@ -220,6 +220,7 @@ for k, (a, b) in enumerate(zip(aos, soa)):
     for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
         x, y = np.asarray(getattr(a, name)), np.asarray(getattr(b, name))
         assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), (k, name)
+        assert getattr(b, name).flags.c_contiguous, (k, name)     # as the CPU kernel's
     assert (a.residual_max, a.ke_peak, a.rk4_steps, a.deepest) == (b.residual_max, b.ke_peak, b.rk4_steps, b.deepest), k
 impacts = float(aos[1].stats[0].max())
 print("compared", len(aos), "cases; largest statistic", impacts)
