@@ -8,8 +8,9 @@ that), so that the call is known to work before device time is spent. Steps, in 
 
 1. **builds**: each kernel the later steps launch (layout aos; soa at the capacities they
    use), compiled in parallel processes into Numba's on-disk cache
-   (``CLEARSWEEP_CUDA_CACHE=1``), each also built to PTX for ptxas' registers and spills
-   (``python -m clearsweep.ptx``); the later steps load the builds. Skipped in the simulator.
+   (``CLEARSWEEP_CUDA_CACHE=1``), with ``--ptxas`` each also built to PTX for ptxas'
+   registers and spills (``python -m clearsweep.ptx``, the same figures as without a
+   device); the later steps load the builds. Skipped in the simulator.
 2. **kernel**: ``bench_gpu.py --kernel-only`` at 10,000 and 30,000 two-clearance cases
    (``--kernel-sizes``) for the case-by-case layout (aos) and the structure-of-arrays one
    (soa), each in its own process, with the CPU agreement on three cases.
@@ -139,6 +140,10 @@ if layout == "cpu":
     print("BUILD " + json.dumps(res))
     sys.exit(0)
 res["build_s"] = ptx.build_kernel(layout, cap)
+if sys.argv[3] != "1":
+    res["ptxas"] = "not asked for (--ptxas)"
+    print("BUILD " + json.dumps(res))
+    sys.exit(0)
 try:
     from numba import cuda
     cc = cuda.get_current_device().compute_capability
@@ -151,14 +156,15 @@ print("BUILD " + json.dumps(res))
 """
 
 
-def builds(suite: Suite, kernels: list[tuple[str, int]]) -> None:
+def builds(suite: Suite, kernels: list[tuple[str, int]], ptxas: bool = False) -> None:
     """Step 1: the kernels compiled in parallel processes (into the on-disk cache), the CPU
     kernel beside them (the agreement and the CPU sweep load it)."""
     if suite.simulator:
         suite.record["skipped"]["builds"] = "the simulator compiles nothing"
         return
     began = time.perf_counter()
-    procs = [(layout, cap, subprocess.Popen([sys.executable, "-c", BUILD, layout, str(cap)],
+    procs = [(layout, cap, subprocess.Popen([sys.executable, "-c", BUILD, layout, str(cap),
+                                             "1" if ptxas else "0"],
                                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                             text=True, env=suite.env(), cwd=ROOT))
              for layout, cap in kernels]
@@ -351,6 +357,9 @@ def main(argv=None) -> int:
     ap.add_argument("--cpu-cases", type=int, default=None,
                     help="cases of the CPU sweep (default: 100 per core; 8 in the simulator)")
     ap.add_argument("--ncu-cases", type=int, default=2000)
+    ap.add_argument("--ptxas", action="store_true",
+                    help="each build also compiled to PTX for ptxas' figures (about a minute "
+                         "more per build; the figures do not depend on the device)")
     args = ap.parse_args(argv)
     sim = args.simulator
     sizes = args.kernel_sizes or ([8] if sim else [10_000, 30_000])
@@ -382,7 +391,7 @@ def main(argv=None) -> int:
         return 2
     kernels = [("cpu", 0), ("aos", capacity_for(max(sizes))), ("soa", capacity_for(max(sizes))),
                ("soa", capacity_for(n))]
-    builds(suite, list(dict.fromkeys(kernels)))
+    builds(suite, list(dict.fromkeys(kernels)), args.ptxas)
     kernel(suite, sizes, kdur)
     sweeps(suite, n, sdur, cpu_cases, workers)
     ncu(suite, args.ncu_cases)

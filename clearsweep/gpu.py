@@ -9,7 +9,9 @@ sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
 projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
 other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
-Cases are grouped by wear-map shape and run in batches that fit the device's free memory.
+Cases are grouped by wear-map shape and run in batches that fit the device's free memory,
+stored structure-of-arrays (element e of case i at e * capacity + i) and padded to a launch
+capacity (:data:`CAPACITIES`, :func:`batch_plan`): a batch takes capacity x case_bytes.
 """
 
 from __future__ import annotations

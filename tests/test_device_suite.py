@@ -46,3 +46,39 @@ def test_the_device_suite_runs_in_the_simulator(tmp_path):
     table = (out / "suite.md").read_text()
     assert "| step | layout | cases |" in table
     assert table.count("| kernel | ") == 2 and "device / CPU workers" in table
+
+
+def _suite_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("device_suite",
+                                                  ROOT / "benchmarks" / "device_suite.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.slow
+def test_builds_run_in_processes_and_report(tmp_path):
+    """The builds step's plumbing, with the one build that needs no device (the CPU
+    kernel): a process per build, its report read back; a build that fails is recorded with
+    its output, not raised."""
+    suite_mod = _suite_module()
+    suite = suite_mod.Suite(tmp_path, tmp_path, budget=600.0, simulator=False)
+    suite_mod.builds(suite, [("cpu", 0), ("no-such-layout", 0)])
+    done = suite.record["steps"]["builds"]["kernels"]
+    assert done[0]["layout"] == "cpu" and done[0]["build_s"] >= 0.0
+    assert done[1]["layout"] == "no-such-layout" and "error" in done[1]
+
+
+def test_ncu_csv_is_read_by_metric_name():
+    suite_mod = _suite_module()
+    text = ('==PROF== Connected to process 1\n'
+            '"ID","Kernel Name","Section Name","Metric Name","Metric Unit","Metric Value"\n'
+            '"0","run_cases","Occupancy","Achieved Occupancy","%","11.52"\n'
+            '"0","run_cases","Memory Workload Analysis","L2 Hit Rate","%","40.10"\n'
+            '"0","run_cases","Warp State Statistics","Stall Long Scoreboard","cycle","12.3"\n')
+    rows = suite_mod._ncu_rows(text)
+    assert rows["Achieved Occupancy"] == "11.52" and rows["L2 Hit Rate"] == "40.10"
+    assert suite_mod._ncu_value(text, "DRAM Throughput") is None
+    assert "Stall Long Scoreboard" in rows
