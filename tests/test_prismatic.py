@@ -3,29 +3,29 @@ independent models.
 
 1. The kernel's right-hand side with P's clearance (alone, with B, with A, B and O; both
    presets) against the dense reference of tests/reference.py (``block_contact``: the
-   prismatic rows dropped, each corner's Hertz point-on-flat force F = (4/3) E* sqrt(r_c)
-   delta^(3/2) with damping and friction written from their formulas, applied at the corner
-   through finite-difference point Jacobians), with the block posed so that one corner,
-   several corners (on a y and a z wall) and diagonally opposite corners (on opposite walls)
-   penetrate, counted in numpy (``slot_penetrations``). Measured worst differences, scaled
-   as tests/test_reference.py's ``compare`` scales them: accelerations 3.5e-11, torque
-   6.7e-12, the guide's and the joints' forces 1.3e-11, P's F_N 1.1e-14 and friction force
-   9.0e-15 relative (the deepest slot's); RTOL = 1e-7. A worn wall (a depth in the map bin
-   under a corner) acts as the wider gap c + h there and nowhere else; the corners' stiff
-   rate is the free block's at the corner (equal to 1e-12), above the constrained one.
+   prismatic rows dropped, each wall meeting the block's face along its two long edges,
+   each edge's load on its end corners integrated by scipy's quadrature of the pressure
+   k_l max(delta, 0) per unit length, with damping and friction written from their
+   formulas, applied at the corners through finite-difference point Jacobians), with the
+   block posed so that one corner, several corners (on a y and a z wall) and diagonally
+   opposite corners (on opposite walls) penetrate, counted in numpy
+   (``slot_penetrations``); RTOL = 1e-7 as tests/test_reference.py's ``compare`` scales
+   it. A worn wall (a depth in the map bins under an edge's corners) acts as the wider gap
+   c + h there and nowhere else; the corners' stiff rate is the free block's at the corner
+   with the line's stiffness bound k_l L / 2, above the constrained one.
 2. The ideal mechanism's closed form (params.ideal_slider_x) with clearances of 1e-9 m: the
-   realistic corners sink ~1.4 um into the walls under the load, which moves x by the
-   closed form's slope times that (measured 1.32e-6 m, 4.7e-6 relative, near theta = 2.8 +
-   0.3 rad where the slope is 0.94); walls 1e4 times stiffer: 1.4e-8 relative.
-3. A symmetric load and start stay symmetric to round-off (the angles exactly 0 but roll,
-   3e-22 rad); a yaw of 1e-12 rad at the start grows a yaw rate of 6.8e-9 rad/s.
-4. One corner impact of the full kernel against scipy's integration of the 1-DOF model
-   m_eff delta'' = -F_N(delta, delta'): peak force -3.2e-5, penetration -3.4e-5, velocity
-   ratio +3.4e-4 relative (the block turns during the impact; tolerance 1e-3).
-5. The worn volume of each wall's band of P's map, and each bin's depth, against
-   k * sum(F_N |v_t| dt) written out from the saved states: 3e-13 relative (bins 6e-13).
-6. The energy residual of a 0.1 s run (3.9e-8 of the peak kinetic energy) and the settled
-   statistics' change with dt halved (< 5e-5).
+   faces sink ~10 nm into the walls under the load (face_sink), which moves x by the closed
+   form's slope times that; walls 1e4 times stiffer: < 1e-6 relative.
+3. A symmetric load and start stay symmetric to round-off; a yaw of 1e-12 rad at the start
+   grows a yaw rate.
+4. One edge impact and one face impact of the full kernel against scipy's integration of
+   the 1-DOF model m_eff delta'' = -F_N(delta, delta'), F_N = K delta (1 + kappa delta'),
+   K = k_l L for an edge, 2 k_l L for a face (tolerance 1e-3).
+5. The worn volume of P, and of each wall's band of its map (its bins' depths times their
+   areas), against k * sum(F_N |v_t| dt) written out from the saved states (1e-9), and the
+   track's width across a wall.
+6. The energy residual of a 0.1 s run and the settled statistics' change with dt halved
+   (< 5e-3).
 7. Bad ``joints.P`` values: one ``clearsweep: error:`` line naming the key, clearances
    beyond the rod's reach included (params.check_guide_reach).
 """
