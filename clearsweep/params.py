@@ -690,6 +690,8 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
         ideal = row[L.J_CLEARANCE] == 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
             f"layered law, E_w ({cfg.contact.layer_rule})"
+        if kind == "prismatic":
+            law = "elastic foundation on the faces' edge lines, E*"
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,

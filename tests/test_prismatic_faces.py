@@ -232,7 +232,7 @@ def test_the_walls_depth_converges_with_the_map():
     walls hold the worn volume (the bands' depth times area sum to wear_volume, 1e-9), and
     the deepest bin's depth converges: 72 x 144 within 5 % of 144 x 288 and closer to it
     than 36 x 72 is (the depth is the volume over the area the faces cover, Archard's k p s,
-    not a corner's point track; measured: see docs/physics.md 5.7). Before issue 41 item 5
+    not a corner's point track; measured 0.9998 and 0.9987 of 144 x 288's 2.76e-11 m). Before issue 41 item 5
     the bins held a corner's track depth V / (w x length), w its Hertz width (~70 um),
     whatever the map: the bands held tens of times the worn volume."""
     depth = {}
