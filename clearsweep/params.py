@@ -148,7 +148,7 @@ def hertz_modulus(joint: AnyJoint, materials: dict) -> float:
 def power_law_joint(joint_type: str, exponent: float) -> bool:
     """Whether a joint of ``joint_type`` takes the power law (Hertz's, docs/physics.md 3.2)
     in a case whose ``P_EXPONENT`` is ``exponent``: the journal of O and P's corners always
-    (``revolute.journal_law``, ``prismatic.corner_law``), the spherical joints under
+    (``revolute.journal_law``; P's faces, ``prismatic.line_stiffness``), the spherical joints under
     ``contact.elastic: hertz`` (``exponent`` != 0); else the paper's layered law."""
     return joint_type in ("revolute", "prismatic") or exponent != 0.0
 
@@ -361,12 +361,11 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     Such a case stops at its first steps on penetration_exceeded, the penetration being
     contact.max_penetration_fraction of c (at P, of the smaller of its two clearances).
 
-    At the guide P the reaction's component across each pair of walls (y, z) is shared by
-    the four corners of the block's face that meets the wall, the block lying flat: the
-    least sink a case can have (a tilted block carries the load on fewer corners, deeper).
+    At the guide P the reaction's component across each pair of walls (y, z) is carried by
+    the face of the block that meets the wall, lying flat on it (:func:`face_sink`): the
+    least sink a case can have (a tilted block carries the load on one edge, deeper).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.prismatic import corner_law
     from .core.revolute import journal_law
 
     packed = pack(cfg, materials)
@@ -381,22 +380,19 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
             continue
         c = jp[j, L.J_C]
         if joint.type == "prismatic":
-            # the reaction across the y walls and across the z walls, four corners each
+            # the reaction across the y walls and across the z walls, a face each
             # the stop compares the deepest corner with the smaller clearance (jp[J_C])
             key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
             for axis in (1, 2):
-                corner_load = abs(float(forces[j][axis])) / 4.0
-                if not (math.isfinite(corner_load) and corner_load > 0.0):
+                load = abs(float(forces[j][axis]))
+                if not (math.isfinite(load) and load > 0.0):
                     continue
-                # the corner's power law A c (delta / c)^n, A = 4 E* sqrt(r_c c) / 3: Hertz's
-                # sphere on a plane, as the kernel and :func:`seated_block` take it
-                sink = static_penetration(corner_load, c, jp[j, L.J_EW], jp[j, L.J_RI], c,
-                                          corner_law(p))
+                sink = face_sink(load, jp[j], axis)
                 if sink >= fraction * c:
                     out.append(f"joints.{joint.name}.{key} ({c:g} m) is below joint "
-                               f"{joint.name}'s Hertz sink: {sink:.3g} m at each of the four "
-                               f"corners on its {'yz'[axis - 1]} walls under a static load of "
-                               f"{4.0 * corner_load:.3g} N, beyond contact.max_penetration_fraction "
+                               f"{joint.name}'s contact sink: {sink:.3g} m of the block's face "
+                               f"on its {'yz'[axis - 1]} walls under a static load of "
+                               f"{load:.3g} N, beyond contact.max_penetration_fraction "
                                f"({fraction:g}) of the smaller clearance; the run will stop on "
                                "penetration_exceeded")
                     break
@@ -526,6 +522,17 @@ def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: i
     return turned, size / math.sqrt(1.0 + mu_eff * mu_eff)
 
 
+def face_sink(load_N: float, row: np.ndarray, axis: int) -> float:
+    """Penetration [m] of the block's face lying flat on a wall across ``axis`` (1: a y wall,
+    2: a z wall) of the guide P (its jp ``row``) under the load ``load_N`` [N]: both edge
+    lines of the face in contact along their length, 2 k_l L delta = load
+    (``prismatic.line_stiffness``, docs/physics.md 3.7)."""
+    from .core.prismatic import line_stiffness
+
+    stiffness = line_stiffness(np.ascontiguousarray(row[None, :]), 0, 2 * axis - 2, row[L.J_EW])
+    return load_N / (2.0 * stiffness * row[L.J_LENGTH])
+
+
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
                r4: np.ndarray) -> tuple[float, float, float, float]:
     """The least wear depth [m] under the four corners that face each wall of prismatic
@@ -547,14 +554,11 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
     """The offset [m] (0, y, z) of a block seated in its guide (joint P's jp ``row``) under
     the ideal guide's force ``force`` [N] on it: against the y wall the force's y part
     pushes from, and likewise in z, each wall's four corners sharing that part of the load
-    (a corner's law, ``prismatic.corner_law``, and the coated modulus); a part that is 0 or
-    not finite leaves the block centred in that direction. ``depth``: each wall's wear
-    under its least worn corner (+y, -y, +z, -z; :func:`worn_walls`), which moves the
-    wall's surface out by that much: the least worn corner rests on it, the others start
+    (its face lying flat on the wall, :func:`face_sink`, with the coated modulus); a part
+    that is 0 or not finite leaves the block centred in that direction. ``depth``: each
+    wall's wear under its least worn corner (+y, -y, +z, -z; :func:`worn_walls`), which moves
+    the wall's surface out by that much: the least worn corner rests on it, the others start
     clear of their deeper wear."""
-    from .core.prismatic import corner_law
-
-    law = corner_law(p)
     out = np.zeros(3)
     for axis, c in ((1, row[L.J_CY]), (2, row[L.J_CZ])):
         part = float(force[axis])
@@ -562,8 +566,7 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
             continue
         # the block rests on the wall opposite the force's direction: -y (-z) for a part > 0
         c = c + depth[2 * axis - 2 + (1 if part > 0.0 else 0)]
-        # the corner's power law A c (delta / c)^n with A = 4 E* sqrt(r_c c) / 3
-        delta = static_penetration(0.25 * abs(part), c, row[L.J_EW], row[L.J_RI], c, law)
+        delta = face_sink(abs(part), row, axis)
         out[axis] = -math.copysign(c + delta, part)
     return out
 
@@ -687,6 +690,8 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
         ideal = row[L.J_CLEARANCE] == 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
             f"layered law, E_w ({cfg.contact.layer_rule})"
+        if kind == "prismatic":
+            law = "elastic foundation on the faces' edge lines, E*"
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,

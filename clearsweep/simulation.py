@@ -37,7 +37,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
     own elastic law (the journal's at O, the corners' at P).
     """
     from .core.joints import INDEX
-    from .core.prismatic import corner_law
+    from .core.prismatic import line_stiffness
     from .core.revolute import journal_law
 
     solver = cfg.solver
@@ -58,11 +58,16 @@ def check_step(cfg: Config, packed: Packed) -> None:
         mass = m_ref
         rj = jp[L.J_RJ]
         if j == INDEX["P"]:
-            law = as_python(corner_law)(packed.p)
-            rj = jp[L.J_C]
+            # a corner's bound on its edge line's stiffness, k_l L / 2 (prismatic.slot_rate),
+            # the stiffer of the two faces, on the free block's mass at the corner
             corner = 0.25 * (jp[L.J_LENGTH] ** 2 + jp[L.J_WIDTH] ** 2 + jp[L.J_HEIGHT] ** 2)
             mass = 1.0 / (1.0 / preset.slider_mass_kg + corner / min(preset.slider_inertia_kgm2))
-        elif j == INDEX["O"]:
+            stiffness = max(0.5 * as_python(line_stiffness)(packed.jp, j, wall, jp[L.J_EW])
+                            * jp[L.J_LENGTH] for wall in (0, 2))
+            bounds.append(solver.stability_limit * 2 ** solver.max_substep_level
+                          / math.sqrt(stiffness / mass))
+            continue
+        if j == INDEX["O"]:
             law = as_python(journal_law)(packed.p)
         else:
             law = packed.p[L.P_EXPONENT]
