@@ -455,10 +455,10 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     the modulus the one the contact law uses there. The journal of O leans along the
     reaction's part in the bearing's plane (y, z), with the journal's law, turned by the
     friction angle where friction is on (:func:`journal_seat`), so that its contact force,
-    normal and friction together, is the ideal reaction.
+    normal and friction together, is the ideal reaction; the balls of the spherical joints
+    likewise, against the friction of their slip at the start (:func:`ball_seats`).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.kinematics import rotation, trig
     from .core.revolute import journal_law
 
     y_ideal = initial_state(preset, theta0, omega)
@@ -484,15 +484,87 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         u = f / size            # the contact's force on the ball leans along u
         if joint.type == "revolute":
             u, size = journal_seat(u, size, p, jp, j, omega, wmap)
-        c, ew = jp[j, L.J_C], jp[j, L.J_EW]
-        if wmap is not None:
-            # the socket body's angles (the table's; the ground, with no state, unrotated)
-            socket = next(body for body in BODIES if body.name == joint.socket.body)
-            phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
-            rot = np.array(rotation(trig(*phi))).reshape(3, 3)
-            c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
-        delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        offsets[j] = -(c + delta) * u
+        offsets[j] = leaning_offset(j, u, size, law, p, jp, y_ideal, wmap)
+    return ball_seats(preset, p, jp, theta0, omega, forces, offsets, y_ideal, wmap)
+
+
+def leaning_offset(j: int, u: np.ndarray, size: float, law: float, p: np.ndarray,
+                   jp: np.ndarray, y_ideal: np.ndarray, wmap: np.ndarray | None) -> np.ndarray:
+    """The offset [m] of joint j's ball (global) whose contact force, normal along -n = u,
+    carries the normal load ``size`` [N]: -(c + delta_s) u, delta_s the static penetration
+    of the joint's law ``law`` (c and the modulus those of the worn socket in that
+    direction where ``wmap`` is given)."""
+    from .core.kinematics import rotation, trig
+
+    joint = JOINTS[j]
+    c, ew = jp[j, L.J_C], jp[j, L.J_EW]
+    if wmap is not None:
+        # the socket body's angles (the table's; the ground, with no state, unrotated)
+        socket = next(body for body in BODIES if body.name == joint.socket.body)
+        phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
+        rot = np.array(rotation(trig(*phi))).reshape(3, 3)
+        c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
+    delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
+    return -(c + delta) * u
+
+
+#: Fixed-point iterations of :func:`ball_seats` at most; each turns the seat by at most the
+#: friction angle's sine times the last turn (mu' = 0.167: 1e-16 in 20).
+BALL_SEAT_ITERATIONS = 60
+
+
+def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, omega: float,
+               forces: np.ndarray, offsets: np.ndarray, y_ideal: np.ndarray,
+               wmap: np.ndarray | None = None) -> np.ndarray:
+    """The seated offsets with each loaded spherical clearance joint's ball turned so that
+    its contact force, normal and friction together, is the ideal reaction ``forces[j]``
+    (docs/physics.md 1.2). Friction off: ``offsets`` unchanged.
+
+    At the start the ball turns with its body and the socket with its own (the rod's rate
+    against the crank's at A, the slider's at B), so the contact point slips and friction
+    mu' F_N acts along the slip's tangent direction f (mu' = mu c_d(|v_t|), section 3.3).
+    With tan(phi) = mu', F_N (-n) + mu' F_N f = |F| F^ holds when
+    -n = cos(phi) F^ - sin(phi) g, g the unit part of f across F^, and F_N = |F| cos(phi).
+    The slip's direction depends on n (and the start's velocities on every offset), so the
+    seat is a fixed point: the kernel's own contact (``dynamics.start_contacts``) at the
+    state the offsets give reads f and mu', the seat is turned, and again, until the
+    offsets stop moving (a contraction by about sin(phi) per turn)."""
+    from .core.dynamics import start_contacts
+
+    seats = []
+    for j, joint in enumerate(JOINTS):
+        size = float(np.linalg.norm(forces[j]))
+        if (joint.type == "spherical" and jp[j, L.J_CLEARANCE] != 0.0
+                and math.isfinite(size) and size > 0.0):
+            seats.append((j, forces[j] / size, size))
+    if p[L.P_FRICTION] == 0.0 or not seats:
+        return offsets
+    grid = np.zeros((L.N_JOINTS, 1, 1)) if wmap is None else wmap
+    law = p[L.P_EXPONENT]
+    offsets = offsets.copy()
+    for _ in range(BALL_SEAT_ITERATIONS):
+        by_name = {row.name: offsets[k] for k, row in enumerate(JOINTS)}
+        y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
+                           by_name["P"])
+        force, fn, normal = start_contacts(y0, p, jp, grid)
+        moved = 0.0
+        for j, f_hat, size in seats:
+            friction = force[j] + fn[j] * normal[j]     # the contact force less its normal part
+            ft = float(np.linalg.norm(friction))
+            if not (fn[j] > 0.0 and math.isfinite(ft) and ft > 0.0):
+                continue                                # no slip, no friction to balance
+            mu = ft / fn[j]
+            cos, sin = 1.0 / math.sqrt(1.0 + mu * mu), mu / math.sqrt(1.0 + mu * mu)
+            across = friction / ft - (friction / ft @ f_hat) * f_hat
+            if not np.linalg.norm(across) > 0.0:
+                continue                                # friction along the load: no turn helps
+            g = across / np.linalg.norm(across)
+            u = cos * f_hat - sin * g
+            new = leaning_offset(j, u / np.linalg.norm(u), size * cos, law, p, jp, y_ideal, wmap)
+            moved = max(moved, float(np.linalg.norm(new - offsets[j]) / np.linalg.norm(new)))
+            offsets[j] = new
+        if moved <= 1e-15:
+            break
     return offsets
 
 

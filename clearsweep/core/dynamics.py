@@ -1007,3 +1007,31 @@ def ideal_joint_forces(t, y, p, jp):
         for i in range(3):
             out[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
     return out
+
+
+def start_contacts(y, p, jp, wmap):
+    """Each clearance joint's contact at state y and t = 0, as the kernel computes it: the
+    force on the ball [N] (N_JOINTS x 3, global frame), the normal force F_N [N] and the
+    normal's line (global, unit). The contact state is a fresh episode's (no impact velocity
+    yet). Plain Python around the compiled :func:`evaluate`, as :func:`ideal_joint_forces`;
+    ``params.seated_offsets`` balances the spherical joints' friction with it."""
+    s = np.zeros((N_JOINTS, N_S))
+    dy = np.zeros(y.shape[0])
+    dg = np.zeros(N_D)
+    C = np.zeros((NZ, NZ))
+    S = np.zeros((NZ, NZ))
+    L = np.zeros((NZ, NZ))
+    vz = np.zeros((VZ_ROWS, NZ))
+    force = np.full((N_JOINTS, 3), np.nan)
+    fn = np.full(N_JOINTS, np.nan)
+    normal = np.full((N_JOINTS, 3), np.nan)
+    if evaluate(0.0, np.ascontiguousarray(y, dtype=np.float64),
+                Model(p, jp, s, np.ascontiguousarray(wmap, dtype=np.float64)),
+                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
+        return force, fn, normal
+    for j in range(N_JOINTS):
+        fn[j] = dg[D_FN + j]
+        for i in range(3):
+            force[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
+            normal[j, i] = dg[D_NGLOBAL + 3 * j + i]
+    return force, fn, normal
