@@ -225,8 +225,16 @@ class ContactConfig(_Section):
     min_impact_velocity: float = _setting(_positive(1.0e-2), "m s-1", "floor of the impact velocity")
     layer_rule: str = _setting(Field("series", ("series", "paper_mm")), None,
                                "double elastic layer rule")
-    max_penetration_fraction: float = _setting(
-        _positive(0.5), "1", "largest penetration accepted, fraction of the clearance")
+    #: null (the default): the physical stop, the depth at which the joint's own law carries
+    #: load_bound or the coating's thickness (docs/physics.md 4.3); a number: the earlier
+    #: stop, that fraction of the clearance
+    max_penetration_fraction: float | None = _setting(
+        Field(None, lo=0.0, lo_open=True, nullable=True), "1",
+        "largest penetration accepted, fraction of the clearance (null: the physical stop)")
+    #: the contact force beyond which the elastic law is not trusted: the penetration stop
+    #: is the law's depth at it (docs/physics.md 4.3)
+    load_bound: float = _setting(_positive(1.0e5), "N",
+                                 "contact force at the penetration stop")
     #: hysteresis damping law (docs/physics.md section 3.2): the paper's or one of the literature's
     damping: str = _setting(Field("paper", DAMPING_LAWS), None, "contact damping law")
     #: max: the fastest approach of the contact episode; onset: its value at the episode's first step

@@ -328,15 +328,20 @@ def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> N
 
 
 def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float = 0.0,
-                       exponent: float = 0.0) -> float:
+                       exponent: float = 0.0, *, plain: bool = False) -> float:
     """Penetration delta [m] at which the contact's elastic force equals force_N [N].
 
     ``exponent`` 0, the paper's law: Newton on F_el(delta) = force_N from the small-penetration
     estimate F_el ~ (2 K / c) delta^2, K = 4 pi E_w R_i / 5; F_el is convex and increasing, so
     the iteration converges monotonically from above. The power law F_el = A c (delta/c)^n
-    (ball radius ``rj``, n = ``exponent``) is inverted in closed form.
+    (ball radius ``rj``, n = ``exponent``) is inverted in closed form. ``plain``: the contact
+    functions' Python forms (:func:`as_python`), so that planning compiles nothing.
     """
-    from .core.contact import elastic_force, power_coefficient, stiffness_factor
+    from .core import contact
+
+    elastic_force, power_coefficient, stiffness_factor = (
+        (as_python(f) if plain else f)
+        for f in (contact.elastic_force, contact.power_coefficient, contact.stiffness_factor))
 
     if force_N <= 0.0:
         return 0.0
@@ -358,8 +363,11 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     penetration under the joint's static load, here the ideal mechanism's joint reaction at
     the start (weights and inertia at cfg.mechanism.theta0 and speed), through the joint's
     own contact law and modulus (:func:`static_penetration`, :func:`equivalent_modulus`).
-    Such a case stops at its first steps on penetration_exceeded, the penetration being
-    contact.max_penetration_fraction of c (at P, of the smaller of its two clearances).
+    Such a joint sits deeper in its socket than its clearance: its contact law is used
+    beyond the small contact it describes (docs/physics.md 4.3). The text says
+    whether the run will stop: where the sink also passes the joint's penetration stop
+    (:func:`penetration_stop`; with ``contact.max_penetration_fraction`` that fraction of c,
+    and then the warning comes at that fraction).
 
     At the guide P the reaction's component across each pair of walls (y, z) is shared by
     the four corners of the block's face that meets the wall, the block lying flat: the
@@ -369,17 +377,30 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     from .core.prismatic import corner_law
     from .core.revolute import journal_law
 
-    packed = pack(cfg, materials)
+    packed = pack(cfg, materials, seat=False)
     p, jp = packed.p, packed.jp
     preset = PRESETS[cfg.mechanism.preset]
     forces = ideal_joint_forces(0.0, initial_state(preset, cfg.mechanism.theta0,
                                                    cfg.mechanism.omega_rad_s), p, jp)
     fraction = cfg.contact.max_penetration_fraction
     out = []
+
+    def outcome(sink: float, stop: float) -> str:
+        if sink > stop:
+            if fraction is not None:
+                return (f"beyond contact.max_penetration_fraction ({fraction:g}) of the "
+                        "clearance; the run will stop on penetration_exceeded")
+            return (f"beyond its penetration stop ({stop:.3g} m); the run will stop on "
+                    "penetration_exceeded")
+        return ("deeper than its clearance: its contact law is used beyond the small contact "
+                "it describes (docs/physics.md 4.3); the run goes on")
+
     for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
         c = jp[j, L.J_C]
+        stop = jp[j, L.J_PEN_STOP]
+        limit = min(c, stop)
         if joint.type == "prismatic":
             # the reaction across the y walls and across the z walls, four corners each
             # the stop compares the deepest corner with the smaller clearance (jp[J_C])
@@ -392,13 +413,11 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
                 # sphere on a plane, as the kernel and :func:`seated_block` take it
                 sink = static_penetration(corner_load, c, jp[j, L.J_EW], jp[j, L.J_RI], c,
                                           corner_law(p))
-                if sink >= fraction * c:
+                if sink >= limit:
                     out.append(f"joints.{joint.name}.{key} ({c:g} m) is below joint "
                                f"{joint.name}'s Hertz sink: {sink:.3g} m at each of the four "
                                f"corners on its {'yz'[axis - 1]} walls under a static load of "
-                               f"{4.0 * corner_load:.3g} N, beyond contact.max_penetration_fraction "
-                               f"({fraction:g}) of the smaller clearance; the run will stop on "
-                               "penetration_exceeded")
+                               f"{4.0 * corner_load:.3g} N, {outcome(sink, stop)}")
                     break
             continue
         f = forces[j].copy()
@@ -410,12 +429,49 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
         if not (math.isfinite(size) and size > 0.0):
             continue
         sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        if sink >= fraction * c:
+        if sink >= limit:
             out.append(f"joints.{joint.name}.clearance ({c:g} m) is below joint {joint.name}'s "
-                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, beyond "
-                       f"contact.max_penetration_fraction ({fraction:g}) of the clearance; the "
-                       "run will stop on penetration_exceeded")
+                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, "
+                       f"{outcome(sink, stop)}")
     return out
+
+
+#: The deepest a corner of the guide's block may go, a fraction of its radius r_c: there
+#: Hertz's contact radius sqrt(r_c delta) is 0.32 r_c (:func:`penetration_stop`).
+CORNER_DEPTH_FRACTION = 0.1
+
+
+def penetration_stop(row: np.ndarray, kind: str, p: np.ndarray, fraction: float | None,
+                     load_bound: float) -> float:
+    """The penetration [m] beyond which joint ``row`` (its packed jp row, of joint type
+    ``kind``) stops its run on penetration_exceeded (docs/physics.md 4.3).
+
+    ``fraction`` given (``contact.max_penetration_fraction``): that fraction of the clearance
+    (at P, of the smaller of its two), the earlier rule. Otherwise the depth at which the
+    contact law leaves its validity: where the joint's own law, with its modulus, carries
+    ``load_bound`` [N] (``contact.load_bound``; at P on a single corner, the deepest a
+    corner can be sent), and, for a coated socket, no deeper than the coating's thickness
+    (the ball would have pressed through the layer whose law it is); at P no deeper than
+    :data:`CORNER_DEPTH_FRACTION` of the corner's radius. The unworn clearance is used: wear
+    softens the law, so a worn joint's stop is, if anything, early."""
+    from .core.prismatic import corner_law
+    from .core.revolute import journal_law
+
+    c = float(row[L.J_C])
+    if fraction is not None:
+        return fraction * c
+    rj, law = row[L.J_RJ], p[L.P_EXPONENT]
+    if kind == "prismatic":
+        rj, law = c, as_python(corner_law)(p)
+    elif kind == "revolute":
+        law = as_python(journal_law)(p)
+    depth = min(static_penetration(load_bound, c, row[L.J_EW], row[L.J_RI], rj, law, plain=True),
+                float(row[L.J_COAT]))
+    if kind == "prismatic":
+        # Hertz's sphere on a plane wants its contact radius sqrt(r_c delta) well inside the
+        # corner's radius r_c (jp[J_RI]): 0.32 r_c at a tenth of r_c
+        depth = min(depth, CORNER_DEPTH_FRACTION * float(row[L.J_RI]))
+    return depth
 
 
 def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
@@ -803,7 +859,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     contact = cfg.contact
     p[L.P_CR] = contact.restitution
     p[L.P_DV0_MIN] = contact.min_impact_velocity
-    p[L.P_PEN_FRAC] = contact.max_penetration_fraction
+    fraction = contact.max_penetration_fraction
+    p[L.P_PEN_FRAC] = 0.0 if fraction is None else fraction
     p[L.P_HYST_NUM], p[L.P_HYST_DEN] = as_python(hysteresis_fraction)(DAMPING_LAWS.index(contact.damping),
                                                            contact.restitution)
     p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
@@ -857,6 +914,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
         if isinstance(joint, PrismaticJointConfig):
             guide_row(jp[j], joint, preset)
+        if c > 0.0:
+            jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
+                                                   contact.load_bound)
     perturb = cfg.ensemble.perturb
     member = member_perturbation(cfg.ensemble) if perturb.any else None
     if member is not None:      # unperturbed: the nominal case, bit for bit
