@@ -123,6 +123,11 @@ class RevoluteJointConfig(_Section):
     #: None: the surface material's own coefficient
     wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
                                               "Archard wear coefficient of joint O's bearing")
+    #: the oil's dynamic viscosity in the bearing's film (Petroff's viscous shear, docs/physics.md
+    #: 3.6); 0 (the default): the paper's dry contact. An ISO VG 68 oil (68 mm2/s at 40 C,
+    #: ISO 3448, at 880 kg/m3) is 0.06 Pa s
+    lubricant_viscosity: float = _setting(Field(0.0, lo=0.0, hi=10.0), "Pa s",
+                                          "lubricant viscosity in joint O's bearing")
 
     @property
     def socket_radius(self) -> float:

@@ -436,6 +436,14 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     return out
 
 
+def film_coefficient(viscosity: float, radius: float, length: float, clearance: float) -> float:
+    """The bearing film's viscous coefficient [N s/m]: Petroff's shear of a film of thickness
+    c over the bearing's surface 2 pi R L, F = eta (2 pi R L / c) v (Petroff 1883; Hamrock,
+    Schmid & Jacobson, *Fundamentals of Fluid Film Lubrication*, 2nd ed. 2004, ch. 8), along
+    the journal's slip (docs/physics.md 3.6)."""
+    return viscosity * 2.0 * math.pi * radius * length / clearance
+
+
 #: The deepest a corner of the guide's block may go, a fraction of its radius r_c: there
 #: Hertz's contact radius sqrt(r_c delta) is 0.32 r_c (:func:`penetration_stop`).
 CORNER_DEPTH_FRACTION = 0.1
@@ -644,14 +652,26 @@ def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: i
     if p[L.P_FRICTION] == 0.0 or omega == 0.0:
         return u, size
     mu = jp[j, L.J_MU]
+    film = jp[j, L.J_FILM]
     if wmap is not None and revolute.worn_through(np.ascontiguousarray(wmap, dtype=np.float64), j,
                                                   tuple(float(v) for v in -u), float(jp[j, L.J_COAT])):
         mu = jp[j, L.J_MU_BASE]
-    mu_eff = mu * as_python(friction_factor)(jp[j, L.J_RJ] * abs(omega), p[L.P_V0], p[L.P_V1])
-    angle = -math.copysign(math.atan(mu_eff), omega)
+    slip = jp[j, L.J_RJ] * abs(omega)
+    mu_eff = mu * as_python(friction_factor)(slip, p[L.P_V0], p[L.P_V1])
+    drag = film * slip                  # the film's viscous shear [N] (section 3.6)
+    if drag == 0.0 or not drag < size:
+        # no film (or one whose drag alone exceeds the load: no seat balances it)
+        angle = -math.copysign(math.atan(mu_eff), omega)
+        normal = size / math.sqrt(1.0 + mu_eff * mu_eff)
+    else:
+        # |F|^2 = F_N^2 + (mu' F_N + drag)^2, the tangential force mu' F_N + drag
+        a = 1.0 + mu_eff * mu_eff
+        normal = (-mu_eff * drag + math.sqrt(mu_eff * mu_eff * drag * drag
+                                             - a * (drag * drag - size * size))) / a
+        angle = -math.copysign(math.atan2(mu_eff * normal + drag, normal), omega)
     cs, sn = math.cos(angle), math.sin(angle)
     turned = np.array([0.0, cs * u[1] - sn * u[2], sn * u[1] + cs * u[2]])
-    return turned, size / math.sqrt(1.0 + mu_eff * mu_eff)
+    return turned, normal
 
 
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
@@ -914,6 +934,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
         if isinstance(joint, PrismaticJointConfig):
             guide_row(jp[j], joint, preset)
+        if c > 0.0 and isinstance(joint, RevoluteJointConfig):
+            jp[j, L.J_FILM] = film_coefficient(joint.lubricant_viscosity, joint.bearing_radius,
+                                               joint.length, c)
         if c > 0.0:
             jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
                                                    contact.load_bound)

@@ -77,6 +77,7 @@ from .layout import (
     D_VT,
     D_WORN,
     J_CLEARANCE,
+    J_FILM,
     J_RI,
     J_RJ,
     N_D,
@@ -927,7 +928,8 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
     fn = dg[D_FN + j]
-    if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+    film = jp[j, J_FILM]
+    if p[P_FRICTION] != 0.0 and (mu > 0.0 or film > 0.0) and fn > 0.0:
         # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
         t1, t2 = tangent_basis(n)
         a = quad_form(wp, t1, t1)
@@ -936,7 +938,8 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
         inv_t = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b)
         vt = dg[D_VT + j]
         slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
-        rate = max(rate, mu * fn * slope * inv_t)
+        # Coulomb's ramp and the film's viscous shear (its rate: the coefficient over the mass)
+        rate = max(rate, (mu * fn * slope + film) * inv_t)
     return rate
 
 

@@ -79,7 +79,8 @@ J_CZ = 15           # clearance between the block's top / bottom and the guide's
 J_X0 = 16           # start of the walls' wear maps along the guide (x) [m]
 J_XSPAN = 17        # length of the walls' wear maps along the guide [m]
 J_PEN_STOP = 18     # penetration stop [m] (docs/physics.md 4.3)
-N_JP = 19
+J_FILM = 19         # lubricant film's viscous coefficient [N s/m] along the slip (O: Petroff); else 0
+N_JP = 20
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
