@@ -30,7 +30,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
 
     Two bounds: the crank may turn at most MAX_ROTATION_PER_STEP_RAD per step, and the
     deepest sub-step h / 2^k_max must resolve the elastic contact rate at the largest
-    penetration the run accepts (contact.max_penetration_fraction * c), with the lightest
+    penetration the run accepts (its stop, jp[J_PEN_STOP]: docs/physics.md 4.3), with the lightest
     mass a contact can meet (rod, slider, or the rod's end-point rotational mass; where O has
     clearance the crank is free in its bearing's plane, and that mass in series with the
     crank's; at P, the block's mass at a corner, its rotation included), each joint with its
@@ -54,7 +54,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
         jp = packed.jp[j]
         if jp[L.J_CLEARANCE] == 0.0:
             continue
-        delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
+        delta = jp[L.J_PEN_STOP]
         mass = m_ref
         rj = jp[L.J_RJ]
         if j == INDEX["P"]:

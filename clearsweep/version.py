@@ -33,8 +33,9 @@ __version__ = _version()
 
 
 #: The revision of the results: raised whenever a config gives other results than before
-#: (here: joint P's block meets its walls along its faces' edge lines, an elastic
-#: foundation, and wears them over the faces' tracks, issue 41 item 5; before it, Hertz's
+#: (here: the seated balls of A and B balance their friction, and joint P's block meets
+#: its walls along its faces' edge lines and wears them over the faces' tracks, issue 41;
+#: before it, Hertz's
 #: modulus E* in the power law at O, P and under ``contact.elastic: hertz``). It is part
 #: of every run's identity (``params.run_identity``): a sweep's parts and a life checkpoint
 #: written before are another run's, refused by --resume with the difference named, not

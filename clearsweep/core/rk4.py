@@ -50,6 +50,7 @@ from .layout import (
     J_CY,
     J_CZ,
     J_LENGTH,
+    J_PEN_STOP,
     J_RI,
     J_RJ,
     M_ACC_PEAK,
@@ -85,7 +86,6 @@ from .layout import (
     P_MAX_LEVEL,
     P_OMEGA,
     P_ONSET,
-    P_PEN_FRAC,
     P_SECTION_PHASE,
     P_SETTLE,
     P_SLIP,
@@ -837,7 +837,7 @@ def step_checks(y, dg, p, jp, status, e0, track):
     if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
         status = ST_EULER
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
+        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > jp[j, J_PEN_STOP]:
             status = ST_PENETRATION
     track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
     track[T_WORK_MAX] = max(track[T_WORK_MAX], abs(y[Y_WORK]))
