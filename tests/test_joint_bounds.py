@@ -164,12 +164,14 @@ def test_an_excessive_penetration_still_stops(thickness_m, load_bound_N):
 def test_the_penetration_stop_is_the_laws_depth_at_the_load_bound():
     """params.penetration_stop: the depth at which the joint's own law carries
     contact.load_bound (uncoated B: the paper's law; O: the journal's), no deeper than a
-    coating's thickness, and at P than a tenth of the corner's radius;
+    coating's thickness (P: one edge line's law, touching at its end corner only, and no
+    deeper than a tenth of the edges' radius);
     contact.max_penetration_fraction given, that fraction of the clearance, as before."""
     from clearsweep.config import load_config, resolve_materials
     from clearsweep.core import layout as L
     from clearsweep.core.contact import elastic_force
     from clearsweep.core.joints import INDEX
+    from clearsweep.core.prismatic import line_load, line_stiffness
     from clearsweep.params import pack
 
     cfg = load_config(ONE, ["joints.O.clearance=1e-4", "joints.P.clearance_y=1e-4",
@@ -181,10 +183,18 @@ def test_the_penetration_stop_is_the_laws_depth_at_the_load_bound():
         force = elastic_force(row[L.J_PEN_STOP], row[L.J_C], row[L.J_EW], row[L.J_RI],
                               row[L.J_RJ], law)[0]
         assert force == pytest.approx(5e4, rel=1e-9)
-    row = packed.jp[INDEX["P"]]                    # a tenth of the 1 mm corner's radius
+    # P: one edge line touching at its end corner only carries the bound at the stop (the
+    # softer wall's lines), and the stop is inside a tenth of the 1 mm edges' radius
+    row = packed.jp[INDEX["P"]]
+    one = np.ascontiguousarray(row[None, :])
+    kl = min(line_stiffness(one, 0, wall, row[L.J_EW]) for wall in (0, 2))
+    fa, fb, _ = line_load(row[L.J_PEN_STOP], 0.0, kl, row[L.J_LENGTH])
+    assert fa + fb == pytest.approx(5e4, rel=1e-12)
+    assert row[L.J_PEN_STOP] < 0.1 * row[L.J_RI]
+    heavy = load_config(ONE, ["joints.P.clearance_y=1e-4", "joints.P.clearance_z=1e-4",
+                              "contact.load_bound=1e7"])
+    row = pack(heavy, resolve_materials(heavy), seat=False).jp[INDEX["P"]]
     assert row[L.J_PEN_STOP] == pytest.approx(0.1 * row[L.J_RI], rel=1e-15)
-    assert elastic_force(row[L.J_PEN_STOP], row[L.J_C], row[L.J_EW], row[L.J_RI], row[L.J_C],
-                         1.5)[0] < 5e4
     coated = load_config(ONE, ["joints.B.coating=PTFE", "joints.B.coating_thickness=1e-6"])
     assert pack(coated, resolve_materials(coated), seat=False).jp[INDEX["B"], L.J_PEN_STOP] == 1e-6
     old = load_config(ONE, ["contact.max_penetration_fraction=0.5"])

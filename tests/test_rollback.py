@@ -96,10 +96,11 @@ def test_a_step_without_sub_steps_keeps_the_state_k1_and_diagnostics_alone():
 
 @pytest.mark.slow
 def test_a_split_step_keeps_the_accepted_state_once():
-    """The paper preset splits every step (up to 2^3 sub-steps): each step keeps what an
-    accepted sub-step changes once, at its first acceptance, not once per sub-step."""
+    """The paper preset splits every step (into two sub-steps or more from the seated
+    start): each step keeps what an accepted sub-step changes once, at its first
+    acceptance, not once per sub-step."""
     got = kept_values("paper_case.yaml", ["solver.duration=0.0005"])
-    assert got["status"] == "ok" and got["deepest"] > 0 and got["substeps"] > 2 * got["steps"]
+    assert got["status"] == "ok" and got["deepest"] > 0 and got["substeps"] >= 2 * got["steps"]
     steps = got["steps"]
     copied = got["copied"]
     assert copied["msave"] == steps * L.N_WINDOWS * L.N_M
