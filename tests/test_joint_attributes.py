@@ -41,9 +41,10 @@ def test_every_joint_has_its_attributes_and_they_are_the_packed_values():
     assert ds.attrs["joint_P_clearance_m"] == 1.0e-4        # P's smaller clearance
     assert ds.attrs["joint_B_coating"] == ds.attrs["joint_B_surface_material"] == "PTFE"
     assert ds.attrs["joint_O_surface_material"] == BASE_MATERIAL
-    # O's journal and P's corners take Hertz's law; A and B the paper's layered law
+    # O's journal takes Hertz's law, P's faces an elastic foundation with Hertz's E*
+    # (docs/physics.md 3.7); A and B the paper's layered law
     assert ds.attrs["joint_O_contact"].startswith("Hertz")
-    assert ds.attrs["joint_P_contact"].startswith("Hertz")
+    assert ds.attrs["joint_P_contact"].startswith("elastic foundation")
     assert ds.attrs["joint_A_contact"].startswith("layered")
     # the kernel's values differ between the joints: not one value copied four times
     assert ds.attrs["joint_O_modulus_Pa"] != ds.attrs["joint_A_modulus_Pa"]

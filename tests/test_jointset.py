@@ -72,7 +72,7 @@ def test_the_device_launch_refuses_a_case_outside_its_build():
     from clearsweep.core import device
 
     with pytest.raises(ValueError, match="clearance at O cannot run on the kernel built for A,B"):
-        device.launch({}, jointset.named("A", "B"), [jointset.named("O")])
+        device.launch({}, "aos", jointset.named("A", "B"), [jointset.named("O")])
 
 
 @pytest.mark.parametrize("overrides, build", [(SETS[2][0], ("A", "B")), (SETS[0][0], None)],

@@ -3,10 +3,11 @@
 A joint set is a bitmask over the rows of ``joints.JOINTS`` (bit j: joint j). The
 integrators take it as their last argument and hand it down to every function that tests a
 joint for clearance (``dynamics.evaluate``, ``rk4.advance``, ``rk4.accept_substep``,
-``rk4.record_sample``, ``dopri5.advance_dopri5``, ...); the CPU entry points make it a
-compile-time constant (``numba.literally``: Numba compiles, and caches on disk, one build
-per set, the set in the cached signature), the CUDA kernel closes over it
-(``device.kernel``). :func:`has_clearance` reads the bit before the case's packed flag
+``rk4.record_sample``, ``dopri5.advance_dopri5``, ...). The CPU entry points take it as a
+compile-time constant (a :class:`Build` from ``simulation.run_kernel``, or an int made a
+literal by ``numba.literally``): Numba compiles, and caches on disk, one build per set, the
+set in the cached signature. The CUDA kernels close over it (``device.soa_kernel``,
+``device.aos_kernel``). :func:`has_clearance` reads the bit before the case's packed flag
 (``jp[j, J_CLEARANCE]``): where the bit is clear the test is a constant False, and LLVM
 folds the joint's contact, its free coordinates and its wear away.
 
