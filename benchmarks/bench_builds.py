@@ -18,8 +18,8 @@ import time
 
 #: case -> (overrides, the builds to time it on, as joint names; "all": the generic build)
 CASES = {
-    "ideal": ((), ("none", "A,B", "all")),
-    "one clearance (B)": (("joints.B.clearance=2.5e-4",), ("B", "A,B", "all")),
+    "ideal": ((), ("none", "O,P", "A,B", "all")),
+    "one clearance (B)": (("joints.B.clearance=2.5e-4",), ("B", "B,O,P", "A,B", "all")),
     "two clearances (A, B)": (("joints.A.clearance=2.5e-4", "joints.B.clearance=2.5e-4"),
                               ("A,B", "all")),
     "A, B and O": (("joints.A.clearance=2.5e-4", "joints.B.clearance=2.5e-4",

@@ -8,9 +8,10 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos] [--capacity N]``
-prints them, keeping the PTX text in
-PTX_FILE if given (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos] [--capacity N]
+[--joints A,B]`` prints them for the kernel built for a joint set (``core.jointset``; default
+every joint, the generic build), keeping the PTX text in PTX_FILE if given
+(tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
 """
 
 from __future__ import annotations
@@ -74,12 +75,13 @@ DEFAULT_CAPACITY = 16384
 
 
 def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
-                          capacity: int = DEFAULT_CAPACITY) -> str:
-    """PTX of the batch kernel of ``layout`` for compute capability cc: "soa",
-    ``core.device.soa_kernel(capacity)`` (the default), or "aos", ``core.device.run_cases``
-    (the arrays of either have the same dimensions). Needs numba-cuda with NVVM (``pip
-    install numba-cuda[cu12]``), no device. About a minute on one core: the whole kernel is
-    compiled, every device function inlined."""
+                          capacity: int = DEFAULT_CAPACITY, spec: int | None = None) -> str:
+    """PTX of the batch kernel of ``layout`` built for the joint set ``spec``
+    (``core.jointset``; None: every joint, the generic build) for compute capability cc:
+    "soa", ``core.device.soa_kernel(capacity, spec)`` (the default), or "aos",
+    ``core.device.aos_kernel(spec)`` (the arrays of either have the same dimensions). Needs
+    numba-cuda with NVVM (``pip install numba-cuda[cu12]``), no device. About a minute on
+    one core: the whole kernel is compiled, every device function inlined."""
     from numba import cuda
 
     from .core import device
@@ -88,7 +90,10 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
         raise RuntimeError("NUMBA_ENABLE_CUDASIM is set: the simulator compiles no PTX")
     if layout not in device.LAYOUTS:
         raise ValueError(f"layout {layout!r}: expected one of {device.LAYOUTS}")
-    kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
+    from .core.jointset import ALL
+
+    spec = ALL if spec is None else spec
+    kernel = device.aos_kernel(spec) if layout == "aos" else device.soa_kernel(capacity, spec)
     with _device_of_capability(cc):
         ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(), cc=cc)
     return ptx
