@@ -827,11 +827,11 @@ def joint_set(cfg: Config) -> int:
 
 #: The joints on which the CPU's kernel builds are specialised (``core.jointset``: a build
 #: per set of them, compiled and cached once each); a build always holds the others, tested
-#: at run time. The spherical joints A and B: folding them away is what gains on the CPU
-#: (the ideal case 1.18x the generic build, folding O and P alone 1.03x at most), while each
-#: build costs a cold compile of about 45 CPU seconds (the mixed-clearance study's 16 sets
-#: would compile 16 builds for a run of 40 s: benchmarks/README.md, "Builds per joint
-#: set"). Four builds at most.
+#: at run time. Each build costs a cold compile of about 45 CPU seconds: the mixed-clearance
+#: study's 16 sets would compile 16 builds for a run of 40 s. Specialised on the spherical
+#: joints A and B, four builds at most, the ideal case runs 1.12x the generic build; per full
+#: set it would run 1.18x, one clearance 1.05x against 1.01x (benchmarks/README.md, "Builds
+#: per joint set").
 SPECIALISED_JOINTS = jointset.named("A", "B")
 
 #: The device's: every joint. Folding O and P away halves the CUDA kernel's spill stores
