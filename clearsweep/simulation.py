@@ -126,12 +126,12 @@ def kernel_needs_compiling(method: str = "rk4", build: int | None = None) -> boo
     kernel = _kernel(method)
     if _compiled_for(kernel, build):
         return False
-    cache = getattr(kernel, "_cache", None)
-    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
+    index = getattr(cache_file, "_index_path", None)
     if not (index and os.path.exists(index)):
         return True
     try:
-        cached = cache._cache_file._load_index()
+        cached = cache_file._load_index()
     except Exception:  # noqa: BLE001 - an unreadable index: Numba compiles again
         return True
     return not any(getattr(key[0][-1], "literal_value", None) == build for key in cached)
