@@ -128,7 +128,7 @@ def kernel_needs_compiling(method: str = "rk4", build: int | None = None) -> boo
         return False
     cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
     index = getattr(cache_file, "_index_path", None)
-    if not (index and os.path.exists(index)):
+    if cache_file is None or not (index and os.path.exists(index)):
         return True
     try:
         cached = cache_file._load_index()
