@@ -263,7 +263,9 @@ def test_a_sampling_sweep_is_drawn_against_its_inputs(sensitivity_example, metri
     assert not [line for ax in fig.axes for line in ax.get_lines() if len(line.get_xdata()) > 2]
     assert [ax.get_xlabel().split(" [")[0] for ax in fig.axes] == \
         ["B_clearance", "B_coating_thickness", "restitution", "speed_rpm"]
-    assert fig.axes[0].get_xlabel() == "B_clearance [\u00b5m]"
+    # each quantity in its one unit (issue 45 item 6): a clearance in mm, a coating in um
+    assert [ax.get_xlabel() for ax in fig.axes[:2]] == ["B_clearance [mm]",
+                                                        "B_coating_thickness [\u00b5m]"]
 
 
 def test_the_reliability_bands_are_hatched_and_in_the_legend(reliability_example):

@@ -430,4 +430,4 @@ def test_a_zip_group_case_chosen_by_its_label_is_titled_with_the_values_it_ran(s
     title = " ".join(figure(ds, "wear-map", ["clearance_joints=AB", "coating_joints=B"])
                      .get_suptitle().split())
     assert "coating_joints=B (A_coating none, B_coating PTFE)" in title
-    assert "clearance_joints=AB (A_clearance 0.00025 m, B_clearance 0.00025 m)" in title
+    assert "clearance_joints=AB (A_clearance 0.25 mm, B_clearance 0.25 mm)" in title

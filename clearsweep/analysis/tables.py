@@ -116,12 +116,13 @@ def guide_track_depths(ds: xr.Dataset) -> dict[str, xr.DataArray]:
     """The largest track depth [m] on each wall of every prismatic joint of ``ds`` (the
     largest bin of the wall's band of ``wear_map``), by its column name
     (:data:`TRACK_DEPTH_COLUMNS`), NaN for the other joints; {} where ``ds`` has no wear map
-    (a summary-only sweep) or no prismatic joint."""
+    (a summary-only sweep) or no prismatic joint with a clearance."""
     if "wear_map" not in ds or "joint" not in ds["wear_map"].dims:
         return {}
     wmap = ds["wear_map"]
-    guide = xr.DataArray([JOINT_TYPES.get(value_text(j)) == "prismatic" for j in wmap["joint"].values],
-                         dims="joint", coords={"joint": wmap["joint"]})
+    ideal = ideal_joints(ds)
+    guide = xr.DataArray([JOINT_TYPES.get(value_text(j)) == "prismatic" and value_text(j) not in ideal
+                          for j in wmap["joint"].values], dims="joint", coords={"joint": wmap["joint"]})
     if not bool(guide.any()) or wmap.sizes["polar"] < len(GUIDE_WALLS):
         return {}
     band = wmap.sizes["polar"] // len(GUIDE_WALLS)

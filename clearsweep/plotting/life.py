@@ -15,6 +15,7 @@ from .common import (
     _note_span,
     _require,
     axis_label,
+    joint_name,
     log_ticks,
     run_config,
     scaled,
@@ -53,7 +54,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
             for joint in var["joint"].values:
                 values = var.sel(joint=joint).values / factor
                 if np.isfinite(values).any():
-                    ax.plot(cycles, values, marker=".", label=f"joint {value_text(joint)}")
+                    ax.plot(cycles, values, marker=".", label=joint_name(value_text(joint)))
         else:
             ax.plot(cycles, var.values / factor, marker=".")
         limit = _life_limit(config, limits.get(name))
@@ -89,7 +90,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         mesh = ax.pcolormesh(azimuth, polar, maps.isel(snapshot=s).values, cmap="viridis", norm=norm,
                              shading="flat")
         ax.set_ylim(180.0, 0.0)
-        ax.set_title(f"joint {joint}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
+        ax.set_title(f"{joint_name(joint)}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
         ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
         ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
     if mesh is not None:
@@ -109,10 +110,10 @@ def snapshot_note(cycles: np.ndarray, picks: np.ndarray, joint: str) -> str:
     """
     n = len(cycles)
     if len(picks) == n:
-        return f"wear maps of joint {joint}: all {n} stored snapshots"
+        return f"wear maps of {joint_name(joint)}: all {n} stored snapshots"
     left = [float(c) for i, c in enumerate(cycles) if i not in set(picks.tolist())]
     listed = ", ".join(f"{c:.3g}" for c in left[:4]) + (", ..." if len(left) > 4 else "")
-    return (f"wear maps of joint {joint}: {len(picks)} of the {n} stored snapshots "
+    return (f"wear maps of {joint_name(joint)}: {len(picks)} of the {n} stored snapshots "
             f"(not drawn: {listed} revolutions)")
 
 

@@ -243,8 +243,9 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     guides = [j for j in named if JOINT_TYPES.get(value_text(j)) == "prismatic"]
     named = [j for j in named if j not in guides]
     joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
-    scales = [f"joint {value_text(j)}: no wear" for j in named if j not in joints]
-    scales += [f"guide {value_text(j)}: not applicable (flat walls, see wear-map)" for j in guides]
+    scales = [f"{joint_name(value_text(j))}: no wear" for j in named if j not in joints]
+    scales += [f"{joint_name(value_text(j))}: not applicable (flat walls, see wear-map)"
+               for j in guides]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):
@@ -252,8 +253,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
         factor, unit = display_scale([peak], "m")
         # a no-break space keeps the value and its unit on one line of the wrapped title
-        scales.append(f"joint {value_text(joint)}: {peak / factor:.3g}\u00a0{unit}" if scale else
-                      f"joint {value_text(joint)}: no wear")
+        scales.append(f"{joint_name(value_text(joint))}: {peak / factor:.3g}\u00a0{unit}" if scale
+                      else f"{joint_name(value_text(joint))}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
                                  projection="polar")
@@ -268,7 +269,7 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_rlim(  # type: ignore[attr-defined]
                 0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
             ax.set_yticks([])
-            ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
+            ax.set_title(f"{joint_name(value_text(joint))}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
     if fig.axes:
         handles, labels = fig.axes[0].get_legend_handles_labels()
