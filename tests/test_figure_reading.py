@@ -491,7 +491,7 @@ def test_a_clearance_is_written_in_mm_in_legends_titles_and_axes(sweep_ds):
     "B_clearance=0.0001" in a legend, "B_clearance=0.00025 m" in a --select title, "[m]" on
     a line's axis, "[um]" on a heat map's and "100 um" in the orbit's legend."""
     slider = figure(sweep_ds, "slider")
-    legend = [t.get_text() for t in slider.axes[0].get_legend().get_texts()]
+    legend = [t.get_text() for t in slider.legends[0].get_texts()]
     assert "B_coating=none, B_clearance=0.1 mm" in legend
     title = " ".join(figure(sweep_ds, "slider", ["B_clearance=2.5e-4"]).get_suptitle().split())
     assert "selection: B_clearance=0.25 mm" in title

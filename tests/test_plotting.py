@@ -81,7 +81,7 @@ def test_every_kind_renders_from_a_sweep(tmp_path, sweep_ds, kind):
 
 def test_slider_overlays_cases_with_coordinate_legends(tmp_path, sweep_ds):
     fig = plot(sweep_ds, "slider", tmp_path / "s.png", x="time", dpi=TEST_DPI)
-    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert legend == ["B_coating=none, B_clearance=0.1 mm", "B_coating=none, B_clearance=0.25 mm",
                       "B_coating=PTFE, B_clearance=0.1 mm", "B_coating=PTFE, B_clearance=0.25 mm"]
     assert fig.axes[-1].get_xlabel() == "time [s]"
@@ -264,7 +264,7 @@ def test_many_overlaid_cases_get_a_note_instead_of_a_legend(tmp_path, case):
         assert not any(e.startswith("rep=") for e in entries), (kind, entries)
         assert "13 cases overlaid" in fig.get_suptitle() and "--select" in fig.get_suptitle()
     few = plot(many.isel(rep=slice(0, 3)), "slider", tmp_path / "few.png", dpi=TEST_DPI)
-    assert len(few.axes[0].get_legend().get_texts()) == 3 and "overlaid" not in few.get_suptitle()
+    assert len(few.legends[0].get_texts()) == 3 and "overlaid" not in few.get_suptitle()
 
 
 def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):

@@ -378,8 +378,13 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
 
 
 def _legend(ax, cases) -> None:
+    """The overlaid cases' legend (the lines of ``ax``), below the panels: inside a panel of
+    time series it covered lines wherever it went (tests/test_figure_layout.py,
+    ``legends_over_data``)."""
     if 1 < len(cases) <= MAX_LEGEND_ENTRIES:
-        ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
+        handles, labels = ax.get_legend_handles_labels()
+        ax.figure.legend(handles, labels, loc="outside lower center", fontsize="x-small",
+                         ncol=min(len(labels), 2 if max(map(len, labels)) > 40 else 3))
 
 
 def figure_legend(fig) -> None:

@@ -69,7 +69,9 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         if cycles.size and np.nanmin(cycles) > 0:
             log_ticks(ax.xaxis, float(np.nanmin(cycles)), float(np.nanmax(cycles)))
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name), unit))
+        # wrapped: a long label ran past its panel's top into the figure's title
+        ax.set_ylabel(wrapped_label(axis_label(var, var.attrs.get("long_name", name), unit),
+                                    AXIS_LABEL_CHARACTERS))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="x-small")
     snaps = ds["wear_map_snapshot"]

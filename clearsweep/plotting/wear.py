@@ -25,6 +25,7 @@ from .common import (
     _require,
     axis_label,
     display_scale,
+    figure_legend,
     joint_name,
     run_config,
     scaled,
@@ -271,10 +272,9 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_yticks([])
             ax.set_title(f"{joint_name(value_text(joint))}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
-    if fig.axes:
-        handles, labels = fig.axes[0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
-                   fontsize="small")
+    # one legend below the panels, in two columns where an entry is long (three of a sweep's
+    # long case labels ran off the figure's sides)
+    figure_legend(fig)
     fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
                  f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})"
                  + _legend_note(len(cases)), fontsize="medium")
