@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from matplotlib.figure import Figure
 from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
 from test_ensemble import synthetic_ensemble
-from test_figure_layout import layout_problems, life_ds  # noqa: F401  (pytest fixture)
+from test_figure_layout import layout_problems, legends_over_data, life_ds  # noqa: F401  (pytest fixture)
 
 from clearsweep.ensemble import ensemble_statistics
 from clearsweep.plotting import (
@@ -457,11 +457,14 @@ def test_the_figures_call_o_the_bearing_and_p_the_guide(three_joints, kind):
     at O"; the orbit figure alone said "bearing O" and "guide P"."""
     import re
 
-    texts = " ".join(" ".join(t.split()) for t in _figure_texts(figure(three_joints, kind)))
+    fig = figure(three_joints, kind)
+    texts = " ".join(" ".join(t.split()) for t in _figure_texts(fig))
     assert not re.search(r"\bjoints? [OP]\b|\bat O\b", texts), texts
     assert "bearing O" in texts
     assert "guide P" in texts or kind == "poincare"     # the block has no section offset
     assert "joint B" in texts
+    # the bearing's, the socket's and the guide's panels together, texts apart
+    assert layout_problems(fig) == [] and legends_over_data(fig) == []
 
 
 def test_an_orbit_at_a_fixed_point_draws_as_one_point(case):

@@ -1539,12 +1539,12 @@ SELECT_UNITS = [
      "'0.25furlong'\", no word of units)",
      lambda t, f: ["plot", f / "clr.nc", "--kind", "sweep", "--select", "B_clearance=0.25furlong",
                    "-o", t / "out.png"], 2,
-     "unknown unit 'furlong' in --select B_clearance=0.25furlong (its values are in m: give a "
+     "unknown unit 'furlong' in B_clearance=0.25furlong (its values are in m: give a "
      "number in m, or one of m, mm, um"),
     ("report --reference a clearance in seconds (was: \"unknown value for B_clearance "
      "'0.1 s'\")",
      lambda t, f: ["report", f / "clr.nc", "--reference", "B_clearance=0.1 s"], 2,
-     "unknown unit 's' in --select B_clearance=0.1 s"),
+     "unknown unit 's' in B_clearance=0.1 s"),
     ("plot --select a clearance given in mm that is not swept (was: the values in m only)",
      lambda t, f: ["plot", f / "clr.nc", "--kind", "slider", "--select", "B_clearance=0.2mm",
                    "-o", t / "out.png"], 2,

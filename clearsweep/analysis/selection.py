@@ -159,7 +159,7 @@ def _number_in_units(coord: xr.DataArray, name: str, text: str) -> float | None:
     if unit not in accepted:
         offer = (f"its values are in {units}: give a number in {units}, or one of "
                  f"{', '.join(accepted)}" if accepted else "its values have no unit: give a number")
-        raise SelectionError(f"unknown unit {unit!r} in --select {name}={text} ({offer})",
+        raise SelectionError(f"unknown unit {unit!r} in {name}={text} ({offer})",
                              name=name, value=text, choices=list(accepted))
     return number * accepted[unit]
 

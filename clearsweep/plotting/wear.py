@@ -135,7 +135,7 @@ def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: s
             x_edges = 1e3 * (x0 + span * np.arange(ncol + 1) / ncol)
             a_edges = 1e3 * half * (2.0 * np.arange(band + 1) / band - 1.0)
             xlabel = "position along the guide x [mm]"
-            across = "across, z - z_s [mm]" if w < 2 else "across, y [mm]"
+            across = "z - z_s [mm]" if w < 2 else "y [mm]"
         else:
             x_edges = np.arange(ncol + 1.0)
             a_edges = np.arange(band + 1.0)
@@ -175,7 +175,11 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     label = axis_label(wear, "wear depth", unit)
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.0)
-    grid = fig.add_gridspec(max(len(joints), 1), 2)
+    # the guide's row holds four strips: twice a socket's height, the figure taller for it
+    heights = [2.0 if JOINT_TYPES.get(value_text(j)) == "prismatic" else 1.0 for j in joints]
+    if len(joints) > 1 and max(heights, default=1.0) > 1.0:
+        fig.set_size_inches(fig.get_figwidth(), fig.get_figheight() * sum(heights) / len(heights))
+    grid = fig.add_gridspec(max(len(joints), 1), 2, height_ratios=heights or None)
     for j, joint in enumerate(joints):
         depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
