@@ -23,7 +23,7 @@ from clearsweep.cli import main
 from clearsweep.core.prismatic import WALLS
 from clearsweep.plotting import figure
 from clearsweep.plotting.common import scaled
-from clearsweep.plotting.wear import guide_extent
+from clearsweep.plotting.common import guide_extent
 
 #: A clearance at the guide P alone (0.2 mm across y, 0.1 mm across z): one revolution at
 #: 600 r/min on a 16 x 24 map (4 rows a wall).
@@ -96,3 +96,29 @@ def test_the_report_gives_the_track_depth_of_each_guide_wall_in_its_own_column(g
     (row,) = [line for line in table if line.startswith("P ")]
     printed = [float(v) for v in row.split()[1:]]
     np.testing.assert_allclose(printed, [1e9 * expected[w] for w in WALLS], rtol=5e-4)
+
+
+def test_a_life_figure_of_the_guide_draws_its_snapshots_as_wall_strips():
+    """A life run with a clearance at the guide alone: its snapshot panels drew P's map
+    against "polar" and "azimuth" angles, a socket's axes; they now draw its four walls'
+    bands, labelled, along the guide in mm."""
+    from test_figure_layout import CONFIG, TINY_LIFE, layout_problems
+
+    from clearsweep.config import load_config
+    from clearsweep.service_life import life
+
+    ds = life(load_config(CONFIG, [*TINY_LIFE, "joints.B.clearance=0", "joints.P.clearance_y=1e-4",
+                                   "joints.P.clearance_z=1e-4", "life.max_blocks=2"]))
+    fig = figure(ds, "life")
+    assert "wear maps of guide P" in fig.get_suptitle()
+    panels = [ax for ax in fig.axes if ax.collections and ax.get_title().startswith("guide P")]
+    assert panels
+    factor, _ = scaled(ds["wear_map_snapshot"])
+    for ax, k in zip(panels, range(ds.sizes["snapshot"])):
+        (mesh,) = ax.collections
+        snapshot = ds["wear_map_snapshot"].sel(joint="P").isel(snapshot=k).values
+        np.testing.assert_allclose(np.asarray(mesh.get_array()).reshape(snapshot.shape),
+                                   snapshot / factor, rtol=1e-12)
+        assert [t.get_text() for t in ax.get_yticklabels()] == [f"{w} wall" for w in WALLS]
+        assert ax.get_xlabel() == "along the guide x [mm]"
+    assert layout_problems(fig) == []

@@ -118,6 +118,27 @@ def run_config(ds: xr.Dataset) -> dict:
     return file_config(ds)
 
 
+def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
+    """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
+    the run's config (``params.guide_row``: the walls' bins along the guide and across each
+    wall); None where the file's config cannot be read."""
+    from ..config import ConfigError, load_config
+    from ..core import layout as L
+    from ..params import PRESETS, guide_row
+
+    base = run_config(ds)
+    if not base:
+        return None
+    try:
+        cfg = load_config(base)
+    except (ConfigError, TypeError, ValueError):
+        return None
+    row = np.zeros(L.N_JP)
+    guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
+    return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
+            0.5 * row[L.J_WIDTH] + row[L.J_CY])
+
+
 def clearance_text(ds: xr.Dataset) -> str:
     """``"clearance at A, B"``: the joints with a clearance in every case of ``ds`` (a swept
     or selected clearance as the case ran, else its config's); ``"no clearance (ideal

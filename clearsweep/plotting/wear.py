@@ -26,8 +26,8 @@ from .common import (
     axis_label,
     display_scale,
     figure_legend,
+    guide_extent,
     joint_name,
-    run_config,
     scaled,
 )
 
@@ -89,27 +89,6 @@ def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
     polar_ax.set_yticks([])
     polar_ax.set_title(f"{joint_name(joint)}: cross-section (y right, z up), worn profile "
                        f"exaggerated", fontsize="small", pad=12)
-
-
-def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
-    """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
-    the run's config (``params.guide_row``: the walls' bins along the guide and across each
-    wall); None where the file's config cannot be read."""
-    from ..config import ConfigError, load_config
-    from ..core import layout as L
-    from ..params import PRESETS, guide_row
-
-    base = run_config(ds)
-    if not base:
-        return None
-    try:
-        cfg = load_config(base)
-    except (ConfigError, TypeError, ValueError):
-        return None
-    row = np.zeros(L.N_JP)
-    guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
-    return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
-            0.5 * row[L.J_WIDTH] + row[L.J_CY])
 
 
 def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: str, label: str,
