@@ -22,8 +22,7 @@ from click.testing import CliRunner
 from clearsweep.cli import main
 from clearsweep.core.prismatic import WALLS
 from clearsweep.plotting import figure
-from clearsweep.plotting.common import scaled
-from clearsweep.plotting.common import guide_extent
+from clearsweep.plotting.common import guide_extent, scaled
 
 #: A clearance at the guide P alone (0.2 mm across y, 0.1 mm across z): one revolution at
 #: 600 r/min on a 16 x 24 map (4 rows a wall).

@@ -216,7 +216,7 @@ def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
         offset = ds["poincare_offset"].sel(joint=joint)
         axis = offset_component(offset)
         values = offset.sel(axis=axis).transpose(dim, "revolution").values
-        centre = {"revolute": "journal", "prismatic": "block"}.get(JOINT_TYPES.get(str(joint)), "ball")
+        centre = {"revolute": "journal", "prismatic": "block"}.get(str(JOINT_TYPES.get(str(joint))), "ball")
         panels.append((f"{joint_name(str(joint))}: {centre}-centre offset {axis} (socket frame)",
                        f"offset {axis} / clearance [{DIMENSIONLESS}]", samples(values)))
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]

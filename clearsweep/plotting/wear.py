@@ -104,7 +104,7 @@ def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: s
     ncol = depth.sizes["azimuth"]
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
     strips = spec.subgridspec(len(WALLS), 1)
-    axes = []
+    axes: list = []
     mesh = None
     for w, wall in enumerate(WALLS):
         ax = fig.add_subplot(strips[w, 0], sharex=axes[0] if axes else None)
