@@ -93,6 +93,8 @@ def quantity_text(coord: xr.DataArray, value) -> str:
     '0.25 mm'
     """
     factor, unit = quantity_unit(coord)
+    if isinstance(value, np.ndarray) and value.ndim == 0:     # a scalar coordinate's values
+        value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
         return value_text(value)
     number = value_text(float(value) / factor) if factor != 1.0 else value_text(value)
