@@ -851,7 +851,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Draw only the sweep cases with this coordinate value; DIM may be the "
-                   "dotted config key (repeatable).")
+                   "dotted config key, VALUE may carry a unit (B_clearance=0.25mm, "
+                   "speed_rpm=60rpm) (repeatable).")
 @click.option("--x", "x_axis", default=None, metavar="AXIS",
               help="Abscissa of time series: angle (crank angle [degree], the default) or "
                    "time [s]; of --kind bifurcation, the swept key, by its dimension or its "
