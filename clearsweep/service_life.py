@@ -32,14 +32,15 @@ if TYPE_CHECKING:
 
 from .budget import (
     MAX_OUTPUT_BYTES,
-    SECONDS_PER_STEP,
     Estimate,
     check_budget,
     duration_text,
     estimate,
     format_bytes,
     memory_limit,
-    time_text,
+    plan_costs,
+    life_seconds,
+    steps_text,
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
@@ -283,9 +284,13 @@ def life_time_text(cfg: Config, steps_per_block: int) -> str:
     40 s: 101 blocks to the wear limit (...)"``."""
     steps = cfg.life.max_blocks * steps_per_block
     forecast = forecast_blocks(cfg)
-    expected = forecast.blocks * steps_per_block * SECONDS_PER_STEP
-    return (f"at most {steps:.3g} RK4 steps, at most {time_text(steps)}; expected about "
-            f"{duration_text(expected)}: {forecast.describe(cfg)}")
+    start = plan_costs().run_start_s
+    bound = start + life_seconds(cfg, cfg.life.max_blocks, steps_per_block)
+    expected = start + life_seconds(cfg, forecast.blocks, steps_per_block)
+    return (f"at most {steps:.3g} RK4 steps, at most about {duration_text(bound)} on one core "
+            f"({steps_text([cfg])} and {plan_costs().block_s:.2g} s per block's jump; "
+            f"benchmarks/calibrate_plan.py); expected about {duration_text(expected)}: "
+            f"{forecast.describe(cfg)}")
 
 
 def life_block(cfg: Config, *, allow_large: bool = False,
