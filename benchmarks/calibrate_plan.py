@@ -105,7 +105,15 @@ def measure_steps(repeats: int, parts: Path) -> dict:
         priced = ideal + sum(shares[j] for j in mix)
         print(f"  {mix}: priced {priced * 1e6:.3f} us a step, measured {slopes[mix] * 1e6:.3f} "
               f"({slopes[mix] / priced:.2f})")
-    return {"step_s": ideal, "joint_step_s": shares,
+    # a full part's wear maps: the tiny B case on the default map and on the main job's
+    maps = {}
+    for shape in ((144, 288), (288, 576)):
+        cfg = case_config("B", DURATIONS[0], [f"wear.map=[{shape[0]}, {shape[1]}]"])
+        maps[shape[0] * shape[1]] = time_case(cfg, "full", repeats, parts)
+    (small, t_small), (big, t_big) = sorted(maps.items())
+    map_bin_s = max(0.0, (t_big - t_small) / (4 * (big - small)))
+    print(f"  wear maps of a full part: {map_bin_s * 1e9:.3f} ns a bin and joint")
+    return {"step_s": ideal, "joint_step_s": shares, "map_bin_s": map_bin_s,
             "row_s": max(0.0, statistics.median(row_extra)),
             "case_s": max(0.0, statistics.median(intercepts)),
             "check": {mix: {"priced_us": round((ideal + sum(shares[j] for j in mix)) * 1e6, 3),
@@ -170,39 +178,60 @@ def tree_cpu(args: list[str]) -> tuple[float, float, float]:
     return time.perf_counter() - began, own, sum(seen.values())
 
 
-def measure_start(costs: dict, repeats: int) -> tuple[float, float]:
-    """(a ``run``'s fixed cost, a sweep's) [s]: the interpreter's start, the imports, the
-    kernel from the cache. A run: the CPU time of ``clearsweep run`` of an ideal 0.01 s case,
-    less its priced work. A sweep: the driver's CPU time of ``clearsweep sweep`` of two such
+def measure_start(costs: dict, repeats: int) -> dict:
+    """A run's and a sweep's fixed costs and a sweep driver's cost per case [s].
+
+    ``run_start_s``: the CPU time of ``clearsweep run`` of an ideal 0.01 s case, less its
+    priced work. ``sweep_start_s``: the driver's CPU time of ``clearsweep sweep`` of two such
     cases on two workers, plus its workers' CPU time shared by the two (they start side by
-    side), less the cases' priced work."""
+    side), less the cases' priced work. ``assemble_case_s``: what the driver spends on each
+    case (its part checked and copied into the file, and the summaries' statistics), from
+    sweeps of 2 and 18 cases; ``assemble_row_s``: each saved row it copies of a ``store:
+    full`` case, from full sweeps of 0.01 s and 0.1 s cases. The driver does this after the
+    cases, one core while the other waits."""
     cli = [sys.executable, "-c", "from clearsweep.cli import main; main()"]
+    work = costs["case_s"] + 1000 * costs["step_s"]
     with tempfile.TemporaryDirectory() as tmp:
         case = Path(tmp) / "tiny_case.yaml"
         case.write_text("mechanism: {preset: realistic}\njoints: {B: {clearance: 0.0}}\n"
                         "solver: {duration: 0.01}\n")
-        path = Path(tmp) / "tiny.yaml"
-        path.write_text(textwrap.dedent("""\
-            name: tiny
-            store: summary
-            base: {mechanism: {preset: realistic}, joints: {B: {clearance: 0.0}},
-                   solver: {duration: 0.01}}
-            sweep: {grid: {mechanism.speed_rpm: [59.0, 61.0]}}
-            """))
-        work = costs["case_s"] + 1000 * costs["step_s"]
-        runs, sweeps = [], []
+
+        def sweep(cases: int, store: str, duration: float) -> tuple[float, float]:
+            path = Path(tmp) / "tiny.yaml"
+            speeds = ", ".join(f"{60.0 + i * 0.5:g}" for i in range(cases))
+            path.write_text(textwrap.dedent(f"""\
+                name: tiny
+                store: {store}
+                base: {{mechanism: {{preset: realistic}}, joints: {{B: {{clearance: 0.0}}}},
+                       solver: {{duration: {duration}}}}}
+                sweep: {{grid: {{mechanism.speed_rpm: [{speeds}]}}}}
+                """))
+            best = (float("inf"), float("inf"))
+            for _ in range(repeats):
+                wall, own, workers = tree_cpu([*cli, "sweep", str(path), "-o",
+                                               str(Path(tmp) / "tiny.nc"), "--overwrite",
+                                               "--workers", "2", "-q", "--yes"])
+                print(f"  sweep of {cases} cases of {duration} s, {store}: {wall:.2f} s wall, "
+                      f"{own:.2f} s CPU in the driver, {workers:.2f} s in its workers")
+                best = min(best, (own, workers))
+            return best
+
+        runs = []
         for _ in range(repeats):
             wall, own, _ = tree_cpu([*cli, "run", str(case), "-o", str(Path(tmp) / "c.nc"),
                                      "--overwrite", "-q"])
             runs.append(own - work)
             print(f"  run of a tiny case: {wall:.2f} s wall, {own:.2f} s CPU")
-            wall, own, workers = tree_cpu([*cli, "sweep", str(path), "-o",
-                                           str(Path(tmp) / "tiny.nc"), "--overwrite",
-                                           "--workers", "2", "-q", "--yes"])
-            sweeps.append(own + workers / 2 - work)
-            print(f"  sweep of 2 tiny cases: {wall:.2f} s wall, {own:.2f} s CPU in the driver, "
-                  f"{workers:.2f} s in its workers")
-    return max(0.0, min(runs)), max(0.0, min(sweeps))
+        two, two_workers = sweep(2, "summary", 0.01)
+        many, _ = sweep(18, "summary", 0.01)
+        full_short, _ = sweep(18, "full", 0.01)
+        full_long, _ = sweep(18, "full", 0.1)
+    per_case = max(0.0, (many - two) / 16)
+    rows = (1001 - 101) * 18
+    return {"run_start_s": max(0.0, min(runs)),
+            "sweep_start_s": max(0.0, two - 2 * per_case + two_workers / 2 - work),
+            "assemble_case_s": per_case,
+            "assemble_row_s": max(0.0, (full_long - full_short) / rows)}
 
 
 def measure_compile() -> float:
@@ -244,7 +273,7 @@ def main() -> None:
         costs = measure_steps(args.repeats, Path(tmp))
     print("a life block and a sweep's start:")
     costs["block_s"] = measure_blocks(costs, max(1, args.repeats - 1))
-    costs["run_start_s"], costs["sweep_start_s"] = measure_start(costs, max(1, args.repeats - 1))
+    costs.update(measure_start(costs, max(1, args.repeats - 1)))
     if args.compile:
         costs["compile_s"] = measure_compile()
     load_after = os.getloadavg()
@@ -280,12 +309,18 @@ joint_step_s: {{O: {shares['O']:.4g}, A: {shares['A']:.4g}, B: {shares['B']:.4g}
 row_s: {costs['row_s']:.4g}
 # each case beyond its steps: packing, the seated start, the summaries, the part [s]
 case_s: {costs['case_s']:.4g}
+# each bin of each joint's wear map a `store: full` case writes [s]
+map_bin_s: {costs['map_bin_s']:.4g}
 # each life block beyond its steps: the jump (wear rates, the grown map), its row [s]
 block_s: {costs['block_s']:.4g}
 # a run's or a life run's fixed cost: the interpreter, the imports, the kernel from the cache [s]
 run_start_s: {costs['run_start_s']:.3g}
 # a sweep's fixed cost: the driver's and the workers' start, the kernel from the cache [s]
 sweep_start_s: {costs['sweep_start_s']:.3g}
+# what a sweep's driver spends on each case once they have run (its part checked and
+# copied into the file, the statistics), and on each saved row of a `store: full` case [s]
+assemble_case_s: {costs['assemble_case_s']:.4g}
+assemble_row_s: {costs['assemble_row_s']:.4g}
 # a cold compile of the RK4 kernel on an empty cache, CPU time with the imports [s]{'' if 'compile_s' in costs else
                                                               ' (kept: run with --compile)'}
 compile_s: {compile_s:.3g}

@@ -11,6 +11,7 @@ by the workers (the driver waits while the cases run).
 
     .venv/bin/python benchmarks/plan_vs_measured.py                 # every config
     .venv/bin/python benchmarks/plan_vs_measured.py life ideal      # the rows named so
+    .venv/bin/python benchmarks/plan_vs_measured.py --plan-only     # the plans alone
 
 Run from the repository root with a warm kernel cache; results go to a temporary folder.
 """
@@ -98,15 +99,23 @@ def measure(args: list[str]) -> tuple[float, float, float]:
     return wall, driver, sum(seen.values())
 
 
+def plan_of(name: str, tmp: str) -> float | None:
+    """The plan's time [s] of row ``name`` (its ``--dry-run``)."""
+    (command, config), cuts = ROWS[name][0], ROWS[name][1]
+    sets = [x for cut in cuts for x in ("--set", cut)]
+    extra = ["--workers", str(WORKERS), "--yes"] if command == "sweep" else []
+    plan_out = subprocess.run([*CS, command, config, *sets, "-o", str(Path(tmp) / "plan.nc"),
+                               *extra, "--dry-run"], capture_output=True, text=True)
+    return planned(plan_out.stdout + plan_out.stderr)
+
+
 def row(name: str, tmp: str) -> str:
     (command, config), cuts, note = ROWS[name][0], ROWS[name][1], ROWS[name][2]
     sets = [x for cut in cuts for x in ("--set", cut)]
     out = ["-o", str(Path(tmp) / f"{name}.nc"), "--overwrite"]
     extra = ["--workers", str(WORKERS)] if command == "sweep" else []
     yes = ["--yes"] if command == "sweep" else []
-    plan_out = subprocess.run([*CS, command, config, *sets, *out, *extra, *yes, "--dry-run"],
-                              capture_output=True, text=True)
-    plan = planned(plan_out.stdout + plan_out.stderr)
+    plan = plan_of(name, tmp)
     load0 = os.getloadavg()[0]
     wall, driver, workers = measure([*CS, command, config, *sets, *out, *extra, *yes, "-q"])
     load1 = os.getloadavg()[0]
@@ -120,7 +129,13 @@ def row(name: str, tmp: str) -> str:
 
 
 def main() -> None:
-    names = sys.argv[1:] or list(ROWS)
+    """Every row, or the rows named; ``--plan-only``: each row's plan alone, nothing run."""
+    names = [a for a in sys.argv[1:] if not a.startswith("--")] or list(ROWS)
+    if "--plan-only" in sys.argv:
+        with tempfile.TemporaryDirectory() as tmp:
+            for name in names:
+                print(f"{name}: {plan_of(name, tmp):.3g} s", flush=True)
+        return
     print("| config | command | cut | plan [s] | wall [s] | CPU driver + workers [s] | "
           "own cores [s] | own / plan | load average |")
     print("|---|---|---|---|---|---|---|---|---|")

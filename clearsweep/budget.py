@@ -26,7 +26,7 @@ from .config import DEFAULTS, Config, ConfigError
 
 __all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
            "PlanCosts", "plan_costs", "read_plan_costs", "clearance_joints", "step_seconds",
-           "case_seconds", "life_seconds", "sweep_seconds",
+           "case_seconds", "assembly_seconds", "life_seconds", "sweep_seconds",
            "MAX_READ_BYTES", "largest_variable", "machine_memory",
            "memory_limit"]
 
@@ -74,6 +74,8 @@ class PlanCosts:
         Each saved row of a case that keeps its time series (``run``, ``store: full``).
     case_s : float
         Each case beyond its steps: packing, the seated start, the summaries, its part.
+    map_bin_s : float
+        Each bin of each joint's wear map that a case keeping its time series writes.
     block_s : float
         Each life block beyond its steps: the jump (wear rates, the grown map), its row.
     run_start_s : float
@@ -81,6 +83,11 @@ class PlanCosts:
         from the cache.
     sweep_start_s : float
         A sweep's fixed cost: the driver's and the workers' start, the kernel from the cache.
+    assemble_case_s : float
+        What a sweep's driver spends on each case once the cases have run: its part checked
+        and copied into the file, the statistics.
+    assemble_row_s : float
+        What the driver spends on each saved row of a case that keeps its time series.
     compile_s : float
         A cold compile of the RK4 kernel (an empty Numba cache).
     measured : dict
@@ -91,9 +98,12 @@ class PlanCosts:
     joint_step_s: dict
     row_s: float
     case_s: float
+    map_bin_s: float
     block_s: float
     run_start_s: float
     sweep_start_s: float
+    assemble_case_s: float
+    assemble_row_s: float
     compile_s: float
     measured: dict
 
@@ -109,10 +119,10 @@ def read_plan_costs(path: str | None = None) -> PlanCosts:
 
     doc = read_yaml(Path(path) if path is not None else PLAN_COSTS_FILE)
     shares = {j: float(doc["joint_step_s"][j]) for j in _JOINTS}
-    return PlanCosts(float(doc["step_s"]), shares, float(doc["row_s"]), float(doc["case_s"]),
-                     float(doc["block_s"]), float(doc["run_start_s"]), float(doc["sweep_start_s"]),
-                     float(doc["compile_s"]),
-                     dict(doc.get("measured") or {}))
+    values = {name: float(doc[name]) for name in (
+        "step_s", "row_s", "case_s", "map_bin_s", "block_s", "run_start_s", "sweep_start_s",
+        "assemble_case_s", "assemble_row_s", "compile_s")}
+    return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}), **values)
 
 
 def plan_costs() -> PlanCosts:
@@ -139,8 +149,19 @@ def case_seconds(cfg: Config, keeps_series: bool = True, est: Estimate | None = 
     time series (``run``, ``store: full``), and the cost per case."""
     costs = plan_costs()
     est = estimate(cfg) if est is None else est
-    rows = est.rows * costs.row_s if keeps_series else 0.0
-    return costs.case_s + est.steps * step_seconds(cfg) + rows
+    kept = 0.0
+    if keeps_series:
+        polar, azimuth = cfg.wear.map
+        kept = est.rows * costs.row_s + len(_JOINTS) * polar * azimuth * costs.map_bin_s
+    return costs.case_s + est.steps * step_seconds(cfg) + kept
+
+
+def assembly_seconds(cfg: Config, keeps_series: bool, est: Estimate | None = None) -> float:
+    """What a sweep's driver spends on a case of ``cfg`` once the cases have run [s]: its part
+    checked and copied into the file (its saved rows, where it keeps its time series)."""
+    costs = plan_costs()
+    rows = (estimate(cfg) if est is None else est).rows if keeps_series else 0
+    return costs.assemble_case_s + rows * costs.assemble_row_s
 
 
 def life_seconds(cfg: Config, blocks: float, steps_per_block: int) -> float:
@@ -183,19 +204,21 @@ def time_text(cfg: Config, est: Estimate | None = None) -> str:
             f"{plan_costs().run_start_s:.2g} s to start; benchmarks/calibrate_plan.py)")
 
 
-def sweep_seconds(case_times: Iterable[float], workers: int | None = None) -> float:
+def sweep_seconds(case_times: Iterable[float], workers: int | None = None,
+                  assembly: float = 0.0) -> float:
     """The estimated wall time [s] of a sweep whose cases cost ``case_times`` [s] on one
     worker each, shared by ``workers`` cores: the fixed start, then the cases' total over the
-    workers, and at least the longest case."""
+    workers and at least the longest case, then the driver's ``assembly`` [s]
+    (:func:`assembly_seconds` of each case)."""
     times = list(case_times)
     share = sum(times) / (workers or 1)
-    return plan_costs().sweep_start_s + max(share, max(times, default=0.0))
+    return plan_costs().sweep_start_s + max(share, max(times, default=0.0)) + assembly
 
 
 def sweep_time_text(case_times: Iterable[float], cfgs: Iterable[Config],
-                    workers: int | None = None) -> str:
+                    workers: int | None = None, assembly: float = 0.0) -> str:
     """:func:`sweep_seconds` in words, with the costs it charges."""
-    seconds = sweep_seconds(case_times, workers)
+    seconds = sweep_seconds(case_times, workers, assembly)
     costs = plan_costs()
     return (f"about {duration_text(seconds)} {_workers_text(workers)} ({steps_text(cfgs)}, "
             f"{costs.case_s:.2g} s per case and {costs.sweep_start_s:.2g} s to start; "

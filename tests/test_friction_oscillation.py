@@ -1,8 +1,9 @@
 """The friction-driven in-contact oscillation at B (docs/physics.md section 3.3) and what
 ``report`` says sets each case's peak force (``summary.peak_force_source``).
 
-PTFE in B's socket with 0.05 mm clearance (the main job's first PTFE case,
-configs/coating_clearance.yaml): the ball stays in contact for the whole run, without a single
+PTFE in B's socket with 0.05 mm clearance at 60 r/min (configs/measured_friction.yaml's PTFE
+case with the paper's friction data; the main job's first PTFE case while it ran at 60 r/min):
+the ball stays in contact for the whole run, without a single
 impact, yet its normal force rises from the 11.9 N it carries with friction off to over 100 N
 in a burst at crank angles 155-195 degrees (t = 0.43-0.54 s at 60 r/min), so a 0.6 s run
 holds it.

@@ -38,9 +38,12 @@ step_s: 1.0e-3
 joint_step_s: {O: 2.0e-3, A: 4.0e-3, B: 8.0e-3, P: 16.0e-3}
 row_s: 1.0e-4
 case_s: 5.0
+map_bin_s: 1.0e-6
 block_s: 7.0
 run_start_s: 3.0
 sweep_start_s: 11.0
+assemble_case_s: 0.5
+assemble_row_s: 1.0e-5
 compile_s: 123
 """
 
@@ -97,18 +100,23 @@ def test_a_guide_case_costs_more_per_step_than_an_ideal_case():
 
 def test_the_file_s_constants_are_the_plan_s(round_costs):
     """Every constant of the costs file reaches the plans as written."""
-    cfg = load_config({"solver": {"duration": 0.01, "dt": 1e-5, "save_every": 10}},
+    cfg = load_config({"solver": {"duration": 0.01, "dt": 1e-5, "save_every": 10},
+                       "wear": {"map": [10, 20]}},
                       ["joints.O.clearance=1e-4", "joints.B.clearance=2.5e-4"])
     assert step_seconds(cfg) == pytest.approx(1e-3 + 2e-3 + 8e-3)
-    # 1000 steps, 101 rows
+    # 1000 steps, 101 rows, 4 maps of 200 bins
     assert case_seconds(cfg, keeps_series=False) == pytest.approx(5.0 + 1000 * 11e-3)
-    assert case_seconds(cfg) == pytest.approx(5.0 + 1000 * 11e-3 + 101 * 1e-4)
+    kept = 101 * 1e-4 + 800 * 1e-6
+    assert case_seconds(cfg) == pytest.approx(5.0 + 1000 * 11e-3 + kept)
+    assert budget.assembly_seconds(cfg, False) == pytest.approx(0.5)
+    assert budget.assembly_seconds(cfg, True) == pytest.approx(0.5 + 101 * 1e-5)
     assert life_seconds(cfg, 4, 1000) == pytest.approx(5.0 + 4 * (1000 * 11e-3 + 7.0))
     assert budget.sweep_seconds([10.0, 20.0, 30.0], workers=2) == pytest.approx(11.0 + 30.0)
+    assert budget.sweep_seconds([10.0, 20.0, 30.0], 2, assembly=1.5) == pytest.approx(42.5)
     # the longest case bounds a sweep from below however many workers share it
     assert budget.sweep_seconds([100.0, 1.0], workers=2) == pytest.approx(11.0 + 100.0)
     text = budget.time_text(cfg)
-    assert seconds_of(text) == pytest.approx(3.0 + 5.0 + 11.0 + 0.0101, rel=0.01)
+    assert seconds_of(text) == pytest.approx(3.0 + 5.0 + 11.0 + kept, rel=0.01)
     assert "at 1.1e+04 us per step (OB)" in text
 
 
@@ -117,7 +125,8 @@ def test_a_sweep_plan_prices_each_case_by_its_joints(round_costs):
     priced by its own joints, shared by the workers, after the start."""
     plan = expand(ROOT / "configs" / "mixed_clearances.yaml")
     cases = plan.runnable()
-    expected = 11.0 + sum(case_seconds(c, keeps_series=False) for c in cases.values()) / 2
+    expected = (11.0 + sum(case_seconds(c, keeps_series=False) for c in cases.values()) / 2
+                + 0.5 * len(cases))
     assert seconds_of(plan.describe(2)) == pytest.approx(expected, rel=0.01)
     # with every case priced as the ideal one the plan would be far shorter
     flat = 11.0 + sum(5.0 + budget.estimate(c).steps * 1e-3 for c in cases.values()) / 2
@@ -138,7 +147,8 @@ def test_a_life_plan_prices_its_blocks_and_jumps(round_costs):
     plan = expand(ROOT / "configs" / "reliability_joints.yaml")
     members = plan.runnable().values()
     want = 11.0 + sum(5.0 + forecast_blocks(c, every_limit=True).blocks
-                      * (block_steps(c) * per_step + 7.0) for c in members) / 2
+                      * (block_steps(c) * per_step + 7.0) for c in members) / 2 \
+        + 0.5 * len(members)
     assert seconds_of(plan.describe(2).split("expected ")[1]) == pytest.approx(want, rel=0.01)
 
 

@@ -22,6 +22,7 @@ import xarray as xr
 
 from .. import variables
 from ..budget import (
+    assembly_seconds,
     case_seconds,
     duration_text,
     estimate,
@@ -292,13 +293,16 @@ class SweepPlan:
         steps = total([estimates[h].steps for h in runnable])
         keeps = STORES[self.store].keeps_series
         seconds = times([case_seconds(cfg, keeps, estimates[h]) for h, cfg in runnable.items()])
+        assembly = total([assembly_seconds(cfg, keeps, estimates[h])
+                          for h, cfg in runnable.items()])
         # the file holds the kept cases too
         keeps_series = STORES[self.store].keeps_series
         sizes = [e.output_bytes if keeps_series else e.map_bytes for e in estimates.values()]
         per_case = max(sizes, default=0) * (n_cases - skipped) if self.counted else sum(sizes)
         counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
-                f"{steps:.3g} RK4 steps: {sweep_time_text(seconds, runnable.values(), workers)}; "
+                f"{steps:.3g} RK4 steps: "
+                f"{sweep_time_text(seconds, runnable.values(), workers, assembly)}; "
                 f"results up to "
                 f"{format_bytes(per_case)} before compression")
 
@@ -323,6 +327,7 @@ class SweepPlan:
             forecasts.append(forecast)
         if not forecasts:       # every part is on disk: only the assembly is left
             return f"{head}: nothing to run"
+        assembly = total([assembly_seconds(cfg, False) for cfg in runnable.values()])
         most, likely = total(bound), total(expected)
         blocks = sorted({f.blocks for f in forecasts})
         span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
@@ -336,8 +341,10 @@ class SweepPlan:
             why = (f"{span} blocks a run to the first wear limit ({limit_keys(limits)}); fewer "
                    "where life.cycles or another limit comes first")
         return (f"{head}: at most {most:.3g} RK4 steps (life.max_blocks blocks each), at most "
-                f"{sweep_time_text(times(bound_s), runnable.values(), workers)}; expected about "
-                f"{duration_text(sweep_seconds(times(expected_s), workers))} ({likely:.3g} RK4 "
+                f"{sweep_time_text(times(bound_s), runnable.values(), workers, assembly)}; "
+                f"expected about "
+                f"{duration_text(sweep_seconds(times(expected_s), workers, assembly))} "
+                f"({likely:.3g} RK4 "
                 f"steps and each block's jump: {why})")
 
     def plan_text(self, workers: int | None = None) -> str:
