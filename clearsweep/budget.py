@@ -117,11 +117,19 @@ def read_plan_costs(path: str | None = None) -> PlanCosts:
     """The plan costs of ``path`` (default :data:`PLAN_COSTS_FILE`), read once per process."""
     from .schema import read_yaml
 
-    doc = read_yaml(Path(path) if path is not None else PLAN_COSTS_FILE)
-    shares = {j: float(doc["joint_step_s"][j]) for j in _JOINTS}
-    values = {name: float(doc[name]) for name in (
-        "step_s", "row_s", "case_s", "map_bin_s", "block_s", "run_start_s", "sweep_start_s",
-        "assemble_case_s", "assemble_row_s", "compile_s")}
+    source = str(path if path is not None else PLAN_COSTS_FILE)
+    doc = read_yaml(Path(source), source)
+    names = ("step_s", "row_s", "case_s", "map_bin_s", "block_s", "run_start_s",
+             "sweep_start_s", "assemble_case_s", "assemble_row_s", "compile_s")
+    try:
+        shares = {j: float(doc["joint_step_s"][j]) for j in _JOINTS}
+        values = {name: float(doc[name]) for name in names}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError(None, None, "a plan-costs file as benchmarks/calibrate_plan.py writes "
+                          f"it: numbers {', '.join(names)} and joint_step_s of "
+                          f"{', '.join(_JOINTS)} ({type(exc).__name__}: {exc})", source) from None
+    if not all(math.isfinite(v) and v >= 0.0 for v in [*values.values(), *shares.values()]):
+        raise ConfigError(None, None, "a plan-costs file of finite costs >= 0", source)
     return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}), **values)
 
 
@@ -193,7 +201,9 @@ def steps_text(cfgs: Iterable[Config]) -> str:
     lo, hi = priced[0], priced[-1]
     if lo[0] == hi[0]:
         return f"at {lo[0] * 1e6:.2g} us per step ({lo[1]})"
-    return f"at {lo[0] * 1e6:.2g} us per step ({lo[1]}) to {hi[0] * 1e6:.2g} us ({hi[1]})"
+    digits = 2 if f"{lo[0] * 1e6:.2g}" != f"{hi[0] * 1e6:.2g}" else 3
+    return (f"at {lo[0] * 1e6:.{digits}g} us per step ({lo[1]}) to {hi[0] * 1e6:.{digits}g} us "
+            f"({hi[1]})")
 
 
 def time_text(cfg: Config, est: Estimate | None = None) -> str:

@@ -161,3 +161,20 @@ def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
     monkeypatch.setattr(cli.click, "echo", lambda text, err=False: said.append(text))
     cli.announce_compile(False, ["rk4"])
     assert "about 123 s" in said[0], said
+
+
+@pytest.mark.parametrize("text", ["step_s: 1\n", ROUND.replace("P: 16.0e-3", "P: fast"),
+                                  ROUND.replace("case_s: 5.0", "case_s: -5.0")],
+                         ids=["keys missing", "not a number", "negative"])
+def test_a_broken_costs_file_is_refused_in_one_line(tmp_path, monkeypatch, text):
+    path = tmp_path / "costs.yaml"
+    path.write_text(text)
+    monkeypatch.setenv("CLEARSWEEP_PLAN_COSTS", str(path))
+    read_plan_costs.cache_clear()
+    try:
+        result = CliRunner().invoke(main, ["run", str(ROOT / "configs" / "ideal.yaml"), "--dry-run"])
+    finally:
+        read_plan_costs.cache_clear()
+    assert result.exit_code == 2, result.output
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"clearsweep: error: {path}:") and "plan-costs file" in line
