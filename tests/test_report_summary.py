@@ -211,7 +211,7 @@ def test_impacts_drive_the_differences_where_the_highest_peak_is_an_impacts():
     line = _drivers(["quasi-static", "quasi-static", "impacts (B)", "impacts (A, B)"],
                     [50.0, 60.0, 300.0, 1775.0])
     assert line.startswith("What drives the differences between designs: impacts. 2 of 4 designs "
-                           "impact (joint A, B)"), line
+                           "impact (joints A, B)"), line
     assert "1775 N at B_clearance=0.001" in line and "50-60 N" in line
 
 

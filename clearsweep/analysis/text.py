@@ -400,8 +400,9 @@ def drivers_line(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, .
     if top_source.startswith(PEAK_BY_IMPACTS):
         joints = sorted({j for _, text, _ in cases if text.startswith(PEAK_BY_IMPACTS)
                          for j in text.split("(")[1].rstrip(")").split(", ")})
-        return (f"{head} impacts. {tally(PEAK_BY_IMPACTS)} impact (joint "
-                f"{', '.join(joints)}) and set the highest peak contact force, {where}; "
+        return (f"{head} impacts. {tally(PEAK_BY_IMPACTS)} impact (joint"
+                f"{'s' if len(joints) > 1 else ''} {', '.join(joints)}) and set the highest "
+                f"peak contact force, {where}; "
                 f"{load_range()}.")
     if top_source.startswith(PEAK_BY_OSCILLATION):
         impacts = (f"{tally(PEAK_BY_IMPACTS)} impact, below it" if kinds[PEAK_BY_IMPACTS]
