@@ -300,6 +300,7 @@ measured:
   tree: {commit}
   kernel_cache: {Path(cache_dir()).name}
   repeats: {args.repeats}
+  timing: CPU time, the least of the repeats (other work stretches the wall time, not it)
 # one RK4 step on the output grid of the ideal mechanism, as a worker runs it [s]
 step_s: {costs['step_s']:.4g}
 # what a joint with clearance adds to each step [s]: A and B a ball in its socket, O the
@@ -317,8 +318,9 @@ block_s: {costs['block_s']:.4g}
 run_start_s: {costs['run_start_s']:.3g}
 # a sweep's fixed cost: the driver's and the workers' start, the kernel from the cache [s]
 sweep_start_s: {costs['sweep_start_s']:.3g}
-# what a sweep's driver spends on each case once they have run (its part checked and
-# copied into the file, the statistics), and on each saved row of a `store: full` case [s]
+# what a sweep's driver spends on each case (its checks before the run; its part checked
+# and copied into the file, the statistics, after it), and on each saved row of a
+# `store: full` case [s]
 assemble_case_s: {costs['assemble_case_s']:.4g}
 assemble_row_s: {costs['assemble_row_s']:.4g}
 # a cold compile of the RK4 kernel on an empty cache, CPU time with the imports [s]{'' if 'compile_s' in costs else

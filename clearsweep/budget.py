@@ -84,8 +84,8 @@ class PlanCosts:
     sweep_start_s : float
         A sweep's fixed cost: the driver's and the workers' start, the kernel from the cache.
     assemble_case_s : float
-        What a sweep's driver spends on each case once the cases have run: its part checked
-        and copied into the file, the statistics.
+        What a sweep's driver spends on each case: its checks before the run, its part
+        checked and copied into the file and the statistics after it.
     assemble_row_s : float
         What the driver spends on each saved row of a case that keeps its time series.
     compile_s : float
