@@ -40,7 +40,7 @@ import click
 if TYPE_CHECKING:
     import xarray as xr
 
-from .budget import case_plan_text, check_budget
+from .budget import case_plan_text, check_budget, plan_costs
 from .choices import (
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -172,14 +172,6 @@ _allow_large = click.option(
     "--allow-large", is_flag=True,
     help="Run a case beyond the bounds on its work and memory (4 GiB of arrays, 1e9 RK4 steps).")
 
-#: Cold compile of the RK4 integrator on this project's 2-core x86-64 machine, measured with
-#: an empty cache: ``NUMBA_CACHE_DIR=$(mktemp -d) python -c "from clearsweep.simulation import
-#: prepare_kernel; print(prepare_kernel('rk4'))"`` gave 82 s (load average 6, the cores
-#: shared); a user's fresh clone took 54 s. The older 23 s (bench_engine on a quiet machine)
-#: was too low by 2x for what users saw.
-COMPILE_ESTIMATE_S = 80
-
-
 def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> None:
     """Compile the integrators ``methods`` (solver.method) now, saying so, where neither
     this process nor the cache has them."""
@@ -189,8 +181,8 @@ def announce_compile(quiet: bool = False, methods: Iterable[str] = ("rk4",)) -> 
         if kernel_needs_compiling(method):
             if not quiet:
                 name = "kernel" if method == "rk4" else f"{method} kernel"
-                click.echo(f"compiling the {name} (once, about {COMPILE_ESTIMATE_S} s on a 2-core "
-                           "machine) ...",
+                click.echo(f"compiling the {name} (once, about {plan_costs().compile_s:.0f} s on a "
+                           "quiet 2-core machine, longer when it is busy) ...",
                            err=True)
             seconds = prepare_kernel(method)
             if not quiet:
@@ -392,7 +384,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
     # bad input is refused before the kernel is compiled (the seated start needs it)
     _preflight(cfg, config, allow_large)
     if dry_run:
-        click.echo(case_plan_text(config, est))
+        click.echo(case_plan_text(config, est, cfg))
         return
     from .simulation import simulate
 

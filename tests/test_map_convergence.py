@@ -23,7 +23,7 @@ TABLE = {
     "one_clearance": ([144, 288], 0.983),
     "two_clearances": ([144, 288], 0.946),
     "paper_case": ([144, 288], 0.971),
-    "coating_clearance": ([288, 576], 0.952),     # 0.893 at 144 x 288
+    "coating_clearance": ([288, 576], 0.952),     # 0.893 at 144 x 288; 1 s at 60 r/min
     "paper": ([144, 288], 0.953),
     "contact_laws": ([144, 288], 0.976),
     "revolute_clearance": ([144, 288], 0.943),   # B's socket and O's bearing (288 bins around)

@@ -14,7 +14,15 @@ import xarray as xr
 from ..ensemble import MEMBER_DIM
 from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
-from ..summary import case_summary, settle_time, settled_revolutions
+from ..summary import (
+    OSCILLATION_CREST_FACTOR,
+    PEAK_BY_IMPACTS,
+    PEAK_BY_LOAD,
+    PEAK_BY_OSCILLATION,
+    case_summary,
+    settle_time,
+    settled_revolutions,
+)
 from .factorial import factorial_lines
 from .selection import (
     _MISSING_TEXT,
@@ -343,6 +351,74 @@ def _design_text(ds: xr.Dataset, label: dict) -> str:
     return label_text(label) + (f" ({', '.join(inputs)})" if inputs else "")
 
 
+def _peak_contact_force(summary: xr.Dataset) -> xr.DataArray | None:
+    """Each case's largest peak normal contact force [N] over its joints (an ideal joint has
+    none: NaN), of the settled window where the case has one, else of the whole run."""
+    whole = summary.get("normal_force_peak")
+    settled = summary.get("normal_force_peak_settled")
+    force = whole if settled is None else (settled if whole is None else settled.fillna(whole))
+    if force is None or "joint" not in force.dims:
+        return None
+    return force.max("joint", skipna=True)
+
+
+def drivers_line(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, ...]) -> str | None:
+    """One line saying what drives the differences between a sweep's designs, built on each
+    case's ``peak_force_source`` (:func:`clearsweep.summary.peak_force_source`): the source
+    of the design with the highest peak contact force. ``impacts`` where it impacts;
+    ``friction`` where it rides its socket in an in-contact oscillation (no impact, a crest
+    factor above the threshold: docs/physics.md section 3.3); else ``nothing beyond the
+    spread``, every design quasi-static and the peak forces no further apart than the
+    mechanism's load makes them. None without the statistics or the sweep dimensions."""
+    source, force = summary.get("peak_force_source"), _peak_contact_force(summary)
+    if source is None or force is None or not dims:
+        return None
+    cases = []
+    for label, point in iter_points(source, dims):
+        index = {d: label[d] for d in dims}
+        value = float(force.sel(index))
+        if bool(usable.sel(index) if index else usable) and math.isfinite(value):
+            cases.append((value, str(point.values[()]), label))
+    if not cases:
+        return None
+    kinds = collections.Counter(text.split(" (")[0] for _, text, _ in cases)
+    top, top_source, top_at = max(cases, key=lambda c: c[0])
+    quiet = [f for f, text, _ in cases if text == PEAK_BY_LOAD]
+    n = len(cases)
+
+    def tally(kind: str) -> str:
+        return f"{kinds[kind]} of {n} designs"
+
+    def load_range() -> str:
+        if not quiet:
+            return "no design is quasi-static"
+        return (f"the quasi-static designs reach {min(quiet):.4g}-{max(quiet):.4g} N" if
+                len(quiet) > 1 else f"the quasi-static design reaches {quiet[0]:.4g} N")
+
+    head = "What drives the differences between designs:"
+    where = f"{top:.4g} N at {_design_text(ds, top_at)}"
+    if top_source.startswith(PEAK_BY_IMPACTS):
+        joints = sorted({j for _, text, _ in cases if text.startswith(PEAK_BY_IMPACTS)
+                         for j in text.split("(")[1].rstrip(")").split(", ")})
+        return (f"{head} impacts. {tally(PEAK_BY_IMPACTS)} impact (joint"
+                f"{'s' if len(joints) > 1 else ''} {', '.join(joints)}) and set the highest "
+                f"peak contact force, {where}; "
+                f"{load_range()}.")
+    if top_source.startswith(PEAK_BY_OSCILLATION):
+        impacts = (f"{tally(PEAK_BY_IMPACTS)} impact, below it" if kinds[PEAK_BY_IMPACTS]
+                   else "no design impacts")
+        return (f"{head} friction. {tally(PEAK_BY_OSCILLATION)} stay in contact in a "
+                f"friction-driven oscillation (crest factor above {OSCILLATION_CREST_FACTOR:g}) "
+                f"and set the highest peak contact force, {where}; {impacts}; {load_range()}.")
+    low = min(c[0] for c in cases)
+    apart = (f"{100.0 * (top - low) / low:.2g} % apart" if low > 0 else "")
+    others = "".join(f"; {tally(k)} {'impact' if k == PEAK_BY_IMPACTS else 'oscillate'}, "
+                     "below it" for k in (PEAK_BY_IMPACTS, PEAK_BY_OSCILLATION) if kinds[k])
+    return (f"{head} nothing beyond the spread. The highest peak contact force is the "
+            f"quasi-static load, {where}{others}; peak contact forces {low:.4g}-{top:.4g} N"
+            + (f" ({apart})" if apart else "") + ".")
+
+
 def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
     """What a sweep answers, first: its design axes and, per headline metric, the lowest
     (best) and highest (worst) design and their spread; an ensemble's means with the
@@ -425,6 +501,11 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             lines.append(f"    {spread}")
     if not ensemble:
         summary = report_summary(ds)
+        driver = drivers_line(ds, summary, usable, dims)
+        if driver is not None:
+            lines.append("")
+            lines += textwrap.wrap(driver, REPORT_LINE_CHARACTERS, subsequent_indent="    ",
+                                   break_on_hyphens=False)
         lines += _sweep_motion_lines(ds, summary, usable, dims)
         lines += _periodic_window_lines(ds, summary, usable, dims)
     lines += factorial_lines(ds)
