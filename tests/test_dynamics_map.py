@@ -97,7 +97,30 @@ def test_the_map_draws_each_cells_period_and_k_as_the_file_holds_them(small_map,
     assert ax.get_xlabel().endswith("[r/min]") and ax.get_ylabel().endswith("[mm]")
     assert [t.get_text() for t in ax.get_xticklabels()] == ["600", "640"]
     assert [t.get_text() for t in ax.get_yticklabels()] == ["0.2", "0.25"]
-    assert "K" in fig.axes[-1].get_ylabel()      # the colour bar of the 0-1 test
+    # the colour bars of the 0-1 test and of the Lyapunov exponent
+    assert [a.get_ylabel().split(" [")[0] for a in fig.axes if a.get_label() == "<colorbar>"] == [
+        "0-1 test K", "largest Lyapunov exponent"]
+
+
+def test_the_map_draws_each_cells_lyapunov_exponent_and_marks_its_motion_class(small_map):
+    """The shipped map asks for the exponent (metrics.lyapunov_revolutions): every case holds
+    one, the third panel draws it, and each cell without a period carries its class's mark."""
+    from clearsweep.plotting.dynamics import CLASS_MARKS
+
+    with xr.open_dataset(small_map) as ds:
+        summary = report_summary(ds)
+        fig = figure(ds, "dynamics-map", x="speed_rpm", y="B_clearance")
+    exponent = summary["lyapunov_exponent"].transpose("B_clearance", "speed_rpm").values
+    assert np.isfinite(exponent).all()
+    drawn = np.ma.getdata(_mesh(fig, "lyapunov_exponent").get_array()).reshape(exponent.shape)
+    np.testing.assert_allclose(drawn, exponent)
+    period = summary["period"].transpose("B_clearance", "speed_rpm").values
+    classes = summary["motion_class"].transpose("B_clearance", "speed_rpm").values
+    marks = sorted((t.get_position(), t.get_text(), t.get_gid()) for t in fig.axes[0].texts)
+    expected = sorted(((float(col), float(row)), CLASS_MARKS[str(name)], f"motion_class:{name}")
+                      for (row, col), name in np.ndenumerate(classes) if period[row, col] <= 0)
+    assert marks == expected
+    assert all(str(c) == "periodic" for c, p in zip(classes.ravel(), period.ravel()) if p > 0)
 
 
 def test_the_maps_texts_stay_inside_the_figure_and_apart(small_map):
