@@ -461,7 +461,7 @@ _LYAPUNOV_STATE = slice(0, L.Y_WORK)
 
 def lyapunov_scale(packed: Packed) -> np.ndarray:
     """Each state component's scale in the twin runs' norm: the crank length l2 for a
-    position, 1 rad for an angle, times omega for a rate (docs/physics.md section 11.4);
+    position, 1 rad for an angle, times omega for a rate (docs/physics.md section 11.5);
     the energy integrals ``inf`` (not perturbed, not measured)."""
     length, omega = float(packed.p[L.P_L2]), float(packed.p[L.P_OMEGA])
     position = np.ones(L.Y_QD)
@@ -477,7 +477,7 @@ def lyapunov_exponent(packed: Packed, raw: KernelRun, revolutions: int,
                       logs: list | None = None) -> float:
     """The largest Lyapunov exponent [1 / revolution] of a run, from twin runs renormalised
     once per revolution over ``revolutions`` revolutions from the settled window's start
-    (:func:`clearsweep.motion.largest_lyapunov`, docs/physics.md section 11.4).
+    (:func:`clearsweep.motion.largest_lyapunov`, docs/physics.md section 11.5).
 
     Block k starts at a saved row x_k of the run (``raw``), about one revolution after the
     previous one (a whole number of saved rows). The kernel runs the block twice from that

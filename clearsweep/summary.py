@@ -404,7 +404,7 @@ def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
 def motion_class(period: xr.Variable, chaos_k: xr.Variable,
                  exponent: xr.Variable | None = None) -> xr.Variable:
     """Each case's class (:func:`clearsweep.motion.classify_motion`) from its ``period``,
-    ``chaos_k`` and, where computed, ``lyapunov_exponent`` (docs/physics.md section 11.5)."""
+    ``chaos_k`` and, where computed, ``lyapunov_exponent`` (docs/physics.md section 11.6)."""
     parts = [period, chaos_k] + ([exponent] if exponent is not None else [])
     dims: list[str] = []
     for part in parts:
@@ -420,7 +420,9 @@ def motion_class(period: xr.Variable, chaos_k: xr.Variable,
     out = np.empty(shape, dtype=object)
     for index in np.ndindex(*shape):
         out[index] = motion.classify_motion(int(p[index]), float(k[index]), float(lam[index]))
-    rules = {"lyapunov_zero": motion.LYAPUNOV_ZERO, "chaos_threshold": motion.CHAOS_THRESHOLD}
+    rules = {"lyapunov_zero_below": motion.LYAPUNOV_ZERO_BELOW,
+             "lyapunov_zero_above": motion.LYAPUNOV_ZERO_ABOVE,
+             "chaos_threshold": motion.CHAOS_THRESHOLD}
     return xr.Variable(tuple(dims), out.astype(str), {**attrs_for(MOTION_CLASS), **rules})
 
 

@@ -256,7 +256,7 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
     "motion_class": VariableSpec(
         (), "", "motion class from the period, the 0-1 test and the Lyapunov exponent",
         "periodic, quasi-periodic, chaotic, transient (a negative exponent without a period "
-        "in the window) or undetermined (docs/physics.md section 11.5)"),
+        "in the window) or undetermined (docs/physics.md section 11.6)"),
 }
 
 

@@ -253,3 +253,55 @@ def test_a_period_per_member_is_refused_not_drawn(small_map):
         members = xr.concat([ds, ds], dim="member")
     with pytest.raises(PlotError, match="one per member too: choose one with --select"):
         figure(members, "dynamics-map", x="speed_rpm", y="B_clearance")
+
+
+def test_report_names_the_class_of_each_cell_without_a_period():
+    """Beside the periodic windows, one line per motion class of the cells without a period
+    (the two chaos indicators together, summary.motion_class)."""
+    from clearsweep.analysis.text import _periodic_window_lines
+
+    speed = xr.DataArray([92.0, 93.0, 94.0, 96.0], dims="speed_rpm",
+                         attrs={"units": "min-1", "config_key": "mechanism.speed_rpm"})
+    clearance = xr.DataArray([2.5e-4], dims="B_clearance",
+                             attrs={"units": "m", "config_key": "joints.B.clearance"})
+    cells = {"B_clearance": clearance, "speed_rpm": speed}
+    dims = ("B_clearance", "speed_rpm")
+    ds = xr.Dataset({"period": xr.DataArray([[1, 0, 0, 0]], dims=dims, coords=cells),
+                     "motion_class": xr.DataArray([["periodic", "transient", "quasi-periodic",
+                                                    "chaotic"]], dims=dims, coords=cells)})
+    usable = xr.DataArray([[True, True, True, True]], dims=dims)
+    # a second clearance row so that the grid has two varying keys
+    two = xr.concat([ds, ds.assign_coords(B_clearance=[3.0e-4])], dim="B_clearance")
+    lines = _periodic_window_lines(two, two, xr.concat([usable, usable], dim="B_clearance"), dims)
+    listed: list[str] = []
+    for line in lines:          # the wrapped lines joined again
+        if line.startswith("- "):
+            listed.append(line)
+        elif line.startswith("    "):
+            listed[-1] += " " + line.strip()
+    assert listed == [
+        "- period 1: B_clearance 0.00025 m: speed_rpm 92 min-1; B_clearance 0.0003 m: speed_rpm "
+        "92 min-1",
+        "- chaotic: B_clearance 0.00025 m: speed_rpm 96 min-1; B_clearance 0.0003 m: speed_rpm 96 min-1",
+        "- quasi-periodic: B_clearance 0.00025 m: speed_rpm 94 min-1; B_clearance 0.0003 m: speed_rpm "
+        "94 min-1",
+        "- transient: B_clearance 0.00025 m: speed_rpm 93 min-1; B_clearance 0.0003 m: speed_rpm 93 "
+        "min-1"]
+
+
+def test_report_of_the_small_map_gives_each_cases_exponent_and_class(small_map):
+    result = invoke("report", small_map, "--format", "csv")
+    assert result.exit_code == 0, result.output
+    header = result.stdout.splitlines()[0]
+    assert "lyapunov_exponent" in header and "motion_class" in header
+
+
+def test_a_runs_report_gives_its_exponent_and_class():
+    from clearsweep.analysis.text import _run_motion_lines
+
+    case = xr.Dataset({"period": 0, "chaos_k": 0.81, "lyapunov_exponent": 0.026,
+                       "motion_class": "quasi-periodic"})
+    assert _run_motion_lines(case) == [
+        "motion (period in crank revolutions): non-periodic (no period up to 8 revolutions); "
+        "0-1 test K = 0.81; largest Lyapunov exponent +0.026 per revolution; class: quasi-periodic"]
+    assert "n/a" in _run_motion_lines(case.assign(lyapunov_exponent=np.nan))[0]
