@@ -290,10 +290,18 @@ def test_report_names_the_class_of_each_cell_without_a_period():
 
 
 def test_report_of_the_small_map_gives_each_cases_exponent_and_class(small_map):
-    result = invoke("report", small_map, "--format", "csv")
+    import json
+
+    result = invoke("report", small_map, "--full", "--format", "json")
     assert result.exit_code == 0, result.output
-    header = result.stdout.splitlines()[0]
-    assert "lyapunov_exponent" in header and "motion_class" in header
+    report = json.loads(result.stdout)
+    assert {"lyapunov_exponent", "motion_class"} <= set(report["columns"])
+    with xr.open_dataset(small_map) as ds:
+        summary = report_summary(ds)
+    for row in report["rows"]:
+        case = summary.sel(speed_rpm=row["speed_rpm"], B_clearance=row["B_clearance"])
+        assert row["lyapunov_exponent"] == pytest.approx(float(case["lyapunov_exponent"]))
+        assert row["motion_class"] == str(case["motion_class"].values)
 
 
 def test_a_runs_report_gives_its_exponent_and_class():
