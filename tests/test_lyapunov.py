@@ -182,8 +182,8 @@ def test_the_onset_between_92_and_96_rpm():
     revolutions, 10 of start-up), the exponent over 25 settled revolutions. At 92 r/min the
     motion is period 1 and contracts (measured: -0.44 a revolution over 99, -0.43 over 25);
     at 96 r/min it has no period, K near 1 and a positive exponent (measured: K = 0.995,
-    +0.55 over 75, +0.64 over 25): the onset of chaos lies between. Measured on a loaded
-    2-core machine: about 4 min; about 1 min quiet."""
+    +0.55 over 75, +0.64 over 25): the onset of chaos lies between. 103 s on the 2-core
+    machine under other work (load average about 20)."""
     import yaml
 
     from clearsweep.simulation import simulate
