@@ -260,9 +260,11 @@ class Estimate:
         ``ceil(solver.duration / solver.dt)``.
     steps : int
         Output-grid RK4 steps: ``steps_asked`` rounded up to whole output
-        samples (sub-steps, where contacts need them, come on top).
+        samples (sub-steps, where contacts need them, come on top), and the twin runs of
+        the largest Lyapunov exponent (:func:`lyapunov_steps`).
     rows : int
-        Saved rows: ``steps / solver.save_every + 1``.
+        Saved rows: ``steps_asked`` rounded up to whole output samples /
+        ``solver.save_every`` + 1.
     values_per_row : int
         float64 per row: the kernel's N_Y + N_D + time and wear maximum,
         plus the output variables.
@@ -318,7 +320,23 @@ def estimate(cfg: Config) -> Estimate:
     per_row = L.N_Y + L.N_D + _KERNEL_EXTRA_PER_ROW + _per_row_output_values()
     polar, azimuth = cfg.wear.map
     map_values = L.N_JOINTS * (polar * azimuth + 3 * L.N_ANGLE_BINS)
-    return Estimate(asked, steps, rows, per_row, map_values)
+    return Estimate(asked, steps + lyapunov_steps(cfg, rows), rows, per_row, map_values)
+
+
+def lyapunov_steps(cfg: Config, rows: int) -> int:
+    """Output-grid steps of the twin runs for the largest Lyapunov exponent
+    (``metrics.lyapunov_revolutions``, :func:`clearsweep.simulation.lyapunov_exponent`): two
+    runs of a block of whole saved rows, about a revolution, per revolution the run's
+    ``rows`` hold after its settled window's start."""
+    revolutions = cfg.metrics.lyapunov_revolutions
+    if revolutions <= 0:
+        return 0
+    row_dt = cfg.solver.dt * cfg.solver.save_every
+    period = 60.0 / cfg.mechanism.speed_rpm
+    block = max(1, int(round(period / row_dt)))
+    first = int(math.ceil(cfg.metrics.settle_time / row_dt - 1e-9))
+    blocks = max(0, min(revolutions, (rows - 1 - first) // block))
+    return 2 * blocks * block * cfg.solver.save_every
 
 
 def check_budget(cfg: Config, *, allow_large: bool = False,

@@ -37,6 +37,10 @@ STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + t
 #: section 11).
 SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
 PERIODICITY_VARIABLES = ("period", "chaos_k")
+#: The largest Lyapunov exponent (a run's, where ``metrics.lyapunov_revolutions`` asks for it)
+#: and the class the indicators give together (:func:`motion_class`).
+LYAPUNOV = "lyapunov_exponent"
+MOTION_CLASS = "motion_class"
 
 #: The Poincaré samples a periodicity summary reads (one point per crank revolution).
 POINCARE_TIME = "poincare_time"
@@ -48,6 +52,7 @@ POINCARE_VARIABLES = tuple(POINCARE)
 
 #: Order of the variables in ``case_summary``.
 SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
+                 LYAPUNOV, MOTION_CLASS,
                  "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
                  *PASS_THROUGH_VARIABLES, *POINCARE_VARIABLES)
 REVOLUTION_DIM = "revolution"
@@ -388,7 +393,37 @@ def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
     if (POINCARE_TIME in ds and POINCARE_SLIDER in ds
             and not all(n in ds for n in PERIODICITY_VARIABLES)):
         out.update(_periodicity_values(ds))
+    if MOTION_CLASS not in ds:
+        found = {n: out[n] if n in out else ds.variables[n]
+                 for n in (*PERIODICITY_VARIABLES, LYAPUNOV) if n in out or n in ds.variables}
+        if all(n in found for n in PERIODICITY_VARIABLES):
+            out[MOTION_CLASS] = motion_class(found["period"], found["chaos_k"], found.get(LYAPUNOV))
     return out
+
+
+def motion_class(period: xr.Variable, chaos_k: xr.Variable,
+                 exponent: xr.Variable | None = None) -> xr.Variable:
+    """Each case's class (:func:`clearsweep.motion.classify_motion`) from its ``period``,
+    ``chaos_k`` and, where computed, ``lyapunov_exponent`` (docs/physics.md section 11.6)."""
+    parts = [period, chaos_k] + ([exponent] if exponent is not None else [])
+    dims: list[str] = []
+    for part in parts:
+        dims += [str(d) for d in part.dims if d not in dims]
+    sizes = {d: n for part in parts for d, n in zip(part.dims, part.shape)}
+    shape = tuple(sizes[d] for d in dims)
+
+    def values(var: xr.Variable) -> np.ndarray:
+        return np.broadcast_to(var.set_dims(dict(zip(dims, shape))).transpose(*dims).values, shape)
+
+    p, k = values(period), values(chaos_k)
+    lam = values(exponent) if exponent is not None else np.full(shape, np.nan)
+    out = np.empty(shape, dtype=object)
+    for index in np.ndindex(*shape):
+        out[index] = motion.classify_motion(int(p[index]), float(k[index]), float(lam[index]))
+    rules = {"lyapunov_zero_below": motion.LYAPUNOV_ZERO_BELOW,
+             "lyapunov_zero_above": motion.LYAPUNOV_ZERO_ABOVE,
+             "chaos_threshold": motion.CHAOS_THRESHOLD}
+    return xr.Variable(tuple(dims), out.astype(str), {**attrs_for(MOTION_CLASS), **rules})
 
 
 def case_summary(ds: xr.Dataset) -> xr.Dataset:

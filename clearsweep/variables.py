@@ -247,6 +247,16 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
         "Gottwald and Melbourne (2004, 2009), correlation method, median over random c, on the "
         "settled Poincare samples of the slider acceleration: near 0 regular, near 1 chaotic; "
         "NaN for fewer than zero_one_min_samples revolutions"),
+    "lyapunov_exponent": VariableSpec(
+        (), "1", "largest Lyapunov exponent per crank revolution",
+        "twin runs from the settled window's start, the twin lyapunov_perturbation away in the "
+        "state (positions / crank length, angles in rad, rates / omega), renormalised once per "
+        "revolution (Benettin et al. 1980) over lyapunov_revolutions: > 0 chaotic, about 0 "
+        "quasi-periodic, < 0 periodic; NaN where the run is too short or a twin run stops"),
+    "motion_class": VariableSpec(
+        (), "", "motion class from the period, the 0-1 test and the Lyapunov exponent",
+        "periodic, quasi-periodic, chaotic, transient (a negative exponent without a period "
+        "in the window) or undetermined (docs/physics.md section 11.6)"),
 }
 
 
@@ -330,7 +340,7 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
 
 #: Text variables of results files and the dims they carry besides the sweep's.
 TEXT_VARIABLES: dict[str, tuple[str, ...]] = {
-    "status": (), "message": (), "stop_reason": (), "block_status": ("cycle",),
+    "status": (), "message": (), "motion_class": (), "stop_reason": (), "block_status": ("cycle",),
     **{f"first_joint_to_{name}": () for name in ("clearance_growth", "normal_force",
                                                  "rms_acceleration", "motion_error",
                                                  "wear_through")},

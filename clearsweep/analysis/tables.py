@@ -477,6 +477,8 @@ _CHARACTER_COLUMNS = (
     _Column("slider_acceleration_high_order_share", f"Power share above order {HIGH_ORDER:g}", ".3g"),
     _Column("period", "Period in revolutions (0: none, -1: n/a)", ""),
     _Column("chaos_k", "0-1 test K", ".2f"),
+    _Column("lyapunov_exponent", "Largest Lyapunov exponent per revolution", ".3g"),
+    _Column("motion_class", "Motion class", ""),
 )
 _CONTACT_COLUMNS = (
     _Column("normal_force_peak_settled", "Peak normal force, settled", ".4g"),

@@ -157,8 +157,14 @@ def _run_motion_lines(case: xr.Dataset) -> list[str]:
         k = float(case["chaos_k"]) if "chaos_k" in case else math.nan
         test = (f"0-1 test K = {k:.2f}" if np.isfinite(k)
                 else "0-1 test: n/a (fewer settled revolutions than it needs)")
-        lines.append(f"motion (period in crank revolutions): {_period_text(int(case['period']))}; "
-                     f"{test}")
+        if "lyapunov_exponent" in case:
+            lam = float(case["lyapunov_exponent"])
+            test += ("; largest Lyapunov exponent " + (f"{lam:+.3f} per revolution" if np.isfinite(lam)
+                                                       else "n/a (the run is too short, or a twin run stopped)"))
+        line = f"motion (period in crank revolutions): {_period_text(int(case['period']))}; {test}"
+        if "motion_class" in case:
+            line += f"; class: {case['motion_class'].item()}"
+        lines.append(line)
     return lines
 
 
@@ -180,7 +186,13 @@ def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple
         period = int(point)
         k = float(summary["chaos_k"].sel(index)) if "chaos_k" in summary else math.nan
         design = _design_text(ds, label)
-        if period == PERIOD_NONE and np.isfinite(k):
+        lam = (float(summary["lyapunov_exponent"].sel(index)) if "lyapunov_exponent" in summary
+               else math.nan)
+        if period == PERIOD_NONE and np.isfinite(lam) and "motion_class" in summary:
+            key = (f"non-periodic, {summary['motion_class'].sel(index).item()} by the Lyapunov "
+                   "exponent and the 0-1 test")
+            design += f" (lambda = {lam:+.3f}/rev, K = {k:.2f})"
+        elif period == PERIOD_NONE and np.isfinite(k):
             chaotic = k > CHAOS_THRESHOLD
             key = (f"non-periodic, {'chaotic' if chaotic else 'regular'} by the 0-1 test "
                    f"(K {'>' if chaotic else '<='} {CHAOS_THRESHOLD:g})")
@@ -243,17 +255,29 @@ def _periodic_window_lines(ds: xr.Dataset, summary: xr.Dataset, usable,
     lines = ["", *textwrap.wrap(f"Periodic windows over {x} x {y} (periods in crank "
                                 "revolutions; --kind dynamics-map draws the map):",
                                 REPORT_LINE_CHARACTERS, break_on_hyphens=False)]
-    if not found:
-        return lines + [f"- none: no case has a period up to {MAX_PERIOD}"]
-    for p in found:
+
+    def cells(flags: np.ndarray) -> str:
         parts = []
-        for row in range(period.shape[0]):
-            runs = _runs((period[row] == p) & ok[row])
+        for row in range(flags.shape[0]):
+            runs = _runs(flags[row] & ok[row])
             if runs:
                 spans = ", ".join(_coordinate_text(ds, x, a, b) for a, b in runs)
                 parts.append(f"{_coordinate_text(ds, y, row, row)}: {spans}")
-        lines += textwrap.wrap(f"- period {p}: " + "; ".join(parts), REPORT_LINE_CHARACTERS,
+        return "; ".join(parts)
+
+    if not found:
+        lines.append(f"- none: no case has a period up to {MAX_PERIOD}")
+    for p in found:
+        lines += textwrap.wrap(f"- period {p}: " + cells(period == p), REPORT_LINE_CHARACTERS,
                                subsequent_indent="    ", break_on_hyphens=False)
+    if "motion_class" in summary and summary["motion_class"].dims == summary["period"].dims:
+        # the cells without a period, by the class the two chaos indicators give them
+        classes = summary["motion_class"].transpose(y, x).values.astype(str)
+        for name in sorted({str(c) for c, p, good in zip(classes.ravel(), period.ravel(), ok.ravel())
+                            if good and p <= 0}):
+            lines += textwrap.wrap(f"- {name}: " + cells((classes == name) & (period <= 0)),
+                                   REPORT_LINE_CHARACTERS, subsequent_indent="    ",
+                                   break_on_hyphens=False)
     return lines
 
 

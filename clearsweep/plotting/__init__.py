@@ -172,7 +172,7 @@ FIGURES = {
     "spectrum": FigureKind((9, 5.5), _draw_spectrum),
     "bifurcation": FigureKind((10, 9), _draw_bifurcation, ("x",)),
     "effects": FigureKind((15, 8), _draw_effects),
-    "dynamics-map": FigureKind((13, 5.5), _draw_dynamics_map, ("x", "y")),
+    "dynamics-map": FigureKind((18, 5.5), _draw_dynamics_map, ("x", "y")),
 }
 
 
