@@ -6,12 +6,17 @@ case is what the summaries need: the running statistics (layout.M_*), the wear m
 projections, the worn volume, the counters and the energy residual; no time series (a
 sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 
-Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
-projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
-other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
-Cases are grouped by wear-map shape and run in batches that fit the device's free memory,
-stored structure-of-arrays (element e of case i at e * capacity + i) and padded to a launch
-capacity (:data:`CAPACITIES`, :func:`batch_plan`): a batch takes capacity x case_bytes.
+Memory per case (:func:`case_bytes`), structure-of-arrays: the wear maps of the batch's
+clearance joints alone (8 * nazim bytes per map row: npolar rows for A, B and P's walls,
+one for the bearing O, :func:`map_layout`), 8,640 bytes of projections per joint of A, B
+and O with clearance, an undo buffer of 64 * 2**max_substep_level bytes per such joint, the
+parameters that differ across the batch (the others are one shared row), and about 8 kB
+of other work arrays and results: 0.74 MB for the two-clearance case (A and B) on the
+default map [144, 288] at level 8, 1.46 MB case by case. Cases are grouped by
+:func:`batch_key` (the wear-map shape: sweep cases and ensemble members share launches)
+and run in batches that fit the device's free memory, stored structure-of-arrays (element e
+of case i at e * capacity + i) and padded to a launch capacity (:data:`CAPACITIES`,
+:func:`batch_plan`): a batch takes capacity x case_bytes.
 """
 
 from __future__ import annotations
@@ -36,8 +41,8 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
-#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (10,000
-#: cases of the default map at 1.46 MB each, four joints' maps), or a quarter of the
+#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (23,143
+#: two-clearance cases of the default map at 0.74 MB each), or a quarter of the
 #: machine's memory where that is less (:func:`host_batch_bytes`). A batch must hold
 #: thousands of cases to fill the device: on an H200, one launch of 1,470 cases ran
 #: 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
@@ -54,6 +59,7 @@ CAPACITIES = (64, 1024, 4096, 16384, 32768)
 #: Parameters of a case (p, then jp's rows) and entries of the joint layout ``geom``
 #: (``core.device.N_PJ``, ``N_GEOM``: stated here for the same reason).
 N_PJ = L.N_P + L.N_JOINTS * L.N_JP
+N_GEOM = 5
 
 
 class NoCudaDevice(RuntimeError):
@@ -301,7 +307,8 @@ def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tup
     projections and the undo buffer hold the rows of the batch's clearance joints alone."""
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
-    map_rows, proj_rows = (L.N_JOINTS, npolar), (L.N_JOINTS, 3)
+    map_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
+    proj_rows: tuple[int, ...] = (L.N_JOINTS, 3)
     if layout == "soa":
         joints = batch_joints(group)
         lay = map_layout(joints, npolar)
@@ -345,7 +352,7 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
     arrays: dict[str, np.ndarray] = {}
     if layout == "aos":
         arrays.update(p=np.stack([pk.p for pk in group]), jp=np.stack([pk.jp for pk in group]),
-                      pcols=np.zeros(N_PJ, dtype=np.int64), geom=np.zeros(5, dtype=np.int64))
+                      pcols=np.zeros(N_PJ, dtype=np.int64), geom=np.zeros(N_GEOM, dtype=np.int64))
         arrays["y0"] = np.stack([pk.y0 for pk in group])
     else:
         cap = capacity if capacity is not None else capacity_for(n)

@@ -21,6 +21,12 @@ then one base per argument plus constants, rather than a pointer and row lengths
 that stay live in registers across every inlined ``evaluate``. :func:`launch` checks the
 shapes.
 
+The structure-of-arrays kernel (:func:`soa_kernel`) takes what its batch shares once: the
+parameters equal in every case as one row, the others per case, gathered by each thread
+into its local memory at its start; and the wear maps and projections of the batch's
+clearance joints alone, each joint's rows at r0 + j * dj of one array
+(:func:`soa_joint_rows`, the layout ``gpu.joint_rows`` chooses and ``geom`` carries).
+
 Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
 numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
 Python thread: the simulator hands kernels wrapped arrays, which :func:`_advance` unwraps
