@@ -21,6 +21,7 @@ of case i at e * capacity + i) and padded to a launch capacity (:data:`CAPACITIE
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Sequence
@@ -168,6 +169,12 @@ def joint_rows(rows: Sequence[int]) -> tuple[int, int, int]:
     disjoint and within the array, total as small as one stride between joints allows. A
     joint of no rows (no clearance) gets none: its rows alias others' or lie outside the
     array (r0 may be negative), and the kernel never touches them."""
+    return _joint_rows(tuple(int(r) for r in rows))
+
+
+@functools.lru_cache(maxsize=256)
+def _joint_rows(rows: tuple[int, ...]) -> tuple[int, int, int]:
+    """:func:`joint_rows`, once per joint set and map shape (a sweep asks per case)."""
     present = [j for j, r in enumerate(rows) if r > 0]
     if not present:
         return 0, 0, 1

@@ -181,15 +181,17 @@ def test_cuda_backend_refuses_what_the_device_does_not_run(tmp_path, store, key)
 
 
 def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
-    """A sweep's CUDA window holds as many default-map cases as the host bound allows: at
-    least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
-    (benchmarks/README.md), and never more than a quarter of the machine's memory."""
+    """A sweep's CUDA window holds as many default-map two-clearance cases as the host bound
+    allows: at least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
+    (benchmarks/README.md), and never more than a quarter of the machine's memory. (Cases
+    without clearance carry no maps: 20,000 of them fit any window here.)"""
     from clearsweep import gpu
     from clearsweep.config import Config
 
-    cfg = Config()
-    cases = [cfg] * 20_000
+    cfg = Config().replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4)
+    cases = [cfg] * 40_000
     per_case = gpu.config_bytes(cfg)
+    assert gpu.batch_window([Config()] * 20_000) == 20_000
     gib = 1 << 30
     monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 128 * gib // 4096,
                                                     "SC_PAGE_SIZE": 4096}[name])
