@@ -231,7 +231,7 @@ class ContactConfig(_Section):
     layer_rule: str = _setting(Field("series", ("series", "paper_mm")), None,
                                "double elastic layer rule")
     #: null (the default): the physical stop, the depth at which the joint's own law carries
-    #: load_bound or the coating's thickness (docs/physics.md 4.3); a number: the earlier
+    #: load_bound (docs/physics.md 4.3); a number: the earlier
     #: stop, that fraction of the clearance
     max_penetration_fraction: float | None = _setting(
         Field(None, lo=0.0, lo_open=True, nullable=True), "1",
