@@ -15,8 +15,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_the_motion_stops_repeating_between_80_and_110_rpm():
-    """Measured on the shipped settings at every third speed (docs/sweeps.md): period 1 at
-    80 r/min (K 0.00), none at 110 r/min (K 0.99). Short runs give the same split."""
+    """Measured on the shipped settings (docs/sweeps.md): period 1 at 50 to 90 r/min (K 0.00
+    at 80), none from 100 r/min (K 0.99 at 110). Short runs give the same split at 80 and
+    110 r/min."""
     spec = yaml.safe_load((ROOT / "configs" / "bifurcation.yaml").read_text())
     spec["sweep"]["grid"]["mechanism.speed_rpm"] = [80.0, 110.0]
     spec["base"]["solver"]["revolutions"] = 14
