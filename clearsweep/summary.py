@@ -36,6 +36,9 @@ STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + t
 #: The spectrum's and the periodicity's summaries (:func:`motion_summary`, docs/physics.md
 #: section 11).
 SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
+#: The change of the settled RMS between the settled window's halves (:func:`_drift_values`):
+#: how far a settled statistic still moves with the run's length (clearsweep.analysis.factorial).
+DRIFT_VARIABLES = ("slider_acceleration_rms_settled_drift",)
 PERIODICITY_VARIABLES = ("period", "chaos_k")
 
 #: The Poincaré samples a periodicity summary reads (one point per crank revolution).
@@ -47,7 +50,8 @@ POINCARE_OFFSET = "poincare_offset"
 POINCARE_VARIABLES = tuple(POINCARE)
 
 #: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
+SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *DRIFT_VARIABLES,
+                 *PERIODICITY_VARIABLES,
                  "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
                  *PASS_THROUGH_VARIABLES, *POINCARE_VARIABLES)
 REVOLUTION_DIM = "revolution"
@@ -323,6 +327,38 @@ def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
             xr.Variable(dims, share, {**attrs_for("slider_acceleration_high_order_share"), **extra})}
 
 
+def settled_halves_rms(t: np.ndarray, acc: np.ndarray, start: float) -> tuple[float, float]:
+    """RMS of the saved rows ``acc`` at times ``t`` [s] over each half of the settled window,
+    from ``start`` [s] to the last finite row, split at its middle (with the window a whole
+    number of revolutions, an even number makes each half whole revolutions); NaN where a
+    half holds fewer than 2 rows."""
+    keep = np.isfinite(t) & np.isfinite(acc) & is_settled(t, start)
+    if keep.sum() < 4:
+        return float("nan"), float("nan")
+    t, acc = t[keep], acc[keep]
+    middle = 0.5 * (float(t[0]) + float(t[-1]))
+    first, second = acc[t < middle], acc[t >= middle]
+    if first.size < 2 or second.size < 2:
+        return float("nan"), float("nan")
+    return float(np.sqrt(np.mean(first ** 2))), float(np.sqrt(np.mean(second ** 2)))
+
+
+def _drift_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """``slider_acceleration_rms_settled_drift`` of every case of ``ds`` (with
+    ``slider_acceleration`` on ``time``): the second half's RMS minus the first's
+    (:func:`settled_halves_rms`)."""
+    acc = ds.variables["slider_acceleration"]
+    dims = _case_dims(acc, ("time",))
+    acc_v = acc.transpose(*dims, "time").values
+    t = ds["time"].values.astype(float)
+    start = settle_time(ds)
+    drift = np.full(acc_v.shape[:-1], np.nan)
+    for index in np.ndindex(*acc_v.shape[:-1]):
+        first, second = settled_halves_rms(t, acc_v[index], start)
+        drift[index] = second - first
+    return {DRIFT_VARIABLES[0]: xr.Variable(dims, drift, attrs_for(DRIFT_VARIABLES[0]))}
+
+
 def is_settled(time, start: float):
     """Whether Poincaré sample times ``time`` (an array or a DataArray) [s] lie in the
     settled window from ``start`` [s] on (within 1e-12 s: a section at the window's start
@@ -385,6 +421,9 @@ def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
     if ("slider_acceleration" in ds and "crank_angle" in ds and "time" in ds.dims
             and not all(n in ds for n in SPECTRUM_VARIABLES)):
         out.update(_spectrum_values(ds))
+    if ("slider_acceleration" in ds and "time" in ds.dims
+            and not all(n in ds for n in DRIFT_VARIABLES)):
+        out.update(_drift_values(ds))
     if (POINCARE_TIME in ds and POINCARE_SLIDER in ds
             and not all(n in ds for n in PERIODICITY_VARIABLES)):
         out.update(_periodicity_values(ds))
