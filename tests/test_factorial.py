@@ -265,3 +265,23 @@ def test_an_effect_that_changes_sign_with_the_speed_is_given_at_each_speed():
     assert "speed_rpm 60: -0.3" in text and "speed_rpm 120: +0.3" in text
     assert "its sign changes" not in format_sweep_summary(synthetic())
     assert max(map(len, text.splitlines())) <= 100
+
+
+def test_the_effects_figure_marks_an_effect_at_each_speed_where_its_sign_changes():
+    """A's markers at -0.3 (60 r/min) and +0.3 (120 r/min) on its row; none for B."""
+    from matplotlib.figure import Figure
+
+    from clearsweep.plotting.effects import _draw_effects
+
+    fig = Figure()
+    _draw_effects(fig, synthetic(a_by_speed=0.3))
+    ax = fig.axes[0]                                   # the slider's vibration
+    rows = [t.get_text() for t in ax.get_yticklabels()]
+    marks = {line.get_label(): (float(line.get_xdata()[0]), float(line.get_ydata()[0]))
+             for line in ax.get_lines() if line.get_label().startswith("at ")}
+    assert set(marks) == {"at speed_rpm 60", "at speed_rpm 120"}
+    assert marks["at speed_rpm 60"] == pytest.approx((-0.3, rows.index("clearance at A")))
+    assert marks["at speed_rpm 120"] == pytest.approx((0.3, rows.index("clearance at A")))
+    plain = Figure()
+    _draw_effects(plain, synthetic())
+    assert not [line for line in plain.axes[0].get_lines() if line.get_label().startswith("at ")]
