@@ -285,3 +285,27 @@ def test_the_effects_figure_marks_an_effect_at_each_speed_where_its_sign_changes
     plain = Figure()
     _draw_effects(plain, synthetic())
     assert not [line for line in plain.axes[0].get_lines() if line.get_label().startswith("at ")]
+
+
+def test_the_pages_script_compares_a_doubled_run_against_the_intervals(tmp_path, capsys):
+    """docs/mixed_clearances.py FILE DOUBLED: a run that moves B's effect by more than its
+    interval is counted outside; the same file twice moves nothing."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "mixed_page", Path(__file__).resolve().parents[1] / "docs" / "mixed_clearances.py")
+    page = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(page)
+    first = synthetic(noise=0.05, paired=False, seed=3)
+    path = write_netcdf_atomic(first, tmp_path / "mixed.nc")
+    page.main(str(path), str(path))
+    out = capsys.readouterr().out
+    assert "0 of 30 outside" in out                    # 4 effects + 6 pairs, averaged and at 2 speeds
+    assert "h_m" in out and "h_r 0.000" in out         # no drift in the file: no run-length term
+    moved = first.copy()
+    moved[RMS] = first[RMS] + 1.0 * (first["B_clearance"] > 0)
+    page.main(str(path), str(write_netcdf_atomic(moved, tmp_path / "doubled.nc")))
+    out = capsys.readouterr().out
+    assert "B                        " in out and "OUTSIDE" in out
+    assert "3 of 30 outside" in out                    # B averaged and at each speed
