@@ -279,9 +279,9 @@ def test_the_effects_figure_marks_an_effect_at_each_speed_where_its_sign_changes
     rows = [t.get_text() for t in ax.get_yticklabels()]
     marks = {line.get_label(): (float(line.get_xdata()[0]), float(line.get_ydata()[0]))
              for line in ax.get_lines() if line.get_label().startswith("at ")}
-    assert set(marks) == {"at speed_rpm 60", "at speed_rpm 120"}
-    assert marks["at speed_rpm 60"] == pytest.approx((-0.3, rows.index("clearance at A")))
-    assert marks["at speed_rpm 120"] == pytest.approx((0.3, rows.index("clearance at A")))
+    assert set(marks) == {"at 60 r/min", "at 120 r/min"}
+    assert marks["at 60 r/min"] == pytest.approx((-0.3, rows.index("clearance at A")))
+    assert marks["at 120 r/min"] == pytest.approx((0.3, rows.index("clearance at A")))
     plain = Figure()
     _draw_effects(plain, synthetic())
     assert not [line for line in plain.axes[0].get_lines() if line.get_label().startswith("at ")]

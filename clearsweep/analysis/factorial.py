@@ -258,10 +258,10 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
     rest = [d for d in design_dims(ds) if d not in {f[0] for f in factors.values()}]
     over = f" and over {', '.join(rest)}" if rest else ""
     ensemble = is_ensemble(ds)
-    source = "the members' spread" + (" and the run's length (settled halves)"
-                                      if RUN_LENGTH[VIBRATION[0]] in ds else "")
+    source = "the members' spread" + (", and for the vibration the run's length (the settled "
+                                      "window's halves)" if RUN_LENGTH[VIBRATION[0]] in ds else "")
     head = (f"Clearance as a two-level design over joints {', '.join(names)}: effects averaged over "
-            f"the other joints' settings{over}" + (f" (95 % intervals from {source})" if ensemble else "")
+            f"the other joints' settings{over}" + (f" (95 % intervals: {source})" if ensemble else "")
             + ":")
     lines = ["", *textwrap.wrap(head, width=100, subsequent_indent="  ")]
     for name, joint in metrics(ds, factors):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from ..analysis import factorial
 from .common import PlotError, display_scale
@@ -68,7 +69,7 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
                                              factors, where)
             for dim, found in changes.items():
                 for k, (setting, (value, _, _)) in enumerate(found):
-                    label = f"at {dim} {setting}"
+                    label = f"at {setting} r/min" if dim == "speed_rpm" else f"at {dim} {setting}"
                     ax.plot(value / scale, row, MARKERS[k % len(MARKERS)], color="k", ms=5,
                             mfc="w", label=None if label in labelled else label)
                     labelled.add(label)
@@ -81,6 +82,7 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_xlabel(f"change of the {what} [{unit}]")
         ax.set_title(what + (f" (cases with clearance at {joint})" if joint else ""),
                      fontsize="small")
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
         ax.grid(axis="x", alpha=0.3)
     rest = [d for d in factorial.design_dims(ds) if d not in {f[0] for f in factors.values()}]
     fig.suptitle("Effect of each joint's clearance (ideal -> clear), averaged over the other "
