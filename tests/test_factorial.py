@@ -309,3 +309,22 @@ def test_the_pages_script_compares_a_doubled_run_against_the_intervals(tmp_path,
     out = capsys.readouterr().out
     assert "B                        " in out and "OUTSIDE" in out
     assert "3 of 30 outside" in out                    # B averaged and at each speed
+
+
+def test_the_pages_script_compares_a_doubled_run_of_fewer_members_over_those_members(
+        tmp_path, capsys):
+    """A doubled run of the first 2 members, equal to the first run's values there, moved
+    nothing, though the 2 members' mean differs from the 6 members'."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "mixed_page", Path(__file__).resolve().parents[1] / "docs" / "mixed_clearances.py")
+    page = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(page)
+    first = synthetic(noise=0.05, paired=False, seed=3)
+    path = write_netcdf_atomic(first, tmp_path / "mixed.nc")
+    two = first.isel(member=slice(0, 2))
+    page.main(str(path), str(write_netcdf_atomic(two, tmp_path / "doubled.nc")))
+    out = capsys.readouterr().out
+    assert "0 of 30 outside" in out and "(moved +0.000" in out
