@@ -327,17 +327,28 @@ def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
             xr.Variable(dims, share, {**attrs_for("slider_acceleration_high_order_share"), **extra})}
 
 
-def settled_halves_rms(t: np.ndarray, acc: np.ndarray, start: float) -> tuple[float, float]:
-    """RMS of the saved rows ``acc`` at times ``t`` [s] over each half of the settled window,
-    from ``start`` [s] to the last finite row, split at its middle (with the window a whole
-    number of revolutions, an even number makes each half whole revolutions); NaN where a
-    half holds fewer than 2 rows."""
+def settled_halves_rms(t: np.ndarray, acc: np.ndarray, start: float,
+                       period: float | None = None) -> tuple[float, float]:
+    """RMS of the saved rows ``acc`` at times ``t`` [s] over the two halves of the settled
+    window, from ``start`` [s] to the last finite row. With the crank's ``period`` [s]: the
+    first and the last n whole revolutions of the window, n = half its revolutions rounded
+    down (an odd number of settled revolutions leaves the middle one out: a part of a
+    revolution would weigh the harmonics by where the cut falls in it); without it, the
+    window split at its middle. NaN where a half holds fewer than 2 rows (or n is 0)."""
     keep = np.isfinite(t) & np.isfinite(acc) & is_settled(t, start)
     if keep.sum() < 4:
         return float("nan"), float("nan")
     t, acc = t[keep], acc[keep]
-    middle = 0.5 * (float(t[0]) + float(t[-1]))
-    first, second = acc[t < middle], acc[t >= middle]
+    begin, end = float(t[0]), float(t[-1])
+    if period is not None and np.isfinite(period) and period > 0.0:
+        tol = 0.25 * float(np.min(np.diff(t)))
+        span = np.floor((end - begin + tol) / period / 2.0) * period
+        if span <= 0.0:
+            return float("nan"), float("nan")
+        first, second = acc[t < begin + span - tol], acc[t > end - span + tol]
+    else:
+        middle = 0.5 * (begin + end)
+        first, second = acc[t < middle], acc[t >= middle]
     if first.size < 2 or second.size < 2:
         return float("nan"), float("nan")
     return float(np.sqrt(np.mean(first ** 2))), float(np.sqrt(np.mean(second ** 2)))
@@ -346,15 +357,24 @@ def settled_halves_rms(t: np.ndarray, acc: np.ndarray, start: float) -> tuple[fl
 def _drift_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
     """``slider_acceleration_rms_settled_drift`` of every case of ``ds`` (with
     ``slider_acceleration`` on ``time``): the second half's RMS minus the first's
-    (:func:`settled_halves_rms`)."""
+    (:func:`settled_halves_rms`, whole revolutions where ``crank_angle`` gives the speed)."""
     acc = ds.variables["slider_acceleration"]
     dims = _case_dims(acc, ("time",))
     acc_v = acc.transpose(*dims, "time").values
+    angle_v = None
+    if "crank_angle" in ds:
+        angle = ds.variables["crank_angle"]
+        angle_v = np.broadcast_to(angle.transpose(*_case_dims(angle, ("time",)), "time").values,
+                                  acc_v.shape)
     t = ds["time"].values.astype(float)
     start = settle_time(ds)
     drift = np.full(acc_v.shape[:-1], np.nan)
     for index in np.ndindex(*acc_v.shape[:-1]):
-        first, second = settled_halves_rms(t, acc_v[index], start)
+        period = None
+        if angle_v is not None:
+            omega = crank_speed(t, angle_v[index])
+            period = 2.0 * np.pi / abs(omega) if np.isfinite(omega) and omega != 0.0 else None
+        first, second = settled_halves_rms(t, acc_v[index], start, period)
         drift[index] = second - first
     return {DRIFT_VARIABLES[0]: xr.Variable(dims, drift, attrs_for(DRIFT_VARIABLES[0]))}
 

@@ -167,6 +167,20 @@ def test_a_steady_window_has_no_drift_and_a_settling_one_has():
     assert np.isnan(summary.settled_halves_rms(t, steady, 20.0)[0])     # no settled window
 
 
+def test_the_halves_are_whole_revolutions_so_a_steady_motion_does_not_drift():
+    """A periodic motion with odd and even harmonics, 5 settled revolutions from a start
+    phase of 20 degree: cut at the window's middle (2.5 revolutions each) the halves differ;
+    the first and last 2 whole revolutions do not."""
+    t = np.arange(0.0, 10.0 + 1e-9, 1e-3)
+    theta = 2 * np.pi * t + np.deg2rad(20.0)
+    acc = np.cos(theta) + 0.4 * np.cos(2 * theta + 0.3) + 0.2 * np.sin(3 * theta)
+    middle = summary.settled_halves_rms(t, acc, 5.0)
+    whole = summary.settled_halves_rms(t, acc, 5.0, period=1.0)
+    assert abs(middle[1] - middle[0]) > 1e-3
+    assert whole[1] - whole[0] == pytest.approx(0.0, abs=1e-9)
+    assert np.isnan(summary.settled_halves_rms(t, acc, 9.5, period=1.0)[0])   # under 2 revolutions
+
+
 def test_the_interval_adds_the_run_length_term_in_quadrature():
     """h = sqrt(h_m^2 + h_r^2), h_r the RMS over the members of the drift's contrast."""
     design = synthetic(noise=0.05, paired=False, seed=3)
