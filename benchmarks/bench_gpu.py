@@ -19,7 +19,10 @@ launch (2 cases) compiling outside the clock; it prints RK4 steps/s and the case
 then the three smallest cases' statistics against the CPU kernel's (``simulation.run_kernel``).
 ``--kernel-only --sizes 1470 10000 --duration 0.1`` gives the figures in benchmarks/README;
 ``--set KEY=VALUE`` (repeatable) overrides every case's config (``--set joints.O.clearance=2.5e-4``:
-clearance at the crank's bearing too).
+clearance at the crank's bearing too). ``--layout aos`` times the case-by-case layout
+instead of the structure-of-arrays one, ``--capacity N`` launches every soa batch at that
+capacity (one compile for several sizes), ``--json FILE`` keeps the figures
+(benchmarks/device_suite.py runs it so).
 
 Without a CUDA device it prints ``no CUDA device`` and exits 0. ``--simulator`` runs the
 CUDA path in numba's CUDA simulator instead (sizes and duration should then be tiny, e.g.
@@ -80,9 +83,12 @@ def packed_cases(n: int, duration: float) -> list:
     return [pack(c.config, resolve_materials(c.config)) for c in plan.cases]
 
 
-def kernel_only(sizes: list[int], duration: float) -> None:
+def kernel_only(sizes: list[int], duration: float, layout: str = "soa",
+                capacity: int | None = None) -> dict:
     """RK4 steps/s of one device launch per size, then the device's statistics against the
-    CPU kernel's on three cases."""
+    CPU kernel's on three cases; what it printed, as a dict (``--json``). ``layout``: the
+    device layout; ``capacity``: the launch capacity of every soa launch (default: the
+    smallest that holds each size; one capacity for every size compiles the kernel once)."""
     from collections import Counter
 
     import numpy as np
@@ -90,27 +96,40 @@ def kernel_only(sizes: list[int], duration: float) -> None:
     from clearsweep import gpu
     from clearsweep.simulation import run_kernel
 
-    gpu.run_packed(packed_cases(2, 1.0e-4))           # compiles
-    print("| cases | one launch [s] | RK4 steps/s | statuses |")
-    print("|---|---|---|---|")
+    caps = sorted({capacity or gpu.capacity_for(n) for n in sizes}) if layout == "soa" else [None]
+    began = time.perf_counter()
+    for cap in caps:
+        gpu.run_packed(packed_cases(2, 1.0e-4), layout, cap)           # compiles
+    result: dict = {"layout": layout, "capacity": capacity, "duration_s": duration,
+                    "compile_s": time.perf_counter() - began, "launches": [], "agreement": []}
+    print("| layout | cases | one launch [s] | RK4 steps/s | statuses |")
+    print("|---|---|---|---|---|")
     for n in sizes:
         packed = packed_cases(n, duration)
         start = time.perf_counter()
-        runs = gpu.run_packed(packed)
+        runs = gpu.run_packed(packed, layout, capacity)
         seconds = time.perf_counter() - start
         steps = sum(pk.n_steps for pk in packed)
-        print(f"| {n:,} | {seconds:.2f} | {steps / seconds:.3g} | "
-              f"{dict(Counter(r.status for r in runs))} |", flush=True)
+        statuses = dict(Counter(r.status for r in runs))
+        result["launches"].append({"cases": n, "seconds": seconds, "steps_per_s": steps / seconds,
+                                   "statuses": statuses})
+        print(f"| {layout} | {n:,} | {seconds:.2f} | {steps / seconds:.3g} | {statuses} |",
+              flush=True)
     print()
     print("| case | statistic's largest relative difference | worn volume per joint: device / CPU "
           "[m^3] | energy residual: device / CPU |")
     print("|---|---|---|---|")
     packed = packed_cases(3, duration)
-    for k, (pk, dev) in enumerate(zip(packed, gpu.run_packed(packed))):
+    for k, (pk, dev) in enumerate(zip(packed, gpu.run_packed(packed, layout, capacity))):
         cpu = run_kernel(pk)
         rel = np.abs(dev.stats - cpu.stats) / np.maximum(np.abs(cpu.stats), 1e-300)
+        wrel = np.abs(dev.wvol - cpu.wvol) / np.maximum(np.abs(cpu.wvol), 1e-300)
+        result["agreement"].append({"case": k, "stats_max_rel": float(rel.max()),
+                                    "wvol_max_rel": float(wrel.max()),
+                                    "status": [dev.status, cpu.status]})
         print(f"| {k} | {float(rel.max()):.2e} | {dev.wvol} / {cpu.wvol} | "
               f"{dev.residual_max:.9e} / {cpu.residual_max:.9e} |")
+    return result
 
 
 def agreement(gpu, cpu) -> list[tuple[str, float, int]]:
@@ -147,6 +166,13 @@ def main(argv=None) -> int:
                     help="override of every case's config, e.g. joints.O.clearance=2.5e-4")
     ap.add_argument("--simulator", action="store_true",
                     help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
+    ap.add_argument("--layout", choices=("soa", "aos"), default="soa",
+                    help="the device layout (--kernel-only): structure of arrays or case by case")
+    ap.add_argument("--capacity", type=int, default=None,
+                    help="launch capacity of every soa launch (--kernel-only; default: the "
+                         "smallest that holds each size)")
+    ap.add_argument("--json", type=Path, default=None,
+                    help="write the --kernel-only figures to this JSON file too")
     args = ap.parse_args(argv)
     EXTRA[:] = args.set
     if args.simulator:
@@ -165,7 +191,12 @@ def main(argv=None) -> int:
         print(f"device: {name}; two_clearances{''.join(' --set ' + o for o in EXTRA)}, "
               f"{args.duration:g} s of motion per case")
         print()
-        kernel_only(args.sizes, args.duration)
+        result = kernel_only(args.sizes, args.duration, args.layout, args.capacity)
+        if args.json is not None:
+            import json
+
+            result.update(device=name, overrides=list(EXTRA))
+            args.json.write_text(json.dumps(result, indent=1))
         return 0
     # compile the device kernel outside the clock: one tiny batch
     timed_sweep(1, 1.0e-4, backend="cuda")

@@ -123,6 +123,11 @@ class RevoluteJointConfig(_Section):
     #: None: the surface material's own coefficient
     wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
                                               "Archard wear coefficient of joint O's bearing")
+    #: the oil's dynamic viscosity in the bearing's film (Petroff's viscous shear, docs/physics.md
+    #: 3.6); 0 (the default): the paper's dry contact. An ISO VG 68 oil (68 mm2/s at 40 C,
+    #: ISO 3448, at 880 kg/m3) is 0.06 Pa s
+    lubricant_viscosity: float = _setting(Field(0.0, lo=0.0, hi=10.0), "Pa s",
+                                          "lubricant viscosity in joint O's bearing")
 
     @property
     def socket_radius(self) -> float:
@@ -225,8 +230,16 @@ class ContactConfig(_Section):
     min_impact_velocity: float = _setting(_positive(1.0e-2), "m s-1", "floor of the impact velocity")
     layer_rule: str = _setting(Field("series", ("series", "paper_mm")), None,
                                "double elastic layer rule")
-    max_penetration_fraction: float = _setting(
-        _positive(0.5), "1", "largest penetration accepted, fraction of the clearance")
+    #: null (the default): the physical stop, the depth at which the joint's own law carries
+    #: load_bound or the coating's thickness (docs/physics.md 4.3); a number: the earlier
+    #: stop, that fraction of the clearance
+    max_penetration_fraction: float | None = _setting(
+        Field(None, lo=0.0, lo_open=True, nullable=True), "1",
+        "largest penetration accepted, fraction of the clearance (null: the physical stop)")
+    #: the contact force beyond which the elastic law is not trusted: the penetration stop
+    #: is the law's depth at it (docs/physics.md 4.3)
+    load_bound: float = _setting(_positive(1.0e5), "N",
+                                 "contact force at the penetration stop")
     #: hysteresis damping law (docs/physics.md section 3.2): the paper's or one of the literature's
     damping: str = _setting(Field("paper", DAMPING_LAWS), None, "contact damping law")
     #: max: the fastest approach of the contact episode; onset: its value at the episode's first step

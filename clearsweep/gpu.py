@@ -9,7 +9,9 @@ sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
 projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
 other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
-Cases are grouped by wear-map shape and run in batches that fit the device's free memory.
+Cases are grouped by wear-map shape and run in batches that fit the device's free memory,
+stored structure-of-arrays (element e of case i at e * capacity + i) and padded to a launch
+capacity (:data:`CAPACITIES`, :func:`batch_plan`): a batch takes capacity x case_bytes.
 """
 
 from __future__ import annotations
@@ -43,12 +45,63 @@ HOST_BATCH_BYTES = 16 << 30
 #: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
 SIMULATOR_BATCH = 64
 
+#: The device layouts and launch capacities (``core.device``, which imports numba.cuda:
+#: stated here too, so that planning a batch needs no CUDA import; tests check they agree).
+LAYOUTS = ("soa", "aos")
+DEFAULT_LAYOUT = "soa"
+CAPACITIES = (64, 1024, 4096, 16384, 32768)
+
 
 class NoCudaDevice(RuntimeError):
     """``--backend cuda`` without a CUDA device (and without the simulator)."""
 
     def __init__(self, detail: str = ""):
         super().__init__(NO_DEVICE + (f" ({detail})" if detail else ""))
+
+
+class CudaPairing(NoCudaDevice):
+    """numba-cuda and numpy releases that do not compile the kernel together: no usable
+    device, said in one line before any case runs."""
+
+    def __init__(self, message: str):
+        RuntimeError.__init__(self, message)
+
+
+#: numba-cuda releases (major, minor) and the numpy (major, minor) below which each
+#: compiles the kernel: numba-cuda 0.30 (0.30.4 on the device image) fails with numpy 2.5,
+#: whose removal of np.row_stack breaks its compiler, and every case of a sweep came back
+#: ``failed`` with numpy's message (benchmarks/README.md, "CUDA backend"). pyproject.toml's
+#: ``cuda`` and ``test`` extras pin the same pairing (tests/test_gpu.py checks they agree).
+NUMPY_BELOW = {(0, 30): (2, 5)}
+
+
+def _minor(version: str) -> tuple[int, int]:
+    parts = [int("".join(c for c in p if c.isdigit()) or 0) for p in version.split(".")[:2]]
+    return (parts + [0, 0])[0], (parts + [0, 0])[1]
+
+
+def installed_versions() -> tuple[str, str | None]:
+    """(numpy's version, numba-cuda's; None where numba-cuda is not installed)."""
+    from importlib import metadata
+
+    try:
+        numba_cuda: str | None = metadata.version("numba-cuda")
+    except metadata.PackageNotFoundError:
+        numba_cuda = None
+    return np.__version__, numba_cuda
+
+
+def pairing_problem(numpy_version: str, numba_cuda_version: str | None) -> str | None:
+    """The one-line message for a numpy and numba-cuda pairing that does not compile the
+    kernel (:data:`NUMPY_BELOW`), None for one that does or is not known not to."""
+    if numba_cuda_version is None:
+        return None
+    below = NUMPY_BELOW.get(_minor(numba_cuda_version))
+    if below is None or _minor(numpy_version) < below:
+        return None
+    return (f"numba-cuda {numba_cuda_version} does not compile the kernel with numpy "
+            f"{numpy_version}: install numpy below {below[0]}.{below[1]} "
+            "(pip install 'clearsweep[cuda]'), or use --backend processes")
 
 
 def simulated() -> bool:
@@ -59,9 +112,14 @@ def simulated() -> bool:
 
 
 def device_name() -> str:
-    """The CUDA device's name; raises :class:`NoCudaDevice` when there is none."""
+    """The CUDA device's name; raises :class:`NoCudaDevice` when there is none, and
+    :class:`CudaPairing` (one of them) when the installed numpy and numba-cuda do not compile
+    the kernel together (:data:`NUMPY_BELOW`), before anything is compiled or run."""
     if simulated():
         return "numba CUDA simulator"
+    problem = pairing_problem(*installed_versions())
+    if problem is not None:
+        raise CudaPairing(problem)
     try:
         from numba import cuda
 
@@ -122,51 +180,122 @@ def _device_budget() -> int:
     return int(DEVICE_MEMORY_FRACTION * free)
 
 
-def _allocate(group: Sequence[Packed]) -> dict[str, np.ndarray]:
-    """Host arrays of run_cases' arguments, by name (``core.device.ARGS``), for one batch of
-    cases of one map shape."""
-    n = len(group)
+def _shapes(group: Sequence[Packed]) -> dict[str, tuple[tuple[int, ...], Any, float]]:
+    """Per-case shape, dtype and initial value of run_cases' arguments but the inputs p, jp,
+    y0, n_steps and save_every, by name (``core.device.ARGS``' order), for one batch of cases
+    of one map shape."""
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
-    arrays = {"p": np.stack([pk.p for pk in group]), "jp": np.stack([pk.jp for pk in group]),
-              "y0": np.stack([pk.y0 for pk in group]),
-              "n_steps": np.array([pk.n_steps for pk in group], dtype=np.int64),
-              "save_every": np.array([pk.save_every for pk in group], dtype=np.int64),
-              "wmap": np.zeros((n, L.N_JOINTS, npolar, nazim)),
-              "proj": np.zeros((n, L.N_JOINTS, 3, L.N_ANGLE_BINS)),
-              "wvol": np.zeros((n, L.N_JOINTS)),
-              "info": np.zeros((n, L.N_INFO), dtype=np.int64),
-              "stats": np.zeros((n, L.N_WINDOWS, L.N_M)), "track": np.zeros((n, L.N_TRACK)),
-              # one row at least: no zero-size array for the device
-              "sec": np.full((n, max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.nan)}
+    shapes: dict[str, tuple[tuple[int, ...], Any, float]] = {
+        "wmap": ((L.N_JOINTS, npolar, nazim), np.float64, 0.0),
+        "proj": ((L.N_JOINTS, 3, L.N_ANGLE_BINS), np.float64, 0.0),
+        "wvol": ((L.N_JOINTS,), np.float64, 0.0), "info": ((L.N_INFO,), np.int64, 0),
+        "stats": ((L.N_WINDOWS, L.N_M), np.float64, 0.0), "track": ((L.N_TRACK,), np.float64, 0.0),
+        # one row at least: no zero-size array for the device
+        "sec": ((max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.float64, np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
-        arrays[name] = np.zeros((n,) + shape, dtype=np.int64 if name in INT_WORK else np.float64)
-    arrays.update(rows_t=np.zeros((n, 1)), rows_y=np.zeros((n, 1, L.N_Y)),
-                  rows_d=np.zeros((n, 1, L.N_D)), rows_wmax=np.zeros((n, 1, L.N_JOINTS)))
-    return arrays
+        shapes[name] = (shape, np.int64 if name in INT_WORK else np.float64, 0)
+    shapes.update(rows_t=((1,), np.float64, 0.0), rows_y=((1, L.N_Y), np.float64, 0.0),
+                  rows_d=((1, L.N_D), np.float64, 0.0), rows_wmax=((1, L.N_JOINTS), np.float64, 0.0))
+    return shapes
 
 
-def _run_on_device(arrays: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def _allocate(group: Sequence[Packed], layout: str = "aos",
+              capacity: int | None = None) -> dict[str, np.ndarray]:
+    """Host arrays of run_cases' arguments, by name (``core.device.ARGS``), for one batch of
+    cases of one map shape: with the case first ("aos"), or stored structure-of-arrays with
+    the case last, padded to ``capacity`` cases ("soa": ``core.device.soa_kernel``; the
+    smallest launch capacity that holds the batch by default). n_steps and save_every hold
+    the batch's cases alone in either layout."""
+    n = len(group)
+    inputs = {"p": np.stack([pk.p for pk in group]), "jp": np.stack([pk.jp for pk in group]),
+              "y0": np.stack([pk.y0 for pk in group])}
+    arrays: dict[str, np.ndarray] = {}
+    if layout == "aos":
+        arrays.update(inputs)
+    else:
+        cap = capacity if capacity is not None else capacity_for(n)
+        for name, a in inputs.items():
+            arrays[name] = to_soa(a, cap)
+    arrays["n_steps"] = np.array([pk.n_steps for pk in group], dtype=np.int64)
+    arrays["save_every"] = np.array([pk.save_every for pk in group], dtype=np.int64)
+    for name, (shape, dtype, fill) in _shapes(group).items():
+        full = (n,) + shape if layout == "aos" else shape + (cap,)
+        arrays[name] = np.full(full, fill, dtype=dtype) if fill != 0 else np.zeros(full, dtype=dtype)
+    from .core.device import ARGS
+
+    return {name: arrays[name] for name in ARGS}
+
+
+def capacity_for(n: int) -> int:
+    """The launch capacity a batch of n cases is stored for (``core.device.capacity_for``,
+    without importing numba.cuda)."""
+    for cap in CAPACITIES:
+        if n <= cap:
+            return cap
+    raise ValueError(f"{n} cases exceed the largest launch capacity {CAPACITIES[-1]}")
+
+
+def to_soa(a: np.ndarray, capacity: int) -> np.ndarray:
+    """Case-first a (n, ...) stored structure-of-arrays: shape (..., capacity), case i of a
+    in column i, the padding zero."""
+    n = a.shape[0]
+    out = np.zeros(a.shape[1:] + (capacity,), dtype=a.dtype)
+    out[..., :n] = np.moveaxis(a, 0, -1)
+    return out
+
+
+def from_soa(a: np.ndarray, n: int) -> np.ndarray:
+    """The first n cases of a structure-of-arrays a (..., capacity), case first (a view)."""
+    return np.moveaxis(a[..., :n], -1, 0)
+
+
+def batch_plan(n: int, fit: int) -> tuple[int, int]:
+    """(cases per batch, launch capacity) of the structure-of-arrays layout for n cases of
+    which ``fit`` fit the device's memory at once: as many as fit, in the smallest capacity
+    that holds them, where that capacity fits too; else in the largest capacity that fits
+    (the smallest, at worst)."""
+    size = max(1, min(n, fit, CAPACITIES[-1]))
+    cap = capacity_for(size)
+    if cap > fit:
+        fitting = [c for c in CAPACITIES if c <= fit]
+        cap = fitting[-1] if fitting else CAPACITIES[0]
+        size = min(size, cap)
+    return size, cap
+
+
+def _run_on_device(arrays: dict[str, np.ndarray], layout: str = "aos") -> dict[str, np.ndarray]:
     """Launch one batch; the arrays it gives back (``core.device.RESULTS``: wmap, proj,
     wvol, info, stats, track and the work array ``pairs``, which holds the first impact
-    times) on the host, by name."""
+    times) on the host, by name, case first."""
     from .core import device
 
+    n = arrays["n_steps"].shape[0]
     if simulated():
-        device.launch(arrays)
-        return {name: arrays[name] for name in device.RESULTS}
-    from numba import cuda
+        device.launch(arrays, layout)
+        res = {name: arrays[name] for name in device.RESULTS}
+    else:
+        from numba import cuda
 
-    stream = cuda.stream()
-    on_device = {name: cuda.to_device(a, stream=stream) for name, a in arrays.items()}
-    stream.synchronize()
-    device.launch(on_device)
-    return {name: on_device[name].copy_to_host() for name in device.RESULTS}
+        stream = cuda.stream()
+        on_device = {name: cuda.to_device(a, stream=stream) for name, a in arrays.items()}
+        stream.synchronize()
+        device.launch(on_device, layout)
+        res = {name: on_device[name].copy_to_host() for name in device.RESULTS}
+    if layout == "soa":
+        res = {name: from_soa(a, n) for name, a in res.items()}
+    return res
 
 
-def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
+def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
+               capacity: int | None = None) -> list[KernelRun]:
     """Run cases on the device; per case what ``simulation.run_kernel`` returns, with one
-    NaN row for the time series (none is kept) and the batch's wall time shared out."""
+    NaN row for the time series (none is kept) and the batch's wall time shared out.
+    ``layout``: "soa" (structure of arrays, :func:`batch_plan`'s capacities) or "aos" (case
+    by case); ``capacity``: the launch capacity of every "soa" batch, of at most that many
+    cases (a benchmark compiles the kernel of the capacity it times)."""
+    if layout not in LAYOUTS:
+        raise ValueError(f"device layout {layout!r}: expected one of {LAYOUTS}")
     device_name()
     out: list[KernelRun | None] = [None] * len(packed)
     by_shape: dict[tuple[int, ...], list[int]] = {}
@@ -175,17 +304,26 @@ def run_packed(packed: Sequence[Packed]) -> list[KernelRun]:
     for shape, members in by_shape.items():
         rows = max(section_rows(packed[i]) for i in members)
         need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL]), rows) for i in members)
-        size = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
+        fit = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
+        cap = None
+        if layout == "aos":
+            size = fit
+        elif capacity is not None:
+            size, cap = min(fit, capacity), capacity
+        else:
+            size, cap = batch_plan(len(members), fit)
         for start in range(0, len(members), size):
             batch = members[start:start + size]
             began = time.perf_counter()
-            res = _run_on_device(_allocate([packed[i] for i in batch]))
+            res = _run_on_device(_allocate([packed[i] for i in batch], layout, cap), layout)
             wall = (time.perf_counter() - began) / len(batch)
             for k, i in enumerate(batch):
-                out[i] = _raw(packed[i], res["wmap"][k], res["proj"][k], res["wvol"][k],
-                              res["info"][k], res["stats"][k], res["track"][k],
-                              res["pairs"][k][PAIR_FIRST], res["sec"][k][:section_rows(packed[i])],
-                              wall)
+                # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
+                # batch gives strided views), one case at a time
+                one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
+                out[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
+                              one["stats"], one["track"], one["pairs"][PAIR_FIRST],
+                              one["sec"][:section_rows(packed[i])], wall)
     return [r for r in out if r is not None]
 
 

@@ -148,7 +148,7 @@ def hertz_modulus(joint: AnyJoint, materials: dict) -> float:
 def power_law_joint(joint_type: str, exponent: float) -> bool:
     """Whether a joint of ``joint_type`` takes the power law (Hertz's, docs/physics.md 3.2)
     in a case whose ``P_EXPONENT`` is ``exponent``: the journal of O and P's corners always
-    (``revolute.journal_law``, ``prismatic.corner_law``), the spherical joints under
+    (``revolute.journal_law``; P's faces, ``prismatic.line_stiffness``), the spherical joints under
     ``contact.elastic: hertz`` (``exponent`` != 0); else the paper's layered law."""
     return joint_type in ("revolute", "prismatic") or exponent != 0.0
 
@@ -328,15 +328,20 @@ def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> N
 
 
 def static_penetration(force_N: float, c: float, ew: float, ri: float, rj: float = 0.0,
-                       exponent: float = 0.0) -> float:
+                       exponent: float = 0.0, *, plain: bool = False) -> float:
     """Penetration delta [m] at which the contact's elastic force equals force_N [N].
 
     ``exponent`` 0, the paper's law: Newton on F_el(delta) = force_N from the small-penetration
     estimate F_el ~ (2 K / c) delta^2, K = 4 pi E_w R_i / 5; F_el is convex and increasing, so
     the iteration converges monotonically from above. The power law F_el = A c (delta/c)^n
-    (ball radius ``rj``, n = ``exponent``) is inverted in closed form.
+    (ball radius ``rj``, n = ``exponent``) is inverted in closed form. ``plain``: the contact
+    functions' Python forms (:func:`as_python`), so that planning compiles nothing.
     """
-    from .core.contact import elastic_force, power_coefficient, stiffness_factor
+    from .core import contact
+
+    elastic_force, power_coefficient, stiffness_factor = (
+        (as_python(f) if plain else f)
+        for f in (contact.elastic_force, contact.power_coefficient, contact.stiffness_factor))
 
     if force_N <= 0.0:
         return 0.0
@@ -358,47 +363,57 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     penetration under the joint's static load, here the ideal mechanism's joint reaction at
     the start (weights and inertia at cfg.mechanism.theta0 and speed), through the joint's
     own contact law and modulus (:func:`static_penetration`, :func:`equivalent_modulus`).
-    Such a case stops at its first steps on penetration_exceeded, the penetration being
-    contact.max_penetration_fraction of c (at P, of the smaller of its two clearances).
+    Such a joint sits deeper in its socket than its clearance: its contact law is used
+    beyond the small contact it describes (docs/physics.md 4.3). The text says
+    whether the run will stop: where the sink also passes the joint's penetration stop
+    (:func:`penetration_stop`; with ``contact.max_penetration_fraction`` that fraction of c,
+    and then the warning comes at that fraction).
 
-    At the guide P the reaction's component across each pair of walls (y, z) is shared by
-    the four corners of the block's face that meets the wall, the block lying flat: the
-    least sink a case can have (a tilted block carries the load on fewer corners, deeper).
+    At the guide P the reaction's component across each pair of walls (y, z) is carried by
+    the face of the block that meets the wall, lying flat on it (:func:`face_sink`): the
+    least sink a case can have (a tilted block carries the load on one edge, deeper).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.prismatic import corner_law
     from .core.revolute import journal_law
 
-    packed = pack(cfg, materials)
+    packed = pack(cfg, materials, seat=False)
     p, jp = packed.p, packed.jp
     preset = PRESETS[cfg.mechanism.preset]
     forces = ideal_joint_forces(0.0, initial_state(preset, cfg.mechanism.theta0,
                                                    cfg.mechanism.omega_rad_s), p, jp)
     fraction = cfg.contact.max_penetration_fraction
     out = []
+
+    def outcome(sink: float, stop: float) -> str:
+        if sink > stop:
+            if fraction is not None:
+                return (f"beyond contact.max_penetration_fraction ({fraction:g}) of the "
+                        "clearance; the run will stop on penetration_exceeded")
+            return (f"beyond its penetration stop ({stop:.3g} m); the run will stop on "
+                    "penetration_exceeded")
+        return ("deeper than its clearance: its contact law is used beyond the small contact "
+                "it describes (docs/physics.md 4.3); the run goes on")
+
     for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
         c = jp[j, L.J_C]
+        stop = jp[j, L.J_PEN_STOP]
+        limit = min(c, stop)
         if joint.type == "prismatic":
-            # the reaction across the y walls and across the z walls, four corners each
+            # the reaction across the y walls and across the z walls, a face each
             # the stop compares the deepest corner with the smaller clearance (jp[J_C])
             key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
             for axis in (1, 2):
-                corner_load = abs(float(forces[j][axis])) / 4.0
-                if not (math.isfinite(corner_load) and corner_load > 0.0):
+                load = abs(float(forces[j][axis]))
+                if not (math.isfinite(load) and load > 0.0):
                     continue
-                # the corner's power law A c (delta / c)^n, A = 4 E* sqrt(r_c c) / 3: Hertz's
-                # sphere on a plane, as the kernel and :func:`seated_block` take it
-                sink = static_penetration(corner_load, c, jp[j, L.J_EW], jp[j, L.J_RI], c,
-                                          corner_law(p))
-                if sink >= fraction * c:
+                sink = face_sink(load, jp[j], axis)
+                if sink >= limit:
                     out.append(f"joints.{joint.name}.{key} ({c:g} m) is below joint "
-                               f"{joint.name}'s Hertz sink: {sink:.3g} m at each of the four "
-                               f"corners on its {'yz'[axis - 1]} walls under a static load of "
-                               f"{4.0 * corner_load:.3g} N, beyond contact.max_penetration_fraction "
-                               f"({fraction:g}) of the smaller clearance; the run will stop on "
-                               "penetration_exceeded")
+                               f"{joint.name}'s contact sink: {sink:.3g} m of the block's face "
+                               f"on its {'yz'[axis - 1]} walls under a static load of "
+                               f"{load:.3g} N, {outcome(sink, stop)}")
                     break
             continue
         f = forces[j].copy()
@@ -410,12 +425,62 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
         if not (math.isfinite(size) and size > 0.0):
             continue
         sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        if sink >= fraction * c:
+        if sink >= limit:
             out.append(f"joints.{joint.name}.clearance ({c:g} m) is below joint {joint.name}'s "
-                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, beyond "
-                       f"contact.max_penetration_fraction ({fraction:g}) of the clearance; the "
-                       "run will stop on penetration_exceeded")
+                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, "
+                       f"{outcome(sink, stop)}")
     return out
+
+
+def film_coefficient(viscosity: float, radius: float, length: float, clearance: float) -> float:
+    """The bearing film's viscous coefficient [N s/m]: Petroff's shear of a film of thickness
+    c over the bearing's surface 2 pi R L, F = eta (2 pi R L / c) v (Petroff 1883; Hamrock,
+    Schmid & Jacobson, *Fundamentals of Fluid Film Lubrication*, 2nd ed. 2004, ch. 8), along
+    the journal's slip (docs/physics.md 3.6)."""
+    return viscosity * 2.0 * math.pi * radius * length / clearance
+
+
+#: The deepest a corner of the guide's block may go, a fraction of its edges' radius r_c:
+#: there a rounded edge's contact half-width, about sqrt(r_c delta), is 0.32 r_c
+#: (:func:`penetration_stop`).
+CORNER_DEPTH_FRACTION = 0.1
+
+
+def penetration_stop(row: np.ndarray, kind: str, p: np.ndarray, fraction: float | None,
+                     load_bound: float) -> float:
+    """The penetration [m] beyond which joint ``row`` (its packed jp row, of joint type
+    ``kind``) stops its run on penetration_exceeded (docs/physics.md 4.3).
+
+    ``fraction`` given (``contact.max_penetration_fraction``): that fraction of the clearance
+    (at P, of the smaller of its two), the earlier rule. Otherwise the depth at which the
+    contact law leaves its validity: where the joint's own law, with its modulus, carries
+    ``load_bound`` [N] (``contact.load_bound``; at P on one edge line touching at its end
+    corner only, the deepest a corner can be sent for a load), and, for a coated socket, no
+    deeper than the coating's thickness (the ball would have pressed through the layer
+    whose law it is); at P no deeper than :data:`CORNER_DEPTH_FRACTION` of the edge's
+    radius. The unworn clearance is used: wear
+    softens the law, so a worn joint's stop is, if anything, early."""
+    from .core.prismatic import line_stiffness
+    from .core.revolute import journal_law
+
+    c = float(row[L.J_C])
+    if fraction is not None:
+        return fraction * c
+    if kind == "prismatic":
+        # the edge lines' law (section 3.7): an edge tilted until only its end corner
+        # touches carries k_l L delta / 2 at the corner's depth delta, the least load for a
+        # depth that a line in contact along its length can have; the softer wall's lines
+        one = np.ascontiguousarray(row[None, :], dtype=np.float64)
+        kl = min(as_python(line_stiffness)(one, 0, wall, row[L.J_EW]) for wall in (0, 2))
+        depth = min(load_bound / (0.5 * kl * float(row[L.J_LENGTH])), float(row[L.J_COAT]))
+        # the rounded edge's line contact wants its width well inside the edge's radius
+        # r_c (jp[J_RI]): no deeper than a tenth of r_c
+        return min(depth, CORNER_DEPTH_FRACTION * float(row[L.J_RI]))
+    law = as_python(journal_law)(p) if kind == "revolute" else p[L.P_EXPONENT]
+    depth = min(static_penetration(load_bound, c, row[L.J_EW], row[L.J_RI], row[L.J_RJ], law,
+                                   plain=True),
+                float(row[L.J_COAT]))
+    return depth
 
 
 def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
@@ -455,10 +520,10 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     the modulus the one the contact law uses there. The journal of O leans along the
     reaction's part in the bearing's plane (y, z), with the journal's law, turned by the
     friction angle where friction is on (:func:`journal_seat`), so that its contact force,
-    normal and friction together, is the ideal reaction.
+    normal and friction together, is the ideal reaction; the balls of the spherical joints
+    likewise, against the friction of their slip at the start (:func:`ball_seats`).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.kinematics import rotation, trig
     from .core.revolute import journal_law
 
     y_ideal = initial_state(preset, theta0, omega)
@@ -484,15 +549,87 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
         u = f / size            # the contact's force on the ball leans along u
         if joint.type == "revolute":
             u, size = journal_seat(u, size, p, jp, j, omega, wmap)
-        c, ew = jp[j, L.J_C], jp[j, L.J_EW]
-        if wmap is not None:
-            # the socket body's angles (the table's; the ground, with no state, unrotated)
-            socket = next(body for body in BODIES if body.name == joint.socket.body)
-            phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
-            rot = np.array(rotation(trig(*phi))).reshape(3, 3)
-            c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
-        delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        offsets[j] = -(c + delta) * u
+        offsets[j] = leaning_offset(j, u, size, law, p, jp, y_ideal, wmap)
+    return ball_seats(preset, p, jp, theta0, omega, forces, offsets, y_ideal, wmap)
+
+
+def leaning_offset(j: int, u: np.ndarray, size: float, law: float, p: np.ndarray,
+                   jp: np.ndarray, y_ideal: np.ndarray, wmap: np.ndarray | None) -> np.ndarray:
+    """The offset [m] of joint j's ball (global) whose contact force, normal along -n = u,
+    carries the normal load ``size`` [N]: -(c + delta_s) u, delta_s the static penetration
+    of the joint's law ``law`` (c and the modulus those of the worn socket in that
+    direction where ``wmap`` is given)."""
+    from .core.kinematics import rotation, trig
+
+    joint = JOINTS[j]
+    c, ew = jp[j, L.J_C], jp[j, L.J_EW]
+    if wmap is not None:
+        # the socket body's angles (the table's; the ground, with no state, unrotated)
+        socket = next(body for body in BODIES if body.name == joint.socket.body)
+        phi = np.zeros(3) if socket.y_phi is None else y_ideal[socket.y_phi:socket.y_phi + 3]
+        rot = np.array(rotation(trig(*phi))).reshape(3, 3)
+        c, ew = worn_contact(jp, j, wmap, rot.T @ (-u), p)
+    delta = static_penetration(size, c, ew, jp[j, L.J_RI], jp[j, L.J_RJ], law)
+    return -(c + delta) * u
+
+
+#: Fixed-point iterations of :func:`ball_seats` at most; each turns the seat by at most the
+#: friction angle's sine times the last turn (mu' = 0.167: 1e-16 in 20).
+BALL_SEAT_ITERATIONS = 60
+
+
+def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, omega: float,
+               forces: np.ndarray, offsets: np.ndarray, y_ideal: np.ndarray,
+               wmap: np.ndarray | None = None) -> np.ndarray:
+    """The seated offsets with each loaded spherical clearance joint's ball turned so that
+    its contact force, normal and friction together, is the ideal reaction ``forces[j]``
+    (docs/physics.md 1.2). Friction off: ``offsets`` unchanged.
+
+    At the start the ball turns with its body and the socket with its own (the rod's rate
+    against the crank's at A, the slider's at B), so the contact point slips and friction
+    mu' F_N acts along the slip's tangent direction f (mu' = mu c_d(|v_t|), section 3.3).
+    With tan(phi) = mu', F_N (-n) + mu' F_N f = |F| F^ holds when
+    -n = cos(phi) F^ - sin(phi) g, g the unit part of f across F^, and F_N = |F| cos(phi).
+    The slip's direction depends on n (and the start's velocities on every offset), so the
+    seat is a fixed point: the kernel's own contact (``dynamics.start_contacts``) at the
+    state the offsets give reads f and mu', the seat is turned, and again, until the
+    offsets stop moving (a contraction by about sin(phi) per turn)."""
+    from .core.dynamics import start_contacts
+
+    seats = []
+    for j, joint in enumerate(JOINTS):
+        size = float(np.linalg.norm(forces[j]))
+        if (joint.type == "spherical" and jp[j, L.J_CLEARANCE] != 0.0
+                and math.isfinite(size) and size > 0.0):
+            seats.append((j, forces[j] / size, size))
+    if p[L.P_FRICTION] == 0.0 or not seats:
+        return offsets
+    grid = np.zeros((L.N_JOINTS, 1, 1)) if wmap is None else wmap
+    law = p[L.P_EXPONENT]
+    offsets = offsets.copy()
+    for _ in range(BALL_SEAT_ITERATIONS):
+        by_name = {row.name: offsets[k] for k, row in enumerate(JOINTS)}
+        y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
+                           by_name["P"])
+        force, fn, normal = start_contacts(y0, p, jp, grid)
+        moved = 0.0
+        for j, f_hat, size in seats:
+            friction = force[j] + fn[j] * normal[j]     # the contact force less its normal part
+            ft = float(np.linalg.norm(friction))
+            if not (fn[j] > 0.0 and math.isfinite(ft) and ft > 0.0):
+                continue                                # no slip, no friction to balance
+            mu = ft / fn[j]
+            cos, sin = 1.0 / math.sqrt(1.0 + mu * mu), mu / math.sqrt(1.0 + mu * mu)
+            across = friction / ft - (friction / ft @ f_hat) * f_hat
+            if not np.linalg.norm(across) > 0.0:
+                continue                                # friction along the load: no turn helps
+            g = across / np.linalg.norm(across)
+            u = cos * f_hat - sin * g
+            new = leaning_offset(j, u / np.linalg.norm(u), size * cos, law, p, jp, y_ideal, wmap)
+            moved = max(moved, float(np.linalg.norm(new - offsets[j]) / np.linalg.norm(new)))
+            offsets[j] = new
+        if moved <= 1e-15:
+            break
     return offsets
 
 
@@ -516,14 +653,38 @@ def journal_seat(u: np.ndarray, size: float, p: np.ndarray, jp: np.ndarray, j: i
     if p[L.P_FRICTION] == 0.0 or omega == 0.0:
         return u, size
     mu = jp[j, L.J_MU]
+    film = jp[j, L.J_FILM]
     if wmap is not None and revolute.worn_through(np.ascontiguousarray(wmap, dtype=np.float64), j,
                                                   tuple(float(v) for v in -u), float(jp[j, L.J_COAT])):
         mu = jp[j, L.J_MU_BASE]
-    mu_eff = mu * as_python(friction_factor)(jp[j, L.J_RJ] * abs(omega), p[L.P_V0], p[L.P_V1])
-    angle = -math.copysign(math.atan(mu_eff), omega)
+    slip = jp[j, L.J_RJ] * abs(omega)
+    mu_eff = mu * as_python(friction_factor)(slip, p[L.P_V0], p[L.P_V1])
+    drag = film * slip                  # the film's viscous shear [N] (section 3.6)
+    if drag == 0.0 or not drag < size:
+        # no film (or one whose drag alone exceeds the load: no seat balances it)
+        angle = -math.copysign(math.atan(mu_eff), omega)
+        normal = size / math.sqrt(1.0 + mu_eff * mu_eff)
+    else:
+        # |F|^2 = F_N^2 + (mu' F_N + drag)^2, the tangential force mu' F_N + drag
+        a = 1.0 + mu_eff * mu_eff
+        normal = (-mu_eff * drag + math.sqrt(mu_eff * mu_eff * drag * drag
+                                             - a * (drag * drag - size * size))) / a
+        angle = -math.copysign(math.atan2(mu_eff * normal + drag, normal), omega)
     cs, sn = math.cos(angle), math.sin(angle)
     turned = np.array([0.0, cs * u[1] - sn * u[2], sn * u[1] + cs * u[2]])
-    return turned, size / math.sqrt(1.0 + mu_eff * mu_eff)
+    return turned, normal
+
+
+def face_sink(load_N: float, row: np.ndarray, axis: int) -> float:
+    """Penetration [m] of the block's face lying flat on a wall across ``axis`` (1: a y wall,
+    2: a z wall) of the guide P (its jp ``row``) under the load ``load_N`` [N]: both edge
+    lines of the face in contact along their length, 2 k_l L delta = load
+    (``prismatic.line_stiffness``, docs/physics.md 3.7)."""
+    from .core.prismatic import line_stiffness
+
+    stiffness = as_python(line_stiffness)(np.ascontiguousarray(row[None, :]), 0, 2 * axis - 2,
+                                          row[L.J_EW])
+    return load_N / (2.0 * stiffness * row[L.J_LENGTH])
 
 
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
@@ -547,14 +708,11 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
     """The offset [m] (0, y, z) of a block seated in its guide (joint P's jp ``row``) under
     the ideal guide's force ``force`` [N] on it: against the y wall the force's y part
     pushes from, and likewise in z, each wall's four corners sharing that part of the load
-    (a corner's law, ``prismatic.corner_law``, and the coated modulus); a part that is 0 or
-    not finite leaves the block centred in that direction. ``depth``: each wall's wear
-    under its least worn corner (+y, -y, +z, -z; :func:`worn_walls`), which moves the
-    wall's surface out by that much: the least worn corner rests on it, the others start
+    (its face lying flat on the wall, :func:`face_sink`, with the coated modulus); a part
+    that is 0 or not finite leaves the block centred in that direction. ``depth``: each
+    wall's wear under its least worn corner (+y, -y, +z, -z; :func:`worn_walls`), which moves
+    the wall's surface out by that much: the least worn corner rests on it, the others start
     clear of their deeper wear."""
-    from .core.prismatic import corner_law
-
-    law = corner_law(p)
     out = np.zeros(3)
     for axis, c in ((1, row[L.J_CY]), (2, row[L.J_CZ])):
         part = float(force[axis])
@@ -562,8 +720,7 @@ def seated_block(force: np.ndarray, row: np.ndarray, p: np.ndarray,
             continue
         # the block rests on the wall opposite the force's direction: -y (-z) for a part > 0
         c = c + depth[2 * axis - 2 + (1 if part > 0.0 else 0)]
-        # the corner's power law A c (delta / c)^n with A = 4 E* sqrt(r_c c) / 3
-        delta = static_penetration(0.25 * abs(part), c, row[L.J_EW], row[L.J_RI], c, law)
+        delta = face_sink(abs(part), row, axis)
         out[axis] = -math.copysign(c + delta, part)
     return out
 
@@ -687,6 +844,8 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
         ideal = row[L.J_CLEARANCE] == 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
             f"layered law, E_w ({cfg.contact.layer_rule})"
+        if kind == "prismatic":
+            law = "elastic foundation on the faces' edge lines, E*"
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,
@@ -731,7 +890,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     contact = cfg.contact
     p[L.P_CR] = contact.restitution
     p[L.P_DV0_MIN] = contact.min_impact_velocity
-    p[L.P_PEN_FRAC] = contact.max_penetration_fraction
+    fraction = contact.max_penetration_fraction
+    p[L.P_PEN_FRAC] = 0.0 if fraction is None else fraction
     p[L.P_HYST_NUM], p[L.P_HYST_DEN] = as_python(hysteresis_fraction)(DAMPING_LAWS.index(contact.damping),
                                                            contact.restitution)
     p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
@@ -785,6 +945,12 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
         if isinstance(joint, PrismaticJointConfig):
             guide_row(jp[j], joint, preset)
+        if c > 0.0 and isinstance(joint, RevoluteJointConfig):
+            jp[j, L.J_FILM] = film_coefficient(joint.lubricant_viscosity, joint.bearing_radius,
+                                               joint.length, c)
+        if c > 0.0:
+            jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
+                                                   contact.load_bound)
     perturb = cfg.ensemble.perturb
     member = member_perturbation(cfg.ensemble) if perturb.any else None
     if member is not None:      # unperturbed: the nominal case, bit for bit

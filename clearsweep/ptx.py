@@ -8,7 +8,8 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY]`` prints them, keeping the PTX text in
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos] [--capacity N]``
+prints them, keeping the PTX text in
 PTX_FILE if given (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
 """
 
@@ -67,19 +68,43 @@ def _device_of_capability(cc: tuple[int, int]):
     return stand_in_device(_StandInDevice(cc))
 
 
-def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC) -> str:
-    """PTX of ``core.device.run_cases`` for compute capability cc; needs numba-cuda with NVVM
-    (``pip install numba-cuda[cu12]``), no device. About a minute on one core: the whole
-    kernel is compiled, every device function inlined."""
+#: The launch capacity that the structure-of-arrays figures are built for (any of
+#: ``core.device.CAPACITIES``: the capacity only scales constant strides).
+DEFAULT_CAPACITY = 16384
+
+
+def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
+                          capacity: int = DEFAULT_CAPACITY) -> str:
+    """PTX of the batch kernel of ``layout`` for compute capability cc: "soa",
+    ``core.device.soa_kernel(capacity)`` (the default), or "aos", ``core.device.run_cases``
+    (the arrays of either have the same dimensions). Needs numba-cuda with NVVM (``pip
+    install numba-cuda[cu12]``), no device. About a minute on one core: the whole kernel is
+    compiled, every device function inlined."""
     from numba import cuda
 
     from .core import device
 
     if device.SIMULATED:
         raise RuntimeError("NUMBA_ENABLE_CUDASIM is set: the simulator compiles no PTX")
+    if layout not in device.LAYOUTS:
+        raise ValueError(f"layout {layout!r}: expected one of {device.LAYOUTS}")
+    kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
     with _device_of_capability(cc):
-        ptx, _ = cuda.compile_ptx(device.run_cases.py_func, run_cases_signature(), cc=cc)
+        ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(), cc=cc)
     return ptx
+
+
+def build_kernel(layout: str = "soa", capacity: int = DEFAULT_CAPACITY) -> float:
+    """Compile the batch kernel of ``layout`` (and ``capacity``) for the current CUDA device
+    with the launch signature, as a sweep's first launch would; seconds taken. With
+    ``CLEARSWEEP_CUDA_CACHE=1`` the build lands in Numba's on-disk cache, which later
+    processes load (benchmarks/device_suite.py builds each kernel so, in parallel)."""
+    from .core import device
+
+    kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
+    began = time.perf_counter()
+    kernel.compile(run_cases_signature())
+    return time.perf_counter() - began
 
 
 def find_ptxas() -> Path:
@@ -151,6 +176,8 @@ def parse_args(argv: list[str] | None = None):
     and the compute capability to build for."""
     import argparse
 
+    from .core.device import CAPACITIES
+
     parser = argparse.ArgumentParser(
         prog="python -m clearsweep.ptx",
         description="Compile core.device.run_cases to PTX for a GPU without one (numba-cuda's "
@@ -161,7 +188,16 @@ def parse_args(argv: list[str] | None = None):
     parser.add_argument("--arch", default=f"sm_{DEFAULT_CC[0]}{DEFAULT_CC[1]}",
                         help="the compute capability to build for, as sm_XY "
                              "(default: %(default)s, an H100)")
+    parser.add_argument("--layout", choices=("soa", "aos"), default="soa",
+                        help="the device layout: structure of arrays (the default) or case by "
+                             "case")
+    parser.add_argument("--capacity", type=int, default=DEFAULT_CAPACITY,
+                        help="the launch capacity of the soa layout (default: %(default)s; "
+                             f"one of {', '.join(map(str, CAPACITIES))})")
     args = parser.parse_args(argv)
+    if args.capacity not in CAPACITIES:
+        parser.error(f"--capacity: expected one of {', '.join(map(str, CAPACITIES))}, "
+                     f"got {args.capacity}")
     match = re.fullmatch(r"sm_(\d+)(\d)", args.arch)
     if match is None:
         parser.error(f"--arch: expected sm_XY (for example sm_90), got {args.arch!r}")
@@ -176,8 +212,9 @@ def main(argv: list[str] | None = None) -> None:
     default)."""
     args = parse_args(argv)
     began = time.perf_counter()
-    ptx = compile_run_cases_ptx(args.cc)
-    print(f"PTX: {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
+    ptx = compile_run_cases_ptx(args.cc, args.layout, args.capacity)
+    what = "soa, capacity %d" % args.capacity if args.layout == "soa" else "aos"
+    print(f"PTX ({what}): {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
     if args.output is not None:
         args.output.write_text(ptx)
         print(f"PTX kept in {args.output}")

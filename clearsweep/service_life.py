@@ -44,7 +44,7 @@ from .budget import (
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import ForeignLock, history_line, lock_exclusively, replaced_on_success, with_command_line
-from .params import Packed, identity_changes, joint_configs, pack, run_identity
+from .params import Packed, identity_changes, joint_attributes, joint_configs, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
 from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
 from .version import IDENTITY_VERSION
@@ -907,7 +907,8 @@ def _life(cfg: Config, allow_large: bool, progress: Callable[[dict[str, Any]], N
     if not state.snapshots or state.snapshots[-1][0] != state.rows[-1]["cycle"]:
         # the loop ends after a block, so the map is the last row's
         state.snapshots.append((state.rows[-1]["cycle"], state.wmap.copy()))
-    return _life_dataset(cfg, state, stop, state.wall_before + time.perf_counter() - start)
+    return _life_dataset(cfg, state, stop, state.wall_before + time.perf_counter() - start,
+                         joint_attributes(block_cfg, packed))
 
 
 def _note_wear_through(state: LifeState, before: np.ndarray, after: np.ndarray, coat: np.ndarray,
@@ -935,7 +936,10 @@ def _limit_reached(cfg: Config, row: dict[str, Any], state: LifeState) -> str | 
     return None
 
 
-def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float) -> xr.Dataset:
+def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float,
+                  joints: dict[str, Any]) -> xr.Dataset:
+    """The life run's dataset; ``joints``: each joint's attributes
+    (:func:`clearsweep.params.joint_attributes`), as a run's dataset carries them."""
     import xarray as xr
 
     from .dataset import bin_centres_deg, versions
@@ -999,6 +1003,7 @@ def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float) -> xr.D
                        "sockets, jumps adding dN times the block's wear per revolution",
         "wear_amplification": cfg.wear.amplification,
         "settle_time_s": cfg.metrics.settle_time,
+        **joints,
     })
     ds.attrs.update(versions())
     return ds

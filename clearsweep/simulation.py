@@ -30,14 +30,14 @@ def check_step(cfg: Config, packed: Packed) -> None:
 
     Two bounds: the crank may turn at most MAX_ROTATION_PER_STEP_RAD per step, and the
     deepest sub-step h / 2^k_max must resolve the elastic contact rate at the largest
-    penetration the run accepts (contact.max_penetration_fraction * c), with the lightest
+    penetration the run accepts (its stop, jp[J_PEN_STOP]: docs/physics.md 4.3), with the lightest
     mass a contact can meet (rod, slider, or the rod's end-point rotational mass; where O has
     clearance the crank is free in its bearing's plane, and that mass in series with the
     crank's; at P, the block's mass at a corner, its rotation included), each joint with its
     own elastic law (the journal's at O, the corners' at P).
     """
     from .core.joints import INDEX
-    from .core.prismatic import corner_law
+    from .core.prismatic import line_stiffness
     from .core.revolute import journal_law
 
     solver = cfg.solver
@@ -54,15 +54,20 @@ def check_step(cfg: Config, packed: Packed) -> None:
         jp = packed.jp[j]
         if jp[L.J_CLEARANCE] == 0.0:
             continue
-        delta = packed.p[L.P_PEN_FRAC] * jp[L.J_C]
+        delta = jp[L.J_PEN_STOP]
         mass = m_ref
         rj = jp[L.J_RJ]
         if j == INDEX["P"]:
-            law = as_python(corner_law)(packed.p)
-            rj = jp[L.J_C]
+            # a corner's bound on its edge line's stiffness, k_l L / 2 (prismatic.slot_rate),
+            # the stiffer of the two faces, on the free block's mass at the corner
             corner = 0.25 * (jp[L.J_LENGTH] ** 2 + jp[L.J_WIDTH] ** 2 + jp[L.J_HEIGHT] ** 2)
             mass = 1.0 / (1.0 / preset.slider_mass_kg + corner / min(preset.slider_inertia_kgm2))
-        elif j == INDEX["O"]:
+            stiffness = max(0.5 * as_python(line_stiffness)(packed.jp, j, wall, jp[L.J_EW])
+                            * jp[L.J_LENGTH] for wall in (0, 2))
+            bounds.append(solver.stability_limit * 2 ** solver.max_substep_level
+                          / math.sqrt(stiffness / mass))
+            continue
+        if j == INDEX["O"]:
             law = as_python(journal_law)(packed.p)
         else:
             law = packed.p[L.P_EXPONENT]

@@ -503,7 +503,8 @@ def case_summary(ds: xr.Dataset) -> xr.Dataset:
 #: joints stay in contact without impacts reads as an in-contact oscillation
 #: (:func:`peak_force_source`). A steady one-revolution motion stays well below it: the ideal
 #: mechanism's settled crest factor is 2.395 / 1.427 = 1.68 at 60 r/min, a sine's sqrt(2);
-#: PTFE at B with 0.05 mm clearance reads 17.5 (35.42 / 2.027, 1 s), 1.68 with friction off
+#: PTFE at B with 0.05 mm clearance read 17.5 (35.42 / 2.027, 1 s; seated before the seat
+#: balanced friction, docs/physics.md 3.3), 1.68 with friction off
 #: (docs/physics.md section 3.3).
 OSCILLATION_CREST_FACTOR = 3.0
 #: What :func:`peak_force_source` says sets a case's peak force.

@@ -33,11 +33,13 @@ __version__ = _version()
 
 
 #: The revision of the results: raised whenever a config gives other results than before
-#: (here: Hertz's modulus E* in the power law at O, P and under ``contact.elastic: hertz``,
-#: issue 41; before it, joint P's walls read bilinearly). It is part
+#: (here: the seated balls of A and B balance their friction, and joint P's block meets
+#: its walls along its faces' edge lines and wears them over the faces' tracks, issue 41;
+#: before it, Hertz's
+#: modulus E* in the power law at O, P and under ``contact.elastic: hertz``). It is part
 #: of every run's identity (``params.run_identity``): a sweep's parts and a life checkpoint
 #: written before are another run's, refused by --resume with the difference named, not
 #: mixed into this one's results.
-RESULTS_REVISION = 3
+RESULTS_REVISION = 4
 #: The version a run's identity records: the package's and the results' revision.
 IDENTITY_VERSION = f"{__version__} (results revision {RESULTS_REVISION})"

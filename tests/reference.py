@@ -369,58 +369,105 @@ def wall_depth(mech: Mechanism, wall, x, across):
     return float(read([[np.clip(across, ac[0], ac[-1]), np.clip(x, xs[0], xs[-1])]])[0])
 
 
+def edge_loads(da, db, kl, length):
+    """The loads [N] that an edge line of length ``length`` [m], pressed into its wall by da
+    at its end a and db at its end b (linear between), puts on its two ends: the pressure
+    per unit length kl max(delta(s), 0) against the linear shape functions (1 - s/L, s/L),
+    integrated by scipy's quad (the kink where delta = 0 given to it)."""
+    from scipy.integrate import quad
+
+    def delta(s):
+        return da + (db - da) * s / length
+
+    if da <= 0.0 and db <= 0.0:
+        return 0.0, 0.0
+    kink = [length * da / (da - db)] if da * db < 0.0 else None
+    fa = quad(lambda s: kl * max(delta(s), 0.0) * (1.0 - s / length), 0.0, length,
+              points=kink, epsabs=0.0, epsrel=1e-13)[0]
+    fb = quad(lambda s: kl * max(delta(s), 0.0) * s / length, 0.0, length,
+              points=kink, epsabs=0.0, epsrel=1e-13)[0]
+    return fa, fb
+
+
 def block_contact(mech: Mechanism, q, qd):
-    """Contact state and forces of joint P: every corner of the block (length 2a, width 2b,
-    height 2h about the slider's centroid) against the guide wall it crosses (walls at
-    y = +-(b + c_y), z = z_s +- (h + c_z), worn by ``mech.wmap`` where the case reads it
-    bilinearly), each a point contact with a fresh episode. The result's force and
-    generalised force are the sums over the corners; its contact values those of the corner
-    that penetrates deepest."""
+    """Contact state and forces of joint P: the block (length 2a, width 2b, height 2h about
+    the slider's centroid) against its guide's walls (at y = +-(b + c_y), z = z_s +- (h + c_z),
+    worn by ``mech.wmap`` where the case reads it bilinearly). Each wall meets the block's
+    face along the face's two long edges, each a line whose penetration is linear between
+    its end corners and whose pressure per unit length is k_l max(delta, 0),
+    k_l = E* sqrt(W / (pi L)) (docs/physics.md 3.7; W the face's width, L its length): each
+    corner takes its line's load on it (:func:`edge_loads`) as a point force, with a fresh
+    episode's damping on its own approach rate. The result's force and generalised force
+    are the sums over the corners; its contact values those of the corner that penetrates
+    deepest."""
     jp = mech.jp[JOINT_P]
     half = 0.5 * np.array([jp[L.J_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
     clear = {1: jp[L.J_CY], 2: jp[L.J_CZ]}
     centre = np.array([0.0, 0.0, mech.zs])
-    ew, rc = jp[L.J_EW], jp[L.J_RI]
+    ew = jp[L.J_EW]
     worn = (mech.wmap is not None and mech.p[L.P_FEEDBACK] != 0.0
             and mech.p[L.P_INTERP] != 0.0)
+    pairs = [((sx, sy, sz), axis) for sz in (-1, 1) for sy in (-1, 1) for sx in (-1, 1)
+             for axis in (1, 2)]
 
-    def law(delta, ddot, kappa):
-        if delta <= 0.0:
-            return 0.0, 0.0
-        fel = 4.0 / 3.0 * ew * np.sqrt(rc) * delta ** 1.5
-        return max(0.0, fel * (1.0 + kappa * ddot)), fel
+    def penetration(x, n, axis, wall):
+        h = wall_depth(mech, wall, x[0], x[3 - axis] - centre[3 - axis]) if worn else 0.0
+        return float(n @ (x - centre)) - half[axis] - clear[axis] - h
 
+    def normal(signs, axis):
+        n = np.zeros(3)
+        n[axis] = signs[axis]
+        return n, 2 * (axis - 1) + (0 if signs[axis] > 0 else 1)
+
+    depth = {}
+    for signs, axis in pairs:
+        n, wall = normal(signs, axis)
+        depth[signs, axis] = penetration(point(q, SLIDER, np.array(signs) * half), n, axis, wall)
+    loads = {}
+    for (signs, axis), da in depth.items():
+        if signs[0] > 0:
+            continue
+        other = (1, signs[1], signs[2])
+        width = 2.0 * half[3 - axis]
+        kl = ew * np.sqrt(width / (np.pi * 2.0 * half[0]))
+        loads[signs, axis], loads[other, axis] = edge_loads(da, depth[other, axis], kl,
+                                                            2.0 * half[0])
     total = np.zeros(3)
     gen = np.zeros(18)
     pdiss = 0.0
     deepest = None
-    for signs in [(sx, sy, sz) for sz in (-1, 1) for sy in (-1, 1) for sx in (-1, 1)]:
+    for signs, axis in pairs:
         u = np.array(signs) * half
         corner = point(q, SLIDER, u)
         jc = point_jacobian(q, SLIDER, u)
-        for axis in (1, 2):
-            n = np.zeros(3)
-            n[axis] = signs[axis]
-            wall = 2 * (axis - 1) + (0 if signs[axis] > 0 else 1)
+        n, wall = normal(signs, axis)
+        delta = depth[signs, axis]
+        fel = loads[signs, axis]
 
-            def penetration(x, n=n, axis=axis, wall=wall):
-                h = wall_depth(mech, wall, x[0], x[3 - axis] - centre[3 - axis]) if worn else 0.0
-                return float(n @ (x - centre)) - half[axis] - clear[axis] - h
+        def law(delta, ddot, kappa, fel=fel):
+            if fel <= 0.0:
+                return 0.0, 0.0
+            return max(0.0, fel * (1.0 + kappa * ddot)), fel
 
-            delta = penetration(corner)
-            grad = None
-            if worn:
-                step = 1e-6
-                grad = np.array([(penetration(corner + step * e) - penetration(corner - step * e))
-                                 / (2.0 * step) for e in np.eye(3)])
-            res = respond(mech, JOINT_P, qd, 0.0, n, delta, corner, corner, jc,
-                          np.zeros_like(jc), law, 0.0, grad)
-            if deepest is None or delta > deepest.delta:
-                deepest = res
-            if delta > 0.0:
-                total = total + res.force
-                gen = gen + res.generalized
-                pdiss += res.pdiss
+        grad = None
+        if worn:
+            step = 1e-6
+            grad = np.array([(penetration(corner + step * e, n, axis, wall)
+                              - penetration(corner - step * e, n, axis, wall)) / (2.0 * step)
+                             for e in np.eye(3)])
+        res = respond(mech, JOINT_P, qd, 0.0, n, delta, corner, corner, jc,
+                      np.zeros_like(jc), law, 0.0, grad)
+        if res.fn > 0.0:
+            # the kernel's bound on dF_N / d delta at a corner: its line's k_l L / 2
+            width = 2.0 * half[3 - axis]
+            kl = ew * np.sqrt(width / (np.pi * 2.0 * half[0]))
+            res.dfn_ddelta = kl * half[0] * (1.0 + res.kappa * res.ddot)
+        if deepest is None or delta > deepest.delta:
+            deepest = res
+        if fel > 0.0:
+            total = total + res.force
+            gen = gen + res.generalized
+            pdiss += res.pdiss
     r = q[12:15] - centre
     deepest.ecc = float(np.hypot(r[1], r[2]))
     deepest.force = total
@@ -449,7 +496,7 @@ def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored
     fn, fel = law(delta, ddot, kappa)
     force = -fn * grad
     ft = 0.0
-    if delta > 0.0 and p[L.P_FRICTION] != 0.0 and vtn > 0.0:
+    if fn > 0.0 and p[L.P_FRICTION] != 0.0 and vtn > 0.0:
         ft = mu * friction_factor(vtn, p[L.P_V0], p[L.P_V1]) * fn
         force = force - ft * vt / vtn
     # slopes of F_N (kappa held fixed), by differences
@@ -460,7 +507,7 @@ def respond(mech: Mechanism, j, qd, e, n, delta, qj, qi, jj, ji, law, dv0_stored
     hv = 1e-3 * max(abs(ddot), 1e-6)
     dfdd = d1(lambda x: law(delta, x, kappa)[0], ddot, hv) if fn > 0.0 else 0.0
     # dissipated power: -(power of the contact forces) - dU/dt
-    pdiss = -(force @ v) - fel * ddot if delta > 0.0 else 0.0
+    pdiss = -(force @ v) - fel * ddot if fel > 0.0 else 0.0
     gen = jj.T @ force - ji.T @ force
     return ContactResult(force=force, generalized=gen, n=n, delta=delta, ddot=ddot, ecc=e,
                          vt=vt, fn=fn, fel=fel, ft=ft, kappa=kappa, dfn_ddelta=dfd,

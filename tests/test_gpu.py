@@ -197,3 +197,107 @@ def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
                                                     "SC_PAGE_SIZE": 4096}[name])
     assert gpu.batch_window(cases) == gib // per_case        # a quarter of 4 GiB
     assert gpu.batch_window(cases[:3]) == 3
+
+
+LAYOUT_SCRIPT = r"""
+import sys
+import numpy as np
+from clearsweep.config import DEFAULTS, resolve_materials
+from clearsweep.params import pack
+from clearsweep import gpu
+
+base = DEFAULTS.replace(solver__duration=0.002, wear__map=[6, 12], wear__amplification=1000.0,
+                        metrics__settle_time=0.001, outputs__poincare_phase_deg=0.72)
+cfgs = [base.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4),
+        base.replace(joints__B__clearance=2.5e-4, joints__O__clearance=2.5e-4,
+                     initial__joints="centred"),
+        base]
+packed = [pack(c, resolve_materials(c)) for c in cfgs]
+aos = gpu.run_packed(packed, layout="aos")
+soa = gpu.run_packed(packed, layout="soa")
+for k, (a, b) in enumerate(zip(aos, soa)):
+    assert a.status == b.status == "ok", (k, a.status, b.status)
+    for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+        x, y = np.asarray(getattr(a, name)), np.asarray(getattr(b, name))
+        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), (k, name)
+        assert getattr(b, name).flags.c_contiguous, (k, name)     # as the CPU kernel's
+    assert (a.residual_max, a.ke_peak, a.rk4_steps, a.deepest) == (b.residual_max, b.ke_peak, b.rk4_steps, b.deepest), k
+impacts = float(aos[1].stats[0].max())
+print("compared", len(aos), "cases; largest statistic", impacts)
+"""
+
+
+@pytest.mark.slow
+def test_simulated_layouts_agree_bit_for_bit():
+    """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity)
+    and the case-by-case one compute the same bits in the simulator, where both run the
+    kernel's Python source: clearance at A and B, at B and O from the centred start
+    (impacts), and ideal joints, in one batch."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", LAYOUT_SCRIPT], capture_output=True, text=True,
+                          env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    assert "compared 3 cases" in proc.stdout
+
+
+def test_the_numpy_numba_cuda_pairing_is_pinned_as_the_check_states():
+    """pyproject's cuda and test extras pin numba-cuda to the releases gpu.NUMPY_BELOW knows,
+    with the numpy bound it states for them (numba-cuda 0.30.4 failed every case under
+    numpy 2.5 on a device)."""
+    import re
+
+    from clearsweep import gpu
+
+    text = (ROOT / "pyproject.toml").read_text()     # no tomllib before Python 3.11
+    for name in ("cuda", "test"):
+        listed = re.search(rf"^{name} = \[(.*?)\]$", text, re.MULTILINE | re.DOTALL)
+        assert listed is not None, name
+        extra = re.findall(r'"([^"]+)"', listed.group(1))
+        reqs = {re.split(r"[\[<>=!~ ]", r, maxsplit=1)[0]: r for r in extra}
+        nc = re.fullmatch(r"numba-cuda(\[cu12\])?>=(\d+)\.(\d+)\.\d+,<(\d+)\.(\d+)", reqs["numba-cuda"])
+        assert nc is not None, reqs["numba-cuda"]
+        low, high = (int(nc.group(2)), int(nc.group(3))), (int(nc.group(4)), int(nc.group(5)))
+        assert high == (low[0], low[1] + 1), "one numba-cuda minor release"
+        below = gpu.NUMPY_BELOW[low]
+        assert reqs["numpy"] == f"numpy<{below[0]}.{below[1]}"
+
+
+@pytest.mark.parametrize("numpy_version, numba_cuda, refused", [
+    ("2.4.6", "0.30.4", False), ("2.5.0", "0.30.4", True), ("2.5.0rc1", "0.30.9", True),
+    ("3.0.0", "0.30.4", True), ("2.5.0", None, False), ("2.5.0", "0.31.0", False)])
+def test_pairing_problem(numpy_version, numba_cuda, refused):
+    from clearsweep import gpu
+
+    message = gpu.pairing_problem(numpy_version, numba_cuda)
+    assert (message is not None) == refused
+    if refused:
+        assert "\n" not in message and f"numpy {numpy_version}" in message
+        assert "numpy below 2.5" in message and "--backend processes" in message
+
+
+def test_a_mismatched_pairing_is_one_line_before_any_case_runs(tmp_path, monkeypatch):
+    """numba-cuda 0.30.4 with numpy 2.5 (faked): the sweep stops with one error line naming
+    both versions and the fix, exit 2, before a case is packed or a file written; the same
+    refusal from Python, before the device is even asked for."""
+    from clearsweep import gpu
+    from clearsweep.sweeping import run_sweep
+
+    if gpu.simulated():
+        pytest.skip("the simulator is on in this process")
+    monkeypatch.setattr(gpu, "installed_versions", lambda: ("2.5.0", "0.30.4"))
+    ran = []
+    monkeypatch.setattr(gpu, "run_packed", lambda *a, **k: ran.append(a) or [])
+    path = tmp_path / "s.yaml"
+    path.write_text(json.dumps(SWEEP))
+    result = CliRunner().invoke(sweep_command, [str(path), "--backend", "cuda", "-o",
+                                                str(tmp_path / "s.nc")])
+    assert result.exit_code == 2
+    errors = [line for line in result.output.splitlines() if line.startswith("clearsweep: error")]
+    assert errors == ["clearsweep: error: numba-cuda 0.30.4 does not compile the kernel with "
+                      "numpy 2.5.0: install numpy below 2.5 (pip install 'clearsweep[cuda]'), "
+                      "or use --backend processes"], result.output
+    assert not (tmp_path / "s.nc").exists() and ran == []
+    with pytest.raises(gpu.NoCudaDevice, match="numba-cuda 0.30.4 does not compile"):
+        run_sweep(SWEEP, tmp_path / "t.nc", backend="cuda", progress=False)
+    assert not (tmp_path / "t.nc").exists() and ran == []

@@ -250,6 +250,10 @@ ROWS = [
     ("--keep-series with processes",
      lambda t, f: ["sweep", ONE, "--keep-series", "all", "-o", t / "out.nc"],
      2, "--keep-series selects the cases of --backend cuda"),
+    ("--backend cuda under numba-cuda 0.30.4 and numpy 2.5 (was: every case failed with "
+     "numpy's AttributeError)",
+     lambda t, f: ["sweep", CONFIGS / "sensitivity.yaml", "--backend", "cuda", "-o", t / "out.nc"],
+     2, "numba-cuda 0.30.4 does not compile the kernel with numpy 2.5.0: install numpy below 2.5"),
     # --- fresh round: results files of older versions
     ("report a life file without stop_reason (was: KeyError)",
      lambda t, f: ["report", f / "old_life.nc"], 2, "has no 'stop_reason'"),
@@ -1526,19 +1530,27 @@ ROWS += ROUND5_LAYERS
 @pytest.fixture
 def device(monkeypatch):
     """The CUDA device as the row needs it: none for ``--backend cuda``, a stand-in for
-    ``--keep-series`` (refused before any batch is made)."""
+    ``--keep-series`` (refused before any batch is made), the real check under a faked
+    numpy / numba-cuda mismatch for the pairing's row."""
     import clearsweep.gpu as gpu
 
     def none():
         raise gpu.NoCudaDevice()
 
-    return lambda present: monkeypatch.setattr(gpu, "device_name",
-                                               (lambda: "stand-in") if present else none)
+    def setup(name):
+        if "numba-cuda 0.30.4 and numpy 2.5" in name:
+            monkeypatch.setattr(gpu, "simulated", lambda: False)
+            monkeypatch.setattr(gpu, "installed_versions", lambda: ("2.5.0", "0.30.4"))
+            return
+        present = "--keep-series beyond" in name
+        monkeypatch.setattr(gpu, "device_name", (lambda: "stand-in") if present else none)
+
+    return setup
 
 
 @pytest.mark.parametrize("name, argv, code, words", ROWS, ids=[r[0] for r in ROWS])
 def test_hostile_input_is_one_error_line(tmp_path, files, device, name, argv, code, words):
-    device("--keep-series beyond" in name)
+    device(name)
     result = CliRunner().invoke(main, [str(a) for a in argv(tmp_path, files)])
     assert result.exception is None or isinstance(result.exception, SystemExit), \
         f"{type(result.exception).__name__}: {result.exception}"

@@ -11,7 +11,7 @@ import yaml
 from clearsweep.config import load_config
 from clearsweep.core import layout as L
 from clearsweep.core.joints import JOINTS
-from clearsweep.params import BASE_MATERIAL, JOINT_ATTRIBUTES
+from clearsweep.params import BASE_MATERIAL, JOINT_ATTRIBUTES, joint_attributes
 from clearsweep.simulation import preflight, simulate
 from clearsweep.sweeping import run_sweep
 
@@ -41,9 +41,10 @@ def test_every_joint_has_its_attributes_and_they_are_the_packed_values():
     assert ds.attrs["joint_P_clearance_m"] == 1.0e-4        # P's smaller clearance
     assert ds.attrs["joint_B_coating"] == ds.attrs["joint_B_surface_material"] == "PTFE"
     assert ds.attrs["joint_O_surface_material"] == BASE_MATERIAL
-    # O's journal and P's corners take Hertz's law; A and B the paper's layered law
+    # O's journal takes Hertz's law, P's faces an elastic foundation with Hertz's E*
+    # (docs/physics.md 3.7); A and B the paper's layered law
     assert ds.attrs["joint_O_contact"].startswith("Hertz")
-    assert ds.attrs["joint_P_contact"].startswith("Hertz")
+    assert ds.attrs["joint_P_contact"].startswith("elastic foundation")
     assert ds.attrs["joint_A_contact"].startswith("layered")
     # the kernel's values differ between the joints: not one value copied four times
     assert ds.attrs["joint_O_modulus_Pa"] != ds.attrs["joint_A_modulus_Pa"]
@@ -87,3 +88,23 @@ def test_a_sweep_keeps_shared_joint_values_global_and_varying_ones_per_case(tmp_
                 assert value("joint_B_wear_coefficient_m2_per_N") == jp[1, L.J_K]
                 assert (value("joint_A_contact") == "ideal") == (clearance == 0.0)
         assert np.unique(var.values).size == 2
+
+
+def test_a_life_run_describes_its_joints_as_a_run_does():
+    """A life run's dataset carries the same per-joint attributes as a run of its block
+    (service_life built its own dataset without them); a reliability or life sweep then
+    keeps them as a run sweep does."""
+    from clearsweep.service_life import block_config, life
+
+    doc = {**FOUR, "mechanism": {"speed_rpm": 1200.0}, "life": {"cycles": 1.0, "block_revolutions": 1},
+           "wear": {"map": [12, 24]}}
+    cfg = load_config(doc)
+    ds = life(cfg)
+    block = block_config(cfg)
+    expected = joint_attributes(block, preflight(block, seat=False))
+    assert len(expected) == len(JOINTS) * len(JOINT_ATTRIBUTES)
+    for name, value in expected.items():
+        got = ds.attrs[name]
+        assert got == value or (isinstance(value, float) and math.isnan(value) and math.isnan(got)), name
+    assert ds.attrs["joint_B_coating"] == "PTFE" and ds.attrs["joint_P_type"] == "prismatic"
+    assert ds.attrs["joint_O_contact"].startswith("Hertz")

@@ -30,10 +30,11 @@ TABLE = {
     "coating_ensemble": ([144, 288], 0.945),    # 1 s seated members (0.949 at 0.25 s, offsets)
     "life": ([72, 144], 0.997),
     "reliability": ([36, 72], 0.958),             # member 0's life run, 12 blocks
-    # member 0, 12 blocks: B 1.000, A 1.002, O 1.016, P's walls 1.002; at 36 x 72 (its
-    # --set "wear.map=[36, 72]") B 0.904, A 0.932, O 0.984, P 1.000 (0.702 while P's bins
-    # held the track's volume over the bin's area)
-    "reliability_joints": ([72, 144], 1.000),
+    # member 0, 3 blocks (mc.measure's short run; 12 blocks not re-measured since the guide's
+    # faces, issue 41 item 5): A 0.932, B 0.962, O 1.010, P's walls 0.944; at 36 x 72 (its
+    # --set "wear.map=[36, 72]") A 0.968, B 0.984, O 1.076, P 1.026 (with the corners' point
+    # tracks before: B 1.000, A 1.002, O 1.016, P 1.002 at 72 x 144, 12 blocks)
+    "reliability_joints": ([72, 144], 0.932),
 }
 
 
@@ -71,17 +72,18 @@ def test_a_short_run_at_twice_the_resolution_agrees():
     assert 1.0 - mc.TOLERANCE <= row["worst_ratio"] <= 1.0 + mc.TOLERANCE
 
 
-def test_the_guides_track_depth_does_not_depend_on_the_map():
-    """All four joints clear (configs/reliability_joints.yaml's member 0, 3 blocks) on 36 x
-    72 and 72 x 144 (half the config's map and the config's): P's largest wall depth, the
-    depth of its corners' track, agrees to 1e-3 (measured 0.9998), and every joint's worn
-    volume to 1 % (measured 1.002: the jumps, which read the depths, reach the same
-    revolutions on both maps). With the track's
-    volume spread over the bin's area the depth went as the bin's height: 0.58, and the
-    coarse map's jumps ran 17 % further."""
-    row = mc.measure("reliability_joints", short=True, extra=("wear.map=[36, 72]",))
-    assert row["map"] == [36, 72] and row["fine_map"] == [72, 144]
-    assert row["joint_depth_ratio"]["P"] == pytest.approx(1.0, abs=1e-3)
+def test_the_guides_wall_depth_converges_with_the_map():
+    """All four joints clear (configs/reliability_joints.yaml's member 0, 3 blocks) on the
+    config's 72 x 144 and on 144 x 288: P's largest wall depth, the faces' wear spread over
+    the bins it covers (docs/physics.md 5.7), agrees within the tolerance (measured 0.944;
+    36 x 72 against 72 x 144: 1.026), and every joint's worn volume to 1 % (measured
+    1.007: the jumps, which read the depths, reach the same revolutions on both maps).
+    Before issue 41 item 5 the bins held a corner's point track, 1.000 on any map by
+    construction."""
+    row = mc.measure("reliability_joints", short=True)
+    assert row["map"] == [72, 144] and row["fine_map"] == [144, 288]
+    assert 1.0 - mc.TOLERANCE <= row["joint_depth_ratio"]["P"] <= 1.0 + mc.TOLERANCE
+    assert row["joint_depth_ratio"]["P"] != pytest.approx(1.0, abs=1e-3)
     for joint, ratio in row["joint_volume_ratio"].items():
         assert ratio == pytest.approx(1.0, abs=0.01), joint
 

@@ -269,13 +269,15 @@ def test_a_run_over_stepped_walls(method):
     bin to bin along the guide, feedback on, no wear during the run (amplification 0: each
     deposit under a loaded corner changes its elastic energy too, 3e-7 relative over this
     run with the tracks' depths, docs/physics.md 5.7): read bilinearly, the residual stays
-    at an unworn guide's scale (measured 1.8e-12 relative with RK4, 9.4e-9 with dopri5,
-    whose onsets read the same walls); read bin by bin, each step that a loaded corner
-    crosses adds its elastic energy change (measured 5.4e-5 and 5.5e-5)."""
+    small (measured 2.6e-7 relative with RK4, 2.1e-8 with dopri5, whose onsets read the same
+    walls: the faces' edge lines, far stiffer than the corners' Hertz law before issue 41,
+    ride over the read's kinks at the bin centres, which cost RK4 its order; 1.8e-12 and
+    9.4e-9 with the corners' law); read bin by bin, each step that a loaded corner crosses
+    adds its elastic energy change (measured 4.4e-6 and 2.6e-6)."""
     smooth = stepped_run("true", method)
     binned = stepped_run("false", method)
-    assert smooth < 1e-7
-    assert binned > 100.0 * smooth
+    assert smooth < 1e-6
+    assert binned > 10.0 * smooth
 
 
 # ---------------------------------------------------------------------------
@@ -317,12 +319,16 @@ def test_a_seated_block_rests_on_its_worn_walls(interpolate):
     offset = unworn.y0[axes] - np.array([0.0, unworn.p[L.P_ZS]])
     moved = worn.y0[axes] - unworn.y0[axes]
     assert np.allclose(moved, 4e-6 * np.sign(offset), rtol=1e-9, atol=1e-15)
-    assert np.allclose(start_penetrations(worn, even)[loaded], pen0[loaded], rtol=1e-9, atol=0.0)
+    # the faces sink ~3 nm (docs/physics.md 3.7): the shift's round-off (~1e-17 m) is 3e-9 of it
+    assert np.allclose(start_penetrations(worn, even)[loaded], pen0[loaded], rtol=1e-9, atol=1e-15)
     rough = zero.copy()
     rough[P] = 2e-6 + np.random.default_rng(3).random((ROWS, COLS)) * 4e-6
     pen = start_penetrations(pack(cfg, materials, rough), rough)
     for wall in range(4):
         slots = [k for k in range(L.P_SLOTS) if prismatic.slot_wall(k)[0] == wall]
         if loaded[slots].any():
-            assert pen[slots].max() == pytest.approx(pen0[slots].max(), rel=1e-2)
-            assert np.all(pen[slots] <= pen0[slots].max() * (1 + 1e-2))
+            # within 10 nm: the bilinear read of the rough walls (slopes ~4e-3) moves by some
+            # nm between where the seat reads them and where the block starts, which the
+            # corners' Hertz sink (1.3 um) hid and the faces' (3 nm) does not (measured 3.9 nm)
+            assert pen[slots].max() == pytest.approx(pen0[slots].max(), abs=1e-8)
+            assert np.all(pen[slots] <= pen0[slots].max() + 1e-8)

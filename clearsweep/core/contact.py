@@ -16,6 +16,7 @@ from .kinematics import add, cross, dot, mtv, mv, scale, sub
 from .layout import (
     J_EW,
     J_EW_BASE,
+    J_FILM,
     J_K,
     J_K_BASE,
     J_MU,
@@ -343,7 +344,8 @@ def _respond(j, model, ball, socket, pb, ps, geo, law, energy):
     force_normal = force
     vt, vtn = tangential(v, line)
     if p[P_FRICTION] != 0.0 and vtn > 0.0:
-        ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1])
+        # Coulomb's part and the lubricant film's viscous shear (joint O's; 0 elsewhere)
+        ft = friction_magnitude(mu, fn, vtn, p[P_V0], p[P_V1]) + jp[j, J_FILM] * vtn
         force = add(force, scale(-ft / vtn, vt))
         pdiss += ft * vtn
     return ContactState(force, force_normal, qj, qi, fn, dfd, dfdd, delta, ddot, e, line, d_s, n_s, vtn, c_eff,

@@ -31,12 +31,28 @@ The build for a device is checked without one by ``python -m clearsweep.ptx``.
 
 import inspect
 import math
+import os
 
 import numba
 from numba import cuda, types
 
 from .dynamics import NZ, VZ_ROWS
-from .layout import N_ANGLE_BINS, N_CAP, N_CAP_ROWS, N_D, N_JOINTS, N_JP, N_M, N_S, N_WINDOWS, N_Y
+from .layout import (
+    N_ANGLE_BINS,
+    N_CAP,
+    N_CAP_ROWS,
+    N_D,
+    N_INFO,
+    N_JOINTS,
+    N_JP,
+    N_M,
+    N_P,
+    N_S,
+    N_SEC,
+    N_TRACK,
+    N_WINDOWS,
+    N_Y,
+)
 from .numba_compat import simulator_array
 from .rk4 import PAIR_FIRST, work_shapes
 from .rk4 import advance as _cpu_advance
@@ -44,6 +60,13 @@ from .target import on_device
 from .work import Case, Out, Rk4Work
 
 SIMULATED = bool(numba.config.ENABLE_CUDASIM)
+
+#: ``CLEARSWEEP_CUDA_CACHE=1``: the kernels are kept in Numba's on-disk cache (the folder of
+#: ``numba_compat.cache_dir``), so that processes after the first load the build of each
+#: layout and capacity instead of compiling it (benchmarks/device_suite.py builds them in
+#: parallel processes first). Off by default: tried on a device by that script alone.
+CACHE_KERNELS = os.environ.get("CLEARSWEEP_CUDA_CACHE") == "1" and not SIMULATED
+_jit = cuda.jit(cache=True) if CACHE_KERNELS else cuda.jit
 
 #: Threads per block. The kernel is register- and local-memory-heavy (the right-hand side
 #: keeps its 3-vectors and 3x3 matrices in registers): small blocks keep occupancy even.
@@ -91,6 +114,61 @@ def block_typer(typingctx, arr, i, k, shape):
     return out(arr, i, k, shape), codegen
 
 
+def soa_block_typer(typingctx, arr, i, k, shape, cap):
+    """Typing and code generation of :func:`soa_block` for ``numba.extending.intrinsic`` (the
+    CUDA target; tests/test_ptx.py registers it for the CPU too): arr a C-contiguous array
+    whose last axis is the case, of length ``cap`` (a literal integer: the launch capacity);
+    k a literal integer; the entries of shape integers, literal where the kernel's layout
+    fixes them (then every address is one base per argument plus constants), or read at run
+    time (the wear map's bins, the undo buffer's rows). The view is an 'A'-layout array:
+    strides of cap elements and its multiples."""
+    if not (isinstance(arr, types.Array) and arr.layout == "C"
+            and isinstance(k, types.IntegerLiteral) and isinstance(cap, types.IntegerLiteral)
+            and isinstance(shape, types.BaseTuple) and len(shape) > 0
+            and all(isinstance(n, types.Integer) for n in shape)):
+        return None     # numba retries with literal arguments
+    ndim = len(shape)
+    literal = [n.literal_value if isinstance(n, types.IntegerLiteral) else None for n in shape]
+    capacity = cap.literal_value
+    out = types.Array(arr.dtype, ndim, "A")
+
+    def codegen(context, builder, sig, args):
+        from numba.core import cgutils
+
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        intp = context.get_value_type(types.intp)
+        itemsize = context.get_abi_sizeof(context.get_data_type(arr.dtype))
+        values = cgutils.unpack_tuple(builder, args[3], ndim)
+        dims = []
+        for lit, val, ty in zip(literal, values, sig.args[3]):
+            if lit is not None:
+                dims.append(intp(lit))
+            else:
+                dims.append(context.cast(builder, val, ty, types.intp))
+        case = context.cast(builder, args[1], sig.args[1], types.intp)
+        size = intp(1)
+        for d in dims:
+            size = builder.mul(size, d)
+        # element (k block, e, case) at (k * size + e) * cap + case
+        first = builder.add(builder.mul(builder.mul(intp(k.literal_value), size),
+                                        intp(capacity)), case)
+        offset = builder.mul(first, intp(itemsize))
+        byte_ptr = context.get_value_type(types.voidptr)
+        data = builder.bitcast(builder.gep(builder.bitcast(ary.data, byte_ptr), [offset]),
+                               ary.data.type)
+        strides = []
+        step = intp(capacity * itemsize)
+        for d in reversed(dims):
+            strides.insert(0, step)
+            step = builder.mul(step, d)
+        res = context.make_array(out)(context, builder)
+        context.populate_array(res, data=data, shape=dims, strides=strides,
+                               itemsize=intp(itemsize), meminfo=None, parent=None)
+        return res._getvalue()
+
+    return out(arr, i, k, shape, cap), codegen
+
+
 if SIMULATED:
     _plain = simulator_array
 
@@ -108,6 +186,16 @@ if SIMULATED:
         elements k * prod(shape) to (k + 1) * prod(shape), in C order."""
         size = math.prod(shape)
         return _plain(arr[i]).reshape(-1)[k * size:(k + 1) * size].reshape(shape)
+
+    def soa_block(arr, i, k, shape, cap):
+        """Block k, of shape ``shape``, of case i's part of arr stored structure-of-arrays
+        (the case last, ``cap`` of them), as a strided view: its elements e at
+        (k * prod(shape) + e) * cap + i."""
+        size = math.prod(shape)
+        column = _plain(arr).reshape(-1, cap)[k * size:(k + 1) * size, i]
+        view = column.view()
+        view.shape = tuple(shape)       # a view or an error, never a copy
+        return view
 else:
     from numba.cuda.extending import intrinsic, overload
 
@@ -120,10 +208,14 @@ else:
     #: case i's elements k * prod(shape) to (k + 1) * prod(shape), in C order, as an array
     #: of that shape known to the compiler.
     block = intrinsic(block_typer)
+    #: Block k, of the shape ``shape``, of case i's part of the C-contiguous arr stored
+    #: structure-of-arrays, its last axis the case (of the literal length cap): element e of
+    #: the block at (k * prod(shape) + e) * cap + i, as a strided ('A' layout) array.
+    soa_block = intrinsic(soa_block_typer)
     _advance = _cpu_advance
 
 
-@cuda.jit
+@_jit
 def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
               diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
               rows_d, rows_wmax):
@@ -157,6 +249,97 @@ def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, tra
         _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
 
 
+#: The launch capacities of the structure-of-arrays kernel (:func:`soa_kernel`): a batch of
+#: n cases is stored for the smallest capacity that holds it (its arrays padded to that many
+#: cases), so that a sweep compiles the kernel for one or two capacities, each once per
+#: process. The capacity is a compile-time constant of the kernel: with a run-time batch
+#: size the strides of every per-case view stay live in registers, and sm_90's spill stores
+#: grew from 3,100 to 15,984 bytes (issue 43); as a constant they are folded into the
+#: addresses (benchmarks/README.md, "CUDA backend": the figures of each layout).
+CAPACITIES = (64, 1024, 4096, 16384, 32768)
+
+#: The device layouts: "soa" (structure of arrays, the default: element e of case i at
+#: e * capacity + i, so that a warp's 32 threads read 32 consecutive words) and "aos" (array
+#: of structures, case by case: :func:`run_cases`, kept to measure one against the other).
+LAYOUTS = ("soa", "aos")
+DEFAULT_LAYOUT = "soa"
+
+
+def capacity_for(n: int) -> int:
+    """The smallest launch capacity (:data:`CAPACITIES`) that holds n cases; ValueError past
+    the largest."""
+    for cap in CAPACITIES:
+        if n <= cap:
+            return cap
+    raise ValueError(f"{n} cases exceed the largest launch capacity {CAPACITIES[-1]}")
+
+
+_SOA_KERNELS: dict = {}
+
+
+def soa_kernel(capacity: int):
+    """:func:`run_cases` over arrays stored structure-of-arrays for ``capacity`` cases (one
+    of :data:`CAPACITIES`), built once per capacity and process: the same arguments, each
+    per-case array of shape (per-case shape..., capacity) with the case as its last axis;
+    n_steps and save_every hold the batch's n cases (threads past n do nothing)."""
+    if capacity not in CAPACITIES:
+        raise ValueError(f"launch capacity {capacity}: expected one of {CAPACITIES}")
+    if capacity in _SOA_KERNELS:
+        return _SOA_KERNELS[capacity]
+    cap = capacity      # a constant of the kernel (a closure variable)
+
+    @_jit
+    def run_cases_soa(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track,
+                      sec, vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps,
+                      scratch, rows_t, rows_y, rows_d, rows_wmax):
+        """run_cases, structure of arrays (:func:`soa_block`)."""
+        i = cuda.grid(1)
+        if i < n_steps.shape[0]:
+            npolar = wmap.shape[1]
+            nazim = wmap.shape[2]
+            nbuf = buf_i.shape[0]
+            case = Case(soa_block(p, i, 0, (N_P,), cap),
+                        soa_block(jp, i, 0, (N_JOINTS, N_JP), cap),
+                        soa_block(y0, i, 0, (N_Y,), cap),
+                        soa_block(wmap, i, 0, (N_JOINTS, npolar, nazim), cap),
+                        soa_block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS), cap),
+                        soa_block(wvol, i, 0, (N_JOINTS,), cap))
+            out = Out(soa_block(rows_t, i, 0, (1,), cap), soa_block(rows_y, i, 0, (1, N_Y), cap),
+                      soa_block(rows_d, i, 0, (1, N_D), cap),
+                      soa_block(rows_wmax, i, 0, (1, N_JOINTS), cap),
+                      soa_block(info, i, 0, (N_INFO,), cap),
+                      soa_block(stats, i, 0, (N_WINDOWS, N_M), cap),
+                      soa_block(track, i, 0, (N_TRACK,), cap),
+                      soa_block(pairs, i, PAIR_FIRST, (N_JOINTS,), cap),
+                      soa_block(sec, i, 0, (sec.shape[0], N_SEC), cap))
+            work = Rk4Work(soa_block(vec, i, 0, (N_Y,), cap), soa_block(vec, i, 1, (N_Y,), cap),
+                           soa_block(vec, i, 2, (N_Y,), cap), soa_block(vec, i, 3, (N_Y,), cap),
+                           soa_block(vec, i, 4, (N_Y,), cap), soa_block(vec, i, 5, (N_Y,), cap),
+                           soa_block(vec, i, 6, (N_Y,), cap),
+                           soa_block(diag, i, 0, (N_D,), cap), soa_block(diag, i, 1, (N_D,), cap),
+                           soa_block(cstate, i, 0, (N_JOINTS, N_S), cap),
+                           soa_block(cstate, i, 1, (N_JOINTS, N_S), cap),
+                           soa_block(msave, i, 0, (N_WINDOWS, N_M), cap),
+                           soa_block(pairs, i, 0, (N_JOINTS,), cap),
+                           soa_block(pairs, i, 1, (N_JOINTS,), cap),
+                           soa_block(pairs, i, 2, (N_JOINTS,), cap),
+                           soa_block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,), cap),
+                           soa_block(mats, i, 0, (NZ, NZ), cap), soa_block(mats, i, 1, (NZ, NZ), cap),
+                           soa_block(mats, i, 2, (NZ, NZ), cap),
+                           soa_block(vz, i, 0, (VZ_ROWS, NZ), cap),
+                           soa_block(buf_i, i, 0, (nbuf, 4), cap),
+                           soa_block(buf_v, i, 0, (nbuf, 4), cap),
+                           soa_block(caps, i, 0, (N_CAP_ROWS, N_CAP), cap),
+                           soa_block(caps, i, 1, (N_CAP_ROWS, N_CAP), cap),
+                           soa_block(scratch, i, 0, (4 * npolar, 3), cap),
+                           soa_block(vec, i, 7, (N_Y,), cap), soa_block(diag, i, 2, (N_D,), cap),
+                           soa_block(vec, i, 8, (N_Y,), cap), soa_block(vec, i, 9, (N_Y,), cap))
+            _advance(case, 0.0, n_steps[i], save_every[i], False, out, work)
+
+    _SOA_KERNELS[capacity] = run_cases_soa
+    return run_cases_soa
+
+
 #: run_cases' arguments by name, in launch order (inputs, results, the work arrays of
 #: ``rk4.work_shapes``, the row placeholders): :func:`launch` takes them by name.
 ARGS = tuple(inspect.signature(run_cases.py_func).parameters)
@@ -174,19 +357,44 @@ FIXED_SHAPES = {"jp": (N_JOINTS, N_JP), "proj": (N_JOINTS, 3, N_ANGLE_BINS),
 FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
                      if name not in ("buf_i", "buf_v", "scratch")})
 
+#: The arguments that hold one value per case, n of them in either layout (no capacity).
+PER_CASE_SCALARS = ("n_steps", "save_every")
 
-def launch(arrays: dict) -> None:
-    """Run :func:`run_cases` over every case of ``arrays`` (its arguments by name, device or
-    host arrays) and wait for it to finish. ValueError if an argument is missing or unknown,
-    or if its per-case shape is not the one run_cases addresses it by (FIXED_SHAPES)."""
+
+def launch(arrays: dict, layout: str = "aos") -> None:
+    """Run the kernel of ``layout`` over every case of ``arrays`` (its arguments by name,
+    device or host arrays) and wait for it to finish: "aos", :func:`run_cases` over arrays
+    with the case first; "soa", :func:`soa_kernel` over arrays with the case last (every
+    argument's last axis the launch capacity, n_steps and save_every the n cases run).
+    ValueError if an argument is missing or unknown, or if its per-case shape is not the one
+    the kernel addresses it by (FIXED_SHAPES), or a capacity not one of CAPACITIES."""
+    if layout not in LAYOUTS:
+        raise ValueError(f"device layout {layout!r}: expected one of {LAYOUTS}")
     if set(arrays) != set(ARGS):
         raise ValueError(f"run_cases arguments: missing {sorted(set(ARGS) - set(arrays))}, "
                          f"unknown {sorted(set(arrays) - set(ARGS))}")
-    for name, shape in FIXED_SHAPES.items():
-        if tuple(arrays[name].shape[1:]) != shape:
-            raise ValueError(f"run_cases argument {name}: per-case shape "
-                             f"{arrays[name].shape[1:]}, expected {shape}")
-    n = arrays["p"].shape[0]
+    n = arrays["n_steps"].shape[0]
+    if layout == "aos":
+        for name, shape in FIXED_SHAPES.items():
+            if tuple(arrays[name].shape[1:]) != shape:
+                raise ValueError(f"run_cases argument {name}: per-case shape "
+                                 f"{arrays[name].shape[1:]}, expected {shape}")
+        kernel = run_cases
+    else:
+        cap = arrays["p"].shape[-1]
+        for name in ARGS:
+            if name in PER_CASE_SCALARS:
+                continue
+            if arrays[name].shape[-1] != cap:
+                raise ValueError(f"run_cases argument {name}: capacity {arrays[name].shape[-1]}, "
+                                 f"expected {cap} (p's)")
+            shape = FIXED_SHAPES.get(name)
+            if shape is not None and tuple(arrays[name].shape[:-1]) != shape:
+                raise ValueError(f"run_cases argument {name}: per-case shape "
+                                 f"{arrays[name].shape[:-1]}, expected {shape}")
+        if n > cap:
+            raise ValueError(f"{n} cases exceed the arrays' capacity {cap}")
+        kernel = soa_kernel(cap)
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
-    run_cases[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
+    kernel[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()

@@ -77,6 +77,7 @@ from .layout import (
     D_VT,
     D_WORN,
     J_CLEARANCE,
+    J_FILM,
     J_RI,
     J_RJ,
     N_D,
@@ -927,7 +928,8 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
         rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
     fn = dg[D_FN + j]
-    if p[P_FRICTION] != 0.0 and mu > 0.0 and fn > 0.0:
+    film = jp[j, J_FILM]
+    if p[P_FRICTION] != 0.0 and (mu > 0.0 or film > 0.0) and fn > 0.0:
         # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
         t1, t2 = tangent_basis(n)
         a = quad_form(wp, t1, t1)
@@ -936,7 +938,8 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
         inv_t = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b)
         vt = dg[D_VT + j]
         slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
-        rate = max(rate, mu * fn * slope * inv_t)
+        # Coulomb's ramp and the film's viscous shear (its rate: the coefficient over the mass)
+        rate = max(rate, (mu * fn * slope + film) * inv_t)
     return rate
 
 
@@ -1007,3 +1010,31 @@ def ideal_joint_forces(t, y, p, jp):
         for i in range(3):
             out[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
     return out
+
+
+def start_contacts(y, p, jp, wmap):
+    """Each clearance joint's contact at state y and t = 0, as the kernel computes it: the
+    force on the ball [N] (N_JOINTS x 3, global frame), the normal force F_N [N] and the
+    normal's line (global, unit). The contact state is a fresh episode's (no impact velocity
+    yet). Plain Python around the compiled :func:`evaluate`, as :func:`ideal_joint_forces`;
+    ``params.seated_offsets`` balances the spherical joints' friction with it."""
+    s = np.zeros((N_JOINTS, N_S))
+    dy = np.zeros(y.shape[0])
+    dg = np.zeros(N_D)
+    C = np.zeros((NZ, NZ))
+    S = np.zeros((NZ, NZ))
+    L = np.zeros((NZ, NZ))
+    vz = np.zeros((VZ_ROWS, NZ))
+    force = np.full((N_JOINTS, 3), np.nan)
+    fn = np.full(N_JOINTS, np.nan)
+    normal = np.full((N_JOINTS, 3), np.nan)
+    if evaluate(0.0, np.ascontiguousarray(y, dtype=np.float64),
+                Model(p, jp, s, np.ascontiguousarray(wmap, dtype=np.float64)),
+                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
+        return force, fn, normal
+    for j in range(N_JOINTS):
+        fn[j] = dg[D_FN + j]
+        for i in range(3):
+            force[j, i] = dg[D_JOINT_FORCE + 3 * j + i]
+            normal[j, i] = dg[D_NGLOBAL + 3 * j + i]
+    return force, fn, normal

@@ -30,7 +30,7 @@ P_V1 = 26           # friction ramp end [m/s]
 P_WEAR = 27         # 1.0 = wear on
 P_SLIP = 28         # 0.0 sliding |v_t| dt, 1.0 paper R_i |d beta|
 P_AMPL = 29         # wear amplification [-]
-P_PEN_FRAC = 30     # penetration stop, fraction of c [-]
+P_PEN_FRAC = 30     # contact.max_penetration_fraction [-]; 0: the physical stop (J_PEN_STOP)
 P_CONS_TOL = 31     # constraint violation stop [m]
 P_ENERGY_TOL = 32   # energy residual stop, fraction of the throughput [-]
 P_STAB = 33         # largest accepted rate * h [-]
@@ -78,7 +78,9 @@ J_CY = 14           # clearance between the block's sides and the guide's y wall
 J_CZ = 15           # clearance between the block's top / bottom and the guide's z walls [m]
 J_X0 = 16           # start of the walls' wear maps along the guide (x) [m]
 J_XSPAN = 17        # length of the walls' wear maps along the guide [m]
-N_JP = 18
+J_PEN_STOP = 18     # penetration stop [m] (docs/physics.md 4.3)
+J_FILM = 19         # lubricant film's viscous coefficient [N s/m] along the slip (O: Petroff); else 0
+N_JP = 20
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.

@@ -2,36 +2,37 @@
 (docs/physics.md section 3.7, docs/modelling.md).
 
 A joint type of the shape docs/architecture.md ("Joint types") describes, with one
-difference: a block touches its guide at up to eight corners at once, not at one point.
+difference: a block touches its guide along up to eight edge lines at once, not at one point.
 The guide is fixed in the ground along the global x axis at the height z_s; its four walls
 lie at y = +-(b + c_y) and z - z_s = +-(h + c_z), where the block (length 2a along the
 guide, width 2b, height 2h) sits centred with the gaps c_y and c_z. The block slides along
 x, moves across the guide (y, z) and tilts (its three angles) within its clearances.
 
 Each of the block's eight corners faces one y wall and one z wall: 16 corner-wall pairs
-("slots", k = 2 corner + 0 for the y wall, + 1 for the z wall). A slot is in contact where
-its corner lies beyond its wall; its force is the contact law of a rounded corner of edge
-radius r_c on a flat wall, F_el = K delta^n with K = 4 E* sqrt(r_c) / 3 (Hertz's modulus E*,
-``params.hertz_modulus``) and n = 3/2 (Hertz; the case's exponent under
-``contact.elastic: hertz``), with the case's damping law on the
-slot's own impact velocity, and the improved Coulomb friction on the corner's slip over the
-wall (along and across the guide). Every slot's force acts at its corner.
+("slots", k = 2 corner + 0 for the y wall, + 1 for the z wall). The block meets a wall with
+the face that faces it, along the face's two long edges (docs/physics.md 3.7): each edge is
+a line of the block's length between two corners (an "edge line", e = 2 wall + side), its
+penetration linear between its corners' and its pressure per unit length
+k_l max(delta, 0), the face an elastic foundation (k_l = E* sqrt(W / (pi L)),
+:func:`line_stiffness`). Each corner takes its line's consistent nodal load
+(:func:`line_load`) as its elastic force, with the case's damping law on the corner's own
+impact velocity, and the improved Coulomb friction on the corner's slip over the wall
+(along and across the guide). Every slot's force acts at its corner.
 
 - :func:`gap`: a slot's wall, outward normal and penetration against the wall's worn
   position c + h, h read from the wall's wear map at the corner (its bin, or with
   ``wear.interpolate`` bilinearly, :func:`wall_read`, whose gradient tilts the corner's
-  force onto the worn wall's normal: :func:`slot_state`);
+  force onto the worn wall's normal: :func:`slot_force`);
 - the wall maps: the joint's map rows split in four bands, one per wall (+y, -y, +z, -z),
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
-  (x from jp[J_X0] over jp[J_XSPAN]), each bin holding the depth of the corners' track
-  over it: :func:`wall_bin`, :func:`wall_read`, :func:`track_width`, :func:`deposit`;
-- :func:`contact`: the sum over the slots (force, moment, dissipated power) and, at a
-  step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
-  total elastic energy, the guide's total force and the largest stiff rate of a slot;
-- :func:`accept`: an accepted step's corner impacts and the wear each slot leaves on its
-  wall's map (``rk4.accept_substep``), :func:`seat` the slots of a seated start;
-- :func:`contact_angle`, :func:`contact_area`: the Hertz patch of a rounded corner,
-  a = sqrt(r_c delta).
+  (x from jp[J_X0] over jp[J_XSPAN]), each bin holding the depth worn over it:
+  :func:`wall_bin`, :func:`wall_read`, :func:`track_width`, :func:`deposit`;
+- :func:`contact`: the sum over the lines' corners (force, moment, dissipated power) and, at
+  a step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
+  lines' total elastic energy, the guide's total force and the largest stiff rate of a slot;
+- :func:`accept`: an accepted step's impacts (the joint's contact episodes) and the wear each
+  line leaves on its wall's map (``rk4.accept_substep``), :func:`seat` the slots of a seated
+  start.
 """
 
 import math
@@ -40,11 +41,8 @@ from collections import namedtuple
 from .compiled import compiled
 from .contact import (
     contact_damping,
-    elastic_energy,
     episode_impact_velocity,
     friction_magnitude,
-    normal_force,
-    reachable_penetration,
     stiff_rate,
     surface,
 )
@@ -79,10 +77,10 @@ from .layout import (
     J_XSPAN,
     M_IMPACTS,
     M_VIMP_MAX,
+    N_CAP,
     P_AMPL,
     P_DT,
     P_DV0_MIN,
-    P_EXPONENT,
     P_FEEDBACK,
     P_FRICTION,
     P_INTERP,
@@ -103,10 +101,6 @@ from .wear import coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "prismatic"
-
-#: The corners' elastic exponent where the case keeps the paper's (spherical) law: Hertz's
-#: point contact of a rounded corner on a flat wall.
-CORNER_EXPONENT = 1.5
 
 #: Walls of the guide, in the order of their bands of the wear map.
 WALLS = ("+y", "-y", "+z", "-z")
@@ -136,12 +130,60 @@ Slot = namedtuple("Slot", (
 ))
 
 
+@compiled(inline="always")
+def face_width(jp, j, wall):
+    """Width W [m] across the guide of the block's face that meets wall ``wall`` (0..3: +y,
+    -y, +z, -z): the block's height for a y wall, its width for a z wall."""
+    return jp[j, J_HEIGHT] if wall < 2 else jp[j, J_WIDTH]
+
+
 @compiled
-def corner_law(p):
-    """The exponent n of a corner's power law: the case's Hertz exponent under
-    ``contact.elastic: hertz``, else :data:`CORNER_EXPONENT`."""
-    law = p[P_EXPONENT]
-    return law if law != 0.0 else CORNER_EXPONENT
+def line_stiffness(jp, j, wall, ew):
+    """Stiffness k_l [N/m^2] per unit length of one of the two edge lines that carry the
+    block's face on wall ``wall`` (docs/physics.md 3.7): the face is an elastic foundation
+    of modulus k_f = 2 E* / sqrt(pi A) (A = L W, the face's area: a rigid flat punch of that
+    area pressed into an elastic half-space, F = 2 a E* delta with pi a^2 = A), and each edge
+    carries half the face's width, k_l = k_f W / 2 = E* sqrt(W / (pi L)); ``ew`` is E*."""
+    return ew * math.sqrt(face_width(jp, j, wall) / (math.pi * jp[j, J_LENGTH]))
+
+
+@compiled
+def line_load(da, db, kl, length):
+    """The elastic load of one edge line of length ``length`` [m] whose ends (corners) a and b
+    penetrate their wall by da and db [m], the penetration linear along the edge and the
+    pressure per unit length k_l max(delta, 0) (a linear foundation): (f_a, f_b, U), the
+    forces [N] the line puts on its two ends (its consistent nodal loads: the same force and
+    moment as the distributed load, and f_a = dU/d da, f_b = dU/d db) and its elastic energy
+    U = k_l int max(delta, 0)^2 / 2 ds [J]. With both ends in contact,
+    f_a = k_l L (2 da + db) / 6; with one, the part of the edge in contact is the fraction
+    lam = da / (da - db) of its length at a's end and the load is a triangle on it."""
+    kll = kl * length
+    if da > 0.0 and db > 0.0:
+        return (kll * (2.0 * da + db) / 6.0, kll * (da + 2.0 * db) / 6.0,
+                kll * (da * da + da * db + db * db) / 6.0)
+    if da > 0.0:
+        lam = da / (da - db)
+        f = 0.5 * kll * lam * da
+        return f * (1.0 - lam / 3.0), f * lam / 3.0, kll * lam * da * da / 6.0
+    if db > 0.0:
+        lam = db / (db - da)
+        f = 0.5 * kll * lam * db
+        return f * lam / 3.0, f * (1.0 - lam / 3.0), kll * lam * db * db / 6.0
+    return 0.0, 0.0, 0.0
+
+
+@compiled(inline="always")
+def line_slots(e):
+    """The two slots (its back corner's, at -x, and its front corner's) of edge line e
+    (0..7): wall e // 2 (+y, -y, +z, -z), the face's edge on the negative (e % 2 = 0) or
+    positive side across the wall (z for a y wall, y for a z wall)."""
+    wall = e // 2
+    side = e % 2
+    if wall < 2:
+        corner = (2 if wall == 0 else 0) + (4 if side == 1 else 0)
+        return 2 * corner, 2 * (corner + 1)
+    corner = (4 if wall == 2 else 0) + (2 if side == 1 else 0)
+    return 2 * corner + 1, 2 * (corner + 1) + 1
 
 
 @compiled(inline="always")
@@ -172,9 +214,9 @@ def slot_wall(k):
 
 
 @compiled(inline="always")
-def slot_cell(k):
-    """Where slot k's step wear waits in ``cur`` (layout.CAP_SLOT_ROW): (row, first column)."""
-    return CAP_SLOT_ROW + k // 2, 3 * (k % 2)
+def line_cell(e):
+    """Where edge line e's step wear waits in ``cur`` (layout.CAP_SLOT_ROW): its row."""
+    return CAP_SLOT_ROW + e
 
 
 @compiled(inline="always")
@@ -199,11 +241,21 @@ def wall_bin(jp, j, wall, x, across, nrow, ncol):
 
 
 @compiled
-def track_width(jp, j, wall, delta, nrow):
-    """Width w [m] across wall ``wall`` of the track a corner wears at penetration
-    ``delta`` (> 0): its Hertz patch 2 a = 2 sqrt(r_c delta), at most a bin's extent
-    across the wall (``nrow`` the map's rows; a wider patch spreads over the bin)."""
-    return min(2.0 * math.sqrt(jp[j, J_RI] * delta), 2.0 * wall_half(jp, j, wall) / (nrow // 4))
+def track_width(jp, j, wall, load, span, mean, other, ew):
+    """Width w [m] across wall ``wall`` of the track an edge line wears: half the face's
+    width W / 2 while the face's other edge line is in contact too (the face lies on the
+    wall: each line carries a strip of half the face); with the other line lifted, the
+    strip of the face that its tilt brings into the wall, W mean / (mean - other) (``mean``,
+    ``other``: the two lines' mean penetrations [m]), at least the line contact's width
+    2 b = 2 sqrt(4 P' r_c / (pi E*)) of the rounded edge (Johnson, Contact Mechanics, ch. 4:
+    the load per unit length P' = ``load`` / ``span`` [N/m]) and at most W / 2. Continuous:
+    the tilted strip is W / 2 when the other line touches."""
+    half = 0.5 * face_width(jp, j, wall)
+    if other >= 0.0:
+        return half
+    tilt = 2.0 * half * mean / (mean - other) if mean > 0.0 else 0.0
+    line = 2.0 * math.sqrt(4.0 * load / max(span, 1e-300) * jp[j, J_RI] / (math.pi * ew))
+    return min(max(tilt, line), half)
 
 
 @compiled(inline="always")
@@ -290,21 +342,6 @@ def gap(jp, j, wmap, p, k, q):
 
 
 @compiled
-def contact_angle(pen, rc):
-    """Half-angle psi [rad] of the rounded corner's (edge radius r_c) surface inside the
-    Hertz patch at penetration ``pen``: sin psi = a / r_c, a = sqrt(r_c pen)."""
-    if pen <= 0.0:
-        return 0.0
-    return math.asin(min(1.0, math.sqrt(pen / rc)))
-
-
-@compiled
-def contact_area(pen, rc):
-    """Hertz patch pi a^2 = pi r_c pen [m^2] of a rounded corner on a flat wall."""
-    return math.pi * rc * max(pen, 0.0)
-
-
-@compiled
 def corner_mobility(p, u, nb):
     """Inverse mass [1/kg] of the block's motion at body point u along the body-frame unit
     vector nb, the block alone (its centroid free, its rotation free): 1/m4 +
@@ -315,21 +352,18 @@ def corner_mobility(p, u, nb):
             + a[2] * a[2] / p[P_J4 + 2])
 
 
-@compiled
-def slot_state(j, model, k, slider):
-    """Slot k's contact, a :data:`Slot`. ``slider``: the block's body state (r, v, R, w).
+#: One slot's geometry and kinematics (:func:`slot_geometry`), before any force.
+Geo = namedtuple("Geo", (
+    "delta", "ddot", "q", "n", "vt", "slip", "across", "worn", "c_eff", "h", "u", "slope",
+    "hdot", "sloped",
+))
 
-    On a sloped worn wall (the bilinear read, the gap's ``slope`` s != 0) the penetration
-    delta = out - c - h(x, across) has the gradient m = n - s with respect to the corner, and
-    the normal force derives from the corner's elastic potential U(delta, c_eff)
-    (docs/physics.md 3.5, 3.7): -F_N m - X s on the block, X = dU/dc_eff at fixed delta while
-    F_N > 0 (0 otherwise). The guide does not move, so its power is exactly
-    -F_N delta_dot - X h_dot with delta_dot = m . v_q and h_dot = s . v_q, v_q the corner's
-    velocity; the damping part (F_N - F_el) delta_dot + (X - U_c) h_dot is booked as
-    dissipated. Friction stays tangent to the wall, against the corner's slip over it: its
-    power is then its dot product with that slip whatever the normal force's direction.
-    A flat wall (s = 0) gives -F_N n.
-    """
+
+@compiled
+def slot_geometry(j, model, k, slider):
+    """Slot k's :data:`Geo`: its corner q, the wall's normal, the penetration delta and its
+    rate delta_dot (on a sloped worn wall, m . v_q with m = n - slope the worn wall's normal:
+    the slope's rate s . v_q is ``hdot``), the corner's slip over the wall."""
     p = model.p
     jp = model.jp
     r4, v4, R4, w4 = slider
@@ -348,58 +382,126 @@ def slot_state(j, model, k, slider):
         ddot = dot(n, vq)
         vt = sub(vq, scale(ddot, n))
     slip = math.sqrt(dot(vt, vt))
+    return Geo(delta, ddot, q, n, vt, slip, across, worn, c_eff, h, u, slope, hdot, sloped)
+
+
+@compiled
+def slot_force(j, model, k, g, fel, stiff):
+    """Slot k's contact, a :data:`Slot`, from its geometry g (:func:`slot_geometry`) and the
+    elastic load ``fel`` [N] its edge line puts on its corner (:func:`line_load`; 0: the line
+    is not in contact); ``stiff`` [N/m] the line's k_l L / 2, which bounds dF_el / d delta
+    at the corner (its row of the line's stiffness, k_l L / 3 + k_l L / 6 with both ends in).
+
+    The normal force F_N = F_el (1 + kappa delta_dot) (clamped at 0) carries the case's
+    damping law on the corner's own approach rate and episode impact velocity. The line's
+    potential depends on the penetrations alone, so on a sloped worn wall the corner's
+    normal force is -F_N m, m = n - slope (docs/physics.md 3.5, 3.7): the guide does not
+    move, so its power is exactly -F_N delta_dot with delta_dot = m . v_q, of which
+    (F_N - F_el) delta_dot is booked as dissipated. Friction stays tangent to the wall,
+    against the corner's slip over it (the improved Coulomb law on F_N): its power is its
+    dot product with that slip whatever the normal force's direction."""
+    p = model.p
+    jp = model.jp
     zero = (0.0, 0.0, 0.0)
-    if delta <= 0.0:
-        return Slot(delta, ddot, 0.0, 0.0, 0.0, 0.0, zero, zero, 0.0, q, n, vt, slip, across,
-                    worn, c_eff, h, u)
-    ew, mu, _ = surface(jp, j, worn)
-    rc = jp[j, J_RI]
-    law = corner_law(p)
-    kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
-    fn, fel, dfd, dfdd = normal_force(delta, ddot, c_eff, ew, rc, c_eff, law, kappa)
-    if sloped:
-        # U = delta F_el / (n + 1), F_el = A c_eff (delta / c_eff)^n with A ~ sqrt(c_eff)
-        # (R_j = c_eff): U ~ c_eff^(3/2 - n), so dU/dc_eff = (3/2 - n) U / c_eff
-        uc = (1.5 - law) * elastic_energy(delta, c_eff, ew, rc, c_eff, law) / c_eff
-        x = uc if fn > 0.0 else 0.0
-        fnormal = add(scale(-fn, n), scale(fn - x, slope))
-        pdiss = (fn - fel) * ddot + (x - uc) * hdot
+    if not fel > 0.0:
+        return Slot(g.delta, g.ddot, 0.0, 0.0, 0.0, 0.0, zero, zero, 0.0, g.q, g.n, g.vt,
+                    g.slip, g.across, g.worn, g.c_eff, g.h, g.u)
+    ew, mu, _ = surface(jp, j, g.worn)
+    kappa = contact_damping(model.s[j, S_SLOT + k], g.ddot, p)
+    fac = 1.0 + kappa * g.ddot
+    fn = fel * fac
+    dfd = stiff * fac
+    dfdd = kappa * fel
+    if fn < 0.0:
+        fn = 0.0
+        dfd = 0.0
+        dfdd = 0.0
+    if g.sloped:
+        fnormal = add(scale(-fn, g.n), scale(fn, g.slope))
     else:
-        fnormal = scale(-fn, n)
-        pdiss = (fn - fel) * ddot
+        fnormal = scale(-fn, g.n)
+    pdiss = (fn - fel) * g.ddot
     force = fnormal
-    if p[P_FRICTION] != 0.0 and slip > 0.0:
-        ft = friction_magnitude(mu, fn, slip, p[P_V0], p[P_V1])
-        force = add(force, scale(-ft / slip, vt))
+    if p[P_FRICTION] != 0.0 and g.slip > 0.0:
+        ft = friction_magnitude(mu, fn, g.slip, p[P_V0], p[P_V1])
+        force = add(force, scale(-ft / g.slip, g.vt))
     # friction: its work on the corner's slip
-    pdiss -= dot(sub(force, fnormal), vt)
-    return Slot(delta, ddot, fn, fel, dfd, dfdd, force, fnormal, pdiss, q, n, vt, slip, across,
-                worn, c_eff, h, u)
+    pdiss -= dot(sub(force, fnormal), g.vt)
+    return Slot(g.delta, g.ddot, fn, fel, dfd, dfdd, force, fnormal, pdiss, g.q, g.n, g.vt,
+                g.slip, g.across, g.worn, g.c_eff, g.h, g.u)
+
+
+@compiled
+def line_state(j, model, e, slider):
+    """Edge line e's two corners (:func:`line_slots`): (their geometries, their elastic
+    loads f_a, f_b and the line's elastic energy U, :func:`line_load`). The line's modulus is
+    its first corner's surface (coated, or the base where the coating is worn through)."""
+    jp = model.jp
+    ka, kb = line_slots(e)
+    ga = slot_geometry(j, model, ka, slider)
+    gb = slot_geometry(j, model, kb, slider)
+    fa = 0.0
+    fb = 0.0
+    uel = 0.0
+    if ga.delta > 0.0 or gb.delta > 0.0:
+        ew, _, _ = surface(jp, j, ga.worn if ga.delta >= gb.delta else gb.worn)
+        kl = line_stiffness(jp, j, e // 2, ew)
+        fa, fb, uel = line_load(ga.delta, gb.delta, kl, jp[j, J_LENGTH])
+    return ga, gb, fa, fb, uel
+
+
+@compiled
+def line_stiff(jp, j, e, worn):
+    """k_l L / 2 [N/m] of edge line e (:func:`slot_force`'s ``stiff``)."""
+    ew, _, _ = surface(jp, j, worn)
+    return 0.5 * line_stiffness(jp, j, e // 2, ew) * jp[j, J_LENGTH]
+
+
+@compiled
+def slot_state(j, model, k, slider):
+    """Slot k's contact, a :data:`Slot` (its edge line evaluated whole, :func:`line_state`).
+    ``slider``: the block's body state (r, v, R, w)."""
+    e = slot_line(k)
+    ga, gb, fa, fb, _ = line_state(j, model, e, slider)
+    ka, _ = line_slots(e)
+    if k == ka:
+        return slot_force(j, model, k, ga, fa, line_stiff(model.jp, j, e, ga.worn))
+    return slot_force(j, model, k, gb, fb, line_stiff(model.jp, j, e, gb.worn))
+
+
+@compiled(inline="always")
+def slot_line(k):
+    """The edge line (0..7, :func:`line_slots`) that slot k ends: its wall and the side of
+    the face its corner lies on across the wall."""
+    wall, _ = slot_wall(k)
+    corner = k // 2
+    bit = 4 if k % 2 == 0 else 2
+    return 2 * wall + (1 if corner & bit else 0)
 
 
 @compiled
 def slot_rate(j, model, k, st, R4):
     """Largest stiff rate [1/s] of slot k in contact or closing within one output step
     (docs/physics.md section 4), from the block's mobility at the corner
-    (:func:`corner_mobility`); 0 for a slot that stays open. ``st``: :func:`slot_state`."""
+    (:func:`corner_mobility`) and the line's stiffness bound k_l L / 2 at the corner; a
+    closing corner's damping from the penetration it can reach by energy; 0 for a slot that
+    stays open. ``st``: :func:`slot_state`."""
     p = model.p
     jp = model.jp
     delta = st.delta
     ddot = st.ddot
-    c_eff = st.c_eff
     u = st.u_body
-    if not (delta > 0.0 or delta + ddot * p[P_DT] > 0.0):
+    if not (st.fel > 0.0 or delta > 0.0 or delta + ddot * p[P_DT] > 0.0):
         return 0.0
     m_eff = 1.0 / corner_mobility(p, u, mtv(R4, st.n))
-    rate = stiff_rate(m_eff, st.dfd, st.dfdd)
+    stiff = line_stiff(jp, j, slot_line(k), st.worn)
+    rate = stiff_rate(m_eff, max(st.dfd, stiff), st.dfdd)
     ew, mu, _ = surface(jp, j, st.worn)
-    rc = jp[j, J_RI]
-    law = corner_law(p)
     if ddot > 0.0:
-        dpred = reachable_penetration(max(delta, 0.0), m_eff, ddot, c_eff, ew, rc, c_eff, law)
+        # the depth an approach at ddot reaches on the line's stiffness at the corner
+        dpred = math.sqrt(max(delta, 0.0) ** 2 + m_eff * ddot * ddot / stiff)
         kappa = contact_damping(model.s[j, S_SLOT + k], ddot, p)
-        _, _, dfp, dfdp = normal_force(dpred, ddot, c_eff, ew, rc, c_eff, law, kappa)
-        rate = max(rate, stiff_rate(m_eff, dfp, dfdp))
+        rate = max(rate, stiff_rate(m_eff, stiff * (1.0 + kappa * ddot), kappa * stiff * dpred))
     if p[P_FRICTION] != 0.0 and mu > 0.0 and st.fn > 0.0:
         # the tangential inverse mass, bounded by the largest over directions
         jmin = min(p[P_J4], min(p[P_J4 + 1], p[P_J4 + 2]))
@@ -413,14 +515,16 @@ def slot_rate(j, model, k, st, R4):
 def contact(j, model, slider, full, dg):
     """The guide's action on the block of prismatic joint j: (force [N], moment about the
     block's centroid in the block's frame [N m], power dissipated by damping and friction
-    [W]), summed over the slots. ``slider``: the block's body state (r, v, R, w).
+    [W]), summed over the eight edge lines' corners. ``slider``: the block's body state
+    (r, v, R, w).
 
     With ``full`` (a step's end), joint j's diagnostics into dg: the contact values of the
     slot that penetrates deepest (or, with none in contact, of the one nearest to contact),
     the block's offset (0, y, z - z_s) from the guide's axis, the elastic energy of all
-    slots, the guide's total force on the block and the largest stiff rate of a slot
+    lines, the guide's total force on the block and the largest stiff rate of a slot
     (D_PRATE)."""
     p = model.p
+    jp = model.jp
     r4, v4, R4, w4 = slider
     force = (0.0, 0.0, 0.0)
     moment = (0.0, 0.0, 0.0)
@@ -428,23 +532,28 @@ def contact(j, model, slider, full, dg):
     uel = 0.0
     rate = 0.0
     best = -math.inf
-    law = corner_law(p)
-    for k in range(P_SLOTS):
-        st = slot_state(j, model, k, slider)
-        if full:
-            rate = max(rate, slot_rate(j, model, k, st, R4))
-            if st.delta > best:
-                best = st.delta
-                store_slot(dg, j, st)
-        if st.delta <= 0.0:
+    for e in range(P_SLOTS // 2):
+        ga, gb, fa, fb, ue = line_state(j, model, e, slider)
+        ka, kb = line_slots(e)
+        if not (fa > 0.0 or fb > 0.0 or full):
             continue
-        f = st.force
-        force = add(force, f)
-        moment = add(moment, cross(st.u_body, mtv(R4, f)))
-        pdiss += st.pdiss
-        if full:
-            ew, _, _ = surface(model.jp, j, st.worn)
-            uel += elastic_energy(st.delta, st.c_eff, ew, model.jp[j, J_RI], st.c_eff, law)
+        uel += ue
+        for end in range(2):
+            k = ka if end == 0 else kb
+            g = ga if end == 0 else gb
+            st = slot_force(j, model, k, g, fa if end == 0 else fb,
+                            line_stiff(jp, j, e, g.worn))
+            if full:
+                rate = max(rate, slot_rate(j, model, k, st, R4))
+                if st.delta > best:
+                    best = st.delta
+                    store_slot(dg, j, st)
+            if not st.fel > 0.0:
+                continue
+            f = st.force
+            force = add(force, f)
+            moment = add(moment, cross(st.u_body, mtv(R4, f)))
+            pdiss += st.pdiss
     if full:
         dg[D_UEL + j] = uel
         dg[D_PRATE] = rate
@@ -478,26 +587,37 @@ def store_slot(dg, j, st):
 
 @compiled
 def seat(j, model, slider):
-    """A seated start's slots: each corner that starts in contact begins its episode without
-    an impact (impact velocity at the floor)."""
+    """A seated start's slots: each corner that an edge line in contact loads begins its
+    episode without an impact (impact velocity at the floor), and so does the joint's."""
     p = model.p
     s = model.s
-    for k in range(P_SLOTS):
-        st = slot_state(j, model, k, slider)
-        s[j, S_SLOT + k] = (episode_impact_velocity(0.0, st.ddot, p[P_DV0_MIN], False)
-                            if st.delta > 0.0 else 0.0)
-    s[j, S_DV0] = 0.0
+    touching = False
+    for e in range(P_SLOTS // 2):
+        ga, gb, fa, fb, _ = line_state(j, model, e, slider)
+        ka, kb = line_slots(e)
+        s[j, S_SLOT + ka] = (episode_impact_velocity(0.0, ga.ddot, p[P_DV0_MIN], False)
+                             if fa > 0.0 else 0.0)
+        s[j, S_SLOT + kb] = (episode_impact_velocity(0.0, gb.ddot, p[P_DV0_MIN], False)
+                             if fb > 0.0 else 0.0)
+        touching = touching or fa > 0.0 or fb > 0.0
+    s[j, S_DV0] = 1.0 if touching else 0.0
 
 
 @compiled
 def accept(j, model, slider, hs, in_settled, stats, cur):
-    """An accepted (sub-)step of length hs ends with the block in state ``slider``: each
-    slot's contact episode (an onset is an impact, counted with its approach rate; the
-    impact velocity follows ``contact.episode_impact_velocity``), and the wear of each slot
-    in contact, Archard's V = k F_N |v_t| hs: V / w, its track's width w
-    (:func:`track_width`), into ``cur`` per slot (:func:`slot_cell`: V / w, (V / w) x,
-    (V / w) a; spread on the wall's map once the step is accepted, :func:`deposit`) and V
-    into ``cur[j, 0]`` (the joint's own row, which the other joints' wear leaves unused).
+    """An accepted (sub-)step of length hs ends with the block in state ``slider``.
+
+    Impacts (docs/physics.md 3.7): the joint's contact episode starts when the block goes
+    from touching no wall to touching one (a corner beyond its wall): that onset is one
+    impact of the joint, counted with the fastest approach rate among the corners its
+    lines then load. Each corner keeps its own episode impact velocity for its damping
+    (``contact.episode_impact_velocity``) while its line loads it.
+
+    Wear: Archard's V = k F_N |v_t| hs at each loaded corner, summed per edge line into
+    ``cur``'s line row (:func:`line_cell`): V, and V times the load's centroid along the
+    guide, the ends of the part of the edge in contact, the edge's position across the wall
+    and the track's width (:func:`track_width`); spread on the wall's map once the step is
+    accepted (:func:`deposit`). V also into ``cur[j, 0]`` (the joint's own row).
 
     Returns whether a slot's episode state changed (the step-end evaluation must be redone).
     """
@@ -507,68 +627,152 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     changed = False
     wear_on = p[P_WEAR] != 0.0
     any_contact = False
-    for k in range(P_SLOTS):
-        st = slot_state(j, model, k, slider)
-        ddot = st.ddot
-        at = S_SLOT + k
-        if st.delta > 0.0:
-            any_contact = True
-            if wear_on and st.fn > 0.0:
-                _, _, k_wear = surface(jp, j, st.worn)
-                vol = p[P_AMPL] * k_wear * st.fn * st.slip * hs
-                wall, _ = slot_wall(k)
-                # the volume over the track's width: its depth times the length along the guide
-                line = vol / track_width(jp, j, wall, st.delta, model.wmap.shape[1])
-                row, col = slot_cell(k)
-                cur[row, col] += line
-                cur[row, col + 1] += line * st.q[0]
-                cur[row, col + 2] += line * st.across
-                cur[j, 0] += vol
-            dv0 = episode_impact_velocity(s[j, at], ddot, p[P_DV0_MIN], p[P_ONSET] != 0.0)
-            if s[j, at] == 0.0:
-                changed = True
-                stats[W_WHOLE, M_IMPACTS + j] += 1.0
-                stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j], ddot)
-                if in_settled:
-                    stats[W_SETTLED, M_IMPACTS + j] += 1.0
-                    stats[W_SETTLED, M_VIMP_MAX + j] = max(stats[W_SETTLED, M_VIMP_MAX + j],
-                                                           ddot)
-            elif dv0 != s[j, at]:
-                changed = True
-            s[j, at] = dv0
-        elif s[j, at] != 0.0:
-            s[j, at] = 0.0
-            changed = True
+    vimp = 0.0
+    length = jp[j, J_LENGTH]
+    for wall in range(4):
+        lines = (line_state(j, model, 2 * wall, slider),
+                 line_state(j, model, 2 * wall + 1, slider))
+        for side in range(2):
+            e = 2 * wall + side
+            ga, gb, fa, fb, _ = lines[side]
+            oa, ob, _, _, _ = lines[1 - side]
+            ka, kb = line_slots(e)
+            vol_line = 0.0
+            for end in range(2):
+                k = ka if end == 0 else kb
+                g = ga if end == 0 else gb
+                fel = fa if end == 0 else fb
+                at = S_SLOT + k
+                if fel > 0.0:
+                    st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
+                    any_contact = True
+                    vimp = max(vimp, g.ddot)
+                    if wear_on and st.fn > 0.0:
+                        _, _, k_wear = surface(jp, j, g.worn)
+                        vol = p[P_AMPL] * k_wear * st.fn * g.slip * hs
+                        vol_line += vol
+                        row = line_cell(e)
+                        cur[row, 1] += vol * g.q[0]
+                        cur[j, 0] += vol
+                    dv0 = episode_impact_velocity(s[j, at], g.ddot, p[P_DV0_MIN],
+                                                  p[P_ONSET] != 0.0)
+                    if dv0 != s[j, at]:
+                        changed = True
+                    s[j, at] = dv0
+                elif s[j, at] != 0.0:
+                    s[j, at] = 0.0
+                    changed = True
+            if vol_line > 0.0:
+                # the part of the edge in contact, from the corner(s) beyond the wall
+                xa = ga.q[0]
+                xb = gb.q[0]
+                if ga.delta > 0.0 and gb.delta > 0.0:
+                    x0, x1 = xa, xb
+                elif ga.delta > 0.0:
+                    x0, x1 = xa, xa + (xb - xa) * ga.delta / (ga.delta - gb.delta)
+                else:
+                    x0, x1 = xb + (xa - xb) * gb.delta / (gb.delta - ga.delta), xb
+                ew, _, _ = surface(jp, j, ga.worn)
+                span = abs(x1 - x0)
+                mean = 0.5 * (ga.delta + gb.delta)
+                other = 0.5 * (oa.delta + ob.delta)
+                if oa.delta > 0.0 or ob.delta > 0.0:
+                    other = max(other, 0.0)
+                width = track_width(jp, j, wall, fa + fb, max(span, 1e-3 * length),
+                                    max(mean, max(ga.delta, gb.delta)), other, ew)
+                row = line_cell(e)
+                cur[row, 0] += vol_line
+                cur[row, 2] += vol_line * x0
+                cur[row, 3] += vol_line * x1
+                cur[row, 4] += vol_line * 0.5 * (ga.across + gb.across)
+                cur[row, 5] += vol_line * width
+    if any_contact and s[j, S_DV0] == 0.0:
+        # the joint's contact episode begins: one impact
+        changed = True
+        stats[W_WHOLE, M_IMPACTS + j] += 1.0
+        stats[W_WHOLE, M_VIMP_MAX + j] = max(stats[W_WHOLE, M_VIMP_MAX + j], vimp)
+        if in_settled:
+            stats[W_SETTLED, M_IMPACTS + j] += 1.0
+            stats[W_SETTLED, M_VIMP_MAX + j] = max(stats[W_SETTLED, M_VIMP_MAX + j], vimp)
     s[j, S_DV0] = 1.0 if any_contact else 0.0
     return changed
+
+
+@compiled(inline="always")
+def overlap_linear(lo, hi, x0, x1, a0, slope):
+    """Integral over [lo, hi] intersected with [x0, x1] of the density a0 + slope (x - x0)."""
+    lo = max(lo, x0)
+    hi = min(hi, x1)
+    if hi <= lo:
+        return 0.0
+    return a0 * (hi - lo) + 0.5 * slope * ((hi - x0) ** 2 - (lo - x0) ** 2)
 
 
 @compiled
 def deposit(wmap, j, jp, cur, wvol):
     """Spread joint j's accepted step wear on its wall maps (docs/physics.md 5.7): each
-    slot's track wear (``cur``'s slot rows: sum of V / w, V the sub-step's volume and w
-    its track's width, :func:`track_width`) on the bin of its mean position (weighted
-    alike: a corner's Hertz patch, tens of microns across, lies well inside a bin), which
-    deepens by it over the bin's length along the guide: the depth of the corner's track,
-    Archard's k p s, whatever the bins' sizes. The step's volume (``cur[j, 0]``) adds to
-    the worn volume ``wvol[j]``; both are cleared. Returns the largest depth of a bin
-    written [m]."""
+    edge line's volume V (``cur``'s line rows, :func:`accept`) over the track it wore, a
+    rectangle of the wall: along the guide the part of the edge in contact [x0, x1] with a
+    density linear along it whose centroid is the load's (the corners' forces are the line
+    load's consistent nodal loads), across the wall the track's width w from the edge
+    inward. Each bin deepens by the volume over it divided by its area: the depth Archard's
+    k p s leaves where the track covers whole bins, and the same volume wherever the map's
+    bins are finer or coarser. The step's volume (``cur[j, 0]``) adds to the worn volume
+    ``wvol[j]``; both are cleared. Returns the largest depth of a bin written [m]."""
     nrow = wmap.shape[1]
     ncol = wmap.shape[2]
-    length = jp[j, J_XSPAN] / ncol
+    band = nrow // 4
+    blen = jp[j, J_XSPAN] / ncol
     top = 0.0
-    for k in range(P_SLOTS):
-        cr, cc = slot_cell(k)
-        line = cur[cr, cc]
-        if line > 0.0:
-            wall, _ = slot_wall(k)
-            row, col = wall_bin(jp, j, wall, cur[cr, cc + 1] / line, cur[cr, cc + 2] / line,
-                                nrow, ncol)
-            wmap[j, row, col] += line / length
-            top = max(top, wmap[j, row, col])
-        cur[cr, cc] = 0.0
-        cur[cr, cc + 1] = 0.0
-        cur[cr, cc + 2] = 0.0
+    for e in range(P_SLOTS // 2):
+        row = line_cell(e)
+        vol = cur[row, 0]
+        if vol > 0.0:
+            wall = e // 2
+            half = wall_half(jp, j, wall)
+            bhgt = 2.0 * half / band
+            xc = cur[row, 1] / vol
+            x0 = cur[row, 2] / vol
+            x1 = cur[row, 3] / vol
+            if x1 < x0:
+                x0, x1 = x1, x0
+            edge = cur[row, 4] / vol
+            width = cur[row, 5] / vol
+            a0 = edge - width if e % 2 == 1 else edge
+            a1 = a0 + width
+            span = x1 - x0
+            if span <= 1e-12 * blen:
+                # a point: its bin along the guide
+                x0 = xc - 0.5e-12 * blen
+                x1 = xc + 0.5e-12 * blen
+                span = x1 - x0
+            # the linear density over [x0, x1] with unit integral and centroid xc (held within
+            # the middle third, where such a density is nowhere negative)
+            mid = 0.5 * (x0 + x1)
+            off = min(max(xc - mid, -span / 6.0), span / 6.0)
+            slope = 12.0 * off / span ** 3
+            dens0 = 1.0 / span - 0.5 * slope * span
+            c0 = min(max(int(math.floor((x0 - jp[j, J_X0]) / blen)), 0), ncol - 1)
+            c1 = min(max(int(math.floor((x1 - jp[j, J_X0]) / blen)), 0), ncol - 1)
+            r0 = min(max(int(math.floor((a0 + half) / bhgt)), 0), band - 1)
+            r1 = min(max(int(math.floor((a1 + half) / bhgt)), 0), band - 1)
+            for c in range(c0, c1 + 1):
+                lo = jp[j, J_X0] + c * blen if c > 0 else -math.inf
+                hi = jp[j, J_X0] + (c + 1) * blen if c < ncol - 1 else math.inf
+                fx = overlap_linear(lo, hi, x0, x1, dens0, slope)
+                if fx <= 0.0:
+                    continue
+                for r in range(r0, r1 + 1):
+                    blo = -half + r * bhgt if r > 0 else -math.inf
+                    bhi = -half + (r + 1) * bhgt if r < band - 1 else math.inf
+                    fa = (min(bhi, a1) - max(blo, a0)) / width if width > 0.0 else 1.0
+                    if fa <= 0.0:
+                        continue
+                    at = wall * band + r
+                    wmap[j, at, c] += vol * fx * fa / (blen * bhgt)
+                    top = max(top, wmap[j, at, c])
+        for i in range(N_CAP):
+            cur[row, i] = 0.0
     wvol[j] += cur[j, 0]
     cur[j, 0] = 0.0
     return top

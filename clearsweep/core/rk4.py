@@ -50,6 +50,7 @@ from .layout import (
     J_CY,
     J_CZ,
     J_LENGTH,
+    J_PEN_STOP,
     J_RI,
     J_RJ,
     M_ACC_PEAK,
@@ -85,7 +86,6 @@ from .layout import (
     P_MAX_LEVEL,
     P_OMEGA,
     P_ONSET,
-    P_PEN_FRAC,
     P_SECTION_PHASE,
     P_SETTLE,
     P_SLIP,
@@ -268,6 +268,17 @@ def copy_row(dst, row, src):
     """dst[row, :] = src, without making a slice view."""
     for i in range(src.shape[0]):
         dst[row, i] = src[i]
+
+
+@compiled
+def keep_accepted(s, ssave, stats, msave, first, first_save, ddot_prev, ddot_prev_save):
+    """Copy what only an accepted sub-step changes (the contact state s, the statistics, the
+    first impact times, the approach rates) into its keeping arrays (the second of each
+    pair); called with the pairs swapped, it restores them."""
+    copy_rows_into(ssave, s)
+    copy_rows_into(msave, stats)
+    copy_into(first_save, first)
+    copy_into(ddot_prev_save, ddot_prev)
 
 
 @compiled
@@ -826,7 +837,7 @@ def step_checks(y, dg, p, jp, status, e0, track):
     if status == ST_OK and abs(y[Y_ROD_BETA]) > EULER_LIMIT:
         status = ST_EULER
     for j in range(N_JOINTS):
-        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > p[P_PEN_FRAC] * jp[j, J_C]:
+        if jp[j, J_CLEARANCE] != 0.0 and dg[D_DELTA + j] > jp[j, J_PEN_STOP]:
             status = ST_PENETRATION
     track[T_KE_PEAK] = max(track[T_KE_PEAK], dg[D_KE])
     track[T_WORK_MAX] = max(track[T_WORK_MAX], abs(y[Y_WORK]))
@@ -1155,13 +1166,17 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
         t = t0 + step * h
         steps_done = step + 1
         level = level_for(dg[D_RATE], h, stab)
+        # a rejected attempt undoes what it changed (docs/physics.md section 4). Every step
+        # keeps the state, k1 and the diagnostics of its start: a sub-step changes them
+        # before its stability check. The contact state, the statistics, the first impact
+        # times and the approach rates change only when a sub-step is accepted, so that
+        # only an attempt of several sub-steps can be rejected after changing them: they
+        # are kept at the first such acceptance of the step (``kept``), still the step's
+        # start, and restored only then (the same values as a copy at every step's start).
         copy_into(ysave, y)
         copy_into(k1save, k1)
         copy_into(dgsave, dg)
-        copy_rows_into(ssave, s)
-        copy_rows_into(msave, stats)
-        copy_into(first_save, out.first)
-        copy_into(ddot_prev_save, ddot_prev)
+        kept = False
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
@@ -1197,6 +1212,10 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
                     need = level_for(dg[D_RATE], h, stab)
                     break
                 in_settled = ts + hs >= settle
+                if nsub > 1 and not kept:
+                    keep_accepted(s, ssave, stats, msave, out.first, first_save, ddot_prev,
+                                  ddot_prev_save)
+                    kept = True
                 changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
                                                ddot_prev)
                 if slides and accept_prismatic(hs, in_settled, model, stats, cur, y):
@@ -1233,10 +1252,9 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work):
             copy_into(y, ysave)
             copy_into(k1, k1save)
             copy_into(dg, dgsave)
-            copy_rows_into(s, ssave)
-            copy_rows_into(stats, msave)
-            copy_into(out.first, first_save)
-            copy_into(ddot_prev, ddot_prev_save)
+            if kept:
+                keep_accepted(ssave, s, msave, stats, first_save, out.first, ddot_prev_save,
+                              ddot_prev)
             level = max(level + 1, need)
         if status != ST_OK:
             if status != ST_UNSTABLE_STEP:
