@@ -342,3 +342,13 @@ def test_the_pages_script_compares_a_doubled_run_of_fewer_members_over_those_mem
     page.main(str(path), str(write_netcdf_atomic(two, tmp_path / "doubled.nc")))
     out = capsys.readouterr().out
     assert "0 of 30 outside" in out and "(moved +0.000" in out
+
+
+def test_a_drift_that_could_not_be_measured_leaves_no_interval():
+    """A settled window under 2 revolutions has no whole halves (NaN drift): the effect is
+    given without an interval, not with the members' alone."""
+    design = synthetic(noise=0.05, paired=False, seed=3)
+    f = factorial.clearance_factors(design)
+    unmeasured = design.assign({DRIFT: xr.full_like(design[RMS], np.nan)})
+    value, low, high = factorial.contrast(unmeasured, RMS, None, {"B": (f["B"][2], f["B"][1])}, f)
+    assert np.isfinite(value) and np.isnan(low) and np.isnan(high)

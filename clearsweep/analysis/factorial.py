@@ -27,7 +27,8 @@ steady motion (the whole window's mean has half the standard deviation of the ha
 difference), and bounds the bias of a contrast still settling where its transient falls by at
 least 3x from one half to the next. A metric without a drift twin (the worn volume, which
 grows with the run by construction) has h = h_m; without members, h = h_r where the drift is
-there, else no interval.
+there, else no interval. A drift that is NaN (a settled window under 2 revolutions: no two
+whole halves) leaves the effect without an interval: its run-length uncertainty is unknown.
 
 Averaged over a further axis (the speed), an effect whose values at that axis's settings
 have opposite signs is also given at each setting (:func:`sign_changes`): the average of a
