@@ -231,6 +231,12 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
         (), "1", "share of the slider acceleration's power above the high_order attribute",
         "power of the Welch spectrum's bins above crank order high_order over that of every "
         "bin above order 0, settled window; NaN where it holds fewer than 2 crank revolutions"),
+    "slider_acceleration_rms_settled_drift": VariableSpec(
+        (), "m s-2", "change of the settled RMS slider acceleration between the window's halves",
+        "RMS of slider_acceleration's saved rows over the last n whole crank revolutions of "
+        "the settled window minus that over its first n, n half the window's revolutions "
+        "rounded down: how far the settled RMS still moves with the run's length; NaN where "
+        "a half holds fewer than 2 rows"),
     "peak_force_source": VariableSpec(
         (), "", "what sets the case's peak contact force",
         "impacts (J...): clearance joints J began contact episodes; else in-contact "
