@@ -103,6 +103,11 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
             continue
+        if cpu[name].dtype.kind in "USO":       # a class name (motion_class): the same words
+            assert [str(v) for v in np.ravel(gpu[name].values)] == \
+                [str(v) for v in np.ravel(cpu[name].values)], name
+            compared.append(name)
+            continue
         a = np.asarray(cpu[name].values, dtype=float)
         b = np.asarray(gpu[name].values, dtype=float)
         assert a.shape == b.shape, name
@@ -467,6 +472,10 @@ def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
     assert float(gpu["wear_volume"].sel(joint="O").isel(O_clearance=1).min()) > 0.0
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
+            continue
+        if cpu[name].dtype.kind in "USO":       # a class name (motion_class): the same words
+            assert [str(v) for v in np.ravel(gpu[name].values)] == \
+                [str(v) for v in np.ravel(cpu[name].values)], name
             continue
         a = np.asarray(cpu[name].values, dtype=float)
         b = np.asarray(gpu[name].values, dtype=float)

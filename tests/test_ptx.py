@@ -28,7 +28,10 @@ from clearsweep import ptx
 #: benchmarks/README.md). The goal, below 1,024, is not met (benchmarks/README.md: what
 #: stands in the way); the bound guards against the arrangements that double the spill, with
 #: about 100 bytes of room for ptxas' allocation moving with unrelated edits.
-SPILL_STORE_BOUND = 2160
+#: Measured again once issue 41's physics joined those layouts (the guide's faces' edge lines,
+#: the bearing film's drag, the seats' friction): 4,212 bytes at 255 registers, from 2,052;
+#: which of the physics changes costs what is not yet measured (benchmarks/README.md).
+SPILL_STORE_BOUND = 4320
 
 LOG = """\
 ptxas info    : Compiling entry function '_Z9run_cases' for 'sm_90'
