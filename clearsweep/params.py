@@ -586,9 +586,10 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
 
     At the start the ball turns with its body and the socket with its own (the rod's rate
     against the crank's at A, the slider's at B), so the contact point slips and friction
-    mu' F_N acts along the slip's tangent direction f (mu' = mu c_d(|v_t|), section 3.3).
-    With tan(phi) = mu', F_N (-n) + mu' F_N f = |F| F^ holds when
-    -n = cos(phi) F^ - sin(phi) g, g the unit part of f across F^, and F_N = |F| cos(phi).
+    mu' F_N acts along the slip's tangent direction f (``mu' = mu c_d(|v_t|)``, section 3.3).
+    With tan(phi) = mu', ``F_N (-n) + mu' F_N f = |F| F^`` holds when
+    ``-n = cos(phi) F^ - sin(phi) g``, g the unit part of f across F^, and
+    ``F_N = |F| cos(phi)``.
     The slip's direction depends on n (and the start's velocities on every offset), so the
     seat is a fixed point: the kernel's own contact (``dynamics.start_contacts``) at the
     state the offsets give reads f and mu', the seat is turned, and again, until the
