@@ -151,13 +151,15 @@ def _reliability_base() -> dict:
     return read_yaml("configs/reliability_joints.yaml")["base"]
 
 
-def tree_cpu(args: list[str]) -> tuple[float, float, float]:
+def tree_cpu(args: list[str], capture_stderr: bool = False) -> tuple[float, float, float]:
     """(wall, the process's CPU, its descendants' CPU) [s] of ``args``, the process tree
-    polled every 50 ms (benchmarks/plan_vs_measured.py measures whole runs the same way)."""
+    polled every 50 ms (benchmarks/plan_vs_measured.py measures whole runs with it);
+    ``capture_stderr``: the command's standard error kept for a failure's message."""
     import psutil
 
     began = time.perf_counter()
-    proc = psutil.Popen(args, stdout=subprocess.DEVNULL)
+    proc = psutil.Popen(args, stdout=subprocess.DEVNULL,
+                        stderr=subprocess.PIPE if capture_stderr else None)
     seen: dict[int, float] = {}
     own = 0.0
     while proc.poll() is None:
@@ -174,7 +176,8 @@ def tree_cpu(args: list[str]) -> tuple[float, float, float]:
             pass
         time.sleep(0.05)
     if proc.returncode:
-        raise SystemExit(f"{' '.join(args)}: exit {proc.returncode}")
+        tail = proc.stderr.read().decode()[-2000:] if capture_stderr else ""
+        raise SystemExit(f"{' '.join(args)}: exit {proc.returncode}" + (f": {tail}" if tail else ""))
     return time.perf_counter() - began, own, sum(seen.values())
 
 

@@ -23,10 +23,7 @@ import re
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
-
-import psutil
 
 CS = [sys.executable, "-c", "from clearsweep.cli import main; main()"]
 #: name -> (command and config, the --set cuts, the note on the cut)
@@ -75,29 +72,11 @@ def planned(text: str) -> float | None:
 
 
 def measure(args: list[str]) -> tuple[float, float, float]:
-    """(wall, driver CPU, workers' CPU) [s] of ``args`` run to its end, the process tree
-    polled every 50 ms (a process's last reading counts)."""
-    began = time.perf_counter()
-    proc = psutil.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    seen: dict[int, float] = {}
-    driver = 0.0
-    while proc.poll() is None:
-        try:
-            t = proc.cpu_times()
-            driver = t.user + t.system
-            for child in proc.children(recursive=True):
-                try:
-                    c = child.cpu_times()
-                    seen[child.pid] = c.user + c.system
-                except psutil.Error:
-                    pass
-        except psutil.Error:
-            pass
-        time.sleep(0.05)
-    wall = time.perf_counter() - began
-    if proc.returncode:
-        sys.exit(f"{' '.join(args)}: exit {proc.returncode}: {proc.stderr.read().decode()[-2000:]}")
-    return wall, driver, sum(seen.values())
+    """(wall, driver CPU, workers' CPU) [s] of ``args`` run to its end
+    (``calibrate_plan.tree_cpu``: the process tree polled every 50 ms)."""
+    from calibrate_plan import tree_cpu
+
+    return tree_cpu(args, capture_stderr=True)
 
 
 def plan_of(name: str, tmp: str) -> float | None:
