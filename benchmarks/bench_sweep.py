@@ -193,8 +193,9 @@ def host_per_case(store: str, duration: float | None = None, repeats: int = 2) -
 
     doc = yaml.safe_load((ROOT / "configs" / "coating_clearance.yaml").read_text())
     doc["store"] = store
-    if duration is not None:
-        doc["base"]["solver"]["duration"] = duration
+    if duration is not None:        # in seconds, instead of the job's revolutions
+        doc["base"]["solver"] = {"duration": duration}
+        doc["base"].pop("metrics", None)
     timed_sweep(WARMUP_SWEEP, workers=1)
     kernel_cpu = [0.0]
     real = simulation.run_kernel

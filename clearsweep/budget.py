@@ -14,14 +14,19 @@ kernel's saved rows, the per-row output variables and the wear maps);
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
+from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 from .config import DEFAULTS, Config, ConfigError
 
 __all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
+           "PlanCosts", "plan_costs", "read_plan_costs", "clearance_joints", "step_seconds",
+           "case_seconds", "assembly_seconds", "life_seconds", "sweep_seconds",
            "MAX_READ_BYTES", "largest_variable", "machine_memory",
            "memory_limit"]
 
@@ -47,12 +52,132 @@ def format_bytes(n: float) -> str:
     return f"{n:.3g} PiB"      # pragma: no cover
 
 
-#: Wall time of one output-grid RK4 step per worker on this project's 2-core x86-64 machine
-#: [s], for the time estimates that ``sweep``, ``validate`` and ``--dry-run`` print, measured
-#: on whole sweeps (benchmarks/README.md, "Time estimates": the main job 4.1 us, the shipped
-#: ensemble 2.6 us, quiet machine): it counts the contact sub-steps, the wear map, each
-#: case's start and the writing of its results, not only the bare step (1.6 us).
-SECONDS_PER_STEP = 4e-6
+#: The costs the plans charge, measured by benchmarks/calibrate_plan.py on this project's
+#: 2-core x86-64 machine (the file records when, where and under what load).
+PLAN_COSTS_FILE = Path(__file__).resolve().parent / "data" / "plan_costs.yaml"
+#: The joints in the order the costs file names them.
+_JOINTS = ("O", "A", "B", "P")
+
+
+@dataclass(frozen=True)
+class PlanCosts:
+    """What a plan charges, in seconds of one worker's wall time (clearsweep/data/plan_costs.yaml).
+
+    Attributes
+    ----------
+    step_s : float
+        One output-grid RK4 step of the ideal mechanism, as a sweep's worker runs it.
+    joint_step_s : dict
+        What each joint with clearance adds to every step: ``"A"`` and ``"B"`` a ball in its
+        socket, ``"O"`` the crank's journal, ``"P"`` the block's 16 corner-wall pairs.
+    row_s : float
+        Each saved row of a case that keeps its time series (``run``, ``store: full``).
+    case_s : float
+        Each case beyond its steps: packing, the seated start, the summaries, its part.
+    map_bin_s : float
+        Each bin of each joint's wear map that a case keeping its time series writes.
+    block_s : float
+        Each life block beyond its steps: the jump (wear rates, the grown map), its row.
+    run_start_s : float
+        A ``run``'s or a ``life`` run's fixed cost: the interpreter, the imports, the kernel
+        from the cache.
+    sweep_start_s : float
+        A sweep's fixed cost: the driver's and the workers' start, the kernel from the cache.
+    assemble_case_s : float
+        What a sweep's driver spends on each case: its checks before the run, its part
+        checked and copied into the file and the statistics after it.
+    assemble_row_s : float
+        What the driver spends on each saved row of a case that keeps its time series.
+    compile_s : float
+        A cold compile of the RK4 kernel (an empty Numba cache).
+    measured : dict
+        When, where and under what load the file was measured.
+    """
+
+    step_s: float
+    joint_step_s: dict
+    row_s: float
+    case_s: float
+    map_bin_s: float
+    block_s: float
+    run_start_s: float
+    sweep_start_s: float
+    assemble_case_s: float
+    assemble_row_s: float
+    compile_s: float
+    measured: dict
+
+    def step_seconds(self, joints: Iterable[str]) -> float:
+        """One step's cost [s] with clearance at ``joints`` (``"OABP"``, ``("B",)``, ...)."""
+        return self.step_s + sum(self.joint_step_s[j] for j in set(joints))
+
+
+@functools.lru_cache(maxsize=4)
+def read_plan_costs(path: str | None = None) -> PlanCosts:
+    """The plan costs of ``path`` (default :data:`PLAN_COSTS_FILE`), read once per process."""
+    from .schema import read_yaml
+
+    source = str(path if path is not None else PLAN_COSTS_FILE)
+    doc = read_yaml(Path(source), source)
+    names = ("step_s", "row_s", "case_s", "map_bin_s", "block_s", "run_start_s",
+             "sweep_start_s", "assemble_case_s", "assemble_row_s", "compile_s")
+    try:
+        shares = {j: float(doc["joint_step_s"][j]) for j in _JOINTS}
+        values = {name: float(doc[name]) for name in names}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError(None, None, "a plan-costs file as benchmarks/calibrate_plan.py writes "
+                          f"it: numbers {', '.join(names)} and joint_step_s of "
+                          f"{', '.join(_JOINTS)} ({type(exc).__name__}: {exc})", source) from None
+    if not all(math.isfinite(v) and v >= 0.0 for v in [*values.values(), *shares.values()]):
+        raise ConfigError(None, None, "a plan-costs file of finite costs >= 0", source)
+    return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}), **values)
+
+
+def plan_costs() -> PlanCosts:
+    """The costs every plan charges: :func:`read_plan_costs` of the shipped file, or of the
+    file ``CLEARSWEEP_PLAN_COSTS`` names (a re-calibration tried before it is written over
+    the shipped one)."""
+    return read_plan_costs(os.environ.get("CLEARSWEEP_PLAN_COSTS") or None)
+
+
+def clearance_joints(cfg: Config) -> str:
+    """The joints of ``cfg`` with clearance, in the order O, A, B, P (``"AB"``; ``""``: ideal)."""
+    return "".join(j for j in _JOINTS if getattr(cfg.joints, j).clearance > 0.0)
+
+
+def step_seconds(cfg: Config) -> float:
+    """What one output-grid RK4 step of ``cfg`` costs a worker [s]: the ideal step and each
+    clearance joint's share (:class:`PlanCosts`)."""
+    return plan_costs().step_seconds(clearance_joints(cfg))
+
+
+def case_seconds(cfg: Config, keeps_series: bool = True, est: Estimate | None = None) -> float:
+    """The estimated wall time [s] of one case of ``cfg`` on one worker: its steps priced by
+    its joints with clearance (:func:`step_seconds`), its saved rows where the case keeps its
+    time series (``run``, ``store: full``), and the cost per case."""
+    costs = plan_costs()
+    est = estimate(cfg) if est is None else est
+    kept = 0.0
+    if keeps_series:
+        polar, azimuth = cfg.wear.map
+        kept = est.rows * costs.row_s + len(_JOINTS) * polar * azimuth * costs.map_bin_s
+    return costs.case_s + est.steps * step_seconds(cfg) + kept
+
+
+def assembly_seconds(cfg: Config, keeps_series: bool, est: Estimate | None = None) -> float:
+    """What a sweep's driver spends on a case of ``cfg`` once the cases have run [s]: its part
+    checked and copied into the file (its saved rows, where it keeps its time series)."""
+    costs = plan_costs()
+    rows = (estimate(cfg) if est is None else est).rows if keeps_series else 0
+    return costs.assemble_case_s + rows * costs.assemble_row_s
+
+
+def life_seconds(cfg: Config, blocks: float, steps_per_block: int) -> float:
+    """The estimated wall time [s] of a life run of ``cfg`` that takes ``blocks`` blocks of
+    ``steps_per_block`` steps: each block's steps priced by the joints with clearance, and
+    its jump (:attr:`PlanCosts.block_s`)."""
+    costs = plan_costs()
+    return costs.case_s + blocks * (steps_per_block * step_seconds(cfg) + costs.block_s)
 
 
 def duration_text(seconds: float) -> str:
@@ -63,41 +188,57 @@ def duration_text(seconds: float) -> str:
     return f"{seconds:.2g} s"
 
 
-def time_text(steps: float, workers: int | None = None) -> str:
-    """The estimated wall time of ``steps`` RK4 steps shared by ``workers`` cores
-    (``None``: one core), with the cost per step it assumes."""
-    where = f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
-    return (f"about {duration_text(steps * SECONDS_PER_STEP / (workers or 1))} {where} "
-            f"(at {SECONDS_PER_STEP * 1e6:g} us per step)")
+def _workers_text(workers: int | None) -> str:
+    return f"on {workers} worker{'s' if workers != 1 else ''}" if workers else "on one core"
 
 
-#: A sweep's fixed cost [s]: the interpreter's start and the compiled kernel loaded from the
-#: cache, in the driver and in each pool worker (benchmarks/README.md, "Time estimates").
-SWEEP_START_S = 6.0
-#: A sweep's cost per case beyond its steps [s]: its part written and copied into the file.
-SECONDS_PER_CASE = 0.05
+def steps_text(cfgs: Iterable[Config]) -> str:
+    """The cost per step a plan charges its cases, ``"at 1.9 us per step (ideal)"`` or
+    ``"at 2.1 us per step (B) to 14 us (OABP)"``: by the joints with clearance."""
+    priced = sorted({(step_seconds(c), clearance_joints(c) or "ideal") for c in cfgs})
+    if not priced:
+        return f"at {plan_costs().step_s * 1e6:.2g} us per step"
+    lo, hi = priced[0], priced[-1]
+    if lo[0] == hi[0]:
+        return f"at {lo[0] * 1e6:.2g} us per step ({lo[1]})"
+    digits = 2 if f"{lo[0] * 1e6:.2g}" != f"{hi[0] * 1e6:.2g}" else 3
+    return (f"at {lo[0] * 1e6:.{digits}g} us per step ({lo[1]}) to {hi[0] * 1e6:.{digits}g} us "
+            f"({hi[1]})")
 
 
-def sweep_seconds(steps: float, cases: int, workers: int | None = None) -> float:
-    """The estimated wall time [s] of a sweep of ``cases`` cases and ``steps`` RK4 steps on
-    ``workers`` cores: :func:`time_text`'s steps plus the fixed costs (start, cache load)
-    and the cost per case (part writing, assembly)."""
-    return SWEEP_START_S + (cases * SECONDS_PER_CASE + steps * SECONDS_PER_STEP) / (workers or 1)
+def time_text(cfg: Config, est: Estimate | None = None) -> str:
+    """The estimated wall time of one case of ``cfg`` (a ``run``) on one core, with the cost
+    per step it charges."""
+    seconds = plan_costs().run_start_s + case_seconds(cfg, True, est)
+    return (f"about {duration_text(seconds)} on one core ({steps_text([cfg])} and "
+            f"{plan_costs().run_start_s:.2g} s to start; benchmarks/calibrate_plan.py)")
 
 
-def sweep_time_text(steps: float, cases: int, workers: int | None = None) -> str:
-    """:func:`sweep_seconds` in words, with the costs it assumes."""
-    share = workers or 1
-    seconds = sweep_seconds(steps, cases, workers)
-    where = f"on {share} worker{'s' if share != 1 else ''}" if workers else "on one core"
-    return (f"about {duration_text(seconds)} {where} (at {SECONDS_PER_STEP * 1e6:g} us per "
-            f"step, {SECONDS_PER_CASE:g} s per case and {SWEEP_START_S:g} s to start)")
+def sweep_seconds(case_times: Iterable[float], workers: int | None = None,
+                  assembly: float = 0.0) -> float:
+    """The estimated wall time [s] of a sweep whose cases cost ``case_times`` [s] on one
+    worker each, shared by ``workers`` cores: the fixed start, then the cases' total over the
+    workers and at least the longest case, then the driver's ``assembly`` [s]
+    (:func:`assembly_seconds` of each case)."""
+    times = list(case_times)
+    share = sum(times) / (workers or 1)
+    return plan_costs().sweep_start_s + max(share, max(times, default=0.0)) + assembly
 
 
-def case_plan_text(source: str, est: Estimate) -> str:
+def sweep_time_text(case_times: Iterable[float], cfgs: Iterable[Config],
+                    workers: int | None = None, assembly: float = 0.0) -> str:
+    """:func:`sweep_seconds` in words, with the costs it charges."""
+    seconds = sweep_seconds(case_times, workers, assembly)
+    costs = plan_costs()
+    return (f"about {duration_text(seconds)} {_workers_text(workers)} ({steps_text(cfgs)}, "
+            f"{costs.case_s:.2g} s per case and {costs.sweep_start_s:.2g} s to start; "
+            "benchmarks/calibrate_plan.py)")
+
+
+def case_plan_text(source: str, est: Estimate, cfg: Config) -> str:
     """What ``clearsweep run CONFIG --dry-run`` prints for one case."""
     return (f"{source}: one case, {est.steps:,} RK4 steps, memory up to {est.describe()}; "
-            f"{time_text(est.steps)}; nothing run (--dry-run)")
+            f"{time_text(cfg, est)}; nothing run (--dry-run)")
 
 
 def _per_row_output_values() -> int:
@@ -119,9 +260,11 @@ class Estimate:
         ``ceil(solver.duration / solver.dt)``.
     steps : int
         Output-grid RK4 steps: ``steps_asked`` rounded up to whole output
-        samples (sub-steps, where contacts need them, come on top).
+        samples (sub-steps, where contacts need them, come on top), and the twin runs of
+        the largest Lyapunov exponent (:func:`lyapunov_steps`).
     rows : int
-        Saved rows: ``steps / solver.save_every + 1``.
+        Saved rows: ``steps_asked`` rounded up to whole output samples /
+        ``solver.save_every`` + 1.
     values_per_row : int
         float64 per row: the kernel's N_Y + N_D + time and wear maximum,
         plus the output variables.
@@ -177,7 +320,23 @@ def estimate(cfg: Config) -> Estimate:
     per_row = L.N_Y + L.N_D + _KERNEL_EXTRA_PER_ROW + _per_row_output_values()
     polar, azimuth = cfg.wear.map
     map_values = L.N_JOINTS * (polar * azimuth + 3 * L.N_ANGLE_BINS)
-    return Estimate(asked, steps, rows, per_row, map_values)
+    return Estimate(asked, steps + lyapunov_steps(cfg, rows), rows, per_row, map_values)
+
+
+def lyapunov_steps(cfg: Config, rows: int) -> int:
+    """Output-grid steps of the twin runs for the largest Lyapunov exponent
+    (``metrics.lyapunov_revolutions``, :func:`clearsweep.simulation.lyapunov_exponent`): two
+    runs of a block of whole saved rows, about a revolution, per revolution the run's
+    ``rows`` hold after its settled window's start."""
+    revolutions = cfg.metrics.lyapunov_revolutions
+    if revolutions <= 0:
+        return 0
+    row_dt = cfg.solver.dt * cfg.solver.save_every
+    period = 60.0 / cfg.mechanism.speed_rpm
+    block = max(1, int(round(period / row_dt)))
+    first = int(math.ceil(cfg.metrics.settle_time / row_dt - 1e-9))
+    blocks = max(0, min(revolutions, (rows - 1 - first) // block))
+    return 2 * blocks * block * cfg.solver.save_every
 
 
 def check_budget(cfg: Config, *, allow_large: bool = False,

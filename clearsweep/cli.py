@@ -40,7 +40,7 @@ import click
 if TYPE_CHECKING:
     import xarray as xr
 
-from .budget import case_plan_text, check_budget
+from .budget import case_plan_text, check_budget, plan_costs
 from .choices import (
     DEFAULT_SWEEP_METRIC,
     DPI_RANGE,
@@ -172,14 +172,6 @@ _allow_large = click.option(
     "--allow-large", is_flag=True,
     help="Run a case beyond the bounds on its work and memory (4 GiB of arrays, 1e9 RK4 steps).")
 
-#: Cold compile of the RK4 integrator on this project's 2-core x86-64 machine, measured with
-#: an empty cache: ``NUMBA_CACHE_DIR=$(mktemp -d) python -c "from clearsweep.simulation import
-#: prepare_kernel; print(prepare_kernel('rk4'))"`` gave 82 s (load average 6, the cores
-#: shared); a user's fresh clone took 54 s. The older 23 s (bench_engine on a quiet machine)
-#: was too low by 2x for what users saw.
-COMPILE_ESTIMATE_S = 80
-
-
 def announce_compile(quiet: bool = False, cases: Iterable[Config] = ()) -> None:
     """Compile the kernel builds that the ``cases`` run (their solver.method and joint set,
     ``params.kernel_build``) now, saying so, where neither this process nor the cache
@@ -192,8 +184,9 @@ def announce_compile(quiet: bool = False, cases: Iterable[Config] = ()) -> None:
         if kernel_needs_compiling(method, build):
             if not quiet:
                 name = "kernel" if method == "rk4" else f"{method} kernel"
-                click.echo(f"compiling the {name} for clearance at {label(build)} (once, about "
-                           f"{COMPILE_ESTIMATE_S} s on a 2-core machine) ...",
+                click.echo(f"compiling the {name} for clearance at {label(build)} (once, "
+                           f"about {plan_costs().compile_s:.0f} s on a quiet 2-core machine, "
+                           "longer when it is busy) ...",
                            err=True)
             seconds = prepare_kernel(method, build)
             if not quiet:
@@ -395,7 +388,7 @@ def run(config: str, out: str | None, overrides: tuple[str, ...], allow_large: b
     # bad input is refused before the kernel is compiled (the seated start needs it)
     _preflight(cfg, config, allow_large)
     if dry_run:
-        click.echo(case_plan_text(config, est))
+        click.echo(case_plan_text(config, est, cfg))
         return
     from .simulation import simulate
 
@@ -854,7 +847,8 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
               help="Output file; the suffix (.png, .pdf, .svg) sets the format.")
 @click.option("--select", "select_items", multiple=True, metavar="DIM=VALUE",
               help="Draw only the sweep cases with this coordinate value; DIM may be the "
-                   "dotted config key (repeatable).")
+                   "dotted config key, VALUE may carry a unit (B_clearance=0.25mm, "
+                   "speed_rpm=60rpm) (repeatable).")
 @click.option("--x", "x_axis", default=None, metavar="AXIS",
               help="Abscissa of time series: angle (crank angle [degree], the default) or "
                    "time [s]; of --kind bifurcation, the swept key, by its dimension or its "

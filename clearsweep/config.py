@@ -231,7 +231,7 @@ class ContactConfig(_Section):
     layer_rule: str = _setting(Field("series", ("series", "paper_mm")), None,
                                "double elastic layer rule")
     #: null (the default): the physical stop, the depth at which the joint's own law carries
-    #: load_bound or the coating's thickness (docs/physics.md 4.3); a number: the earlier
+    #: load_bound (docs/physics.md 4.3); a number: the earlier
     #: stop, that fraction of the clearance
     max_penetration_fraction: float | None = _setting(
         Field(None, lo=0.0, lo_open=True, nullable=True), "1",
@@ -286,6 +286,12 @@ class MetricsConfig(_Section):
     settle_revolutions: float | None = _setting(
         Field(None, lo=0.0, nullable=True), "1",
         "crank revolutions before the settled window (alternative to settle_time)")
+    #: twin runs from the settled window's start, renormalised once a revolution, for the
+    #: largest Lyapunov exponent (docs/physics.md section 11.5); 0: not computed (each
+    #: revolution costs two more revolutions of the kernel)
+    lyapunov_revolutions: int = _setting(
+        Field(0, int, lo=0), "1",
+        "crank revolutions of the largest Lyapunov exponent's twin runs (0: none)")
 
 
 @dataclass(frozen=True)

@@ -6,17 +6,23 @@ case is what the summaries need: the running statistics (layout.M_*), the wear m
 projections, the worn volume, the counters and the energy residual; no time series (a
 sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 
-Memory per case (:func:`case_bytes`): the wear map 16 * npolar * nazim bytes, the
-projections 17,280, the undo buffer 128 * 2**max_substep_level, and about 6.6 kB of
-other work arrays and results; 0.73 MB for the default map [144, 288] and level 8.
-Cases are grouped by wear-map shape and kernel build (``params.build_of`` their joints with
-clearance: one compiled kernel per joint set) and run in batches that fit the device's free memory,
-stored structure-of-arrays (element e of case i at e * capacity + i) and padded to a launch
+Memory per case (:func:`case_bytes`), structure-of-arrays: the wear maps of the batch's
+clearance joints alone (8 * nazim bytes per map row: npolar rows for A, B and P's walls,
+one for the bearing O, :func:`map_layout`), 8,640 bytes of projections per joint of A, B
+and O with clearance, an undo buffer of 64 * 2**max_substep_level bytes per such joint, the
+parameters that differ across the batch (the others are one shared row), and about 8 kB
+of other work arrays and results: 0.74 MB for the two-clearance case (A and B) on the
+default map [144, 288] at level 8, 1.46 MB case by case. Cases are grouped by
+:func:`batch_key` (the wear-map shape and the kernel build, ``params.build_of`` their
+joints with clearance: one compiled kernel per joint set; sweep cases and ensemble members
+share launches) and run in batches that fit the device's free memory, stored
+structure-of-arrays (element e of case i at e * capacity + i) and padded to a launch
 capacity (:data:`CAPACITIES`, :func:`batch_plan`): a batch takes capacity x case_bytes.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Sequence
@@ -27,6 +33,7 @@ import numpy as np
 from .config import Config, resolve_materials
 from .core import jointset
 from .core import layout as L
+from .core.joints import INDEX
 from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
 from .params import Packed, build_of, pack
 from .simulation import KernelRun, check_step, section_rows
@@ -37,8 +44,8 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
-#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (10,000
-#: cases of the default map at 1.46 MB each, four joints' maps), or a quarter of the
+#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (23,143
+#: two-clearance cases of the default map at 0.74 MB each), or a quarter of the
 #: machine's memory where that is less (:func:`host_batch_bytes`). A batch must hold
 #: thousands of cases to fill the device: on an H200, one launch of 1,470 cases ran
 #: 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
@@ -52,6 +59,10 @@ SIMULATOR_BATCH = 64
 LAYOUTS = ("soa", "aos")
 DEFAULT_LAYOUT = "soa"
 CAPACITIES = (64, 1024, 4096, 16384, 32768)
+#: Parameters of a case (p, then jp's rows) and entries of the joint layout ``geom``
+#: (``core.device.N_PJ``, ``N_GEOM``: stated here for the same reason).
+N_PJ = L.N_P + L.N_JOINTS * L.N_JP
+N_GEOM = 5
 
 
 class NoCudaDevice(RuntimeError):
@@ -135,25 +146,123 @@ def device_name() -> str:
     return name.decode() if isinstance(name, bytes) else str(name)
 
 
-def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0) -> int:
+#: Joints in the kernel's order (``core.joints.INDEX``): A, B, O, P.
+JOINT_NAMES = tuple(sorted(INDEX, key=INDEX.__getitem__))
+
+#: Rows of the wear map that a clearance joint's map takes in a structure-of-arrays batch,
+#: by joint, as a function of the map's polar bins: the bearing O's map is one row of nazim
+#: bins (``revolute``), the spherical joints' and the guide P's wall maps (four bands) are
+#: npolar rows. A joint without clearance takes none.
+MAP_ROWS = {"A": lambda npolar: npolar, "B": lambda npolar: npolar, "O": lambda npolar: 1,
+            "P": lambda npolar: npolar}
+
+#: Rows of N_ANGLE_BINS projection bins a clearance joint's projections take: three (x, y,
+#: z) for O, A and B; none for P, whose wear the projections do not hold (``rk4.accept_substep``).
+PROJ_ROWS = {"A": 3, "B": 3, "O": 3, "P": 0}
+
+#: Joints whose wear the undo buffer holds, one row per accepted sub-step (P's is not undone
+#: row by row: ``rk4.accept_substep``).
+UNDO_JOINTS = ("A", "B", "O")
+
+
+def joint_rows(rows: Sequence[int]) -> tuple[int, int, int]:
+    """(r0, dj, total): where joint j's rows[j] rows start in a structure-of-arrays array of
+    ``total`` rows: row r0 + j * dj (``core.device.soa_joint_rows``), the joints with rows
+    disjoint and within the array, total as small as one stride between joints allows. A
+    joint of no rows (no clearance) gets none: its rows alias others' or lie outside the
+    array (r0 may be negative), and the kernel never touches them."""
+    return _joint_rows(tuple(int(r) for r in rows))
+
+
+@functools.lru_cache(maxsize=256)
+def _joint_rows(rows: tuple[int, ...]) -> tuple[int, int, int]:
+    """:func:`joint_rows`, once per joint set and map shape (a sweep asks per case)."""
+    present = [j for j, r in enumerate(rows) if r > 0]
+    if not present:
+        return 0, 0, 1
+    if len(present) == 1:
+        return 0, 0, int(rows[present[0]])
+    best: tuple[int, int, int] | None = None
+    reach = max(rows) * len(rows)
+    for dj in range(-reach, reach + 1):
+        if dj == 0:
+            continue
+        spans = sorted((j * dj, j * dj + int(rows[j])) for j in present)
+        if any(a[1] > b[0] for a, b in zip(spans, spans[1:])):
+            continue
+        r0 = -spans[0][0]
+        total = max(end for _, end in spans) + r0
+        if best is None or total < best[2]:
+            best = (r0, dj, total)
+    assert best is not None     # dj = the largest rows count always fits
+    return best
+
+
+def clearance_joints(jp: np.ndarray) -> tuple[bool, ...]:
+    """Per joint (the kernel's order) whether a case's jp row gives it clearance."""
+    mask = jointset.of(jp)
+    return tuple(bool(mask >> j & 1) for j in range(L.N_JOINTS))
+
+
+def map_layout(joints: Sequence[bool], npolar: int) -> dict[str, tuple[int, int, int]]:
+    """The structure-of-arrays batch's joint layout for the clearance joints ``joints`` (per
+    joint, the kernel's order): (r0, dj, total rows) of the wear map ("wmap") and of the
+    projections ("proj"), :func:`joint_rows`."""
+    names = JOINT_NAMES
+    return {"wmap": joint_rows([MAP_ROWS[n](npolar) if c else 0 for n, c in zip(names, joints)]),
+            "proj": joint_rows([PROJ_ROWS[n] if c else 0 for n, c in zip(names, joints)])}
+
+
+def undo_rows(joints: Sequence[bool], max_level: int) -> int:
+    """Rows of the undo buffer for a case of the clearance joints ``joints`` and sub-step
+    level cap max_level: one per undone joint with clearance and sub-step of the deepest
+    level (one row at least: no zero-size array for the device)."""
+    undone = sum(1 for n, c in zip(JOINT_NAMES, joints) if c and n in UNDO_JOINTS)
+    return max(1, undone) * (1 << int(max_level))
+
+
+ALL_JOINTS = (True,) * L.N_JOINTS
+
+
+def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0,
+               joints: Sequence[bool] | None = None, shared: int = 0) -> int:
     """Device memory [bytes] that one case of a batch takes (inputs, results, work);
-    ``sections``: the Poincare section rows its batch holds."""
+    ``sections``: the Poincare section rows its batch holds. ``joints`` (per joint, the
+    kernel's order: whether it has clearance): the structure-of-arrays layout, which holds
+    maps and projections for the clearance joints alone (:func:`map_layout`), the undo
+    buffer for their rows (:func:`undo_rows`), and of the parameters only the ``N_PJ -
+    shared`` that differ across the batch; None: the case-by-case layout, every joint's map
+    and every parameter per case."""
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
     nj = L.N_JOINTS
-    items = (L.N_P + nj * L.N_JP + L.N_Y + 2       # p, jp, y0, n_steps, save_every
-             + nj * npolar * nazim + nj * 3 * L.N_ANGLE_BINS + nj   # wmap, proj, wvol
+    work = work_shapes(max_level, npolar)
+    if joints is None:
+        params = L.N_P + nj * L.N_JP
+        maps = nj * npolar * nazim + nj * 3 * L.N_ANGLE_BINS
+        undo = 2 * 4 * work["buf_i"][0]
+    else:
+        params = max(1, N_PJ - int(shared))
+        lay = map_layout(joints, npolar)
+        maps = lay["wmap"][2] * nazim + lay["proj"][2] * L.N_ANGLE_BINS
+        undo = 2 * 4 * undo_rows(joints, max_level)
+    items = (params + L.N_Y + 2                    # parameters, y0, n_steps, save_every
+             + maps + nj                           # wmap, proj, wvol
              + L.N_INFO + L.N_WINDOWS * L.N_M + L.N_TRACK     # info, stats, track
              + sections * L.N_SEC                                # sec
              + 1 + L.N_Y + L.N_D + nj)             # row placeholders
-    items += sum(math.prod(s) for s in work_shapes(max_level, npolar).values())
+    items += undo + sum(math.prod(s) for name, s in work.items() if name not in ("buf_i", "buf_v"))
     return 8 * items
 
 
 def config_bytes(cfg: Config) -> int:
-    """:func:`case_bytes` of a resolved config (its revolutions, one section each, rounded
-    up)."""
+    """:func:`case_bytes` of a resolved config in the structure-of-arrays layout (its
+    revolutions, one section each, rounded up; its clearance joints; every parameter per
+    case, as a batch of it may hold)."""
+    from .params import joint_configs
+
     sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
-    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level, sections)
+    joints = tuple(joint.clearance > 0.0 for _, joint in joint_configs(cfg))
+    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level, sections, joints)
 
 
 def host_batch_bytes() -> int:
@@ -182,24 +291,61 @@ def _device_budget() -> int:
     return int(DEVICE_MEMORY_FRACTION * free)
 
 
-def _shapes(group: Sequence[Packed]) -> dict[str, tuple[tuple[int, ...], Any, float]]:
+def batch_joints(group: Sequence[Packed]) -> tuple[bool, ...]:
+    """The clearance joints of a batch: per joint (the kernel's order), whether any of its
+    cases gives it clearance (the batch's maps hold rows for these)."""
+    flags = [clearance_joints(pk.jp) for pk in group]
+    return tuple(any(f[j] for f in flags) for j in range(L.N_JOINTS))
+
+
+def parameter_rows(group: Sequence[Packed]) -> np.ndarray:
+    """Each case's parameters as one row (n, N_PJ): p, then jp's rows."""
+    return np.stack([np.concatenate([pk.p, pk.jp.reshape(-1)]) for pk in group])
+
+
+def shared_columns(rows: np.ndarray) -> np.ndarray:
+    """Which parameters (columns of :func:`parameter_rows`) a batch shares: equal to the bit
+    in every case (0.0 and -0.0, or two NaNs of other bits, stay per case)."""
+    bits = np.ascontiguousarray(rows).view(np.int64)
+    return np.all(bits == bits[:1], axis=0)
+
+
+def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tuple[int, ...], Any, float]]:
     """Per-case shape, dtype and initial value of run_cases' arguments but the inputs p, jp,
-    y0, n_steps and save_every, by name (``core.device.ARGS``' order), for one batch of cases
-    of one map shape."""
+    y0, n_steps, save_every, pcols and geom, by name (``core.device.ARGS``' order), for one
+    batch of cases of one map shape: in the structure-of-arrays layout ("soa") the maps, the
+    projections and the undo buffer hold the rows of the batch's clearance joints alone."""
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
+    map_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
+    proj_rows: tuple[int, ...] = (L.N_JOINTS, 3)
+    if layout == "soa":
+        joints = batch_joints(group)
+        lay = map_layout(joints, npolar)
+        map_rows, proj_rows = (lay["wmap"][2],), (lay["proj"][2],)
     shapes: dict[str, tuple[tuple[int, ...], Any, float]] = {
-        "wmap": ((L.N_JOINTS, npolar, nazim), np.float64, 0.0),
-        "proj": ((L.N_JOINTS, 3, L.N_ANGLE_BINS), np.float64, 0.0),
+        "wmap": (map_rows + (nazim,), np.float64, 0.0),
+        "proj": (proj_rows + (L.N_ANGLE_BINS,), np.float64, 0.0),
         "wvol": ((L.N_JOINTS,), np.float64, 0.0), "info": ((L.N_INFO,), np.int64, 0),
         "stats": ((L.N_WINDOWS, L.N_M), np.float64, 0.0), "track": ((L.N_TRACK,), np.float64, 0.0),
         # one row at least: no zero-size array for the device
         "sec": ((max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.float64, np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
+        if layout == "soa" and name in ("buf_i", "buf_v"):
+            shape = (undo_rows(joints, max_level), 4)
         shapes[name] = (shape, np.int64 if name in INT_WORK else np.float64, 0)
     shapes.update(rows_t=((1,), np.float64, 0.0), rows_y=((1, L.N_Y), np.float64, 0.0),
                   rows_d=((1, L.N_D), np.float64, 0.0), rows_wmax=((1, L.N_JOINTS), np.float64, 0.0))
     return shapes
+
+
+def _geom(group: Sequence[Packed]) -> np.ndarray:
+    """The structure-of-arrays kernel's ``geom`` for a batch (``core.device.GEOM_*``): the
+    map's polar bins, (r0, dj) of the maps and of the projections (:func:`map_layout`)."""
+    npolar = group[0].map_shape[0]
+    lay = map_layout(batch_joints(group), npolar)
+    return np.array([npolar, lay["wmap"][0], lay["wmap"][1], lay["proj"][0], lay["proj"][1]],
+                    dtype=np.int64)
 
 
 def _allocate(group: Sequence[Packed], layout: str = "aos",
@@ -208,25 +354,47 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
     cases of one map shape: with the case first ("aos"), or stored structure-of-arrays with
     the case last, padded to ``capacity`` cases ("soa": ``core.device.soa_kernel``; the
     smallest launch capacity that holds the batch by default). n_steps and save_every hold
-    the batch's cases alone in either layout."""
+    the batch's cases alone in either layout. In "soa" the parameters every case shares
+    (:func:`shared_columns`) are one row (``jp``), the others per case (``p``: their
+    columns, ``pcols``: each parameter's column there or -1), and the maps hold the batch's
+    clearance joints' rows alone (``geom``: :func:`map_layout`)."""
     n = len(group)
-    inputs = {"p": np.stack([pk.p for pk in group]), "jp": np.stack([pk.jp for pk in group]),
-              "y0": np.stack([pk.y0 for pk in group])}
     arrays: dict[str, np.ndarray] = {}
     if layout == "aos":
-        arrays.update(inputs)
+        arrays.update(p=np.stack([pk.p for pk in group]), jp=np.stack([pk.jp for pk in group]),
+                      pcols=np.zeros(N_PJ, dtype=np.int64), geom=np.zeros(N_GEOM, dtype=np.int64))
+        arrays["y0"] = np.stack([pk.y0 for pk in group])
     else:
         cap = capacity if capacity is not None else capacity_for(n)
-        for name, a in inputs.items():
-            arrays[name] = to_soa(a, cap)
+        rows = parameter_rows(group)
+        shared = shared_columns(rows)
+        varying = np.flatnonzero(~shared)
+        pcols = np.full(N_PJ, -1, dtype=np.int64)
+        pcols[varying] = np.arange(varying.size)
+        per_case = rows[:, varying] if varying.size else np.zeros((n, 1))
+        arrays.update(p=to_soa(per_case, cap), jp=np.where(shared, rows[0], 0.0), pcols=pcols,
+                      geom=_geom(group), y0=to_soa(np.stack([pk.y0 for pk in group]), cap))
     arrays["n_steps"] = np.array([pk.n_steps for pk in group], dtype=np.int64)
     arrays["save_every"] = np.array([pk.save_every for pk in group], dtype=np.int64)
-    for name, (shape, dtype, fill) in _shapes(group).items():
+    for name, (shape, dtype, fill) in _shapes(group, layout).items():
         full = (n,) + shape if layout == "aos" else shape + (cap,)
         arrays[name] = np.full(full, fill, dtype=dtype) if fill != 0 else np.zeros(full, dtype=dtype)
     from .core.device import ARGS
 
     return {name: arrays[name] for name in ARGS}
+
+
+def expand_joints(compact: np.ndarray, geom_r0: int, geom_dj: int, rows: Sequence[int],
+                  nrows: int) -> np.ndarray:
+    """One case's (N_JOINTS, nrows, ncols) array from its structure-of-arrays rows (rows,
+    ncols) of the clearance joints alone (:func:`joint_rows`: joint j's rows[j] rows from row
+    r0 + j * dj); zero where a joint has no rows, as the kernel leaves it."""
+    out = np.zeros((L.N_JOINTS, nrows, compact.shape[-1]), dtype=compact.dtype)
+    for j, r in enumerate(rows):
+        if r > 0:
+            first = geom_r0 + j * geom_dj
+            out[j, :r] = compact[first:first + r]
+    return out
 
 
 def capacity_for(n: int) -> int:
@@ -291,6 +459,15 @@ def _run_on_device(arrays: dict[str, np.ndarray], layout: str = "aos", build: in
     return res
 
 
+def batch_key(pk: Packed) -> tuple[tuple[int, ...], int]:
+    """What the cases of one launch must have in common: the wear map's shape and the
+    kernel build (``params.build_of`` the case's joints with clearance, for the device).
+    Anything else may differ within a launch (sweep cases and ensemble members alike):
+    parameters the batch does not share are per case, the maps hold the rows of every joint
+    that any case gives clearance, the undo buffer the deepest level any case allows."""
+    return tuple(pk.map_shape), build_of(jointset.of(pk.jp), device=True)
+
+
 def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
                capacity: int | None = None) -> list[KernelRun]:
     """Run cases on the device; per case what ``simulation.run_kernel`` returns, with one
@@ -302,14 +479,14 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
         raise ValueError(f"device layout {layout!r}: expected one of {LAYOUTS}")
     device_name()
     out: list[KernelRun | None] = [None] * len(packed)
-    # one batch holds cases of one map shape and one kernel build (params.build_of)
-    sets = [jointset.of(pk.jp) for pk in packed]
-    by_shape: dict[tuple[tuple[int, ...], int], list[int]] = {}
+    groups: dict[tuple, list[int]] = {}
     for i, pk in enumerate(packed):
-        by_shape.setdefault((tuple(pk.map_shape), build_of(sets[i], device=True)), []).append(i)
-    for (shape, build), members in by_shape.items():
+        groups.setdefault(batch_key(pk), []).append(i)
+    for (shape, build), members in groups.items():
         rows = max(section_rows(packed[i]) for i in members)
-        need = max(case_bytes(shape, int(packed[i].p[L.P_MAX_LEVEL]), rows) for i in members)
+        level = max(int(packed[i].p[L.P_MAX_LEVEL]) for i in members)
+        joints = None if layout == "aos" else batch_joints([packed[i] for i in members])
+        need = case_bytes(shape, level, rows, joints)
         fit = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
         cap = None
         if layout == "aos":
@@ -320,14 +497,23 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
             size, cap = batch_plan(len(members), fit)
         for start in range(0, len(members), size):
             batch = members[start:start + size]
+            group = [packed[i] for i in batch]
             began = time.perf_counter()
-            res = _run_on_device(_allocate([packed[i] for i in batch], layout, cap), layout, build,
-                                 [sets[i] for i in batch])
+            res = _run_on_device(_allocate(group, layout, cap), layout, build,
+                                 [jointset.of(pk.jp) for pk in group])
             wall = (time.perf_counter() - began) / len(batch)
+            if layout == "soa":
+                joints, npolar = batch_joints(group), shape[0]
+                lay = map_layout(joints, npolar)
+                map_rows = [MAP_ROWS[n](npolar) if c else 0 for n, c in zip(JOINT_NAMES, joints)]
+                proj_rows = [PROJ_ROWS[n] if c else 0 for n, c in zip(JOINT_NAMES, joints)]
             for k, i in enumerate(batch):
                 # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
                 # batch gives strided views), one case at a time
                 one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
+                if layout == "soa":
+                    one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], map_rows, npolar)
+                    one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], proj_rows, 3)
                 out[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
                               one["stats"], one["track"], one["pairs"][PAIR_FIRST],
                               one["sec"][:section_rows(packed[i])], wall)

@@ -5,8 +5,8 @@
   that every integer order falls on a frequency bin; :func:`spectrum_summary` reads its
   dominant order and the share of its power above ``HIGH_ORDER``.
 - :func:`detect_period`: the period n of a sequence of Poincaré samples (one point per
-  crank revolution): the smallest n with every point within a tolerance of the point n
-  revolutions before.
+  crank revolution): the smallest n whose n points each stay within a tolerance over the
+  whole window.
 - :func:`zero_one_test`: the 0-1 test for chaos of Gottwald and Melbourne (2004, 2009), the
   correlation method: K near 0 for regular motion, near 1 for chaotic motion.
 
@@ -39,6 +39,11 @@ MAX_PERIOD = 8
 #: Two Poincaré points are the same point within this fraction of the samples' scale
 #: (the clearance for offsets scaled by it; the largest magnitude for other samples).
 PERIOD_RTOL = 1.0e-2
+#: The n points of a period n must be distinct: the spread of each (its samples over the
+#: window) at most this fraction of the distance between any two of them. A decaying spiral
+#: whose phases stay within the tolerance converges on one point: its phases' spreads are
+#: as large as their distance apart.
+PERIOD_SEPARATION = 0.5
 #: ``period`` of a case without enough samples to tell (fewer than 2 settled revolutions,
 #: or NaN samples); 0 means that no period up to ``MAX_PERIOD`` was found.
 PERIOD_UNKNOWN = -1
@@ -147,9 +152,16 @@ def detect_period(samples: np.ndarray, scale=None, rtol: float = PERIOD_RTOL,
     Returns
     -------
     int
-        The smallest n <= ``max_period`` with every point within the tolerance of the one n
-        revolutions before it, the samples holding at least two points of each of the n
-        (2 n samples): 1 for a single repeated point, n for n points visited in turn;
+        The smallest n <= ``max_period`` whose n points each stay within the tolerance over
+        the whole window (the samples n revolutions apart, x[r], x[r + n], x[r + 2 n], ...,
+        span no more than the tolerance in every feature, for each r < n), the samples
+        holding at least two points of each of the n (2 n samples), and the n points
+        distinct: each one's spread no more than ``PERIOD_SEPARATION`` of the distance
+        between any two of them (in the tolerance's units, the largest feature). 1 for a
+        single repeated point, n for n points visited in turn. The whole window, not each
+        point against the one n revolutions before, and distinct points: a decaying spiral
+        around a fixed point, turning about 1 / n of a turn a revolution, moves little in n
+        revolutions, and its n phases converge on one point; it is not period n;
         ``PERIOD_NONE`` (0) where no such n exists (quasi-periodic or chaotic motion, or a
         period beyond what the samples can show); ``PERIOD_UNKNOWN`` (-1) for fewer than 2
         samples or a NaN among them.
@@ -163,9 +175,19 @@ def detect_period(samples: np.ndarray, scale=None, rtol: float = PERIOD_RTOL,
         scale = np.abs(x).max(axis=0)
     scale = np.broadcast_to(np.asarray(scale, dtype=float), x.shape[1:])
     tolerance = rtol * np.where(scale > 0, scale, 1.0)
+    scaled = x / tolerance                 # 1: the tolerance, in every feature
     for n in range(1, min(max_period, x.shape[0] // 2) + 1):
-        if (np.abs(x[n:] - x[:-n]) <= tolerance).all():
-            return n
+        phases = [scaled[r::n] for r in range(n)]
+        spread = max(float(np.ptp(phase, axis=0).max()) for phase in phases)
+        if spread > 1.0:
+            continue
+        if n > 1:
+            centres = np.array([phase.mean(axis=0) for phase in phases])
+            apart = min(float(np.abs(centres[a] - centres[b]).max())
+                        for a in range(n) for b in range(a + 1, n))
+            if spread > PERIOD_SEPARATION * apart:
+                continue
+        return n
     return PERIOD_NONE
 
 
@@ -214,3 +236,118 @@ def zero_one_test(samples: np.ndarray, frequencies: int = ZERO_ONE_FREQUENCIES,
         d = m - mean_sq * (1.0 - np.cos(lags * c)) / (1.0 - np.cos(c))
         ks[i] = np.corrcoef(lags, d)[0, 1] if np.ptp(d) > 0 else 0.0
     return float(np.clip(np.median(ks), 0.0, 1.0))
+
+
+#: Largest Lyapunov exponent: the size of the twin's offset from the reference, renormalised
+#: to it after every block (Benettin et al. 1980), in the norm of :func:`largest_lyapunov`'s
+#: ``scale``.
+LYAPUNOV_PERTURBATION = 1.0e-9
+#: The seed of the twin's first offset direction (a fixed draw: the estimate is deterministic).
+LYAPUNOV_SEED = 19800101
+
+
+def largest_lyapunov(advance, x0, blocks: int, scale=1.0, size: float = LYAPUNOV_PERTURBATION,
+                     seed: int = LYAPUNOV_SEED, base=None, logs: list | None = None) -> float:
+    """The largest Lyapunov exponent per block by twin runs renormalised after every block:
+    Benettin, Galgani, Giorgilli and Strelcyn (1980), Wolf, Swift, Swinney and Vastano (1985).
+
+    A twin starts ``size`` away from the reference state, in a fixed random direction
+    (``seed``), in the norm |d| = sqrt(sum (d_i / scale_i)^2). After each block the twin's
+    offset from the reference has grown by g_k; it is scaled back to ``size`` along its new
+    direction, and the exponent is mean_k ln g_k.
+
+    Parameters
+    ----------
+    advance
+        ``advance(k, reference, twin) -> (reference_end, twin_end)``: both states (1-D
+        arrays) carried over block k by the same flow.
+    x0
+        The reference's state at the start of block 0.
+    blocks
+        Blocks to average over.
+    scale
+        Each component's scale (scalar or one per component); a component of scale ``inf``
+        is left unperturbed and out of the norm.
+    base
+        ``base(k) -> state``: the reference's state at the start of block k >= 1 (a
+        trajectory computed beforehand, continuously); default: the previous block's
+        ``reference_end``.
+    logs
+        A list that receives each block's ln g_k (to follow the estimate's convergence).
+
+    Returns
+    -------
+    float
+        The exponent per block [1 / block]; NaN where a state turns non-finite or the twin
+        lands on the reference (no offset left to renormalise).
+    """
+    x = np.array(x0, dtype=float)
+    weight = 1.0 / np.broadcast_to(np.asarray(scale, dtype=float), x.shape)
+    direction = np.random.default_rng(seed).standard_normal(x.shape) * (weight > 0)
+    offset = direction / weight.clip(min=1e-300) * (weight > 0)
+    offset *= size / np.linalg.norm(offset * weight)
+    total = 0.0
+    for k in range(blocks):
+        if k > 0 and base is not None:
+            x = np.array(base(k), dtype=float)
+        reference, twin = advance(k, x, x + offset)
+        diff = np.asarray(twin, dtype=float) - np.asarray(reference, dtype=float)
+        grown = float(np.linalg.norm(diff * weight))
+        if not (np.isfinite(grown) and grown > 0.0 and np.isfinite(reference).all()):
+            return float("nan")
+        total += np.log(grown / size)
+        if logs is not None:
+            logs.append(float(np.log(grown / size)))
+        offset = diff * (size / grown) * (weight > 0)
+        x = np.asarray(reference, dtype=float)
+    return total / blocks if blocks > 0 else float("nan")
+
+
+#: An exponent from -LYAPUNOV_ZERO_BELOW to +LYAPUNOV_ZERO_ABOVE [1 / revolution] reads as
+#: zero (quasi-periodic motion): a twin's offset along a neutral direction grows like the time,
+#: not exponentially, so a zero exponent estimated over N revolutions reads about ln(N) / N
+#: high (0.078 at N = 50); and the estimate wanders by about 1 / N either way. Measured
+#: (docs/physics.md section 11.6, B at 0.25 mm): 94 r/min, regular by the 0-1 test over 990
+#: samples, reads +0.026 to +0.030 over 25 to 99 revolutions; 95 r/min, converging onto a
+#: period-7 orbit, -0.026 over 50 and -0.042 over 99; 96 r/min, chaotic, +0.55.
+LYAPUNOV_ZERO_BELOW = 0.02
+LYAPUNOV_ZERO_ABOVE = 0.1
+#: The classes :func:`classify_motion` gives.
+PERIODIC = "periodic"
+QUASI_PERIODIC = "quasi-periodic"
+CHAOTIC = "chaotic"
+TRANSIENT = "transient"
+NON_PERIODIC = "non-periodic"
+UNDETERMINED = "undetermined"
+
+
+def classify_motion(period: int, chaos_k: float, exponent: float = float("nan")) -> str:
+    """The motion's class from the period test, the 0-1 test's K and the largest Lyapunov
+    exponent [1 / revolution] (NaN: not computed); docs/physics.md section 11.6.
+
+    - ``periodic``: a period n >= 1 (the period test speaks first);
+    - ``chaotic``: no period, the exponent above ``LYAPUNOV_ZERO_ABOVE`` and K above
+      ``CHAOS_THRESHOLD``;
+    - ``quasi-periodic``: no period, the exponent from -``LYAPUNOV_ZERO_BELOW`` to
+      ``LYAPUNOV_ZERO_ABOVE``, whatever K (with a hundred samples a quasi-periodic orbit
+      can read K near 1: 0.81 at 94 r/min);
+    - ``transient``: no period, the exponent below -``LYAPUNOV_ZERO_BELOW``: the motion
+      contracts onto an orbit it has not reached in the window (a slowly decaying spiral) or
+      whose period exceeds ``MAX_PERIOD``;
+    - without an exponent: ``chaotic`` where K > ``CHAOS_THRESHOLD``, else ``non-periodic``;
+    - ``undetermined``: too few samples (period -1), or the two indicators disagree (an
+      exponent above zero with K at or below the threshold), or neither is known.
+    """
+    if period >= 1:
+        return PERIODIC
+    if period != PERIOD_NONE:
+        return UNDETERMINED
+    if not np.isfinite(exponent):
+        if not np.isfinite(chaos_k):
+            return UNDETERMINED
+        return CHAOTIC if chaos_k > CHAOS_THRESHOLD else NON_PERIODIC
+    if exponent < -LYAPUNOV_ZERO_BELOW:
+        return TRANSIENT
+    if exponent <= LYAPUNOV_ZERO_ABOVE:
+        return QUASI_PERIODIC
+    return CHAOTIC if chaos_k > CHAOS_THRESHOLD else UNDETERMINED

@@ -32,12 +32,15 @@ DEFAULT_CC = (9, 0)
 #: Dimensions of run_cases' arguments (the case first) but the work arrays', by name.
 _NDIM = {"p": 2, "jp": 3, "y0": 2, "n_steps": 1, "save_every": 1, "wmap": 4, "proj": 4,
          "wvol": 2, "info": 2, "stats": 3, "track": 2, "sec": 3, "rows_t": 2, "rows_y": 3, "rows_d": 3,
-         "rows_wmax": 3}
+         "rows_wmax": 3, "pcols": 1, "geom": 1}
+#: Where the structure-of-arrays kernel's dimensions differ (``core.device.soa_kernel``):
+#: the shared parameter row jp, the maps' rows of the batch's clearance joints.
+_NDIM_SOA = {"jp": 1, "wmap": 3, "proj": 3}
 #: run_cases' int64 arguments but the work arrays' (``rk4.INT_WORK``).
-_INT = frozenset({"n_steps", "save_every", "info"})
+_INT = frozenset({"n_steps", "save_every", "info", "pcols", "geom"})
 
 
-def run_cases_signature() -> tuple:
+def run_cases_signature(layout: str = "aos") -> tuple:
     """Numba types of ``run_cases``' arguments, in order (``core.device.ARGS``: C-contiguous
     arrays with the case as first axis, as ``gpu._allocate`` builds them): p, jp, y0,
     n_steps, save_every; the results wmap, proj, wvol, info, stats, track, sec; the work arrays
@@ -48,6 +51,8 @@ def run_cases_signature() -> tuple:
     from .core.rk4 import INT_WORK, work_shapes
 
     ndim = dict(_NDIM, **{name: 1 + len(shape) for name, shape in work_shapes(0, 1).items()})
+    if layout == "soa":
+        ndim.update(_NDIM_SOA)
     ints = _INT | INT_WORK
     return tuple(types.Array(types.int64 if name in ints else types.float64, ndim[name], "C")
                  for name in ARGS)
@@ -95,7 +100,7 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
     spec = ALL if spec is None else spec
     kernel = device.aos_kernel(spec) if layout == "aos" else device.soa_kernel(capacity, spec)
     with _device_of_capability(cc):
-        ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(), cc=cc)
+        ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(layout), cc=cc)
     return ptx
 
 
@@ -108,7 +113,7 @@ def build_kernel(layout: str = "soa", capacity: int = DEFAULT_CAPACITY) -> float
 
     kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
     began = time.perf_counter()
-    kernel.compile(run_cases_signature())
+    kernel.compile(run_cases_signature(layout))
     return time.perf_counter() - began
 
 

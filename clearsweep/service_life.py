@@ -32,14 +32,15 @@ if TYPE_CHECKING:
 
 from .budget import (
     MAX_OUTPUT_BYTES,
-    SECONDS_PER_STEP,
     Estimate,
     check_budget,
     duration_text,
     estimate,
     format_bytes,
+    life_seconds,
     memory_limit,
-    time_text,
+    plan_costs,
+    steps_text,
 )
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
@@ -217,8 +218,10 @@ def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
     block follows from the config alone, and with it the block at which a limit of
     :data:`DEPTH_LIMITS` is crossed: ``life.max_clearance_growth`` and, with
     ``life.stop_at_wear_through``, the coating's thickness. Each clearance joint is walked
-    as if it set the pace. ``every_limit``: a reliability member, which runs until every
-    watched limit is crossed (the dynamic ones taken to come no later); else the first.
+    as if it set the pace, and the slowest walk is taken: a jump ends where any joint's bin
+    reaches its allowance, so the joint with the smallest allowance can cut every jump.
+    ``every_limit``: a reliability member, which runs until every watched limit is crossed
+    (the dynamic ones taken to come no later); else the first.
 
     The forecast is at most ``life.max_blocks``, and at most the blocks that reach
     ``life.cycles`` without a jump. A run that reaches ``life.cycles`` (its wear rate
@@ -238,7 +241,11 @@ def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
         found = [_blocks_to_depth(c, coat, lc.max_clearance_growth if name == "clearance_growth"
                                   else coat, lc.jump_clearance_fraction,
                                   lc.jump_coating_fraction, most) for c, coat in joints]
-        per_limit.append(min(found))
+        # a jump ends where any clearance joint's bin has grown by its allowance, so the joint
+        # with the smallest allowance sets the pace wherever it wears: its walk, the longest
+        # (configs/reliability_joints.yaml, O and P at 0.1 mm against A and B at 0.25 mm:
+        # about 24 blocks a member measured, 9 by A's or B's walk, 21 by O's or P's)
+        per_limit.append(max(found))
     return LifeForecast(max(per_limit) if every_limit else min(per_limit), lc.max_blocks,
                         tuple(watched))
 
@@ -283,9 +290,13 @@ def life_time_text(cfg: Config, steps_per_block: int) -> str:
     40 s: 101 blocks to the wear limit (...)"``."""
     steps = cfg.life.max_blocks * steps_per_block
     forecast = forecast_blocks(cfg)
-    expected = forecast.blocks * steps_per_block * SECONDS_PER_STEP
-    return (f"at most {steps:.3g} RK4 steps, at most {time_text(steps)}; expected about "
-            f"{duration_text(expected)}: {forecast.describe(cfg)}")
+    start = plan_costs().run_start_s
+    bound = start + life_seconds(cfg, cfg.life.max_blocks, steps_per_block)
+    expected = start + life_seconds(cfg, forecast.blocks, steps_per_block)
+    return (f"at most {steps:.3g} RK4 steps, at most about {duration_text(bound)} on one core "
+            f"({steps_text([cfg])} and {plan_costs().block_s:.2g} s per block's jump; "
+            f"benchmarks/calibrate_plan.py); expected about {duration_text(expected)}: "
+            f"{forecast.describe(cfg)}")
 
 
 def life_block(cfg: Config, *, allow_large: bool = False,

@@ -206,12 +206,15 @@ def section_rows(packed: Packed) -> int:
 
 
 def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
-               wvol0: np.ndarray | None = None, *, build: int | None = None) -> KernelRun:
+                wvol0: np.ndarray | None = None, t0: float = 0.0, *,
+                build: int | None = None) -> KernelRun:
     """Run the Numba kernel on packed inputs: the saved rows, wear, statistics, counters.
 
     ``wmap0`` (float64[2, npolar, nazim], [m]) and ``wvol0`` (float64[2], [m^3]): the wear
     map and worn volume to start from (a worn socket, e.g. the previous block of a life
-    run); copied, not changed. Default: unworn. ``wall_time`` times the integration call
+    run); copied, not changed. Default: unworn. ``t0`` [s]: the time of ``packed.y0`` (a
+    block continued from a saved state: the drive angle and the sections run on from it;
+    the contact episodes begin afresh, as at a run's start). ``wall_time`` times the integration call
     alone (compiling included when the kernel has not been compiled yet: ``simulate``
     calls ``prepare_kernel`` first).
 
@@ -240,11 +243,11 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     case = Case(packed.p, packed.jp, packed.y0, wmap, proj, wvol)
     out = Out(out_t, out_y, out_d, out_wmax, info, stats, np.zeros(L.N_TRACK),
               np.zeros(L.N_JOINTS), sec)
-    t0 = time.perf_counter()
-    res = integrate(case, 0.0, packed.n_steps, packed.save_every, out, jointset.Build(build))
-    wall = time.perf_counter() - t0
+    start = time.perf_counter()
+    res = integrate(case, t0, packed.n_steps, packed.save_every, out, jointset.Build(build))
+    wall = time.perf_counter() - start
     out_wmax[int(info[L.I_SAVED]):] = np.nan
-    out_t = np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
+    out_t = t0 + np.arange(n_save) * packed.p[L.P_DT] * packed.save_every
     return KernelRun.from_counters(packed, info, res[L.R_RESIDUAL_MAX], res[L.R_KE_PEAK],
                                    res[L.R_FIRST_IMPACT:L.N_R], wall, t=out_t,
                                    y=out_y, d=out_d, wmax=out_wmax, wmap=wmap, proj=proj, wvol=wvol,
@@ -274,7 +277,30 @@ def simulate(config, overrides=(), *, allow_large: bool = False) -> xr.Dataset:
     cfg = load_config(config, overrides)
     packed = preflight(cfg, allow_large=allow_large)
     prepare_kernel(cfg.solver.method, kernel_build(cfg))
-    return case_dataset(cfg, packed, run_kernel(packed))
+    raw = run_kernel(packed)
+    ds = case_dataset(cfg, packed, raw)
+    if cfg.metrics.lyapunov_revolutions > 0:
+        ds = with_lyapunov(ds, packed, raw, cfg.metrics.lyapunov_revolutions)
+    return ds
+
+
+def with_lyapunov(ds: xr.Dataset, packed: Packed, raw: KernelRun, revolutions: int) -> xr.Dataset:
+    """``ds`` with ``lyapunov_exponent`` [1 / revolution] of its run (:func:`lyapunov_exponent`,
+    the twin runs' kernel time added to ``wall_time``)."""
+    import xarray as xr
+
+    from .motion import LYAPUNOV_PERTURBATION
+    from .variables import attrs_for
+
+    start = time.perf_counter()
+    value = lyapunov_exponent(packed, raw, revolutions)
+    attrs = {**attrs_for("lyapunov_exponent"), "lyapunov_revolutions": int(revolutions),
+             "lyapunov_perturbation": LYAPUNOV_PERTURBATION}
+    out = ds.assign(lyapunov_exponent=xr.Variable((), np.float64(value), attrs))
+    if "wall_time" in out:
+        out["wall_time"] = out["wall_time"] + (time.perf_counter() - start)
+        out["wall_time"].attrs = ds["wall_time"].attrs
+    return out
 
 
 def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
@@ -460,3 +486,69 @@ def sections_from_raw(sec: np.ndarray) -> dict[str, np.ndarray]:
             "poincare_slider_acc": sec[:, L.SEC_SLIDER_ACC],
             "poincare_offset": sec[:, L.SEC_OFFSET:L.SEC_OFFSET + 3 * nj].reshape(-1, nj, 3),
             "poincare_velocity": sec[:, L.SEC_RATE:L.SEC_RATE + 3 * nj].reshape(-1, nj, 3)}
+
+
+#: The state components the twin runs perturb and measure (layout.Y_*): the positions,
+#: angles and their rates; not the energy integrals (drive work, dissipation).
+_LYAPUNOV_STATE = slice(0, L.Y_WORK)
+
+
+def lyapunov_scale(packed: Packed) -> np.ndarray:
+    """Each state component's scale in the twin runs' norm: the crank length l2 for a
+    position, 1 rad for an angle, times omega for a rate (docs/physics.md section 11.5);
+    the energy integrals ``inf`` (not perturbed, not measured)."""
+    length, omega = float(packed.p[L.P_L2]), float(packed.p[L.P_OMEGA])
+    position = np.ones(L.Y_QD)
+    for body in (L.Y_R2, L.Y_R3, L.Y_R4):
+        position[body:body + 3] = length
+    scale = np.full(L.N_Y, np.inf)
+    scale[:L.Y_QD] = position
+    scale[L.Y_QD:L.Y_QD + L.Y_QD] = position * omega
+    return scale
+
+
+def lyapunov_exponent(packed: Packed, raw: KernelRun, revolutions: int,
+                      logs: list | None = None) -> float:
+    """The largest Lyapunov exponent [1 / revolution] of a run, from twin runs renormalised
+    once per revolution over ``revolutions`` revolutions from the settled window's start
+    (:func:`clearsweep.motion.largest_lyapunov`, docs/physics.md section 11.5).
+
+    Block k starts at a saved row x_k of the run (``raw``), about one revolution after the
+    previous one (a whole number of saved rows). The kernel runs the block twice from that
+    row's time: from x_k and from x_k + d_k. Both begin their contact episodes afresh (the
+    kernel keeps a contact's impact velocity outside the state), so both see the same
+    restart and their difference is the perturbation's growth alone. NaN where the run
+    holds fewer rows than one block after its settled window's start, or a block stops.
+    ``logs``: a list that receives each block's ln growth.
+    """
+    from dataclasses import replace
+
+    from .motion import largest_lyapunov
+
+    p = packed.p
+    dt = float(p[L.P_DT])
+    row_dt = dt * packed.save_every
+    period = 2.0 * math.pi / float(p[L.P_OMEGA])
+    rows = max(1, int(round(period / row_dt)))             # rows a block spans
+    first = int(math.ceil(float(p[L.P_SETTLE]) / row_dt - 1e-9))
+    saved = raw.n_saved
+    blocks = min(int(revolutions), (saved - 1 - first) // rows)
+    if blocks < 1:
+        return float("nan")
+    steps = rows * packed.save_every
+    block = replace(packed, n_steps=steps, save_every=steps)
+
+    def advance(k: int, reference: np.ndarray, twin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t0 = (first + k * rows) * row_dt
+        ends = []
+        for y0 in (reference, twin):
+            y0 = np.array(y0, dtype=float)
+            y0[L.Y_WORK:] = 0.0          # the energy balance counts from the block's start
+            run = run_kernel(replace(block, y0=y0), t0=t0)
+            ends.append(run.y[-1] if run.status == L.STATUS_NAMES[L.ST_OK]
+                        else np.full(L.N_Y, np.nan))
+        return ends[0], ends[1]
+
+    per_block = largest_lyapunov(advance, raw.y[first], blocks, lyapunov_scale(packed),
+                                 base=lambda k: raw.y[first + k * rows], logs=logs)
+    return per_block * period / (rows * row_dt)

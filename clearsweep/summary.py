@@ -36,7 +36,14 @@ STATISTIC_VARIABLES = tuple(n for n in STATISTICS if n.endswith("_settled")) + t
 #: The spectrum's and the periodicity's summaries (:func:`motion_summary`, docs/physics.md
 #: section 11).
 SPECTRUM_VARIABLES = ("slider_acceleration_dominant_order", "slider_acceleration_high_order_share")
+#: The change of the settled RMS between the settled window's halves (:func:`_drift_values`):
+#: how far a settled statistic still moves with the run's length (clearsweep.analysis.factorial).
+DRIFT_VARIABLES = ("slider_acceleration_rms_settled_drift",)
 PERIODICITY_VARIABLES = ("period", "chaos_k")
+#: The largest Lyapunov exponent (a run's, where ``metrics.lyapunov_revolutions`` asks for it)
+#: and the class the indicators give together (:func:`motion_class`).
+LYAPUNOV = "lyapunov_exponent"
+MOTION_CLASS = "motion_class"
 
 #: The Poincaré samples a periodicity summary reads (one point per crank revolution).
 POINCARE_TIME = "poincare_time"
@@ -47,7 +54,8 @@ POINCARE_OFFSET = "poincare_offset"
 POINCARE_VARIABLES = tuple(POINCARE)
 
 #: Order of the variables in ``case_summary``.
-SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *PERIODICITY_VARIABLES,
+SUMMARY_ORDER = ("status", *STATISTIC_VARIABLES, *SPECTRUM_VARIABLES, *DRIFT_VARIABLES,
+                 *PERIODICITY_VARIABLES, LYAPUNOV, MOTION_CLASS,
                  "wear_depth_max_final", "wear_volume", *WEAR_TABLE_VARIABLES,
                  *PASS_THROUGH_VARIABLES, *POINCARE_VARIABLES)
 REVOLUTION_DIM = "revolution"
@@ -323,6 +331,58 @@ def _spectrum_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
             xr.Variable(dims, share, {**attrs_for("slider_acceleration_high_order_share"), **extra})}
 
 
+def settled_halves_rms(t: np.ndarray, acc: np.ndarray, start: float,
+                       period: float | None = None) -> tuple[float, float]:
+    """RMS of the saved rows ``acc`` at times ``t`` [s] over the two halves of the settled
+    window, from ``start`` [s] to the last finite row. With the crank's ``period`` [s]: the
+    first and the last n whole revolutions of the window, n = half its revolutions rounded
+    down (an odd number of settled revolutions leaves the middle one out: a part of a
+    revolution would weigh the harmonics by where the cut falls in it); without it, the
+    window split at its middle. NaN where a half holds fewer than 2 rows (or n is 0)."""
+    keep = np.isfinite(t) & np.isfinite(acc) & is_settled(t, start)
+    if keep.sum() < 4:
+        return float("nan"), float("nan")
+    t, acc = t[keep], acc[keep]
+    begin, end = float(t[0]), float(t[-1])
+    if period is not None and np.isfinite(period) and period > 0.0:
+        tol = 0.25 * float(np.min(np.diff(t)))
+        span = np.floor((end - begin + tol) / period / 2.0) * period
+        if span <= 0.0:
+            return float("nan"), float("nan")
+        first, second = acc[t < begin + span - tol], acc[t > end - span + tol]
+    else:
+        middle = 0.5 * (begin + end)
+        first, second = acc[t < middle], acc[t >= middle]
+    if first.size < 2 or second.size < 2:
+        return float("nan"), float("nan")
+    return float(np.sqrt(np.mean(first ** 2))), float(np.sqrt(np.mean(second ** 2)))
+
+
+def _drift_values(ds: xr.Dataset) -> dict[str, xr.Variable]:
+    """``slider_acceleration_rms_settled_drift`` of every case of ``ds`` (with
+    ``slider_acceleration`` on ``time``): the second half's RMS minus the first's
+    (:func:`settled_halves_rms`, whole revolutions where ``crank_angle`` gives the speed)."""
+    acc = ds.variables["slider_acceleration"]
+    dims = _case_dims(acc, ("time",))
+    acc_v = acc.transpose(*dims, "time").values
+    angle_v = None
+    if "crank_angle" in ds:
+        angle = ds.variables["crank_angle"]
+        angle_v = np.broadcast_to(angle.transpose(*_case_dims(angle, ("time",)), "time").values,
+                                  acc_v.shape)
+    t = ds["time"].values.astype(float)
+    start = settle_time(ds)
+    drift = np.full(acc_v.shape[:-1], np.nan)
+    for index in np.ndindex(*acc_v.shape[:-1]):
+        period = None
+        if angle_v is not None:
+            omega = crank_speed(t, angle_v[index])
+            period = 2.0 * np.pi / abs(omega) if np.isfinite(omega) and omega != 0.0 else None
+        first, second = settled_halves_rms(t, acc_v[index], start, period)
+        drift[index] = second - first
+    return {DRIFT_VARIABLES[0]: xr.Variable(dims, drift, attrs_for(DRIFT_VARIABLES[0]))}
+
+
 def is_settled(time, start: float):
     """Whether Poincaré sample times ``time`` (an array or a DataArray) [s] lie in the
     settled window from ``start`` [s] on (within 1e-12 s: a section at the window's start
@@ -385,10 +445,43 @@ def motion_summary(ds: xr.Dataset) -> dict[str, xr.Variable]:
     if ("slider_acceleration" in ds and "crank_angle" in ds and "time" in ds.dims
             and not all(n in ds for n in SPECTRUM_VARIABLES)):
         out.update(_spectrum_values(ds))
+    if ("slider_acceleration" in ds and "time" in ds.dims
+            and not all(n in ds for n in DRIFT_VARIABLES)):
+        out.update(_drift_values(ds))
     if (POINCARE_TIME in ds and POINCARE_SLIDER in ds
             and not all(n in ds for n in PERIODICITY_VARIABLES)):
         out.update(_periodicity_values(ds))
+    if MOTION_CLASS not in ds:
+        found = {n: out[n] if n in out else ds.variables[n]
+                 for n in (*PERIODICITY_VARIABLES, LYAPUNOV) if n in out or n in ds.variables}
+        if all(n in found for n in PERIODICITY_VARIABLES):
+            out[MOTION_CLASS] = motion_class(found["period"], found["chaos_k"], found.get(LYAPUNOV))
     return out
+
+
+def motion_class(period: xr.Variable, chaos_k: xr.Variable,
+                 exponent: xr.Variable | None = None) -> xr.Variable:
+    """Each case's class (:func:`clearsweep.motion.classify_motion`) from its ``period``,
+    ``chaos_k`` and, where computed, ``lyapunov_exponent`` (docs/physics.md section 11.6)."""
+    parts = [period, chaos_k] + ([exponent] if exponent is not None else [])
+    dims: list[str] = []
+    for part in parts:
+        dims += [str(d) for d in part.dims if d not in dims]
+    sizes = {d: n for part in parts for d, n in zip(part.dims, part.shape)}
+    shape = tuple(sizes[d] for d in dims)
+
+    def values(var: xr.Variable) -> np.ndarray:
+        return np.broadcast_to(var.set_dims(dict(zip(dims, shape))).transpose(*dims).values, shape)
+
+    p, k = values(period), values(chaos_k)
+    lam = values(exponent) if exponent is not None else np.full(shape, np.nan)
+    out = np.empty(shape, dtype=object)
+    for index in np.ndindex(*shape):
+        out[index] = motion.classify_motion(int(p[index]), float(k[index]), float(lam[index]))
+    rules = {"lyapunov_zero_below": motion.LYAPUNOV_ZERO_BELOW,
+             "lyapunov_zero_above": motion.LYAPUNOV_ZERO_ABOVE,
+             "chaos_threshold": motion.CHAOS_THRESHOLD}
+    return xr.Variable(tuple(dims), out.astype(str), {**attrs_for(MOTION_CLASS), **rules})
 
 
 def case_summary(ds: xr.Dataset) -> xr.Dataset:

@@ -231,6 +231,12 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
         (), "1", "share of the slider acceleration's power above the high_order attribute",
         "power of the Welch spectrum's bins above crank order high_order over that of every "
         "bin above order 0, settled window; NaN where it holds fewer than 2 crank revolutions"),
+    "slider_acceleration_rms_settled_drift": VariableSpec(
+        (), "m s-2", "change of the settled RMS slider acceleration between the window's halves",
+        "RMS of slider_acceleration's saved rows over the last n whole crank revolutions of "
+        "the settled window minus that over its first n, n half the window's revolutions "
+        "rounded down: how far the settled RMS still moves with the run's length; NaN where "
+        "a half holds fewer than 2 rows"),
     "peak_force_source": VariableSpec(
         (), "", "what sets the case's peak contact force",
         "impacts (J...): clearance joints J began contact episodes; else in-contact "
@@ -247,6 +253,16 @@ SUMMARY_VARIABLES: dict[str, VariableSpec] = {
         "Gottwald and Melbourne (2004, 2009), correlation method, median over random c, on the "
         "settled Poincare samples of the slider acceleration: near 0 regular, near 1 chaotic; "
         "NaN for fewer than zero_one_min_samples revolutions"),
+    "lyapunov_exponent": VariableSpec(
+        (), "1", "largest Lyapunov exponent per crank revolution",
+        "twin runs from the settled window's start, the twin lyapunov_perturbation away in the "
+        "state (positions / crank length, angles in rad, rates / omega), renormalised once per "
+        "revolution (Benettin et al. 1980) over lyapunov_revolutions: > 0 chaotic, about 0 "
+        "quasi-periodic, < 0 periodic; NaN where the run is too short or a twin run stops"),
+    "motion_class": VariableSpec(
+        (), "", "motion class from the period, the 0-1 test and the Lyapunov exponent",
+        "periodic, quasi-periodic, chaotic, transient (a negative exponent without a period "
+        "in the window) or undetermined (docs/physics.md section 11.6)"),
 }
 
 
@@ -330,7 +346,7 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
 
 #: Text variables of results files and the dims they carry besides the sweep's.
 TEXT_VARIABLES: dict[str, tuple[str, ...]] = {
-    "status": (), "message": (), "stop_reason": (), "block_status": ("cycle",),
+    "status": (), "message": (), "motion_class": (), "stop_reason": (), "block_status": ("cycle",),
     **{f"first_joint_to_{name}": () for name in ("clearance_growth", "normal_force",
                                                  "rms_acceleration", "motion_error",
                                                  "wear_through")},

@@ -97,7 +97,30 @@ def test_the_map_draws_each_cells_period_and_k_as_the_file_holds_them(small_map,
     assert ax.get_xlabel().endswith("[r/min]") and ax.get_ylabel().endswith("[mm]")
     assert [t.get_text() for t in ax.get_xticklabels()] == ["600", "640"]
     assert [t.get_text() for t in ax.get_yticklabels()] == ["0.2", "0.25"]
-    assert "K" in fig.axes[-1].get_ylabel()      # the colour bar of the 0-1 test
+    # the colour bars of the 0-1 test and of the Lyapunov exponent
+    assert [a.get_ylabel().split(" [")[0] for a in fig.axes if a.get_label() == "<colorbar>"] == [
+        "0-1 test K", "largest Lyapunov exponent"]
+
+
+def test_the_map_draws_each_cells_lyapunov_exponent_and_marks_its_motion_class(small_map):
+    """The shipped map asks for the exponent (metrics.lyapunov_revolutions): every case holds
+    one, the third panel draws it, and each cell without a period carries its class's mark."""
+    from clearsweep.plotting.dynamics import CLASS_MARKS
+
+    with xr.open_dataset(small_map) as ds:
+        summary = report_summary(ds)
+        fig = figure(ds, "dynamics-map", x="speed_rpm", y="B_clearance")
+    exponent = summary["lyapunov_exponent"].transpose("B_clearance", "speed_rpm").values
+    assert np.isfinite(exponent).all()
+    drawn = np.ma.getdata(_mesh(fig, "lyapunov_exponent").get_array()).reshape(exponent.shape)
+    np.testing.assert_allclose(drawn, exponent)
+    period = summary["period"].transpose("B_clearance", "speed_rpm").values
+    classes = summary["motion_class"].transpose("B_clearance", "speed_rpm").values
+    marks = sorted((t.get_position(), t.get_text(), t.get_gid()) for t in fig.axes[0].texts)
+    expected = sorted(((float(col), float(row)), CLASS_MARKS[str(name)], f"motion_class:{name}")
+                      for (row, col), name in np.ndenumerate(classes) if period[row, col] <= 0)
+    assert marks == expected
+    assert all(str(c) == "periodic" for c, p in zip(classes.ravel(), period.ravel()) if p > 0)
 
 
 def test_the_maps_texts_stay_inside_the_figure_and_apart(small_map):
@@ -230,3 +253,63 @@ def test_a_period_per_member_is_refused_not_drawn(small_map):
         members = xr.concat([ds, ds], dim="member")
     with pytest.raises(PlotError, match="one per member too: choose one with --select"):
         figure(members, "dynamics-map", x="speed_rpm", y="B_clearance")
+
+
+def test_report_names_the_class_of_each_cell_without_a_period():
+    """Beside the periodic windows, one line per motion class of the cells without a period
+    (the two chaos indicators together, summary.motion_class)."""
+    from clearsweep.analysis.text import _periodic_window_lines
+
+    speed = xr.DataArray([92.0, 93.0, 94.0, 96.0], dims="speed_rpm",
+                         attrs={"units": "min-1", "config_key": "mechanism.speed_rpm"})
+    clearance = xr.DataArray([2.5e-4], dims="B_clearance",
+                             attrs={"units": "m", "config_key": "joints.B.clearance"})
+    cells = {"B_clearance": clearance, "speed_rpm": speed}
+    dims = ("B_clearance", "speed_rpm")
+    ds = xr.Dataset({"period": xr.DataArray([[1, 0, 0, 0]], dims=dims, coords=cells),
+                     "motion_class": xr.DataArray([["periodic", "transient", "quasi-periodic",
+                                                    "chaotic"]], dims=dims, coords=cells)})
+    usable = xr.DataArray([[True, True, True, True]], dims=dims)
+    # a second clearance row so that the grid has two varying keys
+    two = xr.concat([ds, ds.assign_coords(B_clearance=[3.0e-4])], dim="B_clearance")
+    lines = _periodic_window_lines(two, two, xr.concat([usable, usable], dim="B_clearance"), dims)
+    listed: list[str] = []
+    for line in lines:          # the wrapped lines joined again
+        if line.startswith("- "):
+            listed.append(line)
+        elif line.startswith("    "):
+            listed[-1] += " " + line.strip()
+    assert listed == [
+        "- period 1: B_clearance 0.00025 m: speed_rpm 92 min-1; B_clearance 0.0003 m: speed_rpm "
+        "92 min-1",
+        "- chaotic: B_clearance 0.00025 m: speed_rpm 96 min-1; B_clearance 0.0003 m: speed_rpm 96 min-1",
+        "- quasi-periodic: B_clearance 0.00025 m: speed_rpm 94 min-1; B_clearance 0.0003 m: speed_rpm "
+        "94 min-1",
+        "- transient: B_clearance 0.00025 m: speed_rpm 93 min-1; B_clearance 0.0003 m: speed_rpm 93 "
+        "min-1"]
+
+
+def test_report_of_the_small_map_gives_each_cases_exponent_and_class(small_map):
+    import json
+
+    result = invoke("report", small_map, "--full", "--format", "json")
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    assert {"lyapunov_exponent", "motion_class"} <= set(report["columns"])
+    with xr.open_dataset(small_map) as ds:
+        summary = report_summary(ds)
+    for row in report["rows"]:
+        case = summary.sel(speed_rpm=row["speed_rpm"], B_clearance=row["B_clearance"])
+        assert row["lyapunov_exponent"] == pytest.approx(float(case["lyapunov_exponent"]))
+        assert row["motion_class"] == str(case["motion_class"].values)
+
+
+def test_a_runs_report_gives_its_exponent_and_class():
+    from clearsweep.analysis.text import _run_motion_lines
+
+    case = xr.Dataset({"period": 0, "chaos_k": 0.81, "lyapunov_exponent": 0.026,
+                       "motion_class": "quasi-periodic"})
+    assert _run_motion_lines(case) == [
+        "motion (period in crank revolutions): non-periodic (no period up to 8 revolutions); "
+        "0-1 test K = 0.81; largest Lyapunov exponent +0.026 per revolution; class: quasi-periodic"]
+    assert "n/a" in _run_motion_lines(case.assign(lyapunov_exponent=np.nan))[0]

@@ -178,6 +178,120 @@ def test_the_check_finds_overlapping_and_escaping_text():
     assert "overlap: 'here' and 'there'" in problems
 
 
+# --- no legend over data (issue 45 item 6) ---------------------------------------------------
+
+def _segments_cross(xy: np.ndarray, box) -> bool:
+    """Whether the polyline ``xy`` (display coordinates, NaN breaks it) enters ``box``: the
+    Liang-Barsky clip of each segment against the box, all segments at once."""
+    x0, y0, x1, y1 = xy[:-1, 0], xy[:-1, 1], xy[1:, 0], xy[1:, 1]
+    keep = np.isfinite(x0) & np.isfinite(y0) & np.isfinite(x1) & np.isfinite(y1)
+    x0, y0, x1, y1 = x0[keep], y0[keep], x1[keep], y1[keep]
+    low, high = np.zeros_like(x0), np.ones_like(x0)
+    inside = np.ones_like(x0, dtype=bool)
+    for p, q in ((x0 - x1, x0 - box.x0), (x1 - x0, box.x1 - x0),
+                 (y0 - y1, y0 - box.y0), (y1 - y0, box.y1 - y0)):
+        parallel = p == 0
+        inside &= ~(parallel & (q < 0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
+        low = np.where(~parallel & (p < 0), np.maximum(low, t), low)
+        high = np.where(~parallel & (p > 0), np.minimum(high, t), high)
+    return bool((inside & (low <= high)).any())
+
+
+def _points_inside(xy: np.ndarray, box) -> bool:
+    xy = xy[np.isfinite(xy).all(axis=1)]
+    return bool(((xy[:, 0] > box.x0) & (xy[:, 0] < box.x1)
+                 & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1)).any())
+
+
+def _covered(ax, box, renderer) -> list[str]:
+    """The data of ``ax`` (lines and their markers, bars, error bars, scatter points) that
+    the display box ``box`` covers."""
+    from matplotlib.collections import LineCollection, PathCollection
+    from matplotlib.patches import Rectangle
+
+    found = []
+    for line in ax.get_lines():
+        if not line.get_visible():
+            continue
+        xy = line.get_transform().transform(np.asarray(line.get_xydata(), dtype=float))
+        drawn = line.get_linestyle() not in ("None", "none", "", " ")
+        if (drawn and _segments_cross(xy, box)) or _points_inside(xy, box):
+            found.append(f"line {line.get_label()!r}")
+    for coll in ax.collections:
+        if not coll.get_visible():
+            continue
+        if isinstance(coll, LineCollection):       # error bars
+            if any(_segments_cross(coll.get_transform().transform(np.asarray(seg, dtype=float)), box)
+                   for seg in coll.get_segments() if len(seg) > 1):
+                found.append(f"error bars {coll.get_label()!r}")
+        elif isinstance(coll, PathCollection):      # scatter points
+            offsets = np.asarray(coll.get_offsets(), dtype=float)
+            if offsets.size and _points_inside(coll.get_offset_transform().transform(offsets), box):
+                found.append(f"points {coll.get_label()!r}")
+    for patch in ax.patches:
+        if isinstance(patch, Rectangle) and patch.get_visible() and patch.get_fill():
+            extent = patch.get_window_extent(renderer)
+            if extent.width > 0 and extent.height > 0 and extent.overlaps(box):
+                found.append(f"bar {patch.get_label()!r}")
+    return found
+
+
+def legends_over_data(fig) -> list[str]:
+    """Legends (of a panel, or of the figure) whose box, drawn at 100 dpi and shrunk by
+    :data:`TOLERANCE_PX`, covers a panel's data: a line (its segments, or its markers), a
+    bar, an error bar or a scatter point, in display coordinates, within the panel."""
+    from matplotlib.transforms import Bbox
+
+    FigureCanvasAgg(fig)
+    fig.set_dpi(100)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    legends = [a.get_legend() for a in fig.axes if a.get_legend() is not None] + list(fig.legends)
+    problems = []
+    for legend in legends:
+        if not legend.get_visible():
+            continue
+        box = legend.get_window_extent(renderer).padded(-TOLERANCE_PX)
+        entries = ", ".join(t.get_text() for t in legend.get_texts()[:2])
+        for ax in fig.axes:
+            if ax.name == "3d":
+                continue
+            inside = Bbox.intersection(box, ax.bbox)
+            if inside is None or inside.width <= 0 or inside.height <= 0:
+                continue
+            problems += [f"legend ({entries}) covers {what} in {ax.get_title() or ax.get_ylabel()!r}"
+                         for what in _covered(ax, inside, renderer)]
+    return problems
+
+
+def test_the_legend_check_finds_a_legend_over_a_line_a_bar_and_error_bars():
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4, 3))
+    ax = fig.add_subplot()
+    ax.plot([0.0, 1.0], [0.95, 0.95], label="a line along the top")
+    ax.set_ylim(0.0, 1.0)
+    ax.legend(loc="upper right")
+    assert any("covers line 'a line along the top'" in p for p in legends_over_data(fig))
+    fig = Figure(figsize=(4, 3))
+    ax = fig.add_subplot()
+    ax.bar([0, 1, 2], [1.0, 1.0, 1.0], label="bars")
+    ax.errorbar([0, 1, 2], [0.5, 0.5, 0.5], yerr=0.5, ls="none", label="error bars")
+    ax.set_ylim(0.0, 1.0)
+    ax.legend(loc="center")
+    problems = legends_over_data(fig)
+    assert any("covers bar" in p for p in problems) and any("covers error bars" in p for p in problems)
+    fig = Figure(figsize=(4, 3), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot([0.0, 1.0], [0.0, 0.2], label="low")
+    ax.set_ylim(0.0, 1.0)
+    ax.legend(loc="upper right")
+    fig.legend(["outside"], loc="outside lower center")
+    assert legends_over_data(fig) == []
+
+
 # --- results with the shipped examples' structure -------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -263,7 +377,9 @@ def test_a_sampling_sweep_is_drawn_against_its_inputs(sensitivity_example, metri
     assert not [line for ax in fig.axes for line in ax.get_lines() if len(line.get_xdata()) > 2]
     assert [ax.get_xlabel().split(" [")[0] for ax in fig.axes] == \
         ["B_clearance", "B_coating_thickness", "restitution", "speed_rpm"]
-    assert fig.axes[0].get_xlabel() == "B_clearance [\u00b5m]"
+    # each quantity in its one unit (issue 45 item 6): a clearance in mm, a coating in um
+    assert [ax.get_xlabel() for ax in fig.axes[:2]] == ["B_clearance [mm]",
+                                                        "B_coating_thickness [\u00b5m]"]
 
 
 def test_the_reliability_bands_are_hatched_and_in_the_legend(reliability_example):

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from matplotlib.figure import Figure
 from synthetic import case, heat_map_sweep, sweep_ds  # noqa: F401  (pytest fixtures)
 from test_ensemble import synthetic_ensemble
-from test_figure_layout import layout_problems, life_ds  # noqa: F401  (pytest fixture)
+from test_figure_layout import layout_problems, legends_over_data, life_ds  # noqa: F401  (pytest fixture)
 
 from clearsweep.ensemble import ensemble_statistics
 from clearsweep.plotting import (
@@ -106,14 +106,14 @@ def test_orbit_clearance_circles_are_told_apart_in_one_legend(sweep_ds):
     circles = {t.get_text(): (str(h.get_linestyle()), str(h.get_color()))
                for h, t in zip(legend.legend_handles, legend.get_texts())
                if "clearance " in t.get_text()}
-    assert set(circles) == {"joint A clearance 250 µm (config)",
-                            "joint B clearance 100 µm (swept)",
-                            "joint B clearance 250 µm (swept)"}
+    assert set(circles) == {"joint A clearance 0.25 mm (config)",
+                            "joint B clearance 0.1 mm (swept)",
+                            "joint B clearance 0.25 mm (swept)"}
     # one style per radius: the two 0.25 mm circles alike, the 0.1 mm one different
-    assert circles["joint A clearance 250 µm (config)"] == circles[
-        "joint B clearance 250 µm (swept)"]
-    assert circles["joint B clearance 100 µm (swept)"] != circles[
-        "joint B clearance 250 µm (swept)"]
+    assert circles["joint A clearance 0.25 mm (config)"] == circles[
+        "joint B clearance 0.25 mm (swept)"]
+    assert circles["joint B clearance 0.1 mm (swept)"] != circles[
+        "joint B clearance 0.25 mm (swept)"]
     assert layout_problems(fig) == []
 
 
@@ -122,7 +122,8 @@ def test_orbit_leaves_out_skipped_cases(sweep_ds):
     ds["status"] = ds["status"].where(ds["B_clearance"] != ds["B_clearance"][1], "skipped")
     fig = figure(ds, "orbit", ["B_coating=none"])
     texts = [t.get_text() for t in fig.legends[0].get_texts()]
-    skipped = f"B_clearance={float(ds['B_clearance'][1]):g}"
+    skipped = f"B_clearance={1e3 * float(ds['B_clearance'][1]):g} mm"
+    assert any(f"B_clearance={1e3 * float(ds['B_clearance'][0]):g} mm" in t for t in texts)
     assert not any(t.startswith(skipped) or f", {skipped}" in t for t in texts)
 
 
@@ -135,7 +136,7 @@ def test_the_ensemble_legend_carries_units():
     ensemble = xr.merge([two, ensemble_statistics(two)], combine_attrs="override")
     fig = figure(ensemble, "sweep", metric="wear_depth_max_final")
     texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert texts == ["B_clearance 0.0001 m", "B_clearance 0.00025 m"]
+    assert texts == ["B_clearance 0.1 mm", "B_clearance 0.25 mm"]
     assert layout_problems(fig) == []
 
 
@@ -379,7 +380,7 @@ def test_a_life_figure_draws_and_names_the_joint_its_config_gives_a_clearance():
     ds = life(load_config(CONFIG, [*TINY_LIFE, "joints.B.clearance=0", "joints.O.clearance=1e-4",
                                    "life.max_blocks=2"]))
     title = figure(ds, "life").get_suptitle()
-    assert "wear maps of joint O" in title and said(title, "clearance at O")
+    assert "wear maps of bearing O" in title and said(title, "clearance at O")
 # --- the guide P drawn as what it is (issue 45 item 5) ---------------------------------------
 
 @pytest.fixture(scope="module")
@@ -394,10 +395,8 @@ def guide_run() -> xr.Dataset:
 
 
 def test_the_orbit_draws_the_guide_gap_as_a_rectangle_with_the_block_inside(guide_run):
-    from clearsweep.plotting.common import scaled
-
     fig = figure(guide_run, "orbit")
-    factor, _ = scaled(guide_run["ball_offset"])
+    factor = 1e-3       # in mm, the unit of every clearance on a figure
     (ax,) = [a for a in fig.axes if "P" in a.get_title()]       # one panel: across the guide
     assert "yz" in ax.get_title()
     d = guide_run["ball_offset"].sel(joint="P")
@@ -436,3 +435,94 @@ def test_the_orbit_names_the_guide_p_a_guide(guide_run):
     assert any(t.startswith("guide P") for t in titles)
     assert any(t.startswith("joint B") for t in titles)
     assert not any(t.startswith("joint P") for t in titles)
+
+
+# --- the figure fixes (issue 45 item 6) ------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def three_joints() -> xr.Dataset:
+    """A run with clearance at the bearing O, the socket B and the guide P: 600 r/min for
+    2.5 revolutions (Poincaré sections), a coarse map."""
+    from clearsweep.simulation import simulate
+
+    return simulate("configs/one_clearance.yaml", [
+        "joints.O.clearance=1e-4", "joints.P.clearance_y=1e-4", "joints.P.clearance_z=1e-4",
+        "mechanism.speed_rpm=600", "solver.duration=0.25", "metrics.settle_time=0.05",
+        "wear.map=[8,16]"])
+
+
+@pytest.mark.parametrize("kind", ["forces", "poincare", "wear-map", "wear-polar", "orbit"])
+def test_the_figures_call_o_the_bearing_and_p_the_guide(three_joints, kind):
+    """The wear, forces and Poincaré figures called O and P "joint O", "joint P" and "reaction
+    at O"; the orbit figure alone said "bearing O" and "guide P"."""
+    import re
+
+    fig = figure(three_joints, kind)
+    texts = " ".join(" ".join(t.split()) for t in _figure_texts(fig))
+    assert not re.search(r"\bjoints? [OP]\b|\bat O\b", texts), texts
+    assert "bearing O" in texts
+    assert "guide P" in texts or kind == "poincare"     # the block has no section offset
+    assert "joint B" in texts
+    # the bearing's, the socket's and the guide's panels together, texts apart
+    assert layout_problems(fig) == [] and legends_over_data(fig) == []
+
+
+def test_an_orbit_at_a_fixed_point_draws_as_one_point(case):
+    """A ball that stays at one offset (a round-off spread about it) and no clearance to draw
+    (the file says none): the orbit was that spread drawn at full scale, a scribble across the
+    panel; each axis now spans at least MIN_RELATIVE_SPAN of the offset's magnitude."""
+    from clearsweep.plotting.common import MIN_RELATIVE_SPAN
+
+    offset = case["ball_offset"]
+    point = xr.DataArray([1.0e-4, -6.0e-5, 2.0e-5], dims="axis", coords={"axis": offset["axis"]})
+    noise = 1e-12 * np.sin(np.arange(offset.sizes["time"]))
+    fixed = (offset.sel(joint="B") * 0 + point * (1 + xr.DataArray(noise, dims="time"))).expand_dims(
+        joint=["B"])
+    ds = case.drop_vars(["eccentricity"], errors="ignore").assign(
+        ball_offset=fixed.transpose(*[d for d in offset.dims]))
+    ds.attrs = {k: v for k, v in ds.attrs.items() if k != "config"}
+    fig = figure(ds, "orbit")
+    assert not [ln for ax in fig.axes for ln in ax.get_lines() if "clearance" in str(ln.get_label())]
+    size = 1e3 * float(np.abs(point).max())        # mm
+    for ax in fig.axes:
+        for low, high in (ax.get_xlim(), ax.get_ylim()):
+            assert high - low >= MIN_RELATIVE_SPAN * size * (1 - 1e-9), ax.get_title()
+
+
+def test_a_clearance_is_written_in_mm_in_legends_titles_and_axes(sweep_ds):
+    """One unit per quantity: the synthetic sweep's B clearances (0.1 and 0.25 mm) read
+    "B_clearance=0.0001" in a legend, "B_clearance=0.00025 m" in a --select title, "[m]" on
+    a line's axis, "[um]" on a heat map's and "100 um" in the orbit's legend."""
+    slider = figure(sweep_ds, "slider")
+    legend = [t.get_text() for t in slider.legends[0].get_texts()]
+    assert "B_coating=none, B_clearance=0.1 mm" in legend
+    title = " ".join(figure(sweep_ds, "slider", ["B_clearance=2.5e-4"]).get_suptitle().split())
+    assert "selection: B_clearance=0.25 mm" in title
+    line = figure(sweep_ds, "sweep", ["B_coating=PTFE"]).axes[0]
+    assert line.get_xlabel().endswith("[mm]")
+    np.testing.assert_allclose(line.get_lines()[0].get_xdata(), [0.1, 0.25])
+    heat = figure(sweep_ds, "sweep", metric="normal_force_peak")
+    (ax, *_) = [a for a in heat.axes if a.images]
+    labels = [ax.get_xlabel(), ax.get_ylabel()]
+    ticks = [t.get_text() for t in (ax.get_xticklabels() if "clearance" in labels[0]
+                                    else ax.get_yticklabels())]
+    assert any("clearance" in label and label.endswith("[mm]") for label in labels)
+    assert ticks == ["0.1", "0.25"]
+    orbit = [t.get_text() for t in figure(sweep_ds, "orbit", ["B_coating=none"]).legends[0].get_texts()]
+    assert "joint B clearance 0.25 mm (swept)" in orbit
+
+
+@pytest.mark.parametrize("value", ["0.25mm", "0.25 mm", "250um", "250 \u00b5m", "2.5e-4m", "2.5e-4"])
+def test_select_takes_a_value_in_any_unit_of_its_quantity(sweep_ds, value):
+    """``--select B_clearance=0.25mm`` (the unit the figures write) was refused: "unknown
+    value for B_clearance '0.25mm'"."""
+    fig = figure(sweep_ds, "slider", [f"B_clearance={value}", "B_coating=none"])
+    assert "selection: B_clearance=0.25 mm" in " ".join(fig.get_suptitle().split())
+
+
+@pytest.mark.parametrize("value", ["60rpm", "60 r/min", "60min-1", "60"])
+def test_select_takes_a_speed_in_r_per_min(value):
+    from clearsweep.analysis import parse_selection
+
+    ds = xr.Dataset({"v": ("speed_rpm", [1.0, 2.0])}, coords={"speed_rpm": [60.0, 120.0]})
+    assert parse_selection(ds, [f"speed_rpm={value}"]) == {"speed_rpm": 60.0}

@@ -25,9 +25,10 @@ def test_validate_prints_the_plan_of_the_main_sweep_file():
     assert f"{SWEEP}: a valid sweep file" in text and f"clearsweep sweep {SWEEP}" in text
     assert "dimension B_coating (4): 'none', 'MoS2', 'lead', 'PTFE'" in text
     assert "dimension clearance_joints (2): 'B', 'AB'" in text
-    # 1 s at dt = 1e-5 per case, 48 cases: the steps, the memory and the time estimate
-    assert "one case: 100,000 RK4 steps; memory up to" in text
-    assert "48 cases, 48 to simulate, 4.8e+06 RK4 steps: about" in text
+    # 6 revolutions at 150 r/min (2.4 s) at dt = 1e-5 per case, 48 cases: the steps, the
+    # memory and the time estimate
+    assert "one case: 240,000 RK4 steps; memory up to" in text
+    assert "48 cases, 48 to simulate, 1.15e+07 RK4 steps: about" in text
 
 
 def test_validate_a_sweep_file_applies_set_and_checks_every_case(tmp_path):

@@ -1,9 +1,10 @@
 """The friction-driven in-contact oscillation at B (docs/physics.md section 3.3) and what
 ``report`` says sets each case's peak force (``summary.peak_force_source``).
 
-PTFE in B's socket with 0.05 mm clearance (the main job's first PTFE case,
-configs/coating_clearance.yaml). Seated with its friction balanced (docs/physics.md 1.2) the
-ball rides its socket quietly: 11.94 N at most, against 11.86 N with friction off. Started
+PTFE in B's socket with 0.05 mm clearance at 60 r/min (configs/measured_friction.yaml's PTFE
+case with the paper's friction data; the main job's first PTFE case while it ran at 60
+r/min). Seated with its friction balanced (docs/physics.md 1.2) the ball rides its socket
+quietly: 11.94 N at most, against 11.86 N with friction off. Started
 0.2 c off that seat (an ensemble member's start, ``ensemble.perturb.ball_offset``), it stays
 in contact for the whole run, without a single impact, yet its normal force rises to 123 N in
 a burst at crank angles 168-188 degrees (t = 0.47-0.52 s at 60 r/min), so a 0.6 s run holds

@@ -11,6 +11,7 @@ same sweep on the CPU backend, compiled, and compares. Cases are tiny (Python sp
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -22,6 +23,7 @@ import xarray as xr
 from click.testing import CliRunner
 
 from clearsweep.cli import sweep_command
+from clearsweep.core.layout import N_ANGLE_BINS
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -101,6 +103,11 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
             continue
+        if cpu[name].dtype.kind in "USO":       # a class name (motion_class): the same words
+            assert [str(v) for v in np.ravel(gpu[name].values)] == \
+                [str(v) for v in np.ravel(cpu[name].values)], name
+            compared.append(name)
+            continue
         a = np.asarray(cpu[name].values, dtype=float)
         b = np.asarray(gpu[name].values, dtype=float)
         assert a.shape == b.shape, name
@@ -179,15 +186,17 @@ def test_cuda_backend_refuses_what_the_device_does_not_run(tmp_path, store, key)
 
 
 def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
-    """A sweep's CUDA window holds as many default-map cases as the host bound allows: at
-    least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
-    (benchmarks/README.md), and never more than a quarter of the machine's memory."""
+    """A sweep's CUDA window holds as many default-map two-clearance cases as the host bound
+    allows: at least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
+    (benchmarks/README.md), and never more than a quarter of the machine's memory. (Cases
+    without clearance carry no maps: 20,000 of them fit any window here.)"""
     from clearsweep import gpu
     from clearsweep.config import Config
 
-    cfg = Config()
-    cases = [cfg] * 20_000
+    cfg = Config().replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4)
+    cases = [cfg] * 40_000
     per_case = gpu.config_bytes(cfg)
+    assert gpu.batch_window([Config()] * 20_000) == 20_000
     gib = 1 << 30
     monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 128 * gib // 4096,
                                                     "SC_PAGE_SIZE": 4096}[name])
@@ -301,3 +310,174 @@ def test_a_mismatched_pairing_is_one_line_before_any_case_runs(tmp_path, monkeyp
     with pytest.raises(gpu.NoCudaDevice, match="numba-cuda 0.30.4 does not compile"):
         run_sweep(SWEEP, tmp_path / "t.nc", backend="cuda", progress=False)
     assert not (tmp_path / "t.nc").exists() and ran == []
+
+
+def test_case_bytes_shrink_for_a_case_without_O_P_clearance():
+    """A structure-of-arrays case carries maps, projections and undo rows for its clearance
+    joints alone: the two-clearance benchmark case (A and B) drops P's and O's maps (two of
+    npolar x nazim bins), their projections and half the undo buffer (O's and P's rows)
+    against every joint's; a bearing-only case holds one map row of nazim bins."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    cfg = load_config(str(ROOT / "configs" / "two_clearances.yaml"))
+    npolar, nazim = cfg.wear.map
+    level = cfg.solver.max_substep_level
+    sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
+    every = gpu.case_bytes(cfg.wear.map, level, sections)
+    mine = gpu.config_bytes(cfg)
+    undo_saved = 2 * 4 * 2 * (1 << level)       # buf_i and buf_v: 4 columns, 2 joints' rows
+    assert every - mine == 8 * (2 * npolar * nazim + 2 * 3 * N_ANGLE_BINS + undo_saved)
+    assert mine < 0.52 * every
+    bearing = (False, False, True, False)         # the kernel's order: A, B, O, P
+    # ideal: one map row and one projection row (no zero-size arrays); the bearing: its row
+    # of nazim bins, its three projection rows, its undo rows
+    assert (gpu.case_bytes(cfg.wear.map, level, sections, bearing)
+            - gpu.case_bytes(cfg.wear.map, level, sections, (False,) * 4)
+            == 8 * ((nazim - nazim) + (3 - 1) * N_ANGLE_BINS))
+    # half of an 80 GB H100 holds a full launch of the largest capacity for the two-clearance
+    # case (before: 27,472 cases fitted, launched 16,384 at a time)
+    size, cap = gpu.batch_plan(100_000, int(40e9) // mine)
+    assert (size, cap) == (32_768, 32_768)
+
+
+@pytest.mark.parametrize("present", [tuple(bool(k >> j & 1) for j in range(4)) for k in range(16)])
+def test_joint_rows_keep_every_clearance_joints_rows_apart(present):
+    """gpu.joint_rows places each clearance joint's rows (the kernel's order A, B, O, P) at
+    r0 + j * dj, disjoint and within the array; the spherical pair A, B takes exactly two
+    maps and a lone joint exactly its own rows."""
+    from clearsweep import gpu
+
+    npolar = 6
+    rows = [gpu.MAP_ROWS[name](npolar) if c else 0 for name, c in zip(gpu.JOINT_NAMES, present)]
+    r0, dj, total = gpu.joint_rows(rows)
+    taken = np.zeros(total, dtype=int)
+    for j, r in enumerate(rows):
+        if r:
+            first = r0 + j * dj
+            assert 0 <= first and first + r <= total, (j, first, r, total)
+            taken[first:first + r] += 1
+    assert taken.max(initial=0) <= 1
+    if sum(1 for r in rows if r) <= 1:
+        assert total == max(1, max(rows))
+    if present == (True, True, False, False):
+        assert total == 2 * npolar
+
+
+SHARED_SCRIPT = r"""
+import sys
+import numpy as np
+from clearsweep.config import DEFAULTS, resolve_materials
+from clearsweep.params import pack
+from clearsweep import gpu
+
+base = DEFAULTS.replace(solver__duration=0.002, wear__map=[6, 12], wear__amplification=1000.0,
+                        metrics__settle_time=0.001, outputs__poincare_phase_deg=0.72,
+                        joints__A__clearance=2.5e-4)
+cfgs = [base.replace(joints__B__clearance=c) for c in (1.5e-4, 2.5e-4)]
+cfgs.append(base.replace(joints__B__clearance=2.0e-4, mechanism__speed_rpm=1500.0))
+packed = [pack(c, resolve_materials(c)) for c in cfgs]
+seen = []
+launch = gpu._run_on_device
+def spy(arrays, layout="aos"):
+    seen.append({k: np.array(arrays[k]) for k in ("p", "jp", "pcols", "geom", "wmap", "proj")})
+    return launch(arrays, layout)
+gpu._run_on_device = spy
+aos = gpu.run_packed(packed, layout="aos")
+soa = gpu.run_packed(packed, layout="soa")
+batch = seen[-1]
+rows = gpu.parameter_rows(packed)
+varying = np.flatnonzero((rows != rows[:1]).any(axis=0))
+# the per-case array holds the varying parameters alone; the shared row the rest
+assert np.array_equal(np.flatnonzero(batch["pcols"] >= 0), varying), (batch["pcols"], varying)
+assert batch["p"].shape[0] == varying.size < 10, batch["p"].shape
+shared = batch["pcols"] < 0
+assert np.array_equal(batch["jp"][shared], rows[0][shared])
+# the maps hold A's and B's rows alone: two maps of 6 rows
+assert batch["wmap"].shape[0] == 12 and batch["proj"].shape[0] == 6, batch["geom"]
+for k, (a, b) in enumerate(zip(aos, soa)):
+    assert a.status == b.status == "ok", (k, a.status, b.status)
+    for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+        x, y = np.asarray(getattr(a, name)), np.asarray(getattr(b, name))
+        assert x.shape == y.shape and np.array_equal(x, y, equal_nan=True), (k, name)
+    assert (a.residual_max, a.ke_peak, a.rk4_steps) == (b.residual_max, b.ke_peak, b.rk4_steps), k
+assert float(soa[2].wvol.sum()) > 0.0
+print("shared", int(shared.sum()), "of", shared.size, "parameters; per case", varying.size)
+"""
+
+
+@pytest.mark.slow
+def test_shared_parameters_are_read_from_the_batchs_one_row():
+    """Parameters equal across a batch travel once, in its shared row; the per-case array
+    holds the others alone (B's clearance and the crank speed here, and what they set), so
+    the kernel can only have read the shared ones from that row: the results are the
+    case-by-case layout's to the bit in the simulator."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", SHARED_SCRIPT], capture_output=True,
+                          text=True, env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    assert "shared" in proc.stdout
+
+
+MIXED = {
+    "name": "gpu_mixed", "store": "summary",
+    "base": {"joints": {"B": {"clearance": 2.5e-4}},
+             "wear": {"map": [6, 12], "amplification": 1000.0},
+             "metrics": {"settle_time": 0.001},
+             "solver": {"duration": 0.002},
+             "ensemble": {"members": 2, "seed": 3,
+                          "perturb": {"crank_phase_deg": 5.0, "wear_coefficient_cv": 0.2}}},
+    "sweep": {"grid": {"joints.O.clearance": [0.0, 2.5e-4]}},
+}
+
+MIXED_SCRIPT = r"""
+import json, sys
+import numpy as np
+from clearsweep.core import device
+from clearsweep.sweeping import run_sweep
+
+launches = []
+launch = device.launch
+def counted(arrays, layout="aos"):
+    launches.append((int(arrays["n_steps"].shape[0]), layout, [int(g) for g in np.array(arrays["geom"])]))
+    return launch(arrays, layout)
+device.launch = counted
+run_sweep(json.loads(sys.argv[1]), sys.argv[2], backend="cuda", progress=False)
+print(json.dumps(launches))
+"""
+
+
+@pytest.mark.slow
+def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
+    """Two sweep cases (the bearing O ideal and with clearance) of two ensemble members each
+    run as one launch of four cases in the simulator: members and cases of other clearance
+    joints share it (the maps hold B's and O's rows), and every summary agrees with the CPU
+    backend's within the simulator's tolerance."""
+    from clearsweep.summary import SUMMARY_ORDER
+    from clearsweep.sweeping import run_sweep
+
+    out = tmp_path / "mixed.nc"
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", MIXED_SCRIPT, json.dumps(MIXED), str(out)],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    launches = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert [(n, layout) for n, layout, _ in launches] == [(4, "soa")]
+    cpu = run_sweep(MIXED, workers=1, progress=False)
+    with xr.open_dataset(out) as gpu:
+        gpu = gpu.load()
+    assert gpu.sizes["member"] == 2 and gpu.sizes["O_clearance"] == 2
+    assert float(gpu["wear_volume"].sel(joint="O").isel(O_clearance=1).min()) > 0.0
+    for name in SUMMARY_ORDER:
+        if name in ("wall_time", "status") or name not in cpu:
+            continue
+        if cpu[name].dtype.kind in "USO":       # a class name (motion_class): the same words
+            assert [str(v) for v in np.ravel(gpu[name].values)] == \
+                [str(v) for v in np.ravel(cpu[name].values)], name
+            continue
+        a = np.asarray(cpu[name].values, dtype=float)
+        b = np.asarray(gpu[name].values, dtype=float)
+        np.testing.assert_allclose(b, a, rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True,
+                                   err_msg=name)

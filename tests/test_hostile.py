@@ -81,7 +81,9 @@ def files(tmp_path_factory):
                  ["sweep", speed_sweep(d), "--no-progress", "--workers", "1", "-q",
                   "-o", d / "bif.nc"],
                  ["sweep", unlabelled_zip(d), "--no-progress", "--workers", "1", "-q",
-                  "-o", d / "zip.nc"]):
+                  "-o", d / "zip.nc"],
+                 ["sweep", clearance_sweep(d), "--no-progress", "--workers", "1", "-q",
+                  "-o", d / "clr.nc"]):
         result = CliRunner().invoke(main, [str(a) for a in argv])
         assert result.exit_code == 0, result.output
     saltelli_file(d / "samp.nc")
@@ -121,6 +123,14 @@ def unlabelled_zip(tmp: Path) -> Path:
     path.write_text("name: zip\nstore: summary\nbase: {joints: {B: {clearance: 2.5e-4}}, "
                     "wear: {map: [6, 12]}}\nsweep: {zip: [{name: g, mechanism.speed_rpm: "
                     "[300.0, 600.0], solver.revolutions: [0.01, 0.02]}]}\n")
+    return path
+
+
+def clearance_sweep(tmp: Path) -> Path:
+    """B's clearance at 0.1 and 0.25 mm, 2 ms a case: a swept coordinate in m."""
+    path = tmp / "clr.yaml"
+    path.write_text("name: clr\nstore: summary\nbase: {solver: {duration: 0.002}, "
+                    "wear: {map: [6, 12]}}\nsweep: {grid: {joints.B.clearance: [1.0e-4, 2.5e-4]}}\n")
     return path
 
 
@@ -1525,6 +1535,27 @@ ROUND5_LAYERS = [
      "PTFE.friction_coefficient.value: got 10"),
 ]
 ROWS += ROUND5_LAYERS
+
+#: --select and --reference take a value with a unit of its quantity (issue 45 item 6): one
+#: that is not is refused naming the key and the units it takes.
+SELECT_UNITS = [
+    ("plot --select a clearance in furlongs (was: \"unknown value for B_clearance "
+     "'0.25furlong'\", no word of units)",
+     lambda t, f: ["plot", f / "clr.nc", "--kind", "sweep", "--select", "B_clearance=0.25furlong",
+                   "-o", t / "out.png"], 2,
+     "unknown unit 'furlong' in B_clearance=0.25furlong (its values are in m: give a "
+     "number in m, or one of m, mm, um"),
+    ("report --reference a clearance in seconds (was: \"unknown value for B_clearance "
+     "'0.1 s'\")",
+     lambda t, f: ["report", f / "clr.nc", "--reference", "B_clearance=0.1 s"], 2,
+     "unknown unit 's' in B_clearance=0.1 s"),
+    ("plot --select a clearance given in mm that is not swept (was: the values in m only)",
+     lambda t, f: ["plot", f / "clr.nc", "--kind", "slider", "--select", "B_clearance=0.2mm",
+                   "-o", t / "out.png"], 2,
+     "unknown value for B_clearance '0.2mm'; choose from: 0.0001, 0.00025 (in m, or with a "
+     "unit: m, mm, um"),
+]
+ROWS += SELECT_UNITS
 
 
 @pytest.fixture

@@ -49,7 +49,9 @@ def test_every_joint_type_module_is_registered():
 def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, module_name):
     module = importlib.import_module(f"clearsweep.core.{module_name}")
     assert module.JOINT_TYPE == type_name
-    missing = [f for f in joints.PROVIDES if not compiled_here(module, f)]
+    wear = getattr(module, "WEAR_SURFACE", None)
+    assert wear, f"core/{module_name}.py does not name its wear surface's functions (WEAR_SURFACE)"
+    missing = [f for f in (*joints.PROVIDES, *wear) if not compiled_here(module, f)]
     assert not missing, f"core/{module_name}.py does not compile {missing}"
     arch = (ROOT / "docs" / "architecture.md").read_text()
     assert f"`{module_name}.py`" in arch and f"`{type_name}`" in arch, (

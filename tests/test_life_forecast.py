@@ -65,6 +65,20 @@ def test_the_reliability_example_is_expected_in_a_fraction_of_its_bound(monkeypa
     assert _seconds(result.output, "expected about") < 0.1 * _seconds(result.output, "at most about")
 
 
+def test_the_joint_with_the_smallest_allowance_sets_the_pace():
+    """configs/reliability_joints.yaml: 40 um of wear at jumps of 2 % of each joint's
+    clearance. A's and B's 0.25 mm allow 5 um a jump (9 blocks); O's and P's 0.1 mm 2 um,
+    and either can cut every jump: 21 blocks (its members ran about 24, issue 45)."""
+    from clearsweep.schema import read_yaml
+
+    cfg = load_config(read_yaml(ROOT / "configs" / "reliability_joints.yaml")["base"])
+    assert forecast_blocks(cfg, every_limit=True).blocks == 21
+    only_b = load_config(read_yaml(ROOT / "configs" / "reliability_joints.yaml")["base"],
+                         ["joints.O.clearance=0", "joints.A.clearance=0",
+                          "joints.P.clearance_y=0", "joints.P.clearance_z=0"])
+    assert forecast_blocks(only_b, every_limit=True).blocks == 9
+
+
 @pytest.mark.parametrize("extra, limit", [
     ([], "clearance_growth"),
     (["joints.B.coating=MoS2", "joints.B.coating_thickness=5e-5",

@@ -14,6 +14,7 @@ from clearsweep.analysis import case_summary
 from clearsweep.motion import (
     HIGH_ORDER,
     PERIOD_NONE,
+    PERIOD_RTOL,
     PERIOD_UNKNOWN,
     ZERO_ONE_MIN_SAMPLES,
     detect_period,
@@ -248,3 +249,50 @@ def test_the_poincare_samples_of_the_ideal_mechanism_are_one_point_period_one():
     a = ds["poincare_slider_acc"].values
     a = a[np.isfinite(a)]
     assert np.ptp(a[1:]) <= 1e-6 * np.abs(a).max()
+
+
+def decaying_spiral(n: int, skip: int = 0, rate: float = 0.995, amplitude: float = 0.1) -> np.ndarray:
+    """Poincaré samples (n, 2) of a slowly decaying spiral around the fixed point (1.0, 0.5):
+    each revolution turns a third of a turn (plus a little) and keeps ``rate`` of the
+    distance, from ``amplitude`` at revolution 0; the samples from revolution ``skip`` on."""
+    k = np.arange(skip, skip + n)
+    turn = 2.0 * np.pi / 3.0 + 0.01
+    radius = amplitude * rate ** k
+    return np.stack([1.0 + radius * np.cos(turn * k), 0.5 + radius * np.sin(turn * k)], axis=1)
+
+
+def test_a_slowly_decaying_spiral_is_not_period_three_until_it_has_settled():
+    """Issue 45 item 8: at 93 r/min a slowly decaying spiral read as period 3 (every point
+    within 1 % of the one 3 revolutions before), and as period 1 after 1,000 revolutions.
+    Over the window each of its three points drifts by 40 % of its amplitude: no period;
+    once it has decayed below the tolerance, period 1."""
+    early = decaying_spiral(101, skip=10)
+    # what the old rule read: each point within the tolerance of the one 3 revolutions before
+    assert (np.abs(early[3:] - early[:-3]) <= PERIOD_RTOL).all()
+    assert detect_period(early, scale=1.0) == PERIOD_NONE
+    late = decaying_spiral(101, skip=1000)
+    assert detect_period(late, scale=1.0) == 1
+
+
+def test_a_spiral_that_converges_within_the_tolerance_is_not_period_three():
+    """The 93 r/min case (B at 0.25 mm): a spiral turning about a third of a turn a revolution
+    and keeping 0.87 of its distance (the exponent measured there, -0.14 a revolution),
+    from 0.8 % of the scale. Each of its three phases stays within the 1 % tolerance over
+    the window, but they converge on one point: not three distinct points. Period 1 once
+    it has settled."""
+    spiral = decaying_spiral(101, rate=0.87, amplitude=0.008)
+    # each phase within the tolerance over the whole window, the samples together not
+    assert all((np.ptp(spiral[r::3], axis=0) <= PERIOD_RTOL).all() for r in range(3))
+    assert np.ptp(spiral, axis=0).max() > PERIOD_RTOL
+    assert detect_period(spiral, scale=1.0) == PERIOD_NONE
+    assert detect_period(decaying_spiral(101, skip=100, rate=0.87, amplitude=0.008),
+                         scale=1.0) == 1
+
+
+def test_a_period_is_its_points_spread_over_the_whole_window():
+    """A period-2 orbit whose two points creep by 0.3 % of the scale a revolution: within the
+    tolerance of the point 2 revolutions before, but 30 % apart over 100 revolutions."""
+    k = np.arange(100)
+    creeping = (-1.0) ** k + 3e-3 * k
+    assert detect_period(creeping, scale=1.0) == PERIOD_NONE
+    assert detect_period(creeping[:4], scale=1.0) == 2

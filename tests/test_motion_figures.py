@@ -183,7 +183,9 @@ def test_the_report_of_a_run_prints_its_period_and_leaves_out_what_it_lacks(tmp_
     lines = result.stdout.splitlines()
     at = lines.index("Motion: spectrum and periodicity (settled = t >= 0.05 s)")
     assert "Period in revolutions (0: none, -1: n/a) [1]" in lines[at + 2]
-    assert lines[at + 3].split() == ["2"]
+    # the period, and the class the indicators give (no exponent: the period speaks)
+    assert "Motion class" in lines[at + 2]
+    assert lines[at + 3].split() == ["2", "periodic"]
     # 0.2 s at one revolution a second: no spectrum, and 30 samples: no 0-1 test; not printed
     assert "Dominant order" not in result.stdout and "0-1 test K" not in result.stdout
 

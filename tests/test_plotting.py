@@ -81,9 +81,9 @@ def test_every_kind_renders_from_a_sweep(tmp_path, sweep_ds, kind):
 
 def test_slider_overlays_cases_with_coordinate_legends(tmp_path, sweep_ds):
     fig = plot(sweep_ds, "slider", tmp_path / "s.png", x="time", dpi=TEST_DPI)
-    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert legend == ["B_coating=none, B_clearance=0.0001", "B_coating=none, B_clearance=0.00025",
-                      "B_coating=PTFE, B_clearance=0.0001", "B_coating=PTFE, B_clearance=0.00025"]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert legend == ["B_coating=none, B_clearance=0.1 mm", "B_coating=none, B_clearance=0.25 mm",
+                      "B_coating=PTFE, B_clearance=0.1 mm", "B_coating=PTFE, B_clearance=0.25 mm"]
     assert fig.axes[-1].get_xlabel() == "time [s]"
     assert fig.axes[0].get_ylabel() == "slider position x_B [mm]"
 
@@ -102,7 +102,9 @@ def test_sweep_heatmap_and_lines(tmp_path, sweep_ds):
     assert "not drawn: joint A, axis z, all 0 or missing" in heat.get_suptitle()
     line = plot(sweep_ds, "sweep", tmp_path / "l.png", ["B_coating=PTFE"], dpi=TEST_DPI)
     ax = line.axes[0]
-    assert ax.get_xlabel() == "radial clearance of B [m]"
+    # a clearance in mm, as in every figure's legends and titles (issue 45 item 6)
+    assert ax.get_xlabel() == "radial clearance of B [mm]"
+    np.testing.assert_allclose(ax.get_lines()[0].get_xdata(), [0.1, 0.25])
     np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), [syn.SWEEP_ACC_LEVEL["PTFE"]] * 2)
 
 
@@ -117,8 +119,8 @@ def test_sweep_plot_from_summary_only_dataset(tmp_path, sweep_ds):
 def test_orbit_circle_uses_the_swept_clearance(tmp_path, sweep_ds):
     fig = plot(sweep_ds, "orbit", tmp_path / "o.png", ["B_coating=none"], dpi=TEST_DPI)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert "joint B clearance 100 µm (swept)" in legend
-    assert "joint B clearance 250 µm (swept)" in legend
+    assert "joint B clearance 0.1 mm (swept)" in legend
+    assert "joint B clearance 0.25 mm (swept)" in legend
 
 
 def test_one_case_kinds_refuse_several_cases(tmp_path, sweep_ds):
@@ -209,7 +211,7 @@ def test_short_simulation_renders_every_kind_and_reports(tmp_path):
             assert_rendered(tmp_path / f"{kind}.png", fig)
         orbit = plot(full, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
         legend = [t.get_text() for t in orbit.legends[0].get_texts()]
-        assert "joint B clearance 250 µm (config)" in legend  # the base case of sweep_config
+        assert "joint B clearance 0.25 mm (config)" in legend  # the base case of sweep_config
     for path in paths.values():
         for args in ([], ["--reference", "B_coating=none"], ["--metric", "normal_force_peak"]):
             result = CliRunner().invoke(report_command, [str(path), "--format", "json", *args])
@@ -262,7 +264,7 @@ def test_many_overlaid_cases_get_a_note_instead_of_a_legend(tmp_path, case):
         assert not any(e.startswith("rep=") for e in entries), (kind, entries)
         assert "13 cases overlaid" in fig.get_suptitle() and "--select" in fig.get_suptitle()
     few = plot(many.isel(rep=slice(0, 3)), "slider", tmp_path / "few.png", dpi=TEST_DPI)
-    assert len(few.axes[0].get_legend().get_texts()) == 3 and "overlaid" not in few.get_suptitle()
+    assert len(few.legends[0].get_texts()) == 3 and "overlaid" not in few.get_suptitle()
 
 
 def test_heat_map_marks_failed_cases(tmp_path, sweep_ds):

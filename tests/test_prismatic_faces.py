@@ -216,6 +216,53 @@ def test_a_run_with_impacts_on_the_walls_keeps_its_energy():
     assert res[5e-6] < res[1e-5] / 4.0
 
 
+def test_the_corners_stiff_rate_against_a_flat_faces_modes():
+    """A block lying flat, 2 nm into the +y wall, at rest: the stiff rate the joint reports
+    (D_PRATE: each corner's bound k_l L / 2 at the block's mobility there, docs/physics.md
+    3.7) against the face's own modes, its two edge lines (each k_l L, at z = +-h) on the
+    block of mass m4 and inertia J4: translation onto the wall sqrt(2 k_l L / m4), roll about
+    the guide's axis sqrt(2 k_l L h^2 / J4x), yaw sqrt(k_l L^3 / (6 J4z)). The corner's
+    bound covers the translation (the realistic block's corner mobility is 6.5 / m4: 1.27
+    times its rate, not the half a corner's k_l L / 2 at 1 / m4 would give) and the yaw, and
+    stays within 10 % of the roll (0.906 of it). A bound four times stiffer (the face's
+    2 k_l L at the corner) lowers a centred start's energy residual exactly as
+    solver.stability_limit 0.5 does, at the same cost (below)."""
+    pk, model = elastic_model()
+    jp, p = pk.jp, pk.p
+    kll = line_stiffness(jp, 1) * jp[P, L.J_LENGTH]          # k_l L of one edge line
+    h = 0.5 * jp[P, L.J_HEIGHT]
+    length = jp[P, L.J_LENGTH]
+    dg = np.zeros(L.N_D)
+    prismatic.contact(P, model, rolled(pk, 0.0, 2e-9), True, dg)
+    rate = dg[L.D_PRATE]
+    translation = math.sqrt(2.0 * kll / p[L.P_M4])
+    roll = math.sqrt(2.0 * kll * h * h / p[L.P_J4])
+    yaw = math.sqrt(kll * length * length / (6.0 * p[L.P_J4 + 2]))
+    assert rate >= translation * 1.2
+    assert rate >= yaw
+    assert rate >= 0.9 * roll
+
+
+def test_a_halved_stability_limit_brings_a_centred_starts_residual_to_1e_5():
+    """The centred start of test_a_run_with_impacts_on_the_walls_keeps_its_energy at
+    dt = 1e-5 s: its residual (8.3e-5) is RK4's error on the faces' stiff rate at
+    rate x h <= 1, and solver.stability_limit 0.5 (one more sub-step level wherever a wall
+    is touched) brings it below 1e-5 (measured 5.2e-6 with 1.84 times the RK4 steps;
+    a corner bound of the face's 2 k_l L gave 5.2e-6 with 1.88 times, and on a seated
+    block in the reliability example's design 2.0 times the steps for a residual already
+    at 2e-8: docs/physics.md 3.7)."""
+    out = {}
+    for limit in (1.0, 0.5):
+        _, _, _, ds = run_case([*guide(1e-4), "joints.B.clearance=2.5e-4",
+                                "initial.joints=centred", "solver.duration=0.1",
+                                "solver.dt=1e-5", f"solver.stability_limit={limit}"])
+        assert str(ds.status.values) == "ok"
+        out[limit] = (float(ds.energy_residual_relative), int(ds.rk4_steps))
+    assert out[1.0][0] > 2e-5
+    assert out[0.5][0] < 1e-5
+    assert out[0.5][1] < 2.0 * out[1.0][1]
+
+
 # ---------------------------------------------------------------------------
 # 4. the walls' depth and the map's resolution
 # ---------------------------------------------------------------------------

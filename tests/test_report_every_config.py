@@ -430,4 +430,39 @@ def test_a_zip_group_case_chosen_by_its_label_is_titled_with_the_values_it_ran(s
     title = " ".join(figure(ds, "wear-map", ["clearance_joints=AB", "coating_joints=B"])
                      .get_suptitle().split())
     assert "coating_joints=B (A_coating none, B_coating PTFE)" in title
-    assert "clearance_joints=AB (A_clearance 0.00025 m, B_clearance 0.00025 m)" in title
+    assert "clearance_joints=AB (A_clearance 0.25 mm, B_clearance 0.25 mm)" in title
+
+
+# --------------------------------------------------------------------------- issue 45 item 6
+
+def _drawn_figures(ds: xr.Dataset, name: str):
+    """(kind, figure) of every figure the short results of shipped config ``name`` draw
+    (:data:`FIGURES`), the reliability figure with and without ``--b10``."""
+    from clearsweep.plotting import figure
+
+    for kind, args in FIGURES[name](ds).items():
+        options = dict(zip(args[::2], args[1::2]))
+        selects = [b for a, b in zip(args[::2], args[1::2]) if a == "--select"]
+        for b10 in ((False, True) if kind == "reliability" else (False,)):
+            yield (f"{kind}{' --b10' if b10 else ''}",
+                   figure(ds, kind, selects or None, x=options.get("--x"),
+                          metric=options.get("--metric"), b10=b10))
+
+
+@pytest.mark.slow      # every figure of 18 files at 100 dpi, drawn twice: about 2 min on two cores
+@pytest.mark.parametrize("name", sorted(FIGURES))
+def test_no_legend_of_a_shipped_configs_figure_covers_its_data(shipped, name):
+    """A legend's box, drawn, against the lines, markers, bars, error bars and scatter points
+    of every panel it lies over (tests/test_figure_layout.py, ``legends_over_data``), and
+    every text inside the figure and apart (``layout_problems``), in every figure the shipped
+    config's short results draw. Before: the case legends of the slider, forces and spectrum
+    figures of coating_clearance, contact_laws, paper and revolute_clearance covered their
+    lines (a gallery legend covered PTFE's error bars, issue 45); their wear-polar legend ran
+    off the figure's sides, and a life figure's axis label into its title."""
+    from test_figure_layout import layout_problems, legends_over_data
+
+    with xr.open_dataset(shipped[name]) as ds:
+        ds = ds.load()
+    problems = {kind: found for kind, fig in _drawn_figures(ds, name)
+                if (found := legends_over_data(fig) + layout_problems(fig))}
+    assert not problems, problems

@@ -20,7 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def main_job(tmp_path_factory) -> Path:
-    """The main job's sweep file (configs/coating_clearance.yaml), shortened to 0.02 s per
+    """The main job's sweep file (configs/coating_clearance.yaml), its settled window from
+    0.05 s (not its first revolution), shortened to 0.02 s per
     case and two of its six clearances: 16 cases, run through the CLI."""
     folder = tmp_path_factory.mktemp("main_job")
     text = (ROOT / "configs" / "coating_clearance.yaml").read_text()
@@ -30,7 +31,8 @@ def main_job(tmp_path_factory) -> Path:
     sweep.write_text(text)
     out = folder / "coating_clearance.nc"
     result = CliRunner().invoke(main, ["sweep", str(sweep), "-o", str(out), "--workers", "1",
-                                       "--no-progress", "--set", "solver.duration=0.02"])
+                                       "--no-progress", "--set", "solver.duration=0.02",
+                                       "--set", "metrics.settle_time=0.05"])
     assert result.exit_code == 0, result.stderr
     return out
 
@@ -185,3 +187,59 @@ def test_a_sweeps_report_counts_its_designs_with_a_short_settled_window(main_job
     warning = [ln for ln in result.stderr.splitlines() if "warning" in ln]
     assert len(warning) == 1 and "the settled window holds less than one crank revolution in " \
         "16 of 16 designs (fewest: 0 crank revolutions, t >= 0.05 s, at " in warning[0], warning
+
+
+# ------------------------------------------------------- what drives the differences (issue 45, item 4)
+
+def _drivers(sources: list[str], forces: list[float]) -> str:
+    """drivers_line of four designs (B_clearance) whose peak force sources and peak contact
+    forces at B are given; A ideal (no force)."""
+    from clearsweep.analysis.text import drivers_line
+
+    dims = ("B_clearance",)
+    coords = {"B_clearance": [5e-5, 2.5e-4, 5e-4, 1e-3], "joint": ["A", "B"]}
+    force = np.array([[np.nan, f] for f in forces])
+    summary = xr.Dataset({"peak_force_source": (dims, np.array(sources)),
+                          "normal_force_peak_settled": (("B_clearance", "joint"), force)},
+                         coords=coords)
+    usable = xr.DataArray(np.ones(4, bool), dims=dims, coords={"B_clearance": coords["B_clearance"]})
+    line = drivers_line(summary, summary, usable, dims)
+    assert line is not None
+    return line
+
+
+def test_impacts_drive_the_differences_where_the_highest_peak_is_an_impacts():
+    line = _drivers(["quasi-static", "quasi-static", "impacts (B)", "impacts (A, B)"],
+                    [50.0, 60.0, 300.0, 1775.0])
+    assert line.startswith("What drives the differences between designs: impacts. 2 of 4 designs "
+                           "impact (joints A, B)"), line
+    assert "1775 N at B_clearance=0.001" in line and "50-60 N" in line
+
+
+def test_friction_drives_them_where_the_highest_peak_is_an_oscillations():
+    """The main job at 60 r/min before: no impact, PTFE at 0.05 mm oscillating at 115.5 N."""
+    line = _drivers(["in-contact oscillation (B)", "quasi-static", "quasi-static", "quasi-static"],
+                    [115.5, 11.9, 12.1, 12.7])
+    assert line.startswith("What drives the differences between designs: friction."), line
+    assert "no design impacts" in line and "115.5 N at B_clearance=5e-05" in line
+
+
+def test_nothing_beyond_the_spread_where_every_design_is_quasi_static():
+    line = _drivers(["quasi-static"] * 4, [11.86, 12.0, 12.4, 12.7])
+    assert line.startswith("What drives the differences between designs: nothing beyond the "
+                           "spread."), line
+    assert "11.86-12.7 N (7.1 % apart)" in line
+
+
+def test_an_impact_below_a_quasi_static_peak_does_not_drive_them():
+    """A design that impacts softly while another carries a larger load: the load decides."""
+    line = _drivers(["impacts (B)", "quasi-static", "quasi-static", "quasi-static"],
+                    [20.0, 11.0, 12.0, 30.0])
+    assert "nothing beyond the spread" in line and "1 of 4 designs impact, below it" in line
+
+
+def test_the_main_jobs_report_says_what_drives_it(main_job):
+    """The shortened main job (0.02 s from the seated start): no impact, no oscillation."""
+    text = report(main_job)
+    (line,) = [x for x in text.splitlines() if x.startswith("What drives the differences")]
+    assert line.endswith("nothing beyond the spread. The highest peak contact"), line

@@ -196,7 +196,9 @@ def test_skip_rules_and_shipped_configs():
     main = expand(ROOT / "configs" / "coating_clearance.yaml")
     assert main.dims == {"B_coating": 4, "B_clearance": 6, "clearance_joints": 2}
     assert len(main.runnable()) == 48
-    assert all(c.config.solver.duration == 1.0 for c in main.cases)
+    # 6 crank revolutions at 150 r/min, the first one settling
+    assert all(c.config.solver.duration == pytest.approx(2.4) for c in main.cases)
+    assert all(c.config.metrics.settle_time == pytest.approx(0.4) for c in main.cases)
 
 
 # ---------------------------------------------------------------------------- running

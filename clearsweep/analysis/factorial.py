@@ -13,8 +13,26 @@ other factors and any further axis, such as the speed) every cell counts once:
   alone (0: the effects add).
 
 With an ensemble (a ``member`` dimension) each is formed member by member (every design's
-member k draws the same perturbation) and given with the 95 % t interval of the members'
-values; without one, the value alone.
+member k draws the same perturbation). Its 95 % interval is value +- h with
+
+    h = sqrt(h_m^2 + h_r^2),
+    h_m = t(0.975, n - 1) s / sqrt(n)          (the members' spread: start phase, wear scatter)
+    h_r = sqrt(mean over members of d_k^2)     (the run's length and settling)
+
+where s is the standard deviation of the n members' contrasts and d_k is member k's contrast
+of the metric's drift (``RUN_LENGTH``: for the settled RMS, ``slider_acceleration_rms_settled_drift``,
+the RMS over the second half of the settled window minus that over its first half). h_r is
+two standard errors of a settled window's mean where the halves are independent samples of a
+steady motion (the whole window's mean has half the standard deviation of the halves'
+difference), and bounds the bias of a contrast still settling where its transient falls by at
+least 3x from one half to the next. A metric without a drift twin (the worn volume, which
+grows with the run by construction) has h = h_m; without members, h = h_r where the drift is
+there, else no interval. A drift that is NaN (a settled window under 2 revolutions: no two
+whole halves) leaves the effect without an interval: its run-length uncertainty is unknown.
+
+Averaged over a further axis (the speed), an effect whose values at that axis's settings
+have opposite signs is also given at each setting (:func:`sign_changes`): the average of a
+sign change is not an effect of either setting.
 """
 
 from __future__ import annotations
@@ -34,6 +52,9 @@ ROUNDING = 1e-12
 #: What the report reads: the slider's vibration, and each joint's wear.
 VIBRATION = ("slider_acceleration_rms_settled", "slider RMS acceleration, settled")
 WEAR = ("wear_volume", "worn volume")
+#: Metric -> its drift between the settled window's halves (``summary.DRIFT_VARIABLES``):
+#: the run-length term h_r of the metric's intervals.
+RUN_LENGTH = {"slider_acceleration_rms_settled": "slider_acceleration_rms_settled_drift"}
 
 
 def clearance_factors(ds: xr.Dataset) -> dict[str, tuple[str, int, int]]:
@@ -68,20 +89,14 @@ def _values(ds: xr.Dataset, name: str, joint: str | None) -> xr.DataArray:
     return values
 
 
-def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tuple[int, int]],
-             factors: dict[str, tuple[str, int, int]], where: dict[str, int] | None = None):
-    """The contrast of metric ``name`` over the factors in ``terms`` (joint -> (+1 index,
-    -1 index); the sign of a cell is the product of its terms': a main effect has one term,
-    an interaction two), averaged over every cell of the other design dimensions but those
-    fixed by ``where`` (dim -> index) and over the cells where every value is finite.
-
-    An ensemble's members draw the same perturbation in every design (``params.
-    member_perturbation``: the seed and the member number alone), so the contrast is formed
-    member by member and its 95 % t interval is that of the members' contrasts (paired:
-    the scatter common to the designs cancels). Returns (value, low, high), NaN bounds
-    without members, or None where no cell has values."""
-    from scipy import stats
-
+def member_contrasts(ds: xr.Dataset, name: str, joint: str | None,
+                     terms: dict[str, tuple[int, int]], factors: dict[str, tuple[str, int, int]],
+                     where: dict[str, int] | None = None) -> np.ndarray | None:
+    """Each member's contrast of metric ``name`` over the factors in ``terms`` (joint -> (+1
+    index, -1 index); the sign of a cell is the product of its terms': a main effect has one
+    term, an interaction two), averaged over every cell of the other design dimensions but
+    those fixed by ``where`` (dim -> index) and over the cells where every value is finite;
+    one value without members, None where no cell has values."""
     values = _values(ds, name, joint)
     where = dict(where or {})
     term_dims = [factors[j][0] for j in terms]
@@ -107,12 +122,87 @@ def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tupl
     # what is left of terms that cancel, rounding of the metric's size: 0
     size = float(np.nanmax(np.abs(values.values))) if np.isfinite(values.values).any() else 0.0
     per_member[np.abs(per_member) <= ROUNDING * size] = 0.0
-    value = float(per_member.mean())
-    n = per_member.size
-    if not is_ensemble(ds) or n < 2:
-        return value, float("nan"), float("nan")
-    half = float(stats.t.ppf(0.975, n - 1)) * float(per_member.std(ddof=1)) / np.sqrt(n)
+    return per_member
+
+
+def half_widths(contrasts: np.ndarray, drifts: np.ndarray | None) -> tuple[float, float]:
+    """(h_m, h_r) of the module's interval from the members' contrasts and their drifts'
+    contrasts (None: the metric has no drift twin, h_r = 0): h_m NaN for fewer than 2
+    members; h_r NaN where a drift is not finite."""
+    from scipy import stats
+
+    n = contrasts.size
+    member = (float(stats.t.ppf(0.975, n - 1) * contrasts.std(ddof=1) / np.sqrt(n))
+              if n >= 2 else float("nan"))
+    run = 0.0 if drifts is None else float(np.sqrt(np.mean(np.square(drifts))))
+    return member, run
+
+
+def interval(value: float, member: float, run: float) -> tuple[float, float, float]:
+    """(value, low, high) of half-width sqrt(member^2 + run^2); a NaN member term (no
+    members) leaves the run term alone, or no interval without one."""
+    if not np.isfinite(member):
+        if not run > 0.0:
+            return value, float("nan"), float("nan")
+        member = 0.0
+    half = float(np.hypot(member, run))
     return value, value - half, value + half
+
+
+def contrast_parts(ds: xr.Dataset, name: str, joint: str | None,
+                   terms: dict[str, tuple[int, int]], factors: dict[str, tuple[str, int, int]],
+                   where: dict[str, int] | None = None):
+    """(value, h_m, h_r) of the contrast (:func:`member_contrasts`), or None where no cell
+    has values; h_m NaN without members."""
+    per_member = member_contrasts(ds, name, joint, terms, factors, where)
+    if per_member is None:
+        return None
+    drifts = None
+    if name in RUN_LENGTH and RUN_LENGTH[name] in ds:
+        drifts = member_contrasts(ds, RUN_LENGTH[name], joint, terms, factors, where)
+        if drifts is None or drifts.size != per_member.size:
+            drifts = np.full(per_member.size, np.nan)
+    member, run = half_widths(per_member, drifts)
+    if not is_ensemble(ds):
+        member = float("nan")
+    return float(per_member.mean()), member, run
+
+
+def contrast(ds: xr.Dataset, name: str, joint: str | None, terms: dict[str, tuple[int, int]],
+             factors: dict[str, tuple[str, int, int]], where: dict[str, int] | None = None):
+    """The contrast of metric ``name`` over the factors in ``terms`` (:func:`member_contrasts`)
+    with its 95 % interval: an ensemble's members draw the same perturbation in every design
+    (``params.member_perturbation``: the seed and the member number alone), so the contrast
+    is formed member by member (paired: the scatter common to the designs cancels), and the
+    interval's half-width combines the members' spread with the run-length term (the module's
+    formula). Returns (value, low, high), NaN bounds without either term, or None where no
+    cell has values."""
+    parts = contrast_parts(ds, name, joint, terms, factors, where)
+    if parts is None:
+        return None
+    return interval(*parts)
+
+
+def sign_changes(ds: xr.Dataset, name: str, joint: str | None,
+                 terms: dict[str, tuple[int, int]], factors: dict[str, tuple[str, int, int]],
+                 where: dict[str, int] | None = None) -> dict[str, list[tuple[str, tuple]]]:
+    """For each design dimension that is no factor (the speed) and not fixed by ``where``:
+    the contrast at each of its settings (setting's text, (value, low, high)), where the
+    values have opposite signs (one above 0 and one below); dimensions without a sign
+    change are left out."""
+    where = dict(where or {})
+    factor_dims = {f[0] for f in factors.values()}
+    out = {}
+    for dim in design_dims(ds):
+        if dim in factor_dims or dim in where or ds.sizes[dim] < 2:
+            continue
+        found = [contrast(ds, name, joint, terms, factors, dict(where, **{dim: k}))
+                 for k in range(ds.sizes[dim])]
+        values = [f[0] for f in found if f is not None]
+        if any(v > 0.0 for v in values) and any(v < 0.0 for v in values):
+            coordinate = ds[dim].values
+            out[dim] = [(value_text(coordinate[k]), f) for k, f in enumerate(found) if f is not None]
+    return out
 
 
 def _effect_text(found: tuple[float, float, float], units: str) -> str:
@@ -150,6 +240,16 @@ def main_effects(ds: xr.Dataset, name: str, joint: str | None,
     return effects
 
 
+def _sign_change_lines(changes: dict[str, list[tuple[str, tuple]]], units: str,
+                      indent: str) -> list[str]:
+    """The lines giving a contrast at each setting of the dimensions where it changes sign."""
+    lines = []
+    for dim, found in changes.items():
+        lines.append(f"{indent}its sign changes with {dim}; at each:")
+        lines += [f"{indent}  {dim} {setting}: {_effect_text(f, units)}" for setting, f in found]
+    return lines
+
+
 def factorial_lines(ds: xr.Dataset) -> list[str]:
     """The report's section on a clearance factorial design (empty without two factors)."""
     factors = clearance_factors(ds)
@@ -159,8 +259,10 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
     rest = [d for d in design_dims(ds) if d not in {f[0] for f in factors.values()}]
     over = f" and over {', '.join(rest)}" if rest else ""
     ensemble = is_ensemble(ds)
+    source = "the members' spread" + (", and for the vibration the run's length (the settled "
+                                      "window's halves)" if RUN_LENGTH[VIBRATION[0]] in ds else "")
     head = (f"Clearance as a two-level design over joints {', '.join(names)}: effects averaged over "
-            f"the other joints' settings{over}" + (" (95 % intervals from the members)" if ensemble else "")
+            f"the other joints' settings{over}" + (f" (95 % intervals: {source})" if ensemble else "")
             + ":")
     lines = ["", *textwrap.wrap(head, width=100, subsequent_indent="  ")]
     for name, joint in metrics(ds, factors):
@@ -169,21 +271,27 @@ def factorial_lines(ds: xr.Dataset) -> list[str]:
         lines.append(f"  {label} [{units}]" + (f" (cases with clearance at {joint})" if joint else "")
                      + ":")
         effects = main_effects(ds, name, joint, factors)
-        lines += [f"    clearance at {j}: {_effect_text(found, units)}" for j, found in effects.items()]
+        where = {factors[joint][0]: factors[joint][2]} if joint else {}
+        for j, found in effects.items():
+            lines.append(f"    clearance at {j}: {_effect_text(found, units)}")
+            lines += _sign_change_lines(
+                sign_changes(ds, name, joint, {j: (factors[j][2], factors[j][1])}, factors, where),
+                units, "      ")
         standing = {k: v for k, v in effects.items() if distinguishable(v[1], v[2]) is not False}
         if standing:
             top = max(standing, key=lambda k: abs(standing[k][0]))
             lines.append(f"    largest effect: clearance at {top}")
         elif effects:
             lines.append("    no joint's clearance changes it beyond the members' spread")
-        where = {factors[joint][0]: factors[joint][2]} if joint else {}
         for a, b in itertools.combinations([j for j in names if j != joint], 2):
-            found = contrast(ds, name, joint, {a: (factors[a][2], factors[a][1]),
-                                               b: (factors[b][2], factors[b][1])}, factors, where)
+            terms = {a: (factors[a][2], factors[a][1]), b: (factors[b][2], factors[b][1])}
+            found = contrast(ds, name, joint, terms, factors, where)
             if found is None:
                 continue
             word = {True: "they do not add", False: "they add", None: ""}[distinguishable(*found[1:])]
             lines.append(f"    {a} and {b} together minus each alone: "
                          f"{_effect_text(found, units).replace(', within the spread', '')}"
                          + (f"; {word}" if word else ""))
+            lines += _sign_change_lines(sign_changes(ds, name, joint, terms, factors, where),
+                                        units, "      ")
     return lines

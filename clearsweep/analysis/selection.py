@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from typing import Any
 
@@ -116,24 +117,72 @@ def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
     return f"unknown {kind} {wanted!r}{hint}; choose from: {offer}"
 
 
+#: The units a ``--select`` value may carry, by its coordinate's SI ``units``: each unit's
+#: factor to the coordinate's. The figures write a clearance in mm and a speed in r/min
+#: (``plotting.common.QUANTITY_UNITS``): ``B_clearance=0.25mm`` and ``speed_rpm=60rpm`` name
+#: the values they show.
+SELECT_UNITS = {"m": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "nm": 1e-9},
+                "min-1": {"r/min": 1.0, "rpm": 1.0, "min-1": 1.0, "1/min": 1.0}}
+
+_NUMBER_AND_UNIT = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([^\d\s].*?)\s*")
+
+
+def coordinate_units(coord: xr.DataArray) -> str:
+    """The SI units of a coordinate's values (``units``; a swept ``speed_rpm`` without them is
+    in ``min-1``); "" where it has none."""
+    unit = str(coord.attrs.get("units", ""))
+    if unit in ("", "1") and str(coord.name).endswith("speed_rpm"):
+        return "min-1"
+    return "" if unit == "1" else unit
+
+
+def _number_in_units(coord: xr.DataArray, name: str, text: str) -> float | None:
+    """The number ``text`` gives in the units of ``coord``: a plain number, or a number with
+    a unit of :data:`SELECT_UNITS` (``0.25mm``, ``60 rpm``); None where ``text`` is not a
+    number.
+
+    Raises
+    ------
+    SelectionError
+        A number with a unit that is not one of the coordinate's quantity.
+    """
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    match = _NUMBER_AND_UNIT.fullmatch(text)
+    if match is None or coord.dtype.kind not in "fiu":
+        return None
+    number, unit = float(match.group(1)), match.group(2)
+    units = coordinate_units(coord)
+    accepted = SELECT_UNITS.get(units, {units: 1.0} if units else {})
+    if unit not in accepted:
+        offer = (f"its values are in {units}: give a number in {units}, or one of "
+                 f"{', '.join(accepted)}" if accepted else "its values have no unit: give a number")
+        raise SelectionError(f"unknown unit {unit!r} in {name}={text} ({offer})",
+                             name=name, value=text, choices=list(accepted))
+    return number * accepted[unit]
+
+
 def _match_value(coord: xr.DataArray, name: str, wanted) -> object:
-    """The value of ``coord`` that ``wanted`` (text or value) names: exact text or equal number."""
+    """The value of ``coord`` that ``wanted`` (text or value) names: exact text or equal
+    number, a number given with a unit of its quantity (:data:`SELECT_UNITS`) included."""
     candidates = list(dict.fromkeys(coord.values.ravel().tolist()))
     text = value_text(wanted).strip()
     for value in candidates:
         if value_text(value) == text or str(value) == text:
             return value
-    try:
-        number = float(text)
-    except ValueError:
-        number = None
+    number = _number_in_units(coord, name, text)
     if number is not None:
         for value in candidates:
             if (isinstance(value, (int, float)) and not isinstance(value, bool)
                     and math.isclose(float(value), number, rel_tol=1e-9, abs_tol=0.0)):
                 return value
-    raise SelectionError(choice_message(f"value for {name}", text, [value_text(v) for v in candidates]),
-                         name=name, value=text, choices=[value_text(v) for v in candidates])
+    units = coordinate_units(coord)
+    hint = (f" (in {units}, or with a unit: {', '.join(SELECT_UNITS[units])})"
+            if units in SELECT_UNITS else "")
+    raise SelectionError(choice_message(f"value for {name}", text, [value_text(v) for v in candidates])
+                         + hint, name=name, value=text, choices=[value_text(v) for v in candidates])
 
 
 def coordinate_for_key(obj: xr.Dataset | xr.DataArray, name: str) -> str:

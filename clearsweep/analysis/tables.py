@@ -104,6 +104,36 @@ def reduction_table(ds: xr.Dataset, reference: Mapping[str, object] | Iterable[s
     }, attrs={"reference": label_text(chosen)})
 
 
+#: The guide's walls as its map's bands hold them (``core.prismatic.WALLS``: rows 0 .. n/4 - 1
+#: the +y wall, then -y, +z and -z; docs/physics.md 5.7), and the name of each wall's column
+#: of the corners' track depth in reports.
+GUIDE_WALLS = ("+y", "-y", "+z", "-z")
+TRACK_DEPTH_COLUMNS = {wall: "track_depth_max_" + ("plus_" if wall[0] == "+" else "minus_") + wall[1]
+                       for wall in GUIDE_WALLS}
+
+
+def guide_track_depths(ds: xr.Dataset) -> dict[str, xr.DataArray]:
+    """The largest track depth [m] on each wall of every prismatic joint of ``ds`` (the
+    largest bin of the wall's band of ``wear_map``), by its column name
+    (:data:`TRACK_DEPTH_COLUMNS`), NaN for the other joints; {} where ``ds`` has no wear map
+    (a summary-only sweep) or no prismatic joint with a clearance."""
+    if "wear_map" not in ds or "joint" not in ds["wear_map"].dims:
+        return {}
+    wmap = ds["wear_map"]
+    ideal = ideal_joints(ds)
+    guide = xr.DataArray([JOINT_TYPES.get(value_text(j)) == "prismatic" and value_text(j) not in ideal
+                          for j in wmap["joint"].values], dims="joint", coords={"joint": wmap["joint"]})
+    if not bool(guide.any()) or wmap.sizes["polar"] < len(GUIDE_WALLS):
+        return {}
+    band = wmap.sizes["polar"] // len(GUIDE_WALLS)
+    out = {}
+    for w, wall in enumerate(GUIDE_WALLS):
+        depth = wmap.isel(polar=slice(w * band, (w + 1) * band)).max(("polar", "azimuth"))
+        out[TRACK_DEPTH_COLUMNS[wall]] = depth.where(guide).assign_attrs(
+            units="m", long_name=f"largest track depth on the guide's {wall} wall")
+    return out
+
+
 def report_summary(ds: xr.Dataset) -> xr.Dataset:
     """:func:`clearsweep.summary.case_summary` of ``ds`` as the reports read it, with what sets
     each case's peak force (:func:`clearsweep.summary.peak_force_source`): a ``period``
@@ -118,7 +148,8 @@ def report_summary(ds: xr.Dataset) -> xr.Dataset:
     source = peak_force_source(summary)
     if source is not None:
         summary["peak_force_source"] = source
-    return summary
+    # the guide's walls: the track depth per wall, beside the whole map's largest bin
+    return summary.assign(guide_track_depths(ds))
 
 
 def metric_table(ds: xr.Dataset, metric: str) -> xr.DataArray:
@@ -419,7 +450,7 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
     if with_statistics:
         summary = report_summary(ds)
         extra = tuple(c for c in (*_MOTION_COLUMNS, *_CHARACTER_COLUMNS, *_CONTACT_COLUMNS,
-                                  *_FINAL_WEAR_COLUMNS) if c.name in summary)
+                                  *_FINAL_WEAR_COLUMNS, *_TRACK_COLUMNS) if c.name in summary)
         # each on its own dims: a row takes its case's (and joint's) value, and a case of
         # ideal joints only (one bare row) its case values
         wear = wear.assign({c.name: summary[c.name] for c in extra})
@@ -446,6 +477,8 @@ _CHARACTER_COLUMNS = (
     _Column("slider_acceleration_high_order_share", f"Power share above order {HIGH_ORDER:g}", ".3g"),
     _Column("period", "Period in revolutions (0: none, -1: n/a)", ""),
     _Column("chaos_k", "0-1 test K", ".2f"),
+    _Column("lyapunov_exponent", "Largest Lyapunov exponent per revolution", ".3g"),
+    _Column("motion_class", "Motion class", ""),
 )
 _CONTACT_COLUMNS = (
     _Column("normal_force_peak_settled", "Peak normal force, settled", ".4g"),
@@ -459,6 +492,10 @@ _FINAL_WEAR_COLUMNS = (
     _Column("wear_depth_max_final", "Max depth, largest map bin", ".4g"),
     _Column("wear_volume", "Worn volume", ".4g"),
 )
+#: A guide's walls: the corners' track depth on each (docs/physics.md 5.7), where the
+#: results keep the wear map.
+_TRACK_COLUMNS = tuple(_Column(TRACK_DEPTH_COLUMNS[wall], f"Track depth, {wall} wall", ".4g")
+                       for wall in GUIDE_WALLS)
 
 
 def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
@@ -479,6 +516,8 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         (f"Contacts ({statistics})", _CONTACT_COLUMNS, ("joint",)),
         ("Wear at the end of the run (the worn volume does not depend on the map's grid)",
          _FINAL_WEAR_COLUMNS, ("joint",)),
+        ("Guide walls at the end of the run (the largest depth of the corners' track on each "
+         "wall)", _TRACK_COLUMNS, ("joint",)),
         (f"Motion: spectrum and periodicity ({window})", _CHARACTER_COLUMNS, ()))
     for heading, wanted, dims in specs:
         # a column with no value in any case (the settled window of runs that end before
@@ -488,6 +527,9 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         if not columns:
             continue
         table = _with_status(ds, summary[[c.name for c in columns]])
+        if wanted is _TRACK_COLUMNS:    # the guides' rows only: a socket has no walls
+            table = table.sel(joint=[j for j in table["joint"].values
+                                     if JOINT_TYPES.get(value_text(j)) == "prismatic"])
         keys: tuple[str, ...]
         if dims:
             groups = _case_groups(table, columns, dims)

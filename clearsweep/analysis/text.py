@@ -14,7 +14,15 @@ import xarray as xr
 from ..ensemble import MEMBER_DIM
 from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
-from ..summary import case_summary, settle_time, settled_revolutions
+from ..summary import (
+    OSCILLATION_CREST_FACTOR,
+    PEAK_BY_IMPACTS,
+    PEAK_BY_LOAD,
+    PEAK_BY_OSCILLATION,
+    case_summary,
+    settle_time,
+    settled_revolutions,
+)
 from .factorial import factorial_lines
 from .selection import (
     _MISSING_TEXT,
@@ -149,8 +157,14 @@ def _run_motion_lines(case: xr.Dataset) -> list[str]:
         k = float(case["chaos_k"]) if "chaos_k" in case else math.nan
         test = (f"0-1 test K = {k:.2f}" if np.isfinite(k)
                 else "0-1 test: n/a (fewer settled revolutions than it needs)")
-        lines.append(f"motion (period in crank revolutions): {_period_text(int(case['period']))}; "
-                     f"{test}")
+        if "lyapunov_exponent" in case:
+            lam = float(case["lyapunov_exponent"])
+            test += ("; largest Lyapunov exponent " + (f"{lam:+.3f} per revolution" if np.isfinite(lam)
+                                                       else "n/a (the run is too short, or a twin run stopped)"))
+        line = f"motion (period in crank revolutions): {_period_text(int(case['period']))}; {test}"
+        if "motion_class" in case:
+            line += f"; class: {case['motion_class'].item()}"
+        lines.append(line)
     return lines
 
 
@@ -172,7 +186,13 @@ def _sweep_motion_lines(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple
         period = int(point)
         k = float(summary["chaos_k"].sel(index)) if "chaos_k" in summary else math.nan
         design = _design_text(ds, label)
-        if period == PERIOD_NONE and np.isfinite(k):
+        lam = (float(summary["lyapunov_exponent"].sel(index)) if "lyapunov_exponent" in summary
+               else math.nan)
+        if period == PERIOD_NONE and np.isfinite(lam) and "motion_class" in summary:
+            key = (f"non-periodic, {summary['motion_class'].sel(index).item()} by the Lyapunov "
+                   "exponent and the 0-1 test")
+            design += f" (lambda = {lam:+.3f}/rev, K = {k:.2f})"
+        elif period == PERIOD_NONE and np.isfinite(k):
             chaotic = k > CHAOS_THRESHOLD
             key = (f"non-periodic, {'chaotic' if chaotic else 'regular'} by the 0-1 test "
                    f"(K {'>' if chaotic else '<='} {CHAOS_THRESHOLD:g})")
@@ -235,17 +255,29 @@ def _periodic_window_lines(ds: xr.Dataset, summary: xr.Dataset, usable,
     lines = ["", *textwrap.wrap(f"Periodic windows over {x} x {y} (periods in crank "
                                 "revolutions; --kind dynamics-map draws the map):",
                                 REPORT_LINE_CHARACTERS, break_on_hyphens=False)]
-    if not found:
-        return lines + [f"- none: no case has a period up to {MAX_PERIOD}"]
-    for p in found:
+
+    def cells(flags: np.ndarray) -> str:
         parts = []
-        for row in range(period.shape[0]):
-            runs = _runs((period[row] == p) & ok[row])
+        for row in range(flags.shape[0]):
+            runs = _runs(flags[row] & ok[row])
             if runs:
                 spans = ", ".join(_coordinate_text(ds, x, a, b) for a, b in runs)
                 parts.append(f"{_coordinate_text(ds, y, row, row)}: {spans}")
-        lines += textwrap.wrap(f"- period {p}: " + "; ".join(parts), REPORT_LINE_CHARACTERS,
+        return "; ".join(parts)
+
+    if not found:
+        lines.append(f"- none: no case has a period up to {MAX_PERIOD}")
+    for p in found:
+        lines += textwrap.wrap(f"- period {p}: " + cells(period == p), REPORT_LINE_CHARACTERS,
                                subsequent_indent="    ", break_on_hyphens=False)
+    if "motion_class" in summary and summary["motion_class"].dims == summary["period"].dims:
+        # the cells without a period, by the class the two chaos indicators give them
+        classes = summary["motion_class"].transpose(y, x).values.astype(str)
+        for name in sorted({str(c) for c, p, good in zip(classes.ravel(), period.ravel(), ok.ravel())
+                            if good and p <= 0}):
+            lines += textwrap.wrap(f"- {name}: " + cells((classes == name) & (period <= 0)),
+                                   REPORT_LINE_CHARACTERS, subsequent_indent="    ",
+                                   break_on_hyphens=False)
     return lines
 
 
@@ -343,6 +375,74 @@ def _design_text(ds: xr.Dataset, label: dict) -> str:
     return label_text(label) + (f" ({', '.join(inputs)})" if inputs else "")
 
 
+def _peak_contact_force(summary: xr.Dataset) -> xr.DataArray | None:
+    """Each case's largest peak normal contact force [N] over its joints (an ideal joint has
+    none: NaN), of the settled window where the case has one, else of the whole run."""
+    whole = summary.get("normal_force_peak")
+    settled = summary.get("normal_force_peak_settled")
+    force = whole if settled is None else (settled if whole is None else settled.fillna(whole))
+    if force is None or "joint" not in force.dims:
+        return None
+    return force.max("joint", skipna=True)
+
+
+def drivers_line(ds: xr.Dataset, summary: xr.Dataset, usable, dims: tuple[str, ...]) -> str | None:
+    """One line saying what drives the differences between a sweep's designs, built on each
+    case's ``peak_force_source`` (:func:`clearsweep.summary.peak_force_source`): the source
+    of the design with the highest peak contact force. ``impacts`` where it impacts;
+    ``friction`` where it rides its socket in an in-contact oscillation (no impact, a crest
+    factor above the threshold: docs/physics.md section 3.3); else ``nothing beyond the
+    spread``, every design quasi-static and the peak forces no further apart than the
+    mechanism's load makes them. None without the statistics or the sweep dimensions."""
+    source, force = summary.get("peak_force_source"), _peak_contact_force(summary)
+    if source is None or force is None or not dims:
+        return None
+    cases = []
+    for label, point in iter_points(source, dims):
+        index = {d: label[d] for d in dims}
+        value = float(force.sel(index))
+        if bool(usable.sel(index) if index else usable) and math.isfinite(value):
+            cases.append((value, str(point.values[()]), label))
+    if not cases:
+        return None
+    kinds = collections.Counter(text.split(" (")[0] for _, text, _ in cases)
+    top, top_source, top_at = max(cases, key=lambda c: c[0])
+    quiet = [f for f, text, _ in cases if text == PEAK_BY_LOAD]
+    n = len(cases)
+
+    def tally(kind: str) -> str:
+        return f"{kinds[kind]} of {n} designs"
+
+    def load_range() -> str:
+        if not quiet:
+            return "no design is quasi-static"
+        return (f"the quasi-static designs reach {min(quiet):.4g}-{max(quiet):.4g} N" if
+                len(quiet) > 1 else f"the quasi-static design reaches {quiet[0]:.4g} N")
+
+    head = "What drives the differences between designs:"
+    where = f"{top:.4g} N at {_design_text(ds, top_at)}"
+    if top_source.startswith(PEAK_BY_IMPACTS):
+        joints = sorted({j for _, text, _ in cases if text.startswith(PEAK_BY_IMPACTS)
+                         for j in text.split("(")[1].rstrip(")").split(", ")})
+        return (f"{head} impacts. {tally(PEAK_BY_IMPACTS)} impact (joint"
+                f"{'s' if len(joints) > 1 else ''} {', '.join(joints)}) and set the highest "
+                f"peak contact force, {where}; "
+                f"{load_range()}.")
+    if top_source.startswith(PEAK_BY_OSCILLATION):
+        impacts = (f"{tally(PEAK_BY_IMPACTS)} impact, below it" if kinds[PEAK_BY_IMPACTS]
+                   else "no design impacts")
+        return (f"{head} friction. {tally(PEAK_BY_OSCILLATION)} stay in contact in a "
+                f"friction-driven oscillation (crest factor above {OSCILLATION_CREST_FACTOR:g}) "
+                f"and set the highest peak contact force, {where}; {impacts}; {load_range()}.")
+    low = min(c[0] for c in cases)
+    apart = (f"{100.0 * (top - low) / low:.2g} % apart" if low > 0 else "")
+    others = "".join(f"; {tally(k)} {'impact' if k == PEAK_BY_IMPACTS else 'oscillate'}, "
+                     "below it" for k in (PEAK_BY_IMPACTS, PEAK_BY_OSCILLATION) if kinds[k])
+    return (f"{head} nothing beyond the spread. The highest peak contact force is the "
+            f"quasi-static load, {where}{others}; peak contact forces {low:.4g}-{top:.4g} N"
+            + (f" ({apart})" if apart else "") + ".")
+
+
 def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
     """What a sweep answers, first: its design axes and, per headline metric, the lowest
     (best) and highest (worst) design and their spread; an ensemble's means with the
@@ -425,6 +525,11 @@ def format_sweep_summary(ds: xr.Dataset, fmt: str = "text") -> str:
             lines.append(f"    {spread}")
     if not ensemble:
         summary = report_summary(ds)
+        driver = drivers_line(ds, summary, usable, dims)
+        if driver is not None:
+            lines.append("")
+            lines += textwrap.wrap(driver, REPORT_LINE_CHARACTERS, subsequent_indent="    ",
+                                   break_on_hyphens=False)
         lines += _sweep_motion_lines(ds, summary, usable, dims)
         lines += _periodic_window_lines(ds, summary, usable, dims)
     lines += factorial_lines(ds)

@@ -21,6 +21,12 @@ then one base per argument plus constants, rather than a pointer and row lengths
 that stay live in registers across every inlined ``evaluate``. :func:`launch` checks the
 shapes.
 
+The structure-of-arrays kernel (:func:`soa_kernel`) takes what its batch shares once: the
+parameters equal in every case as one row, the others per case, gathered by each thread
+into its local memory at its start; and the wear maps and projections of the batch's
+clearance joints alone, each joint's rows at r0 + j * dj of one array
+(:func:`soa_joint_rows`, the layout ``gpu.joint_rows`` chooses and ``geom`` carries).
+
 Importing this module imports ``numba.cuda``; with ``NUMBA_ENABLE_CUDASIM=1`` (read when
 numba is first imported) the kernel runs in numba's CUDA simulator, where each thread is a
 Python thread: the simulator hands kernels wrapped arrays, which :func:`_advance` unwraps
@@ -75,6 +81,15 @@ THREADS_PER_BLOCK = 64
 
 #: row of the work array ``pairs`` holding the copy of the first impact times
 PAIR_FIRST_COPY = PAIR_FIRST + 1
+
+#: Parameters of a case in the structure-of-arrays kernel: p's N_P values, then jp's rows.
+N_PJ = N_P + N_JOINTS * N_JP
+
+#: Entries of the structure-of-arrays kernel's ``geom`` (``gpu.joint_rows``): the wear map's
+#: polar bins, then (first row, rows from one joint to the next) of the maps and of the
+#: projections.
+GEOM_NPOLAR, GEOM_MAP_R0, GEOM_MAP_DJ, GEOM_PROJ_R0, GEOM_PROJ_DJ = range(5)
+N_GEOM = 5
 
 
 def block_typer(typingctx, arr, i, k, shape):
@@ -170,6 +185,45 @@ def soa_block_typer(typingctx, arr, i, k, shape, cap):
     return out(arr, i, k, shape, cap), codegen
 
 
+def soa_joint_rows_typer(typingctx, arr, i, r0, dj, nrows, cap):
+    """Typing and code generation of :func:`soa_joint_rows` for ``numba.extending.intrinsic``:
+    arr a C-contiguous (rows, ncols, cap) array stored structure-of-arrays (the case last, of
+    the literal length cap); the view (N_JOINTS, nrows, ncols) whose joint j, row r is arr's
+    row r0 + j * dj + r (r0, dj and nrows integers read at run time: the batch's joint
+    layout, ``gpu.joint_rows``). Joints without clearance get no rows of their own: their
+    rows alias others' and are never touched."""
+    if not (isinstance(arr, types.Array) and arr.layout == "C" and arr.ndim == 3
+            and isinstance(cap, types.IntegerLiteral)
+            and all(isinstance(x, types.Integer) for x in (r0, dj, nrows))):
+        return None
+    capacity = cap.literal_value
+    out = types.Array(arr.dtype, 3, "A")
+
+    def codegen(context, builder, sig, args):
+        ary = context.make_array(sig.args[0])(context, builder, args[0])
+        intp = context.get_value_type(types.intp)
+        itemsize = context.get_abi_sizeof(context.get_data_type(arr.dtype))
+        case = context.cast(builder, args[1], sig.args[1], types.intp)
+        row0 = context.cast(builder, args[2], sig.args[2], types.intp)
+        jstep = context.cast(builder, args[3], sig.args[3], types.intp)
+        rows = context.cast(builder, args[4], sig.args[4], types.intp)
+        ncols = builder.extract_value(ary.shape, 1)
+        row_stride = builder.mul(ncols, intp(capacity * itemsize))
+        # element (row R, column c, case) at (R * ncols + c) * cap + case
+        offset = builder.add(builder.mul(row0, row_stride), builder.mul(case, intp(itemsize)))
+        byte_ptr = context.get_value_type(types.voidptr)
+        data = builder.bitcast(builder.gep(builder.bitcast(ary.data, byte_ptr), [offset]),
+                               ary.data.type)
+        strides = [builder.mul(jstep, row_stride), row_stride, intp(capacity * itemsize)]
+        res = context.make_array(out)(context, builder)
+        context.populate_array(res, data=data, shape=[intp(N_JOINTS), rows, ncols],
+                               strides=strides, itemsize=intp(itemsize), meminfo=None,
+                               parent=None)
+        return res._getvalue()
+
+    return out(arr, i, r0, dj, nrows, cap), codegen
+
+
 if SIMULATED:
     _plain = simulator_array
 
@@ -197,6 +251,31 @@ if SIMULATED:
         view = column.view()
         view.shape = tuple(shape)       # a view or an error, never a copy
         return view
+
+    def soa_joint_rows(arr, i, r0, dj, nrows, cap):
+        """Case i's (N_JOINTS, nrows, ncols) view of the structure-of-arrays arr (rows,
+        ncols, cap): joint j, row r at arr's row r0 + j * dj + r (the batch's joint layout)."""
+        import numpy as np
+
+        a = _plain(arr)
+        ncols = a.shape[1]
+        item = a.itemsize
+        # the view's first element may lie outside a (r0 < 0: a joint without clearance),
+        # as on the device: numpy's own views cannot start there
+        return np.asarray(_Strided(a, a.ctypes.data + (int(r0) * ncols * cap + i) * item,
+                                   (N_JOINTS, int(nrows), ncols),
+                                   (int(dj) * ncols * cap * item, ncols * cap * item,
+                                    cap * item)))
+
+    class _Strided:
+        """A strided view of ``owner``'s memory from the address ``data`` (kept alive by the
+        array numpy makes of it)."""
+
+        def __init__(self, owner, data, shape, strides):
+            self.owner = owner
+            self.__array_interface__ = {"shape": shape, "typestr": owner.dtype.str,
+                                        "data": (data, False), "strides": strides,
+                                        "version": 3}
 else:
     from numba.cuda.extending import intrinsic, overload
 
@@ -213,6 +292,9 @@ else:
     #: structure-of-arrays, its last axis the case (of the literal length cap): element e of
     #: the block at (k * prod(shape) + e) * cap + i, as a strided ('A' layout) array.
     soa_block = intrinsic(soa_block_typer)
+    #: Case i's (N_JOINTS, nrows, ncols) view of a (rows, ncols, cap) array stored
+    #: structure-of-arrays: joint j, row r at the array's row r0 + j * dj + r.
+    soa_joint_rows = intrinsic(soa_joint_rows_typer)
     _advance = _cpu_advance
 
 
@@ -231,11 +313,12 @@ def aos_kernel(spec: int = ALL):
 
     def run_cases(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track, sec, vec,
                   diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps, scratch, rows_t, rows_y,
-                  rows_d, rows_wmax):
+                  rows_d, rows_wmax, pcols, geom):
         """Integrate case i = thread index from t = 0 (see :func:`rk4.advance`); the grouped work
         arrays of ``rk4.work_shapes`` are handed to advance row by row; ``rows_*`` are
-        placeholders (one row per case) that ``keep_rows = False`` leaves untouched; built
-        for the joint set ``spec`` of :func:`aos_kernel`."""
+        placeholders (one row per case) that ``keep_rows = False`` leaves untouched; ``pcols``
+        and ``geom`` are the structure-of-arrays kernel's (:func:`soa_kernel`): unused here.
+        Built for the joint set ``spec`` of :func:`aos_kernel`."""
         i = cuda.grid(1)
         if i < p.shape[0]:
             case = Case(p[i], block(jp, i, 0, (N_JOINTS, N_JP)), y0[i], wmap[i],
@@ -314,18 +397,31 @@ def soa_kernel(capacity: int, spec: int = ALL):
     @_jit
     def run_cases_soa(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track,
                       sec, vec, diag, cstate, msave, pairs, mats, vz, buf_i, buf_v, caps,
-                      scratch, rows_t, rows_y, rows_d, rows_wmax):
-        """run_cases, structure of arrays (:func:`soa_block`)."""
+                      scratch, rows_t, rows_y, rows_d, rows_wmax, pcols, geom):
+        """run_cases, structure of arrays (:func:`soa_block`). The parameters: ``jp`` the
+        batch's shared row (p then jp's rows, N_PJ values), ``p`` the per-case columns
+        (columns x capacity) and ``pcols`` the column of each parameter in p, -1 where the
+        shared row holds it; each thread gathers its p and jp into its local memory once.
+        The maps: ``wmap`` (rows, nazim, capacity) and ``proj`` (rows, N_ANGLE_BINS,
+        capacity) hold rows for the batch's clearance joints alone, placed by ``geom``
+        (:data:`GEOM`: ``gpu.joint_rows``)."""
         i = cuda.grid(1)
         if i < n_steps.shape[0]:
-            npolar = wmap.shape[1]
-            nazim = wmap.shape[2]
+            pl = cuda.local.array(N_P, numba.float64)
+            jl = cuda.local.array((N_JOINTS, N_JP), numba.float64)
+            for k in range(N_P):
+                c = pcols[k]
+                pl[k] = p[c, i] if c >= 0 else jp[k]
+            for j in range(N_JOINTS):
+                for m in range(N_JP):
+                    k = N_P + j * N_JP + m
+                    c = pcols[k]
+                    jl[j, m] = p[c, i] if c >= 0 else jp[k]
+            npolar = geom[GEOM_NPOLAR]
             nbuf = buf_i.shape[0]
-            case = Case(soa_block(p, i, 0, (N_P,), cap),
-                        soa_block(jp, i, 0, (N_JOINTS, N_JP), cap),
-                        soa_block(y0, i, 0, (N_Y,), cap),
-                        soa_block(wmap, i, 0, (N_JOINTS, npolar, nazim), cap),
-                        soa_block(proj, i, 0, (N_JOINTS, 3, N_ANGLE_BINS), cap),
+            case = Case(pl, jl, soa_block(y0, i, 0, (N_Y,), cap),
+                        soa_joint_rows(wmap, i, geom[GEOM_MAP_R0], geom[GEOM_MAP_DJ], npolar, cap),
+                        soa_joint_rows(proj, i, geom[GEOM_PROJ_R0], geom[GEOM_PROJ_DJ], 3, cap),
                         soa_block(wvol, i, 0, (N_JOINTS,), cap))
             out = Out(soa_block(rows_t, i, 0, (1,), cap), soa_block(rows_y, i, 0, (1, N_Y), cap),
                       soa_block(rows_d, i, 0, (1, N_D), cap),
@@ -354,7 +450,7 @@ def soa_kernel(capacity: int, spec: int = ALL):
                            soa_block(buf_v, i, 0, (nbuf, 4), cap),
                            soa_block(caps, i, 0, (N_CAP_ROWS, N_CAP), cap),
                            soa_block(caps, i, 1, (N_CAP_ROWS, N_CAP), cap),
-                           soa_block(scratch, i, 0, (4 * npolar, 3), cap),
+                           soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
                            soa_block(vec, i, 7, (N_Y,), cap), soa_block(diag, i, 2, (N_D,), cap),
                            soa_block(vec, i, 8, (N_Y,), cap), soa_block(vec, i, 9, (N_Y,), cap))
             _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
@@ -382,6 +478,15 @@ FIXED_SHAPES.update({name: shape for name, shape in work_shapes(0, 1).items()
 
 #: The arguments that hold one value per case, n of them in either layout (no capacity).
 PER_CASE_SCALARS = ("n_steps", "save_every")
+
+#: The structure-of-arrays kernel's arguments that hold one row for the whole batch, and
+#: their shapes: the shared parameter row (``jp``), each parameter's per-case column
+#: (``pcols``) and the joint layout of the maps (``geom``).
+BATCH_ROWS = {"jp": (N_PJ,), "pcols": (N_PJ,), "geom": (N_GEOM,)}
+
+#: The structure-of-arrays kernel's arguments whose per-case shape the batch decides: the
+#: per-case parameter columns and the maps' rows of the batch's clearance joints.
+SOA_FREE = ("p", "wmap", "proj")
 
 
 def launch(arrays: dict, layout: str = "aos", spec: int = ALL, case_sets=()) -> None:
@@ -412,10 +517,15 @@ def launch(arrays: dict, layout: str = "aos", spec: int = ALL, case_sets=()) -> 
         for name in ARGS:
             if name in PER_CASE_SCALARS:
                 continue
+            if name in BATCH_ROWS:
+                if tuple(arrays[name].shape) != BATCH_ROWS[name]:
+                    raise ValueError(f"run_cases argument {name}: shape {arrays[name].shape}, "
+                                     f"expected {BATCH_ROWS[name]}")
+                continue
             if arrays[name].shape[-1] != cap:
                 raise ValueError(f"run_cases argument {name}: capacity {arrays[name].shape[-1]}, "
                                  f"expected {cap} (p's)")
-            shape = FIXED_SHAPES.get(name)
+            shape = None if name in SOA_FREE else FIXED_SHAPES.get(name)
             if shape is not None and tuple(arrays[name].shape[:-1]) != shape:
                 raise ValueError(f"run_cases argument {name}: per-case shape "
                                  f"{arrays[name].shape[:-1]}, expected {shape}")

@@ -1001,6 +1001,21 @@ def evaluate_ideal(t, y, model, dy, dg, full, solve):
     return evaluate(t, y, model, dy, dg, full, solve, NONE)
 
 
+def _diagnostics_at(t, y, p, jp, wmap, ideal=False):
+    """The diagnostics dg (N_D) of one full :func:`evaluate` at state y and time t, from a
+    fresh contact state and fresh work arrays, or None where the evaluation fails: what
+    :func:`ideal_joint_forces` (``ideal``: the ideal mechanism's build) and
+    :func:`start_contacts` read."""
+    dg = np.zeros(N_D)
+    solve = Solve(np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)),
+                  np.zeros((VZ_ROWS, NZ)))
+    model = Model(p, jp, np.zeros((N_JOINTS, N_S)), wmap)
+    run = evaluate_ideal if ideal else evaluate
+    status = run(float(t), np.ascontiguousarray(y, dtype=np.float64), model,
+                 np.zeros(y.shape[0]), dg, True, solve)
+    return dg if status == ST_OK else None
+
+
 def ideal_joint_forces(t, y, p, jp):
     """Forces on the balls [N] (N_JOINTS x 3, global frame; O's: on the crank's journal) of
     the mechanism with every joint ideal, at state y and time t: the reactions a seated
@@ -1012,17 +1027,9 @@ def ideal_joint_forces(t, y, p, jp):
     """
     jp_ideal = jp.copy()
     jp_ideal[:, J_CLEARANCE] = 0.0
-    s = np.zeros((N_JOINTS, N_S))
-    wmap = np.zeros((N_JOINTS, 1, 1))
-    dy = np.zeros(y.shape[0])
-    dg = np.zeros(N_D)
-    C = np.zeros((NZ, NZ))
-    S = np.zeros((NZ, NZ))
-    L = np.zeros((NZ, NZ))
-    vz = np.zeros((VZ_ROWS, NZ))
     out = np.full((N_JOINTS, 3), np.nan)
-    if evaluate_ideal(float(t), np.ascontiguousarray(y, dtype=np.float64),
-                      Model(p, jp_ideal, s, wmap), dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
+    dg = _diagnostics_at(t, y, p, jp_ideal, np.zeros((N_JOINTS, 1, 1)), ideal=True)
+    if dg is None:
         return out
     for j in range(N_JOINTS):
         for i in range(3):
@@ -1036,19 +1043,11 @@ def start_contacts(y, p, jp, wmap):
     normal's line (global, unit). The contact state is a fresh episode's (no impact velocity
     yet). Plain Python around the compiled :func:`evaluate`, as :func:`ideal_joint_forces`;
     ``params.seated_offsets`` balances the spherical joints' friction with it."""
-    s = np.zeros((N_JOINTS, N_S))
-    dy = np.zeros(y.shape[0])
-    dg = np.zeros(N_D)
-    C = np.zeros((NZ, NZ))
-    S = np.zeros((NZ, NZ))
-    L = np.zeros((NZ, NZ))
-    vz = np.zeros((VZ_ROWS, NZ))
     force = np.full((N_JOINTS, 3), np.nan)
     fn = np.full(N_JOINTS, np.nan)
     normal = np.full((N_JOINTS, 3), np.nan)
-    if evaluate(0.0, np.ascontiguousarray(y, dtype=np.float64),
-                Model(p, jp, s, np.ascontiguousarray(wmap, dtype=np.float64)),
-                dy, dg, True, Solve(C, S, L, vz)) != ST_OK:
+    dg = _diagnostics_at(0.0, y, p, jp, np.ascontiguousarray(wmap, dtype=np.float64))
+    if dg is None:
         return force, fn, normal
     for j in range(N_JOINTS):
         fn[j] = dg[D_FN + j]

@@ -71,7 +71,8 @@ INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
 JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic"}
 
 #: What a joint-type module provides, compiled in that module (docs/architecture.md,
-#: "Joint types"): the gap geometry, the contact composed into a ``contact.ContactState``
-#: (by ``contact.respond``, shared by every type), and its wear surface's contact angle and
-#: area.
-PROVIDES = ("gap", "contact", "contact_angle", "contact_area")
+#: "Joint types"): the gap geometry and the contact composed into a
+#: ``contact.ContactState`` (by ``contact.respond``, shared by every type); besides these,
+#: its module's ``WEAR_SURFACE`` names the compiled functions its wear step reads (a
+#: socket's or bearing's contact angle and area; the guide's track width and deposit).
+PROVIDES = ("gap", "contact")

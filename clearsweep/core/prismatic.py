@@ -101,6 +101,8 @@ from .wear import coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "prismatic"
+#: the compiled functions its wear step reads (``joints.PROVIDES``)
+WEAR_SURFACE = ("track_width", "deposit")
 
 #: Walls of the guide, in the order of their bands of the wear map.
 WALLS = ("+y", "-y", "+z", "-z")

@@ -33,6 +33,8 @@ from .wear import angle_bin, arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "revolute"
+#: the compiled functions its wear step reads (``joints.PROVIDES``)
+WEAR_SURFACE = ("contact_angle", "contact_area")
 
 #: The journal's elastic exponent where the case keeps the paper's (spherical) law.
 JOURNAL_EXPONENT = 1.5

@@ -25,6 +25,8 @@ from .wear import worn_surface
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "spherical"
+#: the compiled functions its wear step reads (``joints.PROVIDES``)
+WEAR_SURFACE = ("contact_angle", "contact_area")
 
 @compiled
 def gap(jp, j, wmap, p, pb, ps, Rs):

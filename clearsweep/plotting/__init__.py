@@ -5,7 +5,9 @@ global state, no display needed) and saved in the format the output
 file's suffix names. Every axis and colour-bar label carries the units of the
 variable drawn, from its ``units`` attribute; ``[-]`` marks a dimensionless
 or categorical quantity. Lengths and forces are drawn in the unit that reads
-directly (nm, µm, mm, kN: ``variables.DISPLAY_UNITS``), never with offset text. The
+directly (nm, µm, mm, kN: ``variables.DISPLAY_UNITS``), never with offset text; a swept or
+selected value in one unit per quantity wherever it is written (legends, the ``--select``
+line of the title, the axis over it: a clearance in mm, ``common.QUANTITY_UNITS``). The
 title names the case or ``--select`` slice, the start (seated or centred), the joints with
 clearance (the case's own, swept values included) and every
 ``--set`` override of the command line the file's ``history`` records. A joint that is ideal
@@ -23,13 +25,15 @@ Kinds (``KINDS``):
     x, y, z components, cases overlaid (Figures 10, 14, 15).
 ``wear-map``
     per joint, the socket wear map (polar x azimuth) and the same map on a
-    sphere (Figures 11, 16); one case.
+    sphere (Figures 11, 16); the bearing's wear around it; the guide's four
+    walls as strips (along and across the guide, mm); one case.
 ``wear-polar``
     per joint and axis, the projected wear depth as a worn profile on the
     unit circle, exaggerated (Figures 11, 16); cases overlaid.
 ``orbit``
     ball-centre offset in the socket frame on the xy, xz and yz planes,
-    inside the clearance circle; cases overlaid.
+    inside the clearance circle (the journal's and the guide block's on yz, the
+    block's inside its rectangular gap), in mm; cases overlaid.
 ``poincare``
     the Poincare section, once per crank revolution: per clearance joint the ball-centre
     offset over the clearance on the plane of its two most spread axes, and the slider
@@ -168,7 +172,7 @@ FIGURES = {
     "spectrum": FigureKind((9, 5.5), _draw_spectrum),
     "bifurcation": FigureKind((10, 9), _draw_bifurcation, ("x",)),
     "effects": FigureKind((15, 8), _draw_effects),
-    "dynamics-map": FigureKind((13, 5.5), _draw_dynamics_map, ("x", "y")),
+    "dynamics-map": FigureKind((18, 5.5), _draw_dynamics_map, ("x", "y")),
 }
 
 

@@ -17,7 +17,6 @@ from ..analysis import (
     ideal_joints,
     iter_cases,
     joint_clearances,
-    label_text,
     results_kind,
     sweep_dims,
     value_text,
@@ -52,10 +51,94 @@ DIMENSIONLESS = "-"
 COLOURBAR_LABEL_CHARACTERS = 36
 
 
+#: The unit a figure writes a quantity in wherever it gives a value of a swept or selected
+#: coordinate (the legend of a case, the ``--select`` line of the title, an axis over the
+#: coordinate): one unit per quantity, whatever its values, so that a clearance reads in mm
+#: on every figure (before: 0.00025 in a legend, 0.00025 m in the title, 250 um on a heat
+#: map's axis, 0.25 mm in the orbit's legend). ``--select`` takes values in these units too
+#: (``analysis.parse_selection``). A coordinate of another quantity is written in its units.
+QUANTITY_UNITS = {"length": (1e-3, "mm"), "layer thickness": (1e-6, "\u00b5m"),
+                  "speed": (1.0, "r/min")}
+
+
+def quantity_of(coord: xr.DataArray) -> str | None:
+    """The quantity of :data:`QUANTITY_UNITS` a coordinate holds, from its units and name: a
+    speed (``min-1``, or a ``speed_rpm`` without units), a coating's or base's thickness, any
+    other length (clearances, sizes); None for another."""
+    unit = str(coord.attrs.get("units", ""))
+    name = f"{coord.name} {coord.attrs.get('config_key', '')}"
+    if unit == "min-1" or (unit in ("", "1") and str(coord.name).endswith("speed_rpm")):
+        return "speed"
+    if unit == "m":
+        return "layer thickness" if "thickness" in name else "length"
+    return None
+
+
+def quantity_unit(coord: xr.DataArray) -> tuple[float, str]:
+    """(factor from the coordinate's SI units, unit text) of a coordinate: its quantity's
+    (:func:`quantity_of`), else its own units ("" where it has none)."""
+    quantity = quantity_of(coord)
+    if quantity is not None:
+        return QUANTITY_UNITS[quantity]
+    unit = str(coord.attrs.get("units", ""))
+    return 1.0, "" if unit in ("", "1") else unit
+
+
+def quantity_text(coord: xr.DataArray, value) -> str:
+    """``"0.25 mm"``, ``"60 r/min"``, ``"PTFE"``: a value of ``coord`` in its quantity's unit
+    (:func:`quantity_unit`).
+
+    >>> quantity_text(xr.DataArray([2.5e-4], dims="B_clearance", name="B_clearance",
+    ...                             attrs={"units": "m"}), 2.5e-4)
+    '0.25 mm'
+    """
+    factor, unit = quantity_unit(coord)
+    if isinstance(value, np.ndarray) and value.ndim == 0:     # a scalar coordinate's values
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        return value_text(value)
+    number = value_text(float(value) / factor) if factor != 1.0 else value_text(value)
+    return f"{number} {unit}" if unit else number
+
+
+def quantity_values(coord: xr.DataArray) -> tuple[np.ndarray, str]:
+    """A numeric coordinate's values in its quantity's unit, and its axis label."""
+    factor, unit = quantity_unit(coord)
+    return np.asarray(coord.values, dtype=float) / factor, axis_label(coord, units=unit)
+
+
+def labelled_case(ds: xr.Dataset | xr.DataArray, label: dict) -> str:
+    """``"B_coating=PTFE, B_clearance=0.25 mm"``: a case's label (``analysis.iter_cases``),
+    each value in its quantity's unit (:func:`quantity_text`)."""
+    return ", ".join(f"{k}={quantity_text(ds[k], v)}" if k in ds.coords else f"{k}={value_text(v)}"
+                     for k, v in label.items())
+
+
 def run_config(ds: xr.Dataset) -> dict:
     """The run's config (``config``), or a sweep's base (``sweep_config``); {} if unreadable
     (:func:`clearsweep.analysis.file_config`)."""
     return file_config(ds)
+
+
+def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
+    """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
+    the run's config (``params.guide_row``: the walls' bins along the guide and across each
+    wall); None where the file's config cannot be read."""
+    from ..config import ConfigError, load_config
+    from ..core import layout as L
+    from ..params import PRESETS, guide_row
+
+    base = run_config(ds)
+    if not base:
+        return None
+    try:
+        cfg = load_config(base)
+    except (ConfigError, TypeError, ValueError):
+        return None
+    row = np.zeros(L.N_JP)
+    guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
+    return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
+            0.5 * row[L.J_WIDTH] + row[L.J_CY])
 
 
 def clearance_text(ds: xr.Dataset) -> str:
@@ -314,12 +397,17 @@ def _cases(ds: xr.Dataset) -> list[tuple[str, xr.Dataset, object]]:
         colours = [f"C{i}" for i in range(len(cases))]
     else:
         colours = list(colormaps["viridis"](np.linspace(0.0, 0.95, len(cases))))
-    return [(label_text(label), case, colour) for (label, case), colour in zip(cases, colours)]
+    return [(labelled_case(ds, label), case, colour) for (label, case), colour in zip(cases, colours)]
 
 
 def _legend(ax, cases) -> None:
+    """The overlaid cases' legend (the lines of ``ax``), below the panels: inside a panel of
+    time series it covered lines wherever it went (tests/test_figure_layout.py,
+    ``legends_over_data``)."""
     if 1 < len(cases) <= MAX_LEGEND_ENTRIES:
-        ax.legend(fontsize="x-small", ncol=1 + len(cases) // 6)
+        handles, labels = ax.get_legend_handles_labels()
+        ax.figure.legend(handles, labels, loc="outside lower center", fontsize="x-small",
+                         ncol=min(len(labels), 2 if max(map(len, labels)) > 40 else 3))
 
 
 def figure_legend(fig) -> None:
@@ -364,9 +452,10 @@ def _edges(centres: np.ndarray, lo: float, hi: float) -> np.ndarray:
     return np.append(centres - step / 2, centres[-1] + step / 2)
 
 
-def keep_relative_span(ax, values) -> str:
-    """Widen ``ax``'s y-axis to at least :data:`MIN_RELATIVE_SPAN` of the mean magnitude of
-    ``values`` (the data drawn), centred on the current view, where they vary by less than
+def keep_relative_span(ax, values, axis: str = "y", scale: float | None = None) -> str:
+    """Widen ``ax``'s y-axis (``axis="x"``: its x-axis) to at least :data:`MIN_RELATIVE_SPAN`
+    of the mean magnitude of ``values`` (the data drawn; or of ``scale``, a magnitude that
+    the caller gives), centred on the current view, where they vary by less than
     :data:`NEGLIGIBLE_VARIATION` of it.
 
     Returns
@@ -379,13 +468,13 @@ def keep_relative_span(ax, values) -> str:
     data = data[np.isfinite(data)]
     if data.size == 0:
         return ""
-    scale = abs(float(data.mean()))
-    low, high = ax.get_ylim()
+    scale = abs(float(data.mean())) if scale is None else scale
+    low, high = ax.get_ylim() if axis == "y" else ax.get_xlim()
     if (not scale > 0 or float(np.ptp(data)) >= NEGLIGIBLE_VARIATION * scale
             or high - low >= MIN_RELATIVE_SPAN * scale):
         return ""
     centre, half = 0.5 * (low + high), 0.5 * MIN_RELATIVE_SPAN * scale
-    ax.set_ylim(centre - half, centre + half)
+    (ax.set_ylim if axis == "y" else ax.set_xlim)(centre - half, centre + half)
     return (f"varies by {percent_text(float(np.ptp(data)) / scale)} of its mean; "
             f"axis spans {MIN_RELATIVE_SPAN:.0%} of it")
 
@@ -398,13 +487,13 @@ def _note_span(ax, values) -> None:
 
 
 def coordinate_text(coord: xr.DataArray, value) -> str:
-    """``"B_clearance 0.00025 m"``: a sweep coordinate's name, value and units (if any)."""
-    unit = coord.attrs.get("units", "")
-    return f"{coord.name} {value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+    """``"B_clearance 0.25 mm"``: a sweep coordinate's name and value in its quantity's unit
+    (:func:`quantity_text`)."""
+    return f"{coord.name} {quantity_text(coord, value)}"
 
 
 def point_text(obj: xr.Dataset | xr.DataArray, keys: dict) -> str:
-    """``"B_coating PTFE, B_clearance 0.00025 m"`` of a point of :func:`iter_points`."""
+    """``"B_coating PTFE, B_clearance 0.25 mm"`` of a point of :func:`iter_points`."""
     return ", ".join(coordinate_text(obj[d], v) if d in obj.coords else f"{d} {value_text(v)}"
                      for d, v in keys.items())
 
@@ -419,14 +508,13 @@ def _dim_name(obj: xr.Dataset | xr.DataArray, dim: str) -> str:
 
 def selection_text(ds: xr.Dataset, selection: dict) -> str:
     """The ``--select`` slice as a title line: ``"selection: clearance_joints=AB (A_clearance
-    0.00025 m, B_clearance 0.00025 m), ..."``; numbers with the coordinate's units, a zip
-    group's label with the values the case ran with."""
+    0.25 mm, B_clearance 0.25 mm), ..."``; numbers in their quantity's unit
+    (:func:`quantity_text`), a zip group's label with the values the case ran with."""
     if not selection:
         return ""
     parts = []
     for name, value in selection.items():
-        unit = ds[name].attrs.get("units", "") if name in ds.coords else ""
-        text = f"{name}={value_text(value)}" + (f" {unit}" if unit not in ("", "1") else "")
+        text = f"{name}={quantity_text(ds[name], value) if name in ds.coords else value_text(value)}"
         keys = str(ds[name].attrs.get("config_keys", "")).split() if name in ds.coords else []
         # a zip group's label: the values the case ran with ("AB (A_coating PTFE, ...)")
         zipped = [coordinate_text(c, c.values) for n, c in ds.coords.items()

@@ -1,6 +1,7 @@
 """``dynamics-map``: the period (1 to ``motion.MAX_PERIOD``, none, undetermined) of every case
-of a two-parameter grid sweep as a categorical map, and beside it the 0-1 test's K for chaos
-on a continuous scale (docs/physics.md section 11)."""
+of a two-parameter grid sweep as a categorical map, each cell without a period marked with
+its motion class, and beside it the 0-1 test's K for chaos and, where the sweep computed it,
+the largest Lyapunov exponent, on continuous scales (docs/physics.md section 11)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,9 @@ UNDETERMINED_COLOUR = "#ffffff"
 NONE_COLOUR = "#404040"
 PERIOD_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
                   "#bcbd22")
+#: The mark a cell without a period carries for its motion class (``summary.motion_class``).
+CLASS_MARKS = {"quasi-periodic": "QP", "chaotic": "C", "transient": "T", "non-periodic": "NP",
+               "undetermined": "?"}
 #: Units a swept coordinate is drawn in: its ``units`` attribute -> (factor, unit text): the
 #: drawn value is the stored one / factor.
 AXIS_UNITS = {"m": (1.0e-3, "mm"), "rpm": (1.0, "r/min"), "r/min": (1.0, "r/min"),
@@ -113,11 +117,17 @@ def _draw_dynamics_map(fig: Figure, ds: xr.Dataset, x: str | None, y: str | None
     period = summary["period"].transpose(y, x).values.astype(np.int64)
     chaos = (summary["chaos_k"].transpose(y, x).values.astype(float) if "chaos_k" in summary
              else np.full(period.shape, np.nan))
+    exponent = (summary["lyapunov_exponent"].transpose(y, x).values.astype(float)
+                if "lyapunov_exponent" in summary else None)
+    classes = (summary["motion_class"].transpose(y, x).values.astype(str)
+               if "motion_class" in summary and set(summary["motion_class"].dims) == {x, y}
+               else None)
     xticks, xlabel = _axis(ds, x)
     yticks, ylabel = _axis(ds, y)
     xedges = np.arange(len(xticks) + 1) - 0.5
     yedges = np.arange(len(yticks) + 1) - 0.5
-    ax_period, ax_k = fig.subplots(1, 2)
+    axes = fig.subplots(1, 2 if exponent is None else 3)
+    ax_period, ax_k = axes[0], axes[1]
     cmap, norm = _categories()
     mesh = ax_period.pcolormesh(xedges, yedges, period, cmap=cmap, norm=norm,
                                 edgecolors="0.6", linewidth=0.5)
@@ -127,7 +137,20 @@ def _draw_dynamics_map(fig: Figure, ds: xr.Dataset, x: str | None, y: str | None
                                     label=category_text(p)) for p in present],
                      title="period [revolutions]", loc="upper left", bbox_to_anchor=(1.01, 1.0),
                      fontsize="small", title_fontsize="small")
-    ax_period.set_title("Period of the settled Poincaré samples", fontsize="small")
+    marked = []
+    if classes is not None:
+        for (row, col), name in np.ndenumerate(classes):
+            if period[row, col] > 0 or name not in CLASS_MARKS:
+                continue
+            shade = cmap(norm(period[row, col]))
+            light = sum(shade[:3]) > 1.5
+            text = ax_period.text(col, row, CLASS_MARKS[name], ha="center", va="center",
+                                  fontsize="small", color="black" if light else "white")
+            text.set_gid(f"motion_class:{name}")
+            marked.append(name)
+    ax_period.set_title("Period of the settled Poincaré samples" + (
+        "\n" + ", ".join(f"{CLASS_MARKS[n]}: {n}" for n in CLASS_MARKS if n in marked)
+        if marked else ""), fontsize="small")
     k_mesh = ax_k.pcolormesh(xedges, yedges, np.ma.masked_invalid(chaos), cmap="viridis",
                              vmin=0.0, vmax=1.0, edgecolors="0.6", linewidth=0.5)
     k_mesh.set_gid("chaos_k")
@@ -138,11 +161,23 @@ def _draw_dynamics_map(fig: Figure, ds: xr.Dataset, x: str | None, y: str | None
     ax_k.set_title("0-1 test for chaos" + (f" (grey: n/a, {missing} case"
                                             f"{'s' if missing > 1 else ''})" if missing else ""),
                    fontsize="small")
-    for ax in (ax_period, ax_k):
+    if exponent is not None:
+        ax_l = axes[2]
+        finite = np.abs(exponent[np.isfinite(exponent)])
+        span = max(float(finite.max()) if finite.size else 0.0, 0.05)
+        l_mesh = ax_l.pcolormesh(xedges, yedges, np.ma.masked_invalid(exponent), cmap="RdBu_r",
+                                 vmin=-span, vmax=span, edgecolors="0.6", linewidth=0.5)
+        l_mesh.set_gid("lyapunov_exponent")
+        ax_l.set_facecolor("0.85")
+        lbar = fig.colorbar(l_mesh, ax=ax_l)
+        lbar.set_label("largest Lyapunov exponent [1/revolution] (chaotic above 0)")
+        ax_l.set_title("Largest Lyapunov exponent (twin runs)", fontsize="small")
+    for ax in axes:
         ax.set_xticks(np.arange(len(xticks)), xticks)
         ax.set_yticks(np.arange(len(yticks)), yticks)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_xlim(xedges[0], xedges[-1])
         ax.set_ylim(yedges[0], yedges[-1])
-    fig.suptitle(f"Dynamics map: period and 0-1 test K over {x} and {y}")
+    fig.suptitle(f"Dynamics map: period, 0-1 test K{'' if exponent is None else ' and Lyapunov exponent'}"
+                 f" over {x} and {y}")

@@ -1,18 +1,23 @@
 """``effects``: a sweep that switches joints' clearance on and off, read as a two-level
 design (``analysis.factorial``): each joint's effect on the slider's vibration and on each
-joint's wear, with the members' 95 % intervals (docs/mixed_clearances.md)."""
+joint's wear, with their 95 % intervals (the members' spread and, for the vibration, the run's
+length), and each effect at each speed as a marker where it changes sign with the speed
+(docs/mixed_clearances.md)."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from ..analysis import factorial
 from .common import PlotError, display_scale
 
 #: Volumes drawn in the unit that reads directly (worn volumes are some 1e-15 m^3).
 VOLUME_UNITS = ((1e-18, "\u00b5m3"), (1e-9, "mm3"), (1.0, "m3"))
+#: Markers of an effect at each setting of the axis (the speed) where it changes sign.
+MARKERS = ("o", "s", "^", "v", "D")
 
 
 def _scale(values: np.ndarray, units: str) -> tuple[float, str]:
@@ -56,7 +61,20 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
         ax.barh(y, v, color=colours, height=0.6)
         if np.isfinite(err).all():
             ax.errorbar(v, y, xerr=err, fmt="none", ecolor="k", capsize=3, lw=1.0,
-                        label="95 % interval (members)")
+                        label="95 % interval")
+        where = {factors[joint][0]: factors[joint][2]} if joint else {}
+        labelled = set()
+        for row, j in enumerate(shown):
+            changes = factorial.sign_changes(ds, name, joint, {j: (factors[j][2], factors[j][1])},
+                                             factors, where)
+            for dim, found in changes.items():
+                for k, (setting, (value, _, _)) in enumerate(found):
+                    label = f"at {setting} r/min" if dim == "speed_rpm" else f"at {dim} {setting}"
+                    ax.plot(value / scale, row, MARKERS[k % len(MARKERS)], color="k", ms=5,
+                            mfc="w", label=None if label in labelled else label)
+                    labelled.add(label)
+        if labelled:
+            ax.legend(fontsize="x-small", loc="best")
         ax.axvline(0.0, color="k", lw=0.8)
         ax.set_yticks(y, [f"clearance at {j}" for j in shown])
         ax.invert_yaxis()
@@ -64,8 +82,10 @@ def _draw_effects(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_xlabel(f"change of the {what} [{unit}]")
         ax.set_title(what + (f" (cases with clearance at {joint})" if joint else ""),
                      fontsize="small")
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
         ax.grid(axis="x", alpha=0.3)
     rest = [d for d in factorial.design_dims(ds) if d not in {f[0] for f in factors.values()}]
     fig.suptitle("Effect of each joint's clearance (ideal -> clear), averaged over the other "
                  "joints" + (f" and {', '.join(rest)}" if rest else "")
-                 + "\nred: beyond the members' spread; grey: within it")
+                 + "\nred: interval excludes 0; grey: it holds 0; markers: at each "
+                 "setting, where the sign changes")

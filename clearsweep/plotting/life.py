@@ -8,13 +8,17 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
+from ..variables import JOINT_TYPES
 from .common import (
     AXIS_LABEL_CHARACTERS,
+    DIMENSIONLESS,
     _clearance_joints,
     _edges,
     _note_span,
     _require,
     axis_label,
+    guide_extent,
+    joint_name,
     log_ticks,
     run_config,
     scaled,
@@ -53,7 +57,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
             for joint in var["joint"].values:
                 values = var.sel(joint=joint).values / factor
                 if np.isfinite(values).any():
-                    ax.plot(cycles, values, marker=".", label=f"joint {value_text(joint)}")
+                    ax.plot(cycles, values, marker=".", label=joint_name(value_text(joint)))
         else:
             ax.plot(cycles, var.values / factor, marker=".")
         limit = _life_limit(config, limits.get(name))
@@ -68,7 +72,9 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
         if cycles.size and np.nanmin(cycles) > 0:
             log_ticks(ax.xaxis, float(np.nanmin(cycles)), float(np.nanmax(cycles)))
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(axis_label(var, var.attrs.get("long_name", name), unit))
+        # wrapped: a long label ran past its panel's top into the figure's title
+        ax.set_ylabel(wrapped_label(axis_label(var, var.attrs.get("long_name", name), unit),
+                                    AXIS_LABEL_CHARACTERS))
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="x-small")
     snaps = ds["wear_map_snapshot"]
@@ -83,19 +89,49 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
     polar = _edges(ds["polar"].values, 0.0, 180.0)
     azimuth = _edges(ds["azimuth"].values, -180.0, 180.0)
+    guide = JOINT_TYPES.get(joint) == "prismatic"
     mesh = None
     for k, s in enumerate(picks):
         ax = fig.add_subplot(grid[k // 2, 2 + k % 2])
-        mesh = ax.pcolormesh(azimuth, polar, maps.isel(snapshot=s).values, cmap="viridis", norm=norm,
-                             shading="flat")
-        ax.set_ylim(180.0, 0.0)
-        ax.set_title(f"joint {joint}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
-        ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
-        ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
+        if guide:
+            mesh = _guide_snapshot(ax, maps.isel(snapshot=s).values, guide_extent(ds), norm)
+        else:
+            mesh = ax.pcolormesh(azimuth, polar, maps.isel(snapshot=s).values, cmap="viridis",
+                                 norm=norm, shading="flat")
+            ax.set_ylim(180.0, 0.0)
+            ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
+            ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
+        ax.set_title(f"{joint_name(joint)}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
     if mesh is not None:
         fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth", unit))
     fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}\n"
                  + snapshot_note(ds["snapshot_cycle"].values, picks, joint))
+
+
+def _guide_snapshot(ax, depth: np.ndarray, extent, norm):
+    """A guide's wall maps (docs/physics.md 5.7) in one snapshot panel: its four bands (+y,
+    -y, +z, -z walls, ``core.prismatic.WALLS``) as strips one above the other, each across
+    its wall (rows) by along the guide [mm]; white lines between the walls."""
+    from ..core.prismatic import WALLS
+
+    nrow, ncol = depth.shape
+    band = nrow // len(WALLS)
+    if extent is not None:
+        x0, span = extent[0], extent[1]
+        x_edges = 1e3 * (x0 + span * np.arange(ncol + 1) / ncol)
+        ax.set_xlabel("along the guide x [mm]", fontsize="x-small")
+    else:
+        x_edges = np.arange(ncol + 1.0)
+        ax.set_xlabel(f"bin along the guide [{DIMENSIONLESS}]", fontsize="x-small")
+    mesh = ax.pcolormesh(x_edges, np.arange(nrow + 1.0), depth, cmap="viridis", norm=norm,
+                         shading="flat")
+    ax.set_ylim(float(nrow), 0.0)
+    for w in range(1, len(WALLS)):
+        ax.axhline(w * band, color="white", lw=1.0)
+    ax.set_yticks([(w + 0.5) * band for w in range(len(WALLS))], [f"{w} wall" for w in WALLS],
+                  fontsize="x-small")
+    ax.set_ylabel("across each wall", fontsize="x-small")
+    return mesh
 
 
 def snapshot_note(cycles: np.ndarray, picks: np.ndarray, joint: str) -> str:
@@ -109,10 +145,10 @@ def snapshot_note(cycles: np.ndarray, picks: np.ndarray, joint: str) -> str:
     """
     n = len(cycles)
     if len(picks) == n:
-        return f"wear maps of joint {joint}: all {n} stored snapshots"
+        return f"wear maps of {joint_name(joint)}: all {n} stored snapshots"
     left = [float(c) for i, c in enumerate(cycles) if i not in set(picks.tolist())]
     listed = ", ".join(f"{c:.3g}" for c in left[:4]) + (", ..." if len(left) > 4 else "")
-    return (f"wear maps of joint {joint}: {len(picks)} of the {n} stored snapshots "
+    return (f"wear maps of {joint_name(joint)}: {len(picks)} of the {n} stored snapshots "
             f"(not drawn: {listed} revolutions)")
 
 

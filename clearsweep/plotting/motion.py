@@ -20,6 +20,7 @@ from ..analysis import (
     sweep_dims,
     value_text,
 )
+from ..variables import JOINT_TYPES
 from .common import (
     DIMENSIONLESS,
     PlotError,
@@ -28,7 +29,9 @@ from .common import (
     _legend_note,
     _require,
     axis_label,
+    joint_name,
     percent_text,
+    quantity_unit,
     values_offer,
 )
 
@@ -213,11 +216,13 @@ def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
         offset = ds["poincare_offset"].sel(joint=joint)
         axis = offset_component(offset)
         values = offset.sel(axis=axis).transpose(dim, "revolution").values
-        panels.append((f"joint {joint}: ball-centre offset {axis} (socket frame)",
+        centre = {"revolute": "journal", "prismatic": "block"}.get(str(JOINT_TYPES.get(str(joint))), "ball")
+        panels.append((f"{joint_name(str(joint))}: {centre}-centre offset {axis} (socket frame)",
                        f"offset {axis} / clearance [{DIMENSIONLESS}]", samples(values)))
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     numeric = np.issubdtype(np.asarray(xs).dtype, np.number)
-    positions = np.asarray(xs, dtype=float) if numeric else np.arange(len(xs), dtype=float)
+    factor, unit = quantity_unit(ds[x]) if numeric else (1.0, None)
+    positions = np.asarray(xs, dtype=float) / factor if numeric else np.arange(len(xs), dtype=float)
     for ax, (title, label, values) in zip(axes, panels):
         ax.plot(np.repeat(positions[:, None], n_rev, axis=1).ravel(), values.ravel(),
                 ls="none", marker="o", ms=1.5, color="black")
@@ -226,6 +231,6 @@ def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
         ax.grid(alpha=0.3)
     if not numeric:
         axes[-1].set_xticks(positions, [value_text(v) for v in xs])
-    axes[-1].set_xlabel(axis_label(ds[x]))
+    axes[-1].set_xlabel(axis_label(ds[x], units=unit))
     fig.suptitle(f"Bifurcation diagram: Poincaré samples of the last {n_rev} revolutions of "
                  f"each case against {x}")

@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 from ..analysis import configured_clearances, guide_gap, value_text
 from ..variables import JOINT_TYPES
 from .common import (
+    QUANTITY_UNITS,
     _case_label,
     _cases,
     _clearance_joints,
@@ -18,7 +19,7 @@ from .common import (
     axis_label,
     figure_legend,
     joint_name,
-    scaled,
+    keep_relative_span,
 )
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
@@ -73,7 +74,9 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     named = _clearance_joints(ds, offset, "orbit")
     joints = [j for j in named if np.nan_to_num(offset.sel(joint=j).values).any()] or named
     empty = [value_text(j) for j in named if j not in joints]
-    factor, unit = scaled(offset)
+    # in the unit of a clearance (common.QUANTITY_UNITS), whatever the orbit's size: the
+    # axes, the circles and their legend read in the unit every figure gives a clearance in
+    factor, unit = QUANTITY_UNITS["length"]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 4.8)
     per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
@@ -112,6 +115,14 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
                         ls=styles[radius][0], color=styles[radius][1],
                         label=f"{joint_name(value_text(joint))} clearance {radius / factor:.3g} {unit} "
                               f"({source})")
+            # a ball at a fixed point (a round-off spread) draws as one point, not as that
+            # spread at full scale: each axis spans at least MIN_RELATIVE_SPAN of the offset's
+            # magnitude (the clearance's outline, where drawn, is wider already)
+            drawn = [case["ball_offset"].sel(joint=joint) / factor for _, case, _ in cases]
+            size = max((float(np.nanmax(np.abs(d.values))) for d in drawn
+                        if np.isfinite(d.values).any()), default=0.0)
+            for name, ax_name in ((a, "x"), (b, "y")):
+                keep_relative_span(ax, [d.sel(axis=name).values for d in drawn], ax_name, size)
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
             ax.set_ylabel(axis_label(offset, f"d_{b}", unit))

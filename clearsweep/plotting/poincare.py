@@ -15,6 +15,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import ideal_joints, value_text
+from ..variables import JOINT_TYPES
 from .common import (
     PlotError,
     _case_label,
@@ -24,6 +25,7 @@ from .common import (
     axis_label,
     figure_legend,
     file_figures,
+    joint_name,
     keep_relative_span,
 )
 
@@ -79,7 +81,10 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(axis_label(offset, f"d_{a} / c"))
         ax.set_ylabel(axis_label(offset, f"d_{b} / c"))
-        ax.set_title(f"joint {value_text(joint)}: ball centre, {a}{b} plane", fontsize="small")
+        kind = JOINT_TYPES.get(value_text(joint))
+        centre = "journal" if kind == "revolute" else "block" if kind == "prismatic" else "ball"
+        ax.set_title(f"{joint_name(value_text(joint))}: {centre} centre, {a}{b} plane",
+                     fontsize="small")
         ax.grid(alpha=0.3)
     ax = fig.add_subplot(1, panels, panels)
     acc = ds["poincare_slider_acc"]
@@ -94,6 +99,6 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
                  fontsize="small")
     ax.grid(alpha=0.3)
     figure_legend(fig)
-    left_out = f"\nnot drawn: joint {', '.join(empty)}, no section" if empty else ""
+    left_out = f"\nnot drawn: {', '.join(map(joint_name, empty))}, no section" if empty else ""
     fig.suptitle("Poincare section, once per crank revolution" + _legend_note(len(cases))
                  + left_out)

@@ -8,8 +8,7 @@ from matplotlib import colormaps
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 
-from ..analysis import value_text
-from .common import MAX_CYCLE_COLOURS, _require, axis_label, log_ticks
+from .common import MAX_CYCLE_COLOURS, _require, axis_label, log_ticks, quantity_text
 
 #: Hatching of the confidence bands, one per design in turn.
 BAND_HATCHES = ("//", "\\\\", "||", "--", "+", "x", ".", "o")
@@ -23,7 +22,7 @@ def _draw_reliability(fig: Figure, ds: xr.Dataset, b10: bool) -> None:
     limits = [str(v) for v in ds["limit"].values]
     designs = [d for d in ds["b10"].dims if d != "limit"]
     flat = ds.stack(design=designs) if designs else ds.expand_dims(design=[0])
-    labels = [", ".join(f"{d}={value_text(flat[d].values[k])}" for d in designs) or "design"
+    labels = [", ".join(f"{d}={quantity_text(flat[d], flat[d].values[k])}" for d in designs) or "design"
               for k in range(flat.sizes["design"])]
     colours = colormaps["tab10"] if len(labels) <= MAX_CYCLE_COLOURS else colormaps["viridis"]
     ncols = min(3, len(limits))

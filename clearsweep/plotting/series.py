@@ -9,7 +9,7 @@ from matplotlib.figure import Figure
 
 from ..analysis import value_text
 from ..variables import JOINT_TYPES
-from .common import _abscissa, _cases, _legend, _legend_note, _require, axis_label, scaled
+from .common import _abscissa, _cases, _legend, _legend_note, _require, axis_label, joint_name, scaled
 
 _AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
 
@@ -34,11 +34,11 @@ def _draw_slider(fig: Figure, ds: xr.Dataset, x: str) -> None:
 def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     _require(ds, ("reaction_O", "joint_force"), "--kind forces")
     # (panel title, variable, joint or None)
-    rows = [("reaction at O (ground on crank)", "reaction_O", None)]
+    rows = [(f"{joint_name('O')}: reaction (ground on crank)", "reaction_O", None)]
     # the revolute joint at O: its force on the journal is the reaction at O, drawn once
     # the prismatic joint's: the guide's force on the slider
-    rows += [(f"joint {value_text(j)} (" + ("guide on slider" if JOINT_TYPES.get(value_text(j)) == "prismatic"
-                                           else "on the ball") + ")", "joint_force", j)
+    rows += [(f"{joint_name(value_text(j))} (" + ("on the slider" if JOINT_TYPES.get(value_text(j)) == "prismatic"
+                                                   else "on the ball") + ")", "joint_force", j)
              for j in ds["joint"].values if JOINT_TYPES.get(value_text(j)) != "revolute"]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)

@@ -23,6 +23,8 @@ from .common import (
     axis_label,
     percent_text,
     point_text,
+    quantity_unit,
+    quantity_values,
     scaled,
     wrapped_label,
 )
@@ -47,11 +49,13 @@ ROBUST_FENCE = 1.0
 ANNOTATION_DARK_TEXT_ABOVE = 0.6
 
 
-def _category_positions(coord: xr.DataArray) -> tuple[np.ndarray, list[str] | None]:
-    """Numeric coordinates as they are; others at 0, 1, ... with their text as tick labels."""
+def _category_positions(coord: xr.DataArray) -> tuple[np.ndarray, list[str] | None, str]:
+    """Numeric coordinates in their quantity's unit (``common.quantity_unit``); others at 0,
+    1, ... with their text as tick labels; and the axis label."""
     if coord.dtype.kind in "fiu":
-        return coord.values, None
-    return np.arange(coord.size), [value_text(v) for v in coord.values]
+        xs, label = quantity_values(coord)
+        return xs, None, label
+    return np.arange(coord.size), [value_text(v) for v in coord.values], axis_label(coord)
 
 
 def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
@@ -68,7 +72,7 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
     mean.attrs = {**ds[metric + "_mean"].attrs, "units": unit}
     low, high = ds[metric + "_ci_low"] / factor, ds[metric + "_ci_high"] / factor
     ax = fig.add_subplot()
-    xs, ticks = _category_positions(mean[dims[0]])
+    xs, ticks, xlabel = _category_positions(mean[dims[0]])
     series = tuple(str(d) for d in mean.dims if d != dims[0])
     lines: list[tuple[dict, xr.DataArray]] = []
     empty: list[tuple[dict, xr.DataArray]] = []
@@ -88,7 +92,7 @@ def _draw_ensemble_sweep(fig: Figure, ds: xr.Dataset, metric: str) -> None:
                     label=_case_label(text, len(lines), metric))
     if ticks is not None:
         ax.set_xticks(xs, ticks)
-    ax.set_xlabel(axis_label(mean[dims[0]]))
+    ax.set_xlabel(xlabel)
     ax.set_ylabel(wrapped_label(axis_label(mean), AXIS_LABEL_CHARACTERS))
     ax.grid(alpha=0.3)
     _note_span(ax, [low.values, high.values, mean.values])
@@ -121,7 +125,7 @@ def _draw_sample_scatter(fig: Figure, values: xr.DataArray, panels: list, factor
     for k, name in enumerate(inputs):
         ax = fig.add_subplot(nrows, ncols, k + 1)
         coord = values[name]
-        x_factor, x_unit = scaled(coord)
+        x_factor, x_unit = quantity_unit(coord)
         for text, panel in panels:
             ax.scatter(coord.values / x_factor, panel.transpose(SAMPLE_DIM).values / factor, s=6,
                        alpha=0.6, label=_case_label(text, len(panels), "sample point"))
@@ -165,7 +169,7 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
         return
     if len(dims) == 1:
         ax = fig.add_subplot()
-        xs, ticks = _category_positions(values[dims[0]])
+        xs, ticks, xlabel = _category_positions(values[dims[0]])
         for text, panel in panels:
             # categories are not ordered: points, not lines between them
             ax.plot(xs, panel.transpose(dims[0]).values / factor, marker="o",
@@ -173,7 +177,7 @@ def _draw_sweep(fig: Figure, ds: xr.Dataset, metric: str | None) -> None:
                     label=_case_label(text, len(panels), metric))
         if ticks is not None:
             ax.set_xticks(xs, ticks)
-        ax.set_xlabel(axis_label(values[dims[0]]))
+        ax.set_xlabel(xlabel)
         ax.set_ylabel(wrapped_label(label, AXIS_LABEL_CHARACTERS))
         ax.grid(alpha=0.3)
         _note_span(ax, values.values / factor)
@@ -256,10 +260,10 @@ MAX_CELL_TICK_LABELS = 8
 
 
 def _cell_ticks(coord: xr.DataArray) -> tuple[list[str], str]:
-    """Tick labels of a heat-map axis over ``coord``, numbers in display units (250, not
-    0.00025), every k-th left blank where there are more than :data:`MAX_CELL_TICK_LABELS`;
-    and the axis label with those units."""
-    factor, unit = scaled(coord) if coord.dtype.kind in "fiu" else (1.0, None)
+    """Tick labels of a heat-map axis over ``coord``, numbers in their quantity's unit (0.25
+    mm, not 0.00025 m: ``common.quantity_unit``), every k-th left blank where there are more
+    than :data:`MAX_CELL_TICK_LABELS`; and the axis label with those units."""
+    factor, unit = quantity_unit(coord) if coord.dtype.kind in "fiu" else (1.0, None)
     texts = ([format(float(v) / factor, ".4g") for v in coord.values] if factor != 1.0
              else [value_text(v) for v in coord.values])
     step = -(-len(texts) // MAX_CELL_TICK_LABELS)

@@ -25,7 +25,9 @@ from .common import (
     _require,
     axis_label,
     display_scale,
-    run_config,
+    figure_legend,
+    guide_extent,
+    joint_name,
     scaled,
 )
 
@@ -61,23 +63,23 @@ def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
                       attrs={**ds.attrs, "snapshot": f"{k} at {float(cycles[k]):.4g} revolutions"})
 
 
-def _draw_bearing_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
+def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
                       unit: str, label: str, joint: str) -> None:
     """A revolute joint's bearing map (docs/physics.md 5.6: its first row, the depth around
     the bearing, uniform along its length): the depth against the angle around the bearing,
-    and the bearing's cross-section with the worn profile exaggerated."""
-    rows, cols, first = at
+    and the bearing's cross-section with the worn profile exaggerated (``at``: the two slots
+    of the figure's grid)."""
     ring = depth.isel(polar=0)
     phi = ring["azimuth"].values
-    ax = fig.add_subplot(rows, cols, first)
+    ax = fig.add_subplot(at[0])
     ax.plot(phi, ring.values, color="C0", lw=1.0)
     ax.set_xlim(-180.0, 180.0)
     ax.set_xlabel(axis_label(ring["azimuth"], "angle around the bearing, atan2(z, y)"))
     ax.set_ylabel(label)
     ax.grid(alpha=0.3)
-    ax.set_title(f"joint {joint}: bearing wear around the bearing (max {peak:.3g} {unit})",
+    ax.set_title(f"{joint_name(joint)}: wear around the bearing (max {peak:.3g} {unit})",
                  fontsize="small")
-    polar_ax = fig.add_subplot(rows, cols, first + 1, projection="polar")
+    polar_ax = fig.add_subplot(at[1], projection="polar")
     scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
     closed = np.radians(np.append(phi, phi[0] + 360.0))
     polar_ax.plot(closed, np.ones_like(closed), color="0.5", lw=0.8, ls="--")
@@ -85,69 +87,53 @@ def _draw_bearing_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray
     polar_ax.plot(closed, 1.0 + scale * np.nan_to_num(profile), color="C3", lw=1.2)
     polar_ax.set_ylim(0.0, 1.0 + 1.2 * WEAR_POLAR_EXAGGERATION)
     polar_ax.set_yticks([])
-    polar_ax.set_title(f"joint {joint}: bearing cross-section (y right, z up), worn profile "
+    polar_ax.set_title(f"{joint_name(joint)}: cross-section (y right, z up), worn profile "
                        f"exaggerated", fontsize="small", pad=12)
 
 
-def guide_extent(ds: xr.Dataset) -> tuple[float, float, float, float] | None:
-    """(x0, x span, half height + c_z, half width + c_y) [m] of joint P's wall maps, from
-    the run's config (``params.guide_row``: the walls' bins along the guide and across each
-    wall); None where the file's config cannot be read."""
-    from ..config import ConfigError, load_config
-    from ..core import layout as L
-    from ..params import PRESETS, guide_row
+def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: str, label: str,
+                    joint: str, extent) -> None:
+    """A prismatic joint's wall maps (docs/physics.md 5.7): the map's rows in four bands, one
+    per wall (+y, -y, +z, -z, ``core.prismatic.WALLS``), each ``npolar // 4`` rows across the
+    wall by ``nazim`` columns along the guide, drawn as four strips one above the other in
+    ``spec`` (a slot of the figure's grid), on one depth colour scale, against the position
+    along the guide [mm] and across the wall [mm] (bins where the config cannot be read)."""
+    from ..core.prismatic import WALLS
 
-    base = run_config(ds)
-    if not base:
-        return None
-    try:
-        cfg = load_config(base)
-    except (ConfigError, TypeError, ValueError):
-        return None
-    row = np.zeros(L.N_JP)
-    guide_row(row, cfg.joints.P, PRESETS[cfg.mechanism.preset])
-    return (float(row[L.J_X0]), float(row[L.J_XSPAN]), 0.5 * row[L.J_HEIGHT] + row[L.J_CZ],
-            0.5 * row[L.J_WIDTH] + row[L.J_CY])
-
-
-def _draw_guide_map(fig: Figure, at: tuple[int, int, int], depth: xr.DataArray, peak: float,
-                    unit: str, label: str, joint: str, extent) -> None:
-    """A prismatic joint's wall maps (docs/physics.md 5.7: the map's rows in four bands, one
-    per wall +y, -y, +z, -z, each across the wall by along the guide): the two y walls in
-    the first panel, the two z walls in the second, against the position along the guide
-    [mm] (bins where the config cannot be read) and across the wall [mm]."""
-    rows, cols, first = at
     band = depth.sizes["polar"] // 4
     ncol = depth.sizes["azimuth"]
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
-    for k, walls in enumerate((("+y", "-y"), ("+z", "-z"))):
-        ax = fig.add_subplot(rows, cols, first + k)
+    strips = spec.subgridspec(len(WALLS), 1)
+    axes: list = []
+    mesh = None
+    for w, wall in enumerate(WALLS):
+        ax = fig.add_subplot(strips[w, 0], sharex=axes[0] if axes else None)
         if extent is not None:
             x0, span, half_y_wall, half_z_wall = extent
-            half = half_y_wall if k == 0 else half_z_wall
+            half = half_y_wall if w < 2 else half_z_wall
             x_edges = 1e3 * (x0 + span * np.arange(ncol + 1) / ncol)
             a_edges = 1e3 * half * (2.0 * np.arange(band + 1) / band - 1.0)
-            xlabel, across = "position along the guide x [mm]", "across the wall [mm]"
+            xlabel = "position along the guide x [mm]"
+            across = "z - z_s [mm]" if w < 2 else "y [mm]"
         else:
             x_edges = np.arange(ncol + 1.0)
             a_edges = np.arange(band + 1.0)
-            xlabel, across = f"bin along the guide [{DIMENSIONLESS}]", f"bin across [{DIMENSIONLESS}]"
-        # one wall above the other, a gap between them
-        w0, w1 = (0, 1) if k == 0 else (2, 3)
-        upper = depth.values[w0 * band:(w0 + 1) * band]
-        lower = depth.values[w1 * band:(w1 + 1) * band]
-        height = a_edges[-1] - a_edges[0]
-        mesh = ax.pcolormesh(x_edges, a_edges + 0.6 * height, upper, cmap="viridis", norm=norm,
-                             shading="flat")
-        ax.pcolormesh(x_edges, a_edges - 0.6 * height, lower, cmap="viridis", norm=norm,
-                      shading="flat")
-        ax.set_yticks([0.6 * height + 0.5 * (a_edges[0] + a_edges[-1]),
-                       -0.6 * height + 0.5 * (a_edges[0] + a_edges[-1])], [walls[0], walls[1]])
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel(f"wall ({across})")
-        ax.set_title(f"joint {joint}: guide walls {walls[0]} and {walls[1]} (max {peak:.3g} {unit})",
-                     fontsize="small")
-        fig.colorbar(mesh, ax=ax).set_label(label)
+            xlabel = f"bin along the guide [{DIMENSIONLESS}]"
+            across = f"bin across [{DIMENSIONLESS}]"
+        values = depth.values[w * band:(w + 1) * band]
+        mesh = ax.pcolormesh(x_edges, a_edges, values, cmap="viridis", norm=norm, shading="flat")
+        wall_peak = float(np.nanmax(values)) if np.isfinite(values).any() else float("nan")
+        ax.set_ylabel(across, fontsize="x-small")
+        ax.tick_params(labelsize="x-small")
+        ax.set_title(f"{joint_name(joint)}: {wall} wall (max {wall_peak:.3g} {unit})",
+                     fontsize="x-small", pad=2)
+        if w < len(WALLS) - 1:
+            ax.tick_params(labelbottom=False)
+        else:
+            ax.set_xlabel(xlabel, fontsize="small")
+        axes.append(ax)
+    if mesh is not None:
+        fig.colorbar(mesh, ax=axes, shrink=0.9).set_label(label)
 
 
 def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
@@ -168,30 +154,35 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     label = axis_label(wear, "wear depth", unit)
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.0)
+    # the guide's row holds four strips: twice a socket's height, the figure taller for it
+    heights = [2.0 if JOINT_TYPES.get(value_text(j)) == "prismatic" else 1.0 for j in joints]
+    if len(joints) > 1 and max(heights, default=1.0) > 1.0:
+        fig.set_size_inches(fig.get_figwidth(), fig.get_figheight() * sum(heights) / len(heights))
+    grid = fig.add_gridspec(max(len(joints), 1), 2, height_ratios=heights or None)
     for j, joint in enumerate(joints):
         depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
         if JOINT_TYPES.get(value_text(joint)) == "revolute":
-            _draw_bearing_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit, label,
+            _draw_bearing_map(fig, (grid[j, 0], grid[j, 1]), depth, peak, unit, label,
                               value_text(joint))
             continue
         if JOINT_TYPES.get(value_text(joint)) == "prismatic":
             # the depth of the corners' tracks along the guide (docs/physics.md 5.7)
-            _draw_guide_map(fig, (len(joints), 2, 2 * j + 1), depth, peak, unit,
+            _draw_guide_map(fig, grid[j, :], depth, peak, unit,
                             axis_label(wear, "track depth", unit), value_text(joint),
                             guide_extent(ds))
             continue
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
-        ax = fig.add_subplot(len(joints), 2, 2 * j + 1)
+        ax = fig.add_subplot(grid[j, 0])
         mesh = ax.pcolormesh(np.degrees(azimuth), np.degrees(polar), depth.values, cmap=cmap,
                              norm=norm, shading="flat")
         ax.set_ylim(180.0, 0.0)
         ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"))
         ax.set_ylabel(axis_label(ds["polar"], "polar angle from +z"))
-        ax.set_title(f"joint {value_text(joint)}: socket wear map (max {peak:.3g} {unit})",
+        ax.set_title(f"{joint_name(value_text(joint))}: socket wear map (max {peak:.3g} {unit})",
                      fontsize="small")
         fig.colorbar(mesh, ax=ax).set_label(label)
-        ax3 = fig.add_subplot(len(joints), 2, 2 * j + 2, projection="3d")
+        ax3 = fig.add_subplot(grid[j, 1], projection="3d")
         ax3.plot_surface(*sphere, facecolors=cmap(norm(depth.values)), rstride=1, cstride=1,
                          shade=False, linewidth=0, antialiased=False)
         ax3.set_box_aspect((1, 1, 1))
@@ -206,16 +197,18 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
                                            (ax3.set_zlabel, ax3.set_zticks, "z")):
             set_ticks([-1.0, 0.0, 1.0], ["", "", ""])
             set_label(f"{name} [{DIMENSIONLESS}]", labelpad=-12)
-        ax3.set_title(f"joint {value_text(joint)}: unit sphere, socket frame", fontsize="small",
+        ax3.set_title(f"{joint_name(value_text(joint))}: unit sphere, socket frame", fontsize="small",
                       pad=12)
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(label)
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
-    left_out = f"\nnot drawn: joint {', '.join(empty)}, no wear" if empty else ""
+    left_out = f"\nnot drawn: {', '.join(map(joint_name, empty))}, no wear" if empty else ""
+    # the surfaces drawn: a figure of the guide alone is no socket's
     kinds = {JOINT_TYPES.get(value_text(j)) for j in joints}
-    surfaces = ["Socket"] + [name for kind, name in (("revolute", "bearing"), ("prismatic", "guide"))
-                             if kind in kinds]
-    fig.suptitle((" and ".join(surfaces) if len(surfaces) < 3
-                  else ", ".join(surfaces[:-1]) + " and " + surfaces[-1]) + " wear depth"
+    surfaces = [name for kind, name in (("spherical", "socket"), ("revolute", "bearing"),
+                                        ("prismatic", "guide")) if kind in kinds]
+    said = (" and ".join(surfaces) if len(surfaces) < 3
+            else ", ".join(surfaces[:-1]) + " and " + surfaces[-1])
+    fig.suptitle((f"{said.capitalize()} wear depth" if said else "Wear depth")
                  + (f", snapshot {snapshot}" if snapshot else "") + left_out)
 
 
@@ -234,8 +227,9 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     guides = [j for j in named if JOINT_TYPES.get(value_text(j)) == "prismatic"]
     named = [j for j in named if j not in guides]
     joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
-    scales = [f"joint {value_text(j)}: no wear" for j in named if j not in joints]
-    scales += [f"guide {value_text(j)}: not applicable (flat walls, see wear-map)" for j in guides]
+    scales = [f"{joint_name(value_text(j))}: no wear" for j in named if j not in joints]
+    scales += [f"{joint_name(value_text(j))}: not applicable (flat walls, see wear-map)"
+               for j in guides]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.6)
     for j, joint in enumerate(joints):
@@ -243,8 +237,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
         factor, unit = display_scale([peak], "m")
         # a no-break space keeps the value and its unit on one line of the wrapped title
-        scales.append(f"joint {value_text(joint)}: {peak / factor:.3g}\u00a0{unit}" if scale else
-                      f"joint {value_text(joint)}: no wear")
+        scales.append(f"{joint_name(value_text(joint))}: {peak / factor:.3g}\u00a0{unit}" if scale
+                      else f"{joint_name(value_text(joint))}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
                                  projection="polar")
@@ -259,12 +253,11 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_rlim(  # type: ignore[attr-defined]
                 0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
             ax.set_yticks([])
-            ax.set_title(f"joint {value_text(joint)}, about {axis}", fontsize="small")
+            ax.set_title(f"{joint_name(value_text(joint))}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
-    if fig.axes:
-        handles, labels = fig.axes[0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 3),
-                   fontsize="small")
+    # one legend below the panels, in two columns where an entry is long (three of a sweep's
+    # long case labels ran off the figure's sides)
+    figure_legend(fig)
     fig.suptitle("Projected wear profile, radius 1 + depth x scale; largest depth drawn as "
                  f"{WEAR_POLAR_EXAGGERATION:g} of the radius ({'; '.join(scales)})"
                  + _legend_note(len(cases)), fontsize="medium")

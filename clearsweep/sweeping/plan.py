@@ -21,7 +21,16 @@ import numpy as np
 import xarray as xr
 
 from .. import variables
-from ..budget import duration_text, estimate, format_bytes, sweep_seconds, sweep_time_text
+from ..budget import (
+    assembly_seconds,
+    case_seconds,
+    duration_text,
+    estimate,
+    format_bytes,
+    life_seconds,
+    sweep_seconds,
+    sweep_time_text,
+)
 from ..choices import MAX_CASES, MAX_CASES_ANY, MAX_SAMPLE_POINTS
 from ..config import (
     ALTERNATIVES,
@@ -273,21 +282,31 @@ class SweepPlan:
         def total(values: list[float]) -> float:
             return max(values, default=0.0) * to_run if self.counted else sum(values)
 
+        def times(values: list[float]) -> list[float]:
+            # a counted plan: every case to run as costly as the costliest one checked
+            return [max(values, default=0.0)] * to_run if self.counted else values
+
         if STORES[self.store].runs_life:
-            return self._describe_life(runnable, to_run, total,
+            return self._describe_life(runnable, to_run, total, times,
                                        f"sweep {self.name!r}: {n_cases:,} life runs{checked}, "
                                        f"{to_run:,} to run{resumed}", workers)
         steps = total([estimates[h].steps for h in runnable])
+        keeps = STORES[self.store].keeps_series
+        seconds = times([case_seconds(cfg, keeps, estimates[h]) for h, cfg in runnable.items()])
+        assembly = total([assembly_seconds(cfg, keeps, estimates[h])
+                          for h, cfg in runnable.items()])
         # the file holds the kept cases too
         keeps_series = STORES[self.store].keeps_series
         sizes = [e.output_bytes if keeps_series else e.map_bytes for e in estimates.values()]
         per_case = max(sizes, default=0) * (n_cases - skipped) if self.counted else sum(sizes)
         counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
-                f"{steps:.3g} RK4 steps: {sweep_time_text(steps, to_run, workers)}; results up to "
+                f"{steps:.3g} RK4 steps: "
+                f"{sweep_time_text(seconds, runnable.values(), workers, assembly)}; "
+                f"results up to "
                 f"{format_bytes(per_case)} before compression")
 
-    def _describe_life(self, runnable: dict[str, Config], to_run: int, total, head: str,
+    def _describe_life(self, runnable: dict[str, Config], to_run: int, total, times, head: str,
                        workers: int | None) -> str:
         """:meth:`describe` of a life or reliability sweep: at most life.max_blocks blocks
         a run, and the blocks expected if wear sets the pace
@@ -295,15 +314,20 @@ class SweepPlan:
         every limit it watches is crossed), each in RK4 steps and wall time."""
         every = STORES[self.store].every_limit
         bound, expected, forecasts = [], [], []
+        bound_s, expected_s = [], []
         for cfg in runnable.values():
-            # a life run simulates up to life.max_blocks blocks of life.block_revolutions
+            # a life run simulates up to life.max_blocks blocks of life.block_revolutions,
+            # each block's steps priced by its joints with clearance, and each block's jump
             steps = block_steps(cfg)
             forecast = forecast_blocks(cfg, every_limit=every)
             bound.append(cfg.life.max_blocks * steps)
             expected.append(forecast.blocks * steps)
+            bound_s.append(life_seconds(cfg, cfg.life.max_blocks, steps))
+            expected_s.append(life_seconds(cfg, forecast.blocks, steps))
             forecasts.append(forecast)
         if not forecasts:       # every part is on disk: only the assembly is left
             return f"{head}: nothing to run"
+        assembly = total([assembly_seconds(cfg, False) for cfg in runnable.values()])
         most, likely = total(bound), total(expected)
         blocks = sorted({f.blocks for f in forecasts})
         span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
@@ -317,9 +341,11 @@ class SweepPlan:
             why = (f"{span} blocks a run to the first wear limit ({limit_keys(limits)}); fewer "
                    "where life.cycles or another limit comes first")
         return (f"{head}: at most {most:.3g} RK4 steps (life.max_blocks blocks each), at most "
-                f"{sweep_time_text(most, to_run, workers)}; expected about "
-                f"{duration_text(sweep_seconds(likely, to_run, workers))} ({likely:.3g} RK4 "
-                f"steps: {why})")
+                f"{sweep_time_text(times(bound_s), runnable.values(), workers, assembly)}; "
+                f"expected about "
+                f"{duration_text(sweep_seconds(times(expected_s), workers, assembly))} "
+                f"({likely:.3g} RK4 "
+                f"steps and each block's jump: {why})")
 
     def plan_text(self, workers: int | None = None) -> str:
         """What ``clearsweep validate`` prints for a sweep file: its dimensions, the cases,

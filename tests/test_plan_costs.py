@@ -1,0 +1,180 @@
+"""The plans' clocks (issue 45, item 2): a step is priced by the joints that have clearance,
+from the constants benchmarks/calibrate_plan.py measured (clearsweep/data/plan_costs.yaml);
+a life or reliability plan by its blocks and their jumps; the compile estimate from the same
+file. No timing here: the plans are checked against measured runs in benchmarks/README.md
+("Plans against measured times"), never in a unit test."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from clearsweep import budget
+from clearsweep.budget import (
+    PLAN_COSTS_FILE,
+    case_seconds,
+    clearance_joints,
+    life_seconds,
+    plan_costs,
+    read_plan_costs,
+    step_seconds,
+)
+from clearsweep.cli import main
+from clearsweep.config import load_config
+from clearsweep.schema import read_yaml
+from clearsweep.service_life import block_steps, forecast_blocks, life_time_text
+from clearsweep.sweeping.plan import expand
+
+ROOT = Path(__file__).resolve().parents[1]
+IDEAL = ["joints.B.clearance=0", "joints.A.clearance=0"]
+GUIDE = [*IDEAL, "joints.P.clearance_y=1e-4", "joints.P.clearance_z=1e-4"]
+#: A costs file whose every constant is a round number no measurement gives.
+ROUND = """\
+measured: {date: test, machine: none, load_average: [0, 0]}
+step_s: 1.0e-3
+joint_step_s: {O: 2.0e-3, A: 4.0e-3, B: 8.0e-3, P: 16.0e-3}
+row_s: 1.0e-4
+case_s: 5.0
+map_bin_s: 1.0e-6
+block_s: 7.0
+run_start_s: 3.0
+sweep_start_s: 11.0
+assemble_case_s: 0.5
+assemble_row_s: 1.0e-5
+compile_s: 123
+"""
+
+
+@pytest.fixture
+def round_costs(tmp_path, monkeypatch):
+    path = tmp_path / "costs.yaml"
+    path.write_text(ROUND)
+    monkeypatch.setenv("CLEARSWEEP_PLAN_COSTS", str(path))
+    read_plan_costs.cache_clear()
+    yield path
+    read_plan_costs.cache_clear()
+
+
+def seconds_of(text: str) -> float:
+    value, unit = re.search(r"about ([0-9.e+]+) (s|min|h|d)\b", text).groups()
+    return float(value) * {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}[unit]
+
+
+def test_the_shipped_file_says_where_and_when_it_was_measured():
+    doc = read_yaml(PLAN_COSTS_FILE)
+    assert {"date", "machine", "load_average", "kernel_cache"} <= set(doc["measured"])
+    costs = plan_costs()
+    assert set(costs.joint_step_s) == set("OABP")
+    assert all(v >= 0 for v in costs.joint_step_s.values())
+    assert costs.step_s > 0 and costs.compile_s > 0
+
+
+def test_the_joints_with_clearance():
+    assert clearance_joints(load_config({}, IDEAL)) == ""
+    assert clearance_joints(load_config({}, GUIDE)) == "P"
+    assert clearance_joints(load_config({}, ["joints.O.clearance=1e-4", "joints.A.clearance=2.5e-4",
+                                             "joints.B.clearance=2.5e-4"])) == "OAB"
+
+
+def test_a_guide_case_costs_more_per_step_than_an_ideal_case():
+    """The shipped constants: P's 16 corner-wall pairs make its step several times the ideal
+    one (benchmarks/README.md measured 3-7x), and the same steps plan longer."""
+    ideal, guide = load_config({}, IDEAL), load_config({}, GUIDE)
+    assert step_seconds(guide) > 2.0 * step_seconds(ideal)
+    assert case_seconds(guide) > 2.0 * case_seconds(ideal) > 0.0
+    runner = CliRunner()
+    texts = [runner.invoke(main, ["run", str(ROOT / "configs" / "ideal.yaml"), *sets,
+                                  "--dry-run"]).stdout
+             for sets in ([], ["--set", "joints.P.clearance_y=1e-4", "--set",
+                               "joints.P.clearance_z=1e-4"])]
+    assert "100,000 RK4 steps" in texts[0] and "100,000 RK4 steps" in texts[1]
+    per_step = [float(re.search(r"at ([0-9.e+]+) us per step \((ideal|P)\)", t).group(1))
+                for t in texts]
+    assert per_step[1] > 2.0 * per_step[0], texts
+    assert seconds_of(texts[1]) > seconds_of(texts[0]) + 100_000 * (per_step[1] - per_step[0]) \
+        * 1e-6 * 0.99
+
+
+def test_the_file_s_constants_are_the_plan_s(round_costs):
+    """Every constant of the costs file reaches the plans as written."""
+    cfg = load_config({"solver": {"duration": 0.01, "dt": 1e-5, "save_every": 10},
+                       "wear": {"map": [10, 20]}},
+                      ["joints.O.clearance=1e-4", "joints.B.clearance=2.5e-4"])
+    assert step_seconds(cfg) == pytest.approx(1e-3 + 2e-3 + 8e-3)
+    # 1000 steps, 101 rows, 4 maps of 200 bins
+    assert case_seconds(cfg, keeps_series=False) == pytest.approx(5.0 + 1000 * 11e-3)
+    kept = 101 * 1e-4 + 800 * 1e-6
+    assert case_seconds(cfg) == pytest.approx(5.0 + 1000 * 11e-3 + kept)
+    assert budget.assembly_seconds(cfg, False) == pytest.approx(0.5)
+    assert budget.assembly_seconds(cfg, True) == pytest.approx(0.5 + 101 * 1e-5)
+    assert life_seconds(cfg, 4, 1000) == pytest.approx(5.0 + 4 * (1000 * 11e-3 + 7.0))
+    assert budget.sweep_seconds([10.0, 20.0, 30.0], workers=2) == pytest.approx(11.0 + 30.0)
+    assert budget.sweep_seconds([10.0, 20.0, 30.0], 2, assembly=1.5) == pytest.approx(42.5)
+    # the longest case bounds a sweep from below however many workers share it
+    assert budget.sweep_seconds([100.0, 1.0], workers=2) == pytest.approx(11.0 + 100.0)
+    text = budget.time_text(cfg)
+    assert seconds_of(text) == pytest.approx(3.0 + 5.0 + 11.0 + kept, rel=0.01)
+    assert "at 1.1e+04 us per step (OB)" in text
+
+
+def test_a_sweep_plan_prices_each_case_by_its_joints(round_costs):
+    """The mixed study: 16 subsets of {O, A, B, P}; the plan is the sum of its cases, each
+    priced by its own joints, shared by the workers, after the start."""
+    plan = expand(ROOT / "configs" / "mixed_clearances.yaml")
+    cases = plan.runnable()
+    expected = (11.0 + sum(case_seconds(c, keeps_series=False) for c in cases.values()) / 2
+                + 0.5 * len(cases))
+    assert seconds_of(plan.describe(2)) == pytest.approx(expected, rel=0.01)
+    # with every case priced as the ideal one the plan would be far shorter
+    flat = 11.0 + sum(5.0 + budget.estimate(c).steps * 1e-3 for c in cases.values()) / 2
+    assert expected > 5 * flat
+
+
+def test_a_life_plan_prices_its_blocks_and_jumps(round_costs):
+    """configs/reliability_joints.yaml's member: all four joints clear; its expected time is
+    the forecast blocks, each its steps at the four joints' price and its jump."""
+    cfg = load_config(read_yaml(ROOT / "configs" / "reliability_joints.yaml")["base"])
+    assert clearance_joints(cfg) == "OABP"
+    steps, blocks = block_steps(cfg), forecast_blocks(cfg).blocks
+    per_step = 1e-3 + 2e-3 + 4e-3 + 8e-3 + 16e-3
+    text = life_time_text(cfg, steps)
+    expected = text.split("expected ")[1]
+    assert seconds_of(expected) == pytest.approx(3.0 + 5.0 + blocks * (steps * per_step + 7.0),
+                                                 rel=0.01)
+    plan = expand(ROOT / "configs" / "reliability_joints.yaml")
+    members = plan.runnable().values()
+    want = 11.0 + sum(5.0 + forecast_blocks(c, every_limit=True).blocks
+                      * (block_steps(c) * per_step + 7.0) for c in members) / 2 \
+        + 0.5 * len(members)
+    assert seconds_of(plan.describe(2).split("expected ")[1]) == pytest.approx(want, rel=0.01)
+
+
+def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
+    from clearsweep import cli, simulation
+
+    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method: True)
+    monkeypatch.setattr(simulation, "prepare_kernel", lambda method: 0.0)
+    said = []
+    monkeypatch.setattr(cli.click, "echo", lambda text, err=False: said.append(text))
+    cli.announce_compile(False, ["rk4"])
+    assert "about 123 s" in said[0], said
+
+
+@pytest.mark.parametrize("text", ["step_s: 1\n", ROUND.replace("P: 16.0e-3", "P: fast"),
+                                  ROUND.replace("case_s: 5.0", "case_s: -5.0")],
+                         ids=["keys missing", "not a number", "negative"])
+def test_a_broken_costs_file_is_refused_in_one_line(tmp_path, monkeypatch, text):
+    path = tmp_path / "costs.yaml"
+    path.write_text(text)
+    monkeypatch.setenv("CLEARSWEEP_PLAN_COSTS", str(path))
+    read_plan_costs.cache_clear()
+    try:
+        result = CliRunner().invoke(main, ["run", str(ROOT / "configs" / "ideal.yaml"), "--dry-run"])
+    finally:
+        read_plan_costs.cache_clear()
+    assert result.exit_code == 2, result.output
+    (line,) = result.stderr.splitlines()
+    assert line.startswith(f"clearsweep: error: {path}:") and "plan-costs file" in line
