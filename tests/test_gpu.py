@@ -23,6 +23,7 @@ import xarray as xr
 from click.testing import CliRunner
 
 from clearsweep.cli import sweep_command
+from clearsweep.core import jointset
 from clearsweep.core.layout import N_ANGLE_BINS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -379,9 +380,9 @@ cfgs.append(base.replace(joints__B__clearance=2.0e-4, mechanism__speed_rpm=1500.
 packed = [pack(c, resolve_materials(c)) for c in cfgs]
 seen = []
 launch = gpu._run_on_device
-def spy(arrays, layout="aos"):
+def spy(arrays, layout="aos", *build):
     seen.append({k: np.array(arrays[k]) for k in ("p", "jp", "pcols", "geom", "wmap", "proj")})
-    return launch(arrays, layout)
+    return launch(arrays, layout, *build)
 gpu._run_on_device = spy
 aos = gpu.run_packed(packed, layout="aos")
 soa = gpu.run_packed(packed, layout="soa")
@@ -428,7 +429,7 @@ MIXED = {
              "solver": {"duration": 0.002},
              "ensemble": {"members": 2, "seed": 3,
                           "perturb": {"crank_phase_deg": 5.0, "wear_coefficient_cv": 0.2}}},
-    "sweep": {"grid": {"joints.O.clearance": [0.0, 2.5e-4]}},
+    "sweep": {"grid": {"joints.O.clearance": [0.0, 1.5e-4, 2.5e-4]}},
 }
 
 MIXED_SCRIPT = r"""
@@ -439,9 +440,10 @@ from clearsweep.sweeping import run_sweep
 
 launches = []
 launch = device.launch
-def counted(arrays, layout="aos"):
-    launches.append((int(arrays["n_steps"].shape[0]), layout, [int(g) for g in np.array(arrays["geom"])]))
-    return launch(arrays, layout)
+def counted(arrays, layout="aos", spec=device.ALL, case_sets=()):
+    launches.append((int(arrays["n_steps"].shape[0]), layout, [int(g) for g in np.array(arrays["geom"])],
+                     int(spec)))
+    return launch(arrays, layout, spec, case_sets)
 device.launch = counted
 run_sweep(json.loads(sys.argv[1]), sys.argv[2], backend="cuda", progress=False)
 print(json.dumps(launches))
@@ -450,10 +452,12 @@ print(json.dumps(launches))
 
 @pytest.mark.slow
 def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
-    """Two sweep cases (the bearing O ideal and with clearance) of two ensemble members each
-    run as one launch of four cases in the simulator: members and cases of other clearance
-    joints share it (the maps hold B's and O's rows), and every summary agrees with the CPU
-    backend's within the simulator's tolerance."""
+    """Three sweep cases (the bearing O ideal, and with two clearances) of two ensemble
+    members each run as two launches in the simulator, one per kernel build: the two
+    members of the ideal bearing on B's build, and the four cases with clearance at O on
+    the build of B and O (members and sweep cases of one joint set share a launch, whose
+    maps hold B's and O's rows); every summary agrees with the CPU backend's within the
+    simulator's tolerance."""
     from clearsweep.summary import SUMMARY_ORDER
     from clearsweep.sweeping import run_sweep
 
@@ -464,11 +468,13 @@ def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
                           capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
     assert proc.returncode == 0, proc.stderr[-4000:]
     launches = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert [(n, layout) for n, layout, _ in launches] == [(4, "soa")]
+    b, bo = jointset.named("B"), jointset.named("B", "O")
+    assert sorted((n, layout, spec) for n, layout, _, spec in launches) == \
+        [(2, "soa", b), (4, "soa", bo)]
     cpu = run_sweep(MIXED, workers=1, progress=False)
     with xr.open_dataset(out) as gpu:
         gpu = gpu.load()
-    assert gpu.sizes["member"] == 2 and gpu.sizes["O_clearance"] == 2
+    assert gpu.sizes["member"] == 2 and gpu.sizes["O_clearance"] == 3
     assert float(gpu["wear_volume"].sel(joint="O").isel(O_clearance=1).min()) > 0.0
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
