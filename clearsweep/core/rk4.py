@@ -1060,6 +1060,185 @@ def integrate(case, t0, n_steps, save_every, out, spec):
     return kernel_result(out.track, out.first)
 
 
+@compiled
+def clear_work(work, out):
+    """Zero the work arrays that :func:`advance` reads before writing (their contents on
+    entry do not matter), the tracked extremes and the counters of ``out``."""
+    zero_rows(work.msave)
+    zero_rows(work.vz)
+    zero_rows(work.ssave)
+    zero_rows(work.C)
+    zero_rows(work.S)
+    zero_rows(work.L)
+    zero_rows(work.scratch)
+    zero_rows(work.buf_v)
+    zero_rows(work.buf_i)
+    zero_rows(work.cur)
+    zero_rows(work.pend)
+    for i in range(N_Y):
+        work.ysave[i] = 0.0
+        work.k1save[i] = 0.0
+        work.ksum[i] = 0.0
+        work.kst[i] = 0.0
+        work.yt[i] = 0.0
+    for i in range(N_D):
+        work.dg[i] = 0.0
+        work.dgsave[i] = 0.0
+        work.prev[i] = 0.0
+    for i in range(N_Y):
+        work.ysub[i] = 0.0
+        work.k1sub[i] = 0.0
+        work.secnext[i] = 0.0
+    for j in range(N_JOINTS):
+        work.ddot_prev_save[j] = 0.0
+        work.wmax[j] = 0.0
+        work.first_save[j] = 0.0
+    for i in range(N_TRACK):
+        out.track[i] = 0.0
+    for i in range(I_DEEPEST, N_INFO):
+        out.info[i] = 0
+
+
+@compiled(inline="always")
+def clear_attempt(cur, slides):
+    """An attempt's wear accumulators (``cur``): each joint's, and a prismatic joint's
+    slots where the block ``slides`` in its guide."""
+    for j in range(N_JOINTS):
+        for i in range(6):
+            cur[j, i] = 0.0
+    if slides:
+        for j in range(CAP_SLOT_ROW, N_CAP_ROWS):
+            for i in range(N_CAP):
+                cur[j, i] = 0.0
+
+
+@compiled(inline="always")
+def substep_section(secnext, tk, ts, hs, y, k1, ysub, k1sub):
+    """The Poincare section at time tk inside the sub-step from ts (state ysub, derivative
+    k1sub) to ts + hs (y, k1): the slider acceleration from the cubic Hermite of the slider
+    velocity (``record_sample``'s quadratic) into secnext, the state from the sub-step's
+    cubic Hermite into k1sub (in place), whose offsets are read once the step is accepted."""
+    u = min(1.0, max(0.0, (tk - ts) / hs))
+    a0 = k1sub[Y_QD + Y_SLIDER_X]
+    a1 = k1[Y_QD + Y_SLIDER_X]
+    m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
+    secnext[SN_ACC] = hermite_value(a0, a1, m0, m1, u)
+    hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
+
+
+@compiled(locals=_NOT_LITERAL)
+def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec):
+    """One attempt at the output-grid step from t at sub-step level ``level`` (``last``: the
+    run's last step): 2**level RK4 sub-steps, each accepted (wear, contact episodes,
+    statistics, sections) unless the stiff rate needs a deeper level. Returns (status, need,
+    nbuf, nsub, kept): ``need`` the level the rate asks for (-1: every sub-step taken),
+    ``nbuf`` the undo buffer's rows, ``kept`` whether the step's start was kept for a
+    rejection (:func:`keep_accepted`)."""
+    p = model.p
+    jp = model.jp
+    stats = out.stats
+    y = work.y
+    k1 = work.k1
+    dg = work.dg
+    h = p[P_DT]
+    stab = p[P_STAB]
+    settle = p[P_SETTLE]
+    step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
+    stage = False    # the stage evaluations: the derivative only
+    slides = has_clearance(spec, jp, JOINT_P)
+    nsub = 1 << level
+    hs = h / nsub
+    nbuf = 0
+    need = -1
+    status = ST_OK
+    clear_attempt(work.cur, slides)
+    for sub in range(nsub):
+        ts = t + sub * hs
+        if sub == 0:
+            keep_ends(work.prev, dg, y)      # the step's start (again after a rejection)
+        due, _ = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
+        if due:
+            # a section in this sub-step: its start for the cubic Hermite
+            copy_into(work.ysub, y)
+            copy_into(work.k1sub, k1)
+        st = rk4_substep(ts, hs, y, k1, work.ksum, work.kst, work.yt, dg, model, solve, stage,
+                         spec)
+        if st == ST_OK:
+            st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
+        if st != ST_OK:
+            status = st
+            break
+        if dg[D_RATE] * hs > stab:
+            need = level_for(dg[D_RATE], h, stab)
+            break
+        in_settled = ts + hs >= settle
+        if nsub > 1 and not kept:
+            keep_accepted(work.s, work.ssave, stats, work.msave, out.first, work.first_save,
+                          work.ddot_prev, work.ddot_prev_save)
+            kept = True
+        changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
+                                       work.ddot_prev, spec)
+        if slides and accept_prismatic(hs, in_settled, model, stats, work.cur, y):
+            changed = True
+        note_first_impact(out.first, stats, ts + hs)
+        if changed:
+            st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
+            if st != ST_OK:
+                status = st
+                break
+        record_sample(stats, work.prev, dg, y, jp, hs,
+                      max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
+        due, tk = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
+        if due:
+            substep_section(work.secnext, tk, ts, hs, y, k1, work.ysub, work.k1sub)
+    return status, need, nbuf, nsub, kept
+
+
+@compiled(inline="always")
+def undo_attempt(nbuf, case, out, work, kept):
+    """Undo a rejected attempt: its wear (the undo buffer's nbuf rows, from the
+    projections and the worn volume), the state, k1 and the diagnostics, and where ``kept``
+    the contact state, the statistics, the first impact times and the approach rates."""
+    buf_i = work.buf_i
+    buf_v = work.buf_v
+    for b in range(nbuf - 1, -1, -1):
+        j = buf_i[b, 0]
+        case.proj[j, 0, buf_i[b, 1]] -= buf_v[b, 1]
+        case.proj[j, 1, buf_i[b, 2]] -= buf_v[b, 2]
+        case.proj[j, 2, buf_i[b, 3]] -= buf_v[b, 3]
+        case.wvol[j] -= buf_v[b, 0]
+    copy_into(work.y, work.ysave)
+    copy_into(work.k1, work.k1save)
+    copy_into(work.dg, work.dgsave)
+    if kept:
+        keep_accepted(work.ssave, work.s, work.msave, out.stats, work.first_save, out.first,
+                      work.ddot_prev_save, work.ddot_prev)
+
+
+@compiled(inline="always")
+def keep_stopping_wear(cur, pend):
+    """A run stopped by a status other than an unstable step: the stopping attempt's wear
+    stays in the projections and the worn volume, so the map keeps the same volume (an
+    unstable step's last attempt was rejected and undone); a prismatic joint's wear of the
+    attempt reached neither."""
+    for j in range(N_JOINTS):
+        if j == JOINT_P:
+            continue
+        for i in range(5):
+            pend[j, i] += cur[j, i]
+        if cur[j, 3] > 0.0:
+            pend[j, 5] = cur[j, 5]
+
+
+@compiled(inline="always")
+def save_row(out, n_saved, t, y, dg, wmax):
+    """Output row n_saved: time t, the state, the diagnostics and the largest depths."""
+    out.t[n_saved] = t
+    copy_row(out.y, n_saved, y)
+    copy_row(out.d, n_saved, dg)
+    copy_row(out.wmax, n_saved, wmax)
+
+
 @compiled(locals=_NOT_LITERAL)
 def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     """:func:`integrate` without allocation: every work array is a field of ``work`` (a
@@ -1074,92 +1253,25 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     """
     p = case.p
     jp = case.jp
-    y0 = case.y0
-    wmap = case.wmap
-    proj = case.proj
-    wvol = case.wvol
-    stats = out.stats
     y = work.y
-    ysave = work.ysave
-    k1 = work.k1
-    k1save = work.k1save
-    ksum = work.ksum
-    kst = work.kst
-    yt = work.yt
     dg = work.dg
-    dgsave = work.dgsave
-    s = work.s
-    ssave = work.ssave
-    msave = work.msave
-    ddot_prev = work.ddot_prev
-    ddot_prev_save = work.ddot_prev_save
-    wmax = work.wmax
-    first_save = work.first_save
-    C = work.C
-    S = work.S
-    L = work.L
-    vz = work.vz
-    buf_i = work.buf_i
-    buf_v = work.buf_v
-    cur = work.cur
-    pend = work.pend
-    scratch = work.scratch
-    ysub = work.ysub
-    prev = work.prev
-    k1sub = work.k1sub
     secnext = work.secnext
     sec = out.sec
     model, solve, wear = case_views(case, work)
-    step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
-    stage = False    # the stage evaluations: the derivative only
     h = p[P_DT]
     stab = p[P_STAB]
-    settle = p[P_SETTLE]
     max_level = int(p[P_MAX_LEVEL])
     slides = has_clearance(spec, jp, JOINT_P)   # the slider's block free in its guide
-    zero_rows(msave)
-    zero_rows(vz)
-    zero_rows(buf_v)
-    zero_rows(buf_i)
-    zero_rows(ssave)
-    zero_rows(cur)
-    zero_rows(pend)
-    zero_rows(C)
-    zero_rows(S)
-    zero_rows(L)
-    zero_rows(scratch)
-    for i in range(N_Y):
-        ysave[i] = 0.0
-        k1save[i] = 0.0
-        ksum[i] = 0.0
-        kst[i] = 0.0
-        yt[i] = 0.0
-    for i in range(N_D):
-        dg[i] = 0.0
-        dgsave[i] = 0.0
-        prev[i] = 0.0
-    for i in range(N_Y):
-        ysub[i] = 0.0
-        k1sub[i] = 0.0
-        secnext[i] = 0.0
+    clear_work(work, out)
     plan_sections(p, t0, n_steps, sec)
-    next_section(sec, secnext, 0)
     # the Poincare sections: the next one's index and time
-    for j in range(N_JOINTS):
-        ddot_prev_save[j] = 0.0
-        wmax[j] = 0.0
-        first_save[j] = 0.0
-    copy_into(y, y0)
+    next_section(sec, secnext, 0)
+    copy_into(y, case.y0)
     # begin_case clears the statistics and sets the contact state
-    for i in range(N_TRACK):
-        out.track[i] = 0.0
-    for i in range(I_DEEPEST, N_INFO):
-        out.info[i] = 0
-
-    status = ST_OK
-    st = begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec)
-    if st != ST_OK:
-        out.info[I_STATUS] = st
+    status = begin_case(t0, y, model, work.k1, dg, solve, work.ddot_prev, out.stats, work.prev,
+                        spec)
+    if status != ST_OK:
+        out.info[I_STATUS] = status
         out.info[I_SAVED] = 0
         return
     e0 = energy_total(dg)
@@ -1173,11 +1285,11 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     n_saved = 1
     deepest = 0
     total = 0
-
     steps_done = 0
     for step in range(n_steps):
         t = t0 + step * h
         steps_done = step + 1
+        last = step == n_steps - 1
         level = level_for(dg[D_RATE], h, stab)
         # a rejected attempt undoes what it changed (docs/physics.md section 4). Every step
         # keeps the state, k1 and the diagnostics of its start: a sub-step changes them
@@ -1186,133 +1298,51 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
         # only an attempt of several sub-steps can be rejected after changing them: they
         # are kept at the first such acceptance of the step (``kept``), still the step's
         # start, and restored only then (the same values as a copy at every step's start).
-        copy_into(ysave, y)
-        copy_into(k1save, k1)
-        copy_into(dgsave, dg)
+        copy_into(work.ysave, y)
+        copy_into(work.k1save, work.k1)
+        copy_into(work.dgsave, dg)
         kept = False
         while True:
             if level > max_level:
                 status = ST_UNSTABLE_STEP
                 break
-            nsub = 1 << level
-            hs = h / nsub
-            nbuf = 0
-            need = -1
-            for j in range(N_JOINTS):
-                for i in range(6):
-                    cur[j, i] = 0.0
-            if slides:
-                # a prismatic joint's slots
-                for j in range(CAP_SLOT_ROW, N_CAP_ROWS):
-                    for i in range(N_CAP):
-                        cur[j, i] = 0.0
-            for sub in range(nsub):
-                ts = t + sub * hs
-                if sub == 0:
-                    keep_ends(prev, dg, y)      # the step's start (again after a rejection)
-                due, _ = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
-                if due:
-                    # a section in this sub-step: its start for the cubic Hermite
-                    copy_into(ysub, y)
-                    copy_into(k1sub, k1)
-                st = rk4_substep(ts, hs, y, k1, ksum, kst, yt, dg, model, solve, stage, spec)
-                if st == ST_OK:
-                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
-                if st != ST_OK:
-                    status = st
-                    break
-                if dg[D_RATE] * hs > stab:
-                    need = level_for(dg[D_RATE], h, stab)
-                    break
-                in_settled = ts + hs >= settle
-                if nsub > 1 and not kept:
-                    keep_accepted(s, ssave, stats, msave, out.first, first_save, ddot_prev,
-                                  ddot_prev_save)
-                    kept = True
-                changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                               ddot_prev, spec)
-                if slides and accept_prismatic(hs, in_settled, model, stats, cur, y):
-                    changed = True
-                note_first_impact(out.first, stats, ts + hs)
-                if changed:
-                    st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
-                    if st != ST_OK:
-                        status = st
-                        break
-                record_sample(stats, prev, dg, y, jp, hs,
-                              max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
-                due, tk = section_in(secnext, t, sub, hs, step == n_steps - 1 and sub == nsub - 1)
-                if due:
-                    # the section inside this sub-step: the slider acceleration from the cubic
-                    # Hermite of the slider velocity (record_sample's quadratic), the state
-                    # from the sub-step's cubic Hermite (into k1sub, in place), whose offsets
-                    # are read once the step is accepted
-                    u = min(1.0, max(0.0, (tk - ts) / hs))
-                    a0 = k1sub[Y_QD + Y_SLIDER_X]
-                    a1 = k1[Y_QD + Y_SLIDER_X]
-                    m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
-                    secnext[SN_ACC] = hermite_value(a0, a1, m0, m1, u)
-                    hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
+            status, need, nbuf, nsub, kept = attempt_step(t, level, last, model, solve, wear,
+                                                          out, work, kept, spec)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
-            for b in range(nbuf - 1, -1, -1):
-                j = buf_i[b, 0]
-                proj[j, 0, buf_i[b, 1]] -= buf_v[b, 1]
-                proj[j, 1, buf_i[b, 2]] -= buf_v[b, 2]
-                proj[j, 2, buf_i[b, 3]] -= buf_v[b, 3]
-                wvol[j] -= buf_v[b, 0]
-            copy_into(y, ysave)
-            copy_into(k1, k1save)
-            copy_into(dg, dgsave)
-            if kept:
-                keep_accepted(ssave, s, msave, stats, first_save, out.first, ddot_prev_save,
-                              ddot_prev)
+            undo_attempt(nbuf, case, out, work, kept)
             level = max(level + 1, need)
         if status != ST_OK:
             if status != ST_UNSTABLE_STEP:
-                # the stopping attempt's wear stays in the projections and the worn
-                # volume: keep the map holding the same volume (an unstable step's last
-                # attempt was rejected and undone); a prismatic joint's wear of the attempt
-                # reached neither
-                for j in range(N_JOINTS):
-                    if j == JOINT_P:
-                        continue
-                    for i in range(5):
-                        pend[j, i] += cur[j, i]
-                    if cur[j, 3] > 0.0:
-                        pend[j, 5] = cur[j, 5]
+                keep_stopping_wear(work.cur, work.pend)
             break
         total += 1 << level
         deepest = max(deepest, level)
-        merge_wear(wmap, cur, pend, wmax, scratch)
+        merge_wear(case.wmap, work.cur, work.pend, work.wmax, work.scratch)
         if slides:
-            deposit_prismatic(wmap, cur, wmax, jp, wvol)
+            deposit_prismatic(case.wmap, work.cur, work.wmax, jp, case.wvol)
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
         # its offsets from the state kept in k1sub (here, where few values are live: a GPU
         # thread's registers), and it counts
-        due, _ = section_in(secnext, t, -1, nsub * hs, step == n_steps - 1)
+        due, _ = section_in(secnext, t, -1, nsub * (h / nsub), last)
         if due:
             k = int(secnext[SN_ROW])
             sec[k, SEC_SLIDER_ACC] = secnext[SN_ACC]
-            section_offsets(p, jp, k1sub, sec, k, spec)
+            section_offsets(p, jp, work.k1sub, sec, k, spec)
             next_section(sec, secnext, k + 1)
-
         status = step_checks(y, dg, p, jp, status, e0, out.track, spec)
         if (step + 1) % save_every == 0:
             if keep_rows:
-                out.t[n_saved] = t + h
-                copy_row(out.y, n_saved, y)
-                copy_row(out.d, n_saved, dg)
-                copy_row(out.wmax, n_saved, wmax)
+                save_row(out, n_saved, t + h, y, dg, work.wmax)
             n_saved += 1
         if status != ST_OK:
             break
-    flush_all_wear(wmap, pend, wmax, scratch)
+    flush_all_wear(case.wmap, work.pend, work.wmax, work.scratch)
     out.info[I_SECTIONS] = int(secnext[SN_ROW])
     end_sections(sec, out.info[I_SECTIONS])
     if keep_rows and status == ST_OK and n_saved > 0:
-        copy_row(out.wmax, n_saved - 1, wmax)
+        copy_row(out.wmax, n_saved - 1, work.wmax)
     out.info[I_STATUS] = status
     out.info[I_SAVED] = n_saved
     out.info[I_DEEPEST] = deepest
