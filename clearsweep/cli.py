@@ -184,7 +184,7 @@ def announce_compile(quiet: bool = False, cases: Iterable[Config] = ()) -> None:
         if kernel_needs_compiling(method, build):
             if not quiet:
                 name = "kernel" if method == "rk4" else f"{method} kernel"
-                click.echo(f"compiling the {name} for clearance at {label(build)} (once, "
+                click.echo(f"compiling the {name} build that allows clearance at {label(build)} (once, "
                            f"about {plan_costs().compile_s:.0f} s on a quiet 2-core machine, "
                            "longer when it is busy) ...",
                            err=True)

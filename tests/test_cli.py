@@ -315,7 +315,7 @@ def test_run_says_when_it_compiles_and_times_stepping_only(tmp_path, monkeypatch
     result = CliRunner().invoke(main, ["run", str(cfg), "-o", str(tmp_path / "o.nc")])
     assert result.exit_code == 0, result.output
     build = build_of(named("A", "B"))
-    assert f"compiling the kernel for clearance at {label(build)} (once, about" in result.stderr
+    assert f"compiling the kernel build that allows clearance at {label(build)} (once, about" in result.stderr
     # compiled before the run: the integrator asked for, built for the case's joint set
     assert calls and set(calls) == {("rk4", build)}
     quiet = CliRunner().invoke(main, ["run", str(cfg), "-q", "-o", str(tmp_path / "q.nc")])

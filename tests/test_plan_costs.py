@@ -155,12 +155,14 @@ def test_a_life_plan_prices_its_blocks_and_jumps(round_costs):
 def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
     from clearsweep import cli, simulation
 
-    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method: True)
-    monkeypatch.setattr(simulation, "prepare_kernel", lambda method: 0.0)
+    from clearsweep.config import DEFAULTS
+
+    monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method, build: True)
+    monkeypatch.setattr(simulation, "prepare_kernel", lambda method, build: 0.0)
     said = []
     monkeypatch.setattr(cli.click, "echo", lambda text, err=False: said.append(text))
-    cli.announce_compile(False, ["rk4"])
-    assert "about 123 s" in said[0], said
+    cli.announce_compile(False, [DEFAULTS])
+    assert "about 123 s" in said[0] and "allows clearance at O,P" in said[0], said
 
 
 @pytest.mark.parametrize("text", ["step_s: 1\n", ROUND.replace("P: 16.0e-3", "P: fast"),
