@@ -154,7 +154,6 @@ def test_a_life_plan_prices_its_blocks_and_jumps(round_costs):
 
 def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
     from clearsweep import cli, simulation
-
     from clearsweep.config import DEFAULTS
 
     monkeypatch.setattr(simulation, "kernel_needs_compiling", lambda method, build: True)
