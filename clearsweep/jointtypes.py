@@ -22,6 +22,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from .core import layout
 from .core.joints import JOINT_TYPES, JOINTS
 
 #: Shapes of a joint's gap in the orbit plot (``plotting.orbit``): the ball's clearance circle
@@ -76,16 +77,11 @@ class JointKind:
     #: attribute), else None
     contact_law: str | None
     #: the per-joint packed columns (``core.layout.J_*``) of its own, beyond
-    #: :data:`COMMON_COLUMNS`: a column no type of which names it is 0 in its row
+    #: :data:`COMMON_COLUMNS`: a column that another type names and it does not is 0 in its
+    #: row
     columns: tuple[str, ...]
     #: the wear-depth report's own columns (the guide's tracks), () for none
     report_columns: tuple[str, ...] = ()
-
-
-#: The packed columns every type fills (``core.layout.J_*``): the clearance flag and the
-#: clearance c, the surface's and the base's contact values, the coating and the stop.
-COMMON_COLUMNS = ("J_CLEARANCE", "J_C", "J_EW", "J_MU", "J_K", "J_EW_BASE", "J_MU_BASE",
-                  "J_K_BASE", "J_COAT", "J_PEN_STOP")
 
 
 def _rows_polar(npolar: int) -> int:
@@ -120,6 +116,14 @@ KINDS: Mapping[str, JointKind] = {
                  "J_X0", "J_XSPAN"),
         report_columns=("track_depth",)),
 }
+
+
+#: The packed columns every type fills (``core.layout.J_*``): those no type names as its own
+#: (the clearance flag and the clearance c, the surface's and the base's contact values, the
+#: coating and the stop).
+COMMON_COLUMNS = tuple(name for name, value in vars(layout).items()
+                       if name.startswith("J_") and isinstance(value, int)
+                       and not any(name in k.columns for k in KINDS.values()))
 
 
 def kind(type_name: str) -> JointKind:

@@ -10,7 +10,7 @@ import math
 import types
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -836,18 +836,17 @@ def socket_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
 def bearing_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
     """The bearing's own columns of its jp row: its length, and with a clearance its
     lubricant film's coefficient (:func:`film_coefficient`)."""
-    assert isinstance(joint, RevoluteJointConfig)
-    row[L.J_LENGTH] = joint.length
-    c = joint.clearance
+    bearing = cast(RevoluteJointConfig, joint)
+    row[L.J_LENGTH] = bearing.length
+    c = bearing.clearance
     if c > 0.0:
-        row[L.J_FILM] = film_coefficient(joint.lubricant_viscosity, joint.bearing_radius,
-                                         joint.length, c)
+        row[L.J_FILM] = film_coefficient(bearing.lubricant_viscosity, bearing.bearing_radius,
+                                         bearing.length, c)
 
 
 def guide_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
     """The guide's own columns of its jp row (:func:`guide_row`)."""
-    assert isinstance(joint, PrismaticJointConfig)
-    guide_row(row, joint, preset)
+    guide_row(row, cast(PrismaticJointConfig, joint), preset)
 
 
 def socket_law(p: np.ndarray) -> float:

@@ -111,7 +111,8 @@ def test_every_packed_column_is_common_or_one_types():
     names = {k for k, v in vars(L).items() if k.startswith("J_") and isinstance(v, int)}
     assert sorted(getattr(L, k) for k in names) == list(range(L.N_JP))
     owned = {c for kind in jointtypes.KINDS.values() for c in kind.columns}
-    assert names == set(jointtypes.COMMON_COLUMNS) | owned
+    assert owned <= names
+    assert set(jointtypes.COMMON_COLUMNS) == names - owned
     cfg = DEFAULTS.replace(joints__A__clearance=1e-4, joints__B__clearance=1e-4,
                            joints__O__clearance=1e-4, joints__P__clearance_y=1e-4,
                            joints__P__clearance_z=2e-4)
@@ -121,6 +122,8 @@ def test_every_packed_column_is_common_or_one_types():
         for col in sorted(owned - set(own)):
             assert jp[j, getattr(L, col)] == 0.0, (joint.name, col)
         assert all(jp[j, getattr(L, col)] != 0.0 for col in own if col != "J_FILM"), joint.name
+        # the common columns are every type's: filled in every row with a clearance
+        assert all(jp[j, getattr(L, col)] != 0.0 for col in jointtypes.COMMON_COLUMNS), joint.name
     P = joints.INDEX["P"]
     assert jp[P, L.J_C] == 1e-4 and jp[P, L.J_CORNER_RADIUS] == cfg.joints.P.corner_radius
     assert jp[P, L.J_BLOCK_LENGTH] == cfg.joints.P.block[0]
