@@ -2,7 +2,8 @@
 (docs/physics.md section 3.7, docs/modelling.md).
 
 A joint type of the shape docs/architecture.md ("Joint types") describes, with one
-difference: a block touches its guide along up to eight edge lines at once, not at one point.
+difference: a block touches its guide along up to eight edge lines at once, not at one point
+(its :func:`gap` is a slot's, k the slot).
 The guide is fixed in the ground along the global x axis at the height z_s; its four walls
 lie at y = +-(b + c_y) and z - z_s = +-(h + c_z), where the block (length 2a along the
 guide, width 2b, height 2h) sits centred with the gaps c_y and c_z. The block slides along
@@ -27,7 +28,8 @@ impact velocity, and the improved Coulomb friction on the corner's slip over the
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
   (x from jp[J_X0] over jp[J_XSPAN]), each bin holding the depth worn over it:
   :func:`wall_bin`, :func:`wall_read`, :func:`track_width`, :func:`deposit`;
-- :func:`contact`: the sum over the lines' corners (force, moment, dissipated power) and, at
+- :func:`contact`: the sum over the lines' corners (force, moment, dissipated power: the
+  shape ``joints.PROTOCOL`` fixes, the guide's moment zero) and, at
   a step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   lines' total elastic energy, the guide's total force and the largest stiff rate of a slot;
 - :func:`accept`: an accepted step's impacts (the joint's contact episodes) and the wear each

@@ -1,16 +1,17 @@
 """The spherical clearance joint: a ball in a worn, possibly coated socket (docs/physics.md 3, 5).
 
-A clearance-joint type is a module of this shape (docs/architecture.md, "Joint types"):
+A clearance-joint type is a module of this shape (docs/architecture.md, "Joint types"), its
+:func:`gap` and :func:`contact` of the signatures ``joints.PROTOCOL`` fixes for every type:
 
-- :func:`gap`: from the two bodies' states, the gap geometry in the socket: eccentricity,
-  contact normal, penetration against the worn clearance, and whether the coating is worn
-  through there;
+- :func:`gap`: from the ball's and the socket's centres, the gap geometry in the socket:
+  eccentricity, contact normal, penetration against the worn clearance, and whether the
+  coating is worn through there;
 - the wear-map geometry it wears: a map over the socket's inner sphere (``wear.map_bin``,
   ``wear.deposit``, ``wear.worn_surface``), and the contact's angle and area
   (:func:`contact_angle`, :func:`contact_area`) that the wear step reads;
 - :func:`contact`: the gap composed with the coated contact law, damping and friction
   (``contact.respond``: where the force pair acts, the approach rate, the slip), returning
-  a ``contact.ContactState`` that the equations of motion apply to the two bodies.
+  the force and the moments that the equations of motion apply to the two bodies.
 
 The kernel composes these; nothing of a joint type's geometry is written elsewhere.
 """
