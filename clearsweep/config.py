@@ -108,6 +108,30 @@ class JointConfig(_Section):
         """R_j = socket_radius - clearance [m]."""
         return self.socket_radius - self.clearance
 
+    def clearance_overrides(self, joint: str, clearance: float) -> dict[str, float]:
+        """The overrides (``Config.replace`` keywords) that give joint ``joint`` the
+        clearance ``clearance`` [m] (a reliability member's draw)."""
+        return {f"joints__{joint}__clearance": clearance}
+
+    # the joint type's checks of its section (a raw mapping), called by validation for the
+    # joint ``joint`` in the table's order: its sizes, its fit, its reliability band
+
+    @staticmethod
+    def check_sizes(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                    source: str) -> None:
+        """A socket's sizes: the common bounds only."""
+
+    @staticmethod
+    def check_fit(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                  source: str) -> None:
+        """The ball's radius within the socket (:func:`_check_ball_fit`)."""
+        _check_ball_fit(joint, spec, "ball", source)
+
+    @staticmethod
+    def check_band(joint: str, spec: Mapping[str, Any], tolerance: float, source: str) -> None:
+        """The reliability band of its clearance (:func:`_check_point_band`)."""
+        _check_point_band(joint, spec, tolerance, source)
+
 
 @dataclass(frozen=True)
 class RevoluteJointConfig(_Section):
@@ -139,6 +163,27 @@ class RevoluteJointConfig(_Section):
         """Journal radius R_j = bearing_radius - clearance [m]."""
         return self.bearing_radius - self.clearance
 
+    def clearance_overrides(self, joint: str, clearance: float) -> dict[str, float]:
+        """The overrides that give the bearing the clearance ``clearance`` [m]."""
+        return {f"joints__{joint}__clearance": clearance}
+
+    @staticmethod
+    def check_sizes(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                    source: str) -> None:
+        """The bearing's radius and coating (:func:`_check_bearing`)."""
+        _check_bearing(joint, spec, source)
+
+    @staticmethod
+    def check_fit(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                  source: str) -> None:
+        """The journal's radius within the bearing (:func:`_check_ball_fit`)."""
+        _check_ball_fit(joint, spec, "journal", source)
+
+    @staticmethod
+    def check_band(joint: str, spec: Mapping[str, Any], tolerance: float, source: str) -> None:
+        """The reliability band of its clearance (:func:`_check_point_band`)."""
+        _check_point_band(joint, spec, tolerance, source)
+
 
 @dataclass(frozen=True)
 class PrismaticJointConfig(_Section):
@@ -169,6 +214,31 @@ class PrismaticJointConfig(_Section):
     def socket_radius(self) -> float:
         """The corners' edge radius [m] (the contact law's radius)."""
         return self.corner_radius
+
+    def clearance_overrides(self, joint: str, clearance: float) -> dict[str, float]:
+        """The overrides that give the guide the clearance ``clearance`` [m], its smaller:
+        both move by the same shift."""
+        shift = clearance - self.clearance
+        return {f"joints__{joint}__clearance_y": self.clearance_y + shift,
+                f"joints__{joint}__clearance_z": self.clearance_z + shift}
+
+    @staticmethod
+    def check_sizes(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                    source: str) -> None:
+        """The block (:func:`_check_block`), then the guide's clearances, corners and wall
+        maps (:func:`_check_guide`)."""
+        _check_block(joint, spec, source)
+        _check_guide(spec, cfg["wear"]["map"], source, joint)
+
+    @staticmethod
+    def check_fit(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                  source: str) -> None:
+        """Nothing beyond its sizes: a block has no ball to fit."""
+
+    @staticmethod
+    def check_band(joint: str, spec: Mapping[str, Any], tolerance: float, source: str) -> None:
+        """The reliability band of its smaller clearance (:func:`_check_guide_band`)."""
+        _check_guide_band(joint, spec, tolerance, source)
 
 
 def section_clearance(spec: Mapping[str, Any]) -> float:
@@ -547,7 +617,7 @@ MAX_WEAR_COEFFICIENT = 1.0e-9
 MIN_LAYER_M = 1.0e-9
 
 
-def _check_sizes(joints: Mapping[str, Any], source: str) -> None:
+def _check_sizes(joints: Mapping[str, Any], cfg: Mapping[str, Any], source: str) -> None:
     """Every geometric input of the joints bounded against the mechanism (issue 40 item 9)."""
     for joint, spec in joints.items():
         for key in ("clearance", "clearance_y", "clearance_z"):
@@ -568,23 +638,81 @@ def _check_sizes(joints: Mapping[str, Any], source: str) -> None:
                 raise ConfigError(f"joints.{joint}.{key}", spec[key],
                                   f"a number <= {LONGEST_LINK_M:g} m, the mechanism's longest "
                                   "link (the rod)", source)
-    bearing = joints["O"]
-    radius = bearing["bearing_radius"]
+    for joint, spec in joints.items():
+        section_class(joint).check_sizes(joint, spec, cfg, source)
+
+
+def _check_bearing(joint: str, spec: Mapping[str, Any], source: str) -> None:
+    """A bearing's radius within the crank, and its coating thinner than its radius."""
+    radius = spec["bearing_radius"]
     if not MIN_BEARING_RADIUS_M <= radius <= CRANK_LENGTH_M:
-        raise ConfigError("joints.O.bearing_radius", radius,
+        raise ConfigError(f"joints.{joint}.bearing_radius", radius,
                           f"a number with {MIN_BEARING_RADIUS_M:g} <= x <= {CRANK_LENGTH_M:g} m "
                           "(the crank's length)", source)
-    if bearing["coating_thickness"] >= radius:
-        raise ConfigError("joints.O.coating_thickness", bearing["coating_thickness"],
-                          f"a number < joints.O.bearing_radius ({radius:g} m)", source)
-    guide = joints["P"]
-    if guide["corner_radius"] < MIN_CORNER_RADIUS_M:
-        raise ConfigError("joints.P.corner_radius", guide["corner_radius"],
+    if spec["coating_thickness"] >= radius:
+        raise ConfigError(f"joints.{joint}.coating_thickness", spec["coating_thickness"],
+                          f"a number < joints.{joint}.bearing_radius ({radius:g} m)", source)
+
+
+def _check_block(joint: str, spec: Mapping[str, Any], source: str) -> None:
+    """A guide's block: its corners' radius above the floor, its sides within the rod."""
+    if spec["corner_radius"] < MIN_CORNER_RADIUS_M:
+        raise ConfigError(f"joints.{joint}.corner_radius", spec["corner_radius"],
                           f"a number >= {MIN_CORNER_RADIUS_M:g} m", source)
-    if max(guide["block"]) > LONGEST_LINK_M:
-        raise ConfigError("joints.P.block", guide["block"],
+    if max(spec["block"]) > LONGEST_LINK_M:
+        raise ConfigError(f"joints.{joint}.block", spec["block"],
                           f"sides <= {LONGEST_LINK_M:g} m, the mechanism's longest link (the rod)",
                           source)
+
+
+def _check_ball_fit(joint: str, spec: Mapping[str, Any], ball: str, source: str) -> None:
+    """A ball's (journal's) radius R_j = R_i - clearance at least
+    :data:`MIN_BALL_RADIUS_FRACTION` of R_i."""
+    radius = radius_key(spec)
+    most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
+    if spec["clearance"] > most:
+        raise ConfigError(
+            f"joints.{joint}.clearance", spec["clearance"],
+            f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.{radius} "
+            f"({most:.6g}), so that the {ball} radius R_j = {radius} - clearance is at "
+            f"least {MIN_BALL_RADIUS_FRACTION:g} * {radius}", source)
+
+
+def _check_point_band(joint: str, spec: Mapping[str, Any], tolerance: float,
+                      source: str) -> None:
+    """The reliability band c -+ t of a ball's (journal's) clearance: above 0 and within
+    the largest clearance (:func:`_check_ball_fit`)."""
+    radius = radius_key(spec)
+    most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
+    if 0.0 < spec["clearance"] <= tolerance:
+        raise ConfigError("reliability.clearance_tolerance", tolerance,
+                          f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
+                          "every member keeps a clearance", source)
+    if spec["clearance"] > 0.0 and spec["clearance"] + tolerance > most:
+        room = most - spec["clearance"]     # in full where 6 digits would read as the value
+        shown = f"{room:.6g}" if f"{room:.6g}" != f"{tolerance:.6g}" else repr(room)
+        raise ConfigError(
+            "reliability.clearance_tolerance", tolerance,
+            f"a number <= {shown}, so that the band joints.{joint}."
+            f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
+            f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
+            f"{radius} ({most:.6g} m), whatever member draws it", source)
+
+
+def _check_guide_band(joint: str, spec: Mapping[str, Any], tolerance: float,
+                      source: str) -> None:
+    """The reliability band of a guide's smaller clearance: above 0."""
+    clearance = section_clearance(spec)
+    if 0.0 < clearance <= tolerance:
+        raise ConfigError("reliability.clearance_tolerance", tolerance,
+                          f"a number < the smaller of joints.{joint}.clearance_y and clearance_z "
+                          f"({clearance!r}), so that every member keeps a clearance", source)
+
+
+def section_class(joint: str) -> Any:
+    """The config class of joint section ``joint`` (``JointsConfig``'s field): its checks
+    (``check_sizes``, ``check_fit``, ``check_band``) are the joint type's."""
+    return type(getattr(JointsConfig(), joint))
 
 
 #: Relations between fields, checked after each field on its own: (key, op, other).
@@ -677,23 +805,25 @@ def _check_together(cfg: dict[str, Any], source: str) -> None:
                     "average it over); for perturbed members set ensemble.members to 2 or more", source)
 
 
-def _check_guide(spec: Mapping[str, Any], wear_map: Sequence[int], source: str) -> None:
-    """Joint P's guide: both clearances or neither, a corner radius that fits the block,
-    and with clearance a wear map of a polar row at least for each of its four walls (they
-    are bands of the map's rows)."""
+def _check_guide(spec: Mapping[str, Any], wear_map: Sequence[int], source: str,
+                 joint: str = "P") -> None:
+    """A guide: both clearances or neither, a corner radius that fits the block, and with
+    clearance a wear map of a polar row at least for each of its four walls (they are bands
+    of the map's rows)."""
     cy, cz = spec["clearance_y"], spec["clearance_z"]
     if (cy > 0.0) != (cz > 0.0):
-        key, value = ("joints.P.clearance_z", cz) if cy > 0.0 else ("joints.P.clearance_y", cy)
-        raise ConfigError(key, value, "a number > 0 when the other clearance of joint P is, "
-                          "or both 0 (an ideal guide)", source)
+        key, value = ((f"joints.{joint}.clearance_z", cz) if cy > 0.0
+                      else (f"joints.{joint}.clearance_y", cy))
+        raise ConfigError(key, value, f"a number > 0 when the other clearance of joint {joint} "
+                          "is, or both 0 (an ideal guide)", source)
     smallest = min(spec["block"])
     if spec["corner_radius"] > 0.5 * smallest:
-        raise ConfigError("joints.P.corner_radius", spec["corner_radius"],
+        raise ConfigError(f"joints.{joint}.corner_radius", spec["corner_radius"],
                           f"a number <= half the block's smallest side ({0.5 * smallest:g} m, "
-                          "joints.P.block)", source)
+                          f"joints.{joint}.block)", source)
     if cy > 0.0 and wear_map[0] < 4:
         raise ConfigError("wear.map", wear_map, "at least 4 polar rows with clearance at "
-                          "joint P (its four walls share them)", source)
+                          f"joint {joint} (its four walls share them)", source)
 
 
 #: A length given in seconds or in crank revolutions, one of the two (docs/configs.md):
@@ -764,48 +894,16 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                                   f"below solver.dt ({value!r} s)", source)
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
-    _check_sizes(cfg["joints"], source)
-    _check_guide(cfg["joints"]["P"], cfg["wear"]["map"], source)
+    _check_sizes(cfg["joints"], cfg, source)
     for joint, spec in cfg["joints"].items():
-        if joint == "P":
-            continue
-        radius = radius_key(spec)
-        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
-        if spec["clearance"] > most:
-            raise ConfigError(
-                f"joints.{joint}.clearance", spec["clearance"],
-                f"a number <= {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}.{radius} "
-                f"({most:.6g}), so that the {'ball' if radius == 'socket_radius' else 'journal'} "
-                f"radius R_j = {radius} - clearance is at "
-                f"least {MIN_BALL_RADIUS_FRACTION:g} * {radius}", source)
+        section_class(joint).check_fit(joint, spec, cfg, source)
     # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every
     # clearance a reliability member can draw: both ends must be clearances this check
     # admits, so that no seed decides whether the config is valid (docs/reliability.md).
     # A member's own config has its drawn clearance and no band (reliability.member_config).
     tolerance = cfg["reliability"]["clearance_tolerance"]
     for joint, spec in cfg["joints"].items():
-        if joint == "P":
-            clearance = section_clearance(spec)
-            if 0.0 < clearance <= tolerance:
-                raise ConfigError("reliability.clearance_tolerance", tolerance,
-                                  f"a number < the smaller of joints.P.clearance_y and clearance_z "
-                                  f"({clearance!r}), so that every member keeps a clearance", source)
-            continue
-        radius = radius_key(spec)
-        most = (1.0 - MIN_BALL_RADIUS_FRACTION) * spec[radius]
-        if 0.0 < spec["clearance"] <= tolerance:
-            raise ConfigError("reliability.clearance_tolerance", tolerance,
-                              f"a number < joints.{joint}.clearance ({spec['clearance']!r}), so that "
-                              "every member keeps a clearance", source)
-        if spec["clearance"] > 0.0 and spec["clearance"] + tolerance > most:
-            room = most - spec["clearance"]     # in full where 6 digits would read as the value
-            shown = f"{room:.6g}" if f"{room:.6g}" != f"{tolerance:.6g}" else repr(room)
-            raise ConfigError(
-                "reliability.clearance_tolerance", tolerance,
-                f"a number <= {shown}, so that the band joints.{joint}."
-                f"clearance -+ tolerance ({spec['clearance']:g} -+ {tolerance:g} m) stays within "
-                f"the largest clearance, {1.0 - MIN_BALL_RADIUS_FRACTION:g} * joints.{joint}."
-                f"{radius} ({most:.6g} m), whatever member draws it", source)
+        section_class(joint).check_band(joint, spec, tolerance, source)
     if cfg["materials_file"] is not None:
         path = os.path.abspath(os.path.join(base_dir, os.path.expanduser(cfg["materials_file"])))
         if not os.path.isfile(path):

@@ -34,7 +34,9 @@ from .config import Config, resolve_materials
 from .core import jointset
 from .core import layout as L
 from .core.joints import INDEX
+from .core.joints import JOINTS as JOINT_TABLE
 from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
+from .jointtypes import kind
 from .params import Packed, build_of, pack
 from .simulation import KernelRun, check_step, section_rows
 
@@ -153,16 +155,15 @@ JOINT_NAMES = tuple(sorted(INDEX, key=INDEX.__getitem__))
 #: by joint, as a function of the map's polar bins: the bearing O's map is one row of nazim
 #: bins (``revolute``), the spherical joints' and the guide P's wall maps (four bands) are
 #: npolar rows. A joint without clearance takes none.
-MAP_ROWS = {"A": lambda npolar: npolar, "B": lambda npolar: npolar, "O": lambda npolar: 1,
-            "P": lambda npolar: npolar}
+MAP_ROWS = {joint.name: kind(joint.type).map_rows for joint in JOINT_TABLE}
 
 #: Rows of N_ANGLE_BINS projection bins a clearance joint's projections take: three (x, y,
 #: z) for O, A and B; none for P, whose wear the projections do not hold (``rk4.accept_substep``).
-PROJ_ROWS = {"A": 3, "B": 3, "O": 3, "P": 0}
+PROJ_ROWS = {joint.name: kind(joint.type).proj_rows for joint in JOINT_TABLE}
 
 #: Joints whose wear the undo buffer holds, one row per accepted sub-step (P's is not undone
 #: row by row: ``rk4.accept_substep``).
-UNDO_JOINTS = ("A", "B", "O")
+UNDO_JOINTS = tuple(joint.name for joint in JOINT_TABLE if kind(joint.type).undo_rows)
 
 
 def joint_rows(rows: Sequence[int]) -> tuple[int, int, int]:

@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import math
 import types
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -27,6 +28,7 @@ from .core import jointset
 from .core import layout as L
 from .core.contact import hysteresis_fraction
 from .core.joints import BODIES, JOINTS
+from .jointtypes import kind as joint_kind
 from .materials import FIELDS
 from .version import IDENTITY_VERSION
 
@@ -151,7 +153,7 @@ def power_law_joint(joint_type: str, exponent: float) -> bool:
     in a case whose ``P_EXPONENT`` is ``exponent``: the journal of O and P's corners always
     (``revolute.journal_law``; P's faces, ``prismatic.line_stiffness``), the spherical joints under
     ``contact.elastic: hertz`` (``exponent`` != 0); else the paper's layered law."""
-    return joint_type in ("revolute", "prismatic") or exponent != 0.0
+    return joint_kind(joint_type).power_law or exponent != 0.0
 
 
 def contact_modulus(joint: AnyJoint, joint_type: str, materials: dict, rule: str,
@@ -307,19 +309,21 @@ def check_guide_reach(joint: PrismaticJointConfig, preset: Preset) -> None:
 
 
 def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> None:
-    """Joint P's own columns of its jp row: the block, the two clearances (J_C the smaller),
-    the corners' edge radius, and the walls' wear maps along the guide: from the ideal
-    slider's travel (docs/physics.md section 1) widened by the block's half length and
-    5 % of the travel each way."""
+    """Joint P's own columns of its jp row: the block, the two clearances (J_C, the joint's
+    clearance, the smaller), the corners' edge radius, and the walls' wear maps along the
+    guide: from the ideal slider's travel (docs/physics.md section 1) widened by the block's
+    half length and 5 % of the travel each way. A guide has no socket or ball radius: its
+    J_RI and J_RJ are 0."""
     length, width, height = joint.block
-    row[L.J_LENGTH] = length
+    row[L.J_BLOCK_LENGTH] = length
     row[L.J_WIDTH] = width
     row[L.J_HEIGHT] = height
     row[L.J_CY] = joint.clearance_y
     row[L.J_CZ] = joint.clearance_z
     row[L.J_C] = joint.clearance
-    row[L.J_RI] = joint.corner_radius
-    row[L.J_RJ] = joint.corner_radius
+    row[L.J_RI] = 0.0
+    row[L.J_RJ] = 0.0
+    row[L.J_CORNER_RADIUS] = joint.corner_radius
     theta = np.linspace(0.0, 2.0 * math.pi, 721)
     check_guide_reach(joint, preset)
     x = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
@@ -375,7 +379,6 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     least sink a case can have (a tilted block carries the load on one edge, deeper).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.revolute import journal_law
 
     packed = pack(cfg, materials, seat=False)
     p, jp = packed.p, packed.jp
@@ -398,39 +401,54 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
     for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
-        c = jp[j, L.J_C]
         stop = jp[j, L.J_PEN_STOP]
-        limit = min(c, stop)
-        if joint.type == "prismatic":
-            # the reaction across the y walls and across the z walls, a face each
-            # the stop compares the deepest corner with the smaller clearance (jp[J_C])
-            key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
-            for axis in (1, 2):
-                load = abs(float(forces[j][axis]))
-                if not (math.isfinite(load) and load > 0.0):
-                    continue
-                sink = face_sink(load, jp[j], axis)
-                if sink >= limit:
-                    out.append(f"joints.{joint.name}.{key} ({c:g} m) is below joint "
-                               f"{joint.name}'s contact sink: {sink:.3g} m of the block's face "
-                               f"on its {'yz'[axis - 1]} walls under a static load of "
-                               f"{load:.3g} N, {outcome(sink, stop)}")
-                    break
-            continue
-        f = forces[j].copy()
-        law = p[L.P_EXPONENT]
-        if joint.type == "revolute":
-            f[0] = 0.0
-            law = journal_law(p)
-        size = float(np.linalg.norm(f))
-        if not (math.isfinite(size) and size > 0.0):
-            continue
-        sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ], law)
-        if sink >= limit:
-            out.append(f"joints.{joint.name}.clearance ({c:g} m) is below joint {joint.name}'s "
-                       f"Hertz sink: {sink:.3g} m under its static load of {size:.3g} N, "
-                       f"{outcome(sink, stop)}")
+        found = HOST_HOOKS[joint.type].sink(joint.name, j, forces[j], p, jp,
+                                            min(jp[j, L.J_C], stop))
+        if found is not None:
+            sink, text = found
+            out.append(f"{text}, {outcome(sink, stop)}")
     return out
+
+
+def point_sink(name: str, j: int, force: np.ndarray, p: np.ndarray, jp: np.ndarray,
+               limit: float) -> tuple[float, str] | None:
+    """A point contact's Hertz sink (:func:`hertz_sink_warnings`): the static penetration of
+    its law (``HOST_HOOKS[type].law``) under the static load ``force`` [N] (its axial part
+    left out where the joint's axial play is ideal, ``jointtypes.JointKind.axial_ideal``),
+    and the warning's text, where it reaches ``limit`` [m]; else None."""
+    described = joint_kind(JOINTS[j].type)
+    f = force.copy()
+    if described.axial_ideal:
+        f[0] = 0.0
+    c = jp[j, L.J_C]
+    size = float(np.linalg.norm(f))
+    if not (math.isfinite(size) and size > 0.0):
+        return None
+    sink = static_penetration(size, c, jp[j, L.J_EW], jp[j, L.J_RI], jp[j, L.J_RJ],
+                              HOST_HOOKS[described.name].law(p))
+    if sink < limit:
+        return None
+    return sink, (f"joints.{name}.clearance ({c:g} m) is below joint {name}'s Hertz sink: "
+                  f"{sink:.3g} m under its static load of {size:.3g} N")
+
+
+def guide_sink(name: str, j: int, force: np.ndarray, p: np.ndarray, jp: np.ndarray,
+               limit: float) -> tuple[float, str] | None:
+    """The guide's contact sink (:func:`hertz_sink_warnings`): the reaction across the y
+    walls and across the z walls, a face each (:func:`face_sink`), against ``limit`` (the
+    stop compares the deepest corner with the smaller clearance, jp[J_C])."""
+    c = jp[j, L.J_C]
+    key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
+    for axis in (1, 2):
+        load = abs(float(force[axis]))
+        if not (math.isfinite(load) and load > 0.0):
+            continue
+        sink = face_sink(load, jp[j], axis)
+        if sink >= limit:
+            return sink, (f"joints.{name}.{key} ({c:g} m) is below joint {name}'s contact "
+                          f"sink: {sink:.3g} m of the block's face on its {'yz'[axis - 1]} "
+                          f"walls under a static load of {load:.3g} N")
+    return None
 
 
 def film_coefficient(viscosity: float, radius: float, length: float, clearance: float) -> float:
@@ -462,25 +480,31 @@ def penetration_stop(row: np.ndarray, kind: str, p: np.ndarray, fraction: float 
     carries (a 1 um MoS2 layer in a 0.25 mm steel socket reaches 3.1 um at 300 r/min). The
     unworn clearance is used: wear softens the law, so a worn joint's stop is, if anything,
     early."""
-    from .core.prismatic import line_stiffness
-    from .core.revolute import journal_law
-
-    c = float(row[L.J_C])
     if fraction is not None:
-        return fraction * c
-    if kind == "prismatic":
-        # the edge lines' law (section 3.7): an edge tilted until only its end corner
-        # touches carries k_l L delta / 2 at the corner's depth delta, the least load for a
-        # depth that a line in contact along its length can have; the softer wall's lines
-        one = np.ascontiguousarray(row[None, :], dtype=np.float64)
-        kl = min(as_python(line_stiffness)(one, 0, wall, row[L.J_EW]) for wall in (0, 2))
-        depth = load_bound / (0.5 * kl * float(row[L.J_LENGTH]))
-        # the rounded edge's line contact wants its width well inside the edge's radius
-        # r_c (jp[J_RI]): no deeper than a tenth of r_c
-        return min(depth, CORNER_DEPTH_FRACTION * float(row[L.J_RI]))
-    law = as_python(journal_law)(p) if kind == "revolute" else p[L.P_EXPONENT]
-    return static_penetration(load_bound, c, row[L.J_EW], row[L.J_RI], row[L.J_RJ], law,
-                              plain=True)
+        return fraction * float(row[L.J_C])
+    return HOST_HOOKS[kind].stop(row, p, load_bound)
+
+
+def point_stop(row: np.ndarray, p: np.ndarray, load_bound: float, law: float) -> float:
+    """A point contact's penetration stop (:func:`penetration_stop`): the depth at which its
+    law ``law`` carries ``load_bound`` [N]."""
+    return static_penetration(load_bound, float(row[L.J_C]), row[L.J_EW], row[L.J_RI],
+                              row[L.J_RJ], law, plain=True)
+
+
+def guide_stop(row: np.ndarray, p: np.ndarray, load_bound: float) -> float:
+    """The guide's penetration stop (:func:`penetration_stop`): the edge lines' law (section
+    3.7): an edge tilted until only its end corner touches carries k_l L delta / 2 at the
+    corner's depth delta, the least load for a depth that a line in contact along its
+    length can have, on the softer wall's lines; no deeper than
+    :data:`CORNER_DEPTH_FRACTION` of the edges' radius r_c (jp[J_CORNER_RADIUS]), where the rounded
+    edge's line contact wants its width well inside r_c."""
+    from .core.prismatic import line_stiffness
+
+    one = np.ascontiguousarray(row[None, :], dtype=np.float64)
+    kl = min(as_python(line_stiffness)(one, 0, wall, row[L.J_EW]) for wall in (0, 2))
+    depth = load_bound / (0.5 * kl * float(row[L.J_BLOCK_LENGTH]))
+    return min(depth, CORNER_DEPTH_FRACTION * float(row[L.J_CORNER_RADIUS]))
 
 
 def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.ndarray,
@@ -492,18 +516,11 @@ def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.nda
     bilinear, ``wear.interpolate``; feedback on or off) and ``contact.surface`` switches to
     the base material where the coating is worn through.
     """
-    from .core import revolute
     from .core.contact import surface
-    from .core.wear import worn_surface
 
     n = tuple(float(v) for v in normal_socket)
     wmap = np.ascontiguousarray(wmap, dtype=np.float64)
-    if JOINTS[j].type == "revolute":     # the bearing map: one row around the bearing
-        h = revolute.map_read(wmap, j, n, bool(p[L.P_INTERP] != 0.0))[0] if p[L.P_FEEDBACK] != 0.0 else 0.0
-        worn = revolute.worn_through(wmap, j, n, float(jp[j, L.J_COAT]))
-    else:
-        h, _, worn = worn_surface(wmap, j, n, float(jp[j, L.J_COAT]), bool(p[L.P_FEEDBACK] != 0.0),
-                                  bool(p[L.P_INTERP] != 0.0))
+    h, worn = HOST_HOOKS[JOINTS[j].type].worn(wmap, j, n, jp, p)
     ew, _, _ = surface(jp, j, worn)
     return float(jp[j, L.J_C] + h), float(ew)
 
@@ -524,7 +541,6 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     likewise, against the friction of their slip at the start (:func:`ball_seats`).
     """
     from .core.dynamics import ideal_joint_forces
-    from .core.revolute import journal_law
 
     y_ideal = initial_state(preset, theta0, omega)
     forces = ideal_joint_forces(0.0, y_ideal, p, jp)
@@ -532,25 +548,40 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
-        f = forces[j].copy()
-        law = p[L.P_EXPONENT]
-        if joint.type == "prismatic":
-            offsets[j] = seated_block(f, jp[j], p)
-            if wmap is not None and p[L.P_FEEDBACK] != 0.0:
-                r4 = y_ideal[L.Y_R4:L.Y_R4 + 3] + offsets[j]
-                offsets[j] = seated_block(f, jp[j], p, worn_walls(jp, j, wmap, p, r4))
-            continue
-        if joint.type == "revolute":
-            f[0] = 0.0          # axial: ideal
-            law = journal_law(p)
-        size = float(np.linalg.norm(f))
-        if not (math.isfinite(size) and size > 0.0):
-            continue  # no load to lean on: the ball stays centred
-        u = f / size            # the contact's force on the ball leans along u
-        if joint.type == "revolute":
-            u, size = journal_seat(u, size, p, jp, j, omega, wmap)
-        offsets[j] = leaning_offset(j, u, size, law, p, jp, y_ideal, wmap)
+        offsets[j] = HOST_HOOKS[joint.type].seat(j, forces[j].copy(), p, jp, y_ideal, omega,
+                                                 wmap)
     return ball_seats(preset, p, jp, theta0, omega, forces, offsets, y_ideal, wmap)
+
+
+def point_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np.ndarray,
+               omega: float, wmap: np.ndarray | None) -> np.ndarray:
+    """A point contact's seated offset (:func:`seated_offsets`): leaning along the ideal
+    reaction f (its axial part left out where the joint's axial play is ideal), at its own
+    law's static penetration (:func:`leaning_offset`); the journal turned by the friction
+    angle (:func:`journal_seat`); centred where there is no load to lean on."""
+    described = joint_kind(JOINTS[j].type)
+    hooks = HOST_HOOKS[described.name]
+    if described.axial_ideal:
+        f[0] = 0.0          # axial: ideal
+    law = hooks.law(p)
+    size = float(np.linalg.norm(f))
+    if not (math.isfinite(size) and size > 0.0):
+        return np.zeros(3)  # no load to lean on: the ball stays centred
+    u = f / size            # the contact's force on the ball leans along u
+    if hooks.spins:
+        u, size = journal_seat(u, size, p, jp, j, omega, wmap)
+    return leaning_offset(j, u, size, law, p, jp, y_ideal, wmap)
+
+
+def guide_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np.ndarray,
+               omega: float, wmap: np.ndarray | None) -> np.ndarray:
+    """The block's seated offset in its guide (:func:`seated_offsets`,
+    :func:`seated_block`), on the worn walls where wear feeds back (:func:`worn_walls`)."""
+    offset = seated_block(f, jp[j], p)
+    if wmap is not None and p[L.P_FEEDBACK] != 0.0:
+        r4 = y_ideal[L.Y_R4:L.Y_R4 + 3] + offset
+        offset = seated_block(f, jp[j], p, worn_walls(jp, j, wmap, p, r4))
+    return offset
 
 
 def leaning_offset(j: int, u: np.ndarray, size: float, law: float, p: np.ndarray,
@@ -600,7 +631,7 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
     seats = []
     for j, joint in enumerate(JOINTS):
         size = float(np.linalg.norm(forces[j]))
-        if (joint.type == "spherical" and jp[j, L.J_CLEARANCE] != 0.0
+        if (HOST_HOOKS[joint.type].turns_at_start and jp[j, L.J_CLEARANCE] != 0.0
                 and math.isfinite(size) and size > 0.0):
             seats.append((j, forces[j] / size, size))
     if p[L.P_FRICTION] == 0.0 or not seats:
@@ -685,7 +716,7 @@ def face_sink(load_N: float, row: np.ndarray, axis: int) -> float:
 
     stiffness = as_python(line_stiffness)(np.ascontiguousarray(row[None, :]), 0, 2 * axis - 2,
                                           row[L.J_EW])
-    return load_N / (2.0 * stiffness * row[L.J_LENGTH])
+    return load_N / (2.0 * stiffness * row[L.J_BLOCK_LENGTH])
 
 
 def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
@@ -693,14 +724,15 @@ def worn_walls(jp: np.ndarray, j: int, wmap: np.ndarray, p: np.ndarray,
     """The least wear depth [m] under the four corners that face each wall of prismatic
     joint j (+y, -y, +z, -z), the block unrotated with its centroid at ``r4``: read as the
     kernel reads it (``prismatic.gap``: the bin, or bilinearly with ``wear.interpolate``)."""
-    from .core.prismatic import gap, slot_corner, slot_wall
+    from .core.prismatic import IDENTITY, gap, guide_point, slot_corner, slot_wall
 
     depth = [math.inf] * 4
     wmap = np.ascontiguousarray(wmap, dtype=np.float64)
     for k in range(L.P_SLOTS):
         q = tuple(float(a + b) for a, b in zip(r4, slot_corner(jp, j, k)))
         wall = slot_wall(k)[0]
-        depth[wall] = min(depth[wall], float(gap(jp, j, wmap, p, k, q)[2]))
+        depth[wall] = min(depth[wall], float(gap(jp, j, wmap, p, k, q, guide_point(p, q),
+                                                      IDENTITY)[4]))
     return depth[0], depth[1], depth[2], depth[3]
 
 
@@ -797,6 +829,146 @@ def perturbed_offset(nominal: np.ndarray, shift: np.ndarray, clearance: float) -
     return d * (limit / size) if size > limit else d
 
 
+def socket_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
+    """A spherical joint's own columns of its jp row: none beyond the common ones."""
+
+
+def bearing_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
+    """The bearing's own columns of its jp row: its length, and with a clearance its
+    lubricant film's coefficient (:func:`film_coefficient`)."""
+    bearing = cast(RevoluteJointConfig, joint)
+    row[L.J_LENGTH] = bearing.length
+    c = bearing.clearance
+    if c > 0.0:
+        row[L.J_FILM] = film_coefficient(bearing.lubricant_viscosity, bearing.bearing_radius,
+                                         bearing.length, c)
+
+
+def guide_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
+    """The guide's own columns of its jp row (:func:`guide_row`)."""
+    guide_row(row, cast(PrismaticJointConfig, joint), preset)
+
+
+def socket_law(p: np.ndarray) -> float:
+    """A spherical joint's elastic law: the case's (``P_EXPONENT``; 0: the paper's)."""
+    return p[L.P_EXPONENT]
+
+
+def journal_law(p: np.ndarray) -> float:
+    """The journal's elastic law (``revolute.journal_law``)."""
+    from .core.revolute import journal_law as law
+
+    return as_python(law)(p)
+
+
+def no_law(p: np.ndarray) -> float:
+    """A type whose contact is no point contact's law (the guide's edge lines)."""
+    raise ValueError("the guide's contact has no point contact law")
+
+
+def socket_worn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
+                p: np.ndarray) -> tuple[float, bool]:
+    """(h, worn) of a socket's map over its sphere at the socket-frame direction n
+    (``wear.worn_surface``), as :func:`worn_contact` reads it."""
+    from .core.wear import worn_surface
+
+    h, _, worn = worn_surface(wmap, j, n, float(jp[j, L.J_COAT]),
+                              bool(p[L.P_FEEDBACK] != 0.0), bool(p[L.P_INTERP] != 0.0))
+    return h, worn
+
+
+def bearing_worn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
+                 p: np.ndarray) -> tuple[float, bool]:
+    """(h, worn) of the bearing's map, one row around the bearing, at the direction n
+    (``revolute.map_read``, ``revolute.worn_through``)."""
+    from .core import revolute
+
+    h = (revolute.map_read(wmap, j, n, bool(p[L.P_INTERP] != 0.0))[0]
+         if p[L.P_FEEDBACK] != 0.0 else 0.0)
+    return h, revolute.worn_through(wmap, j, n, float(jp[j, L.J_COAT]))
+
+
+def point_perturb(nominal: np.ndarray, shift: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """A point contact's perturbed start (:func:`perturbed_offset`, its clearance jp[J_C])."""
+    return perturbed_offset(nominal, shift, float(row[L.J_C]))
+
+
+def point_rate(jp: np.ndarray, j: int, p: np.ndarray, preset: Preset, m_ref: float) -> float:
+    """A point contact's stiff rate [1/s] at its penetration stop (jp[J_PEN_STOP]) on the
+    lightest mass ``m_ref`` [kg] it can meet (``simulation.check_step``), with its own law."""
+    from .core.contact import elastic_force
+
+    row = jp[j]
+    _, stiffness = as_python(elastic_force)(row[L.J_PEN_STOP], row[L.J_C], row[L.J_EW],
+                                            row[L.J_RI], row[L.J_RJ],
+                                            HOST_HOOKS[JOINTS[j].type].law(p))
+    return math.sqrt(stiffness / m_ref)
+
+
+def guide_rate(jp: np.ndarray, j: int, p: np.ndarray, preset: Preset, m_ref: float) -> float:
+    """The guide's stiff rate [1/s] (``simulation.check_step``): a corner's bound on its
+    edge line's stiffness, k_l L / 2 (``prismatic.slot_rate``), the stiffer of the two
+    faces, on the free block's mass at the corner."""
+    from .core.prismatic import line_stiffness
+
+    row = jp[j]
+    corner = 0.25 * (row[L.J_BLOCK_LENGTH] ** 2 + row[L.J_WIDTH] ** 2 + row[L.J_HEIGHT] ** 2)
+    mass = 1.0 / (1.0 / preset.slider_mass_kg + corner / min(preset.slider_inertia_kgm2))
+    stiffness = max(0.5 * as_python(line_stiffness)(jp, j, wall, row[L.J_EW])
+                    * row[L.J_BLOCK_LENGTH] for wall in (0, 2))
+    return math.sqrt(stiffness / mass)
+
+
+@dataclass(frozen=True)
+class TypeHooks:
+    """A joint type's behaviour in packing and checking a case (one entry of
+    :data:`HOST_HOOKS`, keyed by the type's name as ``jointtypes.KINDS``): what the packing,
+    the seated start, the checks and the step bound call, so that none of them branches on
+    the type's name."""
+
+    #: fills the type's own columns of its jp row (row, its config section, the preset)
+    fill: Callable[[np.ndarray, AnyJoint, Preset], None]
+    #: its elastic law's exponent for the case's p (:func:`static_penetration`'s)
+    law: Callable[[np.ndarray], float]
+    #: its penetration stop [m] (row, p, contact.load_bound) without a fraction rule
+    stop: Callable[[np.ndarray, np.ndarray, float], float]
+    #: its sink under the start's static load against a limit: (sink, warning) or None
+    sink: Callable[[str, int, np.ndarray, np.ndarray, np.ndarray, float],
+                   tuple[float, str] | None]
+    #: its seated offset [m] (j, ideal force, p, jp, ideal state, omega, wear map)
+    seat: Callable[[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float,
+                    np.ndarray | None], np.ndarray]
+    #: an ensemble member's start (nominal offset, shift in clearances, row)
+    perturb: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    #: (wear depth, coating worn through) of its map in a socket-frame direction
+    worn: Callable[[np.ndarray, int, tuple, np.ndarray, np.ndarray], tuple[float, bool]]
+    #: its stiff rate [1/s] for the step bound (jp, j, p, preset, lightest mass)
+    rate: Callable[[np.ndarray, int, np.ndarray, Preset, float], float]
+    #: whether its ball turns against the slip's friction at a seated start
+    #: (:func:`ball_seats`)
+    turns_at_start: bool = False
+    #: whether its seat turns by the friction of the journal spinning in place
+    #: (:func:`journal_seat`)
+    spins: bool = False
+
+
+#: The registered joint types' host behaviour, by type name (``core.joints.JOINT_TYPES``;
+#: tests/test_jointtypes.py fails for a registered type without an entry).
+HOST_HOOKS: dict[str, TypeHooks] = {
+    "spherical": TypeHooks(fill=socket_fill, law=socket_law,
+                           stop=lambda row, p, bound: point_stop(row, p, bound, socket_law(p)),
+                           sink=point_sink, seat=point_seat, perturb=point_perturb,
+                           worn=socket_worn, rate=point_rate, turns_at_start=True),
+    "revolute": TypeHooks(fill=bearing_fill, law=journal_law,
+                          stop=lambda row, p, bound: point_stop(row, p, bound, journal_law(p)),
+                          sink=point_sink, seat=point_seat, perturb=point_perturb,
+                          worn=bearing_worn, rate=point_rate, spins=True),
+    "prismatic": TypeHooks(fill=guide_fill, law=no_law, stop=guide_stop, sink=guide_sink,
+                           seat=guide_seat, perturb=perturbed_block, worn=socket_worn,
+                           rate=guide_rate),
+}
+
+
 @dataclass
 class Packed:
     """Kernel inputs of one case."""
@@ -883,8 +1055,9 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
         ideal = row[L.J_CLEARANCE] == 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
             f"layered law, E_w ({cfg.contact.layer_rule})"
-        if kind == "prismatic":
-            law = "elastic foundation on the faces' edge lines, E*"
+        own = joint_kind(kind).contact_law
+        if own is not None:
+            law = own
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,
@@ -982,12 +1155,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_MU_BASE] = base.friction_coefficient if coated else jp[j, L.J_MU]
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
-        jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
-        if isinstance(joint, PrismaticJointConfig):
-            guide_row(jp[j], joint, preset)
-        if c > 0.0 and isinstance(joint, RevoluteJointConfig):
-            jp[j, L.J_FILM] = film_coefficient(joint.lubricant_viscosity, joint.bearing_radius,
-                                               joint.length, c)
+        HOST_HOOKS[kind].fill(jp[j], joint, preset)
         if c > 0.0:
             jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
                                                    contact.load_bound)
@@ -1008,13 +1176,10 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     if member is not None and perturb.ball_offset > 0.0:
         for j, row in enumerate(JOINTS):
             shift = member.ball_offset[j].copy()
-            if row.type in ("revolute", "prismatic"):
+            if joint_kind(row.type).axial_ideal:
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
                                     # across its guide
-            if row.type == "prismatic":
-                offsets[j] = perturbed_block(offsets[j], shift, jp[j])
-                continue
-            offsets[j] = perturbed_offset(offsets[j], shift, float(jp[j, L.J_C]))
+            offsets[j] = HOST_HOOKS[row.type].perturb(offsets[j], shift, jp[j])
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
                        by_name["P"])

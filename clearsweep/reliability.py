@@ -144,7 +144,7 @@ def member_config(cfg: Config) -> Config:
     rc = cfg.reliability
     if not rc.any:
         return cfg
-    from .config import PrismaticJointConfig, resolve_materials
+    from .config import resolve_materials
     from .params import surface_material
 
     draws = member_draws(cfg)
@@ -153,14 +153,10 @@ def member_config(cfg: Config) -> Config:
     for j, (name, joint) in enumerate(cfg.joints.items()):
         if joint.clearance <= 0.0:
             continue
-        if rc.clearance_tolerance > 0.0 and isinstance(joint, PrismaticJointConfig):
-            # the guide's two clearances move together by the member's draw
-            shift = float(draws.clearance[j]) - joint.clearance
-            values["joints__P__clearance_y"] = joint.clearance_y + shift
-            values["joints__P__clearance_z"] = joint.clearance_z + shift
-            values["reliability__clearance_tolerance"] = 0.0
-        elif rc.clearance_tolerance > 0.0:
-            values[f"joints__{name}__clearance"] = float(draws.clearance[j])
+        if rc.clearance_tolerance > 0.0:
+            # the section's keys that give it the drawn clearance (a guide's two move
+            # together by the draw)
+            values.update(joint.clearance_overrides(name, float(draws.clearance[j])))
             # the member is one part, its clearance drawn: no band of its own, else the
             # band's check around the draw (not the nominal) would let the seed decide
             values["reliability__clearance_tolerance"] = 0.0

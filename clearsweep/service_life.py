@@ -45,9 +45,10 @@ from .budget import (
 from .config import Config, ConfigError, dump_config, load_config, parse_yaml, resolve_materials
 from .core import layout as L
 from .dataset import ForeignLock, history_line, lock_exclusively, replaced_on_success, with_command_line
+from .jointtypes import describe
 from .params import Packed, identity_changes, joint_attributes, joint_configs, kernel_build, pack, run_identity
 from .simulation import KernelRun, preflight, prepare_kernel, run_kernel
-from .variables import JOINT_TYPES, JOINTS, format_length, length_unit
+from .variables import JOINTS, format_length, length_unit
 from .version import IDENTITY_VERSION
 
 #: A bin counts as worn for the mean depth when deeper than this fraction of the largest.
@@ -711,7 +712,7 @@ def _block_row(cfg: Config, raw: KernelRun, state: LifeState, revs: float, jp: n
             # a guide's bins hold the depth of the corners' tracks, each over the same
             # length along the guide (docs/physics.md 5.7): their plain mean
             areas = (np.ones(state.wmap.shape[1:])
-                     if JOINT_TYPES[JOINTS[j]] == "prismatic"
+                     if describe(JOINTS[j]).equal_bins
                      else bin_areas(state.wmap.shape[1:], jp[j, L.J_RI]))
             mean[j] = float((state.wmap[j] * areas)[worn].sum() / areas[worn].sum())
     ideal = clearance <= 0.0

@@ -17,9 +17,8 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import jointset
 from .core import layout as L
-from .core.contact import elastic_force
 from .core.work import Case, Out
-from .params import PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack
+from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -37,9 +36,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
     crank's; at P, the block's mass at a corner, its rotation included), each joint with its
     own elastic law (the journal's at O, the corners' at P).
     """
-    from .core.joints import INDEX
-    from .core.prismatic import line_stiffness
-    from .core.revolute import journal_law
+    from .core.joints import INDEX, JOINTS
 
     solver = cfg.solver
     dt = solver.dt
@@ -52,28 +49,9 @@ def check_step(cfg: Config, packed: Packed) -> None:
     if packed.jp[INDEX["O"], L.J_CLEARANCE] != 0.0:
         m_ref = 1.0 / (1.0 / m_ref + 1.0 / preset.crank_mass_kg)
     for j in range(L.N_JOINTS):
-        jp = packed.jp[j]
-        if jp[L.J_CLEARANCE] == 0.0:
+        if packed.jp[j, L.J_CLEARANCE] == 0.0:
             continue
-        delta = jp[L.J_PEN_STOP]
-        mass = m_ref
-        rj = jp[L.J_RJ]
-        if j == INDEX["P"]:
-            # a corner's bound on its edge line's stiffness, k_l L / 2 (prismatic.slot_rate),
-            # the stiffer of the two faces, on the free block's mass at the corner
-            corner = 0.25 * (jp[L.J_LENGTH] ** 2 + jp[L.J_WIDTH] ** 2 + jp[L.J_HEIGHT] ** 2)
-            mass = 1.0 / (1.0 / preset.slider_mass_kg + corner / min(preset.slider_inertia_kgm2))
-            stiffness = max(0.5 * as_python(line_stiffness)(packed.jp, j, wall, jp[L.J_EW])
-                            * jp[L.J_LENGTH] for wall in (0, 2))
-            bounds.append(solver.stability_limit * 2 ** solver.max_substep_level
-                          / math.sqrt(stiffness / mass))
-            continue
-        if j == INDEX["O"]:
-            law = as_python(journal_law)(packed.p)
-        else:
-            law = packed.p[L.P_EXPONENT]
-        _, stiffness = as_python(elastic_force)(delta, jp[L.J_C], jp[L.J_EW], jp[L.J_RI], rj, law)
-        rate = math.sqrt(stiffness / mass)
+        rate = HOST_HOOKS[JOINTS[j].type].rate(packed.jp, j, packed.p, preset, m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
     if dt > limit:

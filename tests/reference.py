@@ -401,7 +401,7 @@ def block_contact(mech: Mechanism, q, qd):
     are the sums over the corners; its contact values those of the corner that penetrates
     deepest."""
     jp = mech.jp[JOINT_P]
-    half = 0.5 * np.array([jp[L.J_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
+    half = 0.5 * np.array([jp[L.J_BLOCK_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
     clear = {1: jp[L.J_CY], 2: jp[L.J_CZ]}
     centre = np.array([0.0, 0.0, mech.zs])
     ew = jp[L.J_EW]

@@ -188,13 +188,13 @@ def test_the_penetration_stop_is_the_laws_depth_at_the_load_bound():
     row = packed.jp[INDEX["P"]]
     one = np.ascontiguousarray(row[None, :])
     kl = min(line_stiffness(one, 0, wall, row[L.J_EW]) for wall in (0, 2))
-    fa, fb, _ = line_load(row[L.J_PEN_STOP], 0.0, kl, row[L.J_LENGTH])
+    fa, fb, _ = line_load(row[L.J_PEN_STOP], 0.0, kl, row[L.J_BLOCK_LENGTH])
     assert fa + fb == pytest.approx(5e4, rel=1e-12)
-    assert row[L.J_PEN_STOP] < 0.1 * row[L.J_RI]
+    assert row[L.J_PEN_STOP] < 0.1 * row[L.J_CORNER_RADIUS]
     heavy = load_config(ONE, ["joints.P.clearance_y=1e-4", "joints.P.clearance_z=1e-4",
                               "contact.load_bound=1e7"])
     row = pack(heavy, resolve_materials(heavy), seat=False).jp[INDEX["P"]]
-    assert row[L.J_PEN_STOP] == pytest.approx(0.1 * row[L.J_RI], rel=1e-15)
+    assert row[L.J_PEN_STOP] == pytest.approx(0.1 * row[L.J_CORNER_RADIUS], rel=1e-15)
     # a coating's thickness does not cap the stop: the penetration is the bodies' approach,
     # which the base carries under a thin layer; both stops lie beyond the thin layer's 1 um
     thin, thick = (load_config(ONE, ["joints.B.coating=PTFE", f"joints.B.coating_thickness={t}"])

@@ -4,7 +4,9 @@ that disagrees with the layout, the config or the packed initial state fails her
 
 import dataclasses
 import importlib
+import inspect
 import pkgutil
+import types
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +17,9 @@ import clearsweep.core as core
 from clearsweep.config import DEFAULTS, JointsConfig, resolve_materials
 from clearsweep.core import joints
 from clearsweep.core import layout as L
+from clearsweep.core.compiled import compiled
 from clearsweep.core.kinematics import mv, rotation, trig
+from clearsweep.core.work import Model
 from clearsweep.params import joint_configs, pack
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -56,6 +60,100 @@ def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, mo
     arch = (ROOT / "docs" / "architecture.md").read_text()
     assert f"`{module_name}.py`" in arch and f"`{type_name}`" in arch, (
         f"docs/architecture.md does not describe the joint type {type_name}")
+
+
+def protocol_mismatches(module):
+    """How the functions of a joint-type module differ from ``joints.PROTOCOL``: one line per
+    function that is missing, not compiled, or takes other parameters (names and order)."""
+    out = []
+    for fn in joints.PROTOCOL:
+        obj = getattr(module, fn.name, None)
+        if not isinstance(obj, CPUDispatcher):
+            out.append(f"{fn.name}: not a compiled function")
+            continue
+        params = tuple(inspect.signature(obj.py_func).parameters)
+        if params != fn.params:
+            out.append(f"{fn.name}({', '.join(params)}) is not "
+                       f"{fn.name}({', '.join(fn.params)})")
+    return out
+
+
+@pytest.mark.parametrize("type_name, module_name", sorted(joints.JOINT_TYPES.items()))
+def test_a_registered_joint_type_compiles_the_protocol_signatures(type_name, module_name):
+    module = importlib.import_module(f"clearsweep.core.{module_name}")
+    assert protocol_mismatches(module) == [], f"joint type {type_name} (core/{module_name}.py)"
+
+
+def test_a_joint_type_with_another_signature_fails_the_protocol_check():
+    """The check reads the parameters: a module whose gap lacks the socket's rotation (as
+    revolute's did) or whose contact takes the block alone (as prismatic's did) is named;
+    one that copies a registered type's functions is not."""
+    def gap(jp, j, wmap, p, pb, ps):
+        return 0.0
+
+    def contact(j, model, slider, full, dg):
+        return 0.0
+
+    wrong = types.ModuleType("wrong")
+    wrong.gap = compiled(gap)
+    wrong.contact = compiled(contact)
+    found = protocol_mismatches(wrong)
+    assert len(found) == 2
+    assert found[0].startswith("gap(jp, j, wmap, p, pb, ps) is not")
+    assert found[1].startswith("contact(j, model, slider, full, dg) is not")
+    missing = types.ModuleType("missing")
+    missing.gap = gap           # not compiled, and no contact
+    assert protocol_mismatches(missing) == ["gap: not a compiled function",
+                                            "contact: not a compiled function"]
+    copied = types.ModuleType("copied")
+    spherical = importlib.import_module("clearsweep.core.spherical")
+    copied.gap, copied.contact = spherical.gap, spherical.contact
+    assert protocol_mismatches(copied) == []
+
+
+def body_states(pk):
+    """Each body's state (r, v, R, w) at the packed initial state, at rest."""
+    y = pk.y0
+    zero = (0.0, 0.0, 0.0)
+    out = {}
+    for body in joints.BODIES:
+        if body.y_r is None:
+            out[body.name] = (zero, zero, (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0), zero)
+        else:
+            R = rotation(trig(*(float(a) for a in y[body.y_phi:body.y_phi + 3])))
+            out[body.name] = (tuple(float(a) for a in y[body.y_r:body.y_r + 3]), zero, R, zero)
+    return out
+
+
+def test_every_joint_types_functions_return_the_protocols_shape():
+    """Each joint of the table, with clearance, through its type's compiled gap and contact
+    at the packed initial state (the table's attachments as ball and socket): each returns
+    a tuple of the length that ``joints.PROTOCOL`` names, vectors where it names them."""
+    cfg = DEFAULTS.replace(joints__A__clearance=1e-4, joints__B__clearance=1e-4,
+                           joints__O__clearance=1e-4, joints__P__clearance_y=1e-4,
+                           joints__P__clearance_z=1e-4)
+    pk = pack(cfg, resolve_materials(cfg))
+    lengths = {"l2": pk.p[L.P_L2], "l3": pk.p[L.P_L3], "zs": pk.p[L.P_ZS], None: 0.0}
+    states = body_states(pk)
+    wmap = np.zeros((L.N_JOINTS, 36, 72))
+    model = Model(pk.p, pk.jp, np.zeros((L.N_JOINTS, L.N_S)), wmap)
+    spec = {fn.name: fn for fn in joints.PROTOCOL}
+    for j, joint in enumerate(joints.JOINTS):
+        module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[joint.type]}")
+        ends = []
+        for att in (joint.ball, joint.socket):
+            r, v, R, w = states[att.body]
+            u = tuple(float(lengths[att.length]) * f for f in att.factors)
+            ends.append((r, v, R, w, u))
+        pb = tuple(np.add(ends[0][0], mv(ends[0][2], ends[0][4])))
+        ps = tuple(np.add(ends[1][0], mv(ends[1][2], ends[1][4])))
+        geo = module.gap(pk.jp, j, wmap, pk.p, 0, pb, ps, ends[1][2])
+        assert len(geo) == len(spec["gap"].returns), joint.name
+        for name in ("n", "d_s", "n_s", "slope"):
+            assert len(geo[spec["gap"].returns.index(name)]) == 3, (joint.name, name)
+        act = module.contact(j, model, ends[0], ends[1], True, np.zeros(L.N_D))
+        assert len(act) == len(spec["contact"].returns), joint.name
+        assert [len(v) for v in act[:3]] == [3, 3, 3] and np.isfinite(act[3]), joint.name
 
 
 def test_the_table_names_registered_types_bodies_and_config_sections():

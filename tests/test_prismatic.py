@@ -84,7 +84,7 @@ CASES = [(j, preset) for j in P_JOINTS for preset in ("realistic", "paper")]
 def corners(jp):
     """The block's eight corners in its frame, in the kernel's order (corner index bits:
     x, y, z), and their signs."""
-    half = 0.5 * np.array([jp[P, L.J_LENGTH], jp[P, L.J_WIDTH], jp[P, L.J_HEIGHT]])
+    half = 0.5 * np.array([jp[P, L.J_BLOCK_LENGTH], jp[P, L.J_WIDTH], jp[P, L.J_HEIGHT]])
     signs = np.array([[1.0 if c & 1 else -1.0, 1.0 if c & 2 else -1.0, 1.0 if c & 4 else -1.0]
                       for c in range(8)])
     return signs * half, signs
@@ -224,7 +224,7 @@ def line_stiffness(jp, axis):
     a z wall) an elastic foundation of modulus k_f = 2 E* / sqrt(pi L W), a rigid flat punch
     of the face's area on a half-space (docs/physics.md 3.7), each edge carrying half of it:
     k_l = k_f W / 2 (jp[J_EW]: Hertz's modulus E*, tests/test_contact.py)."""
-    length = jp[P, L.J_LENGTH]
+    length = jp[P, L.J_BLOCK_LENGTH]
     width = jp[P, L.J_HEIGHT] if axis == 1 else jp[P, L.J_WIDTH]
     return 2.0 * jp[P, L.J_EW] / np.sqrt(np.pi * length * width) * width / 2.0
 
@@ -232,7 +232,7 @@ def line_stiffness(jp, axis):
 def face_sink(jp, axis, force):
     """Penetration [m] of a face lying flat on a wall across ``axis`` under ``force`` [N]:
     both edge lines in contact along the block's length L, 2 k_l L delta = force."""
-    return force / (2.0 * line_stiffness(jp, axis) * jp[P, L.J_LENGTH])
+    return force / (2.0 * line_stiffness(jp, axis) * jp[P, L.J_BLOCK_LENGTH])
 
 
 # ---------------------------------------------------------------------------
@@ -415,7 +415,7 @@ def test_edge_and_face_impact_against_scipy(impact_run):
     lever = np.cross(u, n_body) if kind == "edge" else np.zeros(3)
     m_eff = 1.0 / (1.0 / p[L.P_M4] + lever @ (lever / p[L.P_J4:L.P_J4 + 3]))
     # Hertz's E* of the uncoated steel pair in closed form, not the kernel's packed value
-    length, width = jp[P, L.J_LENGTH], jp[P, L.J_HEIGHT]
+    length, width = jp[P, L.J_BLOCK_LENGTH], jp[P, L.J_HEIGHT]
     k_line = hertz_modulus_steel() * np.sqrt(width / (np.pi * length)) * length
     stiffness = k_line * (1 if kind == "edge" else 2)
 
@@ -553,7 +553,7 @@ def test_track_width():
     cfg = load_config(str(ROOT / "configs" / "one_clearance.yaml"),
                       [*guide(1e-4, 2e-4), "joints.P.block=[0.08, 0.05, 0.07]"])
     jp = pack(cfg, resolve_materials(cfg)).jp
-    rc, ew = jp[P, L.J_RI], jp[P, L.J_EW]
+    rc, ew = jp[P, L.J_CORNER_RADIUS], jp[P, L.J_EW]
     assert track_width(jp, P, 0, 10.0, 0.08, 1e-9, 1e-9, ew) == pytest.approx(0.035, rel=1e-15)
     assert track_width(jp, P, 3, 10.0, 0.08, 1e-9, 0.0, ew) == pytest.approx(0.025, rel=1e-15)
     # a lifted face: the tilted strip, continuous with W / 2
@@ -697,7 +697,7 @@ def test_corner_stiff_rate():
     t = 0.2
     y0 = base_state(pk, pk.p[L.P_THETA0] + pk.p[L.P_OMEGA] * t)
     jp, p = pk.jp, pk.p
-    stiff = 0.5 * line_stiffness(jp, 1) * jp[P, L.J_LENGTH]
+    stiff = 0.5 * line_stiffness(jp, 1) * jp[P, L.J_BLOCK_LENGTH]
     for ddot in (-1e-4, 0.05):
         y = block_state(y0, pk, rng, "one", velocity=(ddot, 0.0), rates=(0.0, 0.0, 0.0))
         k = kernel_evaluate(t, y, pk)

@@ -29,7 +29,16 @@ from test_reference import packed_case
 
 from clearsweep.core import layout as L
 from clearsweep.core import prismatic
+from clearsweep.core.dynamics import GROUND
 from clearsweep.core.work import Model
+
+
+def guide_contact(model, slider, dg):
+    """The guide's (force, moment, dissipated power) on the block in body state ``slider``
+    (``prismatic.contact`` with the block as its ball and the ground as its socket)."""
+    force, moment, _, pdiss = prismatic.contact(P, model, (*slider, (0.0, 0.0, 0.0)),
+                                                (*GROUND, (0.0, 0.0, 0.0)), True, dg)
+    return force, moment, pdiss
 
 # ---------------------------------------------------------------------------
 # 1. the line's law
@@ -116,7 +125,7 @@ def test_face_and_edge_closed_forms_and_no_jump_as_the_block_rolls():
     pk, model = elastic_model()
     jp = pk.jp
     kl = line_stiffness(jp, 1)
-    length = jp[P, L.J_LENGTH]
+    length = jp[P, L.J_BLOCK_LENGTH]
     h = 0.5 * jp[P, L.J_HEIGHT]
     depth = 2e-9
     dg = np.zeros(L.N_D)
@@ -127,7 +136,7 @@ def test_face_and_edge_closed_forms_and_no_jump_as_the_block_rolls():
     for roll in rolls:
         state = rolled(pk, roll, depth)
         d1, d2 = edge_depths(pk, model, state)
-        force, _, _ = prismatic.contact(P, model, state, True, dg)
+        force, _, _ = guide_contact(model, state, dg)
         want = kl * length * (max(d1, 0.0) + max(d2, 0.0))
         assert -force[1] == pytest.approx(want, rel=1e-12)
         assert force[0] == 0.0 and force[2] == 0.0
@@ -140,7 +149,7 @@ def test_face_and_edge_closed_forms_and_no_jump_as_the_block_rolls():
     steps = np.abs(np.diff(forces))
     assert steps.max() <= 1.001 * kl * length * h * (rolls[1] - rolls[0])
     # Hertz corners: four of them at the face's depth
-    hertz = 4 * 4.0 / 3.0 * jp[P, L.J_EW] * math.sqrt(jp[P, L.J_RI]) * depth ** 1.5
+    hertz = 4 * 4.0 / 3.0 * jp[P, L.J_EW] * math.sqrt(jp[P, L.J_CORNER_RADIUS]) * depth ** 1.5
     assert forces[0] > 20.0 * hertz
 
 
@@ -163,12 +172,12 @@ def test_energy_of_the_lines_and_its_balance_from_edge_to_face():
                       np.zeros((L.N_JOINTS, 36, 72)))
         jp = pk.jp
         kl = line_stiffness(jp, 1)
-        length = jp[P, L.J_LENGTH]
+        length = jp[P, L.J_BLOCK_LENGTH]
         h = 0.5 * jp[P, L.J_HEIGHT]
         dg = np.zeros(L.N_D)
         if not lossy:
             state = rolled(pk, 0.0, 3e-9)
-            prismatic.contact(P, model, state, True, dg)
+            guide_contact(model, state, dg)
             assert dg[L.D_UEL + P] == pytest.approx(2 * kl * length * (3e-9) ** 2 / 2,
                                                     rel=1e-12)
         # the roll decreases at rate w_x while the block moves into the wall and along it
@@ -184,7 +193,7 @@ def test_energy_of_the_lines_and_its_balance_from_edge_to_face():
                 st = rolled(pk, roll + w[0] * (tt - t), 0.0, v=v, w=w)
                 st = (tuple(r0 + v * (tt - t)), st[1], st[2], st[3])
                 dgs = np.zeros(L.N_D)
-                f, m, pd = prismatic.contact(P, model, st, True, dgs)
+                f, m, pd = guide_contact(model, st, dgs)
                 return np.array(f), np.array(m), pd, dgs[L.D_UEL + P]
 
             f, m, pdiss, _ = at(t)
@@ -229,11 +238,11 @@ def test_the_corners_stiff_rate_against_a_flat_faces_modes():
     solver.stability_limit 0.5 does, at the same cost (below)."""
     pk, model = elastic_model()
     jp, p = pk.jp, pk.p
-    kll = line_stiffness(jp, 1) * jp[P, L.J_LENGTH]          # k_l L of one edge line
+    kll = line_stiffness(jp, 1) * jp[P, L.J_BLOCK_LENGTH]          # k_l L of one edge line
     h = 0.5 * jp[P, L.J_HEIGHT]
-    length = jp[P, L.J_LENGTH]
+    length = jp[P, L.J_BLOCK_LENGTH]
     dg = np.zeros(L.N_D)
-    prismatic.contact(P, model, rolled(pk, 0.0, 2e-9), True, dg)
+    guide_contact(model, rolled(pk, 0.0, 2e-9), dg)
     rate = dg[L.D_PRATE]
     translation = math.sqrt(2.0 * kll / p[L.P_M4])
     roll = math.sqrt(2.0 * kll * h * h / p[L.P_J4])

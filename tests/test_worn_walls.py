@@ -39,7 +39,16 @@ from test_reference import RTOL, base_state, compare, packed_case
 
 from clearsweep.core import layout as L
 from clearsweep.core import prismatic
+from clearsweep.core.dynamics import GROUND
 from clearsweep.core.work import Model
+
+
+def guide_contact(model, slider, dg):
+    """The guide's (force, moment, dissipated power) on the block in body state ``slider``
+    (``prismatic.contact`` with the block as its ball and the ground as its socket)."""
+    force, moment, _, pdiss = prismatic.contact(P, model, (*slider, (0.0, 0.0, 0.0)),
+                                                (*GROUND, (0.0, 0.0, 0.0)), True, dg)
+    return force, moment, pdiss
 
 ROWS, COLS = 36, 72
 BAND = ROWS // 4
@@ -160,7 +169,7 @@ def body(r0, R0, v, w, t):
 
 def guide_action(model, state):
     dg = np.zeros(L.N_D)
-    force, moment, pdiss = prismatic.contact(P, model, state, True, dg)
+    force, moment, pdiss = guide_contact(model, state, dg)
     return np.array(force), np.array(moment), pdiss, dg[L.D_UEL + P]
 
 

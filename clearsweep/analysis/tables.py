@@ -17,6 +17,7 @@ import xarray as xr
 
 from ..choices import REPORT_FORMATS
 from ..ensemble import MEMBER_DIM
+from ..jointtypes import describe
 from ..motion import HIGH_ORDER, PERIOD_UNKNOWN
 from ..summary import (
     WEAR_THRESHOLD_FRACTION,
@@ -25,7 +26,7 @@ from ..summary import (
     wear_table,
     with_attrs,
 )
-from ..variables import JOINT_TYPES, length_unit
+from ..variables import length_unit
 from .selection import (
     _MISSING_TEXT,
     CASE_DIMS,
@@ -112,6 +113,12 @@ TRACK_DEPTH_COLUMNS = {wall: "track_depth_max_" + ("plus_" if wall[0] == "+" els
                        for wall in GUIDE_WALLS}
 
 
+def _has_tracks(ds: xr.Dataset, joint) -> bool:
+    """Whether ``joint``'s type reports its walls' track depths (``jointtypes``: its
+    ``report_columns``)."""
+    return "track_depth" in describe(value_text(joint), ds.attrs).report_columns
+
+
 def guide_track_depths(ds: xr.Dataset) -> dict[str, xr.DataArray]:
     """The largest track depth [m] on each wall of every prismatic joint of ``ds`` (the
     largest bin of the wall's band of ``wear_map``), by its column name
@@ -121,7 +128,7 @@ def guide_track_depths(ds: xr.Dataset) -> dict[str, xr.DataArray]:
         return {}
     wmap = ds["wear_map"]
     ideal = ideal_joints(ds)
-    guide = xr.DataArray([JOINT_TYPES.get(value_text(j)) == "prismatic" and value_text(j) not in ideal
+    guide = xr.DataArray([_has_tracks(ds, j) and value_text(j) not in ideal
                           for j in wmap["joint"].values], dims="joint", coords={"joint": wmap["joint"]})
     if not bool(guide.any()) or wmap.sizes["polar"] < len(GUIDE_WALLS):
         return {}
@@ -438,7 +445,7 @@ def format_wear_table(ds: xr.Dataset, fmt: str = "text", with_statistics: bool =
     columns: tuple[_Column, ...] = _WEAR_COLUMNS
     # a guide's walls have no projections about the axes (docs/physics.md 5.7): its wear is in
     # the final-wear table; the flat csv / json table keeps its row for its statistics
-    flat = [j for j in wear["joint"].values if JOINT_TYPES.get(value_text(j)) != "prismatic"]
+    flat = [j for j in wear["joint"].values if describe(value_text(j), ds.attrs).wear_profile]
     empty = NO_CLEARANCE_ROWS
     if not with_statistics and len(flat) < wear.sizes["joint"]:
         guides = [value_text(j) for j in wear["joint"].values if j not in flat
@@ -529,7 +536,7 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         table = _with_status(ds, summary[[c.name for c in columns]])
         if wanted is _TRACK_COLUMNS:    # the guides' rows only: a socket has no walls
             table = table.sel(joint=[j for j in table["joint"].values
-                                     if JOINT_TYPES.get(value_text(j)) == "prismatic"])
+                                     if _has_tracks(ds, j)])
         keys: tuple[str, ...]
         if dims:
             groups = _case_groups(table, columns, dims)

@@ -14,6 +14,21 @@ from collections import namedtuple
 from .compiled import compiled
 from .kinematics import add, cross, dot, mtv, mv, scale, sub
 from .layout import (
+    D_CEFF,
+    D_DDOT,
+    D_DELTA,
+    D_DFD,
+    D_DFDD,
+    D_ECC,
+    D_FN,
+    D_FT,
+    D_HWEAR,
+    D_NGLOBAL,
+    D_NORMAL,
+    D_OFFSET,
+    D_UEL,
+    D_VT,
+    D_WORN,
     J_EW,
     J_EW_BASE,
     J_FILM,
@@ -381,3 +396,27 @@ def compose(j, model, ball, socket, pb, ps, geo, law, energy):
     if on_device():
         return respond(j, model, ball, socket, pb, ps, geo, law, energy)
     return respond_inline(j, model, ball, socket, pb, ps, geo, law, energy)
+
+
+@compiled
+def store_contact(dg, j, cres):
+    """Copy one joint's contact state (a :data:`ContactState`) into the diagnostics vector."""
+    fn = cres.fn
+    dg[D_FN + j] = fn
+    ft_vec = sub(cres.force, cres.force_normal)   # the friction force
+    dg[D_FT + j] = math.sqrt(dot(ft_vec, ft_vec))
+    dg[D_DELTA + j] = cres.delta
+    dg[D_DDOT + j] = cres.ddot
+    dg[D_ECC + j] = cres.ecc
+    for i in range(3):
+        dg[D_OFFSET + 3 * j + i] = cres.offset_socket[i]
+        dg[D_NORMAL + 3 * j + i] = cres.normal_socket[i]
+    dg[D_VT + j] = cres.slip_speed
+    dg[D_CEFF + j] = cres.c_eff
+    dg[D_HWEAR + j] = cres.wear_depth
+    dg[D_UEL + j] = cres.elastic_energy
+    dg[D_DFD + j] = cres.dfn_ddelta
+    dg[D_DFDD + j] = cres.dfn_dddot
+    dg[D_WORN + j] = cres.worn_through
+    for i in range(3):
+        dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]

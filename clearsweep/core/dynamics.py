@@ -35,6 +35,7 @@ from .joints import INDEX
 from .jointset import ALL, NONE, has_clearance
 from .kinematics import (
     add,
+    body_moment,
     cross,
     dot,
     gdot_phidot,
@@ -64,8 +65,6 @@ from .layout import (
     D_JOINT_FORCE,
     D_KE,
     D_NGLOBAL,
-    D_NORMAL,
-    D_OFFSET,
     D_PDISS,
     D_PDRIVE,
     D_PE_GRAV,
@@ -147,12 +146,6 @@ def p_free(spec, jp):
     """Whether joint P has clearance, the slider's block free across its guide and in its
     three angles (read from jp where needed, as :func:`o_free`)."""
     return has_clearance(spec, jp, JOINT_P)
-
-
-@compiled
-def body_moment(R, r, q, f):
-    """Body-frame moment of the global force f applied at global point q."""
-    return mtv(R, cross(sub(q, r), f))
 
 
 @compiled
@@ -425,8 +418,11 @@ def free_slider(j, y, t4, model, N4, full, dg, dy):
     accelerations under their moment and ``N4`` (B's, where B has clearance) into dy.
     Returns (the guide's force on the block [N], the power it dissipates [W], whether the
     rotational mass block was regular)."""
-    slider = body_state(y, t4, Y_R4, Y_PHI4)
-    force, moment, pdiss = prismatic.contact(j, model, slider, full, dg)
+    r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
+    gr, gv, gR, gw = GROUND
+    zero = (0.0, 0.0, 0.0)
+    force, moment, _, pdiss = prismatic.contact(j, model, (r4, v4, R4, w4, zero),
+                                                (gr, gv, gR, gw, zero), full, dg)
     ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
     return force, pdiss, ok
 
@@ -724,48 +720,40 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        cA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2), (r3, v3, R3, w3, uA3),
-                               full)
-        fA = cA.force
+        fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
+                                             (r3, v3, R3, w3, uA3), full, dg)
         F2 = add(F2, fA)
-        N2 = add(N2, body_moment(R2, r2, cA.q_ball, fA))
+        N2 = add(N2, mA2)
         F3 = sub(F3, fA)
-        N3 = sub(N3, body_moment(R3, r3, cA.q_socket, fA))
-        pdiss += cA.diss_power
-        if full:
-            store_contact(dg, joint_a, cA)
+        N3 = sub(N3, mA3)
+        pdiss += dA
     # joint B: ball = rod end, socket = slider (socket frame: slider)
     if has_clearance(spec, jp, joint_b):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        cB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3), (r4, v4, R4, w4, zero),
-                               full)
-        fB = cB.force
+        fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
+                                             (r4, v4, R4, w4, zero), full, dg)
         F3 = add(F3, fB)
-        N3 = add(N3, body_moment(R3, r3, cB.q_ball, fB))
+        N3 = add(N3, mB3)
         F4 = sub(F4, fB)
         if p_free(spec, jp):
-            N4 = sub(N4, body_moment(R4, r4, cB.q_socket, fB))
-        pdiss += cB.diss_power
-        if full:
-            store_contact(dg, joint_b, cB)
+            N4 = sub(N4, mB4)
+        pdiss += dB
     # joint O: ball = crank journal, socket = the ground's bearing (socket frame: global)
     if o_free(spec, jp):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         gr, gv, gR, gw = GROUND
-        cO = revolute.contact(joint_o, model, (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                              (gr, gv, gR, gw, zero), full)
-        F2 = add(F2, cO.force)
-        N2 = add(N2, body_moment(R2, r2, cO.q_ball, cO.force))
-        pdiss += cO.diss_power
-        if full:
-            store_contact(dg, joint_o, cO)
-            # the contact force on the journal, completed by the axial reaction below (kept
-            # here rather than live across the solve: a GPU thread's registers)
-            for i in range(3):
-                dg[D_JOINT_FORCE + 3 * JOINT_O + i] = cO.force[i]
+        # with full, the contact force on the journal into dg, completed by the axial
+        # reaction below (kept there rather than live across the solve: a GPU thread's
+        # registers)
+        fO, mO2, _, dO = revolute.contact(joint_o, model,
+                                          (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                                          (gr, gv, gR, gw, zero), full, dg)
+        F2 = add(F2, fO)
+        N2 = add(N2, mO2)
+        pdiss += dO
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(spec, jp):
@@ -967,30 +955,6 @@ def clear_contacts(dg):
         dg[D_CEFF + j] = 0.0
         dg[D_DFD + j] = 0.0
         dg[D_DFDD + j] = 0.0
-
-
-@compiled
-def store_contact(dg, j, cres):
-    """Copy one joint's contact state (a :data:`ContactState`) into the diagnostics vector."""
-    fn = cres.fn
-    dg[D_FN + j] = fn
-    ft_vec = sub(cres.force, cres.force_normal)   # the friction force
-    dg[D_FT + j] = math.sqrt(dot(ft_vec, ft_vec))
-    dg[D_DELTA + j] = cres.delta
-    dg[D_DDOT + j] = cres.ddot
-    dg[D_ECC + j] = cres.ecc
-    for i in range(3):
-        dg[D_OFFSET + 3 * j + i] = cres.offset_socket[i]
-        dg[D_NORMAL + 3 * j + i] = cres.normal_socket[i]
-    dg[D_VT + j] = cres.slip_speed
-    dg[D_CEFF + j] = cres.c_eff
-    dg[D_HWEAR + j] = cres.wear_depth
-    dg[D_UEL + j] = cres.elastic_energy
-    dg[D_DFD + j] = cres.dfn_ddelta
-    dg[D_DFDD + j] = cres.dfn_dddot
-    dg[D_WORN + j] = cres.worn_through
-    for i in range(3):
-        dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
 
 
 @compiled

@@ -70,9 +70,38 @@ INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
 #: it (that module's ``JOINT_TYPE`` is the name).
 JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic"}
 
-#: What a joint-type module provides, compiled in that module (docs/architecture.md,
-#: "Joint types"): the gap geometry and the contact composed into a
-#: ``contact.ContactState`` (by ``contact.respond``, shared by every type); besides these,
-#: its module's ``WEAR_SURFACE`` names the compiled functions its wear step reads (a
-#: socket's or bearing's contact angle and area; the guide's track width and deposit).
-PROVIDES = ("gap", "contact")
+#: One function of the joint-type protocol (docs/architecture.md, "Joint types"): its name,
+#: its parameters in order, the names of the values it returns (a tuple of that length), and
+#: what it computes.
+Protocol = namedtuple("Protocol", ["name", "params", "returns", "doc"])
+
+#: The protocol every joint type compiles, with these signatures whatever the type
+#: (tests/test_joints.py checks each registered module's functions against it, names,
+#: parameters and the length of what they return). A joint touches its socket at one
+#: point (spherical, revolute) or at several (prismatic: 16 corner-wall slots); ``k``
+#: indexes them (0 for a one-point type). A parameter a type has no use for is taken and
+#: not read (revolute's and prismatic's ``Rs``: their socket frame is the global frame).
+PROTOCOL = (
+    Protocol("gap", ("jp", "j", "wmap", "p", "k", "pb", "ps", "Rs"),
+             ("e", "n", "d_s", "n_s", "h", "slope", "worn", "c_eff", "delta"),
+             "the gap geometry of contact k of joint j with the ball's point pb and the "
+             "socket's point ps (global) in a socket of rotation Rs: the distance e along "
+             "the outward normal n (global), the offset d_s and the normal n_s in the socket "
+             "frame, the wear depth h under the contact [m], its gradient ``slope`` with "
+             "respect to pb, whether the coating is worn through there, the local clearance "
+             "c_eff = c + h [m] and the penetration delta (negative: a gap) [m]"),
+    Protocol("contact", ("j", "model", "ball", "socket", "full", "dg"),
+             ("force", "moment_ball", "moment_socket", "diss_power"),
+             "the socket's action on the ball of joint j (``ball``, ``socket``: each body's "
+             "(r, v, R, w) and the joint's point on it, a body offset): the force on the "
+             "ball's body [N, global], its moment about that body's centroid [N m, the "
+             "body's frame], the opposite force's moment on the socket's body [N m, its "
+             "frame] and the power dissipated by damping and friction [W]; with ``full`` (a "
+             "step's end) the joint's diagnostics into dg"),
+)
+
+#: What a joint-type module provides, compiled in that module: the names of
+#: :data:`PROTOCOL`; besides these, its module's ``WEAR_SURFACE`` names the compiled
+#: functions its wear step reads (a socket's or bearing's contact angle and area; the
+#: guide's track width and deposit).
+PROVIDES = tuple(f.name for f in PROTOCOL)

@@ -138,3 +138,9 @@ def point_state(r, rv, rm, w, u):
 def point_accel_quadratic(rm, w, gdpd, u):
     """Velocity-dependent part of a body point's acceleration: R (Gdot phidot x u + w x (w x u))."""
     return mv(rm, add(cross(gdpd, u), cross(w, cross(w, u))))
+
+
+@compiled
+def body_moment(R, r, q, f):
+    """Body-frame moment of the global force f applied at global point q."""
+    return mtv(R, cross(sub(q, r), f))

@@ -57,10 +57,13 @@ P_SECTION_PHASE = 49  # crank angle of the Poincare sections, once per revolutio
 N_P = 50
 
 # --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
+# Each column has one meaning whatever the joint's type; a type that has no use for a column
+# leaves it 0 (docs/architecture.md, "Packed columns").
 J_CLEARANCE = 0     # 1.0 = clearance joint, 0.0 = ideal
-J_C = 1             # radial clearance c [m]
-J_RI = 2            # socket radius R_i [m]
-J_RJ = 3            # ball radius R_j [m]
+J_C = 1             # the joint's clearance c [m]: its least gap (radial c of a ball or a
+                    # journal; the smaller of a guide's c_y and c_z)
+J_RI = 2            # socket (bearing) radius R_i [m]; point contacts only
+J_RJ = 3            # ball (journal) radius R_j [m]; point contacts only
 J_EW = 4            # modulus of the joint's elastic law [Pa]: Hertz's E* (power law), else E_w
 J_MU = 5            # friction coefficient of the socket surface [-]
 J_K = 6             # wear coefficient of the socket surface [m^2/N]
@@ -69,9 +72,8 @@ J_EW_BASE = 7       # J_EW of the uncoated pair [Pa]
 J_MU_BASE = 8       # friction coefficient of the base [-]
 J_K_BASE = 9        # wear coefficient of the base [m^2/N]
 J_COAT = 10         # coating thickness [m]; inf = no coating to wear through
-J_LENGTH = 11       # bearing length L [m] (revolute joints), block length (prismatic); else 0
-# a prismatic joint's block in its guide (0 for the other types); its J_C is the smaller of
-# its two clearances, J_RI the corners' edge radius
+J_LENGTH = 11       # bearing length L [m] (revolute joints); else 0
+# a prismatic joint's block in its guide (0 for the other types)
 J_WIDTH = 12        # block width, across the guide along y [m]
 J_HEIGHT = 13       # block height, across the guide along z [m]
 J_CY = 14           # clearance between the block's sides and the guide's y walls [m]
@@ -80,7 +82,9 @@ J_X0 = 16           # start of the walls' wear maps along the guide (x) [m]
 J_XSPAN = 17        # length of the walls' wear maps along the guide [m]
 J_PEN_STOP = 18     # penetration stop [m] (docs/physics.md 4.3)
 J_FILM = 19         # lubricant film's viscous coefficient [N s/m] along the slip (O: Petroff); else 0
-N_JP = 20
+J_BLOCK_LENGTH = 20  # block length 2a along the guide [m] (prismatic joints); else 0
+J_CORNER_RADIUS = 21  # radius r_c of the block's rounded edges [m] (prismatic joints); else 0
+N_JP = 22
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.

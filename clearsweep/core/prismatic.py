@@ -2,7 +2,8 @@
 (docs/physics.md section 3.7, docs/modelling.md).
 
 A joint type of the shape docs/architecture.md ("Joint types") describes, with one
-difference: a block touches its guide along up to eight edge lines at once, not at one point.
+difference: a block touches its guide along up to eight edge lines at once, not at one point
+(its :func:`gap` is a slot's, k the slot).
 The guide is fixed in the ground along the global x axis at the height z_s; its four walls
 lie at y = +-(b + c_y) and z - z_s = +-(h + c_z), where the block (length 2a along the
 guide, width 2b, height 2h) sits centred with the gaps c_y and c_z. The block slides along
@@ -27,7 +28,8 @@ impact velocity, and the improved Coulomb friction on the corner's slip over the
   each ``npolar // 4`` rows across the wall by ``nazim`` columns along the guide
   (x from jp[J_X0] over jp[J_XSPAN]), each bin holding the depth worn over it:
   :func:`wall_bin`, :func:`wall_read`, :func:`track_width`, :func:`deposit`;
-- :func:`contact`: the sum over the lines' corners (force, moment, dissipated power) and, at
+- :func:`contact`: the sum over the lines' corners (force, moment, dissipated power: the
+  shape ``joints.PROTOCOL`` fixes, the guide's moment zero) and, at
   a step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   lines' total elastic energy, the guide's total force and the largest stiff rate of a slot;
 - :func:`accept`: an accepted step's impacts (the joint's contact episodes) and the wear each
@@ -66,12 +68,12 @@ from .layout import (
     D_UEL,
     D_VT,
     D_WORN,
+    J_BLOCK_LENGTH,
     J_COAT,
+    J_CORNER_RADIUS,
     J_CY,
     J_CZ,
     J_HEIGHT,
-    J_LENGTH,
-    J_RI,
     J_WIDTH,
     J_X0,
     J_XSPAN,
@@ -103,6 +105,9 @@ from .wear import coating_worn
 JOINT_TYPE = "prismatic"
 #: the compiled functions its wear step reads (``joints.PROVIDES``)
 WEAR_SURFACE = ("track_width", "deposit")
+
+#: The guide's rotation: the global frame (``gap``'s Rs, not read).
+IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 #: Walls of the guide, in the order of their bands of the wear map.
 WALLS = ("+y", "-y", "+z", "-z")
@@ -146,7 +151,7 @@ def line_stiffness(jp, j, wall, ew):
     of modulus k_f = 2 E* / sqrt(pi A) (A = L W, the face's area: a rigid flat punch of that
     area pressed into an elastic half-space, F = 2 a E* delta with pi a^2 = A), and each edge
     carries half the face's width, k_l = k_f W / 2 = E* sqrt(W / (pi L)); ``ew`` is E*."""
-    return ew * math.sqrt(face_width(jp, j, wall) / (math.pi * jp[j, J_LENGTH]))
+    return ew * math.sqrt(face_width(jp, j, wall) / (math.pi * jp[j, J_BLOCK_LENGTH]))
 
 
 @compiled
@@ -199,7 +204,7 @@ def corner_sign(corner, bit):
 def slot_corner(jp, j, k):
     """Slot k's corner u in the block's frame [m] (its centroid the origin)."""
     corner = k // 2
-    return (0.5 * corner_sign(corner, 1) * jp[j, J_LENGTH],
+    return (0.5 * corner_sign(corner, 1) * jp[j, J_BLOCK_LENGTH],
             0.5 * corner_sign(corner, 2) * jp[j, J_WIDTH],
             0.5 * corner_sign(corner, 4) * jp[j, J_HEIGHT])
 
@@ -256,7 +261,7 @@ def track_width(jp, j, wall, load, span, mean, other, ew):
     if other >= 0.0:
         return half
     tilt = 2.0 * half * mean / (mean - other) if mean > 0.0 else 0.0
-    line = 2.0 * math.sqrt(4.0 * load / max(span, 1e-300) * jp[j, J_RI] / (math.pi * ew))
+    line = 2.0 * math.sqrt(4.0 * load / max(span, 1e-300) * jp[j, J_CORNER_RADIUS] / (math.pi * ew))
     return min(max(tilt, line), half)
 
 
@@ -303,28 +308,32 @@ def wall_read(wmap, j, jp, wall, x, across):
 
 
 @compiled
-def gap(jp, j, wmap, p, k, q):
-    """Gap geometry of slot k of prismatic joint j with its corner at the global point q:
-    (n, across, h, slope, worn, c_eff, delta): the wall's outward unit normal, the corner's
-    position across the wall [m], the wall's wear depth there h [m] (0 without feedback;
-    the bin's, or with ``wear.interpolate`` the bilinear read of :func:`wall_read`), h's
-    gradient with respect to the corner (global, tangent to the wall; zero for the bin
-    read), whether the wall's coating is worn through in the bin under the corner, the
-    local clearance c + h and the penetration delta = (corner beyond the block's nominal
-    face) - c_eff [m] (negative: a gap), whose gradient with respect to the corner is
+def gap(jp, j, wmap, p, k, pb, ps, Rs):
+    """Gap geometry of slot k of prismatic joint j with its corner at the global point pb,
+    ps the point of the guide's axis abreast of it, (x, 0, z_s): (e, n, d_s, n_s, h, slope,
+    worn, c_eff, delta) as ``spherical.gap`` (``joints.PROTOCOL``; the guide's frame is the
+    global frame, Rs is not read): e [m] the corner's distance beyond the block's nominal
+    face along the wall's outward unit normal n, d_s = (0, y, z - z_s) the corner's offset
+    from the guide's axis [m] (its position across the wall: z - z_s on a y wall, y on a z
+    wall, :func:`across_wall`), n_s = n, the wall's wear depth there h [m] (0 without
+    feedback; the bin's, or with ``wear.interpolate`` the bilinear read of
+    :func:`wall_read`), h's gradient with respect to the corner (global, tangent to the
+    wall; zero for the bin read), whether the wall's coating is worn through in the bin
+    under the corner, the local clearance c_eff = c + h and the penetration
+    delta = e - c - h [m] (negative: a gap), whose gradient with respect to the corner is
     n - slope: the worn wall's normal."""
-    zs = p[P_ZS]
     wall, s = slot_wall(k)
+    d = (0.0, pb[1] - ps[1], pb[2] - ps[2])
     if wall < 2:
         n = (0.0, s, 0.0)
-        out = s * q[1] - 0.5 * jp[j, J_WIDTH]
+        out = s * d[1] - 0.5 * jp[j, J_WIDTH]
         c = jp[j, J_CY]
-        across = q[2] - zs
+        across = d[2]
     else:
         n = (0.0, 0.0, s)
-        out = s * (q[2] - zs) - 0.5 * jp[j, J_HEIGHT]
+        out = s * d[2] - 0.5 * jp[j, J_HEIGHT]
         c = jp[j, J_CZ]
-        across = q[1]
+        across = d[1]
     feedback = p[P_FEEDBACK] != 0.0
     binned = feedback and p[P_INTERP] == 0.0
     coat = jp[j, J_COAT]
@@ -332,15 +341,30 @@ def gap(jp, j, wmap, p, k, q):
     slope = (0.0, 0.0, 0.0)
     worn = False
     if feedback and not binned:
-        h, dh_dx, dh_da = wall_read(wmap, j, jp, wall, q[0], across)
+        h, dh_dx, dh_da = wall_read(wmap, j, jp, wall, pb[0], across)
         slope = (dh_dx, 0.0, dh_da) if wall < 2 else (dh_dx, dh_da, 0.0)
     if binned or coat < math.inf:
-        row, col = wall_bin(jp, j, wall, q[0], across, wmap.shape[1], wmap.shape[2])
+        row, col = wall_bin(jp, j, wall, pb[0], across, wmap.shape[1], wmap.shape[2])
         depth = wmap[j, row, col]
         if binned:
             h = depth
         worn = coat < math.inf and coating_worn(depth, coat)
-    return n, across, h, slope, worn, c + h, out - c - h
+    return out, n, d, n, h, slope, worn, c + h, out - c - h
+
+
+@compiled(inline="always")
+def across_wall(k, d_s):
+    """Slot k's corner's position across its wall [m] from its offset d_s = (0, y, z - z_s)
+    from the guide's axis (:func:`gap`): z - z_s on a y wall, y on a z wall."""
+    wall, _ = slot_wall(k)
+    return d_s[2] if wall < 2 else d_s[1]
+
+
+@compiled(inline="always")
+def guide_point(p, q):
+    """The point (x, 0, z_s) of the guide's axis abreast of the global point q: the
+    socket's point that :func:`gap` measures a corner from."""
+    return (q[0], 0.0, p[P_ZS])
 
 
 @compiled
@@ -371,7 +395,9 @@ def slot_geometry(j, model, k, slider):
     r4, v4, R4, w4 = slider
     u = slot_corner(jp, j, k)
     q = add(r4, mv(R4, u))
-    n, across, h, slope, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q)
+    _, n, d_s, _, h, slope, worn, c_eff, delta = gap(jp, j, model.wmap, p, k, q,
+                                                     guide_point(p, q), IDENTITY)
+    across = across_wall(k, d_s)
     vq = add(v4, mv(R4, cross(w4, u)))
     sloped = slope[0] != 0.0 or slope[1] != 0.0 or slope[2] != 0.0
     hdot = 0.0
@@ -448,7 +474,7 @@ def line_state(j, model, e, slider):
     if ga.delta > 0.0 or gb.delta > 0.0:
         ew, _, _ = surface(jp, j, ga.worn if ga.delta >= gb.delta else gb.worn)
         kl = line_stiffness(jp, j, e // 2, ew)
-        fa, fb, uel = line_load(ga.delta, gb.delta, kl, jp[j, J_LENGTH])
+        fa, fb, uel = line_load(ga.delta, gb.delta, kl, jp[j, J_BLOCK_LENGTH])
     return ga, gb, fa, fb, uel
 
 
@@ -456,7 +482,7 @@ def line_state(j, model, e, slider):
 def line_stiff(jp, j, e, worn):
     """k_l L / 2 [N/m] of edge line e (:func:`slot_force`'s ``stiff``)."""
     ew, _, _ = surface(jp, j, worn)
-    return 0.5 * line_stiffness(jp, j, e // 2, ew) * jp[j, J_LENGTH]
+    return 0.5 * line_stiffness(jp, j, e // 2, ew) * jp[j, J_BLOCK_LENGTH]
 
 
 @compiled
@@ -514,11 +540,13 @@ def slot_rate(j, model, k, st, R4):
 
 
 @compiled
-def contact(j, model, slider, full, dg):
-    """The guide's action on the block of prismatic joint j: (force [N], moment about the
-    block's centroid in the block's frame [N m], power dissipated by damping and friction
-    [W]), summed over the eight edge lines' corners. ``slider``: the block's body state
-    (r, v, R, w).
+def contact(j, model, ball, socket, full, dg):
+    """The guide's action on the block of prismatic joint j (``joints.PROTOCOL``): (force
+    [N], moment about the block's centroid in the block's frame [N m], the moment of the
+    opposite force on the guide (the ground: zero), power dissipated by damping and
+    friction [W]), summed over the eight edge lines' corners. ``ball``: the block's body
+    state (r, v, R, w) and its centroid's offset (zero, not read); ``socket``: the ground's
+    (not read: the guide is fixed along the global x axis at z_s).
 
     With ``full`` (a step's end), joint j's diagnostics into dg: the contact values of the
     slot that penetrates deepest (or, with none in contact, of the one nearest to contact),
@@ -527,7 +555,8 @@ def contact(j, model, slider, full, dg):
     (D_PRATE)."""
     p = model.p
     jp = model.jp
-    r4, v4, R4, w4 = slider
+    r4, v4, R4, w4, _ = ball
+    slider = (r4, v4, R4, w4)
     force = (0.0, 0.0, 0.0)
     moment = (0.0, 0.0, 0.0)
     pdiss = 0.0
@@ -565,7 +594,7 @@ def contact(j, model, slider, full, dg):
         dg[D_OFFSET + 3 * j + 2] = r4[2] - p[P_ZS]
         for i in range(3):
             dg[D_JOINT_FORCE + 3 * j + i] = force[i]
-    return force, moment, pdiss
+    return force, moment, (0.0, 0.0, 0.0), pdiss
 
 
 @compiled
@@ -630,7 +659,7 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     wear_on = p[P_WEAR] != 0.0
     any_contact = False
     vimp = 0.0
-    length = jp[j, J_LENGTH]
+    length = jp[j, J_BLOCK_LENGTH]
     for wall in range(4):
         lines = (line_state(j, model, 2 * wall, slider),
                  line_state(j, model, 2 * wall + 1, slider))

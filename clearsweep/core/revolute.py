@@ -26,9 +26,9 @@ the normal and the contact points lie in that plane:
 import math
 
 from .compiled import compiled
-from .contact import compose
-from .kinematics import point_state
-from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
+from .contact import compose, store_contact
+from .kinematics import body_moment, point_state
+from .layout import D_JOINT_FORCE, J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
 from .wear import angle_bin, arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
@@ -82,9 +82,11 @@ def worn_through(wmap, j, n, coat):
 
 
 @compiled
-def gap(jp, j, wmap, p, pb, ps):
+def gap(jp, j, wmap, p, k, pb, ps, Rs):
     """Gap geometry of revolute joint j with journal centre pb and bearing centre ps
-    (global): (e, n, d_s, n_s, h, slope, worn, c_eff, delta), as ``spherical.gap``.
+    (global): (e, n, d_s, n_s, h, slope, worn, c_eff, delta), as ``spherical.gap``
+    (``joints.PROTOCOL``; one contact point, k = 0, and the bearing's frame is the global
+    frame: k and the rotation Rs are not read).
 
     d = pb - ps in the bearing's plane (its axial part dropped: axial play is ideal);
     e = |d|; n = d / e (e = 0: the y axis); the bearing frame is the global frame, so
@@ -147,14 +149,22 @@ def deposit(wmap, j, n, vol, area, radius_length):
 
 
 @compiled
-def contact(j, model, ball, socket, energy):
-    """Contact state and force (a ``contact.ContactState``) of revolute clearance joint j:
-    the journal centre (``ball``: the crank's (rb, vb, Rb, wb) and the centre's body offset)
-    in the bearing (``socket``: the ground's, all zero and unrotated), composed by
-    ``contact.respond`` with the journal's elastic law (:func:`journal_law`)."""
+def contact(j, model, ball, socket, full, dg):
+    """The bearing's action on the journal of revolute clearance joint j, as
+    ``spherical.contact`` (``joints.PROTOCOL``): the journal centre (``ball``: the crank's
+    (rb, vb, Rb, wb) and the centre's body offset) in the bearing (``socket``: the
+    ground's, all zero and unrotated), composed by ``contact.respond`` with the journal's
+    elastic law (:func:`journal_law`); with ``full`` the joint's contact state into dg,
+    its joint force the contact force (the kernel completes it with the axial reaction)."""
     rb, vb, Rb, wb, ub = ball
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = gap(model.jp, j, model.wmap, model.p, pb, ps)
-    return compose(j, model, ball, socket, pb, ps, geo, journal_law(model.p), energy)
+    geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
+    c = compose(j, model, ball, socket, pb, ps, geo, journal_law(model.p), full)
+    if full:
+        store_contact(dg, j, c)
+        for i in range(3):
+            dg[D_JOINT_FORCE + 3 * j + i] = c.force[i]
+    return (c.force, body_moment(Rb, rb, c.q_ball, c.force),
+            body_moment(Rs, rs, c.q_socket, c.force), c.diss_power)

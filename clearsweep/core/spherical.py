@@ -1,16 +1,17 @@
 """The spherical clearance joint: a ball in a worn, possibly coated socket (docs/physics.md 3, 5).
 
-A clearance-joint type is a module of this shape (docs/architecture.md, "Joint types"):
+A clearance-joint type is a module of this shape (docs/architecture.md, "Joint types"), its
+:func:`gap` and :func:`contact` of the signatures ``joints.PROTOCOL`` fixes for every type:
 
-- :func:`gap`: from the two bodies' states, the gap geometry in the socket: eccentricity,
-  contact normal, penetration against the worn clearance, and whether the coating is worn
-  through there;
+- :func:`gap`: from the ball's and the socket's centres, the gap geometry in the socket:
+  eccentricity, contact normal, penetration against the worn clearance, and whether the
+  coating is worn through there;
 - the wear-map geometry it wears: a map over the socket's inner sphere (``wear.map_bin``,
   ``wear.deposit``, ``wear.worn_surface``), and the contact's angle and area
   (:func:`contact_angle`, :func:`contact_area`) that the wear step reads;
 - :func:`contact`: the gap composed with the coated contact law, damping and friction
   (``contact.respond``: where the force pair acts, the approach rate, the slip), returning
-  a ``contact.ContactState`` that the equations of motion apply to the two bodies.
+  the force and the moments that the equations of motion apply to the two bodies.
 
 The kernel composes these; nothing of a joint type's geometry is written elsewhere.
 """
@@ -18,8 +19,8 @@ The kernel composes these; nothing of a joint type's geometry is written elsewhe
 import math
 
 from .compiled import compiled
-from .contact import compose
-from .kinematics import dot, mtv, mv, point_state, scale, sub
+from .contact import compose, store_contact
+from .kinematics import body_moment, dot, mtv, mv, point_state, scale, sub
 from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
 from .wear import worn_surface
 
@@ -29,9 +30,10 @@ JOINT_TYPE = "spherical"
 WEAR_SURFACE = ("contact_angle", "contact_area")
 
 @compiled
-def gap(jp, j, wmap, p, pb, ps, Rs):
+def gap(jp, j, wmap, p, k, pb, ps, Rs):
     """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
-    of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta).
+    of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta) (``joints.PROTOCOL``;
+    the ball touches its socket at one point: the contact index k is 0 and not read).
 
     e = |d| [m], d = pb - ps; n = d / e (global; e = 0: the x axis); d_s, n_s: d and n in the
     socket frame; h [m], worn: the worn socket in direction n_s (wear.worn_surface);
@@ -81,14 +83,22 @@ def contact_angle(pen, e, ri, rj):
 
 
 @compiled
-def contact(j, model, ball, socket, energy):
-    """Contact state and force (a ``contact.ContactState``) of spherical clearance joint j:
-    the ball centre (``ball``: its body's (rb, vb, Rb, wb) and the centre's body offset ub)
-    in the socket (``socket``: likewise), composed by ``contact.respond`` with the case's
-    elastic law (docs/physics.md section 3)."""
+def contact(j, model, ball, socket, full, dg):
+    """The socket's action on the ball of spherical clearance joint j (``joints.PROTOCOL``):
+    (force on the ball's body [N, global], its moment about that body's centroid [N m, the
+    body's frame], the moment of the opposite force about the socket's body's centroid
+    [N m, that body's frame], power dissipated by damping and friction [W]). ``ball``: the
+    ball's body (rb, vb, Rb, wb) and the centre's body offset ub; ``socket``: likewise. The
+    gap (:func:`gap`) composed by ``contact.respond`` with the case's elastic law
+    (docs/physics.md section 3); with ``full`` (a step's end) the joint's contact state
+    into the diagnostics dg (``contact.store_contact``)."""
     rb, vb, Rb, wb, ub = ball
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = gap(model.jp, j, model.wmap, model.p, pb, ps, Rs)
-    return compose(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], energy)
+    geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
+    c = compose(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], full)
+    if full:
+        store_contact(dg, j, c)
+    return (c.force, body_moment(Rb, rb, c.q_ball, c.force),
+            body_moment(Rs, rs, c.q_socket, c.force), c.diss_power)

@@ -21,6 +21,7 @@ from ..analysis import (
     sweep_dims,
     value_text,
 )
+from ..jointtypes import JointKind
 from ..outputs import RESULTS_KINDS
 from ..variables import display_unit
 
@@ -176,11 +177,20 @@ class PlotError(ValueError):
 
 def joint_name(joint) -> str:
     """``"bearing O"``, ``"guide P"``, ``"joint A"``: a joint named as what it is."""
-    from ..variables import JOINT_TYPES
+    from ..jointtypes import kind_of
 
     name = str(joint)
-    kind = JOINT_TYPES.get(name)
-    return f"{'bearing' if kind == 'revolute' else 'guide' if kind == 'prismatic' else 'joint'} {name}"
+    kind = kind_of(name)
+    return f"{'joint' if kind is None else kind.title} {name}"
+
+
+def joint_kind(ds: xr.Dataset | None, joint) -> JointKind:
+    """The host description of ``joint`` (a name, or a coordinate's value) in ``ds``
+    (``jointtypes.kind_of``: the type ``ds`` records, else the joint table's); a name that
+    is no joint's reads as a ball in a socket."""
+    from ..jointtypes import describe
+
+    return describe(value_text(joint), None if ds is None else ds.attrs)
 
 
 def axis_label(obj: xr.DataArray, text: str | None = None, units: str | None = None) -> str:

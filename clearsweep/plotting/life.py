@@ -8,7 +8,6 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
-from ..variables import JOINT_TYPES
 from .common import (
     AXIS_LABEL_CHARACTERS,
     DIMENSIONLESS,
@@ -18,6 +17,7 @@ from .common import (
     _require,
     axis_label,
     guide_extent,
+    joint_kind,
     joint_name,
     log_ticks,
     run_config,
@@ -89,7 +89,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
     norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
     polar = _edges(ds["polar"].values, 0.0, 180.0)
     azimuth = _edges(ds["azimuth"].values, -180.0, 180.0)
-    guide = JOINT_TYPES.get(joint) == "prismatic"
+    guide = joint_kind(ds, joint).wear_figure == "walls"
     mesh = None
     for k, s in enumerate(picks):
         ax = fig.add_subplot(grid[k // 2, 2 + k % 2])

@@ -20,7 +20,6 @@ from ..analysis import (
     sweep_dims,
     value_text,
 )
-from ..variables import JOINT_TYPES
 from .common import (
     DIMENSIONLESS,
     PlotError,
@@ -29,6 +28,7 @@ from .common import (
     _legend_note,
     _require,
     axis_label,
+    joint_kind,
     joint_name,
     percent_text,
     quantity_unit,
@@ -216,7 +216,7 @@ def _draw_bifurcation(fig: Figure, ds: xr.Dataset, x: str | None) -> None:
         offset = ds["poincare_offset"].sel(joint=joint)
         axis = offset_component(offset)
         values = offset.sel(axis=axis).transpose(dim, "revolution").values
-        centre = {"revolute": "journal", "prismatic": "block"}.get(str(JOINT_TYPES.get(str(joint))), "ball")
+        centre = joint_kind(ds, joint).centre
         panels.append((f"{joint_name(str(joint))}: {centre}-centre offset {axis} (socket frame)",
                        f"offset {axis} / clearance [{DIMENSIONLESS}]", samples(values)))
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]

@@ -8,7 +8,6 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import configured_clearances, guide_gap, value_text
-from ..variables import JOINT_TYPES
 from .common import (
     QUANTITY_UNITS,
     _case_label,
@@ -18,6 +17,7 @@ from .common import (
     _require,
     axis_label,
     figure_legend,
+    joint_kind,
     joint_name,
     keep_relative_span,
 )
@@ -93,11 +93,13 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
                   str(0.15 + 0.5 * k / max(len(radii) - 1, 1))) for k, r in enumerate(radii)}
     for j, (joint, clearances) in enumerate(zip(joints, per_joint)):
         # a journal moves in its bearing's plane (y, z) only: one panel
-        bearing = JOINT_TYPES.get(value_text(joint)) == "revolute"
+        gap_shape = joint_kind(ds, joint).orbit_gap
+        bearing = gap_shape == "circle"
         # the guide block moves across its guide (y, z) only, in a rectangular gap
-        guide = JOINT_TYPES.get(value_text(joint)) == "prismatic"
+        guide = gap_shape == "rectangle"
         gaps = {g for g in (_gap(case, gap) for _, case, _ in cases) if g is not None} if guide else set()
-        for p, (a, b) in enumerate(planes[2:] if bearing or guide else planes):
+        across = joint_kind(ds, joint).axial_ideal      # on its axis: its yz plane only
+        for p, (a, b) in enumerate(planes[2:] if across else planes):
             ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
@@ -110,7 +112,8 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
                         ls=_CIRCLE_STYLES[k % len(_CIRCLE_STYLES)], color="0.3",
                         label=f"guide {value_text(joint)} gap \u00b1{cy / factor:.3g} x "
                               f"\u00b1{cz / factor:.3g} {unit}")
-            for radius, source in sorted(clearances.items()) if not gaps else ():
+            circles = () if gaps or gap_shape not in ("sphere", "circle") else clearances.items()
+            for radius, source in sorted(circles):
                 ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
                         label=f"{joint_name(value_text(joint))} clearance {radius / factor:.3g} {unit} "

@@ -15,7 +15,6 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import ideal_joints, value_text
-from ..variables import JOINT_TYPES
 from .common import (
     PlotError,
     _case_label,
@@ -25,6 +24,7 @@ from .common import (
     axis_label,
     figure_legend,
     file_figures,
+    joint_kind,
     joint_name,
     keep_relative_span,
 )
@@ -81,8 +81,7 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel(axis_label(offset, f"d_{a} / c"))
         ax.set_ylabel(axis_label(offset, f"d_{b} / c"))
-        kind = JOINT_TYPES.get(value_text(joint))
-        centre = "journal" if kind == "revolute" else "block" if kind == "prismatic" else "ball"
+        centre = joint_kind(ds, joint).centre
         ax.set_title(f"{joint_name(value_text(joint))}: {centre} centre, {a}{b} plane",
                      fontsize="small")
         ax.grid(alpha=0.3)

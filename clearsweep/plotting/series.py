@@ -8,8 +8,17 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from ..analysis import value_text
-from ..variables import JOINT_TYPES
-from .common import _abscissa, _cases, _legend, _legend_note, _require, axis_label, joint_name, scaled
+from .common import (
+    _abscissa,
+    _cases,
+    _legend,
+    _legend_note,
+    _require,
+    axis_label,
+    joint_kind,
+    joint_name,
+    scaled,
+)
 
 _AXIS_COLOURS = {"magnitude": "black", "x": "tab:blue", "y": "tab:orange", "z": "tab:green"}
 
@@ -37,9 +46,8 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     rows = [(f"{joint_name('O')}: reaction (ground on crank)", "reaction_O", None)]
     # the revolute joint at O: its force on the journal is the reaction at O, drawn once
     # the prismatic joint's: the guide's force on the slider
-    rows += [(f"{joint_name(value_text(j))} (" + ("on the slider" if JOINT_TYPES.get(value_text(j)) == "prismatic"
-                                                   else "on the ball") + ")", "joint_force", j)
-             for j in ds["joint"].values if JOINT_TYPES.get(value_text(j)) != "revolute"]
+    rows += [(f"{joint_name(value_text(j))} ({joint_kind(ds, j).force_on})", "joint_force", j)
+             for j in ds["joint"].values if joint_kind(ds, j).force_on is not None]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)
     axes = fig.subplots(len(rows), len(components), sharex=True, squeeze=False)

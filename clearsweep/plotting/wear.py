@@ -13,7 +13,7 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 
 from ..analysis import SelectionError, value_text
-from ..variables import JOINT_TYPES
+from ..jointtypes import KINDS
 from .common import (
     DIMENSIONLESS,
     _case_label,
@@ -27,6 +27,7 @@ from .common import (
     display_scale,
     figure_legend,
     guide_extent,
+    joint_kind,
     joint_name,
     scaled,
 )
@@ -155,18 +156,19 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.0)
     # the guide's row holds four strips: twice a socket's height, the figure taller for it
-    heights = [2.0 if JOINT_TYPES.get(value_text(j)) == "prismatic" else 1.0 for j in joints]
+    figures = {j: joint_kind(ds, j).wear_figure for j in joints}
+    heights = [2.0 if figures[j] == "walls" else 1.0 for j in joints]
     if len(joints) > 1 and max(heights, default=1.0) > 1.0:
         fig.set_size_inches(fig.get_figwidth(), fig.get_figheight() * sum(heights) / len(heights))
     grid = fig.add_gridspec(max(len(joints), 1), 2, height_ratios=heights or None)
     for j, joint in enumerate(joints):
         depth = wear.sel(joint=joint) / factor
         peak = float(depth.max())
-        if JOINT_TYPES.get(value_text(joint)) == "revolute":
+        if figures[joint] == "bearing":
             _draw_bearing_map(fig, (grid[j, 0], grid[j, 1]), depth, peak, unit, label,
                               value_text(joint))
             continue
-        if JOINT_TYPES.get(value_text(joint)) == "prismatic":
+        if figures[joint] == "walls":
             # the depth of the corners' tracks along the guide (docs/physics.md 5.7)
             _draw_guide_map(fig, grid[j, :], depth, peak, unit,
                             axis_label(wear, "track depth", unit), value_text(joint),
@@ -203,9 +205,8 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
     left_out = f"\nnot drawn: {', '.join(map(joint_name, empty))}, no wear" if empty else ""
     # the surfaces drawn: a figure of the guide alone is no socket's
-    kinds = {JOINT_TYPES.get(value_text(j)) for j in joints}
-    surfaces = [name for kind, name in (("spherical", "socket"), ("revolute", "bearing"),
-                                        ("prismatic", "guide")) if kind in kinds]
+    kinds = [joint_kind(ds, j) for j in joints]
+    surfaces = list(dict.fromkeys(k.surface for k in KINDS.values() if k in kinds))
     said = (" and ".join(surfaces) if len(surfaces) < 3
             else ", ".join(surfaces[:-1]) + " and " + surfaces[-1])
     fig.suptitle((f"{said.capitalize()} wear depth" if said else "Wear depth")
@@ -224,7 +225,7 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     named = _clearance_joints(ds, projection, "wear-polar")
     # the guide P's walls are flat: a profile about an axis does not apply to them (wear-map
     # draws their strips)
-    guides = [j for j in named if JOINT_TYPES.get(value_text(j)) == "prismatic"]
+    guides = [j for j in named if not joint_kind(ds, j).wear_profile]
     named = [j for j in named if j not in guides]
     joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
     scales = [f"{joint_name(value_text(j))}: no wear" for j in named if j not in joints]
