@@ -281,13 +281,11 @@ def test_report_names_the_class_of_each_cell_without_a_period():
         elif line.startswith("    "):
             listed[-1] += " " + line.strip()
     assert listed == [
-        "- period 1: B_clearance 0.00025 m: speed_rpm 92 min-1; B_clearance 0.0003 m: speed_rpm "
-        "92 min-1",
-        "- chaotic: B_clearance 0.00025 m: speed_rpm 96 min-1; B_clearance 0.0003 m: speed_rpm 96 min-1",
-        "- quasi-periodic: B_clearance 0.00025 m: speed_rpm 94 min-1; B_clearance 0.0003 m: speed_rpm "
-        "94 min-1",
-        "- transient: B_clearance 0.00025 m: speed_rpm 93 min-1; B_clearance 0.0003 m: speed_rpm 93 "
-        "min-1"]
+        "- period 1: B_clearance 0.25 mm: speed_rpm 92 r/min; B_clearance 0.3 mm: speed_rpm 92 r/min",
+        "- chaotic: B_clearance 0.25 mm: speed_rpm 96 r/min; B_clearance 0.3 mm: speed_rpm 96 r/min",
+        "- quasi-periodic: B_clearance 0.25 mm: speed_rpm 94 r/min; B_clearance 0.3 mm: speed_rpm "
+        "94 r/min",
+        "- transient: B_clearance 0.25 mm: speed_rpm 93 r/min; B_clearance 0.3 mm: speed_rpm 93 r/min"]
 
 
 def test_report_of_the_small_map_gives_each_cases_exponent_and_class(small_map):
