@@ -69,7 +69,7 @@ class PlanCosts:
         One output-grid RK4 step of the ideal mechanism, as a sweep's worker runs it.
     joint_step_s : dict
         What each joint with clearance adds to every step: ``"A"`` and ``"B"`` a ball in its
-        socket, ``"O"`` the crank's journal, ``"P"`` the block's 16 corner-wall pairs.
+        socket, ``"O"`` the crank's journal, ``"P"`` the block on the guide's faces.
     row_s : float
         Each saved row of a case that keeps its time series (``run``, ``store: full``).
     case_s : float

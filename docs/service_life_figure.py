@@ -69,7 +69,7 @@ def main() -> None:
             ax.set_xticks(x, coatings)
             ax.set_title(title, fontsize=9)
             ax.set_xlabel("coating at B")
-    axes[0].set_ylabel("largest wear depth at B after 10^6 revolutions [um]")
+    axes[0].set_ylabel("largest wear depth at B after 10^6 revolutions [\u00b5m]")
     axes[0].legend(fontsize=8)
     fig.tight_layout()
     OUT.parent.mkdir(parents=True, exist_ok=True)

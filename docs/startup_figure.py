@@ -94,13 +94,13 @@ def main() -> None:
                     axes[row, col].plot(part.time, part.normal_force.sel(joint=joint),
                                         color=color, ls=ls, lw=0.8, label=label)
         axes[0, col].set_title(title)
-        axes[0, col].set_ylabel("slider acceleration [m/s^2]")
+        axes[0, col].set_ylabel("slider acceleration [m s-2]")
         axes[1, col].set_ylabel("normal force at A [N]")
         axes[2, col].set_ylabel("normal force at B [N]")
         axes[2, col].set_xlabel("time [s]")
         for ax in axes[:, col]:
             ax.axvline(0.05, color="0.5", lw=0.6, ls=":")
-    axes[0, 0].legend(loc="upper right", fontsize=8)
+    axes[0, 0].legend(loc="lower right", fontsize=8)     # clear of the lines (issue 45 item 6)
     fig.suptitle("configs/two_clearances.yaml, seated vs centred start; configs/ideal.yaml "
                  "(saved rows, every 1e-4 s)", fontsize=10)
     OUT.parent.mkdir(parents=True, exist_ok=True)

@@ -195,7 +195,8 @@ def test_category_texts():
 def test_report_names_the_periodic_windows_of_a_map():
     """One line per period found: its cells' ranges along the speed at each clearance; a
     case that did not finish ok is left out, non-periodic and undetermined cases are not
-    windows."""
+    windows. The values in the figures' units (issue 45 item 6): a clearance in mm, a speed
+    in r/min (before: 0.0002 m and min-1)."""
     from clearsweep.analysis.text import _periodic_window_lines
 
     speed = xr.DataArray([80.0, 85.0, 90.0, 95.0], dims="speed_rpm",
@@ -211,10 +212,10 @@ def test_report_names_the_periodic_windows_of_a_map():
     lines = _periodic_window_lines(ds, ds, usable, ("B_clearance", "speed_rpm"))
     assert lines[1].startswith("Periodic windows over speed_rpm x B_clearance")
     assert [line for line in lines if line.startswith(("-", "    "))] == [
-        "- period 1: B_clearance 0.0002 m: speed_rpm 80-85 min-1; B_clearance 0.00025 m: "
-        "speed_rpm 80 min-1,",
-        "    speed_rpm 90 min-1",
-        "- period 2: B_clearance 0.0002 m: speed_rpm 95 min-1"]
+        "- period 1: B_clearance 0.2 mm: speed_rpm 80-85 r/min; B_clearance 0.25 mm: "
+        "speed_rpm 80 r/min,",
+        "    speed_rpm 90 r/min",
+        "- period 2: B_clearance 0.2 mm: speed_rpm 95 r/min"]
     none = _periodic_window_lines(ds, ds.assign(period=period * 0), usable,
                                   ("B_clearance", "speed_rpm"))
     assert none[-1] == "- none: no case has a period up to 8"
@@ -280,13 +281,11 @@ def test_report_names_the_class_of_each_cell_without_a_period():
         elif line.startswith("    "):
             listed[-1] += " " + line.strip()
     assert listed == [
-        "- period 1: B_clearance 0.00025 m: speed_rpm 92 min-1; B_clearance 0.0003 m: speed_rpm "
-        "92 min-1",
-        "- chaotic: B_clearance 0.00025 m: speed_rpm 96 min-1; B_clearance 0.0003 m: speed_rpm 96 min-1",
-        "- quasi-periodic: B_clearance 0.00025 m: speed_rpm 94 min-1; B_clearance 0.0003 m: speed_rpm "
-        "94 min-1",
-        "- transient: B_clearance 0.00025 m: speed_rpm 93 min-1; B_clearance 0.0003 m: speed_rpm 93 "
-        "min-1"]
+        "- period 1: B_clearance 0.25 mm: speed_rpm 92 r/min; B_clearance 0.3 mm: speed_rpm 92 r/min",
+        "- chaotic: B_clearance 0.25 mm: speed_rpm 96 r/min; B_clearance 0.3 mm: speed_rpm 96 r/min",
+        "- quasi-periodic: B_clearance 0.25 mm: speed_rpm 94 r/min; B_clearance 0.3 mm: speed_rpm "
+        "94 r/min",
+        "- transient: B_clearance 0.25 mm: speed_rpm 93 r/min; B_clearance 0.3 mm: speed_rpm 93 r/min"]
 
 
 def test_report_of_the_small_map_gives_each_cases_exponent_and_class(small_map):

@@ -72,6 +72,20 @@ def test_the_shipped_file_says_where_and_when_it_was_measured():
     assert costs.step_s > 0 and costs.compile_s > 0
 
 
+def test_the_shipped_costs_price_the_guide_s_faces():
+    """The shipped file was measured on the guide's faces (an elastic foundation over each of
+    P's faces with their edge lines), whose step costs an order of magnitude more than the
+    ideal one: 25.2 us beyond a 2.02 us ideal step on 9001c94 (12.4x). The file measured on
+    the corners' law said 5.83 us beyond 2.06 (2.8x), and the mixed-clearance study's plan
+    came out 2.3x short (benchmarks/README.md, "Plans priced by joint set"). A life block's
+    cost beyond its steps is measured, not a clipped difference (0 where P's steps were
+    priced above what a later block's cost)."""
+    costs = plan_costs()
+    assert costs.joint_step_s["P"] > 5.0 * costs.step_s
+    assert costs.joint_step_s["P"] > 5.0 * max(costs.joint_step_s[j] for j in "OAB")
+    assert costs.block_s > 0.0
+
+
 def test_the_joints_with_clearance():
     assert clearance_joints(load_config({}, IDEAL)) == ""
     assert clearance_joints(load_config({}, GUIDE)) == "P"

@@ -65,6 +65,7 @@ from ..summary import (  # noqa: F401
 )
 from .selection import (  # noqa: F401
     CASE_DIMS,
+    QUANTITY_UNITS,
     RESULTS_KINDS,
     SelectionError,
     choice_message,
@@ -80,6 +81,9 @@ from .selection import (  # noqa: F401
     joint_clearances,
     label_text,
     parse_selection,
+    quantity_of,
+    quantity_text,
+    quantity_unit,
     results_kind,
     select_cases,
     sweep_dims,

@@ -71,6 +71,57 @@ def label_text(label: Mapping[str, object]) -> str:
     return ", ".join(f"{k}={value_text(v)}" for k, v in label.items())
 
 
+#: The unit a figure and a report write a quantity in wherever they give a value of a swept or
+#: selected coordinate (the legend of a case, the ``--select`` line of the title, an axis over the
+#: coordinate): one unit per quantity, whatever its values, so that a clearance reads in mm
+#: on every figure (before: 0.00025 in a legend, 0.00025 m in the title, 250 um on a heat
+#: map's axis, 0.25 mm in the orbit's legend; a dynamics map's periodic windows in m and
+#: min-1 in ``report``). ``--select`` takes values in these units too
+#: (``analysis.parse_selection``). A coordinate of another quantity is written in its units.
+QUANTITY_UNITS = {"length": (1e-3, "mm"), "layer thickness": (1e-6, "\u00b5m"),
+                  "speed": (1.0, "r/min")}
+
+
+def quantity_of(coord: xr.DataArray) -> str | None:
+    """The quantity of :data:`QUANTITY_UNITS` a coordinate holds, from its units and name: a
+    speed (``min-1``, or a ``speed_rpm`` without units), a coating's or base's thickness, any
+    other length (clearances, sizes); None for another."""
+    unit = str(coord.attrs.get("units", ""))
+    name = f"{coord.name} {coord.attrs.get('config_key', '')}"
+    if unit == "min-1" or (unit in ("", "1") and str(coord.name).endswith("speed_rpm")):
+        return "speed"
+    if unit == "m":
+        return "layer thickness" if "thickness" in name else "length"
+    return None
+
+
+def quantity_unit(coord: xr.DataArray) -> tuple[float, str]:
+    """(factor from the coordinate's SI units, unit text) of a coordinate: its quantity's
+    (:func:`quantity_of`), else its own units ("" where it has none)."""
+    quantity = quantity_of(coord)
+    if quantity is not None:
+        return QUANTITY_UNITS[quantity]
+    unit = str(coord.attrs.get("units", ""))
+    return 1.0, "" if unit in ("", "1") else unit
+
+
+def quantity_text(coord: xr.DataArray, value) -> str:
+    """``"0.25 mm"``, ``"60 r/min"``, ``"PTFE"``: a value of ``coord`` in its quantity's unit
+    (:func:`quantity_unit`).
+
+    >>> quantity_text(xr.DataArray([2.5e-4], dims="B_clearance", name="B_clearance",
+    ...                             attrs={"units": "m"}), 2.5e-4)
+    '0.25 mm'
+    """
+    factor, unit = quantity_unit(coord)
+    if isinstance(value, np.ndarray) and value.ndim == 0:     # a scalar coordinate's values
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        return value_text(value)
+    number = value_text(float(value) / factor) if factor != 1.0 else value_text(value)
+    return f"{number} {unit}" if unit else number
+
+
 def iter_points(obj: xr.Dataset | xr.DataArray, dims: tuple[str, ...]) -> Iterator[tuple[dict, Any]]:
     """Yield ``({dim: value}, obj at that point)`` over ``dims``.
 
@@ -119,7 +170,7 @@ def choice_message(kind: str, wanted: str, choices: list[str]) -> str:
 
 #: The units a ``--select`` value may carry, by its coordinate's SI ``units``: each unit's
 #: factor to the coordinate's. The figures write a clearance in mm and a speed in r/min
-#: (``plotting.common.QUANTITY_UNITS``): ``B_clearance=0.25mm`` and ``speed_rpm=60rpm`` name
+#: (:data:`QUANTITY_UNITS`): ``B_clearance=0.25mm`` and ``speed_rpm=60rpm`` name
 #: the values they show.
 SELECT_UNITS = {"m": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "\u00b5m": 1e-6, "nm": 1e-9},
                 "min-1": {"r/min": 1.0, "rpm": 1.0, "min-1": 1.0, "1/min": 1.0}}

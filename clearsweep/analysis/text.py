@@ -32,6 +32,7 @@ from .selection import (
     iter_points,
     joint_clearances,
     label_text,
+    quantity_unit,
     value_text,
 )
 from .tables import report_summary
@@ -229,11 +230,19 @@ def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _coordinate_text(ds: xr.Dataset, dim: str, first: int, last: int) -> str:
-    """``"speed_rpm 80-95 min-1"``: a dimension's values from ``first`` to ``last``."""
+    """``"speed_rpm 80-95 r/min"``, ``"B_clearance 0.25 mm"``: a dimension's values from
+    ``first`` to ``last`` in its quantity's unit, as the figures write them
+    (:data:`QUANTITY_UNITS`: a clearance in mm, a speed in r/min)."""
     values = ds[dim].values
-    units = str(ds[dim].attrs.get("units", ""))
-    span = value_text(values[first]) + ("" if first == last else f"-{value_text(values[last])}")
-    return f"{dim} {span}" + (f" {units}" if units and units != "1" else "")
+    factor, units = quantity_unit(ds[dim])
+
+    def number(value) -> str:
+        if factor == 1.0 or not isinstance(value, (int, float, np.number)):
+            return value_text(value)
+        return value_text(float(value) / factor)
+
+    span = number(values[first]) + ("" if first == last else f"-{number(values[last])}")
+    return f"{dim} {span}" + (f" {units}" if units else "")
 
 
 def _periodic_window_lines(ds: xr.Dataset, summary: xr.Dataset, usable,

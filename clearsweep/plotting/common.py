@@ -12,11 +12,15 @@ import numpy as np
 import xarray as xr
 from matplotlib import colormaps
 
-from ..analysis import (
+from ..analysis import (  # noqa: F401 (QUANTITY_UNITS, quantity_*: the figures' names)
+    QUANTITY_UNITS,
     file_config,
     ideal_joints,
     iter_cases,
     joint_clearances,
+    quantity_of,
+    quantity_text,
+    quantity_unit,
     results_kind,
     sweep_dims,
     value_text,
@@ -50,56 +54,6 @@ DIMENSIONLESS = "-"
 #: Colour-bar labels are wrapped to lines of at most this many characters, so that the
 #: layout engine can keep them inside a figure of the default size.
 COLOURBAR_LABEL_CHARACTERS = 36
-
-
-#: The unit a figure writes a quantity in wherever it gives a value of a swept or selected
-#: coordinate (the legend of a case, the ``--select`` line of the title, an axis over the
-#: coordinate): one unit per quantity, whatever its values, so that a clearance reads in mm
-#: on every figure (before: 0.00025 in a legend, 0.00025 m in the title, 250 um on a heat
-#: map's axis, 0.25 mm in the orbit's legend). ``--select`` takes values in these units too
-#: (``analysis.parse_selection``). A coordinate of another quantity is written in its units.
-QUANTITY_UNITS = {"length": (1e-3, "mm"), "layer thickness": (1e-6, "\u00b5m"),
-                  "speed": (1.0, "r/min")}
-
-
-def quantity_of(coord: xr.DataArray) -> str | None:
-    """The quantity of :data:`QUANTITY_UNITS` a coordinate holds, from its units and name: a
-    speed (``min-1``, or a ``speed_rpm`` without units), a coating's or base's thickness, any
-    other length (clearances, sizes); None for another."""
-    unit = str(coord.attrs.get("units", ""))
-    name = f"{coord.name} {coord.attrs.get('config_key', '')}"
-    if unit == "min-1" or (unit in ("", "1") and str(coord.name).endswith("speed_rpm")):
-        return "speed"
-    if unit == "m":
-        return "layer thickness" if "thickness" in name else "length"
-    return None
-
-
-def quantity_unit(coord: xr.DataArray) -> tuple[float, str]:
-    """(factor from the coordinate's SI units, unit text) of a coordinate: its quantity's
-    (:func:`quantity_of`), else its own units ("" where it has none)."""
-    quantity = quantity_of(coord)
-    if quantity is not None:
-        return QUANTITY_UNITS[quantity]
-    unit = str(coord.attrs.get("units", ""))
-    return 1.0, "" if unit in ("", "1") else unit
-
-
-def quantity_text(coord: xr.DataArray, value) -> str:
-    """``"0.25 mm"``, ``"60 r/min"``, ``"PTFE"``: a value of ``coord`` in its quantity's unit
-    (:func:`quantity_unit`).
-
-    >>> quantity_text(xr.DataArray([2.5e-4], dims="B_clearance", name="B_clearance",
-    ...                             attrs={"units": "m"}), 2.5e-4)
-    '0.25 mm'
-    """
-    factor, unit = quantity_unit(coord)
-    if isinstance(value, np.ndarray) and value.ndim == 0:     # a scalar coordinate's values
-        value = value[()]
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
-        return value_text(value)
-    number = value_text(float(value) / factor) if factor != 1.0 else value_text(value)
-    return f"{number} {unit}" if unit else number
 
 
 def quantity_values(coord: xr.DataArray) -> tuple[np.ndarray, str]:
