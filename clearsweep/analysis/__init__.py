@@ -67,6 +67,7 @@ from .selection import (  # noqa: F401
     CASE_DIMS,
     RESULTS_KINDS,
     SelectionError,
+    bushing_joints,
     choice_message,
     configured_clearances,
     coordinate_for_key,

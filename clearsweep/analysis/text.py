@@ -123,6 +123,7 @@ def run_summary_text(ds: xr.Dataset) -> str:
         if "peak_force_source" in case and case["peak_force_source"].ndim == 0:
             lines.append(f"  peak force set by: {value_text(case['peak_force_source'].values[()])}")
         lines += _run_motion_lines(case)
+        lines += _bushing_lines(ds)
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
         wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
@@ -141,6 +142,26 @@ def _period_text(period: int) -> str:
     if period == PERIOD_NONE:
         return f"non-periodic (no period up to {MAX_PERIOD} revolutions)"
     return f"periodic, period {period}"
+
+
+def _bushing_lines(ds: xr.Dataset) -> list[str]:
+    """One line per joint that ran as an elastic bushing (its ``joint_<J>_type``
+    attribute, ``clearsweep.params.joint_attributes``): its stiffness and damping, and its
+    largest deflection where the run kept the joints' offsets."""
+    lines = []
+    for key, value in ds.attrs.items():
+        if not (key.startswith("joint_") and key.endswith("_type") and value_text(value) == "bushing"):
+            continue
+        name = key[len("joint_"):-len("_type")]
+        k = np.atleast_1d(ds.attrs.get(f"joint_{name}_bushing_stiffness_N_per_m", [math.nan] * 2))
+        c = np.atleast_1d(ds.attrs.get(f"joint_{name}_bushing_damping_N_s_per_m", [math.nan] * 2))
+        text = (f"joint {name}: bushing, stiffness {k[0]:.4g} / {k[-1]:.4g} N m-1, damping "
+                f"{c[0]:.4g} / {c[-1]:.4g} N s m-1 (radial / axial)")
+        if "eccentricity" in ds and "joint" in ds["eccentricity"].dims:
+            peak = float(ds["eccentricity"].sel(joint=name).max())
+            text += f"; largest deflection {peak:.3g} m"
+        lines.append(text)
+    return lines
 
 
 def _run_motion_lines(case: xr.Dataset) -> list[str]:

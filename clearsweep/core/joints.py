@@ -68,7 +68,8 @@ INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
 
 #: Registered joint types: type name -> the module of ``clearsweep.core`` that implements
 #: it (that module's ``JOINT_TYPE`` is the name).
-JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic"}
+JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic",
+               "bushing": "bushing"}
 
 #: What a joint-type module provides, compiled in that module (docs/architecture.md,
 #: "Joint types"): the gap geometry and the contact composed into a

@@ -80,7 +80,14 @@ J_X0 = 16           # start of the walls' wear maps along the guide (x) [m]
 J_XSPAN = 17        # length of the walls' wear maps along the guide [m]
 J_PEN_STOP = 18     # penetration stop [m] (docs/physics.md 4.3)
 J_FILM = 19         # lubricant film's viscous coefficient [N s/m] along the slip (O: Petroff); else 0
-N_JP = 20
+# an elastic bushing (core/bushing.py; 0 for the other types): the joint's coordinates are
+# free as a clearance joint's, its J_CLEARANCE 0 (no gap, no contact, no wear)
+J_BUSHING = 20      # 1.0 = the joint is an elastic bushing
+J_K_RADIAL = 21     # bushing stiffness across its axis [N/m]
+J_K_AXIAL = 22      # bushing stiffness along its axis [N/m] (0 at a revolute's place: axial ideal)
+J_C_RADIAL = 23     # bushing damping across its axis [N s/m]
+J_C_AXIAL = 24      # bushing damping along its axis [N s/m]
+N_JP = 25
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.
