@@ -919,7 +919,7 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
     return out
 
 
-def bushing_row(row: np.ndarray, joint: AnyJoint, kind: str) -> None:
+def bushing_row(row: np.ndarray, joint: JointConfig | RevoluteJointConfig, kind: str) -> None:
     """A bushing's columns of its jp row (core/bushing.py): the flag, the stiffness and the
     damping, radial and axial; at a revolute's place (O) the axial pair 0: its axial motion
     stays ideal."""
@@ -1016,7 +1016,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
         jp[j, L.J_LENGTH] = getattr(joint, "length", 0.0)
-        if clear >> (L.N_JOINTS + j) & 1:
+        if clear >> (L.N_JOINTS + j) & 1 and not isinstance(joint, PrismaticJointConfig):
             bushing_row(jp[j], joint, kind)
         if isinstance(joint, PrismaticJointConfig):
             guide_row(jp[j], joint, preset)

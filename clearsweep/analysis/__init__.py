@@ -103,6 +103,7 @@ from .tables import (  # noqa: F401
 )
 from .text import (  # noqa: F401
     HEADLINE_METRICS,
+    bushing_text,
     format_sweep_summary,
     run_summary_text,
     short_settled_window,

@@ -164,6 +164,11 @@ def _bushing_lines(ds: xr.Dataset) -> list[str]:
     return lines
 
 
+def bushing_text(ds: xr.Dataset) -> str:
+    """The lines of :func:`_bushing_lines` (the joints that ran as bushings), or ''."""
+    return "\n".join(_bushing_lines(ds))
+
+
 def _run_motion_lines(case: xr.Dataset) -> list[str]:
     """A run's spectrum and periodicity lines (docs/physics.md section 11), where it has them."""
     lines = []
