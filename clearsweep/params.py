@@ -877,8 +877,10 @@ JOINT_ATTRIBUTES = {
     "modulus_Pa": "the modulus of the contact law, jp[J_EW] [Pa] (NaN: ideal)",
     "friction_coefficient": "jp[J_MU] (NaN: ideal)",
     "wear_coefficient_m2_per_N": "Archard's k, jp[J_K] [m^2/N] (NaN: ideal)",
-    "bushing_stiffness_N_per_m": "a bushing's stiffness (radial, axial) [N/m] (NaN: not a bushing)",
-    "bushing_damping_N_s_per_m": "a bushing's damping (radial, axial) [N s/m] (NaN: not a bushing)",
+    "bushing_radial_stiffness_N_per_m": "a bushing's stiffness across its axis [N/m] (NaN: not a bushing)",
+    "bushing_axial_stiffness_N_per_m": "a bushing's stiffness along its axis [N/m] (NaN: not a bushing)",
+    "bushing_radial_damping_N_s_per_m": "a bushing's damping across its axis [N s/m] (NaN: not a bushing)",
+    "bushing_axial_damping_N_s_per_m": "a bushing's damping along its axis [N s/m] (NaN: not a bushing)",
 }
 
 
@@ -899,7 +901,6 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
             law = "elastic foundation on the faces' edge lines, E*"
         if elastic:
             kind, law = BUSHING, "linear spring-damper (bushing), no contact"
-        none = [math.nan, math.nan]
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,
@@ -910,10 +911,10 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
             "modulus_Pa": math.nan if ideal else float(row[L.J_EW]),
             "friction_coefficient": math.nan if ideal else float(row[L.J_MU]),
             "wear_coefficient_m2_per_N": math.nan if ideal else float(row[L.J_K]),
-            "bushing_stiffness_N_per_m": ([float(row[L.J_K_RADIAL]), float(row[L.J_K_AXIAL])]
-                                          if elastic else none),
-            "bushing_damping_N_s_per_m": ([float(row[L.J_C_RADIAL]), float(row[L.J_C_AXIAL])]
-                                          if elastic else none),
+            "bushing_radial_stiffness_N_per_m": float(row[L.J_K_RADIAL]) if elastic else math.nan,
+            "bushing_axial_stiffness_N_per_m": float(row[L.J_K_AXIAL]) if elastic else math.nan,
+            "bushing_radial_damping_N_s_per_m": float(row[L.J_C_RADIAL]) if elastic else math.nan,
+            "bushing_axial_damping_N_s_per_m": float(row[L.J_C_AXIAL]) if elastic else math.nan,
         }
         out.update({f"joint_{name}_{key}": value for key, value in values.items()})
     return out

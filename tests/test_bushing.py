@@ -209,10 +209,12 @@ def test_run_reports_o_as_a_bushing(tmp_path):
     assert "joint O: bushing" in result.output
     with xr.open_dataset(out) as ds:
         assert ds.attrs["joint_O_type"] == "bushing"
-        assert list(ds.attrs["joint_O_bushing_stiffness_N_per_m"]) == [1e6, 0.0]
-        assert list(ds.attrs["joint_O_bushing_damping_N_s_per_m"]) == [300.0, 0.0]
+        assert ds.attrs["joint_O_bushing_radial_stiffness_N_per_m"] == 1e6
+        assert ds.attrs["joint_O_bushing_axial_stiffness_N_per_m"] == 0.0
+        assert ds.attrs["joint_O_bushing_radial_damping_N_s_per_m"] == 300.0
+        assert ds.attrs["joint_O_bushing_axial_damping_N_s_per_m"] == 0.0
         assert ds.attrs["joint_A_type"] == "spherical"
-        assert np.isnan(ds.attrs["joint_A_bushing_stiffness_N_per_m"]).all()
+        assert np.isnan(ds.attrs["joint_A_bushing_radial_stiffness_N_per_m"])
         assert str(ds["status"].values) == "ok"
         # the bushing's deflection is kept as the journal's offset, and drawn as its orbit
         ecc = ds["eccentricity"].sel(joint="O").values
@@ -235,21 +237,35 @@ def test_the_attributes_of_a_bushing():
 
     attrs = joint_attributes(cfg, pack(cfg, resolve_materials(cfg), seat=False))
     assert attrs["joint_B_type"] == "bushing"
-    assert attrs["joint_B_bushing_stiffness_N_per_m"] == [3e6, 1e6]
-    assert attrs["joint_B_bushing_damping_N_s_per_m"] == [300.0, 150.0]
+    assert (attrs["joint_B_bushing_radial_stiffness_N_per_m"],
+            attrs["joint_B_bushing_axial_stiffness_N_per_m"]) == (3e6, 1e6)
+    assert (attrs["joint_B_bushing_radial_damping_N_s_per_m"],
+            attrs["joint_B_bushing_axial_damping_N_s_per_m"]) == (300.0, 150.0)
     assert attrs["joint_O_type"] == "revolute"
 
 
 def test_a_sweep_file_sweeps_the_type_and_the_stiffness(tmp_path):
-    """joints.O.type and joints.O.bushing_stiffness are sweep dimensions like any key."""
+    """joints.O.type and joints.O.bushing_stiffness are sweep dimensions like any key; the
+    bushing's attributes, which vary from case to case, become variables of the sweep."""
+    import xarray as xr
+
     from clearsweep.cli import main
 
     path = tmp_path / "s.yaml"
-    path.write_text("name: bush\nstore: summary\nbase: {joints: {B: {clearance: 2.5e-4}}, "
-                    "solver: {duration: 0.002}, wear: {map: [6, 12]}}\n"
+    path.write_text("name: bush\nstore: summary\nbase: {joints: {A: {clearance: 2.5e-4}, "
+                    "B: {clearance: 2.5e-4}}, solver: {duration: 0.002}, wear: {map: [6, 12]}}\n"
                     "sweep: {grid: {joints.O.type: [revolute, bushing], "
                     "joints.O.bushing_stiffness: [[1.0e6, 5.0e5], [4.0e6, 5.0e5]]}}\n")
     result = CliRunner().invoke(main, ["sweep", str(path), "--dry-run"])
     assert result.exit_code == 0, result.output
     assert "dimension O_type (2): 'revolute', 'bushing'" in result.output
     assert "dimension O_bushing_stiffness (2)" in result.output
+    out = tmp_path / "s.nc"
+    result = CliRunner().invoke(main, ["sweep", str(path), "-o", str(out), "--workers", "1",
+                                       "--no-progress", "-q"])
+    assert result.exit_code == 0, result.output
+    with xr.open_dataset(out) as ds:
+        assert [str(s) for s in ds["status"].values.ravel()] == ["ok"] * 4
+        k = ds["joint_O_bushing_radial_stiffness_N_per_m"]
+        assert np.isnan(k.sel(O_type="revolute").values).all()
+        assert list(k.sel(O_type="bushing").values) == [1e6, 4e6]

@@ -153,10 +153,11 @@ def _bushing_lines(ds: xr.Dataset) -> list[str]:
         if not (key.startswith("joint_") and key.endswith("_type") and value_text(value) == "bushing"):
             continue
         name = key[len("joint_"):-len("_type")]
-        k = np.atleast_1d(ds.attrs.get(f"joint_{name}_bushing_stiffness_N_per_m", [math.nan] * 2))
-        c = np.atleast_1d(ds.attrs.get(f"joint_{name}_bushing_damping_N_s_per_m", [math.nan] * 2))
-        text = (f"joint {name}: bushing, stiffness {k[0]:.4g} / {k[-1]:.4g} N m-1, damping "
-                f"{c[0]:.4g} / {c[-1]:.4g} N s m-1 (radial / axial)")
+        k, c = ([float(ds.attrs.get(f"joint_{name}_bushing_{way}_{what}", math.nan))
+                 for way in ("radial", "axial")]
+                for what in ("stiffness_N_per_m", "damping_N_s_per_m"))
+        text = (f"joint {name}: bushing, stiffness {k[0]:.4g} / {k[1]:.4g} N m-1, damping "
+                f"{c[0]:.4g} / {c[1]:.4g} N s m-1 (radial / axial)")
         if "eccentricity" in ds and "joint" in ds["eccentricity"].dims:
             peak = float(ds["eccentricity"].sel(joint=name).max())
             text += f"; largest deflection {peak:.3g} m"
