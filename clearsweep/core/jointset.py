@@ -122,8 +122,13 @@ def has_clearance(spec, jp, j):
 @compiled(inline="always")
 def is_bushing(spec, jp, j):
     """Whether joint j is an elastic bushing: in the build's bushing bits (``spec``, a
-    constant of the build: a clear bit folds the test away) and in the case (``jp``)."""
-    return (spec >> (N_JOINTS + j)) & 1 != 0 and jp[j, J_BUSHING] != 0.0
+    constant of the build: a clear bit folds the test away) and in the case (``jp``). The
+    build's bushing bits are tested first as a whole, a constant whatever j is, so that a
+    build without bushings folds the test away also where j is a loop's variable (the rate
+    loop of ``dynamics.evaluate``: without it the device build of A and B kept the
+    bushing's rate, 2.41 M characters of PTX against 2.19 M, ``python -m clearsweep.ptx``)."""
+    return (spec >> N_JOINTS != 0 and (spec >> (N_JOINTS + j)) & 1 != 0
+            and jp[j, J_BUSHING] != 0.0)
 
 
 @compiled(inline="always")
