@@ -784,6 +784,7 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
     """
     from .analysis import (
         SelectionError,
+        bushing_text,
         design_dims,
         format_metric_table,
         format_reduction_table,
@@ -825,8 +826,9 @@ def report_command(path: str, fmt: str, reference: tuple[str, ...], metric: str 
                 text = format_reduction_table(ds, reference, fmt)
             else:
                 statistics = format_statistics_table(ds, fmt) if fmt in ("text", "markdown") else ""
+                bushings = bushing_text(ds) if fmt in ("text", "markdown") else ""
                 text = "\n\n".join(t for t in (statistics, format_wear_table(
-                    ds, fmt, with_statistics=fmt in ("csv", "json"))) if t)
+                    ds, fmt, with_statistics=fmt in ("csv", "json")), bushings) if t)
             if summary and full:
                 text = f"{summary}\n\n{text}"
         except SelectionError as exc:

@@ -90,6 +90,26 @@ class _Section:
         return get_path(self, key)
 
 
+#: A rubber bushing's default stiffness [N/m] (radial, axial): a suspension control arm's
+#: bushing is about 1e6 N/m across its axis (0.8-1.5 kN/mm), the default of common linear
+#: bushing elements (1e6 N/m); along its axis, where the rubber works in shear, about half
+#: (docs/physics.md 3.8).
+BUSHING_STIFFNESS = (1.0e6, 5.0e5)
+#: Its default damping [N s/m] (radial, axial): a damping ratio of about 0.2 on the rod's
+#: mass, within the 1e2-1e3 N s/m of a rubber bushing's viscous part.
+BUSHING_DAMPING = (300.0, 150.0)
+
+
+def _bushing_stiffness(joint: str) -> Any:
+    return _setting(Field(list(BUSHING_STIFFNESS), size=2, lo=0.0, lo_open=True, hi=1.0e12),
+                    "N m-1", f"bushing stiffness of joint {joint} (radial, axial)")
+
+
+def _bushing_damping(joint: str) -> Any:
+    return _setting(Field(list(BUSHING_DAMPING), size=2, lo=0.0, hi=1.0e9), "N s m-1",
+                    f"bushing damping of joint {joint} (radial, axial)")
+
+
 @dataclass(frozen=True)
 class JointConfig(_Section):
     """One spherical joint; ``clearance == 0`` makes it ideal."""
@@ -102,6 +122,11 @@ class JointConfig(_Section):
     #: None: the surface material's own coefficient
     wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
                                               "Archard wear coefficient of joint X's socket")
+    #: bushing: an elastic bushing (core/bushing.py) in place of the spherical joint: no
+    #: clearance, no coating, its stiffness and damping below
+    type: str = _setting(Field("spherical", ("spherical", "bushing")), None, "joint type of joint X")
+    bushing_stiffness: tuple[float, float] = _bushing_stiffness("X")
+    bushing_damping: tuple[float, float] = _bushing_damping("X")
 
     @property
     def ball_radius_m(self) -> float:
@@ -152,6 +177,11 @@ class RevoluteJointConfig(_Section):
     #: ISO 3448, at 880 kg/m3) is 0.06 Pa s
     lubricant_viscosity: float = _setting(Field(0.0, lo=0.0, hi=10.0), "Pa s",
                                           "lubricant viscosity in joint O's bearing")
+    #: bushing: an elastic bushing (core/bushing.py) in place of the revolute: radial only
+    #: (its axial value unused: O's axial motion stays ideal)
+    type: str = _setting(Field("revolute", ("revolute", "bushing")), None, "joint type of joint O")
+    bushing_stiffness: tuple[float, float] = _bushing_stiffness("O")
+    bushing_damping: tuple[float, float] = _bushing_damping("O")
 
     @property
     def socket_radius(self) -> float:
@@ -715,6 +745,22 @@ def section_class(joint: str) -> Any:
     return type(getattr(JointsConfig(), joint))
 
 
+def _check_bushings(joints: Mapping[str, Any], source: str) -> None:
+    """A bushing (``joints.X.type: bushing``) has no gap and no coated surface: a clearance
+    or a coating with it is refused (either would be silently ignored)."""
+    for joint, spec in joints.items():
+        if spec.get("type") != "bushing":
+            continue
+        if spec["clearance"] != 0.0:
+            raise ConfigError(f"joints.{joint}.clearance", spec["clearance"],
+                              f"0 where joints.{joint}.type is bushing (a bushing has no gap)",
+                              source)
+        if spec["coating"] != "none":
+            raise ConfigError(f"joints.{joint}.coating", spec["coating"],
+                              f"'none' where joints.{joint}.type is bushing (a bushing has no "
+                              "contact surface)", source)
+
+
 #: Relations between fields, checked after each field on its own: (key, op, other).
 _RELATIONS = [
     ("friction.v1", ">", "friction.v0"),
@@ -895,6 +941,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_sizes(cfg["joints"], cfg, source)
+    _check_bushings(cfg["joints"], source)
     for joint, spec in cfg["joints"].items():
         section_class(joint).check_fit(joint, spec, cfg, source)
     # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every

@@ -26,6 +26,7 @@ from .config import (
 )
 from .core import jointset
 from .core import layout as L
+from .core.bushing import JOINT_TYPE as BUSHING
 from .core.contact import hysteresis_fraction
 from .core.joints import BODIES, JOINTS
 from .jointtypes import kind as joint_kind
@@ -990,11 +991,18 @@ def joint_configs(cfg: Config) -> list[tuple[str, AnyJoint]]:
 
 
 def joint_set(cfg: Config) -> int:
-    """The case's joints with clearance, as a ``core.jointset`` bitmask (bit j: row j of
-    the joint table): the flags :func:`pack` writes into ``jp[:, J_CLEARANCE]``, which
+    """The case's joints with clearance and its bushings, as a ``core.jointset`` bitmask
+    (bit j: row j of the joint table has clearance; bit N_JOINTS + j: it is a bushing): the
+    flags :func:`pack` writes into ``jp[:, J_CLEARANCE]`` and ``jp[:, J_BUSHING]``, which
     ``jointset.of`` reads back; the kernel build that runs the case is
     :func:`kernel_build` of it."""
-    return sum(1 << j for j, (_, joint) in enumerate(joint_configs(cfg)) if joint.clearance > 0.0)
+    mask = 0
+    for j, (_, joint) in enumerate(joint_configs(cfg)):
+        if joint.clearance > 0.0:
+            mask |= 1 << j
+        if getattr(joint, "type", None) == BUSHING:
+            mask |= 1 << (L.N_JOINTS + j)
+    return mask
 
 
 #: The joints on which the CPU's kernel builds are specialised (``core.jointset``: a build
@@ -1016,9 +1024,10 @@ def build_of(case_set: int, device: bool = False) -> int:
     """The joint set of the kernel build that runs a case of joint set ``case_set``
     (``core.jointset.of`` of its packed flags) on the CPU, or with ``device`` on a CUDA
     device: the case's joints among :data:`SPECIALISED_JOINTS` (or
-    :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint."""
+    :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint; and the case's bushings
+    (a build without bushings, every build before them, folds their code away)."""
     mask = SPECIALISED_JOINTS_DEVICE if device else SPECIALISED_JOINTS
-    return (int(case_set) & mask) | (jointset.ALL & ~mask)
+    return (int(case_set) & mask) | (jointset.ALL & ~mask) | (int(case_set) & jointset.BUSHINGS)
 
 
 def kernel_build(cfg: Config) -> int:
@@ -1040,6 +1049,10 @@ JOINT_ATTRIBUTES = {
     "modulus_Pa": "the modulus of the contact law, jp[J_EW] [Pa] (NaN: ideal)",
     "friction_coefficient": "jp[J_MU] (NaN: ideal)",
     "wear_coefficient_m2_per_N": "Archard's k, jp[J_K] [m^2/N] (NaN: ideal)",
+    "bushing_radial_stiffness_N_per_m": "a bushing's stiffness across its axis [N/m] (NaN: not a bushing)",
+    "bushing_axial_stiffness_N_per_m": "a bushing's stiffness along its axis [N/m] (NaN: not a bushing)",
+    "bushing_radial_damping_N_s_per_m": "a bushing's damping across its axis [N s/m] (NaN: not a bushing)",
+    "bushing_axial_damping_N_s_per_m": "a bushing's damping along its axis [N s/m] (NaN: not a bushing)",
 }
 
 
@@ -1053,11 +1066,14 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
     for j, (name, joint) in enumerate(joint_configs(cfg)):
         row, kind = packed.jp[j], JOINTS[j].type
         ideal = row[L.J_CLEARANCE] == 0.0
+        elastic = row[L.J_BUSHING] != 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
             f"layered law, E_w ({cfg.contact.layer_rule})"
         own = joint_kind(kind).contact_law
         if own is not None:
             law = own
+        if elastic:
+            kind, law = BUSHING, "linear spring-damper (bushing), no contact"
         values = {
             "type": kind,
             "contact": "ideal" if ideal else law,
@@ -1068,9 +1084,27 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
             "modulus_Pa": math.nan if ideal else float(row[L.J_EW]),
             "friction_coefficient": math.nan if ideal else float(row[L.J_MU]),
             "wear_coefficient_m2_per_N": math.nan if ideal else float(row[L.J_K]),
+            "bushing_radial_stiffness_N_per_m": float(row[L.J_K_RADIAL]) if elastic else math.nan,
+            "bushing_axial_stiffness_N_per_m": float(row[L.J_K_AXIAL]) if elastic else math.nan,
+            "bushing_radial_damping_N_s_per_m": float(row[L.J_C_RADIAL]) if elastic else math.nan,
+            "bushing_axial_damping_N_s_per_m": float(row[L.J_C_AXIAL]) if elastic else math.nan,
         }
         out.update({f"joint_{name}_{key}": value for key, value in values.items()})
     return out
+
+
+def bushing_row(row: np.ndarray, joint: Any, kind: str) -> None:
+    """A bushing's columns of its jp row (core/bushing.py): the flag, the stiffness and the
+    damping, radial and axial; at a revolute's place (O) the axial pair 0: its axial motion
+    stays ideal."""
+    kr, ka = joint.bushing_stiffness
+    cr, ca = joint.bushing_damping
+    axial = 0.0 if joint_kind(kind).axial_ideal else 1.0
+    row[L.J_BUSHING] = 1.0
+    row[L.J_K_RADIAL] = kr
+    row[L.J_K_AXIAL] = axial * ka
+    row[L.J_C_RADIAL] = cr
+    row[L.J_C_AXIAL] = axial * ca
 
 
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
@@ -1156,6 +1190,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_K_BASE] = base.wear_coefficient_m2_per_N if coated else jp[j, L.J_K]
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
         HOST_HOOKS[kind].fill(jp[j], joint, preset)
+        if clear >> (L.N_JOINTS + j) & 1:
+            bushing_row(jp[j], joint, kind)
         if c > 0.0:
             jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
                                                    contact.load_bound)

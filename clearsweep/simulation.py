@@ -34,8 +34,10 @@ def check_step(cfg: Config, packed: Packed) -> None:
     mass a contact can meet (rod, slider, or the rod's end-point rotational mass; where O has
     clearance the crank is free in its bearing's plane, and that mass in series with the
     crank's; at P, the block's mass at a corner, its rotation included), each joint with its
-    own elastic law (the journal's at O, the corners' at P).
+    own elastic law (the journal's at O, the corners' at P); a bushing's spring and damper
+    (its stiffer and more damped direction) on that mass.
     """
+    from .core.contact import stiff_rate
     from .core.joints import INDEX, JOINTS
 
     solver = cfg.solver
@@ -46,10 +48,17 @@ def check_step(cfg: Config, packed: Packed) -> None:
     half = 0.5 * preset.rod_length_m
     m_ref = min(preset.rod_mass_kg, preset.slider_mass_kg,
                 min(preset.rod_inertia_kgm2[1:]) / half ** 2)
-    if packed.jp[INDEX["O"], L.J_CLEARANCE] != 0.0:
+    if jointset.frees(packed.jp, INDEX["O"]):
         m_ref = 1.0 / (1.0 / m_ref + 1.0 / preset.crank_mass_kg)
     for j in range(L.N_JOINTS):
-        if packed.jp[j, L.J_CLEARANCE] == 0.0:
+        jp = packed.jp[j]
+        if jp[L.J_BUSHING] != 0.0:
+            # the bushing's spring and damper on the same mass (core/bushing.py)
+            rate = as_python(stiff_rate)(m_ref, max(jp[L.J_K_RADIAL], jp[L.J_K_AXIAL]),
+                                         max(jp[L.J_C_RADIAL], jp[L.J_C_AXIAL]))
+            bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
+            continue
+        if jp[L.J_CLEARANCE] == 0.0:
             continue
         rate = HOST_HOOKS[JOINTS[j].type].rate(packed.jp, j, packed.p, preset, m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
@@ -401,14 +410,15 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     y, d = raw.y, raw.d
     qd = L.Y_QD
     clearance = packed.jp[:, L.J_CLEARANCE] != 0.0
+    free = clearance | (packed.jp[:, L.J_BUSHING] != 0.0)     # a bushing's offset is read too
     nj = L.N_JOINTS
     joint_force = d[:, L.D_JOINT_FORCE:L.D_JOINT_FORCE + 3 * nj].reshape(-1, nj, 3)
     offset = d[:, L.D_OFFSET:L.D_OFFSET + 3 * nj].reshape(-1, nj, 3)
     penetration = d[:, L.D_DELTA:L.D_DELTA + L.N_JOINTS].copy()
     ecc = d[:, L.D_ECC:L.D_ECC + L.N_JOINTS].copy()
     penetration[:, ~clearance] = 0.0
-    offset[:, ~clearance, :] = 0.0
-    ecc[:, ~clearance] = 0.0
+    offset[:, ~free, :] = 0.0
+    ecc[:, ~free] = 0.0
     ke = d[:, L.D_KE]
     pe = d[:, L.D_PE_GRAV].copy()
     for j in range(nj):

@@ -21,6 +21,11 @@ Everything is built the obvious way, independently of the kernel's structured so
   (section 3.7); on walls worn by a given map read bilinearly (``wear.feedback`` and
   ``wear.interpolate``), the depth from scipy's linear interpolation between the bin
   centres and the force along the penetration's gradient, by differences (section 3.5);
+- an elastic bushing at A, B or O (``jp[j, J_BUSHING]``): the joint's rows go (at O the
+  axial row stays) and the linear spring-damper F = -(k_r e_r + c_r w_r) - (k_a e_a + c_a w_a)
+  acts at the ball point on both bodies, e the ball point's offset from the socket point,
+  w the ball point's velocity against the socket's material point there (by point
+  Jacobians), split along the socket body's local x axis (the ground's: global x);
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
@@ -169,7 +174,9 @@ class Mechanism:
         self.u_A3 = np.array([-0.5 * self.l3, 0.0, 0.0])   # rod socket of A
         self.u_B3 = np.array([0.5 * self.l3, 0.0, 0.0])    # rod ball of B
         self.u_B4 = np.zeros(3)                             # slider socket of B (centroid)
-        self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 for j in range(N_JOINTS)]
+        self.bushing = [self.jp[j, L.J_BUSHING] != 0.0 for j in range(N_JOINTS)]
+        self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 and not self.bushing[j]
+                      for j in range(N_JOINTS)]
         # the journal's law is the only elastic law written here besides the paper's
         assert self.p[L.P_EXPONENT] == 0.0, "the reference knows the default elastic laws only"
 
@@ -296,7 +303,9 @@ class ContactResult:
 
 def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
     """Contact state and forces of clearance joint j (A, B: spherical; O: the journal; P: the
-    block's corners)."""
+    block's corners; a bushing at A, B or O)."""
+    if mech.bushing[j]:
+        return bushing_contact(mech, j, q, qd)
     if j == JOINT_O:
         return journal_contact(mech, q, qd, dv0_stored)
     if j == JOINT_P:
@@ -318,6 +327,44 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
         return normal_force(delta, ddot, c, ew, ri, kappa)
 
     return respond(mech, j, qd, e, n, e - c, qj, qi, jj, ji, law, dv0_stored)
+
+
+def bushing_contact(mech: Mechanism, j, q, qd):
+    """Force of the bushing at joint j: the linear spring-damper between the ball point and the
+    socket point (A: crank pin / rod end; B: rod end / slider centroid; O: the crank's point O
+    / the origin on the ground), split along the socket body's local x axis."""
+    jp = mech.jp[j]
+    if j == JOINT_O:
+        bb, ub, sb, us = CRANK, mech.u_O, None, None
+    else:
+        bb, ub, sb, us = mech.joint_bodies(j)
+    pb = point(q, bb, ub)
+    jj = point_jacobian(q, bb, ub)
+    if sb is None:                      # the ground: at the origin, unrotated
+        ps, axis, ji = np.zeros(3), np.array([1.0, 0.0, 0.0]), np.zeros((3, 18))
+    else:
+        ps = point(q, sb, us)
+        axis = rotation(q[6 * sb + 3:6 * sb + 6])[:, 0]
+        ji = point_jacobian(q, sb, body_offset(q, sb, pb))   # the socket's point at pb
+    e = pb - ps
+    w = (jj - ji) @ qd
+
+    def parts(v):
+        along = float(axis @ v) * axis
+        return along, v - along
+
+    e_a, e_r = parts(e)
+    w_a, w_r = parts(w)
+    force = -(jp[L.J_K_RADIAL] * e_r + jp[L.J_C_RADIAL] * w_r
+              + jp[L.J_K_AXIAL] * e_a + jp[L.J_C_AXIAL] * w_a)
+    pdiss = float(jp[L.J_C_RADIAL] * w_r @ w_r + jp[L.J_C_AXIAL] * w_a @ w_a)
+    size = float(np.linalg.norm(e))
+    n = e / size if size > 0.0 else np.array([1.0, 0.0, 0.0])
+    return ContactResult(force=force, generalized=jj.T @ force - ji.T @ force, n=n, delta=0.0,
+                         ddot=float(n @ w), ecc=size, vt=np.zeros(3),
+                         fn=float(np.linalg.norm(force)), fel=0.0, ft=0.0, kappa=0.0,
+                         dfn_ddelta=jp[L.J_K_RADIAL], dfn_dddot=jp[L.J_C_RADIAL], pdiss=pdiss,
+                         j_rel=jj - ji, q_ball=pb, q_socket=pb)
 
 
 def journal_force(delta, ddot, c, ew, ri, rj, kappa):

@@ -277,6 +277,9 @@ def _consistent(raw):
         radius = radius_key(joint)
         joint[radius] = 3.0 * joint["clearance"] + joint[radius]
         joint["coating"] = joint["coating"] if joint["coating"] in ("none", "PTFE", "lead") else "MoS2"
+        if joint.get("type") == "bushing":   # a bushing has no clearance and no coating
+            joint["clearance"] = 0.0
+            joint["coating"] = "none"
     raw["friction"]["v1"] = 2.0 * raw["friction"]["v0"] + raw["friction"]["v1"]
     raw["solver"]["duration"] = raw["solver"]["dt"] + raw["solver"]["duration"]
     if raw["solver"]["revolutions"] is not None or raw["metrics"]["settle_revolutions"] is not None:
@@ -380,7 +383,8 @@ def test_message_format_exactly():
         load_config({"joints": {"A": {"clearence": 0.001}}}, source_name="my.yaml")
     assert str(info.value) == (
         "my.yaml: joints.A.clearence: got 0.001; expected one of the keys of joints.A (clearance, "
-        "socket_radius, coating, coating_thickness, base_thickness, wear_coefficient); "
+        "socket_radius, coating, coating_thickness, base_thickness, wear_coefficient, type, "
+        "bushing_stiffness, bushing_damping); "
         "did you mean 'joints.A.clearance'?")
     assert info.value.value == 0.001 and info.value.suggestion == "joints.A.clearance"
     assert isinstance(info.value, ValueError)

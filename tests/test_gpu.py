@@ -42,13 +42,18 @@ SWEEP = {
              "metrics": {"settle_time": 0.001},
              "outputs": {"poincare_phase_deg": 0.72},
              "solver": {"duration": 0.003}},
-    "sweep": {"zip": [{"name": "variant", "labels": ["B", "AB", "AB_centred", "AB_laws", "ABO"],
-                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4, 2.5e-4],
-                       "joints.O.clearance": [0.0, 0.0, 0.0, 0.0, 2.5e-4],
-                       "initial.joints": ["seated", "seated", "centred", "centred", "seated"],
-                       "contact.damping": ["paper", "paper", "paper", "flores", "paper"],
-                       "contact.impact_velocity": ["max", "max", "max", "onset", "max"],
-                       "contact.elastic": ["paper", "paper", "paper", "hertz", "paper"]}]},
+    # the last variant: an elastic bushing at O (issue 42 item 3)
+    "sweep": {"zip": [{"name": "variant",
+                       "labels": ["B", "AB", "AB_centred", "AB_laws", "ABO", "AB_Obushing"],
+                       "joints.A.clearance": [0.0, 2.5e-4, 2.5e-4, 2.5e-4, 2.5e-4, 2.5e-4],
+                       "joints.O.clearance": [0.0, 0.0, 0.0, 0.0, 2.5e-4, 0.0],
+                       "joints.O.type": ["revolute"] * 5 + ["bushing"],
+                       "initial.joints": ["seated", "seated", "centred", "centred", "seated",
+                                          "seated"],
+                       "contact.damping": ["paper", "paper", "paper", "flores", "paper", "paper"],
+                       "contact.impact_velocity": ["max", "max", "max", "onset", "max", "max"],
+                       "contact.elastic": ["paper", "paper", "paper", "hertz", "paper",
+                                           "paper"]}]},
 }
 
 SCRIPT = r"""
@@ -96,8 +101,8 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
     from clearsweep.summary import SUMMARY_ORDER
 
     cpu, gpu = simulated
-    assert [str(s) for s in cpu["status"].values] == ["ok"] * 5
-    assert [str(s) for s in gpu["status"].values] == ["ok"] * 5
+    assert [str(s) for s in cpu["status"].values] == ["ok"] * 6
+    assert [str(s) for s in gpu["status"].values] == ["ok"] * 6
     # the bearing case wears its bearing, on both paths
     assert float(cpu["wear_volume"].sel(variant="ABO", joint="O")) > 0.0
     compared = []

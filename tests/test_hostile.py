@@ -1504,6 +1504,28 @@ ROUND5_SIZES = [
 ]
 ROWS += ROUND5_SIZES
 
+# --- issue 42 item 3: the elastic bushing's settings
+BUSHING = [
+    ("B a bushing with its clearance (was: unknown key joints.B.type)",
+     lambda t, f: ["validate", ONE, "--set", "joints.B.type=bushing"], 2,
+     "joints.B.clearance: got 0.00025; expected 0 where joints.B.type is bushing (a bushing has no gap)"),
+    ("A a bushing with a coating (was: unknown key joints.A.type)",
+     lambda t, f: ["run", ONE, "--set", "joints.A.type=bushing", "--set", "joints.A.coating=PTFE",
+                   "-o", t / "out.nc"], 2,
+     "joints.A.coating: got 'PTFE' (from --set); expected 'none' where joints.A.type is bushing"),
+    ("O a bushing on a prismatic's type (was: unknown key joints.O.type)",
+     lambda t, f: ["validate", ONE, "--set", "joints.O.type=prismatic"], 2,
+     "joints.O.type: got 'prismatic' (from --set); expected one of 'revolute', 'bushing'"),
+    ("O a bushing damped beyond the step's reach (was: unknown key joints.O.bushing_damping)",
+     lambda t, f: ["run", ONE, "--set", "joints.O.type=bushing", "--set",
+                   "joints.O.bushing_damping=[1e8,0]", "-o", t / "out.nc"], 2,
+     "solver.dt: got 1e-05; expected a step <="),
+    ("B a bushing of stiffness 0 (was: unknown key joints.B.bushing_stiffness)",
+     lambda t, f: ["validate", ONE, "--set", "joints.B.bushing_stiffness=[0,1e6]"], 2,
+     "joints.B.bushing_stiffness: got [0"),
+]
+ROWS += BUSHING
+
 
 def friction_materials(tmp: Path, mu: str) -> str:
     """A user materials file giving PTFE the friction coefficient ``mu``."""

@@ -54,7 +54,16 @@ def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, mo
     module = importlib.import_module(f"clearsweep.core.{module_name}")
     assert module.JOINT_TYPE == type_name
     wear = getattr(module, "WEAR_SURFACE", None)
-    assert wear, f"core/{module_name}.py does not name its wear surface's functions (WEAR_SURFACE)"
+    assert wear is not None, (
+        f"core/{module_name}.py does not name its wear surface's functions (WEAR_SURFACE)")
+    if not wear:
+        # only a type that does not wear may name none: it compiles no wear geometry and
+        # says so (tests/test_bushing.py: the bushing's gap reports no penetration)
+        assert not any(compiled_here(module, f) for f in ("deposit", "contact_angle",
+                                                          "contact_area")), (
+            f"core/{module_name}.py has wear functions but names none in WEAR_SURFACE")
+        assert "does not wear" in (module.__doc__ or ""), (
+            f"core/{module_name}.py names no wear surface without saying it does not wear")
     missing = [f for f in (*joints.PROVIDES, *wear) if not compiled_here(module, f)]
     assert not missing, f"core/{module_name}.py does not compile {missing}"
     arch = (ROOT / "docs" / "architecture.md").read_text()

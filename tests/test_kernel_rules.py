@@ -48,6 +48,10 @@ def sources():
     # (jointset.has_clearance: a compile-time constant that folds an absent joint away);
     # the host reads the packed flags where it packs and reports
     (r"J_CLEARANCE\]\s*[!=]=", {"core/jointset.py", "params.py", "simulation.py", "service_life.py"}),
+    # likewise whether a joint is a bushing (jointset.is_bushing: the kernel's one switch
+    # between a joint's own type and the bushing); the host where it packs, bounds the step
+    # and reports
+    (r"J_BUSHING\]\s*[!=]=", {"core/jointset.py", "params.py", "simulation.py"}),
 ])
 def test_a_rule_is_written_in_one_module(pattern, allowed):
     found = {name for name, text in sources().items() if re.search(pattern, text)}

@@ -68,6 +68,7 @@ from .selection import (  # noqa: F401
     QUANTITY_UNITS,
     RESULTS_KINDS,
     SelectionError,
+    bushing_joints,
     choice_message,
     configured_clearances,
     coordinate_for_key,
@@ -106,6 +107,7 @@ from .tables import (  # noqa: F401
 )
 from .text import (  # noqa: F401
     HEADLINE_METRICS,
+    bushing_text,
     format_sweep_summary,
     run_summary_text,
     short_settled_window,

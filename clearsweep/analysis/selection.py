@@ -408,6 +408,16 @@ def ideal_joints(ds: xr.Dataset) -> list[str]:
             if not float(clearances.sel(joint=j).max()) > 0.0]
 
 
+def bushing_joints(ds: xr.Dataset) -> list[str]:
+    """The joints that ran as elastic bushings (their ``joint_<J>_type`` attribute is
+    ``bushing``, ``clearsweep.params.joint_attributes``), in ``joint`` order: no clearance,
+    so ideal to the contact and wear figures, but their deflection is an orbit."""
+    if "joint" not in ds.coords:
+        return []
+    return [value_text(j) for j in ds["joint"].values
+            if str(ds.attrs.get(f"joint_{value_text(j)}_type", "")) == "bushing"]
+
+
 def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:
     """``rows`` without those of an ideal joint (clearance 0) of the case ``clearance`` is of."""
     if clearance is None:

@@ -124,6 +124,7 @@ def run_summary_text(ds: xr.Dataset) -> str:
         if "peak_force_source" in case and case["peak_force_source"].ndim == 0:
             lines.append(f"  peak force set by: {value_text(case['peak_force_source'].values[()])}")
         lines += _run_motion_lines(case)
+        lines += _bushing_lines(ds)
         lines.append(f"sub-steps used: {_number(case, 'substeps_used', '.0f')}")
         lines.append(f"energy residual (relative): {_number(case, 'energy_residual_relative', '.2e')}")
         wall = f"wall time: {_number(case, 'wall_time', '.3g')}"
@@ -142,6 +143,32 @@ def _period_text(period: int) -> str:
     if period == PERIOD_NONE:
         return f"non-periodic (no period up to {MAX_PERIOD} revolutions)"
     return f"periodic, period {period}"
+
+
+def _bushing_lines(ds: xr.Dataset) -> list[str]:
+    """One line per joint that ran as an elastic bushing (its ``joint_<J>_type``
+    attribute, ``clearsweep.params.joint_attributes``): its stiffness and damping, and its
+    largest deflection where the run kept the joints' offsets."""
+    lines = []
+    for key, value in ds.attrs.items():
+        if not (key.startswith("joint_") and key.endswith("_type") and value_text(value) == "bushing"):
+            continue
+        name = key[len("joint_"):-len("_type")]
+        k, c = ([float(ds.attrs.get(f"joint_{name}_bushing_{way}_{what}", math.nan))
+                 for way in ("radial", "axial")]
+                for what in ("stiffness_N_per_m", "damping_N_s_per_m"))
+        text = (f"joint {name}: bushing, stiffness {k[0]:.4g} / {k[1]:.4g} N m-1, damping "
+                f"{c[0]:.4g} / {c[1]:.4g} N s m-1 (radial / axial)")
+        if "eccentricity" in ds and "joint" in ds["eccentricity"].dims:
+            peak = float(ds["eccentricity"].sel(joint=name).max())
+            text += f"; largest deflection {peak:.3g} m"
+        lines.append(text)
+    return lines
+
+
+def bushing_text(ds: xr.Dataset) -> str:
+    """The lines of :func:`_bushing_lines` (the joints that ran as bushings), or ''."""
+    return "\n".join(_bushing_lines(ds))
 
 
 def _run_motion_lines(case: xr.Dataset) -> list[str]:

@@ -28,11 +28,11 @@ import math
 import numpy as np
 from numba import types
 
-from . import prismatic, revolute, spherical
+from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .joints import INDEX
-from .jointset import ALL, NONE, has_clearance
+from .joints import BODIES, INDEX, JOINTS
+from .jointset import ALL, NONE, has_clearance, is_bushing, is_free
 from .kinematics import (
     add,
     body_moment,
@@ -134,11 +134,11 @@ GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 
 
 @compiled(inline="always")
 def o_free(spec, jp):
-    """Whether joint O has clearance, its journal free in the bearing's plane (in the
-    build's joint set ``spec``, then in the case): read from jp where it is needed rather
-    than kept live through the right-hand side (a GPU thread's registers: 16 B fewer spill
-    stores, ``python -m clearsweep.ptx``)."""
-    return has_clearance(spec, jp, JOINT_O)
+    """Whether joint O's journal is free in the bearing's plane, by its clearance or as a
+    bushing (in the build's joint set ``spec``, then in the case): read from jp where it is
+    needed rather than kept live through the right-hand side (a GPU thread's registers: 16 B
+    fewer spill stores, ``python -m clearsweep.ptx``)."""
+    return is_free(spec, jp, JOINT_O)
 
 
 @compiled(inline="always")
@@ -502,7 +502,7 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
-    if not has_clearance(spec, jp, JOINT_A):
+    if not is_free(spec, jp, JOINT_A):
         free = o_free(spec, jp)
         if free:
             rdd2 = (rdd2[0], 0.0, 0.0)
@@ -531,7 +531,7 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
                                   - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
         nc += 3
-    if not has_clearance(spec, jp, JOINT_B):
+    if not is_free(spec, jp, JOINT_B):
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
@@ -716,24 +716,32 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
         r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
     # joint A: ball = crank pin, socket = rod end (socket frame: rod)
-    if has_clearance(spec, jp, joint_a):
+    if is_free(spec, jp, joint_a):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                             (r3, v3, R3, w3, uA3), full, dg)
+        if is_bushing(spec, jp, joint_a):
+            fA, mA2, mA3, dA = bushing.contact(joint_a, model, (r2, v2, R2, w2, uA2),
+                                               (r3, v3, R3, w3, uA3), full, dg)
+        else:
+            fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
+                                                 (r3, v3, R3, w3, uA3), full, dg)
         F2 = add(F2, fA)
         N2 = add(N2, mA2)
         F3 = sub(F3, fA)
         N3 = sub(N3, mA3)
         pdiss += dA
     # joint B: ball = rod end, socket = slider (socket frame: slider)
-    if has_clearance(spec, jp, joint_b):
+    if is_free(spec, jp, joint_b):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                             (r4, v4, R4, w4, zero), full, dg)
+        if is_bushing(spec, jp, joint_b):
+            fB, mB3, mB4, dB = bushing.contact(joint_b, model, (r3, v3, R3, w3, uB3),
+                                               (r4, v4, R4, w4, zero), full, dg)
+        else:
+            fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
+                                                 (r4, v4, R4, w4, zero), full, dg)
         F3 = add(F3, fB)
         N3 = add(N3, mB3)
         F4 = sub(F4, fB)
@@ -748,9 +756,14 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         # with full, the contact force on the journal into dg, completed by the axial
         # reaction below (kept there rather than live across the solve: a GPU thread's
         # registers)
-        fO, mO2, _, dO = revolute.contact(joint_o, model,
-                                          (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                                          (gr, gv, gR, gw, zero), full, dg)
+        if is_bushing(spec, jp, joint_o):
+            fO, mO2, _, dO = bushing.contact(joint_o, model,
+                                             (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                                             (gr, gv, gR, gw, zero), full, dg)
+        else:
+            fO, mO2, _, dO = revolute.contact(joint_o, model,
+                                              (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                                              (gr, gv, gR, gw, zero), full, dg)
         F2 = add(F2, fO)
         N2 = add(N2, mO2)
         pdiss += dO
@@ -814,7 +827,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
-    if not has_clearance(spec, jp, joint_a):
+    if not is_free(spec, jp, joint_a):
         fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
         r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
@@ -822,7 +835,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
-    if not has_clearance(spec, jp, joint_b):
+    if not is_free(spec, jp, joint_b):
         fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
     # with O's clearance, lamO keeps the axial reaction only (its y, z vanish to rounding)
     torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
@@ -865,6 +878,9 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
+        if is_bushing(spec, jp, j):
+            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv))
+            continue
         if not has_clearance(spec, jp, j):
             continue
         if j == JOINT_P:
@@ -876,6 +892,37 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
                                         minv, mr_inv))
     dg[D_RATE] = rate
     return ST_OK
+
+
+#: Each joint's socket body's Euler angles in the state (layout.Y_*), -1 for the ground:
+#: the bushing's axis is that body's local x axis.
+SOCKET_PHI = tuple(-1 if body.y_phi is None else body.y_phi
+                   for joint in JOINTS for body in BODIES if body.name == joint.socket.body)
+
+#: Each joint's point on the rod (layout's attachment offsets as multiples of l3, along the
+#: rod's x axis), where its mobility is read for a bushing's rate: the rod carries one side
+#: of A and B, neither of O.
+ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
+                         if att.body == "rod"), 0.0) for joint in JOINTS)
+
+
+@compiled
+def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv):
+    """Largest stiff rate [1/s] of bushing j (``bushing.rate``) on the mobility of its point
+    (:func:`point_mobility`, every constraint in place), its axis the socket body's local x
+    axis (the global x axis on the ground). The point is read at the joint's attachment on
+    the rod, the bushing's small deflection left out."""
+    p = model.p
+    R3 = rotation(t3)
+    Jr = point_jacobian_rot(R3, (ROD_FACTOR[j] * p[P_L3], 0.0, 0.0), gmat(t3))
+    wp = point_mobility(j, Jr, solve.C, solve.L, nc, minv, mr_inv, solve.vz)
+    phi = SOCKET_PHI[j]
+    a = (1.0, 0.0, 0.0)
+    if phi >= 0:
+        Rs = rotation(trig(y[phi], y[phi + 1], y[phi + 2]))
+        a = (Rs[0], Rs[3], Rs[6])
+    t1, t2 = tangent_basis(a)
+    return bushing.rate(model.jp, j, wp, a, t1, t2)
 
 
 @compiled

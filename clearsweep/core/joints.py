@@ -68,7 +68,8 @@ INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
 
 #: Registered joint types: type name -> the module of ``clearsweep.core`` that implements
 #: it (that module's ``JOINT_TYPE`` is the name).
-JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic"}
+JOINT_TYPES = {"spherical": "spherical", "revolute": "revolute", "prismatic": "prismatic",
+               "bushing": "bushing"}
 
 #: One function of the joint-type protocol (docs/architecture.md, "Joint types"): its name,
 #: its parameters in order, the names of the values it returns (a tuple of that length), and

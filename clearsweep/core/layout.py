@@ -84,7 +84,14 @@ J_PEN_STOP = 18     # penetration stop [m] (docs/physics.md 4.3)
 J_FILM = 19         # lubricant film's viscous coefficient [N s/m] along the slip (O: Petroff); else 0
 J_BLOCK_LENGTH = 20  # block length 2a along the guide [m] (prismatic joints); else 0
 J_CORNER_RADIUS = 21  # radius r_c of the block's rounded edges [m] (prismatic joints); else 0
-N_JP = 22
+# an elastic bushing (core/bushing.py; 0 for the other types): the joint's coordinates are
+# free as a clearance joint's, its J_CLEARANCE 0 (no gap, no contact, no wear)
+J_BUSHING = 22      # 1.0 = the joint is an elastic bushing
+J_K_RADIAL = 23     # bushing stiffness across its axis [N/m]
+J_K_AXIAL = 24      # bushing stiffness along its axis [N/m] (0 at a revolute's place: axial ideal)
+J_C_RADIAL = 25     # bushing damping across its axis [N s/m]
+J_C_AXIAL = 26      # bushing damping along its axis [N s/m]
+N_JP = 27
 
 # --- state vector y ---------------------------------------------------------
 # q = [r2, phi2, r3, phi3, r4, phi4] (18), then qd (18), then two integrals.

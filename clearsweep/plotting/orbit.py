@@ -7,9 +7,10 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis import configured_clearances, guide_gap, value_text
+from ..analysis import bushing_joints, configured_clearances, guide_gap, value_text
 from .common import (
     QUANTITY_UNITS,
+    PlotError,
     _case_label,
     _cases,
     _clearance_joints,
@@ -71,7 +72,16 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     gap = guide_gap(ds)
     # a ball that stays in the centre gets no panel of a point at the origin; an ideal
     # joint's is not named either
-    named = _clearance_joints(ds, offset, "orbit")
+    # and a bushing's deflection (no clearance: no circle)
+    bushings = bushing_joints(ds)
+    try:
+        named = _clearance_joints(ds, offset, "orbit")
+    except PlotError:
+        if not bushings:
+            raise
+        named = []
+    named += [j for j in offset["joint"].values
+              if value_text(j) in bushings and value_text(j) not in map(value_text, named)]
     joints = [j for j in named if np.nan_to_num(offset.sel(joint=j).values).any()] or named
     empty = [value_text(j) for j in named if j not in joints]
     # in the unit of a clearance (common.QUANTITY_UNITS), whatever the orbit's size: the
@@ -129,7 +139,8 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(axis_label(offset, f"d_{a}", unit))
             ax.set_ylabel(axis_label(offset, f"d_{b}", unit))
-            ideal = "" if clearances else " (ideal joint)"
+            ideal = ("" if clearances else " (bushing)" if value_text(joint) in bushings
+                     else " (ideal joint)")
             where = ("journal in the bearing's plane, yz" if bearing
                      else "block across its guide, yz" if guide else f"{a}{b} plane")
             ax.set_title(f"{joint_name(value_text(joint))}{ideal}: {where}", fontsize="small")
