@@ -749,7 +749,9 @@ def _check_bushings(joints: Mapping[str, Any], source: str) -> None:
     """A bushing (``joints.X.type: bushing``) has no gap and no coated surface: a clearance
     or a coating with it is refused (either would be silently ignored)."""
     for joint, spec in joints.items():
-        if spec.get("type") != "bushing":
+        # a section's type other than its table type: the bushing, the one alternative
+        table_type = getattr(section_class(joint)(), "type", None)
+        if spec.get("type", table_type) == table_type:
             continue
         if spec["clearance"] != 0.0:
             raise ConfigError(f"joints.{joint}.clearance", spec["clearance"],

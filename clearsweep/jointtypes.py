@@ -82,6 +82,9 @@ class JointKind:
     columns: tuple[str, ...]
     #: the wear-depth report's own columns (the guide's tracks), () for none
     report_columns: tuple[str, ...] = ()
+    #: whether the joint has a gap (contact, impacts, wear); False: an elastic joint (the
+    #: bushing), ideal to the contact and wear figures, whose deflection is its orbit
+    gap: bool = True
 
 
 def _rows_polar(npolar: int) -> int:
@@ -90,6 +93,10 @@ def _rows_polar(npolar: int) -> int:
 
 def _rows_one(npolar: int) -> int:
     return 1
+
+
+def _rows_none(npolar: int) -> int:
+    return 0
 
 
 #: The registered joint types' host descriptions, by type name.
@@ -115,6 +122,13 @@ KINDS: Mapping[str, JointKind] = {
         columns=("J_BLOCK_LENGTH", "J_CORNER_RADIUS", "J_WIDTH", "J_HEIGHT", "J_CY", "J_CZ",
                  "J_X0", "J_XSPAN"),
         report_columns=("track_depth",)),
+    "bushing": JointKind(
+        name="bushing", centre="ball", surface="bushing", title="bushing", force_on="the ball",
+        orbit_gap="none", wear_figure="none", wear_profile=False, equal_bins=False,
+        map_rows=_rows_none, proj_rows=0, undo_rows=False, axial_ideal=False,
+        power_law=False, contact_law="linear spring-damper (bushing), no contact",
+        columns=("J_BUSHING", "J_K_RADIAL", "J_K_AXIAL", "J_C_RADIAL", "J_C_AXIAL"),
+        gap=False),
 }
 
 
@@ -129,6 +143,13 @@ COMMON_COLUMNS = tuple(name for name, value in vars(layout).items()
 def kind(type_name: str) -> JointKind:
     """The host description of the joint type ``type_name``."""
     return KINDS[type_name]
+
+
+def elastic(type_name: Any) -> bool:
+    """Whether ``type_name`` (a recorded ``joint_<J>_type``, any value) names a registered
+    type without a gap (:attr:`JointKind.gap`: the bushing)."""
+    found = KINDS.get(str(type_name))
+    return found is not None and not found.gap
 
 
 #: Each joint of the table's type by name.

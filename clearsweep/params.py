@@ -863,8 +863,15 @@ def journal_law(p: np.ndarray) -> float:
 
 
 def no_law(p: np.ndarray) -> float:
-    """A type whose contact is no point contact's law (the guide's edge lines)."""
-    raise ValueError("the guide's contact has no point contact law")
+    """A type whose contact is no point contact's law (the guide's edge lines; the
+    bushing, which has no contact)."""
+    raise ValueError("this joint type's contact has no point contact law")
+
+
+def row_type(jp: np.ndarray, j: int) -> str:
+    """The joint type that joint j of a packed case runs as (its ``HOST_HOOKS`` key): the
+    bushing where its row says so (``J_BUSHING``), else the joint table's type."""
+    return BUSHING if jp[j, L.J_BUSHING] != 0.0 else JOINTS[j].type
 
 
 def socket_worn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
@@ -953,6 +960,52 @@ class TypeHooks:
     spins: bool = False
 
 
+def bushing_fill(row: np.ndarray, joint: Any, preset: Preset) -> None:
+    """A bushing's own columns (core/bushing.py): the flag, the stiffness and the damping,
+    radial and axial (``joints.X.bushing_stiffness``, ``bushing_damping``)."""
+    kr, ka = joint.bushing_stiffness
+    cr, ca = joint.bushing_damping
+    row[L.J_BUSHING] = 1.0
+    row[L.J_K_RADIAL] = kr
+    row[L.J_K_AXIAL] = ka
+    row[L.J_C_RADIAL] = cr
+    row[L.J_C_AXIAL] = ca
+
+
+def bushing_rate(jp: np.ndarray, j: int, p: np.ndarray, preset: Preset, m_ref: float) -> float:
+    """A bushing's stiff rate [1/s] for the step bound: its stiffer spring and damper on
+    the lightest mass ``m_ref`` [kg] (``contact.stiff_rate``; the kernel's sub-step rule
+    reads the joint's own mobility, ``bushing.rate``)."""
+    from .core.contact import stiff_rate
+
+    row = jp[j]
+    return float(as_python(stiff_rate)(m_ref, max(row[L.J_K_RADIAL], row[L.J_K_AXIAL]),
+                                       max(row[L.J_C_RADIAL], row[L.J_C_AXIAL])))
+
+
+def no_sink(name: str, j: int, force: np.ndarray, p: np.ndarray, jp: np.ndarray,
+            limit: float) -> None:
+    """A joint without a gap sinks into no wall: no warning."""
+    return None
+
+
+def unseated(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np.ndarray,
+             omega: float, wmap: np.ndarray | None) -> np.ndarray:
+    """A bushing starts undeflected (docs/physics.md 3.8): no seated offset."""
+    return np.zeros(3)
+
+
+def unperturbed(nominal: np.ndarray, shift: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """A joint without clearance has no play for an ensemble member's start to take."""
+    return np.array(nominal, dtype=float)
+
+
+def unworn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
+           p: np.ndarray) -> tuple[float, bool]:
+    """A joint that does not wear: no depth, no coating worn through."""
+    return 0.0, False
+
+
 #: The registered joint types' host behaviour, by type name (``core.joints.JOINT_TYPES``;
 #: tests/test_jointtypes.py fails for a registered type without an entry).
 HOST_HOOKS: dict[str, TypeHooks] = {
@@ -967,6 +1020,10 @@ HOST_HOOKS: dict[str, TypeHooks] = {
     "prismatic": TypeHooks(fill=guide_fill, law=no_law, stop=guide_stop, sink=guide_sink,
                            seat=guide_seat, perturb=perturbed_block, worn=socket_worn,
                            rate=guide_rate),
+    # a bushing has no gap: no contact law, no penetration to stop, nothing to wear
+    "bushing": TypeHooks(fill=bushing_fill, law=no_law, stop=lambda row, p, bound: math.inf,
+                         sink=no_sink, seat=unseated, perturb=unperturbed, worn=unworn,
+                         rate=bushing_rate),
 }
 
 
@@ -1094,17 +1151,13 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
 
 
 def bushing_row(row: np.ndarray, joint: Any, kind: str) -> None:
-    """A bushing's columns of its jp row (core/bushing.py): the flag, the stiffness and the
-    damping, radial and axial; at a revolute's place (O) the axial pair 0: its axial motion
-    stays ideal."""
-    kr, ka = joint.bushing_stiffness
-    cr, ca = joint.bushing_damping
-    axial = 0.0 if joint_kind(kind).axial_ideal else 1.0
-    row[L.J_BUSHING] = 1.0
-    row[L.J_K_RADIAL] = kr
-    row[L.J_K_AXIAL] = axial * ka
-    row[L.J_C_RADIAL] = cr
-    row[L.J_C_AXIAL] = axial * ca
+    """A bushing's columns of its jp row (core/bushing.py) at a joint of the table's type
+    ``kind``: its own (:func:`bushing_fill`), the axial pair 0 where that type's axial
+    motion is ideal (a revolute's place, O)."""
+    HOST_HOOKS[BUSHING].fill(row, joint, PRESETS["realistic"])
+    if joint_kind(kind).axial_ideal:
+        row[L.J_K_AXIAL] = 0.0
+        row[L.J_C_AXIAL] = 0.0
 
 
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,

@@ -18,7 +18,7 @@ from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, res
 from .core import jointset
 from .core import layout as L
 from .core.work import Case, Out
-from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack
+from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack, row_type
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -37,8 +37,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
     own elastic law (the journal's at O, the corners' at P); a bushing's spring and damper
     (its stiffer and more damped direction) on that mass.
     """
-    from .core.contact import stiff_rate
-    from .core.joints import INDEX, JOINTS
+    from .core.joints import INDEX
 
     solver = cfg.solver
     dt = solver.dt
@@ -51,16 +50,9 @@ def check_step(cfg: Config, packed: Packed) -> None:
     if jointset.frees(packed.jp, INDEX["O"]):
         m_ref = 1.0 / (1.0 / m_ref + 1.0 / preset.crank_mass_kg)
     for j in range(L.N_JOINTS):
-        jp = packed.jp[j]
-        if jp[L.J_BUSHING] != 0.0:
-            # the bushing's spring and damper on the same mass (core/bushing.py)
-            rate = as_python(stiff_rate)(m_ref, max(jp[L.J_K_RADIAL], jp[L.J_K_AXIAL]),
-                                         max(jp[L.J_C_RADIAL], jp[L.J_C_AXIAL]))
-            bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
+        if not jointset.frees(packed.jp, j):
             continue
-        if jp[L.J_CLEARANCE] == 0.0:
-            continue
-        rate = HOST_HOOKS[JOINTS[j].type].rate(packed.jp, j, packed.p, preset, m_ref)
+        rate = HOST_HOOKS[row_type(packed.jp, j)].rate(packed.jp, j, packed.p, preset, m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
     if dt > limit:

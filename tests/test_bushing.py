@@ -124,7 +124,7 @@ def test_the_bushing_keeps_the_joint_type_signatures():
                 == inspect.signature(getattr(spherical, name).py_func))
     assert bushing.WEAR_SURFACE == ()
     ident = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-    geo = bushing.gap.py_func(np.zeros((4, L.N_JP)), 0, None, None, (1e-6, 0.0, 0.0),
+    geo = bushing.gap.py_func(np.zeros((4, L.N_JP)), 0, None, None, 0, (1e-6, 0.0, 0.0),
                               (0.0, 0.0, 0.0), ident)
     assert geo[0] == pytest.approx(1e-6) and geo[-1] == 0.0 and geo[-2] == 0.0
 

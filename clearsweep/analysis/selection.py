@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from ..ensemble import MEMBER_DIM
+from ..jointtypes import elastic
 from ..outputs import CASE_DIMS, has_member_statistics, kind_of
 from ..outputs import RESULTS_KINDS as _RESULTS_KINDS
 from ..schema import close_matches
@@ -415,7 +416,7 @@ def bushing_joints(ds: xr.Dataset) -> list[str]:
     if "joint" not in ds.coords:
         return []
     return [value_text(j) for j in ds["joint"].values
-            if str(ds.attrs.get(f"joint_{value_text(j)}_type", "")) == "bushing"]
+            if elastic(ds.attrs.get(f"joint_{value_text(j)}_type", ""))]
 
 
 def _drop_ideal_rows(rows: list[dict[str, object]], clearance: xr.DataArray | None) -> list:

@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 from ..ensemble import MEMBER_DIM
+from ..jointtypes import elastic
 from ..motion import CHAOS_THRESHOLD, HIGH_ORDER, MAX_PERIOD, PERIOD_NONE, PERIOD_UNKNOWN
 from ..outputs import SAMPLE_DIM  # noqa: F401
 from ..summary import (
@@ -151,7 +152,7 @@ def _bushing_lines(ds: xr.Dataset) -> list[str]:
     largest deflection where the run kept the joints' offsets."""
     lines = []
     for key, value in ds.attrs.items():
-        if not (key.startswith("joint_") and key.endswith("_type") and value_text(value) == "bushing"):
+        if not (key.startswith("joint_") and key.endswith("_type") and elastic(value_text(value))):
             continue
         name = key[len("joint_"):-len("_type")]
         k, c = ([float(ds.attrs.get(f"joint_{name}_bushing_{way}_{what}", math.nan))
