@@ -436,20 +436,39 @@ def slot_force(j, model, k, g, fel, stiff):
 @compiled
 def line_state(j, model, e, slider):
     """Edge line e's two corners (:func:`line_slots`): (their geometries, their elastic
-    loads f_a, f_b and the line's elastic energy U, :func:`line_load`). The line's modulus is
-    its first corner's surface (coated, or the base where the coating is worn through)."""
-    jp = model.jp
+    loads f_a, f_b and the line's elastic energy U, :func:`line_loads`)."""
     ka, kb = line_slots(e)
     ga = slot_geometry(j, model, ka, slider)
     gb = slot_geometry(j, model, kb, slider)
-    fa = 0.0
-    fb = 0.0
-    uel = 0.0
-    if ga.delta > 0.0 or gb.delta > 0.0:
-        ew, _, _ = surface(jp, j, ga.worn if ga.delta >= gb.delta else gb.worn)
-        kl = line_stiffness(jp, j, e // 2, ew)
-        fa, fb, uel = line_load(ga.delta, gb.delta, kl, jp[j, J_LENGTH])
+    fa, fb, uel = line_loads(model.jp, j, e, ga.delta, gb.delta, ga.worn, gb.worn)
     return ga, gb, fa, fb, uel
+
+
+@compiled
+def line_loads(jp, j, e, da, db, worn_a, worn_b):
+    """Edge line e's elastic loads on its corners and its energy (f_a, f_b, U,
+    :func:`line_load`) from its corners' penetrations da, db [m] and whether the wall's
+    coating is worn through under each: the line's modulus is its deeper corner's surface
+    (coated, or the base where the coating is worn through)."""
+    if not (da > 0.0 or db > 0.0):
+        return 0.0, 0.0, 0.0
+    ew, _, _ = surface(jp, j, worn_a if da >= db else worn_b)
+    return line_load(da, db, line_stiffness(jp, j, e // 2, ew), jp[j, J_LENGTH])
+
+
+@compiled
+def edge_loads(j, model, e, slider):
+    """Edge line e's loads and energy (f_a, f_b, U), as :func:`line_state` gives them,
+    keeping of its corners' geometries only their penetrations and worn flags.
+    :func:`contact` then forms each loaded corner's geometry again, one corner at a time:
+    with both corners' geometries held through the corners' forces, the device build's
+    spill stores doubled (issue 43, benchmarks/README.md)."""
+    ka, kb = line_slots(e)
+    ga = slot_geometry(j, model, ka, slider)
+    da = ga.delta
+    worn_a = ga.worn
+    gb = slot_geometry(j, model, kb, slider)
+    return line_loads(model.jp, j, e, da, gb.delta, worn_a, gb.worn)
 
 
 @compiled
@@ -535,16 +554,18 @@ def contact(j, model, slider, full, dg):
     rate = 0.0
     best = -math.inf
     for e in range(P_SLOTS // 2):
-        ga, gb, fa, fb, ue = line_state(j, model, e, slider)
+        fa, fb, ue = edge_loads(j, model, e, slider)
         ka, kb = line_slots(e)
         if not (fa > 0.0 or fb > 0.0 or full):
             continue
         uel += ue
         for end in range(2):
+            fel = fa if end == 0 else fb
+            if not (fel > 0.0 or full):
+                continue
             k = ka if end == 0 else kb
-            g = ga if end == 0 else gb
-            st = slot_force(j, model, k, g, fa if end == 0 else fb,
-                            line_stiff(jp, j, e, g.worn))
+            g = slot_geometry(j, model, k, slider)
+            st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
             if full:
                 rate = max(rate, slot_rate(j, model, k, st, R4))
                 if st.delta > best:
