@@ -472,6 +472,17 @@ def edge_loads(j, model, e, slider):
 
 
 @compiled
+def line_deltas(j, model, e, slider):
+    """The penetrations [m] of edge line e's two corners (:func:`line_slots`), as
+    :func:`slot_geometry` gives them: what :func:`accept` reads of a face's other line,
+    formed where a line wears instead of holding both lines' geometries through the wall's
+    corners (the device build's spill stores, issue 43)."""
+    ka, kb = line_slots(e)
+    return (slot_geometry(j, model, ka, slider).delta,
+            slot_geometry(j, model, kb, slider).delta)
+
+
+@compiled
 def line_stiff(jp, j, e, worn):
     """k_l L / 2 [N/m] of edge line e (:func:`slot_force`'s ``stiff``)."""
     ew, _, _ = surface(jp, j, worn)
@@ -652,63 +663,61 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     any_contact = False
     vimp = 0.0
     length = jp[j, J_LENGTH]
-    for wall in range(4):
-        lines = (line_state(j, model, 2 * wall, slider),
-                 line_state(j, model, 2 * wall + 1, slider))
-        for side in range(2):
-            e = 2 * wall + side
-            ga, gb, fa, fb, _ = lines[side]
-            oa, ob, _, _, _ = lines[1 - side]
-            ka, kb = line_slots(e)
-            vol_line = 0.0
-            for end in range(2):
-                k = ka if end == 0 else kb
-                g = ga if end == 0 else gb
-                fel = fa if end == 0 else fb
-                at = S_SLOT + k
-                if fel > 0.0:
-                    st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
-                    any_contact = True
-                    vimp = max(vimp, g.ddot)
-                    if wear_on and st.fn > 0.0:
-                        _, _, k_wear = surface(jp, j, g.worn)
-                        vol = p[P_AMPL] * k_wear * st.fn * g.slip * hs
-                        vol_line += vol
-                        row = line_cell(e)
-                        cur[row, 1] += vol * g.q[0]
-                        cur[j, 0] += vol
-                    dv0 = episode_impact_velocity(s[j, at], g.ddot, p[P_DV0_MIN],
-                                                  p[P_ONSET] != 0.0)
-                    if dv0 != s[j, at]:
-                        changed = True
-                    s[j, at] = dv0
-                elif s[j, at] != 0.0:
-                    s[j, at] = 0.0
+    for e in range(P_SLOTS // 2):
+        wall = e // 2
+        ga, gb, fa, fb, _ = line_state(j, model, e, slider)
+        ka, kb = line_slots(e)
+        vol_line = 0.0
+        for end in range(2):
+            k = ka if end == 0 else kb
+            g = ga if end == 0 else gb
+            fel = fa if end == 0 else fb
+            at = S_SLOT + k
+            if fel > 0.0:
+                st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
+                any_contact = True
+                vimp = max(vimp, g.ddot)
+                if wear_on and st.fn > 0.0:
+                    _, _, k_wear = surface(jp, j, g.worn)
+                    vol = p[P_AMPL] * k_wear * st.fn * g.slip * hs
+                    vol_line += vol
+                    row = line_cell(e)
+                    cur[row, 1] += vol * g.q[0]
+                    cur[j, 0] += vol
+                dv0 = episode_impact_velocity(s[j, at], g.ddot, p[P_DV0_MIN],
+                                              p[P_ONSET] != 0.0)
+                if dv0 != s[j, at]:
                     changed = True
-            if vol_line > 0.0:
-                # the part of the edge in contact, from the corner(s) beyond the wall
-                xa = ga.q[0]
-                xb = gb.q[0]
-                if ga.delta > 0.0 and gb.delta > 0.0:
-                    x0, x1 = xa, xb
-                elif ga.delta > 0.0:
-                    x0, x1 = xa, xa + (xb - xa) * ga.delta / (ga.delta - gb.delta)
-                else:
-                    x0, x1 = xb + (xa - xb) * gb.delta / (gb.delta - ga.delta), xb
-                ew, _, _ = surface(jp, j, ga.worn)
-                span = abs(x1 - x0)
-                mean = 0.5 * (ga.delta + gb.delta)
-                other = 0.5 * (oa.delta + ob.delta)
-                if oa.delta > 0.0 or ob.delta > 0.0:
-                    other = max(other, 0.0)
-                width = track_width(jp, j, wall, fa + fb, max(span, 1e-3 * length),
-                                    max(mean, max(ga.delta, gb.delta)), other, ew)
-                row = line_cell(e)
-                cur[row, 0] += vol_line
-                cur[row, 2] += vol_line * x0
-                cur[row, 3] += vol_line * x1
-                cur[row, 4] += vol_line * 0.5 * (ga.across + gb.across)
-                cur[row, 5] += vol_line * width
+                s[j, at] = dv0
+            elif s[j, at] != 0.0:
+                s[j, at] = 0.0
+                changed = True
+        if vol_line > 0.0:
+            # the part of the edge in contact, from the corner(s) beyond the wall
+            xa = ga.q[0]
+            xb = gb.q[0]
+            if ga.delta > 0.0 and gb.delta > 0.0:
+                x0, x1 = xa, xb
+            elif ga.delta > 0.0:
+                x0, x1 = xa, xa + (xb - xa) * ga.delta / (ga.delta - gb.delta)
+            else:
+                x0, x1 = xb + (xa - xb) * gb.delta / (gb.delta - ga.delta), xb
+            ew, _, _ = surface(jp, j, ga.worn)
+            span = abs(x1 - x0)
+            mean = 0.5 * (ga.delta + gb.delta)
+            # the face's other edge line: its corners' penetrations
+            oa, ob = line_deltas(j, model, e ^ 1, slider)
+            other = 0.5 * (oa + ob)
+            if oa > 0.0 or ob > 0.0:
+                other = max(other, 0.0)
+            width = track_width(jp, j, wall, fa + fb, max(span, 1e-3 * length),
+                                max(mean, max(ga.delta, gb.delta)), other, ew)
+            row = line_cell(e)
+            cur[row, 0] += vol_line
+            cur[row, 2] += vol_line * x0
+            cur[row, 3] += vol_line * x1
+            cur[row, 4] += vol_line * 0.5 * (ga.across + gb.across)
+            cur[row, 5] += vol_line * width
     if any_contact and s[j, S_DV0] == 0.0:
         # the joint's contact episode begins: one impact
         changed = True
