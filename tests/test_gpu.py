@@ -492,3 +492,58 @@ def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
         b = np.asarray(gpu[name].values, dtype=float)
         np.testing.assert_allclose(b, a, rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True,
                                    err_msg=name)
+
+
+#: The guide P with clearance on the device path (no case above has it): A, B and P with
+#: clearance, P's walls read bilinearly and worn (amplified), from the seated start, where
+#: the block rests on its walls from the first step; 300 steps on an [8, 12] map (two rows
+#: per wall). Its contact is the device's costliest (benchmarks/README.md, issue 43).
+GUIDE = {
+    "name": "gpu_guide", "store": "summary",
+    "base": {"joints": {"A": {"clearance": 2.5e-4}, "B": {"clearance": 2.5e-4},
+                        "P": {"clearance_y": 1.0e-4, "clearance_z": 1.0e-4}},
+             "wear": {"map": [8, 12], "amplification": 1.0e5, "interpolate": True},
+             "metrics": {"settle_time": 0.001},
+             "solver": {"duration": 0.003}},
+    "sweep": {"zip": [{"name": "variant", "labels": ["seated"], "initial.joints": ["seated"]}]},
+}
+
+GUIDE_SCRIPT = r"""
+import json, sys
+from clearsweep.core import device
+from clearsweep.sweeping import run_sweep
+
+assert device.SIMULATED
+run_sweep(json.loads(sys.argv[1]), sys.argv[2], backend="cuda", progress=False)
+"""
+
+
+@pytest.mark.slow
+def test_simulated_guide_agrees_with_the_cpu_backend(tmp_path):
+    """A case with clearance at the guide P runs the device path (``prismatic.contact``,
+    ``accept`` and ``deposit`` in the kernel's Python source) to the CPU backend's summaries
+    within the simulator's tolerance, the guide's walls worn on both."""
+    from clearsweep.summary import SUMMARY_ORDER
+    from clearsweep.sweeping import run_sweep
+
+    out = tmp_path / "guide.nc"
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-c", GUIDE_SCRIPT, json.dumps(GUIDE), str(out)],
+                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    cpu = run_sweep(GUIDE, workers=1, progress=False)
+    with xr.open_dataset(out) as gpu:
+        gpu = gpu.load()
+    assert [str(s) for s in gpu["status"].values] == [str(s) for s in cpu["status"].values] == ["ok"]
+    assert float(cpu["wear_volume"].sel(joint="P").max()) > 0.0
+    for name in SUMMARY_ORDER:
+        if name in ("wall_time", "status") or name not in cpu:
+            continue
+        if cpu[name].dtype.kind in "USO":
+            assert [str(v) for v in np.ravel(gpu[name].values)] == \
+                [str(v) for v in np.ravel(cpu[name].values)], name
+            continue
+        np.testing.assert_allclose(np.asarray(gpu[name].values, dtype=float),
+                                   np.asarray(cpu[name].values, dtype=float),
+                                   rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True, err_msg=name)

@@ -462,20 +462,50 @@ def slot_force(j, model, k, g, fel, stiff):
 @compiled
 def line_state(j, model, e, slider):
     """Edge line e's two corners (:func:`line_slots`): (their geometries, their elastic
-    loads f_a, f_b and the line's elastic energy U, :func:`line_load`). The line's modulus is
-    its first corner's surface (coated, or the base where the coating is worn through)."""
-    jp = model.jp
+    loads f_a, f_b and the line's elastic energy U, :func:`line_loads`)."""
     ka, kb = line_slots(e)
     ga = slot_geometry(j, model, ka, slider)
     gb = slot_geometry(j, model, kb, slider)
-    fa = 0.0
-    fb = 0.0
-    uel = 0.0
-    if ga.delta > 0.0 or gb.delta > 0.0:
-        ew, _, _ = surface(jp, j, ga.worn if ga.delta >= gb.delta else gb.worn)
-        kl = line_stiffness(jp, j, e // 2, ew)
-        fa, fb, uel = line_load(ga.delta, gb.delta, kl, jp[j, J_BLOCK_LENGTH])
+    fa, fb, uel = line_loads(model.jp, j, e, ga.delta, gb.delta, ga.worn, gb.worn)
     return ga, gb, fa, fb, uel
+
+
+@compiled
+def line_loads(jp, j, e, da, db, worn_a, worn_b):
+    """Edge line e's elastic loads on its corners and its energy (f_a, f_b, U,
+    :func:`line_load`) from its corners' penetrations da, db [m] and whether the wall's
+    coating is worn through under each: the line's modulus is its deeper corner's surface
+    (coated, or the base where the coating is worn through)."""
+    if not (da > 0.0 or db > 0.0):
+        return 0.0, 0.0, 0.0
+    ew, _, _ = surface(jp, j, worn_a if da >= db else worn_b)
+    return line_load(da, db, line_stiffness(jp, j, e // 2, ew), jp[j, J_BLOCK_LENGTH])
+
+
+@compiled
+def edge_loads(j, model, e, slider):
+    """Edge line e's loads and energy (f_a, f_b, U), as :func:`line_state` gives them,
+    keeping of its corners' geometries only their penetrations and worn flags.
+    :func:`contact` then forms each loaded corner's geometry again, one corner at a time:
+    with both corners' geometries held through the corners' forces, the device build's
+    spill stores doubled (issue 43, benchmarks/README.md)."""
+    ka, kb = line_slots(e)
+    ga = slot_geometry(j, model, ka, slider)
+    da = ga.delta
+    worn_a = ga.worn
+    gb = slot_geometry(j, model, kb, slider)
+    return line_loads(model.jp, j, e, da, gb.delta, worn_a, gb.worn)
+
+
+@compiled
+def line_deltas(j, model, e, slider):
+    """The penetrations [m] of edge line e's two corners (:func:`line_slots`), as
+    :func:`slot_geometry` gives them: what :func:`accept` reads of a face's other line,
+    formed where a line wears instead of holding both lines' geometries through the wall's
+    corners (the device build's spill stores, issue 43)."""
+    ka, kb = line_slots(e)
+    return (slot_geometry(j, model, ka, slider).delta,
+            slot_geometry(j, model, kb, slider).delta)
 
 
 @compiled
@@ -564,16 +594,18 @@ def contact(j, model, ball, socket, full, dg):
     rate = 0.0
     best = -math.inf
     for e in range(P_SLOTS // 2):
-        ga, gb, fa, fb, ue = line_state(j, model, e, slider)
+        fa, fb, ue = edge_loads(j, model, e, slider)
         ka, kb = line_slots(e)
         if not (fa > 0.0 or fb > 0.0 or full):
             continue
         uel += ue
         for end in range(2):
+            fel = fa if end == 0 else fb
+            if not (fel > 0.0 or full):
+                continue
             k = ka if end == 0 else kb
-            g = ga if end == 0 else gb
-            st = slot_force(j, model, k, g, fa if end == 0 else fb,
-                            line_stiff(jp, j, e, g.worn))
+            g = slot_geometry(j, model, k, slider)
+            st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
             if full:
                 rate = max(rate, slot_rate(j, model, k, st, R4))
                 if st.delta > best:
@@ -660,63 +692,61 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
     any_contact = False
     vimp = 0.0
     length = jp[j, J_BLOCK_LENGTH]
-    for wall in range(4):
-        lines = (line_state(j, model, 2 * wall, slider),
-                 line_state(j, model, 2 * wall + 1, slider))
-        for side in range(2):
-            e = 2 * wall + side
-            ga, gb, fa, fb, _ = lines[side]
-            oa, ob, _, _, _ = lines[1 - side]
-            ka, kb = line_slots(e)
-            vol_line = 0.0
-            for end in range(2):
-                k = ka if end == 0 else kb
-                g = ga if end == 0 else gb
-                fel = fa if end == 0 else fb
-                at = S_SLOT + k
-                if fel > 0.0:
-                    st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
-                    any_contact = True
-                    vimp = max(vimp, g.ddot)
-                    if wear_on and st.fn > 0.0:
-                        _, _, k_wear = surface(jp, j, g.worn)
-                        vol = p[P_AMPL] * k_wear * st.fn * g.slip * hs
-                        vol_line += vol
-                        row = line_cell(e)
-                        cur[row, 1] += vol * g.q[0]
-                        cur[j, 0] += vol
-                    dv0 = episode_impact_velocity(s[j, at], g.ddot, p[P_DV0_MIN],
-                                                  p[P_ONSET] != 0.0)
-                    if dv0 != s[j, at]:
-                        changed = True
-                    s[j, at] = dv0
-                elif s[j, at] != 0.0:
-                    s[j, at] = 0.0
+    for e in range(P_SLOTS // 2):
+        wall = e // 2
+        ga, gb, fa, fb, _ = line_state(j, model, e, slider)
+        ka, kb = line_slots(e)
+        vol_line = 0.0
+        for end in range(2):
+            k = ka if end == 0 else kb
+            g = ga if end == 0 else gb
+            fel = fa if end == 0 else fb
+            at = S_SLOT + k
+            if fel > 0.0:
+                st = slot_force(j, model, k, g, fel, line_stiff(jp, j, e, g.worn))
+                any_contact = True
+                vimp = max(vimp, g.ddot)
+                if wear_on and st.fn > 0.0:
+                    _, _, k_wear = surface(jp, j, g.worn)
+                    vol = p[P_AMPL] * k_wear * st.fn * g.slip * hs
+                    vol_line += vol
+                    row = line_cell(e)
+                    cur[row, 1] += vol * g.q[0]
+                    cur[j, 0] += vol
+                dv0 = episode_impact_velocity(s[j, at], g.ddot, p[P_DV0_MIN],
+                                              p[P_ONSET] != 0.0)
+                if dv0 != s[j, at]:
                     changed = True
-            if vol_line > 0.0:
-                # the part of the edge in contact, from the corner(s) beyond the wall
-                xa = ga.q[0]
-                xb = gb.q[0]
-                if ga.delta > 0.0 and gb.delta > 0.0:
-                    x0, x1 = xa, xb
-                elif ga.delta > 0.0:
-                    x0, x1 = xa, xa + (xb - xa) * ga.delta / (ga.delta - gb.delta)
-                else:
-                    x0, x1 = xb + (xa - xb) * gb.delta / (gb.delta - ga.delta), xb
-                ew, _, _ = surface(jp, j, ga.worn)
-                span = abs(x1 - x0)
-                mean = 0.5 * (ga.delta + gb.delta)
-                other = 0.5 * (oa.delta + ob.delta)
-                if oa.delta > 0.0 or ob.delta > 0.0:
-                    other = max(other, 0.0)
-                width = track_width(jp, j, wall, fa + fb, max(span, 1e-3 * length),
-                                    max(mean, max(ga.delta, gb.delta)), other, ew)
-                row = line_cell(e)
-                cur[row, 0] += vol_line
-                cur[row, 2] += vol_line * x0
-                cur[row, 3] += vol_line * x1
-                cur[row, 4] += vol_line * 0.5 * (ga.across + gb.across)
-                cur[row, 5] += vol_line * width
+                s[j, at] = dv0
+            elif s[j, at] != 0.0:
+                s[j, at] = 0.0
+                changed = True
+        if vol_line > 0.0:
+            # the part of the edge in contact, from the corner(s) beyond the wall
+            xa = ga.q[0]
+            xb = gb.q[0]
+            if ga.delta > 0.0 and gb.delta > 0.0:
+                x0, x1 = xa, xb
+            elif ga.delta > 0.0:
+                x0, x1 = xa, xa + (xb - xa) * ga.delta / (ga.delta - gb.delta)
+            else:
+                x0, x1 = xb + (xa - xb) * gb.delta / (gb.delta - ga.delta), xb
+            ew, _, _ = surface(jp, j, ga.worn)
+            span = abs(x1 - x0)
+            mean = 0.5 * (ga.delta + gb.delta)
+            # the face's other edge line: its corners' penetrations
+            oa, ob = line_deltas(j, model, e ^ 1, slider)
+            other = 0.5 * (oa + ob)
+            if oa > 0.0 or ob > 0.0:
+                other = max(other, 0.0)
+            width = track_width(jp, j, wall, fa + fb, max(span, 1e-3 * length),
+                                max(mean, max(ga.delta, gb.delta)), other, ew)
+            row = line_cell(e)
+            cur[row, 0] += vol_line
+            cur[row, 2] += vol_line * x0
+            cur[row, 3] += vol_line * x1
+            cur[row, 4] += vol_line * 0.5 * (ga.across + gb.across)
+            cur[row, 5] += vol_line * width
     if any_contact and s[j, S_DV0] == 0.0:
         # the joint's contact episode begins: one impact
         changed = True
