@@ -627,6 +627,90 @@ def kinetic_energy(p, y, t2, t3, t4):
     return ke
 
 
+@compiled(inline="always")
+def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4):
+    """The state's derivative dy: the velocities, then the accelerations of the crank
+    (rdd2, pdd2), the rod (zdd[0:5], its spin gdd3) and the slider (zdd[5], ydd4, zdd4)."""
+    qd = Y_QD
+    for k in range(N_Q):
+        dy[k] = y[qd + k]
+    dy[qd + Y_R2] = rdd2[0]
+    dy[qd + Y_R2 + 1] = rdd2[1]
+    dy[qd + Y_R2 + 2] = rdd2[2]
+    dy[qd + Y_PHI2] = pdd2[0]
+    dy[qd + Y_PHI2 + 1] = pdd2[1]
+    dy[qd + Y_PHI2 + 2] = pdd2[2]
+    dy[qd + Y_R3] = zdd[0]
+    dy[qd + Y_R3 + 1] = zdd[1]
+    dy[qd + Y_R3 + 2] = zdd[2]
+    dy[qd + Y_PHI3] = zdd[3]
+    dy[qd + Y_PHI3 + 1] = zdd[4]
+    dy[qd + Y_PHI3 + 2] = gdd3
+    dy[qd + Y_R4] = zdd[5]
+    dy[qd + Y_R4 + 1] = ydd4
+    dy[qd + Y_R4 + 2] = zdd4
+
+
+@compiled
+def end_diagnostics(model, spec, y, t2, t3, t4, dy, dg, solve, zdd, ydd4, zdd4, fA, fB, torque,
+                    lamO, pdiss, cons, nc, minv, mr_inv):
+    """The diagnostics of an evaluation at a (sub-)step's end (:func:`evaluate` with
+    ``full``): the slider's acceleration, the drive torque, each joint's force, the powers
+    and energies, the constraint violation ``cons`` completed with the crank's and the
+    slider's own constraints, and the stiff rate of the joints in or near contact
+    (docs/physics.md section 4)."""
+    p = model.p
+    jp = model.jp
+    grav = (p[P_G], p[P_G + 1], p[P_G + 2])
+    dg[D_SLIDER_ACC] = zdd[5]
+    dg[D_TORQUE] = torque
+    for i in range(3):
+        # the bearing's force on the crank: the ideal revolute's reaction, or O's contact
+        # force (stored with the contact) and the axial reaction
+        f_o = dg[D_JOINT_FORCE + 3 * JOINT_O + i] if o_free(spec, jp) else 0.0
+        dg[D_REACTION_O + i] = f_o - lamO[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
+        dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
+    if not p_free(spec, jp):
+        # the ideal guide's reaction on the slider, from the slider's equations: across the
+        # guide only (the guide takes no load along it)
+        dg[D_JOINT_FORCE + 3 * JOINT_P] = 0.0
+        dg[D_JOINT_FORCE + 3 * JOINT_P + 1] = p[P_M4] * (ydd4 - grav[1]) + fB[1]
+        dg[D_JOINT_FORCE + 3 * JOINT_P + 2] = p[P_M4] * (zdd4 - grav[2]) + fB[2]
+    dg[D_PDRIVE] = dy[Y_WORK]
+    dg[D_PDISS] = pdiss
+    dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
+    r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
+    r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
+    r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
+    dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
+    R2 = rotation(t2)
+    pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
+    if o_free(spec, jp):
+        cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
+    else:
+        cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
+    if not p_free(spec, jp):
+        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
+    dg[D_CONS] = cons
+    rate = 0.0
+    for j in range(N_JOINTS):
+        if is_bushing(spec, jp, j):
+            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv))
+            continue
+        if not has_clearance(spec, jp, j):
+            continue
+        if j == JOINT_P:
+            rate = max(rate, dg[D_PRATE])   # the corners' own, prismatic.contact
+            continue
+        delta = dg[D_DELTA + j]
+        if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
+            rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
+                                        minv, mr_inv))
+    dg[D_RATE] = rate
+
+
 #: Local variables that Numba must type as plain int64: a constant argument would otherwise
 #: compile the callee once per value (a Literal specialisation).
 _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64,
@@ -634,69 +718,32 @@ _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types
 
 
 @compiled(locals=_NOT_LITERAL)
-def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
-    """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
+def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
+    """The forces and moments on the crank, the rod and the slider from gravity and from the
+    joints with clearance or a bushing (each joint's type's ``contact``: its state into dg
+    with ``full``; the guide's block through :func:`free_slider`, which writes its free
+    accelerations' share into dy): (F2, N2, F3, N3, F4, fA, fB, pdiss, ok); fA, fB the
+    contact forces on the balls of A and B (zero where ideal), pdiss the power dissipated
+    [W], ok False where the guide's equations are singular.
 
-    Parameters
-    ----------
-    t : float
-        Time [s].
-    y : float64[38]
-        State (layout.Y_*): q, qd, drive work, dissipated energy.
-    model : work.Model
-        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[N_JOINTS, N_S], the
-        discrete contact state (impact velocity, contact angle) per joint; wmap:
-        float64[N_JOINTS, npolar, nazim], the wear maps [m].
-    dy : float64[38]
-        Output derivative.
-    dg : float64[N_D]
-        Output diagnostics (forces, contact state, energies, constraint violation and the
-        stiff rate of docs/physics.md section 4), written only with ``full``.
-    full : bool
-        An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
-        dopri5's inner stages need the derivative only.
-    solve : work.Solve
-        The float64 work arrays C, S, L (NZ x NZ) and vz (VZ_ROWS x NZ).
-    spec : int
-        The build's joint set (``jointset``: the joints that may have clearance), a
-        compile-time constant of the integrators' builds: the joints outside it are ideal
-        and their code is folded away. Default: every joint, each tested at run time.
-
-    Returns
-    -------
-    int
-        layout.ST_OK or layout.ST_SINGULAR.
-
-    Each body's Euler-angle sines and cosines are computed once (``trig``); its rotation,
-    angular velocity and the other products of them are formed again in each part that
-    uses them (:func:`body_frame`), from the state and the trig values, rather than all up
-    front: few values then stay live across the contacts and the solve, which is what a
-    GPU thread's registers hold (``python -m clearsweep.ptx``). The crank's and rod's
-    frames are the exception on a CPU, formed once before the contacts (forming them in each
-    contact cost the CPU about 3 %); a device build (``target.on_device``) forms them in
-    each contact.
-    """
+    Each body's rotation, angular velocity and the other products of its Euler angles'
+    sines and cosines (``t2``, ``t3``, ``t4``: ``trig``, computed once by :func:`evaluate`)
+    are formed again in each part that uses them (:func:`body_state`), rather than all up
+    front: few values then stay live across the contacts, which is what a GPU thread's
+    registers hold (``python -m clearsweep.ptx``). The crank's and rod's frames are the
+    exception on a CPU, formed once before the contacts (forming them in each contact cost
+    the CPU about 3 %); a device build (``target.on_device``) forms them in each contact."""
     p = model.p
     jp = model.jp
-    C = solve.C
-    S = solve.S
-    L = solve.L
-    vz = solve.vz
     joint_a = JOINT_A
     joint_b = JOINT_B
     joint_o = JOINT_O
     joint_p = JOINT_P
-    qd = Y_QD
-    t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
-    t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
-    t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
     uA2 = (0.0, 0.0, -0.5 * p[P_L2])
     uA3 = (-0.5 * p[P_L3], 0.0, 0.0)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     zero = (0.0, 0.0, 0.0)
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
-
-    # ---- applied forces: gravity, contact ----
     F2 = scale(p[P_M2], grav)
     N2 = zero
     F3 = scale(p[P_M3], grav)
@@ -772,9 +819,68 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     if p_free(spec, jp):
         fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy)
         if not ok:
-            return ST_SINGULAR
+            return F2, N2, F3, N3, F4, fA, fB, pdiss, False
         F4 = add(F4, fP)
         pdiss += dP
+    return F2, N2, F3, N3, F4, fA, fB, pdiss, True
+
+
+@compiled(locals=_NOT_LITERAL)
+def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
+    """Right-hand side dy = f(t, y) of the mechanism; with ``full``, diagnostics into dg.
+
+    Parameters
+    ----------
+    t : float
+        Time [s].
+    y : float64[38]
+        State (layout.Y_*): q, qd, drive work, dissipated energy.
+    model : work.Model
+        p, jp: packed parameters (layout.P_*, layout.J_*); s: float64[N_JOINTS, N_S], the
+        discrete contact state (impact velocity, contact angle) per joint; wmap:
+        float64[N_JOINTS, npolar, nazim], the wear maps [m].
+    dy : float64[38]
+        Output derivative.
+    dg : float64[N_D]
+        Output diagnostics (forces, contact state, energies, constraint violation and the
+        stiff rate of docs/physics.md section 4), written only with ``full``.
+    full : bool
+        An evaluation at a (sub-)step's end, whose diagnostics are used; RK4 stages and
+        dopri5's inner stages need the derivative only.
+    solve : work.Solve
+        The float64 work arrays C, S, L (NZ x NZ) and vz (VZ_ROWS x NZ).
+    spec : int
+        The build's joint set (``jointset``: the joints that may have clearance), a
+        compile-time constant of the integrators' builds: the joints outside it are ideal
+        and their code is folded away. Default: every joint, each tested at run time.
+
+    Returns
+    -------
+    int
+        layout.ST_OK or layout.ST_SINGULAR.
+
+    Each body's Euler-angle sines and cosines are computed once (``trig``); the frames
+    formed from them, where the loads need them, are :func:`applied_loads`' arrangement.
+    """
+    p = model.p
+    jp = model.jp
+    C = solve.C
+    S = solve.S
+    L = solve.L
+    vz = solve.vz
+    joint_a = JOINT_A
+    joint_b = JOINT_B
+    qd = Y_QD
+    t2 = trig(y[Y_PHI2], y[Y_PHI2 + 1], y[Y_PHI2 + 2])
+    t3 = trig(y[Y_PHI3], y[Y_PHI3 + 1], y[Y_PHI3 + 2])
+    t4 = trig(y[Y_PHI4], y[Y_PHI4 + 1], y[Y_PHI4 + 2])
+    uA2 = (0.0, 0.0, -0.5 * p[P_L2])
+
+    # ---- applied forces: gravity, the joints' contacts and bushings ----
+    F2, N2, F3, N3, F4, fA, fB, pdiss, ok = applied_loads(y, t2, t3, t4, model, spec, full, dg,
+                                                          dy)
+    if not ok:
+        return ST_SINGULAR
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
@@ -806,24 +912,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         ydd4 = vz[VZ_ZDD, 8]
         zdd4 = vz[VZ_ZDD, 9]
 
-    # ---- assemble qdd ----
-    for k in range(N_Q):
-        dy[k] = y[qd + k]
-    dy[qd + Y_R2] = rdd2[0]
-    dy[qd + Y_R2 + 1] = rdd2[1]
-    dy[qd + Y_R2 + 2] = rdd2[2]
-    dy[qd + Y_PHI2] = pdd2[0]
-    dy[qd + Y_PHI2 + 1] = pdd2[1]
-    dy[qd + Y_PHI2 + 2] = pdd2[2]
-    dy[qd + Y_R3] = zdd[0]
-    dy[qd + Y_R3 + 1] = zdd[1]
-    dy[qd + Y_R3 + 2] = zdd[2]
-    dy[qd + Y_PHI3] = zdd[3]
-    dy[qd + Y_PHI3 + 1] = zdd[4]
-    dy[qd + Y_PHI3 + 2] = gdd3
-    dy[qd + Y_R4] = zdd[5]
-    dy[qd + Y_R4 + 1] = ydd4
-    dy[qd + Y_R4 + 2] = zdd4
+    assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4)
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
@@ -844,53 +933,8 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     if not full:
         return ST_OK
 
-    dg[D_SLIDER_ACC] = zdd[5]
-    dg[D_TORQUE] = torque
-    for i in range(3):
-        # the bearing's force on the crank: the ideal revolute's reaction, or O's contact
-        # force (stored with the contact) and the axial reaction
-        f_o = dg[D_JOINT_FORCE + 3 * JOINT_O + i] if o_free(spec, jp) else 0.0
-        dg[D_REACTION_O + i] = f_o - lamO[i]
-        dg[D_JOINT_FORCE + 3 * JOINT_A + i] = fA[i]
-        dg[D_JOINT_FORCE + 3 * JOINT_B + i] = fB[i]
-        dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
-    if not p_free(spec, jp):
-        # the ideal guide's reaction on the slider, from the slider's equations: across the
-        # guide only (the guide takes no load along it)
-        dg[D_JOINT_FORCE + 3 * JOINT_P] = 0.0
-        dg[D_JOINT_FORCE + 3 * JOINT_P + 1] = p[P_M4] * (ydd4 - grav[1]) + fB[1]
-        dg[D_JOINT_FORCE + 3 * JOINT_P + 2] = p[P_M4] * (zdd4 - grav[2]) + fB[2]
-    dg[D_PDRIVE] = dy[Y_WORK]
-    dg[D_PDISS] = pdiss
-    dg[D_KE] = kinetic_energy(p, y, t2, t3, t4)
-    r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
-    r3 = (y[Y_R3], y[Y_R3 + 1], y[Y_R3 + 2])
-    r4 = (y[Y_R4], y[Y_R4 + 1], y[Y_R4 + 2])
-    dg[D_PE_GRAV] = -(p[P_M2] * dot(grav, r2) + p[P_M3] * dot(grav, r3) + p[P_M4] * dot(grav, r4))
-    R2 = rotation(t2)
-    pO = add(r2, mv(R2, (0.0, 0.0, 0.5 * p[P_L2])))
-    if o_free(spec, jp):
-        cons = max(cons, abs(pO[0]))    # the axial position only: y, z move in the bearing
-    else:
-        cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
-    if not p_free(spec, jp):
-        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
-    dg[D_CONS] = cons
-    rate = 0.0
-    for j in range(N_JOINTS):
-        if is_bushing(spec, jp, j):
-            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv))
-            continue
-        if not has_clearance(spec, jp, j):
-            continue
-        if j == JOINT_P:
-            rate = max(rate, dg[D_PRATE])   # the corners' own, prismatic.contact
-            continue
-        delta = dg[D_DELTA + j]
-        if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-            rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
-                                        minv, mr_inv))
-    dg[D_RATE] = rate
+    end_diagnostics(model, spec, y, t2, t3, t4, dy, dg, solve, zdd, ydd4, zdd4, fA, fB,
+                    torque, lamO, pdiss, cons, nc, minv, mr_inv)
     return ST_OK
 
 
