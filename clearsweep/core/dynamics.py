@@ -652,15 +652,20 @@ def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4):
 
 
 @compiled
-def end_diagnostics(model, spec, y, t2, t3, t4, dy, dg, solve, zdd, ydd4, zdd4, fA, fB, torque,
-                    lamO, pdiss, cons, nc, minv, mr_inv):
+def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     """The diagnostics of an evaluation at a (sub-)step's end (:func:`evaluate` with
     ``full``): the slider's acceleration, the drive torque, each joint's force, the powers
-    and energies, the constraint violation ``cons`` completed with the crank's and the
-    slider's own constraints, and the stiff rate of the joints in or near contact
-    (docs/physics.md section 4)."""
+    and energies, the constraint violation completed with the crank's and the slider's own
+    constraints, and the stiff rate of the joints in or near contact (docs/physics.md
+    section 4). ``trigs``: the bodies' (t2, t3, t4); ``acc``: the solve's (zdd, ydd4,
+    zdd4); ``loads``: (fA, fB, torque, lamO, pdiss); ``mobility``: (cons, nc, minv,
+    mr_inv), the ideal joints' violation and the solve's rows and inverse masses."""
     p = model.p
     jp = model.jp
+    t2, t3, t4 = trigs
+    zdd, ydd4, zdd4 = acc
+    fA, fB, torque, lamO, pdiss = loads
+    cons, nc, minv, mr_inv = mobility
     grav = (p[P_G], p[P_G + 1], p[P_G + 2])
     dg[D_SLIDER_ACC] = zdd[5]
     dg[D_TORQUE] = torque
@@ -933,8 +938,8 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     if not full:
         return ST_OK
 
-    end_diagnostics(model, spec, y, t2, t3, t4, dy, dg, solve, zdd, ydd4, zdd4, fA, fB,
-                    torque, lamO, pdiss, cons, nc, minv, mr_inv)
+    end_diagnostics(model, spec, y, (t2, t3, t4), dy, dg, solve, (zdd, ydd4, zdd4),
+                    (fA, fB, torque, lamO, pdiss), (cons, nc, minv, mr_inv))
     return ST_OK
 
 
