@@ -35,14 +35,20 @@ from clearsweep.core import jointset
 #: and the bearing film cost nothing (a9b5643: 4,044). With the corners' geometries formed
 #: one at a time (``prismatic.edge_loads``), 2,608 bytes, and with ``prismatic.accept``
 #: reading the face's other line's penetrations alone (``line_deltas``), 2,456 (issue 43;
-#: benchmarks/README.md); the bound is that with 5 % of room for ptxas' allocation moving
-#: with unrelated edits.
-SPILL_STORE_BOUND = 2580
+#: benchmarks/README.md). The bushing's five packed columns (N_JP 27) and the guide's own
+#: two made it 2,536; ``dynamics.evaluate`` split into ``applied_loads``, ``assemble_qdd``
+#: and ``end_diagnostics`` 2,648 (and the A,B build 1,192 -> 992). The bound is that with
+#: 5 % of room for ptxas' allocation moving with unrelated edits.
+SPILL_STORE_BOUND = 2780
+
+#: The issue's goal for the two-clearance cases' build (A,B): below 1,024 bytes of spill
+#: stores per thread; 992 since ``dynamics.evaluate`` was split (benchmarks/README.md).
+AB_SPILL_STORE_GOAL = 1024
 
 #: The kernel built for clearance at A and B alone (the two-clearance cases' joint set, O and
 #: P folded away: core/jointset.py) spills less than the generic one: 1,252 bytes against
 #: 2,532 structure-of-arrays, 1,660 against 3,076 case by case (benchmarks/README.md,
-#: "Builds per joint set"). The issue's goal, below 1,024, is not met.
+#: "Builds per joint set"); 992 since evaluate was split, within the goal below.
 
 LOG = """\
 ptxas info    : Compiling entry function '_Z9run_cases' for 'sm_90'
@@ -389,3 +395,4 @@ def test_the_build_for_a_and_b_spills_less_than_the_generic_one(request, report,
         print(f"\nPTX (clearance at A,B) {built.line()}")
     assert 0 < built.registers <= 255
     assert built.spill_store_bytes < report.spill_store_bytes, (built.line(), report.line())
+    assert built.spill_store_bytes < AB_SPILL_STORE_GOAL, built.line()
