@@ -651,7 +651,7 @@ def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4):
     dy[qd + Y_R4 + 2] = zdd4
 
 
-@compiled
+@compiled(inline="always")
 def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     """The diagnostics of an evaluation at a (sub-)step's end (:func:`evaluate` with
     ``full``): the slider's acceleration, the drive torque, each joint's force, the powers
@@ -722,7 +722,7 @@ _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types
                 "joint_p": types.int64}
 
 
-@compiled(locals=_NOT_LITERAL)
+@compiled(inline="always", locals=_NOT_LITERAL)
 def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
     """The forces and moments on the crank, the rod and the slider from gravity and from the
     joints with clearance or a bushing (each joint's type's ``contact``: its state into dg
