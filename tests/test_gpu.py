@@ -81,30 +81,23 @@ xr.testing.assert_identical(drop_timing(gpu), drop_timing(again))
 SIMULATOR_RTOL = 1e-9
 
 
-@pytest.fixture(scope="module")
-def simulated(tmp_path_factory):
-    from clearsweep.sweeping import run_sweep
-
-    out = tmp_path_factory.mktemp("gpu_sim") / "gpu.nc"
+def run_simulated(script: str, *argv: str) -> subprocess.CompletedProcess:
+    """``script`` (with ``argv``) run in the CUDA simulator, in a process of its own (the
+    simulator is chosen when numba is imported); fails the test where it fails."""
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
            "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(SWEEP), str(out)],
-                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
+    proc = subprocess.run([sys.executable, "-c", script, *argv], capture_output=True,
+                          text=True, env=env, cwd=ROOT, timeout=600)
     assert proc.returncode == 0, proc.stderr[-4000:]
-    cpu = run_sweep(SWEEP, workers=1, progress=False)
-    with xr.open_dataset(out) as gpu:
-        return cpu, gpu.load()
+    return proc
 
 
-@pytest.mark.slow
-def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
+def assert_summaries_agree(cpu, gpu) -> list[str]:
+    """Every summary variable of the CPU backend's results ``cpu`` (but the wall time and the
+    status) in the device's ``gpu``: class names word for word, numbers of the same shape,
+    NaN in the same places and within :data:`SIMULATOR_RTOL`. Returns the names compared."""
     from clearsweep.summary import SUMMARY_ORDER
 
-    cpu, gpu = simulated
-    assert [str(s) for s in cpu["status"].values] == ["ok"] * 6
-    assert [str(s) for s in gpu["status"].values] == ["ok"] * 6
-    # the bearing case wears its bearing, on both paths
-    assert float(cpu["wear_volume"].sel(variant="ABO", joint="O")) > 0.0
     compared = []
     for name in SUMMARY_ORDER:
         if name in ("wall_time", "status") or name not in cpu:
@@ -121,6 +114,29 @@ def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
         np.testing.assert_allclose(b, a, rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True,
                                    err_msg=name)
         compared.append(name)
+    return compared
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    from clearsweep.sweeping import run_sweep
+
+    out = tmp_path_factory.mktemp("gpu_sim") / "gpu.nc"
+    run_simulated(SCRIPT, json.dumps(SWEEP), str(out))
+    cpu = run_sweep(SWEEP, workers=1, progress=False)
+    with xr.open_dataset(out) as gpu:
+        return cpu, gpu.load()
+
+
+@pytest.mark.slow
+def test_simulated_cuda_summaries_agree_with_the_cpu_backend(simulated):
+
+    cpu, gpu = simulated
+    assert [str(s) for s in cpu["status"].values] == ["ok"] * 6
+    assert [str(s) for s in gpu["status"].values] == ["ok"] * 6
+    # the bearing case wears its bearing, on both paths
+    assert float(cpu["wear_volume"].sel(variant="ABO", joint="O")) > 0.0
+    compared = assert_summaries_agree(cpu, gpu)
     assert "slider_acceleration_peak_settled" in compared
     assert "wear_depth_axis_max" in compared
     assert "impact_count" in compared
@@ -248,11 +264,7 @@ def test_simulated_layouts_agree_bit_for_bit():
     and the case-by-case one compute the same bits in the simulator, where both run the
     kernel's Python source: clearance at A and B, at B and O from the centred start
     (impacts), and ideal joints, in one batch."""
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", LAYOUT_SCRIPT], capture_output=True, text=True,
-                          env=env, cwd=ROOT, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-4000:]
+    proc = run_simulated(LAYOUT_SCRIPT)
     assert "compared 3 cases" in proc.stdout
 
 
@@ -418,11 +430,7 @@ def test_shared_parameters_are_read_from_the_batchs_one_row():
     holds the others alone (B's clearance and the crank speed here, and what they set), so
     the kernel can only have read the shared ones from that row: the results are the
     case-by-case layout's to the bit in the simulator."""
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", SHARED_SCRIPT], capture_output=True,
-                          text=True, env=env, cwd=ROOT, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-4000:]
+    proc = run_simulated(SHARED_SCRIPT)
     assert "shared" in proc.stdout
 
 
@@ -463,15 +471,10 @@ def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
     the build of B and O (members and sweep cases of one joint set share a launch, whose
     maps hold B's and O's rows); every summary agrees with the CPU backend's within the
     simulator's tolerance."""
-    from clearsweep.summary import SUMMARY_ORDER
     from clearsweep.sweeping import run_sweep
 
     out = tmp_path / "mixed.nc"
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", MIXED_SCRIPT, json.dumps(MIXED), str(out)],
-                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-4000:]
+    proc = run_simulated(MIXED_SCRIPT, json.dumps(MIXED), str(out))
     launches = json.loads(proc.stdout.strip().splitlines()[-1])
     b, bo = jointset.named("B"), jointset.named("B", "O")
     assert sorted((n, layout, spec) for n, layout, _, spec in launches) == \
@@ -481,17 +484,7 @@ def test_sweep_cases_and_ensemble_members_share_one_launch(tmp_path):
         gpu = gpu.load()
     assert gpu.sizes["member"] == 2 and gpu.sizes["O_clearance"] == 3
     assert float(gpu["wear_volume"].sel(joint="O").isel(O_clearance=1).min()) > 0.0
-    for name in SUMMARY_ORDER:
-        if name in ("wall_time", "status") or name not in cpu:
-            continue
-        if cpu[name].dtype.kind in "USO":       # a class name (motion_class): the same words
-            assert [str(v) for v in np.ravel(gpu[name].values)] == \
-                [str(v) for v in np.ravel(cpu[name].values)], name
-            continue
-        a = np.asarray(cpu[name].values, dtype=float)
-        b = np.asarray(gpu[name].values, dtype=float)
-        np.testing.assert_allclose(b, a, rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True,
-                                   err_msg=name)
+    assert_summaries_agree(cpu, gpu)
 
 
 #: The guide P with clearance on the device path (no case above has it): A, B and P with
@@ -523,27 +516,13 @@ def test_simulated_guide_agrees_with_the_cpu_backend(tmp_path):
     """A case with clearance at the guide P runs the device path (``prismatic.contact``,
     ``accept`` and ``deposit`` in the kernel's Python source) to the CPU backend's summaries
     within the simulator's tolerance, the guide's walls worn on both."""
-    from clearsweep.summary import SUMMARY_ORDER
     from clearsweep.sweeping import run_sweep
 
     out = tmp_path / "guide.nc"
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1", "NUMBA_DISABLE_JIT": "1",
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", GUIDE_SCRIPT, json.dumps(GUIDE), str(out)],
-                          capture_output=True, text=True, env=env, cwd=ROOT, timeout=600)
-    assert proc.returncode == 0, proc.stderr[-4000:]
+    run_simulated(GUIDE_SCRIPT, json.dumps(GUIDE), str(out))
     cpu = run_sweep(GUIDE, workers=1, progress=False)
     with xr.open_dataset(out) as gpu:
         gpu = gpu.load()
     assert [str(s) for s in gpu["status"].values] == [str(s) for s in cpu["status"].values] == ["ok"]
     assert float(cpu["wear_volume"].sel(joint="P").max()) > 0.0
-    for name in SUMMARY_ORDER:
-        if name in ("wall_time", "status") or name not in cpu:
-            continue
-        if cpu[name].dtype.kind in "USO":
-            assert [str(v) for v in np.ravel(gpu[name].values)] == \
-                [str(v) for v in np.ravel(cpu[name].values)], name
-            continue
-        np.testing.assert_allclose(np.asarray(gpu[name].values, dtype=float),
-                                   np.asarray(cpu[name].values, dtype=float),
-                                   rtol=SIMULATOR_RTOL, atol=0.0, equal_nan=True, err_msg=name)
+    assert_summaries_agree(cpu, gpu)
