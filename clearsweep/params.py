@@ -1150,11 +1150,11 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
     return out
 
 
-def bushing_row(row: np.ndarray, joint: Any, kind: str) -> None:
+def bushing_row(row: np.ndarray, joint: Any, kind: str, preset: Preset) -> None:
     """A bushing's columns of its jp row (core/bushing.py) at a joint of the table's type
     ``kind``: its own (:func:`bushing_fill`), the axial pair 0 where that type's axial
     motion is ideal (a revolute's place, O)."""
-    HOST_HOOKS[BUSHING].fill(row, joint, PRESETS["realistic"])
+    HOST_HOOKS[BUSHING].fill(row, joint, preset)
     if joint_kind(kind).axial_ideal:
         row[L.J_K_AXIAL] = 0.0
         row[L.J_C_AXIAL] = 0.0
@@ -1244,7 +1244,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
         HOST_HOOKS[kind].fill(jp[j], joint, preset)
         if clear >> (L.N_JOINTS + j) & 1:
-            bushing_row(jp[j], joint, kind)
+            bushing_row(jp[j], joint, kind, preset)
         if c > 0.0:
             jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
                                                    contact.load_bound)
