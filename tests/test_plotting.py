@@ -95,6 +95,14 @@ def test_slider_angle_axis_in_degrees(tmp_path, case):
     assert line.get_xdata()[-1] == pytest.approx(np.degrees(syn.OMEGA_RAD_S * syn.DURATION_S))
 
 
+def test_forces_panels_say_which_body_the_joint_force_acts_on(tmp_path, case):
+    """Each joint's panels name the body its force acts on: the ball's (A, B), the slider
+    (the guide P); the bearing O's is the reaction on the crank."""
+    fig = plot(case, "forces", tmp_path / "f.png", dpi=TEST_DPI)
+    titles = {ax.get_title().split(":")[0] for ax in fig.axes if ax.get_title()}
+    assert {"joint A (on the ball)", "joint B (on the ball)", "guide P (on the slider)"} <= titles
+
+
 def test_sweep_heatmap_and_lines(tmp_path, sweep_ds):
     heat = plot(sweep_ds, "sweep", tmp_path / "h.png", metric="wear_depth_axis_max", dpi=TEST_DPI)
     # joint x axis panels; joint A's wear about z is 0 everywhere: no panel, the title says so
