@@ -410,7 +410,7 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
 def life_time_text(cfg: Config, steps_per_block: int) -> str:
     """The time of the life run ``cfg``, bound and expected (:func:`forecast_blocks`):
     ``"at most 2e+07 RK4 steps, at most about 1.33 min on one core (...); expected about
-    40 s: 101 blocks to the wear limit (...)"``."""
+    11 s: 40 blocks to 1e+06 revolutions at the wear pace of ..."``."""
     steps = cfg.life.max_blocks * steps_per_block
     forecast = forecast_blocks(cfg)
     start = plan_costs().run_start_s
