@@ -6,13 +6,17 @@ ideal step, plus each clearance joint's share (a spherical joint's ball and sock
 journal, P's block on the guide's faces), plus each saved row a ``store: full`` part keeps, plus a
 fixed cost per case; a life block adds its jump (the wear rates, the map grown, the
 block's summary). This script measures each of those on this machine, in this process, the
-way a sweep's worker runs a case (simulate, summarise, write its part), and writes them:
+way a sweep's worker runs a case (simulate, summarise, write its part), and writes them.
+It also fits a socket's wear pace to configs/life.yaml's run (:func:`fit_wear_pace`), with
+which a life plan counts the blocks to ``life.cycles`` (clearsweep.budget.WearPace):
 
     .venv/bin/python benchmarks/calibrate_plan.py              # measure and write the file
     .venv/bin/python benchmarks/calibrate_plan.py --dry-run    # measure and print only
     .venv/bin/python benchmarks/calibrate_plan.py --compile    # also a cold compile (~40 s)
+    .venv/bin/python benchmarks/calibrate_plan.py --wear-pace  # the wear pace alone (~15 s)
 
-Re-run it when the kernel changes (a joint type, the step, the outputs): the file records
+Re-run it when the kernel changes (a joint type, the step, the outputs, the contact or
+wear laws, which move the wear pace): the file records
 the date, the machine, the load average and the kernel's cache key it was measured under.
 Run from the repository root with nothing else running, and check the plans against whole
 runs afterwards (benchmarks/README.md, "Plans against measured times").
@@ -22,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import os
 import platform
 import statistics
@@ -33,7 +38,7 @@ import time
 from pathlib import Path
 
 from clearsweep.budget import PLAN_COSTS_FILE, clearance_joints
-from clearsweep.config import load_config
+from clearsweep.config import load_config, resolve_materials
 from clearsweep.core.numba_compat import cache_dir
 from clearsweep.service_life import block_steps, life
 from clearsweep.simulation import prepare_kernel
@@ -153,6 +158,63 @@ def measure_blocks(costs: dict, repeats: int) -> float:
     print(f"  life block ({clearance_joints(cfg)}): {per_block:.3f} s ({steps:,} steps at "
           f"{step * 1e6:.3f} us, and {jump:.3f} s for the jump and the block's bookkeeping)")
     return max(0.0, jump)
+
+
+#: The life run a socket's wear pace is fitted to (WearPace, clearsweep/budget.py), and its joint.
+PACE_CONFIG, PACE_JOINT = "configs/life.yaml", "B"
+
+
+def fit_wear_pace(ds, cfg, joint: str = PACE_JOINT) -> dict:
+    """A socket's wear pace (clearsweep.budget.WearPace) from a life run ``ds`` of ``cfg``
+    that reached its ``life.cycles``: r0 the deepest bin of ``joint`` after the first block
+    per revolution; K such that the jumps at r(h) = K / (K / r0 + h), each the allowance
+    a_k over the rate at the allowances H_k grown before it, sum to the revolutions the
+    run's uncut jumps took: dN_k = a_k / r0 + a_k H_k / K, so
+    K = sum(a_k H_k) / sum(dN_k - a_k / r0). The run's own jumps, not its depths: the bin
+    that limits a jump is not always the deepest, and what a plan needs is when the
+    jumps reach life.cycles."""
+    j = [str(x) for x in ds["joint"].values].index(joint)
+    lc = cfg.life
+    jc = getattr(cfg.joints, joint)
+    coating = jc.coating_thickness if jc.coating != "none" else math.inf
+    revs = float(ds["block_revolutions"].values[0])
+    r0 = float(ds["wear_depth_max"].values[0, j]) / revs
+    jumps = ds["jump_revolutions"].values
+    cycles = ds["cycle"].values
+    grown = spent = weighted = 0.0
+    used = 0
+    for k, jump in enumerate(jumps):
+        if not jump > 0.0 or cycles[k] + jump + revs >= lc.cycles * (1.0 - 1e-9):
+            break           # the last jump is cut to end at life.cycles
+        step = lc.jump_clearance_fraction * jc.clearance
+        if grown < coating:
+            step = min(step, lc.jump_coating_fraction * max(coating - grown,
+                                                            lc.jump_coating_fraction * coating))
+        weighted += step * grown
+        spent += float(jump) - step / r0
+        grown += step
+        used += 1
+    if used < 2 or not (weighted > 0.0 and spent > 0.0 and r0 > 0.0):
+        raise SystemExit(f"the wear pace needs a run that jumps at least twice; got {used} jumps")
+    material = jc.coating if jc.coating != "none" else "steel"
+    k = jc.wear_coefficient
+    k = resolve_materials(cfg)[material].wear_coefficient_m2_per_N if k is None else k
+    return {"first_rate_m": r0, "growth_m2": weighted / spent, "clearance_m": jc.clearance,
+            "wear_coefficient_m2_per_N": k * cfg.wear.amplification,
+            "reference": f"{PACE_CONFIG}, joint {joint}: {ds.sizes['cycle']} blocks to "
+                         f"{float(cycles[-1]):.4g} revolutions ({used} jumps fitted)"}
+
+
+def measure_wear_pace() -> dict:
+    """Run configs/life.yaml (about 12 s of CPU, kernel cached) and fit its wear pace."""
+    cfg = load_config(PACE_CONFIG)
+    began = time.process_time()
+    ds = life(cfg)
+    pace = fit_wear_pace(ds, cfg)
+    print(f"  wear pace ({PACE_CONFIG}, {time.process_time() - began:.1f} s): "
+          f"r0 {pace['first_rate_m']:.4g} m a revolution, K {pace['growth_m2']:.4g} m^2 "
+          f"a revolution; {pace['reference']}")
+    return pace
 
 
 def _reliability_base() -> dict:
@@ -278,10 +340,17 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--compile", action="store_true", help="measure a cold compile too")
     parser.add_argument("--dry-run", action="store_true", help="print, do not write the file")
+    parser.add_argument("--wear-pace", action="store_true",
+                        help="measure the wear pace alone; keep the file's other costs")
     parser.add_argument("-o", "--output", default=str(PLAN_COSTS_FILE))
     args = parser.parse_args()
     load_before = os.getloadavg()
     prepare_kernel("rk4")
+    if args.wear_pace:
+        costs = kept_costs()
+        costs["wear_pace"] = measure_wear_pace()
+        write(args, costs, load_before, os.getloadavg())
+        return
     with tempfile.TemporaryDirectory() as tmp:
         print("cost per step and case (a worker's case: simulate, summarise, write its part):")
         costs = measure_steps(args.repeats, Path(tmp))
@@ -290,8 +359,29 @@ def main() -> None:
     costs.update(measure_start(costs, max(1, args.repeats - 1)))
     if args.compile:
         costs["compile_s"] = measure_compile()
+    costs["wear_pace"] = measure_wear_pace()
     load_after = os.getloadavg()
     write(args, costs, load_before, load_after)
+
+
+def kept_costs() -> dict:
+    """The current file's costs (``--wear-pace``: only the pace is measured again), with
+    when and where they were measured."""
+    from clearsweep.budget import read_plan_costs
+
+    old = read_plan_costs()
+    costs = {name: getattr(old, name) for name in
+             ("step_s", "row_s", "case_s", "map_bin_s", "block_s", "run_start_s",
+              "sweep_start_s", "assemble_case_s", "assemble_row_s")}
+    costs["joint_step_s"] = dict(old.joint_step_s)
+    text = PLAN_COSTS_FILE.read_text().splitlines()
+    start = text.index("measured:") + 1
+    end = next(i for i in range(start, len(text)) if not text[i].startswith("  "))
+    costs["measured"] = "\n".join(text[start:end])
+    mark = "# the joints' shares checked on mixes (us a step): "
+    lines = [line for line in PLAN_COSTS_FILE.read_text().splitlines() if line.startswith(mark)]
+    costs["check"] = lines[0][len(mark):] if lines else "not recorded"
+    return costs
 
 
 def write(args, costs: dict, load_before, load_after) -> None:
@@ -302,19 +392,29 @@ def write(args, costs: dict, load_before, load_after) -> None:
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip() or "unknown"
     shares = costs["joint_step_s"]
-    text = f"""\
-# What clearsweep's plans charge (clearsweep/budget.py, read by `sweep`, `run`, `life`,
-# `validate` and `--dry-run`), measured by benchmarks/calibrate_plan.py: re-run it when the
-# kernel changes (a joint type, the step, the outputs) and check the plans against whole
-# runs (benchmarks/README.md, "Plans against measured times").
-measured:
+    pace = costs["wear_pace"]
+    if "measured" in costs:
+        # --wear-pace: the other costs keep their own measurement; the pace's is added
+        measured = costs["measured"]
+        pace_when = (f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
+                     f"tree {commit}, load average {load_before[0]:.2f}-{load_after[0]:.2f}")
+    else:
+        measured = f"""\
   date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC
   machine: {machine()}
   load_average: [{load_before[0]:.2f}, {load_after[0]:.2f}]   # 1-minute, before and after
   tree: {commit}
   kernel_cache: {Path(cache_dir()).name}
   repeats: {args.repeats}
-  timing: CPU time, the least of the repeats (other work stretches the wall time, not it)
+  timing: CPU time, the least of the repeats (other work stretches the wall time, not it)"""
+        pace_when = "with the costs above"
+    text = f"""\
+# What clearsweep's plans charge (clearsweep/budget.py, read by `sweep`, `run`, `life`,
+# `validate` and `--dry-run`), measured by benchmarks/calibrate_plan.py: re-run it when the
+# kernel changes (a joint type, the step, the outputs) and check the plans against whole
+# runs (benchmarks/README.md, "Plans against measured times").
+measured:
+{measured}
 # one RK4 step on the output grid of the ideal mechanism, as a worker runs it [s]
 step_s: {costs['step_s']:.4g}
 # what a joint with clearance adds to each step [s]: A and B a ball in its socket, O the
@@ -342,6 +442,18 @@ assemble_row_s: {costs['assemble_row_s']:.4g}
                                                               ' (kept: run with --compile)'}
 compile_s: {compile_s:.3g}
 # the joints' shares checked on mixes (us a step): {costs['check']}
+# a ball-and-socket joint's wear pace, which a life plan walks to life.cycles with
+# (clearsweep.budget.WearPace: the deepest bin deepens by K / (K / r0 + h) a revolution at
+# depth h), fitted to a life run that reached its life.cycles (fit_wear_pace), measured
+# {pace_when};
+# a config's r0 and K are these scaled by its Archard k times wear.amplification, and by
+# its clearance
+wear_pace:
+  reference: "{pace['reference']}"
+  first_rate_m: {pace['first_rate_m']:.4g}
+  growth_m2: {pace['growth_m2']:.4g}
+  clearance_m: {pace['clearance_m']:.4g}
+  wear_coefficient_m2_per_N: {pace['wear_coefficient_m2_per_N']:.4g}
 """
     print(text)
     if not args.dry_run:

@@ -21,11 +21,12 @@ import sys
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .config import DEFAULTS, Config, ConfigError
 
 __all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
-           "PlanCosts", "plan_costs", "read_plan_costs", "clearance_joints", "step_seconds",
+           "PlanCosts", "WearPace", "plan_costs", "read_plan_costs", "clearance_joints", "step_seconds",
            "case_seconds", "assembly_seconds", "life_seconds", "sweep_seconds",
            "MAX_READ_BYTES", "largest_variable", "machine_memory",
            "memory_limit"]
@@ -57,6 +58,47 @@ def format_bytes(n: float) -> str:
 PLAN_COSTS_FILE = Path(__file__).resolve().parent / "data" / "plan_costs.yaml"
 #: The joints in the order the costs file names them.
 _JOINTS = ("O", "A", "B", "P")
+
+
+@dataclass(frozen=True)
+class WearPace:
+    """How fast a socket wears, as a life plan walks it to ``life.cycles``
+    (:func:`clearsweep.service_life.forecast_blocks`), fitted to a reference life run by
+    benchmarks/calibrate_plan.py.
+
+    The deepest bin of a ball-and-socket joint at depth h [m] deepens by
+    r(h) = K / (d + h) per revolution, d = K / r0: the contact cap's area grows with the
+    depth under it (docs/physics.md 5.2, A = 2 pi R_j h_c), so a worn-in socket's depth
+    goes as the square root of the revolutions. A config's K and r0 are the reference's
+    scaled by Archard's k (times ``wear.amplification``) and by the clearance (the cap's
+    area goes as 1 / c); its loads, speed and dynamics are taken to be the reference's.
+
+    Attributes
+    ----------
+    first_rate_m : float
+        r0: the reference's deepest bin after its first block, per revolution [m].
+    growth_m2 : float
+        K [m^2 per revolution], fitted so that the reference's jumps reach the revolutions
+        its run reached.
+    clearance_m : float
+        The reference joint's radial clearance [m].
+    wear_coefficient_m2_per_N : float
+        Archard's k of the reference joint's worn surface [m^2/N].
+    reference : str
+        What was run (config, joint, blocks).
+    """
+
+    first_rate_m: float
+    growth_m2: float
+    clearance_m: float
+    wear_coefficient_m2_per_N: float
+    reference: str
+
+    def scaled(self, clearance: float, wear_coefficient: float) -> tuple[float, float]:
+        """(r0, K) of a socket of ``clearance`` [m] whose surface wears with
+        ``wear_coefficient`` (Archard's k times ``wear.amplification``) [m^2/N]."""
+        factor = (wear_coefficient / self.wear_coefficient_m2_per_N) * (clearance / self.clearance_m)
+        return self.first_rate_m * factor, self.growth_m2 * factor
 
 
 @dataclass(frozen=True)
@@ -92,6 +134,9 @@ class PlanCosts:
         A cold compile of the RK4 kernel (an empty Numba cache).
     measured : dict
         When, where and under what load the file was measured.
+    wear_pace : WearPace or None
+        A socket's wear pace, which a life plan walks to ``life.cycles`` with; None in a
+        file without one (the plan then walks to the wear limits alone).
     """
 
     step_s: float
@@ -106,6 +151,7 @@ class PlanCosts:
     assemble_row_s: float
     compile_s: float
     measured: dict
+    wear_pace: WearPace | None = None
 
     def step_seconds(self, joints: Iterable[str]) -> float:
         """One step's cost [s] with clearance at ``joints`` (``"OABP"``, ``("B",)``, ...)."""
@@ -130,7 +176,24 @@ def read_plan_costs(path: str | None = None) -> PlanCosts:
                           f"{', '.join(_JOINTS)} ({type(exc).__name__}: {exc})", source) from None
     if not all(math.isfinite(v) and v >= 0.0 for v in [*values.values(), *shares.values()]):
         raise ConfigError(None, None, "a plan-costs file of finite costs >= 0", source)
-    return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}), **values)
+    return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}),
+                     wear_pace=_wear_pace(doc.get("wear_pace"), source), **values)
+
+
+def _wear_pace(entry: Any, source: str) -> WearPace | None:
+    """The ``wear_pace`` of a plan-costs file (None where it has none)."""
+    if entry is None:
+        return None
+    names = ("first_rate_m", "growth_m2", "clearance_m", "wear_coefficient_m2_per_N")
+    try:
+        values = {name: float(entry[name]) for name in names}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ConfigError(None, None, "a plan-costs file whose wear_pace has numbers "
+                          f"{', '.join(names)} ({type(exc).__name__}: {exc})", source) from None
+    if not all(math.isfinite(v) and v > 0.0 for v in values.values()):
+        raise ConfigError(None, None, "a plan-costs file whose wear_pace numbers are finite "
+                          "and > 0", source)
+    return WearPace(reference=str(entry.get("reference", "")), **values)
 
 
 def plan_costs() -> PlanCosts:

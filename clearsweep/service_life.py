@@ -175,32 +175,59 @@ class LifeForecast:
     Attributes
     ----------
     blocks : int
-        Blocks expected: to the wear limits in ``limits`` if wear sets the pace, at most
-        ``bound``.
+        Blocks expected: the fewer of ``to_limits`` and ``to_cycles``, at most ``bound``.
     bound : int
         Most blocks: ``life.max_blocks``.
     limits : tuple of str
         The limits of :data:`DEPTH_LIMITS` the forecast walks to; empty where the run
-        watches none of them (or nothing wears): then ``blocks == bound``.
+        watches none of them (or nothing wears).
+    to_limits : int
+        Blocks to those limits, each jump growing the bin that limits it by its allowance
+        whatever the wear rate; ``bound`` (or the blocks that reach ``life.cycles`` without
+        a jump) where ``limits`` is empty.
+    to_cycles : int or None
+        Blocks to ``life.cycles`` at the wear pace of the plan costs
+        (:class:`clearsweep.budget.WearPace`), each jump as long as the run's rule makes it
+        at that pace; None where no pace is known (a joint other than a ball in its socket
+        has clearance, nothing wears, or the plan costs have no pace).
     """
 
     blocks: int
     bound: int
     limits: tuple[str, ...]
+    to_limits: int = 0
+    to_cycles: int | None = None
+
+    @property
+    def known(self) -> bool:
+        """Whether anything but the bound is forecast (a wear limit or ``life.cycles``)."""
+        return bool(self.limits) or self.to_cycles is not None
 
     def describe(self, cfg: Config) -> str:
-        """``"100 blocks to the wear limit (life.max_clearance_growth) at jumps of 1 % of the
-        clearance, fewer if it reaches 1e+06 revolutions first"``."""
+        """``"40 blocks to 1e+06 revolutions at the wear pace of benchmarks/calibrate_plan.py's
+        reference run, ...; 101 to the wear limit (life.max_clearance_growth); ..."`` or
+        ``"11 blocks to the wear limit (life.max_clearance_growth) at jumps of 1 % of the
+        clearance, fewer if it reaches 1e+06 revolutions (40 at the reference's wear pace)
+        or another limit first"``."""
         lc = cfg.life
-        if not self.limits:
-            return (f"{self.blocks:,} blocks (no wear limit watched to forecast from: "
-                    "life.cycles or a dynamic limit ends it, at a pace the plan cannot know)")
+        if not self.known:
+            return (f"{self.blocks:,} blocks (no wear limit watched and no wear pace to forecast "
+                    "from: life.cycles or a dynamic limit ends it, at a pace the plan cannot know)")
+        if self.to_cycles is not None and self.to_cycles < self.to_limits:
+            limits = (f"; {self.to_limits:,} to the wear limit{'s' if len(self.limits) > 1 else ''} "
+                      f"({limit_keys(self.limits)})" if self.limits else "")
+            return (f"{self.blocks:,} blocks to {lc.cycles:.4g} revolutions at the wear pace of "
+                    "benchmarks/calibrate_plan.py's reference run, scaled by Archard's k and "
+                    "the clearance (not by the loads or speed: a run that wears faster ends "
+                    f"sooner){limits}; fewer if a dynamic limit comes first")
         coating = (f" or {100 * lc.jump_coating_fraction:.3g} % of the coating left"
                    if "wear_through" in self.limits else "")
+        cycles = ("" if self.to_cycles is None else
+                  f" ({self.to_cycles:,} at the reference's wear pace)")
         return (f"{self.blocks:,} blocks to the wear limit{'s' if len(self.limits) > 1 else ''} "
                 f"({limit_keys(self.limits)}) at jumps of {100 * lc.jump_clearance_fraction:.3g} % "
-                f"of the clearance{coating}, fewer if it reaches {lc.cycles:.4g} revolutions or "
-                "another limit first")
+                f"of the clearance{coating}, fewer if it reaches {lc.cycles:.4g} revolutions"
+                f"{cycles} or another limit first")
 
 
 def limit_keys(names) -> str:
@@ -210,23 +237,78 @@ def limit_keys(names) -> str:
                      for name in names)
 
 
-def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
-    """The blocks the life run ``cfg`` takes if wear sets its pace, before it runs.
+#: The joint types whose wear a :class:`clearsweep.budget.WearPace` describes: a ball in
+#: its socket (the reference run's joint B).
+PACED_TYPES = ("spherical",)
 
-    A jump grows the bin whose wear rate limits it by exactly what :func:`jump_revolutions`
-    allows (``life.jump_clearance_fraction`` of the clearance, less while coating remains),
-    whatever the wear rate; taking that bin for the deepest one, the depth after each
-    block follows from the config alone, and with it the block at which a limit of
-    :data:`DEPTH_LIMITS` is crossed: ``life.max_clearance_growth`` and, with
-    ``life.stop_at_wear_through``, the coating's thickness. Each clearance joint is walked
-    as if it set the pace, and the slowest walk is taken: a jump ends where any joint's bin
-    reaches its allowance, so the joint with the smallest allowance can cut every jump.
-    ``every_limit``: a reliability member, which runs until every watched limit is crossed
-    (the dynamic ones taken to come no later); else the first.
+
+def wear_pace(cfg: Config) -> list[tuple[float, float, float, float, float, float]] | None:
+    """Each clearance joint's (clearance, coating, r0, K on the coating, r0, K on the base)
+    at the plan costs' wear pace (:meth:`clearsweep.budget.WearPace.scaled`: Archard's k of
+    the surface worn, times ``wear.amplification``, and the clearance); None where the pace
+    is unknown: no pace in the plan costs, no wear, or a joint with clearance that is not a
+    ball in its socket (the bearing O, the guide P), whose pace no run has measured."""
+    from .core.joints import JOINTS as TABLE
+    from .params import BASE_MATERIAL, surface_material
+
+    pace = plan_costs().wear_pace
+    if pace is None or not cfg.wear.enabled:
+        return None
+    materials = resolve_materials(cfg)
+    out = []
+    for (_, joint), row in zip(joint_configs(cfg), TABLE, strict=True):
+        if joint.clearance <= 0.0:
+            continue
+        if row.type not in PACED_TYPES or getattr(joint, "type", row.type) not in PACED_TYPES:
+            return None
+        k = joint.wear_coefficient
+        k = surface_material(joint, materials).wear_coefficient_m2_per_N if k is None else k
+        coated = joint.coating != "none"
+        k_base = materials[BASE_MATERIAL].wear_coefficient_m2_per_N if coated else k
+        amp = cfg.wear.amplification
+        r0, growth = pace.scaled(joint.clearance, k * amp)
+        r0_base, growth_base = pace.scaled(joint.clearance, k_base * amp)
+        out.append((joint.clearance, joint.coating_thickness if coated else math.inf,
+                    r0, growth, r0_base, growth_base))
+    return out or None
+
+
+def pace_rate(depth: float, coating: float, r0: float, growth: float, r0_base: float,
+              growth_base: float) -> float:
+    """The deepest bin's wear per revolution [m] at ``depth`` (:class:`clearsweep.budget.WearPace`:
+    K / (K / r0 + h)), the coating's pace while it holds, the base's past it."""
+    if depth >= coating:
+        r0, growth = r0_base, growth_base
+    if r0 <= 0.0 or growth <= 0.0:
+        return 0.0
+    return growth / (growth / r0 + depth)
+
+
+def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
+    """The blocks the life run ``cfg`` takes, before it runs.
+
+    Two walks, each by the run's own jump rule, and the fewer blocks of the two: the run
+    ends at whichever end comes first.
+
+    To the wear limits: a jump grows the bin whose wear rate limits it by exactly what
+    :func:`jump_revolutions` allows (``life.jump_clearance_fraction`` of the clearance,
+    less while coating remains), whatever the wear rate; taking that bin for the deepest
+    one, the depth after each block follows from the config alone, and with it the block at
+    which a limit of :data:`DEPTH_LIMITS` is crossed: ``life.max_clearance_growth`` and,
+    with ``life.stop_at_wear_through``, the coating's thickness. Each clearance joint is
+    walked as if it set the pace, and the slowest walk is taken: a jump ends where any
+    joint's bin reaches its allowance, so the joint with the smallest allowance can cut
+    every jump. ``every_limit``: a reliability member, which runs until every watched limit
+    is crossed (the dynamic ones taken to come no later); else the first.
+
+    To ``life.cycles``: when that comes is set by the wear rate, which the plan takes from
+    the plan costs' wear pace (:func:`wear_pace`); each jump is the allowance over the
+    pace's rate at the depth reached, cut to end one block short of ``life.cycles`` as the
+    run cuts it, and the slowest joint's walk is taken.
 
     The forecast is at most ``life.max_blocks``, and at most the blocks that reach
-    ``life.cycles`` without a jump. A run that reaches ``life.cycles`` (its wear rate
-    decides, which only a run shows) or a dynamic limit first takes fewer blocks.
+    ``life.cycles`` without a jump. A dynamic limit, or a run that wears faster than the
+    pace, ends sooner.
     """
     lc = cfg.life
     most = min(lc.max_blocks, max(1, math.ceil(lc.cycles / lc.block_revolutions - 1e-9)))
@@ -235,34 +317,74 @@ def forecast_blocks(cfg: Config, every_limit: bool = False) -> LifeForecast:
                    else lc.stop_at_wear_through)]
     joints = tuple((j.clearance, j.coating_thickness if j.coating != "none" else math.inf)
                    for _, j in joint_configs(cfg) if j.clearance > 0.0)
+    paced = wear_pace(cfg) if joints else None
+    to_cycles = None
+    if paced is not None:
+        to_cycles = max(_walk_to_cycles(c, coat, lc.jump_clearance_fraction,
+                                        lc.jump_coating_fraction, most, float(lc.cycles),
+                                        float(lc.block_revolutions), (r0, g, r0b, gb))
+                        for c, coat, r0, g, r0b, gb in paced)
     if not (cfg.wear.enabled and joints and watched):
-        return LifeForecast(lc.max_blocks, lc.max_blocks, ())
+        bound = lc.max_blocks if to_cycles is None else min(to_cycles, lc.max_blocks)
+        return LifeForecast(bound, lc.max_blocks, (), lc.max_blocks, to_cycles)
     per_limit = []
     for name in watched:
-        found = [_blocks_to_depth(c, coat, lc.max_clearance_growth if name == "clearance_growth"
-                                  else coat, lc.jump_clearance_fraction,
-                                  lc.jump_coating_fraction, most) for c, coat in joints]
+        found = [_walk(c, coat, lc.max_clearance_growth if name == "clearance_growth"
+                       else coat, lc.jump_clearance_fraction,
+                       lc.jump_coating_fraction, most) for c, coat in joints]
         # a jump ends where any clearance joint's bin has grown by its allowance, so the joint
         # with the smallest allowance sets the pace wherever it wears: its walk, the longest
         # (configs/reliability_joints.yaml, O and P at 0.1 mm against A and B at 0.25 mm:
         # about 24 blocks a member measured, 9 by A's or B's walk, 21 by O's or P's)
         per_limit.append(max(found))
-    return LifeForecast(max(per_limit) if every_limit else min(per_limit), lc.max_blocks,
-                        tuple(watched))
+    to_limits = max(per_limit) if every_limit else min(per_limit)
+    blocks = to_limits if to_cycles is None else min(to_limits, to_cycles)
+    return LifeForecast(blocks, lc.max_blocks, tuple(watched), to_limits, to_cycles)
+
+
+def _allowance(reached: float, clearance: float, coating: float, clearance_fraction: float,
+               coating_fraction: float) -> float:
+    """What a jump may deepen a bin at depth ``reached`` by (:func:`jump_revolutions`)."""
+    step = clearance_fraction * clearance
+    if reached < coating:
+        step = min(step, coating_fraction * max(coating - reached, coating_fraction * coating))
+    return step
 
 
 @functools.lru_cache(maxsize=1024)
-def _blocks_to_depth(clearance: float, coating: float, depth: float, clearance_fraction: float,
-                     coating_fraction: float, most: int) -> int:
+def _walk(clearance: float, coating: float, depth: float, clearance_fraction: float,
+          coating_fraction: float, most: int) -> int:
     """Blocks until the deepest bin of a joint reaches ``depth`` [m] (at most ``most``; inf
     depth: ``most``), each block but the last followed by the largest jump
     :func:`jump_revolutions` allows that bin."""
     reached, blocks = 0.0, 1
     while blocks < most and reached < depth * (1.0 - 1e-9):
-        step = clearance_fraction * clearance
-        if reached < coating:
-            step = min(step, coating_fraction * max(coating - reached, coating_fraction * coating))
-        reached += step
+        reached += _allowance(reached, clearance, coating, clearance_fraction, coating_fraction)
+        blocks += 1
+    return blocks
+
+
+@functools.lru_cache(maxsize=1024)
+def _walk_to_cycles(clearance: float, coating: float, clearance_fraction: float,
+                    coating_fraction: float, most: int, cycles: float, revs: float,
+                    pace: tuple[float, float, float, float]) -> int:
+    """Blocks until a run whose deepest bin wears at ``pace`` (:func:`pace_rate`'s r0 and K
+    on the coating and on the base) reaches ``cycles`` revolutions (at most ``most``), by
+    :func:`_life`'s rule: each block of ``revs`` revolutions wears the bin at the rate of
+    the depth it starts from, the jump after it is the bin's allowance
+    (:func:`jump_revolutions`) over that rate, cut to end one block short of ``cycles``,
+    and the run ends at the block after which another would pass ``cycles``."""
+    rate = pace_rate(0.0, coating, *pace)
+    reached, done, blocks = rate * revs, revs, 1
+    while blocks < most and done + revs <= cycles * (1.0 + 1e-12):
+        step = _allowance(reached, clearance, coating, clearance_fraction, coating_fraction)
+        jump = step / rate if rate > 0.0 else math.inf
+        jump = max(0.0, min(jump, cycles - done - revs))
+        reached += jump * rate
+        done += jump
+        rate = pace_rate(reached, coating, *pace)
+        reached += rate * revs
+        done += revs
         blocks += 1
     return blocks
 
@@ -288,7 +410,7 @@ def life_plan_text(cfg: Config, source: str, *, allow_large: bool = False) -> st
 def life_time_text(cfg: Config, steps_per_block: int) -> str:
     """The time of the life run ``cfg``, bound and expected (:func:`forecast_blocks`):
     ``"at most 2e+07 RK4 steps, at most about 1.33 min on one core (...); expected about
-    40 s: 101 blocks to the wear limit (...)"``."""
+    11 s: 40 blocks to 1e+06 revolutions at the wear pace of ..."``."""
     steps = cfg.life.max_blocks * steps_per_block
     forecast = forecast_blocks(cfg)
     start = plan_costs().run_start_s
@@ -1086,23 +1208,25 @@ def blocks_left(cfg: Config, blocks: int, depths: Sequence[tuple[float, float]] 
     """The blocks a life run is expected to take after its first ``blocks``.
 
     At most ``life.max_blocks``, and those :func:`forecast_blocks` gives to the wear limits
-    while the run is short of them. ``depths``: (revolutions, deepest bin [m]) at the end of
-    each block so far. From three blocks on, the depth is taken to grow as a power of the
+    while the run is short of them (the cap). ``depths``: (revolutions, deepest bin [m]) at
+    the end of each block so far. From three blocks on, the depth is taken to grow as a power of the
     revolutions, h = h_k (N / N_k)^beta, beta from the last two blocks (a socket running in
     wears ever slower: beta 0.5 in configs/life.yaml), and each further block to add the
     mean depth of the last blocks' jumps; the run then ends at ``life.cycles`` with the depth
     h(life.cycles), or at the cap if that comes first (the wear limits' blocks). Without
-    that (fewer blocks, no wear), the cap alone.
+    that (fewer blocks, no wear), the blocks :func:`forecast_blocks` expects (to
+    ``life.cycles`` at the plan's wear pace, or to the cap), less those run.
     """
     lc = cfg.life
     forecast = forecast_blocks(cfg)
-    most = forecast.blocks if forecast.limits and blocks < forecast.blocks else lc.max_blocks
-    left = float(max(most - blocks, 0))
+    cap = forecast.to_limits if forecast.limits and blocks < forecast.to_limits else lc.max_blocks
+    guess = forecast.blocks if forecast.known and blocks < forecast.blocks else cap
+    left, guessed = float(max(cap - blocks, 0)), float(max(min(guess, cap) - blocks, 0))
     if len(depths) < 3:
-        return left
+        return guessed
     (_, h0), (n1, h1), (n2, h2) = depths[-3], depths[-2], depths[-1]
     if not (0.0 < n1 < n2 < lc.cycles and 0.0 < h1 < h2 and h0 < h1):
-        return left
+        return guessed
     beta = math.log(h2 / h1) / math.log(n2 / n1)
     step = (h2 - h0) / 2.0                          # the mean depth of the last two jumps
     growth = beta * math.log(lc.cycles / n2)        # log of h(life.cycles) / h2

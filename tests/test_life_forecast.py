@@ -96,18 +96,119 @@ def test_the_forecast_is_the_blocks_a_run_that_wear_ends_takes(extra, limit):
     assert forecast.blocks == ds.sizes["cycle"] == (4 if limit == "clearance_growth" else 10)
 
 
+#: configs/life.yaml: its run ends at its 10^6 revolutions in 40 blocks (docs/service_life.md)
+#: long before its wear limit, 0.25 mm of wear (101 blocks at jumps of 1 % of the clearance).
+LIFE = str(ROOT / "configs/life.yaml")
+
+
+def _kernel_at_the_plan_s_pace(cfg, monkeypatch):
+    """Stand in for the kernel in ``life``: each block deepens one bin of each clearance
+    joint by the plan's wear pace (service_life.pace_rate at the bin's depth, times the
+    block's revolutions) and does nothing else. The run's own loop is left as it is: the
+    rates it reads from the block, its jumps, their cut at life.cycles, its limits."""
+    import types
+
+    import numpy as np
+
+    from clearsweep import service_life
+    from clearsweep.core import layout as L
+    from clearsweep.params import joint_configs
+
+    paced = service_life.wear_pace(cfg)
+    assert paced is not None
+    clear = [j for j, (_, joint) in enumerate(joint_configs(cfg)) if joint.clearance > 0.0]
+    revs = cfg.life.block_revolutions
+
+    def run_kernel(packed, wmap, wvol):
+        out = wmap.copy()
+        for j, (_, coating, *pace) in zip(clear, paced, strict=True):
+            out[j, 0, 0] += service_life.pace_rate(float(out[j, 0, 0]), coating, *pace) * revs
+        return types.SimpleNamespace(
+            wmap=out, wvol=wvol + 1e-12, stats=np.zeros((2, L.N_M)), status="ok",
+            residual_max=0.0, ke_peak=0.0, n_saved=0, t=np.zeros(0), y=np.zeros((0, L.N_Y)))
+
+    monkeypatch.setattr(service_life, "run_kernel", run_kernel)
+    monkeypatch.setattr(service_life, "prepare_kernel", lambda *args, **kwargs: 0.0)
+
+
+@pytest.mark.parametrize("overrides, stop", [
+    ([], "cycles"),
+    (["life.cycles=2e4"], "cycles"),
+    (["joints.B.clearance=1e-4", "wear.amplification=10"], "cycles"),
+    (["life.max_clearance_growth=2.5e-5"], "clearance_growth"),
+    (["joints.B.coating_thickness=2e-5", "life.stop_at_wear_through=true",
+      "life.max_clearance_growth=null"], "wear_through"),
+    (["life.max_blocks=25"], "max_blocks"),
+], ids=["life.yaml", "2e4 revolutions", "0.1 mm, wear x10", "wear limit", "wear-through",
+        "max_blocks"])
+def test_the_forecast_is_the_blocks_of_a_run_that_wears_at_the_plan_s_pace(
+        overrides, stop, monkeypatch):
+    """Physics aside, the plan counts blocks by the run's own rule: a run whose wear follows
+    the plan's pace takes exactly the blocks forecast, whichever end comes first, life.cycles
+    or a wear limit (was: configs/life.yaml forecast 101 blocks, the walk to its wear limit,
+    for a run that reaches its 10^6 revolutions in 40)."""
+    cfg = load_config(LIFE, overrides)
+    _kernel_at_the_plan_s_pace(cfg, monkeypatch)
+    ds = life(cfg)
+    assert str(ds["stop_reason"].values) == stop
+    assert forecast_blocks(cfg).blocks == ds.sizes["cycle"]
+
+
+def test_the_calibration_gives_back_the_pace_a_run_wore_at(monkeypatch):
+    """benchmarks/calibrate_plan.py's fit of the wear pace inverts the plan's walk: on a
+    run that wore at the shipped pace it gives that pace back (r0 to rounding, K to 1e-3:
+    the fit leaves out the blocks' own wear, about a nanometre a block against the jumps'
+    2.5 um)."""
+    import importlib.util
+
+    from clearsweep.budget import plan_costs
+
+    spec = importlib.util.spec_from_file_location("calibrate_plan",
+                                                  ROOT / "benchmarks" / "calibrate_plan.py")
+    assert spec is not None and spec.loader is not None
+    calibrate = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(calibrate)
+    cfg = load_config(LIFE)
+    _kernel_at_the_plan_s_pace(cfg, monkeypatch)
+    fitted = calibrate.fit_wear_pace(life(cfg), cfg)
+    pace = plan_costs().wear_pace
+    assert fitted["first_rate_m"] == pytest.approx(pace.first_rate_m, rel=1e-9)
+    assert fitted["growth_m2"] == pytest.approx(pace.growth_m2, rel=1e-3)
+    assert fitted["clearance_m"] == pace.clearance_m
+    assert fitted["wear_coefficient_m2_per_N"] == pace.wear_coefficient_m2_per_N
+
+
+def test_the_forecast_of_a_short_run_to_life_cycles_is_its_blocks():
+    """configs/life.yaml cut to 2e4 revolutions, run: its 10^6 revolutions' pace (fitted
+    by benchmarks/calibrate_plan.py to the whole run's 40 blocks) forecasts 6 blocks, and
+    the run takes 5 (was: 101, the walk to its wear limit)."""
+    cfg = load_config(LIFE, ["life.cycles=2e4"])
+    ds = life(cfg)
+    assert str(ds["stop_reason"].values) == "cycles"
+    assert abs(forecast_blocks(cfg).blocks - ds.sizes["cycle"]) <= 1
+
+
 def test_the_forecast_never_passes_the_bound():
     life_yaml = str(ROOT / "configs/life.yaml")
     cfg = load_config(life_yaml)
-    assert forecast_blocks(cfg).blocks == 101        # 0.25 mm at 1 % of 0.25 mm a jump
-    assert forecast_blocks(load_config(life_yaml, ["life.max_blocks=50"])).blocks == 50
-    # at most the blocks that reach life.cycles without a jump
-    assert forecast_blocks(load_config(life_yaml, ["life.cycles=20"])).blocks == 20
-    # nothing to forecast from: the bound, said so
-    for overrides in (["life.max_clearance_growth=null", "life.max_normal_force=30"],
-                      ["wear.enabled=false"]):
+    assert forecast_blocks(cfg).to_limits == 101     # 0.25 mm at 1 % of 0.25 mm a jump
+    capped = forecast_blocks(load_config(life_yaml, ["life.max_blocks=30"]))
+    assert (capped.blocks, capped.to_limits, capped.to_cycles) == (30, 30, 30)
+    # at most the blocks that reach life.cycles without a jump; at the wear pace, one jump
+    # to a block short of them and that block
+    short = forecast_blocks(load_config(life_yaml, ["life.cycles=20"]))
+    assert (short.to_limits, short.to_cycles, short.blocks) == (20, 2, 2)
+    # no wear limit watched: life.cycles at the wear pace, said so
+    paced = forecast_blocks(load_config(life_yaml, ["life.max_clearance_growth=null",
+                                                    "life.max_normal_force=30"]))
+    assert (paced.blocks, paced.limits) == (forecast_blocks(cfg).to_cycles, ())
+    assert "revolutions at the wear pace of" in paced.describe(cfg)
+    # nothing to forecast from (no wear; a bearing with clearance, whose pace no run
+    # measured): the bound, said so
+    for overrides in (["life.max_clearance_growth=null", "life.max_normal_force=30",
+                       "joints.O.clearance=1e-4"], ["wear.enabled=false"]):
         forecast = forecast_blocks(load_config(life_yaml, overrides))
-        assert (forecast.blocks, forecast.limits) == (200, ())
+        assert (forecast.blocks, forecast.limits, forecast.to_cycles) == (200, (), None)
         assert "no wear limit watched" in forecast.describe(cfg)
     # a reliability member waits for every limit: the later of the two
     both = load_config(life_yaml, ["joints.B.coating_thickness=5e-5",

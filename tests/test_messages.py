@@ -246,13 +246,16 @@ def test_the_blocks_left_follow_the_depth_s_power_law(beta):
     a = 50 * step / 1e6 ** beta           # h = a N^beta [m]: 1e6 revolutions at block 50
     revolutions = [(step * b / a) ** (1.0 / beta) for b in range(1, 6)]
     depths = [(n, a * n ** beta) for n in revolutions]
-    cap = forecast_blocks(cfg).blocks - 5
-    assert cap > 45
+    forecast = forecast_blocks(cfg)
+    cap, planned = forecast.to_limits - 5, forecast.blocks - 5
+    assert cap > 45 and planned < cap
     assert blocks_left(cfg, 5, depths) == pytest.approx(45, rel=1e-9)   # 50, less the 5 run
-    assert blocks_left(cfg, 5, depths[:2]) == cap          # too few blocks: the cap alone
-    assert blocks_left(cfg, 5, [(n, 1e-6) for n, _ in depths]) == cap     # no growth seen
-    # a steep fit (two blocks a revolution apart, the depth doubled) is the cap, not an
-    # OverflowError that would stop the run from its progress line
+    # too few blocks, or no growth seen: the plan's forecast (to life.cycles at the plan's
+    # wear pace), less the blocks run
+    assert blocks_left(cfg, 5, depths[:2]) == planned
+    assert blocks_left(cfg, 5, [(n, 1e-6) for n, _ in depths]) == planned
+    # a steep fit (two blocks a revolution apart, the depth doubled) is the cap (the wear
+    # limit's blocks), not an OverflowError that would stop the run from its progress line
     assert blocks_left(cfg, 5, [(1e4, 1e-6), (1e4 + 1, 2e-6), (1e4 + 2, 4e-6)]) == cap
 
 

@@ -70,6 +70,8 @@ def test_the_shipped_file_says_where_and_when_it_was_measured():
     assert set(costs.joint_step_s) == set("OABP")
     assert all(v >= 0 for v in costs.joint_step_s.values())
     assert costs.step_s > 0 and costs.compile_s > 0
+    # the wear pace a life plan walks to life.cycles with, and the run it was fitted to
+    assert costs.wear_pace is not None and "configs/life.yaml" in costs.wear_pace.reference
 
 
 def test_the_shipped_costs_price_the_guide_s_faces():
@@ -178,9 +180,19 @@ def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
     assert "about 123 s" in said[0] and "allows clearance at O,P" in said[0], said
 
 
+#: A wear pace whose numbers are round: r0 2.5e-11 m a revolution at 0.25 mm of clearance,
+#: and a K so large that the rate stays r0 at any depth (K / (K / r0 + h)).
+PACE = ("wear_pace: {reference: test, first_rate_m: 2.5e-11, growth_m2: 1.0, "
+        "clearance_m: 2.5e-4, wear_coefficient_m2_per_N: 8.0e-14}\n")
+
+
 @pytest.mark.parametrize("text", ["step_s: 1\n", ROUND.replace("P: 16.0e-3", "P: fast"),
-                                  ROUND.replace("case_s: 5.0", "case_s: -5.0")],
-                         ids=["keys missing", "not a number", "negative"])
+                                  ROUND.replace("case_s: 5.0", "case_s: -5.0"),
+                                  ROUND + PACE.replace("1.0,", "fast,"),
+                                  ROUND + PACE.replace("1.0,", "0,"),
+                                  ROUND + "wear_pace: {first_rate_m: 1.0e-6}\n"],
+                         ids=["keys missing", "not a number", "negative", "pace not a number",
+                              "pace of zero", "pace keys missing"])
 def test_a_broken_costs_file_is_refused_in_one_line(tmp_path, monkeypatch, text):
     path = tmp_path / "costs.yaml"
     path.write_text(text)
@@ -193,3 +205,35 @@ def test_a_broken_costs_file_is_refused_in_one_line(tmp_path, monkeypatch, text)
     assert result.exit_code == 2, result.output
     (line,) = result.stderr.splitlines()
     assert line.startswith(f"clearsweep: error: {path}:") and "plan-costs file" in line
+
+
+def test_a_life_plan_walks_to_life_cycles_at_the_file_s_wear_pace(tmp_path, monkeypatch):
+    """The wear pace is the file's. Without one a life plan walks to its wear limits alone
+    (configs/life.yaml: 101 blocks to 0.25 mm of wear at 2.5 um a jump). With one it also
+    walks to life.cycles, each jump the allowance over the pace's rate, cut as the run cuts
+    it: at 2.5e-11 m a revolution the jumps are 1e5 revolutions, and 1e6 revolutions take
+    11 blocks (the tenth jump cut to 99,989). The rate goes with Archard's k: 4 times k,
+    jumps of 2.5e4 revolutions, 41 blocks; and with the clearance, as the allowance does:
+    0.1 mm, jumps of 1e5 revolutions again."""
+    path = tmp_path / "costs.yaml"
+    life_yaml = ROOT / "configs" / "life.yaml"
+    cfg = load_config(life_yaml)
+    try:
+        path.write_text(ROUND)
+        monkeypatch.setenv("CLEARSWEEP_PLAN_COSTS", str(path))
+        read_plan_costs.cache_clear()
+        without = forecast_blocks(cfg)
+        path.write_text(ROUND + PACE)
+        read_plan_costs.cache_clear()
+        paced = forecast_blocks(cfg)
+        worn = forecast_blocks(load_config(life_yaml, ["joints.B.wear_coefficient=3.2e-13"]))
+        tight = forecast_blocks(load_config(life_yaml, ["joints.B.clearance=1e-4"]))
+        text = life_time_text(cfg, block_steps(cfg))
+    finally:
+        read_plan_costs.cache_clear()
+    assert (without.blocks, without.to_cycles) == (101, None)
+    assert (paced.blocks, paced.to_limits, paced.to_cycles) == (11, 101, 11)
+    assert (worn.blocks, tight.blocks) == (41, 11)
+    assert "11 blocks to 1e+06 revolutions at the wear pace of" in text
+    assert seconds_of(text.split("expected ")[1]) == pytest.approx(
+        3.0 + 5.0 + 11 * (block_steps(cfg) * (1e-3 + 8e-3) + 7.0), rel=0.01)

@@ -332,7 +332,17 @@ class SweepPlan:
         blocks = sorted({f.blocks for f in forecasts})
         span = (f"{blocks[0]:,}" if len(blocks) == 1 else f"{blocks[0]:,} to {blocks[-1]:,}")
         limits = [name for name in DEPTH_LIMITS if any(name in f.limits for f in forecasts)]
-        if not limits:
+        # the runs that the plan's wear pace takes to life.cycles before any wear limit
+        paced = sum(1 for f in forecasts if f.to_cycles is not None and f.to_cycles < f.to_limits)
+        pace = ("life.cycles at the wear pace of benchmarks/calibrate_plan.py's reference run, "
+                "scaled by Archard's k and the clearance")
+        if paced == len(forecasts):
+            why = (f"{span} blocks a run to {pace} (not by the loads or speed: a run that "
+                   "wears faster ends sooner); fewer where a dynamic limit comes first")
+        elif paced:
+            why = (f"{span} blocks a run: {paced:,} of {len(forecasts):,} runs to {pace}, the "
+                   f"others to their wear limits ({limit_keys(limits)})")
+        elif not limits:
             why = f"{span} blocks a run: no wear limit watched to forecast from"
         elif every:
             why = (f"{span} blocks a run to its wear limits ({limit_keys(limits)}), the other "
