@@ -96,7 +96,7 @@ def kernel_only(sizes: list[int], duration: float, layout: str = "soa",
     from clearsweep import gpu
     from clearsweep.simulation import run_kernel
 
-    caps = sorted({capacity or gpu.capacity_for(n) for n in sizes}) if layout == "soa" else [None]
+    caps = sorted({capacity or gpu.capacity_for(n) for n in sizes}) if layout != "aos" else [None]
     began = time.perf_counter()
     for cap in caps:
         gpu.run_packed(packed_cases(2, 1.0e-4), layout, cap)           # compiles
@@ -166,8 +166,10 @@ def main(argv=None) -> int:
                     help="override of every case's config, e.g. joints.O.clearance=2.5e-4")
     ap.add_argument("--simulator", action="store_true",
                     help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
-    ap.add_argument("--layout", choices=("soa", "aos"), default="soa",
-                    help="the device layout (--kernel-only): structure of arrays or case by case")
+    ap.add_argument("--layout", choices=("soa", "aos", "soa-local"), default="soa",
+                    help="the device layout (--kernel-only): structure of arrays, case by case, "
+                         "or structure of arrays with the work arrays in each thread's local "
+                         "memory")
     ap.add_argument("--capacity", type=int, default=None,
                     help="launch capacity of every soa launch (--kernel-only; default: the "
                          "smallest that holds each size)")

@@ -19,6 +19,9 @@ that), so that the call is known to work before device time is spent. Steps, in 
 4. **sweep, CPU**: the same sweep's first ``--cpu-cases`` cases (100 per core by default) on
    the host's CPU workers (``--backend processes``), side by side in the same call; its
    cases/s against the device's.
+4b. **variants** (issue 43 item 6), where time is left: the kernel step again for the
+   work arrays in each thread's local memory (layout soa-local) and for the
+   structure-of-arrays kernel built to prefer the most L1 (``CLEARSWEEP_CUDA_CARVEOUT=maxl1``).
 5. **ncu**, where ``ncu`` is on the PATH: achieved occupancy, L1/L2 hit rates, DRAM
    throughput, sectors per request and the warp stall reasons of one launch of 2,000 short
    cases per layout (the raw CSV kept).
@@ -79,15 +82,16 @@ class Suite:
     def left(self) -> float:
         return self.budget - (time.perf_counter() - self.began)
 
-    def env(self) -> dict:
+    def env(self, extra: dict | None = None) -> dict:
         env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1"}
         if self.simulator:
             env.update(NUMBA_ENABLE_CUDASIM="1", NUMBA_DISABLE_JIT="1")
         else:
             env["CLEARSWEEP_CUDA_CACHE"] = "1"
+        env.update(extra or {})
         return env
 
-    def run(self, name: str, argv: list[str], need: float) -> dict | None:
+    def run(self, name: str, argv: list[str], need: float, extra: dict | None = None) -> dict | None:
         """Run argv (a step's process) with the time left; its wall time, exit status and
         output tail, or None where it was skipped (recorded as such)."""
         if self.left() < need:
@@ -95,7 +99,7 @@ class Suite:
             return None
         began = time.perf_counter()
         try:
-            proc = subprocess.run(argv, capture_output=True, text=True, env=self.env(), cwd=ROOT,
+            proc = subprocess.run(argv, capture_output=True, text=True, env=self.env(extra), cwd=ROOT,
                                   timeout=max(1.0, self.left()))
             rc, tail = proc.returncode, (proc.stdout + proc.stderr)[-3000:]
             self.full = proc.stdout
@@ -131,7 +135,7 @@ BUILD = r"""
 import json, sys, time
 from clearsweep import ptx
 layout, cap = sys.argv[1], int(sys.argv[2])
-res = {"layout": layout, "capacity": cap if layout == "soa" else None}
+res = {"layout": layout, "capacity": cap if layout.startswith("soa") else None}
 if layout == "cpu":
     from clearsweep.simulation import prepare_kernel
     began = time.perf_counter()
@@ -181,30 +185,46 @@ def builds(suite: Suite, kernels: list[tuple[str, int]], ptxas: bool = False) ->
     suite.record["steps"]["builds"] = {"seconds": time.perf_counter() - began, "kernels": done}
 
 
-def kernel(suite: Suite, sizes: list[int], duration: float) -> None:
-    """Step 2: one launch per size and layout, each layout in its own process."""
+#: Step 2's kernels: (name, layout, environment), each timed in its own process.
+KERNELS = (("aos", "aos", {}), ("soa", "soa", {}))
+
+#: Step 4b, issue 43 item 6's arrangements, timed against step 2's "soa" where time is left:
+#: the fixed-size work arrays in each thread's local memory ("soa-local", which the
+#: hardware interleaves thread by thread), and the structure-of-arrays kernel preferring
+#: the most L1 over shared memory (``core.device.CARVEOUT``; compiled in its own process,
+#: outside the on-disk cache, so that no build of another carve-out is loaded for it).
+VARIANTS = (("soa-local", "soa-local", {}),
+            ("soa-maxl1", "soa", {"CLEARSWEEP_CUDA_CARVEOUT": "maxl1",
+                                  "CLEARSWEEP_CUDA_CACHE": "0"}))
+
+
+def kernel(suite: Suite, sizes: list[int], duration: float, kernels=KERNELS,
+           step: str = "kernel") -> None:
+    """Step 2 (and 4b, ``kernels=VARIANTS``): one launch per size and kernel, each kernel in
+    its own process."""
     rows = []
     cap = None
     if not suite.simulator:
         from clearsweep.gpu import capacity_for
 
         cap = capacity_for(max(sizes))
-    for layout in ("aos", "soa"):
-        path = suite.work / f"kernel_{layout}.json"
+    for name, layout, extra in kernels:
+        path = suite.work / f"kernel_{name}.json"
         argv = [sys.executable, str(BENCH), "--kernel-only", "--layout", layout, "--sizes",
                 *map(str, sizes), "--duration", str(duration), "--json", str(path)]
         argv += [a for s in KERNEL_SET for a in ("--set", s)]
         if suite.simulator:
             argv.append("--simulator")
-        elif layout == "soa":
+        elif layout != "aos":
             argv += ["--capacity", str(cap)]
-        res = suite.run(f"kernel_{layout}", argv, need=30)
+        res = suite.run(f"kernel_{name}", argv, need=30 if step == "kernel" else 90, extra=extra)
         if res is None:
             continue
+        res["kernel"] = name
         if res["rc"] == 0 and path.exists():
             res.update(json.loads(path.read_text()))
         rows.append(res)
-    suite.record["steps"]["kernel"] = rows
+    suite.record["steps"][step] = rows
 
 
 def sweep_file(suite: Suite, n: int, duration: float) -> tuple[Path, list[str]]:
@@ -310,17 +330,18 @@ def table(record: dict) -> str:
     for b in steps.get("builds", {}).get("kernels", []):
         lines.append(f"| build | {b.get('layout')} {b.get('capacity') or ''} | | | "
                      f"{b.get('build_s', float('nan')):.1f} | {b.get('ptxas', b.get('error', ''))[:120]} | |")
-    for k in steps.get("kernel", []):
+    for k in steps.get("kernel", []) + steps.get("variants", []):
         for launch in k.get("launches", []):
-            lines.append(f"| kernel | {k.get('layout')} | {launch['cases']:,} | {k.get('duration_s')} | "
+            name = k.get("kernel", k.get("layout"))
+            lines.append(f"| kernel | {name} | {launch['cases']:,} | {k.get('duration_s')} | "
                          f"{launch['seconds']:.2f} | {launch['steps_per_s']:.3g} RK4 steps/s | "
                          f"{launch['statuses']} |")
         for a in k.get("agreement", []):
-            lines.append(f"| CPU agreement | {k.get('layout')} | case {a['case']} | | | statistics "
+            lines.append(f"| CPU agreement | {k.get('kernel', k.get('layout'))} | case {a['case']} | | | statistics "
                          f"{a['stats_max_rel']:.1e}, worn volume {a['wvol_max_rel']:.1e} relative | "
                          f"{a['status']} |")
         if k.get("rc"):
-            lines.append(f"| kernel | {k['argv'][k['argv'].index('--layout') + 1]} | | | "
+            lines.append(f"| kernel | {k.get('kernel')} | | | "
                          f"{k['seconds']:.1f} | failed (exit {k['rc']}) | see its log |")
     for name in ("sweep_cuda", "sweep_cpu"):
         s = steps.get(name)
@@ -390,10 +411,11 @@ def main(argv=None) -> int:
         (args.out / "suite.json").write_text(json.dumps(suite.record, indent=1))
         return 2
     kernels = [("cpu", 0), ("aos", capacity_for(max(sizes))), ("soa", capacity_for(max(sizes))),
-               ("soa", capacity_for(n))]
+               ("soa", capacity_for(n)), ("soa-local", capacity_for(max(sizes)))]
     builds(suite, list(dict.fromkeys(kernels)), args.ptxas)
     kernel(suite, sizes, kdur)
     sweeps(suite, n, sdur, cpu_cases, workers)
+    kernel(suite, sizes, kdur, VARIANTS, "variants")
     ncu(suite, args.ncu_cases)
     suite.record["seconds"] = time.perf_counter() - suite.began
     (args.out / "suite.json").write_text(json.dumps(suite.record, indent=1))

@@ -745,21 +745,23 @@ def section_class(joint: str) -> Any:
     return type(getattr(JointsConfig(), joint))
 
 
-def _check_bushings(joints: Mapping[str, Any], source: str) -> None:
-    """A bushing (``joints.X.type: bushing``) has no gap and no coated surface: a clearance
-    or a coating with it is refused (either would be silently ignored)."""
+def _check_gapless(joints: Mapping[str, Any], source: str) -> None:
+    """A joint whose type has no gap (``jointtypes.JointKind.gap`` False: the bushing) has no
+    clearance and no coated surface: a clearance or a coating with it is refused (either
+    would be silently ignored)."""
+    from .jointtypes import elastic
+
     for joint, spec in joints.items():
-        # a section's type other than its table type: the bushing, the one alternative
-        table_type = getattr(section_class(joint)(), "type", None)
-        if spec.get("type", table_type) == table_type:
+        kind = spec.get("type")
+        if not elastic(kind):
             continue
         if spec["clearance"] != 0.0:
             raise ConfigError(f"joints.{joint}.clearance", spec["clearance"],
-                              f"0 where joints.{joint}.type is bushing (a bushing has no gap)",
+                              f"0 where joints.{joint}.type is {kind} (a {kind} has no gap)",
                               source)
         if spec["coating"] != "none":
             raise ConfigError(f"joints.{joint}.coating", spec["coating"],
-                              f"'none' where joints.{joint}.type is bushing (a bushing has no "
+                              f"'none' where joints.{joint}.type is {kind} (a {kind} has no "
                               "contact surface)", source)
 
 
@@ -943,7 +945,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_sizes(cfg["joints"], cfg, source)
-    _check_bushings(cfg["joints"], source)
+    _check_gapless(cfg["joints"], source)
     for joint, spec in cfg["joints"].items():
         section_class(joint).check_fit(joint, spec, cfg, source)
     # The tolerance band c -+ t (uniform, or the normal's cut at -+3 sigma) holds every

@@ -58,7 +58,10 @@ SIMULATOR_BATCH = 64
 
 #: The device layouts and launch capacities (``core.device``, which imports numba.cuda:
 #: stated here too, so that planning a batch needs no CUDA import; tests check they agree).
-LAYOUTS = ("soa", "aos")
+LAYOUTS = ("soa", "aos", "soa-local")
+#: The work arrays the "soa-local" layout keeps in each thread's local memory
+#: (``core.device.LOCAL_WORK``): the launch holds a placeholder for each.
+LOCAL_WORK = ("vec", "diag", "cstate", "msave", "mats", "vz", "caps")
 DEFAULT_LAYOUT = "soa"
 CAPACITIES = (64, 1024, 4096, 16384, 32768)
 #: Parameters of a case (p, then jp's rows) and entries of the joint layout ``geom``
@@ -320,7 +323,7 @@ def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tup
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
     map_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
     proj_rows: tuple[int, ...] = (L.N_JOINTS, 3)
-    if layout == "soa":
+    if layout != "aos":
         joints = batch_joints(group)
         lay = map_layout(joints, npolar)
         map_rows, proj_rows = (lay["wmap"][2],), (lay["proj"][2],)
@@ -332,8 +335,10 @@ def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tup
         # one row at least: no zero-size array for the device
         "sec": ((max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.float64, np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
-        if layout == "soa" and name in ("buf_i", "buf_v"):
+        if layout != "aos" and name in ("buf_i", "buf_v"):
             shape = (undo_rows(joints, max_level), 4)
+        if layout == "soa-local" and name in LOCAL_WORK:
+            shape = (1,) * len(shape)       # not read: the thread's local arrays
         shapes[name] = (shape, np.int64 if name in INT_WORK else np.float64, 0)
     shapes.update(rows_t=((1,), np.float64, 0.0), rows_y=((1, L.N_Y), np.float64, 0.0),
                   rows_d=((1, L.N_D), np.float64, 0.0), rows_wmax=((1, L.N_JOINTS), np.float64, 0.0))
@@ -379,6 +384,8 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
     arrays["save_every"] = np.array([pk.save_every for pk in group], dtype=np.int64)
     for name, (shape, dtype, fill) in _shapes(group, layout).items():
         full = (n,) + shape if layout == "aos" else shape + (cap,)
+        if layout == "soa-local" and name in LOCAL_WORK:
+            full = shape + (1,)
         arrays[name] = np.full(full, fill, dtype=dtype) if fill != 0 else np.zeros(full, dtype=dtype)
     from .core.device import ARGS
 
@@ -455,7 +462,7 @@ def _run_on_device(arrays: dict[str, np.ndarray], layout: str = "aos", build: in
         stream.synchronize()
         device.launch(on_device, layout, build, case_sets)
         res = {name: on_device[name].copy_to_host() for name in device.RESULTS}
-    if layout == "soa":
+    if layout != "aos":
         res = {name: from_soa(a, n) for name, a in res.items()}
     return res
 
@@ -473,9 +480,11 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
                capacity: int | None = None) -> list[KernelRun]:
     """Run cases on the device; per case what ``simulation.run_kernel`` returns, with one
     NaN row for the time series (none is kept) and the batch's wall time shared out.
-    ``layout``: "soa" (structure of arrays, :func:`batch_plan`'s capacities) or "aos" (case
-    by case); ``capacity``: the launch capacity of every "soa" batch, of at most that many
-    cases (a benchmark compiles the kernel of the capacity it times)."""
+    ``layout``: "soa" (structure of arrays, :func:`batch_plan`'s capacities), "soa-local"
+    (the same, the fixed-size work arrays in each thread's local memory,
+    ``core.device.LOCAL_WORK``) or "aos" (case by case); ``capacity``: the launch capacity
+    of every structure-of-arrays batch, of at most that many cases (a benchmark compiles
+    the kernel of the capacity it times)."""
     if layout not in LAYOUTS:
         raise ValueError(f"device layout {layout!r}: expected one of {LAYOUTS}")
     device_name()
@@ -503,7 +512,7 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
             res = _run_on_device(_allocate(group, layout, cap), layout, build,
                                  [jointset.of(pk.jp) for pk in group])
             wall = (time.perf_counter() - began) / len(batch)
-            if layout == "soa":
+            if layout != "aos":
                 joints, npolar = batch_joints(group), shape[0]
                 lay = map_layout(joints, npolar)
                 map_rows = [MAP_ROWS[n](npolar) if c else 0 for n, c in zip(JOINT_NAMES, joints)]
@@ -512,7 +521,7 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
                 # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
                 # batch gives strided views), one case at a time
                 one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
-                if layout == "soa":
+                if layout != "aos":
                     one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], map_rows, npolar)
                     one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], proj_rows, 3)
                 out[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],

@@ -8,7 +8,7 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos] [--capacity N]
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos|soa-local] [--capacity N]
 [--joints A,B]`` prints them for the kernel built for a joint set (``core.jointset``; default
 every joint, the generic build), keeping the PTX text in PTX_FILE if given
 (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
@@ -51,7 +51,7 @@ def run_cases_signature(layout: str = "aos") -> tuple:
     from .core.rk4 import INT_WORK, work_shapes
 
     ndim = dict(_NDIM, **{name: 1 + len(shape) for name, shape in work_shapes(0, 1).items()})
-    if layout == "soa":
+    if layout != "aos":
         ndim.update(_NDIM_SOA)
     ints = _INT | INT_WORK
     return tuple(types.Array(types.int64 if name in ints else types.float64, ndim[name], "C")
@@ -83,7 +83,8 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
                           capacity: int = DEFAULT_CAPACITY, spec: int | None = None) -> str:
     """PTX of the batch kernel of ``layout`` built for the joint set ``spec``
     (``core.jointset``; None: every joint, the generic build) for compute capability cc:
-    "soa", ``core.device.soa_kernel(capacity, spec)`` (the default), or "aos",
+    "soa", ``core.device.soa_kernel(capacity, spec)`` (the default), "soa-local" (the same
+    with its fixed-size work arrays in each thread's local memory), or "aos",
     ``core.device.aos_kernel(spec)`` (the arrays of either have the same dimensions). Needs
     numba-cuda with NVVM (``pip install numba-cuda[cu12]``), no device. About a minute on
     one core: the whole kernel is compiled, every device function inlined."""
@@ -98,7 +99,8 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
     from .core.jointset import ALL
 
     spec = ALL if spec is None else spec
-    kernel = device.aos_kernel(spec) if layout == "aos" else device.soa_kernel(capacity, spec)
+    kernel = (device.aos_kernel(spec) if layout == "aos"
+              else device.soa_kernel(capacity, spec, local=layout == "soa-local"))
     with _device_of_capability(cc):
         ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(layout), cc=cc)
     return ptx
@@ -111,7 +113,8 @@ def build_kernel(layout: str = "soa", capacity: int = DEFAULT_CAPACITY) -> float
     processes load (benchmarks/device_suite.py builds each kernel so, in parallel)."""
     from .core import device
 
-    kernel = device.run_cases if layout == "aos" else device.soa_kernel(capacity)
+    kernel = (device.run_cases if layout == "aos"
+              else device.soa_kernel(capacity, local=layout == "soa-local"))
     began = time.perf_counter()
     kernel.compile(run_cases_signature(layout))
     return time.perf_counter() - began
@@ -198,7 +201,7 @@ def parse_args(argv: list[str] | None = None):
     parser.add_argument("--arch", default=f"sm_{DEFAULT_CC[0]}{DEFAULT_CC[1]}",
                         help="the compute capability to build for, as sm_XY "
                              "(default: %(default)s, an H100)")
-    parser.add_argument("--layout", choices=("soa", "aos"), default="soa",
+    parser.add_argument("--layout", choices=("soa", "aos", "soa-local"), default="soa",
                         help="the device layout: structure of arrays (the default) or case by "
                              "case")
     parser.add_argument("--capacity", type=int, default=DEFAULT_CAPACITY,
@@ -236,7 +239,7 @@ def main(argv: list[str] | None = None) -> None:
     ptx = compile_run_cases_ptx(args.cc, args.layout, args.capacity, args.spec)
     from .core.jointset import label
 
-    what = "soa, capacity %d" % args.capacity if args.layout == "soa" else "aos"
+    what = "%s, capacity %d" % (args.layout, args.capacity) if args.layout != "aos" else "aos"
     what += f", clearance at {label(args.spec)}"
     print(f"PTX ({what}): {len(ptx):,} characters in {time.perf_counter() - began:.0f} s")
     if args.output is not None:

@@ -27,8 +27,9 @@ def test_the_device_suite_runs_in_the_simulator(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["suite.json", "suite.md"]
     record = json.loads((out / "suite.json").read_text())
     assert record["simulator"] and record["device"] == "numba CUDA simulator"
-    kernel = {k["layout"]: k for k in record["steps"]["kernel"]}
-    assert sorted(kernel) == ["aos", "soa"]
+    kernel = {k["kernel"]: k for k in record["steps"]["kernel"] + record["steps"]["variants"]}
+    # step 2, and issue 43 item 6's arrangements (4b): local work arrays, the L1 carve-out
+    assert sorted(kernel) == ["aos", "soa", "soa-local", "soa-maxl1"]
     for layout, k in kernel.items():
         assert k["rc"] == 0, k["tail"]
         assert [launch["cases"] for launch in k["launches"]] == [8]
@@ -45,7 +46,7 @@ def test_the_device_suite_runs_in_the_simulator(tmp_path):
     assert set(record["skipped"]) == {"builds", "ncu"}
     table = (out / "suite.md").read_text()
     assert "| step | layout | cases |" in table
-    assert table.count("| kernel | ") == 2 and "device / CPU workers" in table
+    assert table.count("| kernel | ") == 4 and "device / CPU workers" in table
 
 
 def _suite_module():

@@ -245,8 +245,10 @@ cfgs = [base.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4),
         base]
 packed = [pack(c, resolve_materials(c)) for c in cfgs]
 aos = gpu.run_packed(packed, layout="aos")
-soa = gpu.run_packed(packed, layout="soa")
-for k, (a, b) in enumerate(zip(aos, soa)):
+pairs = []
+for layout in ("soa", "soa-local"):
+    pairs += list(zip(aos, gpu.run_packed(packed, layout=layout)))
+for k, (a, b) in enumerate(pairs):
     assert a.status == b.status == "ok", (k, a.status, b.status)
     for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
         x, y = np.asarray(getattr(a, name)), np.asarray(getattr(b, name))
@@ -254,18 +256,19 @@ for k, (a, b) in enumerate(zip(aos, soa)):
         assert getattr(b, name).flags.c_contiguous, (k, name)     # as the CPU kernel's
     assert (a.residual_max, a.ke_peak, a.rk4_steps, a.deepest) == (b.residual_max, b.ke_peak, b.rk4_steps, b.deepest), k
 impacts = float(aos[1].stats[0].max())
-print("compared", len(aos), "cases; largest statistic", impacts)
+print("compared", len(pairs), "cases; largest statistic", impacts)
 """
 
 
 @pytest.mark.slow
 def test_simulated_layouts_agree_bit_for_bit():
-    """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity)
-    and the case-by-case one compute the same bits in the simulator, where both run the
-    kernel's Python source: clearance at A and B, at B and O from the centred start
-    (impacts), and ideal joints, in one batch."""
+    """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity),
+    the same with the fixed-size work arrays in each thread's local memory ("soa-local",
+    their launch arrays placeholders) and the case-by-case one compute the same bits in the
+    simulator, where each runs the kernel's Python source: clearance at A and B, at B and O
+    from the centred start (impacts), and ideal joints, in one batch."""
     proc = run_simulated(LAYOUT_SCRIPT)
-    assert "compared 3 cases" in proc.stdout
+    assert "compared 6 cases" in proc.stdout
 
 
 def test_the_numpy_numba_cuda_pairing_is_pinned_as_the_check_states():

@@ -14,7 +14,7 @@ import pytest
 from numba.core.registry import CPUDispatcher
 
 import clearsweep.core as core
-from clearsweep.config import DEFAULTS, JointsConfig, resolve_materials
+from clearsweep.config import DEFAULTS, JointsConfig, load_config, resolve_materials
 from clearsweep.core import joints
 from clearsweep.core import layout as L
 from clearsweep.core.compiled import compiled
@@ -222,3 +222,61 @@ def test_the_table_attachments_meet_at_the_ideal_start():
     # and a moved attachment would not meet
     moved = joints.JOINTS[0].ball._replace(factors=(0.0, 0.0, 0.5))
     assert not np.allclose(point(moved), point(joints.JOINTS[0].socket), atol=1e-6)
+
+
+def test_the_free_coordinates_table_sizes_the_solve():
+    """``joints.FREE`` describes the solve's columns: its length is ``dynamics.NZ``, the
+    coordinates the guide frees come last (``NZ_HELD`` before them), and each names a body
+    with a state, an axis and, where it is not always free, a joint of the table whose ball
+    is that body."""
+    from clearsweep.core import dynamics
+
+    by_name = {b.name: b for b in joints.BODIES}
+    names = [j.name for j in joints.JOINTS]
+    assert dynamics.NZ == len(joints.FREE)
+    assert [c.freed_by for c in joints.FREE[dynamics.NZ_HELD:]] == ["P", "P"]
+    for c in joints.FREE:
+        assert by_name[c.body].y_r is not None, c
+        assert c.axis in ("x", "y", "z", "alpha", "beta"), c
+        if c.freed_by is not None:
+            joint = joints.JOINTS[names.index(c.freed_by)]
+            assert joint.ball.body == c.body and c.axis in ("y", "z"), c
+
+
+def _state_index(c):
+    body = {b.name: b for b in joints.BODIES}[c.body]
+    if c.axis in ("x", "y", "z"):
+        return body.y_r + "xyz".index(c.axis)
+    return body.y_phi + ("alpha", "beta").index(c.axis)
+
+
+@pytest.mark.parametrize("free", [False, True], ids=["O and P ideal", "O and P free"])
+def test_the_free_coordinates_are_the_solves_columns(free):
+    """Each entry of ``joints.FREE`` is the state coordinate whose acceleration the solve
+    returns in that column: evaluate's free accelerations vz[VZ_ZDD, c] are the state
+    derivative's accelerations of the coordinate the table names, where the coordinate is
+    free; a coordinate the table frees by a joint without clearance is held (its column's
+    acceleration 0, the state's from the joint's own constraint)."""
+    from clearsweep.core import dynamics
+    from clearsweep.core.work import Solve
+
+    over = (["joints.O.clearance=2.5e-4", "joints.P.clearance_y=2.5e-4",
+             "joints.P.clearance_z=2.5e-4"] if free else [])
+    cfg = load_config({}, ["solver.duration=0.01"] + over)
+    pk = pack(cfg, resolve_materials(cfg))
+    nz = dynamics.NZ
+    solve = Solve(np.zeros((nz, nz)), np.zeros((nz, nz)), np.zeros((nz, nz)),
+                  np.zeros((dynamics.VZ_ROWS, nz)))
+    y = pk.y0.copy()
+    y[L.Y_QD:L.Y_QD + L.N_Q] += 0.01 * np.sin(np.arange(L.N_Q))   # a state off the closed form
+    dy = np.zeros_like(y)
+    model = Model(pk.p, pk.jp, np.zeros((L.N_JOINTS, L.N_S)),
+                  np.zeros((L.N_JOINTS, *pk.map_shape)))
+    # full=False: a step end's diagnostics reuse vz's rows as work (the stiff rate)
+    assert dynamics.evaluate(0.0, y, model, dy, np.zeros(L.N_D), False, solve) == L.ST_OK
+    zdd = solve.vz[dynamics.VZ_ZDD]
+    for k, c in enumerate(joints.FREE):
+        if c.freed_by is None or free:
+            assert zdd[k] == dy[L.Y_QD + _state_index(c)], c.name
+        else:
+            assert zdd[k] == 0.0, c.name

@@ -61,7 +61,15 @@ from .layout import (
     N_Y,
 )
 from .numba_compat import simulator_array
-from .rk4 import PAIR_FIRST, work_shapes
+from .rk4 import (
+    CAP_ROWS,
+    CSTATE_ROWS,
+    DIAG_ROWS,
+    MAT_ROWS,
+    PAIR_FIRST,
+    VEC_ROWS,
+    work_shapes,
+)
 from .rk4 import advance as _cpu_advance
 from .target import on_device
 from .work import Case, Out, Rk4Work
@@ -73,7 +81,19 @@ SIMULATED = bool(numba.config.ENABLE_CUDASIM)
 #: layout and capacity instead of compiling it (benchmarks/device_suite.py builds them in
 #: parallel processes first). Off by default: tried on a device by that script alone.
 CACHE_KERNELS = os.environ.get("CLEARSWEEP_CUDA_CACHE") == "1" and not SIMULATED
-_jit = cuda.jit(cache=True) if CACHE_KERNELS else cuda.jit
+
+#: ``CLEARSWEEP_CUDA_CARVEOUT``: the kernels' preferred split of each multiprocessor's L1
+#: and shared memory (numba-cuda's ``shared_memory_carveout``: ``maxl1``, ``maxshared``,
+#: ``default`` or a percentage of shared memory). The kernel uses no shared memory, so
+#: ``maxl1`` gives the threads' spills and local arrays the most L1 (issue 43 item 6: to time
+#: against the driver's default, benchmarks/device_suite.py). Unset: the driver's choice.
+CARVEOUT = None if SIMULATED else os.environ.get("CLEARSWEEP_CUDA_CARVEOUT") or None
+_options: dict = {}
+if CACHE_KERNELS:
+    _options["cache"] = True
+if CARVEOUT is not None:
+    _options["shared_memory_carveout"] = int(CARVEOUT) if CARVEOUT.isdigit() else CARVEOUT
+_jit = cuda.jit(**_options) if _options else cuda.jit
 
 #: Threads per block. The kernel is register- and local-memory-heavy (the right-hand side
 #: keeps its 3-vectors and 3x3 matrices in registers): small blocks keep occupancy even.
@@ -298,6 +318,14 @@ else:
     _advance = _cpu_advance
 
 
+@cuda.jit(device=True)
+def zero_rows(a):
+    """Set the 2-d array a to zero (a thread's local work array, :func:`soa_kernel`)."""
+    for r in range(a.shape[0]):
+        for c in range(a.shape[1]):
+            a[r, c] = 0.0
+
+
 #: The case-by-case ("aos") kernels built so far, by joint set (:func:`aos_kernel`).
 _AOS_KERNELS: dict = {}
 
@@ -365,7 +393,7 @@ CAPACITIES = (64, 1024, 4096, 16384, 32768)
 #: The device layouts: "soa" (structure of arrays, the default: element e of case i at
 #: e * capacity + i, so that a warp's 32 threads read 32 consecutive words) and "aos" (array
 #: of structures, case by case: :func:`run_cases`, kept to measure one against the other).
-LAYOUTS = ("soa", "aos")
+LAYOUTS = ("soa", "aos", "soa-local")
 DEFAULT_LAYOUT = "soa"
 
 
@@ -380,18 +408,29 @@ def capacity_for(n: int) -> int:
 
 _SOA_KERNELS: dict = {}
 
+#: The work arrays that the "soa-local" layout keeps in each thread's local memory rather
+#: than in the batch's global arrays (``rk4.work_shapes``' groups of a fixed size: every one
+#: but the undo buffer and the wear scratch, whose sizes the batch decides, and ``pairs``,
+#: whose row PAIR_FIRST is a result). The hardware interleaves local memory thread by
+#: thread, so a warp's accesses to it coalesce as the structure-of-arrays layout's do; the
+#: launch's global arrays of these names are then placeholders of one element per axis.
+LOCAL_WORK = ("vec", "diag", "cstate", "msave", "mats", "vz", "caps")
 
-def soa_kernel(capacity: int, spec: int = ALL):
+
+def soa_kernel(capacity: int, spec: int = ALL, local: bool = False):
     """:func:`run_cases` over arrays stored structure-of-arrays for ``capacity`` cases (one
     of :data:`CAPACITIES`), built for the joint set ``spec`` (as :func:`aos_kernel`) once per
-    capacity, set and process: the same arguments, each per-case array of shape (per-case
-    shape..., capacity) with the case as its last axis; n_steps and save_every hold the
-    batch's n cases (threads past n do nothing)."""
+    capacity, set, arrangement and process: the same arguments, each per-case array of shape
+    (per-case shape..., capacity) with the case as its last axis; n_steps and save_every
+    hold the batch's n cases (threads past n do nothing). ``local`` (the "soa-local"
+    layout): the work arrays of :data:`LOCAL_WORK` are each thread's local arrays, and the
+    launch's arrays of those names are not read."""
     if capacity not in CAPACITIES:
         raise ValueError(f"launch capacity {capacity}: expected one of {CAPACITIES}")
     spec = int(spec)
-    if (capacity, spec) in _SOA_KERNELS:
-        return _SOA_KERNELS[capacity, spec]
+    local = bool(local)
+    if (capacity, spec, local) in _SOA_KERNELS:
+        return _SOA_KERNELS[capacity, spec, local]
     cap = capacity      # a constant of the kernel (a closure variable), as the joint set
 
     @_jit
@@ -431,6 +470,34 @@ def soa_kernel(capacity: int, spec: int = ALL):
                       soa_block(track, i, 0, (N_TRACK,), cap),
                       soa_block(pairs, i, PAIR_FIRST, (N_JOINTS,), cap),
                       soa_block(sec, i, 0, (sec.shape[0], N_SEC), cap))
+            if local:
+                # LOCAL_WORK in the thread's local memory (a constant of the build: the
+                # branch not taken is pruned before typing)
+                lv = cuda.local.array((VEC_ROWS, N_Y), numba.float64)
+                ld = cuda.local.array((DIAG_ROWS, N_D), numba.float64)
+                ls = cuda.local.array((CSTATE_ROWS, N_JOINTS, N_S), numba.float64)
+                lm = cuda.local.array((N_WINDOWS, N_M), numba.float64)
+                lc = cuda.local.array((MAT_ROWS, NZ, NZ), numba.float64)
+                lz = cuda.local.array((VZ_ROWS, NZ), numba.float64)
+                lk = cuda.local.array((CAP_ROWS, N_CAP_ROWS, N_CAP), numba.float64)
+                # zeroed, as the host's arrays are
+                for a in (lv, ld, lm, lz):
+                    zero_rows(a)
+                for a in (ls, lc, lk):
+                    for r in range(a.shape[0]):
+                        zero_rows(a[r])
+                work = Rk4Work(lv[0], lv[1], lv[2], lv[3], lv[4], lv[5], lv[6], ld[0], ld[1],
+                               ls[0], ls[1], lm, soa_block(pairs, i, 0, (N_JOINTS,), cap),
+                               soa_block(pairs, i, 1, (N_JOINTS,), cap),
+                               soa_block(pairs, i, 2, (N_JOINTS,), cap),
+                               soa_block(pairs, i, PAIR_FIRST_COPY, (N_JOINTS,), cap),
+                               lc[0], lc[1], lc[2], lz,
+                               soa_block(buf_i, i, 0, (nbuf, 4), cap),
+                               soa_block(buf_v, i, 0, (nbuf, 4), cap), lk[0], lk[1],
+                               soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
+                               lv[7], ld[2], lv[8], lv[9])
+                _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                return
             work = Rk4Work(soa_block(vec, i, 0, (N_Y,), cap), soa_block(vec, i, 1, (N_Y,), cap),
                            soa_block(vec, i, 2, (N_Y,), cap), soa_block(vec, i, 3, (N_Y,), cap),
                            soa_block(vec, i, 4, (N_Y,), cap), soa_block(vec, i, 5, (N_Y,), cap),
@@ -455,7 +522,7 @@ def soa_kernel(capacity: int, spec: int = ALL):
                            soa_block(vec, i, 8, (N_Y,), cap), soa_block(vec, i, 9, (N_Y,), cap))
             _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
 
-    _SOA_KERNELS[capacity, spec] = run_cases_soa
+    _SOA_KERNELS[capacity, spec, local] = run_cases_soa
     return run_cases_soa
 
 
@@ -515,7 +582,7 @@ def launch(arrays: dict, layout: str = "aos", spec: int = ALL, case_sets=()) -> 
     else:
         cap = arrays["p"].shape[-1]
         for name in ARGS:
-            if name in PER_CASE_SCALARS:
+            if name in PER_CASE_SCALARS or (layout == "soa-local" and name in LOCAL_WORK):
                 continue
             if name in BATCH_ROWS:
                 if tuple(arrays[name].shape) != BATCH_ROWS[name]:
@@ -531,7 +598,7 @@ def launch(arrays: dict, layout: str = "aos", spec: int = ALL, case_sets=()) -> 
                                  f"{arrays[name].shape[:-1]}, expected {shape}")
         if n > cap:
             raise ValueError(f"{n} cases exceed the arrays' capacity {cap}")
-        kernel = soa_kernel(cap, spec)
+        kernel = soa_kernel(cap, spec, local=layout == "soa-local")
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
     kernel[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()

@@ -31,7 +31,7 @@ from numba import types
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .joints import BODIES, INDEX, JOINTS
+from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, has_clearance, is_bushing, is_free
 from .kinematics import (
     add,
@@ -45,7 +45,6 @@ from .kinematics import (
     point_accel_quadratic,
     point_jacobian_rot,
     point_state,
-    rot_mass,
     rotation,
     scale,
     sub,
@@ -116,20 +115,29 @@ from .layout import (
     Y_R4,
     Y_WORK,
 )
+from .multibody import (
+    GROUND,
+    body_frame,
+    body_motion,
+    body_state,
+    chol_solve,
+    euler_equations,
+    quad_form,
+    solve_spd,
+    tangent_basis,
+)
 from .target import on_device
 from .work import Model, Solve
 
-NZ = 10  # free coordinates: x3, y3, z3, alpha3, beta3, x4, y2, z2, y4, z4
+#: Free coordinates of the equations of motion (``joints.FREE``: x3, y3, z3, alpha3, beta3,
+#: x4, y2, z2, y4, z4), the columns of C and the length of vz's rows.
+NZ = len(FREE)
 
 #: The joints' rows (joints.JOINTS), as constants of the compiled code.
 JOINT_A = INDEX["A"]
 JOINT_B = INDEX["B"]
 JOINT_O = INDEX["O"]
 JOINT_P = INDEX["P"]
-
-#: The ground's body state (r, v, R, w): the bearing of joint O.
-GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
-          (0.0, 0.0, 0.0))
 
 
 @compiled(inline="always")
@@ -148,42 +156,11 @@ def p_free(spec, jp):
     return has_clearance(spec, jp, JOINT_P)
 
 
-@compiled
-def solve_spd(S, vz, b, nc, L):
-    """Solve S x = vz[b] in place (vz[b] <- x) by Cholesky; L receives the factor. False if
-    singular."""
-    for i in range(nc):
-        for j in range(i + 1):
-            acc = S[i, j]
-            for k in range(j):
-                acc -= L[i, k] * L[j, k]
-            if i == j:
-                if acc <= 0.0:
-                    return False
-                L[i, i] = math.sqrt(acc)
-            else:
-                L[i, j] = acc / L[j, j]
-    chol_solve(L, vz, b, nc)
-    return True
 
 
-@compiled
-def chol_solve(L, vz, b, nc):
-    """Solve L L^T x = vz[b] in place."""
-    for i in range(nc):
-        acc = vz[b, i]
-        for k in range(i):
-            acc -= L[i, k] * vz[b, k]
-        vz[b, i] = acc / L[i, i]
-    for i in range(nc - 1, -1, -1):
-        acc = vz[b, i]
-        for k in range(i + 1, nc):
-            acc -= L[k, i] * vz[b, k]
-        vz[b, i] = acc / L[i, i]
-
-
-#: Free coordinates but the slider's y4, z4 (the last two, free only where P has clearance).
-NZ_HELD = NZ - 2
+#: Free coordinates but those the guide P frees (the slider's y4, z4: ``joints.FREE``'s last,
+#: free only where P has clearance).
+NZ_HELD = sum(1 for coordinate in FREE if coordinate.freed_by != "P")
 
 
 @compiled(inline="always")
@@ -306,24 +283,6 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     return (vz[5, 0], vz[5, 1], vz[5, 2], vz[5, 3], vz[5, 4], vz[5, 5])
 
 
-@compiled
-def quad_form(w, u, v):
-    """u^T W v for the packed symmetric W."""
-    return (u[0] * (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])
-            + u[1] * (w[1] * v[0] + w[3] * v[1] + w[4] * v[2])
-            + u[2] * (w[2] * v[0] + w[4] * v[1] + w[5] * v[2]))
-
-
-@compiled
-def tangent_basis(n):
-    """Two unit vectors orthogonal to the unit vector n."""
-    if abs(n[0]) < 0.9:
-        a = (1.0, 0.0, 0.0)
-    else:
-        a = (0.0, 1.0, 0.0)
-    t1 = cross(n, a)
-    t1 = scale(1.0 / math.sqrt(dot(t1, t1)), t1)
-    return t1, cross(n, t1)
 
 
 #: Rows of evaluate's work array vz (float64[VZ_ROWS, NZ], one value per free coordinate or
@@ -339,31 +298,7 @@ VZ_WORK2 = 6
 VZ_ROWS = 8
 
 
-@compiled(inline="always")
-def body_motion(y, r_at, phi_at):
-    """Centroid position [m], velocity [m/s] and Euler-angle rates [rad/s] of the body whose
-    coordinates start at y[r_at] (centroid) and y[phi_at] (angles)."""
-    qd = Y_QD
-    return ((y[r_at], y[r_at + 1], y[r_at + 2]),
-            (y[qd + r_at], y[qd + r_at + 1], y[qd + r_at + 2]),
-            (y[qd + phi_at], y[qd + phi_at + 1], y[qd + phi_at + 2]))
 
-
-@compiled(inline="always")
-def body_frame(tr, pd):
-    """Rotation R and body angular velocity w = G phi_dot [rad/s] of a body from its Euler
-    angles' trig(...) and rates pd."""
-    return rotation(tr), mv(gmat(tr), pd)
-
-
-@compiled(inline="always")
-def body_state(y, tr, r_at, phi_at):
-    """(r, v, R, w) of the body whose coordinates start at y[r_at] and y[phi_at], tr its
-    Euler angles' trig(...): centroid position and velocity, rotation, body angular
-    velocity."""
-    r, v, pd = body_motion(y, r_at, phi_at)
-    R, w = body_frame(tr, pd)
-    return r, v, R, w
 
 
 @compiled(inline="always")
@@ -426,18 +361,6 @@ def free_slider(j, y, t4, model, N4, full, dg, dy):
     ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
     return force, pdiss, ok
 
-
-@compiled(inline="always")
-def euler_equations(J, t, pd, N):
-    """A body's rotational equations in its Euler angles, M phi_dd = Q: (Q = G^T (N - w x J w
-    - J Gdot phi_dot), M = G^T J G, G) for principal inertia J, the angles' trig(...) t,
-    their rates pd and the body-frame moment N (w = G pd)."""
-    G = gmat(t)
-    w = mv(G, pd)
-    gq = gdot_phidot(t, pd[0], pd[1], pd[2])
-    Jw = (J[0] * w[0], J[1] * w[1], J[2] * w[2])
-    Jg = (J[0] * gq[0], J[1] * gq[1], J[2] * gq[2])
-    return mtv(G, sub(N, add(cross(w, Jw), Jg))), rot_mass(J, G), G
 
 
 @compiled(inline="always")

@@ -9,15 +9,15 @@ of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one
 :data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
 registration without its module or docs).
 
-What the table does not drive yet: ``dynamics.evaluate`` applies joint A (crank pin in
-the rod), joint B (rod end in the slider), joint O (crank journal in the ground's
-bearing) and joint P (the slider's block in the ground's guide) by name, with the
-attachment points written there as in :data:`JOINTS`, and removes the crank's rotation
-and the slider's guide analytically (ten free coordinates, the crank's two in the bearing
-plane counting only where O has clearance, the slider's two across its guide only where
-P has,
+What the table does not drive yet: ``dynamics.evaluate`` (the RSSP's equations of motion,
+the one kernel module that names its joints) applies joint A (crank pin in the rod), joint
+B (rod end in the slider), joint O (crank journal in the ground's bearing) and joint P (the
+slider's block in the ground's guide) by name, with the attachment points written there as
+in :data:`JOINTS`, and removes the crank's rotation and the slider's guide analytically
+over the free coordinates of :data:`FREE` (the crank's two in the bearing plane counting
+only where O has clearance, the slider's two across its guide only where P has,
 ``dynamics.minv_apply``); tests/test_joints.py checks the table's attachments against the
-packed initial state.
+packed initial state and :data:`FREE` against the solve's columns.
 """
 
 from collections import namedtuple
@@ -62,6 +62,34 @@ JOINTS = (
 
 #: Joints of the mechanism.
 N_JOINTS = len(JOINTS)
+
+#: A free coordinate of the equations of motion: a column of the ideal joints' constraint
+#: rows and of the free coordinates' mass matrix (``dynamics.NZ`` of them, in this order).
+#: ``body`` names the body it moves, ``axis`` the global axis of a centroid coordinate
+#: (``"x"``, ``"y"``, ``"z"``) or the Euler angle it is (``"alpha"``, ``"beta"``), and
+#: ``freed_by`` the joint whose clearance or bushing frees it (None: free in every build;
+#: elsewhere the coordinate is held, its inverse mass 0).
+FreeCoordinate = namedtuple("FreeCoordinate", ["name", "body", "axis", "freed_by"])
+
+#: The free coordinates of the equations of motion. The crank is driven and the rod's spin
+#: is fixed (gamma3 = 0), so the rod's centroid and two angles and the slider's position
+#: along its guide are always free; the crank's centroid in the bearing's plane only where
+#: O lets it move, and the slider across its guide only where P does (their angles then
+#: follow from the slider's own rotational equations). The coordinates a joint frees come
+#: last, P's last of all: a build without P's clearance loops over the first ones only
+#: (``dynamics.NZ_HELD``).
+FREE = (
+    FreeCoordinate("x3", "rod", "x", None),
+    FreeCoordinate("y3", "rod", "y", None),
+    FreeCoordinate("z3", "rod", "z", None),
+    FreeCoordinate("alpha3", "rod", "alpha", None),
+    FreeCoordinate("beta3", "rod", "beta", None),
+    FreeCoordinate("x4", "slider", "x", None),
+    FreeCoordinate("y2", "crank", "y", "O"),
+    FreeCoordinate("z2", "crank", "z", "O"),
+    FreeCoordinate("y4", "slider", "y", "P"),
+    FreeCoordinate("z4", "slider", "z", "P"),
+)
 
 #: Each joint's row by name (``INDEX["O"]``: the revolute joint's row of jp, s, the maps).
 INDEX = {joint.name: i for i, joint in enumerate(JOINTS)}
