@@ -1064,11 +1064,15 @@ def joint_set(cfg: Config) -> int:
 
 #: The joints on which the CPU's kernel builds are specialised (``core.jointset``: a build
 #: per set of them, compiled and cached once each); a build always holds the others, tested
-#: at run time. Each build costs a cold compile of about 45 CPU seconds: the mixed-clearance
-#: study's 16 sets would compile 16 builds for a run of 40 s. Specialised on the spherical
-#: joints A and B, four builds at most, the ideal case runs 1.12x the generic build; per full
-#: set it would run 1.18x, one clearance 1.05x against 1.01x (benchmarks/README.md, "Builds
-#: per joint set").
+#: at run time. A cold cache's first build costs 70-85 CPU seconds (the functions the
+#: builds share included), each later one 20-28: the mixed-clearance study's 16 sets
+#: would compile 16 builds for a run of 40 s. Specialised on the spherical joints A and B,
+#: four builds at most: against the tree before builds per joint set (c64b06a), side by
+#: side, the ideal case runs 1.11x, one clearance 1.01-1.03x, two 1.01-1.02x (the step inlined,
+#: ``rk4.attempt_step``). Per full set (16 builds for the mixed study) or specialised on A,
+#: B and P as well (8) one clearance ran 1.05-1.06x and two 1.02-1.03x, short of the goals
+#: (1.10x, 1.05x) too, and the main job compiles two builds under each
+#: (benchmarks/README.md, "Builds per joint set", "The CPU's grouping, measured again").
 SPECIALISED_JOINTS = jointset.named("A", "B")
 
 #: The device's: every joint. Folding O and P away halves the CUDA kernel's spill stores

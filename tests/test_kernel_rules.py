@@ -191,3 +191,23 @@ def test_kernel_functions_take_their_arrays_by_name():
     wide = sorted(f"{name} ({n})" for name, disp in kernel_dispatchers().items()
                   if (n := len(inspect.signature(disp.py_func).parameters)) > MAX_KERNEL_ARGUMENTS)
     assert wide == [], f"more than {MAX_KERNEL_ARGUMENTS} arguments: {wide}"
+
+
+def test_a_step_attempt_is_compiled_into_advance():
+    """``rk4.attempt_step`` is inlined into ``rk4.advance`` at Numba's level: left a call of
+    its own (as when ``advance`` was split) the RK4 step ran 5-7 % fewer steps per CPU second
+    on every case (benchmarks/README.md, "The CPU's grouping, measured again"). Its
+    ``step_end`` and ``stage`` come from ``advance``, whose locals type them as plain
+    booleans: inlining drops the callee's own locals, and as literals they would compile
+    ``evaluate`` once per value of ``full`` besides, about twice a build's cold compile."""
+    import inspect
+
+    from numba import types
+
+    from clearsweep.core import rk4
+
+    assert rk4.attempt_step.targetoptions.get("inline") == "always"
+    assert list(inspect.signature(rk4.attempt_step.py_func).parameters)[-2:] == ["step_end", "stage"]
+    assert not rk4.attempt_step.locals
+    local_types = rk4.advance.locals
+    assert local_types["step_end"] == local_types["stage"] == types.boolean

@@ -1126,8 +1126,8 @@ def substep_section(secnext, tk, ts, hs, y, k1, ysub, k1sub):
     hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
 
 
-@compiled(locals=_NOT_LITERAL)
-def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec):
+@compiled(inline="always")
+def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step_end, stage):
     """One attempt at the output-grid step from t at sub-step level ``level`` (``last``: the
     run's last step): 2**level RK4 sub-steps, each accepted (wear, contact episodes,
     statistics, sections) unless the stiff rate needs a deeper level. Returns (status, need,
@@ -1143,8 +1143,6 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec):
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
-    step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
-    stage = False    # the stage evaluations: the derivative only
     slides = has_clearance(spec, jp, JOINT_P)
     nsub = 1 << level
     hs = h / nsub
@@ -1262,6 +1260,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     stab = p[P_STAB]
     max_level = int(p[P_MAX_LEVEL])
     slides = has_clearance(spec, jp, JOINT_P)   # the slider's block free in its guide
+    step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
+    stage = False    # the stage evaluations: the derivative only
     clear_work(work, out)
     plan_sections(p, t0, n_steps, sec)
     # the Poincare sections: the next one's index and time
@@ -1307,7 +1307,8 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
                 status = ST_UNSTABLE_STEP
                 break
             status, need, nbuf, nsub, kept = attempt_step(t, level, last, model, solve, wear,
-                                                          out, work, kept, spec)
+                                                          out, work, kept, spec, step_end,
+                                                          stage)
             if status != ST_OK or need < 0:
                 break
             # reject: undo this step's wear and state, go deeper
