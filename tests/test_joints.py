@@ -249,6 +249,35 @@ def test_every_joint_types_protocol_returns_its_shape_and_neutral_values():
             assert np.isnan(out["section_offsets"][0]).all(), type_name
 
 
+def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
+    """jointkinds' masks put each row of the table under its own type alone, its multi-contact
+    rows are those whose type has several contact points, and a row's ball body state is the
+    one its body's slots of joints.BODIES give (for the guide's block, bit for bit the state
+    dynamics.evaluate hands the guide's contact)."""
+    from clearsweep.core import jointkinds as kinds
+    from clearsweep.core.dynamics import slider_state
+
+    masks = {"spherical": kinds.SPHERICAL, "revolute": kinds.REVOLUTE,
+             "prismatic": kinds.PRISMATIC, "bushing": kinds.BUSHING}
+    assert set(masks) == set(joints.JOINT_TYPES) == set(kinds.MODULES)
+    for j, joint in enumerate(joints.JOINTS):
+        assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [joint.type], joint.name
+        module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[joint.type]}")
+        assert kinds.is_multi(j) == (module.CONTACTS > 1) and kinds.contacts(j) == module.CONTACTS
+        assert (kinds.MULTI_ROW == j) == (module.CONTACTS > 1), joint.name
+    rng = np.random.default_rng(3)
+    y = rng.normal(scale=0.1, size=L.N_Y)
+    bodies = {b.name: b for b in joints.BODIES}
+    for j, joint in enumerate(joints.JOINTS):
+        body = bodies[joint.ball.body]
+        r, v, R, w = kinds.ball_body(j, y)
+        assert r == tuple(y[body.y_r:body.y_r + 3]), joint.name
+        assert v == tuple(y[L.Y_QD + body.y_r:L.Y_QD + body.y_r + 3]), joint.name
+        assert R == rotation(trig(*y[body.y_phi:body.y_phi + 3])), joint.name
+        if body.name == "slider":
+            assert (r, v, R, w) == slider_state(y)
+
+
 #: Kernel modules that dispatch on a joint's type (core/jointkinds.py) and must not name a
 #: joint of the table.
 NAMELESS = ("rk4.py", "dopri5.py", "wear.py", "device.py", "jointkinds.py")

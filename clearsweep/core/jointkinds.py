@@ -14,14 +14,15 @@ loops below (which test ``jointset.has_clearance``) pass it by.
 
 A type touches its socket at one point (``CONTACTS`` 1: the kernel's one-point rules of
 ``rk4.accept_substep``, ``rk4.merge_wear``, ...) or at several (:data:`MULTI`: the type's own
-``accept`` and ``deposit_step``, :func:`multi_free`). A type that needs the ball's body
+``accept`` and ``deposit_step``, :func:`multi_free`; one such joint, :data:`MULTI_ROW`, as the
+step's wear rows of ``layout`` hold one). A type that needs the ball's body
 state (``accept``, ``seat``, ``penetration``) gets it from :func:`ball_body`, read from the
 state vector at the ball's body's slots in ``joints.BODIES``.
 """
 
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
-from .joints import BODIES, JOINT_TYPES, JOINTS, N_JOINTS
+from .joints import BODIES, JOINT_TYPES, JOINTS
 from .jointset import has_clearance
 from .kinematics import gmat, mv, rotation, trig
 from .layout import Y_QD
@@ -45,8 +46,15 @@ PRISMATIC = rows_of("prismatic")
 #: 0: a bushing is never a row's type (it stands in per case)
 BUSHING = rows_of("bushing")
 
-#: The rows whose type touches at several points (its module's ``CONTACTS`` > 1).
+#: The rows whose type touches at several points (its module's ``CONTACTS`` > 1), a bitmask.
 MULTI = sum(1 << j for j, joint in enumerate(JOINTS) if MODULES[joint.type].CONTACTS > 1)
+if MULTI & (MULTI - 1):
+    raise ImportError("the step's wear rows (layout.CAP_SLOT_ROW ...) hold one multi-contact "
+                      "joint's edge lines; the joint table has several such joints")
+#: The multi-contact row (-1: none), a compile-time constant: the kernel hands it to its
+#: type's functions as a constant, so that their indices into jp, s and the maps fold (a
+#: device build inlines them whole).
+MULTI_ROW = MULTI.bit_length() - 1
 
 
 def _ball_slots(joint):
@@ -77,12 +85,10 @@ def is_multi(j):
 
 @compiled(inline="always")
 def multi_free(spec, jp):
-    """Whether a multi-contact joint has clearance in this case (``spec``: the build's
-    joint set): its ``accept`` and ``deposit_step`` have work to do."""
-    for j in range(N_JOINTS):
-        if is_multi(j) and has_clearance(spec, jp, j):
-            return True
-    return False
+    """Whether the multi-contact joint (:data:`MULTI_ROW`) has clearance in this case
+    (``spec``: the build's joint set): its ``accept`` and ``deposit_step`` have work to
+    do."""
+    return MULTI_ROW >= 0 and has_clearance(spec, jp, MULTI_ROW)
 
 
 @compiled(inline="always")
@@ -224,10 +230,3 @@ def seat(j, model, dg, body):
         return prismatic.seat(j, model, dg, body)
     return bushing.seat(j, model, dg, body)
 
-
-#: A row of the table whose type has no branch above would take the bushing's neutral
-#: values: refused here, when the kernel is imported.
-_UNDISPATCHED = [joint.name for j, joint in enumerate(JOINTS)
-                 if not (SPHERICAL | REVOLUTE | PRISMATIC) >> j & 1]
-if _UNDISPATCHED:
-    raise ImportError(f"jointkinds has no branch for the type of joints {_UNDISPATCHED}")

@@ -17,7 +17,7 @@ from . import jointkinds as kinds
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
 from .dynamics import NZ, VZ_ROWS, evaluate
-from .jointkinds import ball_body, is_multi, multi_free
+from .jointkinds import MULTI_ROW, ball_body, is_multi, multi_free
 from .joints import BODIES, JOINTS
 from .jointset import ALL, has_clearance
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
@@ -796,18 +796,16 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
 
 @compiled
 def accept_multi(hs, in_settled, model, stats, cur, y, spec):
-    """:func:`accept_substep`'s part for each multi-contact joint with clearance
-    (``jointkinds.MULTI``; ``spec``: the build's joint set): its points' impacts and wear
-    (its type's ``accept``) from its ball's body state in y (``jointkinds.ball_body``). A
-    call of its own beside accept_substep, so that the step's bookkeeping of every case
-    without such a joint is what it was before the prismatic joint (steps/s,
-    benchmarks/README.md). Returns whether a point's episode changed."""
-    changed = False
-    for j in range(N_JOINTS):
-        if is_multi(j) and has_clearance(spec, model.jp, j):
-            if kinds.accept(j, model, ball_body(j, y), hs, in_settled, stats, cur):
-                changed = True
-    return changed
+    """:func:`accept_substep`'s part for the multi-contact joint with clearance
+    (``jointkinds.MULTI_ROW``, a constant; ``spec``: the build's joint set): its points'
+    impacts and wear (its type's ``accept``) from its ball's body state in y
+    (``jointkinds.ball_body``). A call of its own beside accept_substep, so that the step's
+    bookkeeping of every case without such a joint is what it was before the prismatic
+    joint (steps/s, benchmarks/README.md). Returns whether a point's episode changed."""
+    if multi_free(spec, model.jp):
+        return kinds.accept(MULTI_ROW, model, ball_body(MULTI_ROW, y), hs, in_settled, stats,
+                            cur)
+    return False
 
 
 @compiled
@@ -950,13 +948,12 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
 
 @compiled
 def deposit_multi(wmap, cur, wmax, jp, wvol, spec):
-    """After an accepted step, for each multi-contact joint with clearance (``spec``: the
-    build's joint set): its points' wear of the step on its map (its type's
-    ``deposit_step``, which adds it to the worn volume ``wvol``); ``wmax`` keeps the
-    deepest bin [m]."""
-    for j in range(N_JOINTS):
-        if is_multi(j) and has_clearance(spec, jp, j):
-            wmax[j] = max(wmax[j], kinds.deposit_step(wmap, j, jp, cur, wvol))
+    """After an accepted step, where the multi-contact joint has clearance
+    (``jointkinds.MULTI_ROW``, a constant; ``spec``: the build's joint set): its points'
+    wear of the step on its map (its type's ``deposit_step``, which adds it to the worn
+    volume ``wvol``); ``wmax`` keeps the deepest bin [m]."""
+    if multi_free(spec, jp):
+        wmax[MULTI_ROW] = max(wmax[MULTI_ROW], kinds.deposit_step(wmap, MULTI_ROW, jp, cur, wvol))
 
 
 @compiled
