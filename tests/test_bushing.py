@@ -118,11 +118,13 @@ def test_the_bushing_books_its_energy():
 
 def test_the_bushing_keeps_the_joint_type_signatures():
     """gap and contact take the arguments of the spherical joint's, which it stands in for;
-    a bushing does not wear: no wear surface, and its gap reports no penetration."""
+    a bushing does not wear: it never touches (no contact points), its wear surface is
+    zero, and its gap reports no penetration."""
     for name in ("gap", "contact"):
         assert (inspect.signature(getattr(bushing, name).py_func)
                 == inspect.signature(getattr(spherical, name).py_func))
-    assert bushing.WEAR_SURFACE == ()
+    assert bushing.CONTACTS == 0
+    assert bushing.wear_surface(np.zeros((4, L.N_JP)), 0, 1e-6, 1e-4, (1.0, 0.0, 0.0)) == (0.0,) * 5
     ident = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     geo = bushing.gap.py_func(np.zeros((4, L.N_JP)), 0, None, None, 0, (1e-6, 0.0, 0.0),
                               (0.0, 0.0, 0.0), ident)

@@ -53,18 +53,15 @@ def test_every_joint_type_module_is_registered():
 def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, module_name):
     module = importlib.import_module(f"clearsweep.core.{module_name}")
     assert module.JOINT_TYPE == type_name
-    wear = getattr(module, "WEAR_SURFACE", None)
-    assert wear is not None, (
-        f"core/{module_name}.py does not name its wear surface's functions (WEAR_SURFACE)")
-    if not wear:
-        # only a type that does not wear may name none: it compiles no wear geometry and
-        # says so (tests/test_bushing.py: the bushing's gap reports no penetration)
-        assert not any(compiled_here(module, f) for f in ("deposit", "contact_angle",
-                                                          "contact_area")), (
-            f"core/{module_name}.py has wear functions but names none in WEAR_SURFACE")
+    contacts = getattr(module, "CONTACTS", None)
+    assert isinstance(contacts, int) and contacts >= 0, (
+        f"core/{module_name}.py does not say how many contact points it has (CONTACTS)")
+    if contacts == 0:
+        # only a type that never touches may have none: it does not wear either and says
+        # so (tests/test_bushing.py: the bushing's gap reports no penetration)
         assert "does not wear" in (module.__doc__ or ""), (
-            f"core/{module_name}.py names no wear surface without saying it does not wear")
-    missing = [f for f in (*joints.PROVIDES, *wear) if not compiled_here(module, f)]
+            f"core/{module_name}.py has no contact points without saying it does not wear")
+    missing = [f for f in joints.PROVIDES if not compiled_here(module, f)]
     assert not missing, f"core/{module_name}.py does not compile {missing}"
     arch = (ROOT / "docs" / "architecture.md").read_text()
     assert f"`{module_name}.py`" in arch and f"`{type_name}`" in arch, (
@@ -95,28 +92,37 @@ def test_a_registered_joint_type_compiles_the_protocol_signatures(type_name, mod
 
 def test_a_joint_type_with_another_signature_fails_the_protocol_check():
     """The check reads the parameters: a module whose gap lacks the socket's rotation (as
-    revolute's did) or whose contact takes the block alone (as prismatic's did) is named;
-    one that copies a registered type's functions is not."""
+    revolute's did), whose contact takes the block alone (as prismatic's did) or whose seat
+    takes the block without the diagnostics (as prismatic's did) is named, and so is every
+    protocol function it lacks; one that copies a registered type's functions is not."""
     def gap(jp, j, wmap, p, pb, ps):
         return 0.0
 
     def contact(j, model, slider, full, dg):
         return 0.0
 
+    def seat(j, model, slider):
+        return True
+
+    spherical = importlib.import_module("clearsweep.core.spherical")
     wrong = types.ModuleType("wrong")
+    for name in joints.PROVIDES:
+        setattr(wrong, name, getattr(spherical, name))
     wrong.gap = compiled(gap)
     wrong.contact = compiled(contact)
+    wrong.seat = compiled(seat)
     found = protocol_mismatches(wrong)
-    assert len(found) == 2
+    assert len(found) == 3
     assert found[0].startswith("gap(jp, j, wmap, p, pb, ps) is not")
     assert found[1].startswith("contact(j, model, slider, full, dg) is not")
+    assert found[2] == "seat(j, model, slider) is not seat(j, model, dg, body)"
     missing = types.ModuleType("missing")
-    missing.gap = gap           # not compiled, and no contact
-    assert protocol_mismatches(missing) == ["gap: not a compiled function",
-                                            "contact: not a compiled function"]
+    missing.gap = gap           # not compiled, and nothing else
+    assert protocol_mismatches(missing) == [f"{name}: not a compiled function"
+                                            for name in joints.PROVIDES]
     copied = types.ModuleType("copied")
-    spherical = importlib.import_module("clearsweep.core.spherical")
-    copied.gap, copied.contact = spherical.gap, spherical.contact
+    for name in joints.PROVIDES:
+        setattr(copied, name, getattr(spherical, name))
     assert protocol_mismatches(copied) == []
 
 
@@ -163,6 +169,160 @@ def test_every_joint_types_functions_return_the_protocols_shape():
         act = module.contact(j, model, ends[0], ends[1], True, np.zeros(L.N_D))
         assert len(act) == len(spec["contact"].returns), joint.name
         assert [len(v) for v in act[:3]] == [3, 3, 3] and np.isfinite(act[3]), joint.name
+
+
+#: Vector results of the protocol (3-tuples), by function.
+VECTORS = {"section_offsets": ("offset", "offset_rate")}
+
+
+def protocol_arguments(module, j, pk, model, body):
+    """Arguments of each protocol function besides gap and contact for joint row j of a
+    type module, at the packed start: a contact 0.1 um deep at the normal (0, 0.6, 0.8)."""
+    jp = pk.jp
+    pen = 1e-7
+    e = jp[j, L.J_C] + pen
+    n = (0.0, 0.6, 0.8)
+    area, *_, scale = module.wear_surface(jp, j, pen, e, n)
+    if not area > 0.0:
+        area, scale = 1e-7, 1.0
+    wmap = np.zeros((L.N_JOINTS, 36, 72))
+    cur = np.zeros((L.N_CAP_ROWS, L.N_CAP))
+    dg = np.zeros(L.N_D)
+    dg[L.D_DELTA + j], dg[L.D_DDOT + j], dg[L.D_ECC + j] = pen, 0.01, e
+    return {
+        "paper_angle": (jp, j, pen, e),
+        "wear_surface": (jp, j, pen, e, n),
+        "cap_mergeable": (j, 1e-6, 0.05, area, scale),
+        "deposit_cap": (wmap, j, n, 1e-15, area, scale, np.zeros((4 * 36, 3))),
+        "accept": (j, model, body, 1e-5, False, np.zeros((L.N_WINDOWS, L.N_M)), cur),
+        "deposit_step": (wmap, j, jp, cur, np.zeros(L.N_JOINTS)),
+        "penetration": (j, model, 0, body),
+        "section_offsets": (jp, j, (1e-5, 2e-5, 3e-5), (0.1, 0.2, 0.3)),
+        "seat": (j, model, dg, body),
+    }
+
+
+def test_every_joint_types_protocol_returns_its_shape_and_neutral_values():
+    """Each registered type's protocol functions besides gap and contact, on a joint of its
+    type (the bushing on joint A, which it may stand in for) at the packed start: a tuple
+    of the length ``joints.PROTOCOL`` names (a single value where it names one), 3-vectors
+    where named; a one-point type's multi-contact functions and a multi-contact type's
+    one-point ones return their neutral values."""
+    from clearsweep.core.jointkinds import ball_body
+
+    cfg = DEFAULTS.replace(joints__A__clearance=1e-4, joints__B__clearance=1e-4,
+                           joints__O__clearance=1e-4, joints__P__clearance_y=1e-4,
+                           joints__P__clearance_z=1e-4)
+    pk = pack(cfg, resolve_materials(cfg))
+    spec = {fn.name: fn for fn in joints.PROTOCOL}
+    rows = {joint.type: j for j, joint in reversed(list(enumerate(joints.JOINTS)))}
+    for type_name, module_name in sorted(joints.JOINT_TYPES.items()):
+        module = importlib.import_module(f"clearsweep.core.{module_name}")
+        j = rows.get(type_name, 0)
+        model = Model(pk.p, pk.jp, np.zeros((L.N_JOINTS, L.N_S)), np.zeros((L.N_JOINTS, 36, 72)))
+        args = protocol_arguments(module, j, pk, model, ball_body(j, pk.y0))
+        assert set(args) | {"gap", "contact"} == set(joints.PROVIDES)
+        out = {}
+        for name, arg in args.items():
+            got = getattr(module, name)(*arg)
+            out[name] = got
+            if len(spec[name].returns) == 1:
+                assert not isinstance(got, tuple), (type_name, name)
+            else:
+                assert isinstance(got, tuple) and len(got) == len(spec[name].returns), (
+                    type_name, name)
+                for vec in VECTORS.get(name, ()):
+                    assert len(got[spec[name].returns.index(vec)]) == 3, (type_name, name)
+        if module.CONTACTS == 1:
+            assert out["accept"] is False and out["deposit_step"] == 0.0, type_name
+            assert out["penetration"] == -np.inf and out["seat"] is True, type_name
+            assert out["wear_surface"][0] > 0.0 and out["deposit_cap"] > 0.0, type_name
+            c = pk.jp[j, L.J_C]
+            assert out["section_offsets"] == ((1e-5 / c, 2e-5 / c, 3e-5 / c),
+                                              (0.1 / c, 0.2 / c, 0.3 / c)), type_name
+        elif module.CONTACTS > 1:
+            assert out["wear_surface"] == (0.0,) * 5 and out["deposit_cap"] == 0.0, type_name
+            assert out["paper_angle"] == (np.pi, False), type_name
+            assert np.isfinite(out["penetration"]) and out["section_offsets"][0][0] == 0.0
+        else:
+            assert out["seat"] is False and out["accept"] is False, type_name
+            assert np.isnan(out["section_offsets"][0]).all(), type_name
+
+
+def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
+    """jointkinds' masks put each row of the table under its own type alone, its multi-contact
+    rows are those whose type has several contact points, and a row's ball body state is the
+    one its body's slots of joints.BODIES give (for the guide's block, bit for bit the state
+    dynamics.evaluate hands the guide's contact)."""
+    from clearsweep.core import jointkinds as kinds
+    from clearsweep.core.dynamics import slider_state
+
+    masks = {"spherical": kinds.SPHERICAL, "revolute": kinds.REVOLUTE,
+             "prismatic": kinds.PRISMATIC, "bushing": kinds.BUSHING}
+    assert set(masks) == set(joints.JOINT_TYPES) == set(kinds.MODULES)
+    for j, joint in enumerate(joints.JOINTS):
+        assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [joint.type], joint.name
+        module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[joint.type]}")
+        assert kinds.is_multi(j) == (module.CONTACTS > 1) and kinds.contacts(j) == module.CONTACTS
+        assert (kinds.MULTI_ROW == j) == (module.CONTACTS > 1), joint.name
+    rng = np.random.default_rng(3)
+    y = rng.normal(scale=0.1, size=L.N_Y)
+    bodies = {b.name: b for b in joints.BODIES}
+    for j, joint in enumerate(joints.JOINTS):
+        body = bodies[joint.ball.body]
+        r, v, R, w = kinds.ball_body(j, y)
+        assert r == tuple(y[body.y_r:body.y_r + 3]), joint.name
+        assert v == tuple(y[L.Y_QD + body.y_r:L.Y_QD + body.y_r + 3]), joint.name
+        assert R == rotation(trig(*y[body.y_phi:body.y_phi + 3])), joint.name
+        if body.name == "slider":
+            assert (r, v, R, w) == slider_state(y)
+
+
+#: Kernel modules that dispatch on a joint's type (core/jointkinds.py) and must not name a
+#: joint of the table.
+NAMELESS = ("rk4.py", "dopri5.py", "wear.py", "device.py", "jointkinds.py")
+
+
+def joint_mentions(source):
+    """Where Python source names a joint of the table: a ``JOINT_A``/``B``/``O``/``P`` name
+    (bare, an attribute or an import) or a subscript of ``INDEX`` (``joints.INDEX["P"]``)."""
+    import ast
+    import re
+
+    named = re.compile(r"JOINT_[ABOP]$")
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Name) and named.match(node.id):
+            found.append(f"line {node.lineno}: {node.id}")
+        elif isinstance(node, ast.Attribute) and named.match(node.attr):
+            found.append(f"line {node.lineno}: .{node.attr}")
+        elif isinstance(node, ast.alias) and named.match(node.asname or node.name):
+            found.append(f"line {node.lineno}: import {node.name}")
+        elif isinstance(node, ast.Subscript):
+            target = node.value
+            name = target.id if isinstance(target, ast.Name) else getattr(target, "attr", None)
+            if name == "INDEX":
+                found.append(f"line {node.lineno}: INDEX[...]")
+    return found
+
+
+@pytest.mark.parametrize("name", NAMELESS)
+def test_the_integrators_name_no_joint(name):
+    """The integrators, the wear map, the device kernel and the type dispatch read the
+    joint table through the joint-type protocol (``jointkinds``), never a joint by name."""
+    source = (ROOT / "clearsweep" / "core" / name).read_text()
+    assert joint_mentions(source) == [], f"core/{name} names a joint"
+
+
+def test_the_scan_finds_a_joint_named_in_any_form():
+    source = ("from .dynamics import JOINT_P\n"
+              "def f(j, y):\n"
+              "    if j == JOINT_O:\n"
+              "        return dynamics.JOINT_A + joints.INDEX['P'] + INDEX['B']\n"
+              "    return JOINT_Q + INDEX_P + x[JOINT_B_ROWS]\n")
+    assert sorted(joint_mentions(source)) == ["line 1: import JOINT_P", "line 3: JOINT_O",
+                                              "line 4: .JOINT_A", "line 4: INDEX[...]",
+                                              "line 4: INDEX[...]"]
 
 
 def test_the_table_names_registered_types_bodies_and_config_sections():

@@ -37,7 +37,8 @@ from clearsweep.core import jointset
 #: reading the face's other line's penetrations alone (``line_deltas``), 2,456 (issue 43;
 #: benchmarks/README.md). The bushing's five packed columns (N_JP 27) and the guide's own
 #: two made it 2,536; ``dynamics.evaluate`` split into ``applied_loads``, ``assemble_qdd``
-#: and ``end_diagnostics`` 2,648 (and the A,B build 1,192 -> 992). The bound is that with
+#: and ``end_diagnostics`` 2,648 (and the A,B build 1,192 -> 992); the integrators' dispatch
+#: on the joint's type (core/jointkinds.py) left both as they were. The bound is that with
 #: 5 % of room for ptxas' allocation moving with unrelated edits.
 SPILL_STORE_BOUND = 2780
 

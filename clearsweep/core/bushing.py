@@ -33,7 +33,9 @@ ideal, as with its clearance (revolute.py).
 - :func:`rate`: its largest stiff rate on the mobility of the joint's point
   (``dynamics.bushing_rate``), for the sub-step (docs/physics.md section 4).
 
-``WEAR_SURFACE`` is empty: a bushing does not wear.
+The rest of ``joints.PROTOCOL`` returns its neutral values: a bushing does not wear (no
+wear surface, caps or deposit), has no contact episodes (no seat, no accept, no
+penetration: ``CONTACTS = 0``) and no clearance to scale a section's offsets by (NaN).
 """
 
 import math
@@ -45,8 +47,8 @@ from .layout import D_JOINT_FORCE, J_C_AXIAL, J_C_RADIAL, J_K_AXIAL, J_K_RADIAL
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "bushing"
-#: the compiled functions its wear step reads (``joints.PROVIDES``): none, it does not wear
-WEAR_SURFACE = ()
+#: Contact points of the joint (``joints.PROVIDES``): none, it never touches.
+CONTACTS = 0
 
 
 @compiled
@@ -174,3 +176,58 @@ def rate(jp, j, wp, a, t1, t2):
     lk = scaled_top(wp, basis, (jp[j, J_K_AXIAL], kr, kr))
     lc = scaled_top(wp, basis, (jp[j, J_C_AXIAL], cr, cr))
     return stiff_rate(1.0, lk, lc)
+
+
+@compiled(inline="always")
+def paper_angle(jp, j, pen, e):
+    """(pi, False): no contact (``joints.PROTOCOL``)."""
+    return math.pi, False
+
+
+@compiled(inline="always")
+def wear_surface(jp, j, pen, e, n):
+    """Zeros: a bushing does not wear (``joints.PROTOCOL``)."""
+    return 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@compiled(inline="always")
+def cap_mergeable(j, d2, tol, area, scale):
+    """False: no wear caps (``joints.PROTOCOL``)."""
+    return False
+
+
+@compiled(inline="always")
+def deposit_cap(wmap, j, n, vol, area, scale, scratch):
+    """0: no wear (``joints.PROTOCOL``)."""
+    return 0.0
+
+
+@compiled(inline="always")
+def accept(j, model, body, hs, in_settled, stats, cur):
+    """False: no contact episodes (``joints.PROTOCOL``)."""
+    return False
+
+
+@compiled(inline="always")
+def deposit_step(wmap, j, jp, cur, wvol):
+    """0: no wear (``joints.PROTOCOL``)."""
+    return 0.0
+
+
+@compiled(inline="always")
+def penetration(j, model, k, body):
+    """-inf: never in contact (``joints.PROTOCOL``)."""
+    return -math.inf
+
+
+@compiled(inline="always")
+def section_offsets(jp, j, d, rate):
+    """NaN: no clearance to scale by (``joints.PROTOCOL``; a bushing's deflection is its
+    diagnostics' offset)."""
+    return (math.nan, math.nan, math.nan), (math.nan, math.nan, math.nan)
+
+
+@compiled(inline="always")
+def seat(j, model, dg, body):
+    """False: never in contact, nothing to seat (``joints.PROTOCOL``)."""
+    return False

@@ -420,3 +420,22 @@ def store_contact(dg, j, cres):
     dg[D_WORN + j] = cres.worn_through
     for i in range(3):
         dg[D_NGLOBAL + 3 * j + i] = cres.normal[i]
+
+
+@compiled(inline="always")
+def seat_episode(j, model, dg):
+    """A one-point joint j in contact at a case's first evaluation (a seated start): its
+    contact episode begins without an impact, at the impact velocity of its approach rate
+    in the diagnostics dg (:func:`episode_impact_velocity` at the episode's onset), into
+    ``model.s``; True (the start is evaluated again). The shared part of the one-point
+    types' ``seat`` (``joints.PROTOCOL``)."""
+    model.s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], model.p[P_DV0_MIN], False)
+    return True
+
+
+@compiled(inline="always")
+def offsets_over(d, rate, c):
+    """A one-point joint's section offset d [m] and its rate [m/s] (socket frame), each
+    over the radial clearance c [m]: the one-point types' ``section_offsets``
+    (``joints.PROTOCOL``)."""
+    return (d[0] / c, d[1] / c, d[2] / c), (rate[0] / c, rate[1] / c, rate[2] / c)

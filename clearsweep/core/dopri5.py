@@ -17,9 +17,10 @@ import math
 import numpy as np
 from numba import literally, njit
 
-from . import prismatic
+from . import jointkinds as kinds
 from .compiled import compiled
-from .dynamics import JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
+from .dynamics import NZ, VZ_ROWS, evaluate
+from .jointkinds import ball_body, contacts, is_multi, multi_free
 from .jointset import ALL, has_clearance
 from .layout import (
     D_DELTA,
@@ -48,7 +49,6 @@ from .layout import (
     P_ONSET_TOL,
     P_RTOL,
     P_SETTLE,
-    P_SLOTS,
     SEC_SLIDER_ACC,
     SEC_TIME,
     ST_OK,
@@ -59,13 +59,13 @@ from .layout import (
 )
 from .rk4 import (
     _NOT_LITERAL,
-    accept_prismatic,
+    accept_multi,
     accept_substep,
     begin_case,
     case_views,
     copy_into,
     copy_row,
-    deposit_prismatic,
+    deposit_multi,
     end_sections,
     energy_total,
     flush_all_wear,
@@ -209,10 +209,10 @@ def onset_within(d0, d1, h, tol, shorter):
 def onset_step(p, jp, dg0, dg1, h, model, y0, y1, spec=ALL):
     """0 when no clearance joint's gap closes over the step, or the step is within the
     onset tolerance; else a shorter step that ends just after the estimated onset. A
-    prismatic joint's gaps are its 16 corner-wall pairs', from the block's states y0 and y1
-    (its diagnostics hold the deepest pair's only, which stays in contact while others
-    close). ``spec``: the build's joint set (``jointset``; default every joint, each tested
-    at run time)."""
+    multi-contact joint's gaps are its points' (its type's ``penetration``: the guide's 16
+    corner-wall pairs), from its ball's body states at y0 and y1 (its diagnostics hold the
+    deepest point's only, which stays in contact while others close). ``spec``: the build's
+    joint set (``jointset``; default every joint, each tested at run time)."""
     tol = p[P_ONSET_TOL]
     if h <= tol:
         return 0.0
@@ -220,12 +220,12 @@ def onset_step(p, jp, dg0, dg1, h, model, y0, y1, spec=ALL):
     for j in range(N_JOINTS):
         if not has_clearance(spec, jp, j):
             continue
-        if j == JOINT_P:
-            s0 = slider_state(y0)
-            s1 = slider_state(y1)
-            for k in range(P_SLOTS):
-                shorter = onset_within(prismatic.slot_state(j, model, k, s0).delta,
-                                       prismatic.slot_state(j, model, k, s1).delta, h, tol, shorter)
+        if is_multi(j):
+            s0 = ball_body(j, y0)
+            s1 = ball_body(j, y1)
+            for k in range(contacts(j)):
+                shorter = onset_within(kinds.penetration(j, model, k, s0),
+                                       kinds.penetration(j, model, k, s1), h, tol, shorter)
             continue
         # signed: the gap is -delta before contact
         shorter = onset_within(dg0[D_DELTA + j], dg1[D_DELTA + j], h, tol, shorter)
@@ -370,8 +370,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
             for i in range(N_CAP):
                 cur[j, i] = 0.0
         changed, _ = accept_substep(hh, in_settled, model, dg1, stats, wear, 0, ddot_prev, spec)
-        if has_clearance(spec, jp, JOINT_P) and accept_prismatic(hh, in_settled, model, stats,
-                                                                 cur, y1):
+        if multi_free(spec, jp) and accept_multi(hh, in_settled, model, stats, cur, y1, spec):
             changed = True
         note_first_impact(out.first, stats, t + hh)
         if changed:
@@ -383,8 +382,8 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
         record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0, spec)
         merge_wear(wmap, cur, pend, wmax, scratch)
-        if has_clearance(spec, jp, JOINT_P):
-            deposit_prismatic(wmap, cur, wmax, jp, case.wvol)
+        if multi_free(spec, jp):
+            deposit_multi(wmap, cur, wmax, jp, case.wvol, spec)
         # output rows inside the step, from the continuous extension (before y moves on)
         while n_saved < n_save and t0 + (n_saved * save_every) * grid <= t + hh * (1.0 + 1e-12):
             # the sample's time from its grid-step count: the same for any save_every

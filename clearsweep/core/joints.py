@@ -1,13 +1,18 @@
 """The mechanism's joints as a table, and the registered joint types (docs/architecture.md,
-"The joint table").
+"The joint table", "Joint types").
 
 Plain data, read when the kernel is imported: the number of joints :data:`N_JOINTS` sizes
 the per-joint blocks of ``layout`` (``D_*``, ``M_*``), the per-joint work arrays and the
 per-joint loops of ``rk4`` and ``dopri5``; each joint's clearance parameters are its row
 of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one module of
-``core/`` that declares ``JOINT_TYPE`` and provides :data:`PROVIDES`; it is registered in
+``core/`` that declares ``JOINT_TYPE`` and ``CONTACTS`` and compiles :data:`PROVIDES`
+with the signatures of :data:`PROTOCOL` (its gap and contact; the wear surface of a
+one-point contact, its caps and their deposit; a multi-contact type's steps, deposit and
+penetrations; the Poincare section's offsets; the seated start); it is registered in
 :data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
-registration without its module or docs).
+registration without its module, functions, signatures or docs). The integrators reach
+the types through ``jointkinds``, which reads each row's type here and dispatches on it:
+they name no joint.
 
 What the table does not drive yet: ``dynamics.evaluate`` (the RSSP's equations of motion,
 the one kernel module that names its joints) applies joint A (crank pin in the rod), joint
@@ -106,10 +111,15 @@ Protocol = namedtuple("Protocol", ["name", "params", "returns", "doc"])
 
 #: The protocol every joint type compiles, with these signatures whatever the type
 #: (tests/test_joints.py checks each registered module's functions against it, names,
-#: parameters and the length of what they return). A joint touches its socket at one
-#: point (spherical, revolute) or at several (prismatic: 16 corner-wall slots); ``k``
-#: indexes them (0 for a one-point type). A parameter a type has no use for is taken and
-#: not read (revolute's and prismatic's ``Rs``: their socket frame is the global frame).
+#: parameters and the length of what they return: a tuple of that length, a single value
+#: where one is named). A joint touches its socket at one point (spherical, revolute) or at
+#: several (prismatic: 16 corner-wall slots); ``k`` indexes them (0 for a one-point type),
+#: and the module's ``CONTACTS`` says how many (0: a type that never touches, the bushing).
+#: A parameter a type has no use for is taken and not read (revolute's and prismatic's
+#: ``Rs``: their socket frame is the global frame); a function a type has nothing to do in
+#: returns the neutral value its doc names. The kernel reaches them through
+#: ``jointkinds``, which dispatches on each row's type of :data:`JOINTS`: ``rk4`` and
+#: ``dopri5`` name no joint.
 PROTOCOL = (
     Protocol("gap", ("jp", "j", "wmap", "p", "k", "pb", "ps", "Rs"),
              ("e", "n", "d_s", "n_s", "h", "slope", "worn", "c_eff", "delta"),
@@ -127,10 +137,62 @@ PROTOCOL = (
              "body's frame], the opposite force's moment on the socket's body [N m, its "
              "frame] and the power dissipated by damping and friction [W]; with ``full`` (a "
              "step's end) the joint's diagnostics into dg"),
+    Protocol("paper_angle", ("jp", "j", "pen", "e"), ("beta", "paper"),
+             "a one-point contact's angle beta [rad] of the paper's slip rule at the "
+             "penetration pen against the unworn radii [m] and the eccentricity e [m] "
+             "(docs/physics.md 5: the wear's sliding distance R_i |beta - beta_prev|), and "
+             "whether the type follows that rule; one that does not (a bearing, whose "
+             "sliding distance is always the slip times the step): (pi, False)"),
+    Protocol("wear_surface", ("jp", "j", "pen", "e", "n"),
+             ("area", "wx", "wy", "wz", "scale"),
+             "the wear surface of a one-point contact of normal n (global) at the "
+             "penetration pen [m] and eccentricity e [m]: the contact area [m^2] the step's "
+             "worn volume spreads over, the weights of the paper's three projections "
+             "(|n| on a sphere; the bearing's axis) and the surface's scale of the waiting "
+             "cap (R_i [m] on a sphere, R_i L [m^2] on a bearing); a multi-contact type "
+             "(its own accept) and one that does not wear: zeros"),
+    Protocol("cap_mergeable", ("j", "d2", "tol", "area", "scale"), ("mergeable",),
+             "whether joint j's wear of a step, its mean direction a squared distance d2 from the "
+             "waiting cap's (both unit), may join that cap of area ``area`` [m^2] on a "
+             "surface of scale ``scale`` (``wear_surface``'s) without moving it by more than "
+             "the fraction tol of its angular radius; a type without caps: False"),
+    Protocol("deposit_cap", ("wmap", "j", "n", "vol", "area", "scale", "scratch"), ("top",),
+             "spread the waiting cap of joint j (direction n, volume vol [m^3], mean area "
+             "[m^2], the surface's scale) on its map (``scratch``: a work array of "
+             "4 npolar x 3) and return the largest depth written [m]; a type without "
+             "caps: 0"),
+    Protocol("accept", ("j", "model", "body", "hs", "in_settled", "stats", "cur"),
+             ("changed",),
+             "a multi-contact joint's accepted (sub-)step of length hs, the ball's body at "
+             "the state ``body`` (r, v, R, w): its contact points' episodes, the joint's "
+             "impacts into stats (``in_settled``: the settled window's too) and its wear of "
+             "the step into ``cur``; whether an episode changed (the step-end evaluation "
+             "is redone). A one-point type's step is the kernel's one-point rule "
+             "(``rk4.accept_substep``): False"),
+    Protocol("deposit_step", ("wmap", "j", "jp", "cur", "wvol"), ("top",),
+             "spread a multi-contact joint's accepted step wear (``cur``, from ``accept``) "
+             "on its map, add its volume to wvol[j], clear it, and return the largest depth "
+             "written [m]; a one-point type (its caps wait: ``deposit_cap``): 0"),
+    Protocol("penetration", ("j", "model", "k", "body"), ("delta",),
+             "the penetration [m] of contact k of a multi-contact joint with the ball's "
+             "body at the state ``body`` (r, v, R, w), where the diagnostics hold the "
+             "deepest contact's alone (the adaptive step's onset location); a one-point "
+             "type, whose diagnostics hold its one contact's: -inf"),
+    Protocol("section_offsets", ("jp", "j", "d", "rate"), ("offset", "offset_rate"),
+             "the Poincare section's offset of the ball's point in the socket's frame d [m] "
+             "and its rate [m/s] each over the clearance of its direction (the section's "
+             "offset and rate, 3-vectors; a free direction 0: the block's position along its "
+             "guide); a type without clearance: NaN"),
+    Protocol("seat", ("j", "model", "dg", "body"), ("seated",),
+             "a case's first evaluation found joint j with clearance in contact (a seated "
+             "start: dg the diagnostics, ``body`` the ball's body state (r, v, R, w)): its "
+             "contact episode begins without an impact (its state in model.s); whether the "
+             "start must be evaluated again. A type that never touches: False"),
 )
 
 #: What a joint-type module provides, compiled in that module: the names of
-#: :data:`PROTOCOL`; besides these, its module's ``WEAR_SURFACE`` names the compiled
-#: functions its wear step reads (a socket's or bearing's contact angle and area; the
-#: guide's track width and deposit).
+#: :data:`PROTOCOL`; besides these, its module's ``CONTACTS`` (how many contact points
+#: the joint has: 1 for a ball or a journal, the guide's 16 corner-wall slots, 0 for a type
+#: that never touches), which decides whether the kernel's one-point rules or the type's
+#: own ``accept`` and ``deposit_step`` take its steps.
 PROVIDES = tuple(f.name for f in PROTOCOL)

@@ -33,8 +33,13 @@ impact velocity, and the improved Coulomb friction on the corner's slip over the
   a step's end, the joint's diagnostics: those of the most deeply penetrating slot, the
   lines' total elastic energy, the guide's total force and the largest stiff rate of a slot;
 - :func:`accept`: an accepted step's impacts (the joint's contact episodes) and the wear each
-  line leaves on its wall's map (``rk4.accept_substep``), :func:`seat` the slots of a seated
-  start.
+  line leaves on its wall's map (``rk4.accept_multi``), :func:`deposit_step` (:func:`deposit`)
+  its spread once the step is accepted, :func:`seat` the slots of a seated start,
+  :func:`penetration` each slot's penetration (the adaptive step's onset location), and
+  :func:`section_offsets` the block's offset across its guide: the functions of
+  ``joints.PROTOCOL`` that a multi-contact type (``CONTACTS`` = 16 slots) takes for
+  itself; the one-point wear caps (:func:`wear_surface`, :func:`cap_mergeable`,
+  :func:`deposit_cap`) and the paper's slip angle have nothing to do here.
 """
 
 import math
@@ -69,6 +74,7 @@ from .layout import (
     D_VT,
     D_WORN,
     J_BLOCK_LENGTH,
+    J_C,
     J_COAT,
     J_CORNER_RADIUS,
     J_CY,
@@ -103,8 +109,8 @@ from .wear import coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "prismatic"
-#: the compiled functions its wear step reads (``joints.PROVIDES``)
-WEAR_SURFACE = ("track_width", "deposit")
+#: Contact points of the joint (``joints.PROVIDES``): the 16 corner-wall slots.
+CONTACTS = P_SLOTS
 
 #: The guide's rotation: the global frame (``gap``'s Rs, not read).
 IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -649,9 +655,11 @@ def store_slot(dg, j, st):
 
 
 @compiled
-def seat(j, model, slider):
-    """A seated start's slots: each corner that an edge line in contact loads begins its
-    episode without an impact (impact velocity at the floor), and so does the joint's."""
+def seat(j, model, dg, body):
+    """A seated start's slots (``joints.PROTOCOL``; ``body``: the block's state (r, v, R,
+    w), dg not read): each corner that an edge line in contact loads begins its episode
+    without an impact (impact velocity at the floor), and so does the joint's. True."""
+    slider = body
     p = model.p
     s = model.s
     touching = False
@@ -664,11 +672,13 @@ def seat(j, model, slider):
                              if fb > 0.0 else 0.0)
         touching = touching or fa > 0.0 or fb > 0.0
     s[j, S_DV0] = 1.0 if touching else 0.0
+    return True
 
 
 @compiled
-def accept(j, model, slider, hs, in_settled, stats, cur):
-    """An accepted (sub-)step of length hs ends with the block in state ``slider``.
+def accept(j, model, body, hs, in_settled, stats, cur):
+    """An accepted (sub-)step of length hs ends with the block in state ``body`` (r, v, R,
+    w) (``joints.PROTOCOL``).
 
     Impacts (docs/physics.md 3.7): the joint's contact episode starts when the block goes
     from touching no wall to touching one (a corner beyond its wall): that onset is one
@@ -684,6 +694,7 @@ def accept(j, model, slider, hs, in_settled, stats, cur):
 
     Returns whether a slot's episode state changed (the step-end evaluation must be redone).
     """
+    slider = body
     p = model.p
     jp = model.jp
     s = model.s
@@ -837,3 +848,52 @@ def deposit(wmap, j, jp, cur, wvol):
     wvol[j] += cur[j, 0]
     cur[j, 0] = 0.0
     return top
+
+
+@compiled(inline="always")
+def deposit_step(wmap, j, jp, cur, wvol):
+    """The accepted step's wear on the wall maps (:func:`deposit`); the largest depth
+    written [m] (``joints.PROTOCOL``)."""
+    return deposit(wmap, j, jp, cur, wvol)
+
+
+@compiled(inline="always")
+def penetration(j, model, k, body):
+    """Slot k's penetration [m] with the block at the state ``body`` (:func:`slot_state`;
+    ``joints.PROTOCOL``)."""
+    return slot_state(j, model, k, body).delta
+
+
+@compiled(inline="always")
+def section_offsets(jp, j, d, rate):
+    """The block's section offset and its rate across its guide, over each direction's
+    clearance c_y, c_z; along the guide, where the block is free, 0 over c
+    (``joints.PROTOCOL``)."""
+    c = jp[j, J_C]
+    cy = jp[j, J_CY]
+    cz = jp[j, J_CZ]
+    return (0.0 / c, d[1] / cy, d[2] / cz), (0.0 / c, rate[1] / cy, rate[2] / cz)
+
+
+@compiled(inline="always")
+def paper_angle(jp, j, pen, e):
+    """(pi, False): the slots' wear is :func:`accept`'s (``joints.PROTOCOL``)."""
+    return math.pi, False
+
+
+@compiled(inline="always")
+def wear_surface(jp, j, pen, e, n):
+    """Zeros: the slots' wear is :func:`accept`'s (``joints.PROTOCOL``)."""
+    return 0.0, 0.0, 0.0, 0.0, 0.0
+
+
+@compiled(inline="always")
+def cap_mergeable(j, d2, tol, area, scale):
+    """False: the walls' wear waits per edge line, not as a cap (``joints.PROTOCOL``)."""
+    return False
+
+
+@compiled(inline="always")
+def deposit_cap(wmap, j, n, vol, area, scale, scratch):
+    """0: the walls' wear is :func:`deposit_step`'s (``joints.PROTOCOL``)."""
+    return 0.0

@@ -20,21 +20,37 @@ the normal and the contact points lie in that plane:
   the power law F_el = K delta^n with K = 4 E* sqrt(R_i R_j / c) / 3 (Hertz's modulus E*,
   ``params.hertz_modulus``) and n = 3/2 unless ``contact.elastic: hertz`` gives another
   exponent (Flores et al. 2008; docs/physics.md
-  section 3.6).
+  section 3.6);
+- the rest of ``joints.PROTOCOL``: the wear surface of a step (:func:`wear_surface`: the
+  strip, its depth projected about the bearing's axis, R_i L as the scale), when a step's
+  strip joins the waiting one (:func:`cap_mergeable`: within a fraction of its half-angle)
+  and its deposit (:func:`deposit_cap`, :func:`deposit`), the section offsets over the
+  clearance and the seated start; the paper's slip rule is a sphere's, not a bearing's
+  (:func:`paper_angle`), and a journal touches at one point (``CONTACTS = 1``).
 """
 
 import math
 
 from .compiled import compiled
-from .contact import compose, store_contact
+from .contact import compose, offsets_over, seat_episode, store_contact
 from .kinematics import body_moment, point_state
-from .layout import D_JOINT_FORCE, J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
+from .layout import (
+    D_JOINT_FORCE,
+    J_C,
+    J_COAT,
+    J_LENGTH,
+    J_RI,
+    J_RJ,
+    P_EXPONENT,
+    P_FEEDBACK,
+    P_INTERP,
+)
 from .wear import angle_bin, arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "revolute"
-#: the compiled functions its wear step reads (``joints.PROVIDES``)
-WEAR_SURFACE = ("contact_angle", "contact_area")
+#: Contact points of the joint (``joints.PROVIDES``): the journal touches its bearing at one.
+CONTACTS = 1
 
 #: The journal's elastic exponent where the case keeps the paper's (spherical) law.
 JOURNAL_EXPONENT = 1.5
@@ -168,3 +184,69 @@ def contact(j, model, ball, socket, full, dg):
             dg[D_JOINT_FORCE + 3 * j + i] = c.force[i]
     return (c.force, body_moment(Rb, rb, c.q_ball, c.force),
             body_moment(Rs, rs, c.q_socket, c.force), c.diss_power)
+
+
+@compiled(inline="always")
+def paper_angle(jp, j, pen, e):
+    """(pi, False): the paper's slip rule is a sphere's; a bearing's sliding distance is
+    the slip times the step (``joints.PROTOCOL``)."""
+    return math.pi, False
+
+
+@compiled(inline="always")
+def wear_surface(jp, j, pen, e, n):
+    """The strip a step wears (``joints.PROTOCOL``): its area 2 psi R_i L
+    (:func:`contact_area`) [m^2], its depth projected about the bearing's axis (weights
+    1, 0, 0), the scale R_i L [m^2]."""
+    ri = jp[j, J_RI]
+    area = contact_area(pen, e, ri, jp[j, J_RJ], jp[j, J_LENGTH])
+    return area, 1.0, 0.0, 0.0, ri * jp[j, J_LENGTH]
+
+
+@compiled(inline="always")
+def cap_mergeable(j, d2, tol, area, scale):
+    """Whether a direction d2 (squared) from the waiting strip's stays within tol of the
+    strip's half-angle psi = A / (2 R_i L), ``scale`` = R_i L (``joints.PROTOCOL``)."""
+    half = 0.5 * area / scale
+    return d2 <= tol * tol * half * half
+
+
+@compiled(inline="always")
+def deposit_cap(wmap, j, n, vol, area, scale, scratch):
+    """The waiting strip on the bearing's map (:func:`deposit`, ``scale`` = R_i L;
+    ``scratch`` not read); the largest depth written [m] (``joints.PROTOCOL``)."""
+    return deposit(wmap, j, n, vol, area, scale)
+
+
+@compiled(inline="always")
+def accept(j, model, body, hs, in_settled, stats, cur):
+    """Nothing: the journal's step is the kernel's one-point rule (``rk4.accept_substep``);
+    False (``joints.PROTOCOL``)."""
+    return False
+
+
+@compiled(inline="always")
+def deposit_step(wmap, j, jp, cur, wvol):
+    """Nothing: the journal's wear waits as a strip (:func:`deposit_cap`); 0
+    (``joints.PROTOCOL``)."""
+    return 0.0
+
+
+@compiled(inline="always")
+def penetration(j, model, k, body):
+    """-inf: the journal's one contact is the diagnostics' (``joints.PROTOCOL``)."""
+    return -math.inf
+
+
+@compiled(inline="always")
+def section_offsets(jp, j, d, rate):
+    """The journal's section offset and its rate over the clearance c (``joints.PROTOCOL``;
+    the axial part as the table's attachments give it)."""
+    return offsets_over(d, rate, jp[j, J_C])
+
+
+@compiled(inline="always")
+def seat(j, model, dg, body):
+    """A seated journal (``joints.PROTOCOL``): its episode begins without an impact
+    (``contact.seat_episode``); its slip angle stays pi; True."""
+    return seat_episode(j, model, dg)

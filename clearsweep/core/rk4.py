@@ -13,10 +13,11 @@ import math
 import numpy as np
 from numba import literally, njit, types
 
-from . import prismatic, revolute
+from . import jointkinds as kinds
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
-from .dynamics import JOINT_O, JOINT_P, NZ, VZ_ROWS, evaluate, slider_state
+from .dynamics import NZ, VZ_ROWS, evaluate
+from .jointkinds import MULTI_ROW, ball_body, is_multi, multi_free
 from .joints import BODIES, JOINTS
 from .jointset import ALL, has_clearance
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
@@ -46,13 +47,8 @@ from .layout import (
     I_STATUS,
     I_STEPS,
     I_SUBSTEPS,
-    J_C,
-    J_CY,
-    J_CZ,
-    J_LENGTH,
     J_PEN_STOP,
     J_RI,
-    J_RJ,
     M_ACC_PEAK,
     M_ACC_SQ,
     M_CONTACT_T,
@@ -122,9 +118,8 @@ from .layout import (
     Y_SLIDER_X,
     Y_WORK,
 )
-from .spherical import contact_angle, contact_area
 from .target import on_device
-from .wear import deposit, projection_bins
+from .wear import projection_bins
 from .work import Model, Rk4Work, Solve, Wear
 
 EULER_LIMIT = 80.0 * math.pi / 180.0  # |beta| stop of docs/physics.md section 1 [rad]
@@ -206,7 +201,8 @@ WEAR_MERGE_AREA = 0.05
 def wear_mergeable(pend, cur, j):
     """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
     (rows as in integrate: sum V n, sum V, sum V A, and the surface's scale: R_i on a
-    sphere, R_i L on a bearing) without moving the cap noticeably."""
+    sphere, R_i L on a bearing) without moving the cap noticeably (its type's
+    ``cap_mergeable``: within WEAR_MERGE_ANGLE of the cap's angular radius)."""
     ap = pend[j, 4] / pend[j, 3]
     ac = cur[j, 4] / cur[j, 3]
     if abs(ac - ap) > WEAR_MERGE_AREA * ap:
@@ -217,24 +213,16 @@ def wear_mergeable(pend, cur, j):
     for i in range(3):
         d = pend[j, i] / np_ - cur[j, i] / nc
         d2 += d * d
-    if j == JOINT_O:
-        # the strip's half-angle psi = A / (2 R_i L)
-        half = 0.5 * ap / pend[j, 5]
-        return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * half * half
-    # cap angular radius^2 ~ A / (pi R^2) for small caps
-    return d2 <= WEAR_MERGE_ANGLE * WEAR_MERGE_ANGLE * ap / (math.pi * pend[j, 5] * pend[j, 5])
+    return kinds.cap_mergeable(j, d2, WEAR_MERGE_ANGLE, ap, pend[j, 5])
 
 
 @compiled
 def flush_wear(wmap, j, pend, scratch):
     """Spread joint j's waiting wear on its map (volume-weighted mean direction and cap
-    area); clear it; return the largest depth written [m]."""
+    area, its type's ``deposit_cap``); clear it; return the largest depth written [m]."""
     size = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
     n = (pend[j, 0] / size, pend[j, 1] / size, pend[j, 2] / size)
-    if j == JOINT_O:
-        top = revolute.deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5])
-    else:
-        top = deposit(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
+    top = kinds.deposit_cap(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
     for i in range(6):
         pend[j, i] = 0.0
     return top
@@ -681,8 +669,8 @@ def section_offsets(p, jp, ys, sec, k, spec):
     ball-centre offset d_s = R_s^T (p_ball - p_socket) in its socket frame over c (as the
     diagnostics D_OFFSET), and its rate R_s^T (v_ball - v_socket) - w_s x d_s over c, from
     the joint table's attachments (kinematics alone: no evaluation of the equations of
-    motion, whose every call site a device build inlines); ``spec``: the build's joint set
-    (``jointset``)."""
+    motion, whose every call site a device build inlines), each over its clearance by its
+    type's ``section_offsets``; ``spec``: the build's joint set (``jointset``)."""
     # one loop over the attachments, ball then socket of each joint (one copy of
     # attachment_state where a device build inlines it)
     pb = (0.0, 0.0, 0.0)
@@ -698,22 +686,13 @@ def section_offsets(p, jp, ys, sec, k, spec):
             continue
         d = mtv(R, vsub(pb, pos))
         rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
-        c = jp[j, J_C]
-        cy = c
-        cz = c
-        if j == JOINT_P:
-            # the block across its guide, over each direction's clearance: the position
-            # along the guide is free
-            d = (0.0, d[1], d[2])
-            rate = (0.0, rate[1], rate[2])
-            cy = jp[j, J_CY]
-            cz = jp[j, J_CZ]
-        sec[k, SEC_OFFSET + 3 * j] = d[0] / c
-        sec[k, SEC_RATE + 3 * j] = rate[0] / c
-        sec[k, SEC_OFFSET + 3 * j + 1] = d[1] / cy
-        sec[k, SEC_RATE + 3 * j + 1] = rate[1] / cy
-        sec[k, SEC_OFFSET + 3 * j + 2] = d[2] / cz
-        sec[k, SEC_RATE + 3 * j + 2] = rate[2] / cz
+        off, off_rate = kinds.section_offsets(jp, j, d, rate)
+        sec[k, SEC_OFFSET + 3 * j] = off[0]
+        sec[k, SEC_RATE + 3 * j] = off_rate[0]
+        sec[k, SEC_OFFSET + 3 * j + 1] = off[1]
+        sec[k, SEC_RATE + 3 * j + 1] = off_rate[1]
+        sec[k, SEC_OFFSET + 3 * j + 2] = off[2]
+        sec[k, SEC_RATE + 3 * j + 2] = off_rate[2]
 
 
 @compiled
@@ -723,9 +702,10 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
     of ``wear``, a :data:`work.Wear`), the contact angle and episode impact velocity in
     ``model.s``, impact counts and velocities.
 
-    A prismatic joint's corners take their own rules (:func:`accept_prismatic`, called
-    beside this where the joint has clearance): their wear waits in ``cur`` until the step
-    is accepted, and needs no undo.
+    The one-point rule: each joint's contact episode from its diagnostics, its wear on its
+    type's surface (``paper_angle``, ``wear_surface``). A multi-contact joint's points take
+    their type's own rules (:func:`accept_multi`, called beside this where such a joint has
+    clearance): their wear waits in ``cur`` until the step is accepted, and needs no undo.
 
     ``spec``: the build's joint set (``jointset``; default every joint, each tested at
     run time). Returns (whether the contact state changed, so that the step-end evaluation
@@ -744,20 +724,22 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
     ampl = p[P_AMPL]
     changed = False
     for j in range(N_JOINTS):
-        if not has_clearance(spec, jp, j) or j == JOINT_P:
+        if not has_clearance(spec, jp, j) or is_multi(j):
             continue
         ddot = dg[D_DDOT + j]
         if dg[D_DELTA + j] > 0.0:
             fn = dg[D_FN + j]
             ri = jp[j, J_RI]
-            rj = jp[j, J_RJ]
             e = dg[D_ECC + j]
             pen = dg[D_DELTA + j] + dg[D_HWEAR + j]  # against the unworn radii
-            bearing = j == JOINT_O
-            # the contact angle matters to the paper's slip rule only, a spherical joint's
-            beta = contact_angle(pen, e, ri, rj) if (paper_slip and not bearing) else math.pi
+            # the contact angle matters to the paper's slip rule only, where the type
+            # follows it (a sphere; a bearing: pi)
+            beta = math.pi
+            paper = False
+            if paper_slip:
+                beta, paper = kinds.paper_angle(jp, j, pen, e)
             if wear_on and fn > 0.0:
-                if bearing or not paper_slip:
+                if not paper:
                     ds = dg[D_VT + j] * hs
                 else:
                     ds = ri * abs(beta - s[j, S_BETA])
@@ -765,15 +747,9 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
                 vol = ampl * k_wear * fn * ds
                 nrm = (dg[D_NORMAL + 3 * j], dg[D_NORMAL + 3 * j + 1],
                        dg[D_NORMAL + 3 * j + 2])
-                if bearing:
-                    # the strip 2 psi R_i L, its depth projected about the bearing's axis
-                    area = revolute.contact_area(pen, e, ri, rj, jp[j, J_LENGTH])
-                    wx, wy, wz = 1.0, 0.0, 0.0
-                    scale_j = ri * jp[j, J_LENGTH]
-                else:
-                    area = contact_area(pen, e, ri, rj)
-                    wx, wy, wz = abs(nrm[0]), abs(nrm[1]), abs(nrm[2])
-                    scale_j = ri
+                # the type's surface: a sphere's cap (weights |n|), a bearing's strip 2 psi
+                # R_i L (its depth projected about the bearing's axis)
+                area, wx, wy, wz, scale_j = kinds.wear_surface(jp, j, pen, e, nrm)
                 bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
                 buf_i[nbuf, 0] = j
                 buf_i[nbuf, 1] = bx
@@ -819,13 +795,17 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
 
 
 @compiled
-def accept_prismatic(hs, in_settled, model, stats, cur, y):
-    """:func:`accept_substep`'s part for the prismatic joint with clearance: its corners'
-    impacts and wear (``prismatic.accept``) from the block's state in y. A call of its own
-    beside accept_substep, so that the step's bookkeeping of every case without clearance at
-    P is what it was before joint P (steps/s, benchmarks/README.md). Returns whether a
-    corner's episode changed."""
-    return prismatic.accept(JOINT_P, model, slider_state(y), hs, in_settled, stats, cur)
+def accept_multi(hs, in_settled, model, stats, cur, y, spec):
+    """:func:`accept_substep`'s part for the multi-contact joint with clearance
+    (``jointkinds.MULTI_ROW``, a constant; ``spec``: the build's joint set): its points'
+    impacts and wear (its type's ``accept``) from its ball's body state in y
+    (``jointkinds.ball_body``). A call of its own beside accept_substep, so that the step's
+    bookkeeping of every case without such a joint is what it was before the prismatic
+    joint (steps/s, benchmarks/README.md). Returns whether a point's episode changed."""
+    if multi_free(spec, model.jp):
+        return kinds.accept(MULTI_ROW, model, ball_body(MULTI_ROW, y), hs, in_settled, stats,
+                            cur)
+    return False
 
 
 @compiled
@@ -937,16 +917,10 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec):
         seated = False
         for j in range(N_JOINTS):
             ddot_prev[j] = dg[D_DDOT + j]
-            if j == JOINT_P and has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
-                prismatic.seat(j, model, slider_state(y))
-                seated = True
-                continue
+            # a clearance joint in contact: its type's seated start
             if has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
-                s[j, S_DV0] = episode_impact_velocity(0.0, dg[D_DDOT + j], p[P_DV0_MIN], False)
-                if j != JOINT_O:
-                    s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j],
-                                                 dg[D_ECC + j], jp[j, J_RI], jp[j, J_RJ])
-                seated = True
+                if kinds.seat(j, model, dg, ball_body(j, y)):
+                    seated = True
         if not seated:
             break
     record_sample(stats, prev, dg, y, jp, 0.0, 0.0 if t0 >= p[P_SETTLE] else -1.0, spec)
@@ -958,9 +932,9 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
     without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m].
-    A prismatic joint's corners spread theirs in :func:`deposit_prismatic`."""
+    A multi-contact joint's points spread theirs in :func:`deposit_multi`."""
     for j in range(N_JOINTS):
-        if j == JOINT_P:
+        if is_multi(j):
             continue
         if cur[j, 3] > 0.0:
             if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
@@ -973,11 +947,13 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
 
 
 @compiled
-def deposit_prismatic(wmap, cur, wmax, jp, wvol):
-    """After an accepted step, where the prismatic joint has clearance: its corners' wear
-    of the step on its wall maps (``prismatic.deposit``, which adds it to the worn volume
-    ``wvol``); ``wmax`` keeps the deepest bin [m]."""
-    wmax[JOINT_P] = max(wmax[JOINT_P], prismatic.deposit(wmap, JOINT_P, jp, cur, wvol))
+def deposit_multi(wmap, cur, wmax, jp, wvol, spec):
+    """After an accepted step, where the multi-contact joint has clearance
+    (``jointkinds.MULTI_ROW``, a constant; ``spec``: the build's joint set): its points'
+    wear of the step on its map (its type's ``deposit_step``, which adds it to the worn
+    volume ``wvol``); ``wmax`` keeps the deepest bin [m]."""
+    if multi_free(spec, jp):
+        wmax[MULTI_ROW] = max(wmax[MULTI_ROW], kinds.deposit_step(wmap, MULTI_ROW, jp, cur, wvol))
 
 
 @compiled
@@ -985,7 +961,7 @@ def flush_all_wear(wmap, pend, wmax, scratch):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
     for j in range(N_JOINTS):
-        if j != JOINT_P and pend[j, 3] > 0.0:
+        if not is_multi(j) and pend[j, 3] > 0.0:
             wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
 
 
@@ -1101,8 +1077,8 @@ def clear_work(work, out):
 
 @compiled(inline="always")
 def clear_attempt(cur, slides):
-    """An attempt's wear accumulators (``cur``): each joint's, and a prismatic joint's
-    slots where the block ``slides`` in its guide."""
+    """An attempt's wear accumulators (``cur``): each joint's, and a multi-contact joint's
+    edge-line rows where one has clearance (``slides``)."""
     for j in range(N_JOINTS):
         for i in range(6):
             cur[j, i] = 0.0
@@ -1143,7 +1119,7 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
     h = p[P_DT]
     stab = p[P_STAB]
     settle = p[P_SETTLE]
-    slides = has_clearance(spec, jp, JOINT_P)
+    slides = multi_free(spec, jp)    # a multi-contact joint with clearance
     nsub = 1 << level
     hs = h / nsub
     nbuf = 0
@@ -1176,7 +1152,7 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
             kept = True
         changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
                                        work.ddot_prev, spec)
-        if slides and accept_prismatic(hs, in_settled, model, stats, work.cur, y):
+        if slides and accept_multi(hs, in_settled, model, stats, work.cur, y, spec):
             changed = True
         note_first_impact(out.first, stats, ts + hs)
         if changed:
@@ -1217,10 +1193,10 @@ def undo_attempt(nbuf, case, out, work, kept):
 def keep_stopping_wear(cur, pend):
     """A run stopped by a status other than an unstable step: the stopping attempt's wear
     stays in the projections and the worn volume, so the map keeps the same volume (an
-    unstable step's last attempt was rejected and undone); a prismatic joint's wear of the
-    attempt reached neither."""
+    unstable step's last attempt was rejected and undone); a multi-contact joint's wear of
+    the attempt reached neither."""
     for j in range(N_JOINTS):
-        if j == JOINT_P:
+        if is_multi(j):
             continue
         for i in range(5):
             pend[j, i] += cur[j, i]
@@ -1259,7 +1235,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
     h = p[P_DT]
     stab = p[P_STAB]
     max_level = int(p[P_MAX_LEVEL])
-    slides = has_clearance(spec, jp, JOINT_P)   # the slider's block free in its guide
+    slides = multi_free(spec, jp)   # a multi-contact joint with clearance (the guide's block)
     step_end = True  # evaluations at a (sub-)step's end: energies and stiff rates too
     stage = False    # the stage evaluations: the derivative only
     clear_work(work, out)
@@ -1322,7 +1298,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
         deepest = max(deepest, level)
         merge_wear(case.wmap, work.cur, work.pend, work.wmax, work.scratch)
         if slides:
-            deposit_prismatic(case.wmap, work.cur, work.wmax, jp, case.wvol)
+            deposit_multi(case.wmap, work.cur, work.wmax, jp, case.wvol, spec)
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
         # its offsets from the state kept in k1sub (here, where few values are live: a GPU
         # thread's registers), and it counts

@@ -11,23 +11,44 @@ A clearance-joint type is a module of this shape (docs/architecture.md, "Joint t
   (:func:`contact_angle`, :func:`contact_area`) that the wear step reads;
 - :func:`contact`: the gap composed with the coated contact law, damping and friction
   (``contact.respond``: where the force pair acts, the approach rate, the slip), returning
-  the force and the moments that the equations of motion apply to the two bodies.
+  the force and the moments that the equations of motion apply to the two bodies;
+- the rest of ``joints.PROTOCOL``: the paper's slip angle (:func:`paper_angle`), the wear
+  surface of a step (:func:`wear_surface`: the cap's area, its projection weights |n|,
+  the socket's radius as the scale), when a step's cap joins the waiting one
+  (:func:`cap_mergeable`) and its deposit on the sphere's map (:func:`deposit_cap`,
+  ``wear.deposit``), the section offsets over the clearance (:func:`section_offsets`) and
+  the seated start (:func:`seat`); a ball touches at one point (``CONTACTS = 1``), so that
+  :func:`accept`, :func:`deposit_step` and :func:`penetration` have nothing to do.
 
-The kernel composes these; nothing of a joint type's geometry is written elsewhere.
+The kernel composes these (through ``jointkinds``); nothing of a joint type's geometry is
+written elsewhere.
 """
 
 import math
 
 from .compiled import compiled
-from .contact import compose, store_contact
+from .contact import compose, offsets_over, seat_episode, store_contact
 from .kinematics import body_moment, dot, mtv, mv, point_state, scale, sub
-from .layout import J_C, J_COAT, P_EXPONENT, P_FEEDBACK, P_INTERP
-from .wear import worn_surface
+from .layout import (
+    D_DELTA,
+    D_ECC,
+    D_HWEAR,
+    J_C,
+    J_COAT,
+    J_RI,
+    J_RJ,
+    P_EXPONENT,
+    P_FEEDBACK,
+    P_INTERP,
+    S_BETA,
+)
+from .wear import deposit, worn_surface
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "spherical"
-#: the compiled functions its wear step reads (``joints.PROVIDES``)
-WEAR_SURFACE = ("contact_angle", "contact_area")
+#: Contact points of the joint (``joints.PROVIDES``): the ball touches its socket at one.
+CONTACTS = 1
+
 
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
@@ -102,3 +123,72 @@ def contact(j, model, ball, socket, full, dg):
         store_contact(dg, j, c)
     return (c.force, body_moment(Rb, rb, c.q_ball, c.force),
             body_moment(Rs, rs, c.q_socket, c.force), c.diss_power)
+
+
+@compiled(inline="always")
+def paper_angle(jp, j, pen, e):
+    """(The contact angle beta of Eq. 11 [rad] at the penetration pen against the unworn
+    radii and the eccentricity e (:func:`contact_angle`), True: the paper's slip rule
+    applies) (``joints.PROTOCOL``)."""
+    return contact_angle(pen, e, jp[j, J_RI], jp[j, J_RJ]), True
+
+
+@compiled(inline="always")
+def wear_surface(jp, j, pen, e, n):
+    """The cap a step wears (``joints.PROTOCOL``): its area (:func:`contact_area`) [m^2],
+    the projection weights |n_x|, |n_y|, |n_z| of the normal n, the socket's radius R_i as
+    the scale [m]."""
+    area = contact_area(pen, e, jp[j, J_RI], jp[j, J_RJ])
+    return area, abs(n[0]), abs(n[1]), abs(n[2]), jp[j, J_RI]
+
+
+@compiled(inline="always")
+def cap_mergeable(j, d2, tol, area, scale):
+    """Whether a direction d2 (squared) from the waiting cap's stays within tol of the cap's
+    angular radius, whose square is A / (pi R^2) for a small cap of area A on a sphere of
+    radius R = ``scale`` (``joints.PROTOCOL``)."""
+    return d2 <= tol * tol * area / (math.pi * scale * scale)
+
+
+@compiled(inline="always")
+def deposit_cap(wmap, j, n, vol, area, scale, scratch):
+    """The waiting cap on the sphere's map (``wear.deposit``, ``scale`` the radius R_i);
+    the largest depth written [m] (``joints.PROTOCOL``)."""
+    return deposit(wmap, j, n, vol, area, scale, scratch)
+
+
+@compiled(inline="always")
+def accept(j, model, body, hs, in_settled, stats, cur):
+    """Nothing: the ball's step is the kernel's one-point rule (``rk4.accept_substep``);
+    False (``joints.PROTOCOL``)."""
+    return False
+
+
+@compiled(inline="always")
+def deposit_step(wmap, j, jp, cur, wvol):
+    """Nothing: the ball's wear waits as a cap (:func:`deposit_cap`); 0
+    (``joints.PROTOCOL``)."""
+    return 0.0
+
+
+@compiled(inline="always")
+def penetration(j, model, k, body):
+    """-inf: the ball's one contact is the diagnostics' (``joints.PROTOCOL``)."""
+    return -math.inf
+
+
+@compiled(inline="always")
+def section_offsets(jp, j, d, rate):
+    """The ball's section offset and its rate over the clearance c (``joints.PROTOCOL``)."""
+    return offsets_over(d, rate, jp[j, J_C])
+
+
+@compiled(inline="always")
+def seat(j, model, dg, body):
+    """A seated ball (``joints.PROTOCOL``): its episode begins without an impact
+    (``contact.seat_episode``) at the contact angle of its seat (:func:`contact_angle`);
+    True."""
+    seated = seat_episode(j, model, dg)
+    model.s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
+                                       model.jp[j, J_RI], model.jp[j, J_RJ])
+    return seated
