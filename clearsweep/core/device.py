@@ -69,6 +69,7 @@ from .rk4 import (
     PAIR_FIRST,
     VEC_ROWS,
     work_shapes,
+    zero_rows,
 )
 from .rk4 import advance as _cpu_advance
 from .target import on_device
@@ -318,14 +319,6 @@ else:
     _advance = _cpu_advance
 
 
-@cuda.jit(device=True)
-def zero_rows(a):
-    """Set the 2-d array a to zero (a thread's local work array, :func:`soa_kernel`)."""
-    for r in range(a.shape[0]):
-        for c in range(a.shape[1]):
-            a[r, c] = 0.0
-
-
 #: The case-by-case ("aos") kernels built so far, by joint set (:func:`aos_kernel`).
 _AOS_KERNELS: dict = {}
 
@@ -480,7 +473,7 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False):
                 lc = cuda.local.array((MAT_ROWS, NZ, NZ), numba.float64)
                 lz = cuda.local.array((VZ_ROWS, NZ), numba.float64)
                 lk = cuda.local.array((CAP_ROWS, N_CAP_ROWS, N_CAP), numba.float64)
-                # zeroed, as the host's arrays are
+                # zeroed, as the host's arrays are (the CPU kernel's rk4.zero_rows)
                 for a in (lv, ld, lm, lz):
                     zero_rows(a)
                 for a in (ls, lc, lk):
