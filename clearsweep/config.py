@@ -301,9 +301,20 @@ class JointsConfig(_Section):
         return (("A", self.A), ("B", self.B), ("O", self.O), ("P", self.P))
 
 
+#: The mechanisms (``mechanism.kind``) and each one's presets, the first its default's
+#: example; ``clearsweep.params.PRESETS`` holds the presets' data (tests/test_config.py
+#: checks they agree).
+MECHANISM_KINDS = {"rssp": ("realistic", "paper"), "slider_crank": ("flores_benchmark",)}
+#: The mechanism of each preset.
+PRESET_KINDS = {preset: kind for kind, presets in MECHANISM_KINDS.items() for preset in presets}
+
+
 @dataclass(frozen=True)
 class MechanismConfig(_Section):
-    preset: str = _setting(Field("realistic", ("realistic", "paper")), None, "mechanism data preset")
+    #: rssp: the spatial RSSP four-bar; slider_crank: the planar slider-crank
+    #: (docs/mechanisms.md), whose data come from a slider-crank preset (flores_benchmark)
+    kind: str = _setting(Field("rssp", tuple(MECHANISM_KINDS)), None, "mechanism")
+    preset: str = _setting(Field("realistic", tuple(PRESET_KINDS)), None, "mechanism data preset")
     speed_rpm: float = _setting(_positive(60.0), "min-1", "crank speed in revolutions per minute")
     gravity: tuple[float, float, float] = _setting(Field([0.0, 0.0, -9.81], size=3), "m s-2",
                                                    "gravity vector")
@@ -745,6 +756,23 @@ def section_class(joint: str) -> Any:
     return type(getattr(JointsConfig(), joint))
 
 
+def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
+    """The preset is one of the mechanism's; the slider-crank's guide is ideal (its block's
+    contacts are written for the RSSP's guide along x)."""
+    kind, preset = cfg["mechanism"]["kind"], cfg["mechanism"]["preset"]
+    if PRESET_KINDS[preset] != kind:
+        raise ConfigError("mechanism.preset", preset,
+                          f"a preset of mechanism.kind {kind}: one of "
+                          f"{', '.join(MECHANISM_KINDS[kind])}", source)
+    if kind == "slider_crank":
+        guide = cfg["joints"]["P"]
+        for key in ("clearance_y", "clearance_z"):
+            if guide[key] != 0.0:
+                raise ConfigError(f"joints.P.{key}", guide[key],
+                                  "0 where mechanism.kind is slider_crank (its guide is ideal; "
+                                  "clearance at O, A and B)", source)
+
+
 def _check_gapless(joints: Mapping[str, Any], source: str) -> None:
     """A joint whose type has no gap (``jointtypes.JointKind.gap`` False: the bushing) has no
     clearance and no coated surface: a clearance or a coating with it is refused (either
@@ -944,6 +972,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
                                   f"below solver.dt ({value!r} s)", source)
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
+    _check_mechanism(cfg, source)
     _check_sizes(cfg["joints"], cfg, source)
     _check_gapless(cfg["joints"], source)
     for joint, spec in cfg["joints"].items():

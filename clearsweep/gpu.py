@@ -473,7 +473,7 @@ def batch_key(pk: Packed) -> tuple[tuple[int, ...], int]:
     Anything else may differ within a launch (sweep cases and ensemble members alike):
     parameters the batch does not share are per case, the maps hold the rows of every joint
     that any case gives clearance, the undo buffer the deepest level any case allows."""
-    return tuple(pk.map_shape), build_of(jointset.of(pk.jp), device=True)
+    return tuple(pk.map_shape), build_of(jointset.of(pk.jp, pk.p), device=True)
 
 
 def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
@@ -510,7 +510,7 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
             group = [packed[i] for i in batch]
             began = time.perf_counter()
             res = _run_on_device(_allocate(group, layout, cap), layout, build,
-                                 [jointset.of(pk.jp) for pk in group])
+                                 [jointset.of(pk.jp, pk.p) for pk in group])
             wall = (time.perf_counter() - began) / len(batch)
             if layout != "aos":
                 joints, npolar = batch_joints(group), shape[0]

@@ -51,6 +51,16 @@ class Preset:
     rod_inertia_kgm2: tuple[float, float, float]
     slider_inertia_kgm2: tuple[float, float, float]
     source: str
+    #: the mechanism (``mechanism.kind``): the RSSP, whose slider's guide runs along x at
+    #: (y, z) = (0, z_s); or the planar slider-crank, the crank's plane y-z, its guide along y
+    #: at (x, z) = (0, z_s) (docs/mechanisms.md)
+    kind: str = "rssp"
+
+    @property
+    def guide_axis(self) -> int:
+        """The global axis of the slider's guide: 0 (x, the RSSP) or 1 (y, the slider-crank)
+        (``p[P_GUIDE]``, ``core.jointset.guide_axis``)."""
+        return 1 if self.kind == "slider_crank" else 0
 
 
 _COMMON: dict[str, Any] = dict(crank_length_m=0.14, rod_length_m=0.38, slider_height_m=-0.12,
@@ -63,6 +73,18 @@ PRESETS: dict[str, Preset] = {
                         source="Jing & Liu 2023 Table 2; rod inertia m l^2/12 (docs/physics.md section 1.1)"),
     "paper": Preset(**_COMMON, rod_inertia_kgm2=(1e-5, 1e-5, 1e-5),
                     source="Jing & Liu 2023 Table 2 as published"),
+    # The planar slider-crank of Flores, Ambrosio, Claro and Lankarani (docs/mechanisms.md,
+    # each value's source): the in-plane inertias as published, the same value about the
+    # body's other axes (the planar motion does not excite them); the slider in line with the
+    # crank's pivot (no offset).
+    "flores_benchmark": Preset(crank_length_m=0.05, rod_length_m=0.12, slider_height_m=0.0,
+                               crank_mass_kg=0.30, rod_mass_kg=0.21, slider_mass_kg=0.14,
+                               crank_inertia_kgm2=(1e-4, 1e-4, 1e-4),
+                               rod_inertia_kgm2=(2.5e-4, 2.5e-4, 2.5e-4),
+                               slider_inertia_kgm2=(1e-4, 1e-4, 1e-4),
+                               source="Flores, Ambrosio, Claro & Lankarani 2008, the slider-crank "
+                                      "benchmark (docs/mechanisms.md)",
+                               kind="slider_crank"),
 }
 
 BASE_MATERIAL = "steel"  # socket base and ball (docs/physics.md section 6)
@@ -185,6 +207,10 @@ def run_identity(cfg: Config) -> dict[str, Any]:
     """
     config = cfg.to_dict()
     config.pop("materials_file", None)
+    if config["mechanism"]["kind"] == "rssp":
+        # the default mechanism, as every run before mechanism.kind: its finished work stays
+        # this run's
+        del config["mechanism"]["kind"]
     table = resolve_materials(cfg)
     used = sorted({BASE_MATERIAL, *(j.coating for _, j in cfg.joints.items() if j.coating != "none")})
     return {"config": config,
@@ -233,6 +259,32 @@ def ideal_slider_x(theta, l2: float, l3: float, zs: float):
     return np.sqrt(l3 ** 2 - (l2 * np.sin(theta)) ** 2 - (zs + l2 * np.cos(theta)) ** 2)
 
 
+def slider_crank_kinematics(theta, omega: float, l2: float, l3: float, zs: float):
+    """The ideal slider-crank's slider along its guide (docs/mechanisms.md): position s [m],
+    velocity [m/s] and acceleration [m/s^2] at crank angle theta [rad] turning at omega
+    [rad/s], the crank pin at (0, l2 sin theta, -l2 cos theta) and the guide along y at
+    height z_s: s = l2 sin theta + w, w = sqrt(l3^2 - u^2), u = z_s + l2 cos theta."""
+    theta = np.asarray(theta, float)
+    u = zs + l2 * np.cos(theta)
+    ud = -l2 * omega * np.sin(theta)
+    udd = -l2 * omega ** 2 * np.cos(theta)
+    w = np.sqrt(l3 ** 2 - u ** 2)
+    wd = -u * ud / w
+    wdd = -(ud ** 2 + u * udd + wd ** 2) / w
+    return (l2 * np.sin(theta) + w, l2 * omega * np.cos(theta) + wd,
+            -l2 * omega ** 2 * np.sin(theta) + wdd)
+
+
+def ideal_slider_position(preset: Preset, theta):
+    """The ideal mechanism's slider position along its guide [m] at crank angle theta [rad]:
+    :func:`ideal_slider_x` for the RSSP, :func:`slider_crank_kinematics` for the
+    slider-crank."""
+    l2, l3, zs = preset.crank_length_m, preset.rod_length_m, preset.slider_height_m
+    if preset.kind == "slider_crank":
+        return slider_crank_kinematics(theta, 0.0, l2, l3, zs)[0]
+    return ideal_slider_x(theta, l2, l3, zs)
+
+
 def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
                   offset_B=(0.0, 0.0, 0.0), offset_O=(0.0, 0.0, 0.0)
                   ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -244,11 +296,15 @@ def rod_endpoints(preset: Preset, theta: float, offset_A=(0.0, 0.0, 0.0),
     d_a = np.asarray(offset_A, float)
     d_b = np.asarray(offset_B, float)
     a = np.array([0.0, l2 * math.sin(theta), -l2 * math.cos(theta)]) + np.asarray(offset_O, float) - d_a
-    # b = (x4, 0, z_s) + d_b with |b - a| = l3, the root with the slider beyond the crank
-    dy = d_b[1] - a[1]
+    # b = (x4, 0, z_s) + d_b (the slider-crank's (0, y4, z_s) + d_b) with |b - a| = l3, the
+    # root with the slider beyond the crank
+    g = preset.guide_axis
+    h = 1 - g
+    dh = d_b[h] - a[h]
     dz = zs + d_b[2] - a[2]
-    x4 = a[0] - d_b[0] + math.sqrt(l3 ** 2 - dy ** 2 - dz ** 2)
-    b = np.array([x4, 0.0, zs]) + d_b
+    x4 = a[g] - d_b[g] + math.sqrt(l3 ** 2 - dh ** 2 - dz ** 2)
+    b = np.array([0.0, 0.0, zs]) + d_b
+    b[g] += x4
     return a, b, x4
 
 
@@ -270,11 +326,13 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     y[g2] = theta0
     y[qd + r2:qd + r2 + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
     y[qd + g2] = omega
+    g = preset.guide_axis
     d_p = np.array([0.0, offset_P[1], offset_P[2]])
     a, b, x4 = rod_endpoints(preset, theta0, offset_A, np.asarray(offset_B, float) + d_p, offset_O)
     va = np.array([0.0, l2 * ct, l2 * st]) * omega
-    # |b - a| = l3 with b moving along X only: (b - a) . (vb - va) = 0
-    vb = np.array([(b - a) @ va / (b - a)[0], 0.0, 0.0])
+    # |b - a| = l3 with b moving along its guide (axis g) only: (b - a) . (vb - va) = 0
+    vb = np.zeros(3)
+    vb[g] = (b - a) @ va / (b - a)[g]
     d = (b - a) / l3
     dd = (vb - va) / l3
     y[r3:r3 + 3] = 0.5 * (a + b)
@@ -283,10 +341,10 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     y[ph3 + 1] = -math.asin(d[2])                            # beta3
     y[qd + ph3] = (d[0] * dd[1] - d[1] * dd[0]) / (d[0] ** 2 + d[1] ** 2)
     y[qd + ph3 + 1] = -dd[2] / math.cos(y[ph3 + 1])
-    y[r4] = x4
-    y[r4 + 1] = d_p[1]
+    y[r4 + g] = x4
+    y[r4 + 1 - g] = d_p[1 - g]
     y[r4 + 2] = preset.slider_height_m + d_p[2]
-    y[qd + r4] = vb[0]
+    y[qd + r4 + g] = vb[g]
     return y
 
 
@@ -327,7 +385,7 @@ def guide_row(row: np.ndarray, joint: PrismaticJointConfig, preset: Preset) -> N
     row[L.J_CORNER_RADIUS] = joint.corner_radius
     theta = np.linspace(0.0, 2.0 * math.pi, 721)
     check_guide_reach(joint, preset)
-    x = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
+    x = ideal_slider_position(preset, theta)
     margin = 0.5 * length + 0.05 * float(x.max() - x.min())
     row[L.J_X0] = float(x.min()) - margin
     row[L.J_XSPAN] = float(x.max() - x.min()) + 2.0 * margin
@@ -1051,9 +1109,10 @@ def joint_set(cfg: Config) -> int:
     """The case's joints with clearance and its bushings, as a ``core.jointset`` bitmask
     (bit j: row j of the joint table has clearance; bit N_JOINTS + j: it is a bushing): the
     flags :func:`pack` writes into ``jp[:, J_CLEARANCE]`` and ``jp[:, J_BUSHING]``, which
-    ``jointset.of`` reads back; the kernel build that runs the case is
+    ``jointset.of`` reads back; and ``jointset.SLIDER_CRANK`` for the slider-crank (its
+    ``p[P_GUIDE]``); the kernel build that runs the case is
     :func:`kernel_build` of it."""
-    mask = 0
+    mask = jointset.SLIDER_CRANK if cfg.mechanism.kind == "slider_crank" else 0
     for j, (_, joint) in enumerate(joint_configs(cfg)):
         if joint.clearance > 0.0:
             mask |= 1 << j
@@ -1086,9 +1145,11 @@ def build_of(case_set: int, device: bool = False) -> int:
     (``core.jointset.of`` of its packed flags) on the CPU, or with ``device`` on a CUDA
     device: the case's joints among :data:`SPECIALISED_JOINTS` (or
     :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint; and the case's bushings
-    (a build without bushings, every build before them, folds their code away)."""
+    (a build without bushings, every build before them, folds their code away); and the
+    case's mechanism (``jointset.MECHANISMS``)."""
     mask = SPECIALISED_JOINTS_DEVICE if device else SPECIALISED_JOINTS
-    return (int(case_set) & mask) | (jointset.ALL & ~mask) | (int(case_set) & jointset.BUSHINGS)
+    return ((int(case_set) & mask) | (jointset.ALL & ~mask)
+            | (int(case_set) & (jointset.BUSHINGS | jointset.MECHANISMS)))
 
 
 def kernel_build(cfg: Config) -> int:
@@ -1200,6 +1261,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     p[L.P_ONSET] = 1.0 if contact.impact_velocity == "onset" else 0.0
     p[L.P_EXPONENT] = contact.hertz_exponent if contact.elastic == "hertz" else 0.0
     p[L.P_SECTION_PHASE] = math.radians(cfg.outputs.poincare_phase_deg)
+    p[L.P_GUIDE] = float(preset.guide_axis)
     friction = cfg.friction
     p[L.P_FRICTION] = 1.0 if friction.enabled else 0.0
     p[L.P_V0] = friction.v0

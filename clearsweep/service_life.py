@@ -459,7 +459,7 @@ def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
     """Largest settled ``|x_slider - x_ideal(theta)|`` [m] of a block's saved rows: the slider's
     motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
     crank angle reached); NaN when no saved row lies in the settled window."""
-    from .params import PRESETS, ideal_slider_x
+    from .params import PRESETS, ideal_slider_position
 
     preset = PRESETS[cfg.mechanism.preset]
     n = int(raw.n_saved)
@@ -468,8 +468,8 @@ def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
     if not settled.any():
         return math.nan
     theta = y[settled, L.Y_CRANK_ANGLE]
-    ideal = ideal_slider_x(theta, preset.crank_length_m, preset.rod_length_m, preset.slider_height_m)
-    return float(np.max(np.abs(y[settled, L.Y_SLIDER_X] - ideal)))
+    ideal = ideal_slider_position(preset, theta)
+    return float(np.max(np.abs(y[settled, L.Y_R4 + preset.guide_axis] - ideal)))
 
 
 def bin_areas(shape: tuple[int, int], radius: float) -> np.ndarray:

@@ -128,7 +128,9 @@ def prepare_kernel(method: str = "rk4", build: int | None = None) -> float:
         build = build_of(jointset.named("A", "B"))
     if _compiled_for(_kernel(method), build):
         return 0.0
-    cfg = DEFAULTS.replace(solver__method=method)     # ideal: any build runs it
+    cfg = DEFAULTS.replace(solver__method=method)     # ideal: any build of its mechanism runs it
+    if build & jointset.SLIDER_CRANK:
+        cfg = cfg.replace(mechanism__kind="slider_crank", mechanism__preset="flores_benchmark")
     packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
@@ -202,7 +204,7 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     build without one of them (it would run the joint as ideal).
     """
     integrate = _kernel(packed.method)
-    case_set = jointset.of(packed.jp)
+    case_set = jointset.of(packed.jp, packed.p)
     build = build_of(case_set) if build is None else int(build)
     jointset.check(case_set, build)
     n_save = packed.n_steps // packed.save_every + 1
@@ -401,6 +403,7 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     """Kernel rows -> registered output variables (variables.CASE_VARIABLES)."""
     y, d = raw.y, raw.d
     qd = L.Y_QD
+    slider = L.Y_R4 + int(packed.p[L.P_GUIDE])     # along its guide: x, or the slider-crank's y
     clearance = packed.jp[:, L.J_CLEARANCE] != 0.0
     free = clearance | (packed.jp[:, L.J_BUSHING] != 0.0)     # a bushing's offset is read too
     nj = L.N_JOINTS
@@ -422,8 +425,8 @@ def arrays_from_raw(raw: KernelRun, packed: Packed) -> dict[str, np.ndarray]:
     return {
         "status": raw.status,
         "crank_angle": y[:, L.Y_CRANK_ANGLE],
-        "slider_position": y[:, L.Y_SLIDER_X],
-        "slider_velocity": y[:, qd + L.Y_SLIDER_X],
+        "slider_position": y[:, slider],
+        "slider_velocity": y[:, qd + slider],
         "slider_acceleration": d[:, L.D_SLIDER_ACC],
         "crank_torque": d[:, L.D_TORQUE],
         "reaction_O": d[:, L.D_REACTION_O:L.D_REACTION_O + 3],

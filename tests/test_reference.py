@@ -323,7 +323,7 @@ def kernel_point_mobility(k, y, pk, j):
     else:
         qrod = r3 + np.array(mv(r3m, (0.5 * p[L.P_L3], 0.0, 0.0))) + jp[j, L.J_RJ] * n
     jr = point_jacobian_rot(r3m, mtv(r3m, tuple(qrod - r3)), g3)
-    w = point_mobility(j, jr, k["C"], k["L"], nc, minv, mr_inv, np.zeros((VZ_ROWS, NZ)))
+    w = point_mobility(j, jr, k["C"], k["L"], nc, minv, mr_inv, np.zeros((VZ_ROWS, NZ)), 0)
     xx, xy, xz, yy, yz, zz = w
     return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
 

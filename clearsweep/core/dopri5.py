@@ -378,7 +378,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
             if st != ST_OK:
                 status = st
                 break
-        keep_ends(work.prev, dg, y)
+        keep_ends(work.prev, dg, y, spec)
         record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0, spec)
         merge_wear(wmap, cur, pend, wmax, scratch)

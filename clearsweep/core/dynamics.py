@@ -32,7 +32,7 @@ from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .joints import BODIES, FREE, INDEX, JOINTS
-from .jointset import ALL, NONE, has_clearance, is_bushing, is_free
+from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
     add,
     body_moment,
@@ -89,6 +89,7 @@ from .layout import (
     P_EXPONENT,
     P_FRICTION,
     P_G,
+    P_GUIDE,
     P_J2,
     P_J3,
     P_J4,
@@ -152,8 +153,9 @@ def o_free(spec, jp):
 @compiled(inline="always")
 def p_free(spec, jp):
     """Whether joint P has clearance, the slider's block free across its guide and in its
-    three angles (read from jp where needed, as :func:`o_free`)."""
-    return has_clearance(spec, jp, JOINT_P)
+    three angles (read from jp where needed, as :func:`o_free`). The slider-crank's guide
+    (``jointset.guide_axis`` 1) is ideal: its build folds P away."""
+    return guide_axis(spec) == 0 and has_clearance(spec, jp, JOINT_P)
 
 
 
@@ -227,14 +229,15 @@ def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
 
 
 @compiled
-def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
+def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g):
     """Mobility W_p of joint j's relative contact motion, a_rel = W_p F for the force pair
     (F on the ball, -F on the socket); symmetric 3x3 as (xx, xy, xz, yy, yz, zz) [1/kg].
 
     The rod carries one side of A and B (A's socket, B's ball; Jr its rotation Jacobian
     block); the crank's rotation is driven, its centroid free in the bearing's plane (y, z)
     where O has clearance (minv[2] = 1/m2, else 0: immobile); B's socket moves with the
-    slider along X only; O's bearing is the ground. With no ideal joint left (nc = 0)
+    slider along its guide only (global axis ``g``: X for the RSSP, Y for the
+    slider-crank); O's bearing is the ground. With no ideal joint left (nc = 0)
     W_p = I/m3 + A Mr^-1 A^T (+ e_x e_x^T / m4 at B, + (e_y e_y^T + e_z e_z^T) / m2 at A) in
     closed form, and (e_y e_y^T + e_z e_z^T) / m2 at O.
     """
@@ -243,6 +246,9 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
     cs = minv[2] if j != JOINT_B else minv[3]
     if j == JOINT_O and nc == 0:
         return (0.0, 0.0, 0.0, cs, 0.0, cs)
+    # the inverse masses along x and y: the slider-crank's slider moves along y
+    ex = xs if (j != JOINT_B or g == 0) else cs
+    ey = cs if (j != JOINT_B or g == 0) else xs
     if nc == 0:
         im = minv[0]
         a0 = (Jr[0], Jr[3], Jr[6])
@@ -251,8 +257,8 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
               mr_inv[0] * a0[2] + mr_inv[1] * a1[2])
         b1 = (mr_inv[2] * a0[0] + mr_inv[3] * a1[0], mr_inv[2] * a0[1] + mr_inv[3] * a1[1],
               mr_inv[2] * a0[2] + mr_inv[3] * a1[2])
-        return (im + xs + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
-                a0[0] * b0[2] + a1[0] * b1[2], im + cs + a0[1] * b0[1] + a1[1] * b1[1],
+        return (im + ex + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
+                a0[0] * b0[2] + a1[0] * b1[2], im + ey + a0[1] * b0[1] + a1[1] * b1[1],
                 a0[1] * b0[2] + a1[1] * b1[2], im + cs + a0[2] * b0[2] + a1[2] * b1[2])
     # general case: g_k = J^T e_k, W_p[a, b] = g_a . (W g_b)
     # rows of vz: 0-2 g_k, 3-4 work, 5 the result (xx, xy, xz, yy, yz, zz), 6 W g_b
@@ -264,7 +270,7 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz):
         vz[k, 2] = rod if k == 2 else 0.0
         vz[k, 3] = rod * Jr[3 * k]
         vz[k, 4] = rod * Jr[3 * k + 1]
-        vz[k, 5] = -1.0 if (j == JOINT_B and k == 0) else 0.0
+        vz[k, 5] = -1.0 if (j == JOINT_B and k == g) else 0.0
         vz[k, 6] = crank if k == 1 else 0.0
         vz[k, 7] = crank if k == 2 else 0.0
         vz[k, 8] = -1.0 if (j == JOINT_B and k == 1) else 0.0
@@ -329,17 +335,20 @@ def crank_accelerations(t, y, p, t2):
 
 
 @compiled(inline="always")
-def fixed_accelerations(y, p, dy, held):
+def fixed_accelerations(y, p, dy, held, g):
     """Accelerations that the other single-body constraints fix (Baumgarte rows): the rod's
-    spin gamma3 and, where the slider is ``held`` in its guide (joint P ideal), its y and z
-    (returned: gdd3, ydd4, zdd4; 0, 0 where it is free) and its angles (written into dy)."""
+    spin gamma3 and, where the slider is ``held`` in its guide (joint P ideal), its other
+    horizontal coordinate (y for the RSSP's guide along x, x for the slider-crank's along y;
+    ``g``: the guide's axis), held at 0, and its z, held at z_s (returned: gdd3, ydd4, zdd4,
+    ydd4 that other coordinate's; 0, 0 where it is free) and its angles (written into dy)."""
     a_b = p[P_BAUM_A]
     b_b = p[P_BAUM_B]
     qd = Y_QD
     gdd3 = -2.0 * a_b * y[qd + Y_PHI3 + 2] - b_b * b_b * y[Y_PHI3 + 2]
     if not held:
         return gdd3, 0.0, 0.0
-    ydd4 = -2.0 * a_b * y[qd + Y_R4 + 1] - b_b * b_b * y[Y_R4 + 1]
+    h = 1 - g
+    ydd4 = -2.0 * a_b * y[qd + Y_R4 + h] - b_b * b_b * y[Y_R4 + h]
     zdd4 = -2.0 * a_b * y[qd + Y_R4 + 2] - b_b * b_b * (y[Y_R4 + 2] - p[P_ZS])
     for k in range(3):
         dy[qd + Y_PHI4 + k] = -2.0 * a_b * y[qd + Y_PHI4 + k] - b_b * b_b * y[Y_PHI4 + k]
@@ -465,9 +474,16 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
         cpos = sub(r4, p3B)
         cvel = sub(v4, v3B)
         quad = point_accel_quadratic(R3, w3, gq3, uB3)
-        # the slider's y, z: fixed by its guide, or free (columns 8, 9) where P has clearance
+        # the slider's y, z (the slider-crank's x, z): fixed by its guide, or free (columns
+        # 8, 9) where P has clearance; its coordinate along the guide is column 5
         slide = p_free(spec, jp)
-        known4 = (0.0, 0.0, 0.0) if slide else (0.0, ydd4, zdd4)
+        g = guide_axis(spec)
+        if slide:
+            known4 = (0.0, 0.0, 0.0)
+        elif g == 0:
+            known4 = (0.0, ydd4, zdd4)
+        else:
+            known4 = (ydd4, 0.0, zdd4)
         for i in range(3):
             for k in range(NZ):
                 C[nc + i, k] = 0.0
@@ -477,7 +493,7 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
             vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
                                   + JrB[3 * i + 2] * gdd3 + quad[i])
             cons = max(cons, abs(cpos[i]))
-        C[nc, 5] = 1.0
+        C[nc + g, 5] = 1.0
         if slide:
             C[nc + 1, 8] = 1.0
             C[nc + 2, 9] = 1.0
@@ -551,9 +567,10 @@ def kinetic_energy(p, y, t2, t3, t4):
 
 
 @compiled(inline="always")
-def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4):
+def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4, g):
     """The state's derivative dy: the velocities, then the accelerations of the crank
-    (rdd2, pdd2), the rod (zdd[0:5], its spin gdd3) and the slider (zdd[5], ydd4, zdd4)."""
+    (rdd2, pdd2), the rod (zdd[0:5], its spin gdd3) and the slider (zdd[5] along the guide,
+    global axis ``g``; ydd4 along the other horizontal axis, zdd4)."""
     qd = Y_QD
     for k in range(N_Q):
         dy[k] = y[qd + k]
@@ -569,8 +586,8 @@ def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4):
     dy[qd + Y_PHI3] = zdd[3]
     dy[qd + Y_PHI3 + 1] = zdd[4]
     dy[qd + Y_PHI3 + 2] = gdd3
-    dy[qd + Y_R4] = zdd[5]
-    dy[qd + Y_R4 + 1] = ydd4
+    dy[qd + Y_R4 + g] = zdd[5]
+    dy[qd + Y_R4 + 1 - g] = ydd4
     dy[qd + Y_R4 + 2] = zdd4
 
 
@@ -602,9 +619,11 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
         dg[D_JOINT_FORCE + 3 * JOINT_O + i] = f_o - lamO[i]
     if not p_free(spec, jp):
         # the ideal guide's reaction on the slider, from the slider's equations: across the
-        # guide only (the guide takes no load along it)
-        dg[D_JOINT_FORCE + 3 * JOINT_P] = 0.0
-        dg[D_JOINT_FORCE + 3 * JOINT_P + 1] = p[P_M4] * (ydd4 - grav[1]) + fB[1]
+        # guide only (the guide takes no load along it, global axis g)
+        g = guide_axis(spec)
+        h = 1 - g
+        dg[D_JOINT_FORCE + 3 * JOINT_P + g] = 0.0
+        dg[D_JOINT_FORCE + 3 * JOINT_P + h] = p[P_M4] * (ydd4 - grav[h]) + fB[h]
         dg[D_JOINT_FORCE + 3 * JOINT_P + 2] = p[P_M4] * (zdd4 - grav[2]) + fB[2]
     dg[D_PDRIVE] = dy[Y_WORK]
     dg[D_PDISS] = pdiss
@@ -620,12 +639,13 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     else:
         cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
     if not p_free(spec, jp):
-        cons = max(cons, max(abs(y[Y_R4 + 1]), abs(y[Y_R4 + 2] - p[P_ZS])))
+        cons = max(cons, max(abs(y[Y_R4 + 1 - guide_axis(spec)]), abs(y[Y_R4 + 2] - p[P_ZS])))
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
         if is_bushing(spec, jp, j):
-            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv))
+            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv,
+                                          guide_axis(spec)))
             continue
         if not has_clearance(spec, jp, j):
             continue
@@ -635,7 +655,7 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
             rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
-                                        minv, mr_inv))
+                                        minv, mr_inv, guide_axis(spec)))
     dg[D_RATE] = rate
 
 
@@ -812,11 +832,12 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
 
     # ---- accelerations that single-body constraints fix ----
     pdd2, wd2, rdd2 = crank_accelerations(t, y, p, t2)
-    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy, not p_free(spec, jp))
+    g = guide_axis(spec)
+    gdd3, ydd4, zdd4 = fixed_accelerations(y, p, dy, not p_free(spec, jp), g)
 
     # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
-    mr_inv, ok = rod_equations(F3, N3, F4[0], y, t3, J3, gdd3, vz)
+    mr_inv, ok = rod_equations(F3, N3, F4[g], y, t3, J3, gdd3, vz)
     if not ok:
         return ST_SINGULAR
     # the crank's centroid in the bearing's plane: free where O has clearance (forces
@@ -840,7 +861,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         ydd4 = vz[VZ_ZDD, 8]
         zdd4 = vz[VZ_ZDD, 9]
 
-    assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4)
+    assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4, g)
 
     # ---- joint forces on the balls; crank multipliers ----
     k0 = 0
@@ -879,7 +900,7 @@ ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
 
 
 @compiled
-def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv):
+def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv, g):
     """Largest stiff rate [1/s] of bushing j (``bushing.rate``) on the mobility of its point
     (:func:`point_mobility`, every constraint in place), its axis the socket body's local x
     axis (the global x axis on the ground). The point is read at the joint's attachment on
@@ -887,7 +908,7 @@ def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv):
     p = model.p
     R3 = rotation(t3)
     Jr = point_jacobian_rot(R3, (ROD_FACTOR[j] * p[P_L3], 0.0, 0.0), gmat(t3))
-    wp = point_mobility(j, Jr, solve.C, solve.L, nc, minv, mr_inv, solve.vz)
+    wp = point_mobility(j, Jr, solve.C, solve.L, nc, minv, mr_inv, solve.vz, g)
     phi = SOCKET_PHI[j]
     a = (1.0, 0.0, 0.0)
     if phi >= 0:
@@ -898,7 +919,7 @@ def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv):
 
 
 @compiled
-def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
+def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
@@ -926,7 +947,7 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv):
             # the ball point Q_j on the rod
             qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
         Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
-    wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz)
+    wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g)
     inv_m = quad_form(wp, n, n)
     if not inv_m > 0.0:
         return 0.0
@@ -993,9 +1014,13 @@ def _diagnostics_at(t, y, p, jp, wmap, ideal=False):
     solve = Solve(np.zeros((NZ, NZ)), np.zeros((NZ, NZ)), np.zeros((NZ, NZ)),
                   np.zeros((VZ_ROWS, NZ)))
     model = Model(p, jp, np.zeros((N_JOINTS, N_S)), wmap)
-    run = evaluate_ideal if ideal else evaluate
-    status = run(float(t), np.ascontiguousarray(y, dtype=np.float64), model,
-                 np.zeros(y.shape[0]), dg, True, solve)
+    args = (float(t), np.ascontiguousarray(y, dtype=np.float64), model, np.zeros(y.shape[0]),
+            dg, True, solve)
+    if p[P_GUIDE] == 1.0:
+        # the slider-crank's builds (its guide along y): the set a constant, as the kernel's
+        status = evaluate(*args, Build((NONE if ideal else ALL) | SLIDER_CRANK))
+    else:
+        status = (evaluate_ideal if ideal else evaluate)(*args)
     return dg if status == ST_OK else None
 
 

@@ -30,7 +30,7 @@ from numba.extending import typeof_impl
 
 from .compiled import compiled
 from .joints import INDEX, JOINTS, N_JOINTS
-from .layout import J_BUSHING, J_CLEARANCE
+from .layout import J_BUSHING, J_CLEARANCE, P_GUIDE
 
 #: Every joint: the generic build, in which each joint's clearance is tested at run time.
 ALL = (1 << N_JOINTS) - 1
@@ -43,6 +43,16 @@ ANY = ALL | BUSHINGS
 
 #: No joint with clearance: the ideal mechanism.
 NONE = 0
+
+#: The mechanism bit (bit 2 N_JOINTS): set for the planar slider-crank
+#: (``mechanism.kind: slider_crank``, docs/mechanisms.md), whose slider's guide runs along
+#: the global y axis, in the crank's plane; clear for the RSSP, whose guide runs along x.
+#: The packed case says which (``p[P_GUIDE]``, :func:`of`); :func:`guide_axis` reads it from
+#: a build's set, a constant of the build.
+SLIDER_CRANK = 1 << (2 * N_JOINTS)
+
+#: Every mechanism bit.
+MECHANISMS = SLIDER_CRANK
 
 
 class Build(int):
@@ -60,11 +70,12 @@ def _typeof_build(val, c):
     return types.IntegerLiteral(int(val))
 
 
-def of(jp) -> int:
+def of(jp, p=None) -> int:
     """The joint set of a packed case (its ``jp``, the flags that the kernel tests): bit j
     where ``jp[j, J_CLEARANCE]`` is not 0, bit N_JOINTS + j where ``jp[j, J_BUSHING]`` is
-    not 0."""
-    mask = 0
+    not 0; and, from its ``p``, :data:`SLIDER_CRANK` where ``p[P_GUIDE]`` is 1 (the guide
+    along y)."""
+    mask = SLIDER_CRANK if p is not None and p[P_GUIDE] == 1.0 else 0
     for j in range(N_JOINTS):
         if jp[j, J_CLEARANCE] != 0.0:
             mask |= 1 << j
@@ -98,8 +109,10 @@ def names(mask: int) -> tuple[str, ...]:
 
 
 def label(mask: int) -> str:
-    """``mask`` in words: the joints' names joined by commas, or ``none``."""
-    return ",".join(names(mask)) or "none"
+    """``mask`` in words: the joints' names joined by commas, or ``none``; followed by
+    `` (slider-crank)`` for that mechanism's."""
+    joints = ",".join(names(mask)) or "none"
+    return f"{joints} (slider-crank)" if int(mask) & SLIDER_CRANK else joints
 
 
 def check(case_set: int, build_set: int) -> None:
@@ -107,9 +120,24 @@ def check(case_set: int, build_set: int) -> None:
     joint with clearance in the case must be in the build (a build without it would treat
     the joint as ideal)."""
     missing = int(case_set) & ~int(build_set)
-    if missing or not 0 <= int(build_set) <= ANY:
+    if missing or not 0 <= int(build_set) <= ANY | MECHANISMS:
         raise ValueError(f"a case with clearance at {label(case_set)} cannot run on the "
                          f"kernel built for {label(build_set)}")
+    if (int(case_set) ^ int(build_set)) & MECHANISMS:
+        raise ValueError(f"a case of the {mechanism_name(case_set)} cannot run on the kernel "
+                         f"built for the {mechanism_name(build_set)}")
+
+
+def mechanism_name(mask: int) -> str:
+    """The mechanism of a set in words: ``slider-crank`` or ``RSSP``."""
+    return "slider-crank" if int(mask) & SLIDER_CRANK else "RSSP"
+
+
+@compiled(inline="always")
+def guide_axis(spec):
+    """The global axis along which the slider's guide runs, a constant of the build: 0 (x,
+    the RSSP) or 1 (y, the planar slider-crank: :data:`SLIDER_CRANK`)."""
+    return (spec >> (2 * N_JOINTS)) & 1
 
 
 @compiled(inline="always")
@@ -127,7 +155,7 @@ def is_bushing(spec, jp, j):
     build without bushings folds the test away also where j is a loop's variable (the rate
     loop of ``dynamics.evaluate``: without it the device build of A and B kept the
     bushing's rate, 2.41 M characters of PTX against 2.19 M, ``python -m clearsweep.ptx``)."""
-    return (spec >> N_JOINTS != 0 and (spec >> (N_JOINTS + j)) & 1 != 0
+    return ((spec >> N_JOINTS) & ALL != 0 and (spec >> (N_JOINTS + j)) & 1 != 0
             and jp[j, J_BUSHING] != 0.0)
 
 

@@ -54,7 +54,8 @@ P_HYST_DEN = 46     # denominator of the hysteresis factor [-]
 P_ONSET = 47        # 1.0 = delta_dot0 is the episode's onset value, 0.0 its running maximum
 P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K delta^n
 P_SECTION_PHASE = 49  # crank angle of the Poincare sections, once per revolution [rad]
-N_P = 50
+P_GUIDE = 50        # the slider guide's global axis: 0.0 x (the RSSP), 1.0 y (the slider-crank)
+N_P = 51
 
 # --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
 # Each column has one meaning whatever the joint's type; a type that has no use for a column
@@ -105,7 +106,8 @@ Y_R4 = 12           # slider centre of mass, 3
 Y_PHI4 = 15         # slider angles, 3
 Y_CRANK_ANGLE = Y_PHI2 + 2   # gamma2, the crank rotation theta [rad]
 Y_ROD_BETA = Y_PHI3 + 1      # beta3, the rod's Euler angle that must stay off +-90 deg
-Y_SLIDER_X = Y_R4            # slider position along the guide [m]
+Y_SLIDER_X = Y_R4            # slider position along the RSSP's guide (x) [m]; the slider-crank's
+                             # runs along y: Y_R4 + jointset.guide_axis (host: guide_slot)
 N_Q = 18
 Y_QD = 18
 Y_WORK = 36         # work done by the drive [J]

@@ -19,7 +19,7 @@ from .contact import episode_impact_velocity, surface
 from .dynamics import NZ, VZ_ROWS, evaluate
 from .jointkinds import MULTI_ROW, ball_body, is_multi, multi_free
 from .joints import BODIES, JOINTS
-from .jointset import ALL, has_clearance
+from .jointset import ALL, guide_axis, has_clearance
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
 from .kinematics import sub as vsub
 from .layout import (
@@ -342,12 +342,12 @@ HERMITE_REACH = 4.0 / 27.0
 
 
 @compiled
-def keep_ends(prev, dg, y):
+def keep_ends(prev, dg, y, spec):
     """prev = what :func:`record_sample` reads of a (sub-)step's start: the values of the
     state y and its diagnostics dg (PV_*)."""
     prev[PV_ACC] = dg[D_SLIDER_ACC]
     prev[PV_TORQUE] = dg[D_TORQUE]
-    prev[PV_V] = y[Y_QD + Y_SLIDER_X]
+    prev[PV_V] = y[Y_QD + Y_SLIDER_X + guide_axis(spec)]
     prev[PV_WORK] = y[Y_WORK]
     prev[PV_RATE] = y[Y_QD + Y_CRANK_ANGLE]
     for j in range(N_JOINTS):
@@ -399,7 +399,8 @@ def record_windows(m, prev, dg, y, jp, weight, settled_lo, spec):
         torque_peak = abs(dg[D_TORQUE])
         if weight > 0.0:
             a0 = prev[PV_ACC]
-            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+            m0, m1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X + guide_axis(spec)] - prev[PV_V])
+                                 / weight)
             low, high = hermite_range(a0, acc, m0, m1, lo)
             acc_peak = max(-low, high)
             rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
@@ -471,7 +472,7 @@ def record_sample(m, prev, dg, y, jp, weight, settled_lo, spec):
     """
     if on_device():
         record_windows(m, prev, dg, y, jp, weight, settled_lo, spec)
-        keep_ends(prev, dg, y)
+        keep_ends(prev, dg, y, spec)
         return
     settled = settled_lo >= 0.0
     w_floor = W_SETTLED if settled else W_WHOLE
@@ -485,7 +486,8 @@ def record_sample(m, prev, dg, y, jp, weight, settled_lo, spec):
     mt1 = 0.0
     if weight > 0.0:
         a0 = prev[PV_ACC]
-        ma0, ma1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X] - prev[PV_V]) / weight)
+        ma0, ma1 = mean_slopes(a0, acc, (y[Y_QD + Y_SLIDER_X + guide_axis(spec)] - prev[PV_V])
+                               / weight)
         rate = 0.5 * (prev[PV_RATE] + y[Y_QD + Y_CRANK_ANGLE])
         t0 = prev[PV_TORQUE]
         mt0, mt1 = mean_slopes(t0, torque, (y[Y_WORK] - prev[PV_WORK]) / (weight * rate))
@@ -525,7 +527,7 @@ def record_sample(m, prev, dg, y, jp, weight, settled_lo, spec):
         if d1 > 0.0:
             for w in range(N_WINDOWS if settled else 1):
                 m[w, M_CONTACT_T + j] += weight
-    keep_ends(prev, dg, y)
+    keep_ends(prev, dg, y, spec)
 
 
 # --------------------------------------------------------------------------- Poincare sections
@@ -1089,15 +1091,16 @@ def clear_attempt(cur, slides):
 
 
 @compiled(inline="always")
-def substep_section(secnext, tk, ts, hs, y, k1, ysub, k1sub):
+def substep_section(secnext, tk, ts, hs, y, k1, ysub, k1sub, spec):
     """The Poincare section at time tk inside the sub-step from ts (state ysub, derivative
     k1sub) to ts + hs (y, k1): the slider acceleration from the cubic Hermite of the slider
     velocity (``record_sample``'s quadratic) into secnext, the state from the sub-step's
     cubic Hermite into k1sub (in place), whose offsets are read once the step is accepted."""
     u = min(1.0, max(0.0, (tk - ts) / hs))
-    a0 = k1sub[Y_QD + Y_SLIDER_X]
-    a1 = k1[Y_QD + Y_SLIDER_X]
-    m0, m1 = mean_slopes(a0, a1, (y[Y_QD + Y_SLIDER_X] - ysub[Y_QD + Y_SLIDER_X]) / hs)
+    v = Y_QD + Y_SLIDER_X + guide_axis(spec)
+    a0 = k1sub[v]
+    a1 = k1[v]
+    m0, m1 = mean_slopes(a0, a1, (y[v] - ysub[v]) / hs)
     secnext[SN_ACC] = hermite_value(a0, a1, m0, m1, u)
     hermite_state(k1sub, u, hs, ysub, k1sub, y, k1)
 
@@ -1129,7 +1132,7 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
     for sub in range(nsub):
         ts = t + sub * hs
         if sub == 0:
-            keep_ends(work.prev, dg, y)      # the step's start (again after a rejection)
+            keep_ends(work.prev, dg, y, spec)      # the step's start (again after a rejection)
         due, _ = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
         if due:
             # a section in this sub-step: its start for the cubic Hermite
@@ -1164,7 +1167,7 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
                       max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
         due, tk = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
         if due:
-            substep_section(work.secnext, tk, ts, hs, y, k1, work.ysub, work.k1sub)
+            substep_section(work.secnext, tk, ts, hs, y, k1, work.ysub, work.k1sub, spec)
     return status, need, nbuf, nsub, kept
 
 
