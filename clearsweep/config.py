@@ -201,7 +201,7 @@ class RevoluteJointConfig(_Section):
     def check_sizes(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
                     source: str) -> None:
         """The bearing's radius and coating (:func:`_check_bearing`)."""
-        _check_bearing(joint, spec, source)
+        _check_bearing(joint, spec, cfg, source)
 
     @staticmethod
     def check_fit(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
@@ -257,7 +257,7 @@ class PrismaticJointConfig(_Section):
                     source: str) -> None:
         """The block (:func:`_check_block`), then the guide's clearances, corners and wall
         maps (:func:`_check_guide`)."""
-        _check_block(joint, spec, source)
+        _check_block(joint, spec, cfg, source)
         _check_guide(spec, cfg["wear"]["map"], source, joint)
 
     @staticmethod
@@ -636,12 +636,21 @@ def field_info(key: str) -> tuple[str | None, str] | None:
 #: does not describe: such a case ran "ok" with a penetration hundreds of times its radius.
 MIN_BALL_RADIUS_FRACTION = 0.5
 
-#: The mechanism's crank length and longest link [m], the same in both presets
-#: (clearsweep.params.PRESETS; tests/test_config.py checks they agree): joint O's bearing
+#: The RSSP's crank length and longest link [m], the same in both its presets
+#: (clearsweep.params.PRESETS; tests/test_joint_bounds.py checks they agree): joint O's bearing
 #: sits on the crank, so its radius is at most the crank's length, and no length of a joint
 #: (bearing length, base, coating, block side) exceeds the longest link, the rod.
 CRANK_LENGTH_M = 0.14
 LONGEST_LINK_M = 0.38
+#: Each preset's (crank length, longest link) [m], the bounds above for its mechanism.
+PRESET_LINKS_M = {"realistic": (CRANK_LENGTH_M, LONGEST_LINK_M),
+                  "paper": (CRANK_LENGTH_M, LONGEST_LINK_M),
+                  "flores_benchmark": (0.05, 0.12)}
+
+
+def _links(cfg: Mapping[str, Any]) -> tuple[float, float]:
+    """The (crank length, longest link) [m] of the config's preset."""
+    return PRESET_LINKS_M[cfg["mechanism"]["preset"]]
 #: Smallest nonzero clearance [m]: below an atomic spacing a gap is no clearance, and the
 #: contact law divides by it (a denormal 5e-324 m ended in ZeroDivisionError).
 MIN_CLEARANCE_M = 1.0e-10
@@ -660,6 +669,7 @@ MIN_LAYER_M = 1.0e-9
 
 def _check_sizes(joints: Mapping[str, Any], cfg: Mapping[str, Any], source: str) -> None:
     """Every geometric input of the joints bounded against the mechanism (issue 40 item 9)."""
+    longest = _links(cfg)[1]
     for joint, spec in joints.items():
         for key in ("clearance", "clearance_y", "clearance_z"):
             if key in spec and 0.0 < spec[key] < MIN_CLEARANCE_M:
@@ -675,34 +685,38 @@ def _check_sizes(joints: Mapping[str, Any], cfg: Mapping[str, Any], source: str)
                                   f"a number >= {MIN_LAYER_M:g} m (a layer of more than a few "
                                   "atoms)", source)
         for key in ("length", "base_thickness", "coating_thickness"):
-            if key in spec and spec[key] > LONGEST_LINK_M:
+            if key in spec and spec[key] > longest:
                 raise ConfigError(f"joints.{joint}.{key}", spec[key],
-                                  f"a number <= {LONGEST_LINK_M:g} m, the mechanism's longest "
+                                  f"a number <= {longest:g} m, the mechanism's longest "
                                   "link (the rod)", source)
     for joint, spec in joints.items():
         section_class(joint).check_sizes(joint, spec, cfg, source)
 
 
-def _check_bearing(joint: str, spec: Mapping[str, Any], source: str) -> None:
+def _check_bearing(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                   source: str) -> None:
     """A bearing's radius within the crank, and its coating thinner than its radius."""
     radius = spec["bearing_radius"]
-    if not MIN_BEARING_RADIUS_M <= radius <= CRANK_LENGTH_M:
+    crank = _links(cfg)[0]
+    if not MIN_BEARING_RADIUS_M <= radius <= crank:
         raise ConfigError(f"joints.{joint}.bearing_radius", radius,
-                          f"a number with {MIN_BEARING_RADIUS_M:g} <= x <= {CRANK_LENGTH_M:g} m "
+                          f"a number with {MIN_BEARING_RADIUS_M:g} <= x <= {crank:g} m "
                           "(the crank's length)", source)
     if spec["coating_thickness"] >= radius:
         raise ConfigError(f"joints.{joint}.coating_thickness", spec["coating_thickness"],
                           f"a number < joints.{joint}.bearing_radius ({radius:g} m)", source)
 
 
-def _check_block(joint: str, spec: Mapping[str, Any], source: str) -> None:
+def _check_block(joint: str, spec: Mapping[str, Any], cfg: Mapping[str, Any],
+                 source: str) -> None:
     """A guide's block: its corners' radius above the floor, its sides within the rod."""
+    longest = _links(cfg)[1]
     if spec["corner_radius"] < MIN_CORNER_RADIUS_M:
         raise ConfigError(f"joints.{joint}.corner_radius", spec["corner_radius"],
                           f"a number >= {MIN_CORNER_RADIUS_M:g} m", source)
-    if max(spec["block"]) > LONGEST_LINK_M:
+    if max(spec["block"]) > longest:
         raise ConfigError(f"joints.{joint}.block", spec["block"],
-                          f"sides <= {LONGEST_LINK_M:g} m, the mechanism's longest link (the rod)",
+                          f"sides <= {longest:g} m, the mechanism's longest link (the rod)",
                           source)
 
 

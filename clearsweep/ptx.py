@@ -211,6 +211,8 @@ def parse_args(argv: list[str] | None = None):
                         help="the joint set to build the kernel for: the joints with "
                              "clearance, comma-separated (A,B), 'none', or 'all' (default: "
                              "%(default)s, the generic build)")
+    parser.add_argument("--mechanism", choices=("rssp", "slider_crank"), default="rssp",
+                        help="the mechanism the kernel is built for (default: %(default)s)")
     args = parser.parse_args(argv)
     if args.capacity not in CAPACITIES:
         parser.error(f"--capacity: expected one of {', '.join(map(str, CAPACITIES))}, "
@@ -226,6 +228,8 @@ def parse_args(argv: list[str] | None = None):
                      else jointset.named(*(name.strip() for name in args.joints.split(","))))
     except ValueError as exc:
         parser.error(f"--joints: {exc}")
+    if args.mechanism == "slider_crank":
+        args.spec |= jointset.SLIDER_CRANK
     if args.output is not None and args.output.is_dir():
         parser.error(f"output: {str(args.output)!r} is a folder; give a file path for the PTX")
     return args

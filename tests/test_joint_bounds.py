@@ -34,9 +34,13 @@ VALUES = st.one_of(
 
 
 def test_the_bounds_follow_the_mechanism():
-    assert {p.crank_length_m for p in PRESETS.values()} == {config_module.CRANK_LENGTH_M}
-    assert max(max(p.crank_length_m, p.rod_length_m) for p in PRESETS.values()) \
-        == config_module.LONGEST_LINK_M
+    assert set(config_module.PRESET_LINKS_M) == set(PRESETS)
+    for name, preset in PRESETS.items():
+        assert config_module.PRESET_LINKS_M[name] == (
+            preset.crank_length_m, max(preset.crank_length_m, preset.rod_length_m))
+    rssp = [p for p in PRESETS.values() if p.kind == "rssp"]
+    assert {p.crank_length_m for p in rssp} == {config_module.CRANK_LENGTH_M}
+    assert max(max(p.crank_length_m, p.rod_length_m) for p in rssp) == config_module.LONGEST_LINK_M
 
 
 @pytest.mark.parametrize("key", KEYS)
