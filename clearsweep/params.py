@@ -1146,10 +1146,15 @@ def build_of(case_set: int, device: bool = False) -> int:
     device: the case's joints among :data:`SPECIALISED_JOINTS` (or
     :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint; and the case's bushings
     (a build without bushings, every build before them, folds their code away); and the
-    case's mechanism (``jointset.MECHANISMS``)."""
+    case's mechanism (``jointset.MECHANISMS``), the slider-crank's without P."""
     mask = SPECIALISED_JOINTS_DEVICE if device else SPECIALISED_JOINTS
-    return ((int(case_set) & mask) | (jointset.ALL & ~mask)
-            | (int(case_set) & (jointset.BUSHINGS | jointset.MECHANISMS)))
+    build = ((int(case_set) & mask) | (jointset.ALL & ~mask)
+             | (int(case_set) & (jointset.BUSHINGS | jointset.MECHANISMS)))
+    if build & jointset.SLIDER_CRANK:
+        # the slider-crank's guide is ideal: its builds fold P away (and jointset.check
+        # refuses a case with P's clearance on them)
+        build &= ~jointset.named("P")
+    return build
 
 
 def kernel_build(cfg: Config) -> int:

@@ -529,3 +529,41 @@ def test_simulated_guide_agrees_with_the_cpu_backend(tmp_path):
     assert [str(s) for s in gpu["status"].values] == [str(s) for s in cpu["status"].values] == ["ok"]
     assert float(cpu["wear_volume"].sel(joint="P").max()) > 0.0
     assert_summaries_agree(cpu, gpu)
+
+
+#: The planar slider-crank on the device path (its build's guide along y, jointset.SLIDER_CRANK):
+#: the benchmark's clearance at the wrist pin B, and at the crank bearing O and the crank pin A
+#: too, worn (amplified), 300 steps at the benchmark's 5000 rpm (a quarter revolution in 3 ms:
+#: dt 1e-5 s). The Poincare section at 18 degrees falls at t = 0.6 ms: one per case.
+SLIDER_CRANK = {
+    "name": "gpu_slider_crank", "store": "summary",
+    "base": {"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark",
+                           "speed_rpm": 5000.0},
+             "joints": {"B": {"clearance": 5.0e-4, "socket_radius": 0.01}},
+             "wear": {"map": [6, 12], "amplification": 100.0},
+             "metrics": {"settle_time": 0.001},
+             "outputs": {"poincare_phase_deg": 18.0},
+             "solver": {"dt": 1.0e-5, "duration": 0.003}},
+    "sweep": {"zip": [{"name": "variant", "labels": ["B", "OAB"],
+                       "joints.A.clearance": [0.0, 2.0e-4],
+                       "joints.O.clearance": [0.0, 2.0e-4]}]},
+}
+
+
+@pytest.mark.slow
+def test_simulated_slider_crank_agrees_with_the_cpu_backend(tmp_path):
+    """The slider-crank's cases run the device path with its own build (the guide along y
+    folded in, the set from each case's p[P_GUIDE]) to the CPU backend's summaries within
+    the simulator's tolerance."""
+    from clearsweep.sweeping import run_sweep
+
+    out = tmp_path / "slider_crank.nc"
+    run_simulated(GUIDE_SCRIPT, json.dumps(SLIDER_CRANK), str(out))
+    cpu = run_sweep(SLIDER_CRANK, workers=1, progress=False)
+    with xr.open_dataset(out) as gpu:
+        gpu = gpu.load()
+    assert [str(s) for s in gpu["status"].values] == [str(s) for s in cpu["status"].values] \
+        == ["ok", "ok"]
+    assert float(cpu["wear_volume"].sel(joint="B").min()) > 0.0
+    assert float(cpu["slider_acceleration_peak"].min()) > 1.0e4     # the benchmark's scale
+    assert_summaries_agree(cpu, gpu)
