@@ -1,4 +1,5 @@
-"""Slow, plain-numpy reference right-hand side of the RSSP mechanism (docs/physics.md sections 1-3, 8).
+"""Slow, plain-numpy reference right-hand side of the RSSP mechanism (docs/physics.md sections 1-3, 8)
+and of the planar slider-crank (docs/mechanisms.md).
 
 Everything is built the obvious way, independently of the kernel's structured solver:
 
@@ -26,6 +27,13 @@ Everything is built the obvious way, independently of the kernel's structured so
   acts at the ball point on both bodies, e the ball point's offset from the socket point,
   w the ball point's velocity against the socket's material point there (by point
   Jacobians), split along the socket body's local x axis (the ground's: global x);
+- the elastic law of the case (``p[P_EXPONENT]``): the paper's k_N at A and B and Hertz's
+  n = 3/2 at O (0), or the power law F_el = (4/3) E* sqrt(R_i R_j) c^(1-n) delta^n at A, B
+  and O (``contact.elastic: hertz``, n > 0);
+- the slider's guide along the global axis ``p[P_GUIDE]`` (0: x, the RSSP; 1: y, the planar
+  slider-crank, whose bodies are the RSSP's): the guide is the line through (0, 0, z_s) along
+  that axis, and the prismatic rows hold the slider's offset from it along the two directions
+  across it (e_z x e_guide and e_z) and its three angles (the slider-crank's guide is ideal);
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
@@ -177,8 +185,19 @@ class Mechanism:
         self.bushing = [self.jp[j, L.J_BUSHING] != 0.0 for j in range(N_JOINTS)]
         self.ideal = [self.jp[j, L.J_CLEARANCE] == 0.0 and not self.bushing[j]
                       for j in range(N_JOINTS)]
-        # the journal's law is the only elastic law written here besides the paper's
-        assert self.p[L.P_EXPONENT] == 0.0, "the reference knows the default elastic laws only"
+        # the elastic law: 0 the paper's (Hertz's n = 3/2 at the journal), n > 0 the power law
+        self.exponent = float(p[L.P_EXPONENT])
+        # the guide: the line through (0, 0, z_s) along the global axis e_guide; the slider's
+        # offset from it is measured along e_across (horizontal, across the guide) and e_z
+        self.guide = int(p[L.P_GUIDE])
+        assert self.guide in (0, 1), "the guide runs along global x or y"
+        e_z = np.array([0.0, 0.0, 1.0])
+        self.e_guide = np.eye(3)[self.guide]
+        self.e_across = np.cross(e_z, self.e_guide)       # x: +y (the RSSP); y: -x
+        self.e_up = e_z
+        self.guide_origin = np.array([0.0, 0.0, self.zs])
+        # the block's corner contacts below are written for a guide along x
+        assert self.guide == 0 or self.ideal[JOINT_P], "the slider-crank's guide is ideal"
 
     # spherical joint j: (ball body, ball offset, socket body, socket offset)
     def joint_bodies(self, j):
@@ -213,8 +232,9 @@ class Mechanism:
         if self.ideal[JOINT_B]:                                  # spherical B: slider - rod end
             c.extend(point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3))
         c.append(q[11])                                          # rod spin gamma3 = 0
-        if self.ideal[JOINT_P]:                                  # prismatic
-            c.extend([q[13], q[14] - self.zs, q[15], q[16], q[17]])
+        if self.ideal[JOINT_P]:                                  # prismatic: on the guide's
+            off = q[12:15] - self.guide_origin                   # line, unrotated
+            c.extend([off @ self.e_across, off @ self.e_up, q[15], q[16], q[17]])
         return np.array(c)
 
     def mass_matrix(self, q):
@@ -324,6 +344,8 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
     ji = point_jacobian(q, sb, body_offset(q, sb, qi))
 
     def law(delta, ddot, kappa):
+        if mech.exponent > 0.0:
+            return journal_force(delta, ddot, c, ew, ri, rj, kappa, mech.exponent)
         return normal_force(delta, ddot, c, ew, ri, kappa)
 
     return respond(mech, j, qd, e, n, e - c, qj, qi, jj, ji, law, dv0_stored)
@@ -367,13 +389,15 @@ def bushing_contact(mech: Mechanism, j, q, qd):
                          j_rel=jj - ji, q_ball=pb, q_socket=pb)
 
 
-def journal_force(delta, ddot, c, ew, ri, rj, kappa):
+def journal_force(delta, ddot, c, ew, ri, rj, kappa, n=JOURNAL_EXPONENT):
     """The journal's F_N = F_el (1 + kappa delta_dot), clamped >= 0, and F_el: Hertz's law of a
     cylinder in a conforming cylindrical bearing, F_el = (4/3) E* sqrt(R_i R_j / c) delta^(3/2)
-    (the conformal pair's radius R_i R_j / (R_i - R_j), R_i - R_j = c; Flores et al. 2008)."""
+    (the conformal pair's radius R_i R_j / (R_i - R_j), R_i - R_j = c; Flores et al. 2008);
+    with another exponent n the power law (4/3) E* sqrt(R_i R_j / c) c^(3/2 - n) delta^n
+    (docs/physics.md section 3.2; c^0 = 1 exactly at n = 3/2). The power law at A and B too."""
     if delta <= 0.0:
         return 0.0, 0.0
-    fel = 4.0 / 3.0 * ew * np.sqrt(ri * rj / c) * delta ** JOURNAL_EXPONENT
+    fel = 4.0 / 3.0 * ew * np.sqrt(ri * rj / c) * delta ** n * c ** (JOURNAL_EXPONENT - n)
     return max(0.0, fel * (1.0 + kappa * ddot)), fel
 
 
@@ -390,8 +414,10 @@ def journal_contact(mech: Mechanism, q, qd, dv0_stored=0.0):
     qi = ri * n                                          # on the bearing, which does not move
     jj = point_jacobian(q, CRANK, body_offset(q, CRANK, qj))
 
+    n_law = mech.exponent if mech.exponent > 0.0 else JOURNAL_EXPONENT
+
     def law(delta, ddot, kappa):
-        return journal_force(delta, ddot, c, ew, ri, rj, kappa)
+        return journal_force(delta, ddot, c, ew, ri, rj, kappa, n_law)
 
     return respond(mech, JOINT_O, qd, e, n, e - c, qj, qi, jj, np.zeros_like(jj), law, dv0_stored)
 
