@@ -373,10 +373,11 @@ def test_the_energy_balance_of_a_clearance_at_b(clearance_b):
     """The joint's impacts (4) and friction dissipate energy (2.35 J), and the books close:
     the residual within 1e-4 of the peak kinetic energy (measured 4.3e-6; 1.7e-5 at dt
     1e-5 s; the status's tolerance is 1e-3); the saved rows' residual within the kernel's
-    every-step maximum; the kinetic energy that of the saved states by tests/reference.py's mass matrix (1e-12); the
-    drive's work the integral of tau omega over the rows (trapezoid; 1e-3 of the work,
-    measured 1.4e-4; rows of 1e-5 s miss the torque's ringing at B's contact: 3.3e-3); the
-    dissipation growing; the potential energy's elastic part >= 0."""
+    every-step maximum; the kinetic energy that of the saved states by tests/reference.py's
+    mass matrix (1e-12); the drive's work the integral of tau omega over the rows
+    (trapezoid; 1e-3 of the work, measured 1.4e-4; rows of 1e-5 s miss the torque's
+    ringing at B's contact: 3.3e-3); the dissipation growing; the potential energy's
+    elastic part >= 0."""
     pk, raw, ds = clearance_b
     assert str(ds.status.values) == "ok"
     assert int(ds.impact_count.sel(joint="B")) > 0
