@@ -1551,6 +1551,11 @@ ISSUE44_MECHANISM = [
     ("an unknown mechanism.kind (was: unknown key mechanism.kind)",
      lambda t, f: ["run", ONE, "--set", "mechanism.kind=four_bar", "-o", t / "out.nc"], 2,
      "mechanism.kind: got 'four_bar' (from --set); expected one of 'rssp', 'slider_crank'"),
+    ("a sweep of mechanism.kind on the RSSP's preset (was: unknown key mechanism.kind)",
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {mechanism.kind: [rssp, slider_crank]}}\n"),
+                   "--no-progress", "--workers", "1", "-o", Path(t) / "out.nc"], 2,
+     "mechanism.kind: got 'slider_crank'; expected a value with which mechanism.preset = "
+     "'realistic' is a preset of mechanism.kind slider_crank"),
 ]
 ROWS += ISSUE44_MECHANISM
 
