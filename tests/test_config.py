@@ -262,6 +262,12 @@ def _consistent(raw):
     bearing["clearance"] = min(bearing["clearance"], 0.25 * bearing["bearing_radius"])
     bearing["coating_thickness"] = min(bearing["coating_thickness"], 0.5 * bearing["bearing_radius"])
     guide = raw["joints"]["P"]
+    mechanism = raw["mechanism"]       # a preset of its mechanism; the slider-crank's guide ideal
+    presets = config_module.MECHANISM_KINDS[mechanism["kind"]]
+    if mechanism["preset"] not in presets:
+        mechanism["preset"] = presets[0]
+    if mechanism["kind"] == "slider_crank":
+        guide["clearance_y"] = guide["clearance_z"] = 0.0
     guide["corner_radius"] = min(max(guide["corner_radius"], config_module.MIN_CORNER_RADIUS_M), 0.01)
     guide["block"] = [min(side, config_module.LONGEST_LINK_M) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
@@ -345,6 +351,17 @@ BAD = [
     ("mechanism:\n  speed_rpm: .nan\n", "mechanism.speed_rpm", float("nan"), "a number > 0"),
     ("mechanism:\n  gravity: [0, -9.81]\n", "mechanism.gravity", [0, -9.81], "a list of 3 numbers"),
     ("mechanism:\n  preset: papr\n", "mechanism.preset", "papr", "did you mean 'paper'?"),
+    # the mechanism and its presets (issue 44)
+    ("mechanism:\n  kind: four_bar\n", "mechanism.kind", "four_bar", "one of 'rssp', 'slider_crank'"),
+    ("mechanism:\n  kind: slidercrank\n", "mechanism.kind", "slidercrank",
+     "did you mean 'slider_crank'?"),
+    ("mechanism:\n  kind: slider_crank\n", "mechanism.preset", "realistic",
+     "a preset of mechanism.kind slider_crank: one of flores_benchmark"),
+    ("mechanism:\n  preset: flores_benchmark\n", "mechanism.preset", "flores_benchmark",
+     "a preset of mechanism.kind rssp: one of realistic, paper"),
+    ("mechanism: {kind: slider_crank, preset: flores_benchmark}\n"
+     "joints: {P: {clearance_y: 1.0e-4, clearance_z: 1.0e-4}}\n", "joints.P.clearance_y", 1e-4,
+     "0 where mechanism.kind is slider_crank"),
     ("contact:\n  restitution: 0\n", "contact.restitution", 0, "0 < x <= 1"),
     ("contact:\n  restitution: 1.5\n", "contact.restitution", 1.5, "0 < x <= 1"),
     ("contact:\n  layer_rule: paper\n", "contact.layer_rule", "paper", "'series', 'paper_mm'"),
@@ -563,3 +580,21 @@ def test_a_later_setting_of_one_unit_replaces_the_others_length(tmp_path):
     with pytest.raises(ConfigError, match=r"solver.duration: got 1 \(from --set\); expected one "
                                           r"of solver.revolutions and solver.duration, not both"):
         load_config(path, ["solver.revolutions=5", "solver.duration=1"])
+
+
+# ----------------------------------------------------------------------------- mechanisms
+
+def test_the_mechanisms_presets_are_the_params_presets():
+    """config.MECHANISM_KINDS names each mechanism's presets, params.PRESETS holds their
+    data: the same presets, each of the mechanism that lists it (its guide along x for the
+    RSSP, along y for the slider-crank), and each mechanism's first preset valid with it."""
+    from clearsweep.params import PRESETS
+
+    assert set(config_module.PRESET_KINDS) == set(PRESETS)
+    for name, preset in PRESETS.items():
+        assert preset.kind == config_module.PRESET_KINDS[name], name
+        assert preset.guide_axis == (1 if preset.kind == "slider_crank" else 0)
+    assert DEFAULTS.mechanism.kind == "rssp" and DEFAULTS.mechanism.preset == "realistic"
+    for kind, presets in config_module.MECHANISM_KINDS.items():
+        cfg = load_config({"mechanism": {"kind": kind, "preset": presets[0]}})
+        assert (cfg.mechanism.kind, cfg.mechanism.preset) == (kind, presets[0])

@@ -754,7 +754,7 @@ ROUND4_FUZZ = [
     ('run mechanism.preset unknown', _run("mechanism.preset=paperr"),
      2, "mechanism.preset: got 'paperr' (from --set); expected one of 'realistic', 'paper"),
     ('run mechanism a value', _run("mechanism=1"),
-     2, 'mechanism: got 1 (from --set); expected a mapping with keys preset, speed_rpm, g'),
+     2, 'mechanism: got 1 (from --set); expected a mapping with keys kind, preset, speed_rpm, g'),
     ('run joints.B.coating number', _run("joints.B.coating=1"),
      2, 'joints.B.coating: got 1 (from --set); expected a string'),
     ('run joints.B.coating unknown', _run("joints.B.coating=PTFEE"),
@@ -1525,6 +1525,39 @@ BUSHING = [
      "joints.B.bushing_stiffness: got [0"),
 ]
 ROWS += BUSHING
+
+# --- issue 44: the mechanism (mechanism.kind) and its presets
+ISSUE44_MECHANISM = [
+    ("the slider-crank's preset on the RSSP (was: refused as one preset of 'realistic', "
+     "'paper')",
+     lambda t, f: ["validate", ONE, "--set", "mechanism.preset=flores_benchmark"], 2,
+     "mechanism.preset: got 'flores_benchmark' (from --set); expected a preset of "
+     "mechanism.kind rssp: one of realistic, paper"),
+    ("mechanism.kind slider_crank on the RSSP's preset (was: unknown key mechanism.kind)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.kind=slider_crank", "-o", t / "out.nc"], 2,
+     "mechanism.preset: got 'realistic'; expected a preset of mechanism.kind slider_crank: "
+     "one of flores_benchmark"),
+    ("a slider-crank with clearance in its guide (was: unknown key mechanism.kind)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.kind=slider_crank", "--set",
+                   "mechanism.preset=flores_benchmark", "--set", "joints.P.clearance_y=1e-4",
+                   "--set", "joints.P.clearance_z=1e-4", "-o", t / "out.nc"], 2,
+     "joints.P.clearance_y: got 0.0001 (from --set); expected 0 where mechanism.kind is "
+     "slider_crank"),
+    ("a slider-crank with clearance_z alone in its guide (was: unknown key mechanism.kind)",
+     lambda t, f: ["validate", ONE, "--set", "mechanism.kind=slider_crank", "--set",
+                   "mechanism.preset=flores_benchmark", "--set", "joints.P.clearance_z=1e-4"], 2,
+     "joints.P.clearance_z: got 0.0001 (from --set); expected 0 where mechanism.kind is "
+     "slider_crank"),
+    ("an unknown mechanism.kind (was: unknown key mechanism.kind)",
+     lambda t, f: ["run", ONE, "--set", "mechanism.kind=four_bar", "-o", t / "out.nc"], 2,
+     "mechanism.kind: got 'four_bar' (from --set); expected one of 'rssp', 'slider_crank'"),
+    ("a sweep of mechanism.kind on the RSSP's preset (was: unknown key mechanism.kind)",
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {mechanism.kind: [rssp, slider_crank]}}\n"),
+                   "--no-progress", "--workers", "1", "-o", Path(t) / "out.nc"], 2,
+     "mechanism.kind: got 'slider_crank'; expected a value with which mechanism.preset = "
+     "'realistic' is a preset of mechanism.kind slider_crank"),
+]
+ROWS += ISSUE44_MECHANISM
 
 
 def friction_materials(tmp: Path, mu: str) -> str:
