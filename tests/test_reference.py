@@ -329,7 +329,8 @@ def kernel_point_mobility(k, y, pk, j):
     minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4],
             1.0 / p[L.P_M2] if jp[ref_mod.JOINT_O, L.J_CLEARANCE] != 0.0 else 0.0,
             1.0 / p[L.P_M4] if jp[ref_mod.JOINT_P, L.J_CLEARANCE] != 0.0 else 0.0)
-    nc = 3 * int(sum(jp[i, L.J_CLEARANCE] == 0.0 for i in range(2)))
+    # the rows of A and B: three where ideal; the slider-crank's pin keeps its axial one
+    nc = sum(3 if jp[i, L.J_CLEARANCE] == 0.0 else int(p[L.P_GUIDE]) for i in range(2))
     dg = k["dg"]
     n = np.array(dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3])
     r3 = np.array(y[6:9])

@@ -21,8 +21,8 @@ item 4). The crank turns about x at the origin, its pin at A = (0, l2 sin theta,
    integral of tau omega, and the dissipation.
 5. Planarity: with clearance at O, A or B, and at all three, every out-of-plane coordinate,
    offset and angle stays at round-off over a revolution; an out-of-plane start does not
-   (the check can fail). Over many revolutions the rod leaves the plane (xfail: the
-   spherical A and B's out-of-plane freedom), and the benchmark stops on it.
+   (the check can fail). Over twenty revolutions it stays in the plane (the pins' axial
+   rows), and the benchmark runs half a second (42 revolutions) in it.
 6. Step-size convergence of settled statistics with 0.5 mm at B.
 7. The mechanism bit of the kernel's joint sets (core/jointset.py): from the packed case,
    kept by the build, refused on the other mechanism's build, folded to axis 0 in every
@@ -383,8 +383,10 @@ def test_the_energy_balance_of_a_clearance_at_b(clearance_b):
     assert int(ds.impact_count.sel(joint="B")) > 0
     assert float(ds.energy_residual_relative) < 1e-4
     residual = ds.energy_residual.values
-    assert np.abs(residual).max() <= float(ds.energy_residual_max) * (1 + 1e-12)
     ke = ds.energy_kinetic.values
+    # the saved rows' residual (the host's sum) within the kernel's every-step maximum (its
+    # own sum, in another order: rounding of the energies' scale apart)
+    assert np.abs(residual).max() <= float(ds.energy_residual_max) + 1e-13 * np.abs(ke).max()
     mech = ref_mod.Mechanism(pk.p, pk.jp)
     rows = range(0, ds.sizes["time"], 100)
     reference = np.array([mech.kinetic_energy(raw.y[k, :L.N_Q], raw.y[k, L.Y_QD:L.Y_QD + L.N_Q])
@@ -474,12 +476,6 @@ def test_an_out_of_plane_start_leaves_the_plane():
     assert out_of_plane(pk, raw, case_dataset(cfg, pk, raw)) > 1e-10
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "A and B are spherical joints: with clearance at A or B the rod has an out-of-plane "
-    "freedom (a swing about A, a slide of B's ball across the plane) that the planar motion "
-    "excites: round-off grows 10-1000 times a revolution, and the rod's centroid leaves the "
-    "plane by 0.2 mm after about 10 revolutions (2e-4 m from revolution 12 on, at 1000 rpm); "
-    "the benchmark's joints are revolute, with no such freedom"))
 def test_the_motion_stays_in_the_plane_over_twenty_revolutions():
     """0.5 mm at B, 1000 rpm, 20 revolutions from the seated start: the out-of-plane
     displacements stay below 1e-9 m (a planar mechanism's joints keep it in its plane)."""
@@ -489,15 +485,15 @@ def test_the_motion_stays_in_the_plane_over_twenty_revolutions():
     assert out_of_plane(pk, raw, ds) < 1e-9
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the out-of-plane instability of the spherical A and B (see "
-    "test_the_motion_stays_in_the_plane_over_twenty_revolutions) stops the benchmark: the "
-    "rod leaves the plane (2e-7 m in revolution 13, 2e-4 m in 16) and the run ends on "
-    "constraint_violation at 0.187 s (with A instead of B at 0.086 s)"))
 def test_the_benchmark_with_a_clearance_at_b_runs_half_a_second():
     """0.5 mm at B (a 10 mm socket), 5000 rpm, 0.5 s (42 revolutions) from the seated start:
-    the run ends ok, in the plane."""
-    _, pk, raw, ds = run({"joints": {"B": B_CLEARANCE}, "solver": {"duration": 0.5}})
+    the run ends ok, in the plane. Baumgarte's constants at 50 1/s, as the shipped configs
+    have them: at the RSSP's 5 1/s (a correction time of 17 revolutions at this speed) the
+    crank pin's constraint drifted to the 1e-6 m stop in 0.2 s (measured: 2.5e-7 m at 0.1 s;
+    at 50 1/s the largest violation over the run was 5.1e-8 m; the step at 5e-6 s with 5 1/s:
+    3.0e-7 m)."""
+    _, pk, raw, ds = run({"joints": {"B": B_CLEARANCE},
+                          "solver": {"duration": 0.5, "baumgarte": [50.0, 50.0]}})
     assert str(ds.status.values) == "ok", (str(ds.status.values), ds.attrs.get("status_time_s"))
     assert out_of_plane(pk, raw, ds) < 1e-9
 
@@ -553,7 +549,8 @@ def packed_case(mechanism: dict, joints: dict):
 def test_the_case_says_its_mechanism_and_the_build_keeps_it(joints, names):
     """The slider-crank's packed case says its guide (p[P_GUIDE] = 1), jointset.of reads the
     bit from it (not from jp alone), params.joint_set gives the same set from the config,
-    and the case's build keeps the bit (CPU and device); the RSSP's case has neither."""
+    and the case's build keeps the bit (CPU and device) and folds the guide P away (it is
+    ideal in the slider-crank); the RSSP's case has neither."""
     cfg, pk = packed_case(SLIDER_CRANK, joints)
     joint_bits = jointset.named(*names)
     assert pk.p[L.P_GUIDE] == 1.0
@@ -562,7 +559,8 @@ def test_the_case_says_its_mechanism_and_the_build_keeps_it(joints, names):
     for device in (False, True):
         build = build_of(joint_set(cfg), device=device)
         assert build & jointset.SLIDER_CRANK
-        assert build == build_of(joint_bits, device=device) | jointset.SLIDER_CRANK
+        assert build == ((build_of(joint_bits, device=device) & ~jointset.named("P"))
+                         | jointset.SLIDER_CRANK)
         jointset.check(joint_set(cfg), build)
     assert kernel_build(cfg) == build_of(joint_set(cfg))
     rssp, rssp_pk = packed_case({}, joints)
@@ -583,11 +581,6 @@ def test_an_rssp_case_is_refused_on_a_slider_crank_build():
         jointset.check(jointset.NONE, jointset.SLIDER_CRANK)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "jointset.check tests the joints before the mechanism: the slider-crank's bit, missing "
-    "from an RSSP build, reads as a missing joint ('a case with clearance at B "
-    "(slider-crank) cannot run on the kernel built for B,O,P'), which names no RSSP and "
-    "gives the wrong reason"))
 def test_a_slider_crank_case_is_refused_on_an_rssp_build_naming_both():
     """The converse: a slider-crank case on the RSSP's build of the same joints is refused
     as a case of the slider-crank on the kernel built for the RSSP."""

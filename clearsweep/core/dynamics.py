@@ -424,7 +424,11 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     rows written and the largest position violation of these joints [m]. Where O has
     clearance the crank's centroid acceleration in the bearing's plane (rdd2's y, z) is
     free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side.
-    ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
+    The slider-crank's A and B (``jointset.guide_axis`` 1) are pins whose axis is the
+    crank's (x): with clearance or a bushing each keeps its axial row (the rows first, x),
+    which holds the rod in the crank's plane; a ball free across the plane would leave it
+    (its lateral equilibrium under the rod's load is unstable: rounding grew 1,000-fold a
+    revolution). ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
     p = model.p
     jp = model.jp
     a_b = p[P_BAUM_A]
@@ -434,7 +438,13 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
-    if not is_free(spec, jp, JOINT_A):
+    # each joint's rows: three where it is ideal; where it has clearance or a bushing, none
+    # at the RSSP's balls, and at the slider-crank's pins the axial one (x, the crank's axis:
+    # a pin's axial play is ideal, as the bearing's at O), which holds the rod in the plane
+    g = guide_axis(spec)
+    rows_a = 3 if not is_free(spec, jp, JOINT_A) else (1 if g == 1 else 0)
+    rows_b = 3 if not is_free(spec, jp, JOINT_B) else (1 if g == 1 else 0)
+    if rows_a > 0:
         free = o_free(spec, jp)
         if free:
             rdd2 = (rdd2[0], 0.0, 0.0)
@@ -451,7 +461,7 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
         cpos = sub(p3A, p2A)
         cvel = sub(v3A, v2A)
         quad = point_accel_quadratic(R3, w3, gq3, uA3)
-        for i in range(3):
+        for i in range(rows_a):
             for k in range(NZ):
                 C[nc + i, k] = 0.0
             C[nc + i, i] = 1.0
@@ -462,8 +472,8 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
             vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
                                   - quad[i] + a2A[i])
             cons = max(cons, abs(cpos[i]))
-        nc += 3
-    if not is_free(spec, jp, JOINT_B):
+        nc += rows_a
+    if rows_b > 0:
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
@@ -477,14 +487,13 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
         # the slider's y, z (the slider-crank's x, z): fixed by its guide, or free (columns
         # 8, 9) where P has clearance; its coordinate along the guide is column 5
         slide = p_free(spec, jp)
-        g = guide_axis(spec)
         if slide:
             known4 = (0.0, 0.0, 0.0)
         elif g == 0:
             known4 = (0.0, ydd4, zdd4)
         else:
             known4 = (ydd4, 0.0, zdd4)
-        for i in range(3):
+        for i in range(rows_b):
             for k in range(NZ):
                 C[nc + i, k] = 0.0
             C[nc + i, i] = -1.0
@@ -493,11 +502,12 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
             vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
                                   + JrB[3 * i + 2] * gdd3 + quad[i])
             cons = max(cons, abs(cpos[i]))
-        C[nc + g, 5] = 1.0
+        if rows_b == 3:
+            C[nc + g, 5] = 1.0
         if slide:
             C[nc + 1, 8] = 1.0
             C[nc + 2, 9] = 1.0
-        nc += 3
+        nc += rows_b
     return nc, cons
 
 
@@ -873,8 +883,20 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
+    elif g == 1:
+        # the slider-crank's pin: its axial row's force on the crank pin, beside the contact's
+        fx = (vz[VZ_LAMBDA, 0], 0.0, 0.0)
+        k0 = 1
+        r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
+        R2 = rotation(t2)
+        qA = add(r2, mv(R2, uA2))
+        fA = add(fA, fx)
+        F2 = add(F2, fx)
+        N2 = add(N2, body_moment(R2, r2, qA, fx))
     if not is_free(spec, jp, joint_b):
         fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
+    elif g == 1:
+        fB = (fB[0] + vz[VZ_LAMBDA, k0], fB[1], fB[2])
     # with O's clearance, lamO keeps the axial reaction only (its y, z vanish to rounding)
     torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
     dy[Y_WORK] = torque * y[qd + Y_PHI2 + 2]

@@ -119,13 +119,13 @@ def check(case_set: int, build_set: int) -> None:
     """ValueError unless a build of ``build_set`` can run a case of ``case_set``: every
     joint with clearance in the case must be in the build (a build without it would treat
     the joint as ideal)."""
+    if (int(case_set) ^ int(build_set)) & MECHANISMS:
+        raise ValueError(f"a case of the {mechanism_name(case_set)} cannot run on the kernel "
+                         f"built for the {mechanism_name(build_set)}")
     missing = int(case_set) & ~int(build_set)
     if missing or not 0 <= int(build_set) <= ANY | MECHANISMS:
         raise ValueError(f"a case with clearance at {label(case_set)} cannot run on the "
                          f"kernel built for {label(build_set)}")
-    if (int(case_set) ^ int(build_set)) & MECHANISMS:
-        raise ValueError(f"a case of the {mechanism_name(case_set)} cannot run on the kernel "
-                         f"built for the {mechanism_name(build_set)}")
 
 
 def mechanism_name(mask: int) -> str:
