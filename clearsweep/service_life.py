@@ -456,9 +456,10 @@ def life_block(cfg: Config, *, allow_large: bool = False,
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
-    """Largest settled ``|x_slider - x_ideal(theta)|`` [m] of a block's saved rows: the slider's
-    motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
-    crank angle reached); NaN when no saved row lies in the settled window."""
+    """Largest settled ``|s - s_ideal(theta)|`` [m] of a block's saved rows, s the slider's
+    position along its guide (x for the RSSP, y for the slider-crank): the slider's motion
+    error (docs/physics.md section 1, the ideal mechanism's slider position at the crank
+    angle reached); NaN when no saved row lies in the settled window."""
     from .params import PRESETS, ideal_slider_position
 
     preset = PRESETS[cfg.mechanism.preset]
@@ -1128,6 +1129,7 @@ def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float,
                                                    "wear_through or block_status:<status>"})
     ds.attrs.update({
         "title": "clearsweep service life by cycle jumps",
+        "mechanism": cfg.mechanism.kind,
         "Conventions": "CF-1.8",
         "source": "clearsweep",
         "history": with_command_line(history_line("created by clearsweep life")),

@@ -19,6 +19,7 @@ from .core import jointset
 from .core import layout as L
 from .core.work import Case, Out
 from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack, row_type
+from .variables import mechanism_title
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -291,6 +292,8 @@ def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
 
     arrays = arrays_from_raw(raw, packed)
     attrs = {
+        "title": f"clearsweep {mechanism_title(cfg.mechanism.kind)} simulation",
+        "mechanism": cfg.mechanism.kind,
         "slip_rule": cfg.wear.slip,
         "slip_description": ("dS = |v_t| dt (sliding distance)" if cfg.wear.slip == "sliding"
                              else "dS = R_i |d beta| (paper Eq. 14)"),
