@@ -6,8 +6,9 @@ slider-crank's one-clearance case against the RSSP's (``MECHANISM_CASES``, steps
 second, the ratio).
 
 Run: ``python benchmarks/bench_engine.py [--baseline REV] [--repeats 5] [--duration 1.0]
-[--out FILE] [--rates-only] [--mechanisms]`` (``--rates-only``: the side-by-side steps/s alone, no cold
-compile, shipped configs or solve_ivp; ``--mechanisms``: the mechanisms' table alone). The baseline defaults to the merge-base of HEAD with ``main``; it is
+[--out FILE] [--rates-only] [--mechanisms]`` (``--rates-only``: the side-by-side steps/s
+alone, no cold compile, shipped configs or solve_ivp; ``--mechanisms``: the mechanisms'
+table alone). The baseline defaults to the merge-base of HEAD with ``main``; it is
 exported with ``git archive`` into a temporary folder. Writes markdown to stdout (and to
 ``--out`` if given).
 """

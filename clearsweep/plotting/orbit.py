@@ -22,8 +22,8 @@ from .common import (
     joint_kind,
     joint_name,
     keep_relative_span,
+    section_axes,
 )
-from .poincare import section_axes
 
 #: A planar mechanism's centre off its plane by more than this fraction of the largest offset
 #: drawn is named in its panel's title (round-off stays near 1e-12 of it).
