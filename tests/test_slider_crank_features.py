@@ -140,3 +140,22 @@ def test_life_reads_the_settled_window_of_a_fast_crank():
     error = ds["slider_motion_error_settled"].values
     assert np.isfinite(error).all()
     assert (error > 0.5 * 5.0e-4).all() and (error < 2.0e-3).all()
+
+
+def test_lyapunov_twin_stays_in_the_plane():
+    """The twin runs of the slider-crank's Lyapunov exponent perturb and measure its state
+    in the crank's plane alone (was: every component, the ones across the plane too, which a
+    planar mechanism does not have); the RSSP's every position, angle and rate as before."""
+    from clearsweep.config import load_config
+    from clearsweep.core import layout as L
+    from clearsweep.simulation import OFF_PLANE_STATE, lyapunov_scale, preflight
+
+    scale = lyapunov_scale(preflight(load_config(SLIDER_CRANK)))
+    across = list(OFF_PLANE_STATE) + [L.Y_QD + i for i in OFF_PLANE_STATE]
+    assert np.isinf(scale[across]).all()
+    # in the plane: the bodies' y and z, the crank angle, the rod's beta3, their rates
+    inside = [L.Y_R2 + 1, L.Y_R2 + 2, L.Y_CRANK_ANGLE, L.Y_R3 + 1, L.Y_R3 + 2, L.Y_ROD_BETA,
+              L.Y_R4 + 1, L.Y_R4 + 2]
+    assert np.isfinite(scale[inside + [L.Y_QD + i for i in inside]]).all()
+    rssp = lyapunov_scale(preflight(load_config({"joints": {"B": {"clearance": 2.5e-4}}})))
+    assert np.isfinite(rssp[:L.Y_WORK]).all()
