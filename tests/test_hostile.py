@@ -754,7 +754,7 @@ ROUND4_FUZZ = [
     ('run mechanism.preset unknown', _run("mechanism.preset=paperr"),
      2, "mechanism.preset: got 'paperr' (from --set); expected one of 'realistic', 'paper"),
     ('run mechanism a value', _run("mechanism=1"),
-     2, 'mechanism: got 1 (from --set); expected a mapping with keys preset, speed_rpm, g'),
+     2, 'mechanism: got 1 (from --set); expected a mapping with keys kind, preset, speed_rpm, g'),
     ('run joints.B.coating number', _run("joints.B.coating=1"),
      2, 'joints.B.coating: got 1 (from --set); expected a string'),
     ('run joints.B.coating unknown', _run("joints.B.coating=PTFEE"),
