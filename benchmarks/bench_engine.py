@@ -1,11 +1,14 @@
 """Engine benchmark, measured side by side in one run: this tree's kernel against a previous
 revision's (steps/s, median of alternating runs in separate processes, and the ratio; cold
 compile of both), each shipped case config's throughput, ns per right-hand side, and the
-same right-hand side driven by scipy.integrate.solve_ivp.
+same right-hand side driven by scipy.integrate.solve_ivp; and, in this tree alone, the
+slider-crank's one-clearance case against the RSSP's (``MECHANISM_CASES``, steps per CPU
+second, the ratio).
 
 Run: ``python benchmarks/bench_engine.py [--baseline REV] [--repeats 5] [--duration 1.0]
-[--out FILE] [--rates-only]`` (``--rates-only``: the side-by-side steps/s alone, no cold
-compile, shipped configs or solve_ivp). The baseline defaults to the merge-base of HEAD with ``main``; it is
+[--out FILE] [--rates-only] [--mechanisms]`` (``--rates-only``: the side-by-side steps/s
+alone, no cold compile, shipped configs or solve_ivp; ``--mechanisms``: the mechanisms'
+table alone). The baseline defaults to the merge-base of HEAD with ``main``; it is
 exported with ``git archive`` into a temporary folder. Writes markdown to stdout (and to
 ``--out`` if given).
 """
@@ -31,6 +34,46 @@ CASES = {
     "one clearance (B)": ["joints.B.clearance=2.5e-4"],
     "two clearances (A, B)": ["joints.A.clearance=2.5e-4", "joints.B.clearance=2.5e-4"],
 }
+
+#: The mechanisms side by side, this tree alone (the baseline may predate mechanism.kind):
+#: case -> (overrides, simulated seconds or None for --duration). The RSSP's row is
+#: CASES' one clearance; the slider-crank's first row the same joint, clearance, speed, step
+#: and length; its second the published benchmark's speed and clearance, for 0.1 s: longer
+#: runs of it stop on a constraint violation once the joints' centres leave the crank's
+#: plane (about 0.19 s at h = 1e-5 s, benchmarks/README.md).
+SLIDER_CRANK = ["mechanism.kind=slider_crank", "mechanism.preset=flores_benchmark"]
+MECHANISM_CASES = {
+    "RSSP, one clearance (B), 60 r/min": (CASES["one clearance (B)"], None),
+    "slider-crank, one clearance (B), 60 r/min": (
+        [*SLIDER_CRANK, "joints.B.clearance=2.5e-4"], None),
+    "slider-crank, B 0.5 mm, 5000 r/min": (
+        [*SLIDER_CRANK, "mechanism.speed_rpm=5000", "joints.B.clearance=5.0e-4",
+         "joints.B.socket_radius=0.01"], 0.1),
+    # the same without wear: what the wear map's deposits cost at its contact loads
+    "slider-crank, B 0.5 mm, 5000 r/min, wear off": (
+        [*SLIDER_CRANK, "mechanism.speed_rpm=5000", "joints.B.clearance=5.0e-4",
+         "joints.B.socket_radius=0.01", "wear.enabled=false"], 0.1),
+}
+
+#: Times each case of MECHANISM_CASES (argv[1]: their JSON, each case's duration filled in)
+#: once, warm; prints {case: [grid steps run, RK4 sub-steps, CPU seconds, status]}: the
+#: steps the run took (a run that stops early counts the steps up to its stop).
+MECHANISM_SNIPPET = """
+import json, sys, time
+from clearsweep.config import load_config
+from clearsweep.simulation import preflight, run_kernel
+from clearsweep.core import layout as L
+out = {}
+for name, (overrides, duration) in json.loads(sys.argv[1]).items():
+    packed = preflight(load_config({"solver": {"duration": duration}}, overrides))
+    run_kernel(packed)
+    cpu = time.process_time()
+    res = run_kernel(packed)
+    cpu = time.process_time() - cpu
+    steps = min(packed.n_steps, round(res.t_end / packed.p[L.P_DT]))
+    out[name] = [steps, int(res.rk4_steps), cpu, res.status]
+print(json.dumps(out))
+"""
 
 COMPILE_SNIPPET = """
 import time
@@ -116,6 +159,44 @@ def side_by_side(trees: dict[str, Path], duration: float, repeats: int,
             for case, (steps, wall, seconds) in res.items():
                 rates[label][case].append(steps / (seconds if cpu else wall))
     return {label: {c: statistics.median(v) for c, v in r.items()} for label, r in rates.items()}
+
+
+def mechanisms_side_by_side(duration: float, repeats: int) -> dict[str, dict]:
+    """{case: {"steps": grid steps per CPU second, "rk4": RK4 (sub-)steps per CPU second,
+    "status": the runs' statuses}} of MECHANISM_CASES in this tree: every case in each of
+    ``repeats`` fresh processes, one after the other (the same load for all), the medians."""
+    cases = {name: (ov, duration if d is None else d) for name, (ov, d) in MECHANISM_CASES.items()}
+    in_tree(ROOT, MECHANISM_SNIPPET, json.dumps({n: (ov, 1e-3) for n, (ov, _) in cases.items()}))
+    runs: dict[str, list] = {name: [] for name in cases}
+    for _ in range(repeats):
+        res = json.loads(in_tree(ROOT, MECHANISM_SNIPPET, json.dumps(cases)))
+        for name, row in res.items():
+            runs[name].append(row)
+    return {name: {"steps": statistics.median(r[0] / r[2] for r in rows),
+                   "rk4": statistics.median(r[1] / r[2] for r in rows),
+                   "duration": cases[name][1], "ran": rows[0][0],
+                   "status": sorted({r[3] for r in rows})}
+            for name, rows in runs.items()}
+
+
+def mechanism_lines(duration: float, repeats: int) -> list[str]:
+    """The mechanisms' table (markdown lines), with the load average around it."""
+    load = os.getloadavg()[0]
+    rates = mechanisms_side_by_side(duration, repeats)
+    reference = rates[next(iter(MECHANISM_CASES))]["steps"]
+    return [
+        f"Mechanisms, this tree: steps per CPU second, median of {repeats} runs (a fresh "
+        "process per run, every case in each), h = 1e-5 s, uncoated steel; the ratio to the "
+        "RSSP's one-clearance case:",
+        "",
+        "| case | simulated [s] | grid steps run | grid steps / CPU s | RK4 (sub-)steps / CPU s "
+        "| status | ratio |",
+        "|---|---|---|---|---|---|---|",
+        *(f"| {name} | {r['duration']:g} | {r['ran']:,} | {r['steps']:,.0f} | {r['rk4']:,.0f} | "
+          f"{', '.join(r['status'])} | {r['steps'] / reference:.2f} |" for name, r in rates.items()),
+        "",
+        f"load average (1 min) before the timed runs: {load:.1f}, after: {os.getloadavg()[0]:.1f}",
+    ]
 
 
 def shipped_case_configs() -> list[Path]:
@@ -289,6 +370,9 @@ def main(argv=None) -> str:
     ap.add_argument("--cpu-time", action="store_true",
                     help="steps per CPU second of each run's process (a loaded machine) rather "
                          "than per wall second")
+    ap.add_argument("--mechanisms", action="store_true",
+                    help="the mechanisms' table alone (this tree: the slider-crank against the "
+                         "RSSP, steps per CPU second)")
     args = ap.parse_args(argv)
 
     lines = [
@@ -296,6 +380,13 @@ def main(argv=None) -> str:
         f"Python {platform.python_version()}",
         "",
     ]
+    if args.mechanisms:
+        text = "\n".join(lines + mechanism_lines(args.duration, args.repeats))
+        print(text)
+        if args.out:
+            with open(args.out, "w") as fh:
+                fh.write(text + "\n")
+        return text
     with tempfile.TemporaryDirectory() as tmp:
         if args.baseline_tree:
             base = Path(args.baseline_tree)
@@ -335,6 +426,7 @@ def main(argv=None) -> str:
             with open(args.out, "w") as fh:
                 fh.write(text + "\n")
         return text
+    lines += ["", *mechanism_lines(args.duration, args.repeats)]
     lines += [
         "",
         f"Shipped case configs, {args.config_duration:g} s simulated each (warm, this tree):",

@@ -1,5 +1,6 @@
-"""clearsweep: dynamics and wear of the RSSP mechanism with clearance and coatings in any of its
-joints (the crank's bearing O, the spherical joints A and B, the slider's guide P)."""
+"""clearsweep: dynamics and wear of the RSSP mechanism and the planar slider-crank with
+clearance and coatings in any of their joints (the crank's bearing O, the crank pin A, the
+rod-slider joint B, the slider's guide P)."""
 
 from .version import __version__
 

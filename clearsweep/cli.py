@@ -341,8 +341,9 @@ _overrides = click.option(
 @click.group("clearsweep", cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="clearsweep")
 def main() -> None:
-    """Dynamics and wear of the RSSP mechanism with clearance and coatings in any of its
-    joints: the crank's bearing O, the spherical joints A and B, the slider's guide P."""
+    """Dynamics and wear of the RSSP mechanism and the planar slider-crank
+    (mechanism.kind) with clearance and coatings in any of their joints: the crank's
+    bearing O, the crank pin A, the rod-slider joint B, the slider's guide P."""
 
 
 @main.command()

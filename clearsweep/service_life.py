@@ -422,6 +422,30 @@ def life_time_text(cfg: Config, steps_per_block: int) -> str:
             f"{forecast.describe(cfg)}")
 
 
+def check_settled_window(cfg: Config, block_s: float, source: str = "<config>") -> None:
+    """Refuse a life run whose blocks end before their settled window begins while a limit
+    reads that window (``life.max_normal_force``, ``max_rms_acceleration``,
+    ``max_motion_error``): each block's settled statistics would be NaN and the limit never
+    reached, as at a fast crank's few milliseconds a revolution with the default
+    ``metrics.settle_time`` (0.05 s: 4 revolutions at 5000 r/min). ConfigError naming the
+    settle key the config set."""
+    settled = [key for key, var in CRITERIA.values()
+               if var.endswith("_settled") and cfg.get(key) is not None]
+    settle = cfg.metrics.settle_time
+    if not settled or settle < block_s:
+        return
+    key = ("metrics.settle_revolutions" if cfg.metrics.settle_revolutions is not None
+           else "metrics.settle_time")
+    raise ConfigError(
+        key, cfg.get(key),
+        f"a settled window inside each life block ({block_s:.3g} s: life.block_revolutions "
+        f"{cfg.life.block_revolutions:g} at {cfg.mechanism.speed_rpm:g} r/min), a shorter "
+        f"{key} or more life.block_revolutions: {', '.join(settled)} "
+        f"{'reads' if len(settled) == 1 else 'read'} the settled window and could never be "
+        "reached", source,
+        got=f"{cfg.get(key)!r} (the settled window starts {settle:.3g} s into the block)")
+
+
 def life_block(cfg: Config, *, allow_large: bool = False,
                source: str = "<config>") -> tuple[Config, Packed]:
     """The config of one dynamic block of the life run ``cfg`` and its packed inputs, once
@@ -433,11 +457,14 @@ def life_block(cfg: Config, *, allow_large: bool = False,
     ------
     ConfigError
         Naming what the user set, ``life.block_revolutions``, where the block's derived
-        ``solver.duration`` is too long; other keys as :func:`preflight` names them.
+        ``solver.duration`` is too long; the settle key where a settled limit's window lies
+        beyond the block (:func:`check_settled_window`); other keys as :func:`preflight`
+        names them.
     """
     lc = cfg.life
     block_cfg = block_config(cfg)
     n_block = round(block_cfg.solver.duration / cfg.solver.dt)
+    check_settled_window(cfg, block_cfg.solver.duration, source)
     try:
         packed = preflight(block_cfg, allow_large=allow_large, seat=False)
     except ConfigError as exc:
@@ -456,9 +483,10 @@ def life_block(cfg: Config, *, allow_large: bool = False,
 
 
 def settled_motion_error(cfg: Config, raw: KernelRun) -> float:
-    """Largest settled ``|x_slider - x_ideal(theta)|`` [m] of a block's saved rows: the slider's
-    motion error (docs/physics.md section 1, x_B(theta) of the ideal mechanism at the
-    crank angle reached); NaN when no saved row lies in the settled window."""
+    """Largest settled ``|s - s_ideal(theta)|`` [m] of a block's saved rows, s the slider's
+    position along its guide (x for the RSSP, y for the slider-crank): the slider's motion
+    error (docs/physics.md section 1, the ideal mechanism's slider position at the crank
+    angle reached); NaN when no saved row lies in the settled window."""
     from .params import PRESETS, ideal_slider_position
 
     preset = PRESETS[cfg.mechanism.preset]
@@ -1128,6 +1156,7 @@ def _life_dataset(cfg: Config, state: LifeState, stop: str, wall: float,
                                                    "wear_through or block_status:<status>"})
     ds.attrs.update({
         "title": "clearsweep service life by cycle jumps",
+        "mechanism": cfg.mechanism.kind,
         "Conventions": "CF-1.8",
         "source": "clearsweep",
         "history": with_command_line(history_line("created by clearsweep life")),

@@ -19,6 +19,7 @@ from .core import jointset
 from .core import layout as L
 from .core.work import Case, Out
 from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack, row_type
+from .variables import mechanism_title
 
 #: Largest crank rotation per output-grid step [rad]: the drive must be resolved even
 #: where no contact demands sub-steps.
@@ -291,6 +292,8 @@ def case_dataset(cfg: Config, packed: Packed, raw: KernelRun) -> xr.Dataset:
 
     arrays = arrays_from_raw(raw, packed)
     attrs = {
+        "title": f"clearsweep {mechanism_title(cfg.mechanism.kind)} simulation",
+        "mechanism": cfg.mechanism.kind,
         "slip_rule": cfg.wear.slip,
         "slip_description": ("dS = |v_t| dt (sliding distance)" if cfg.wear.slip == "sliding"
                              else "dS = R_i |d beta| (paper Eq. 14)"),
@@ -476,14 +479,26 @@ def sections_from_raw(sec: np.ndarray) -> dict[str, np.ndarray]:
 _LYAPUNOV_STATE = slice(0, L.Y_WORK)
 
 
+#: The state components across a planar mechanism's plane (the slider-crank's, y-z: the
+#: crank turns about x): each body's x, the crank's and the slider's Euler angles other
+#: than the one about x (alpha, beta), the rod's yaw alpha3 out of the plane and its spin
+#: gamma3; the rod's beta3 turns it in the plane.
+OFF_PLANE_STATE = (L.Y_R2, L.Y_R3, L.Y_R4, L.Y_PHI2, L.Y_PHI2 + 1, L.Y_PHI3, L.Y_PHI3 + 2,
+                   L.Y_PHI4, L.Y_PHI4 + 1)
+
+
 def lyapunov_scale(packed: Packed) -> np.ndarray:
     """Each state component's scale in the twin runs' norm: the crank length l2 for a
     position, 1 rad for an angle, times omega for a rate (docs/physics.md section 11.5);
-    the energy integrals ``inf`` (not perturbed, not measured)."""
+    the energy integrals ``inf`` (not perturbed, not measured), and for the planar
+    slider-crank (its guide along y, ``p[P_GUIDE]``) the components across its plane
+    (:data:`OFF_PLANE_STATE`): its exponent is its motion's in the plane."""
     length, omega = float(packed.p[L.P_L2]), float(packed.p[L.P_OMEGA])
     position = np.ones(L.Y_QD)
     for body in (L.Y_R2, L.Y_R3, L.Y_R4):
         position[body:body + 3] = length
+    if packed.p[L.P_GUIDE] == 1.0:
+        position[list(OFF_PLANE_STATE)] = np.inf
     scale = np.full(L.N_Y, np.inf)
     scale[:L.Y_QD] = position
     scale[L.Y_QD:L.Y_QD + L.Y_QD] = position * omega

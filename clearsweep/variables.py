@@ -26,12 +26,26 @@ JOINTS = tuple(joint.name for joint in JOINT_TABLE)
 #: sphere) or ``revolute`` (a journal in a bearing: one row of its map, around the bearing).
 JOINT_TYPES = {joint.name: joint.type for joint in JOINT_TABLE}
 AXES = ("x", "y", "z")
+#: Each mechanism's name in titles and labels (``mechanism.kind``: config.MECHANISM_KINDS).
+MECHANISM_NAMES = {"rssp": "RSSP", "slider_crank": "slider-crank"}
+#: The mechanisms whose joints move in one plane, the crank's (y-z):
+#: each joint's centre moves in one plane of its socket frame, the other axis holds nothing
+#: but round-off.
+PLANAR_MECHANISMS = ("slider_crank",)
+
+
+def mechanism_title(kind: str) -> str:
+    """The mechanism ``kind`` (``mechanism.kind``) as titles name it: "RSSP mechanism",
+    "slider-crank mechanism"."""
+    return f"{MECHANISM_NAMES.get(kind, kind)} mechanism"
 
 #: Per-case variables (docs/physics.md section 8), plus the diagnostics the kernel keeps.
 CASE_VARIABLES: dict[str, VariableSpec] = {
     "crank_angle": VariableSpec(("time",), "rad", "crank angle theta",
                                 "driven crank angle theta0 + omega t"),
-    "slider_position": VariableSpec(("time",), "m", "slider position x_B"),
+    "slider_position": VariableSpec(("time",), "m", "slider position along its guide",
+                                   "the slider's centre along the guide's global axis: x "
+                                   "for the RSSP, y for the slider-crank"),
     "slider_velocity": VariableSpec(("time",), "m s-1", "slider velocity"),
     "slider_acceleration": VariableSpec(("time",), "m s-2", "slider acceleration"),
     "crank_torque": VariableSpec(("time",), "N m", "driving torque on the crank about X"),
@@ -302,8 +316,9 @@ LIFE_VARIABLES: dict[str, VariableSpec] = {
                                                      "over the block's settled window", "time: maximum"),
     "slider_motion_error_settled": VariableSpec(
         ("cycle",), "m", "settled slider motion error",
-        "largest |x_slider - x_ideal(theta)| over the block's saved rows in the settled window, "
-        "x_ideal the ideal mechanism's slider position (docs/physics.md section 1)", "time: maximum"),
+        "largest |s - s_ideal(theta)| over the block's saved rows in the settled window, s the "
+        "slider's position along its guide, s_ideal the ideal mechanism's (docs/physics.md "
+        "section 1)", "time: maximum"),
     "impacts_per_revolution": VariableSpec(("cycle", "joint"), "1", "impacts per revolution",
                                            "settled impact count / settled revolutions of the block"),
     "wear_map_snapshot": VariableSpec(("snapshot", "joint", "polar", "azimuth"), "m",

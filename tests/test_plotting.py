@@ -85,7 +85,7 @@ def test_slider_overlays_cases_with_coordinate_legends(tmp_path, sweep_ds):
     assert legend == ["B_coating=none, B_clearance=0.1 mm", "B_coating=none, B_clearance=0.25 mm",
                       "B_coating=PTFE, B_clearance=0.1 mm", "B_coating=PTFE, B_clearance=0.25 mm"]
     assert fig.axes[-1].get_xlabel() == "time [s]"
-    assert fig.axes[0].get_ylabel() == "slider position x_B [mm]"
+    assert fig.axes[0].get_ylabel() == "slider position along its guide [mm]"
 
 
 def test_slider_angle_axis_in_degrees(tmp_path, case):

@@ -335,6 +335,26 @@ def file_config(ds: xr.Dataset) -> dict:
     return {}
 
 
+def mechanism_kind(ds: xr.Dataset) -> str:
+    """The mechanism (``mechanism.kind``) a results file was made with: its ``mechanism``
+    attribute, else its config's (:func:`file_config`), else ``rssp`` (a file written before
+    the key). A sweep over mechanisms names each, separated by spaces."""
+    kind = ds.attrs.get("mechanism")
+    if kind:
+        return str(kind)
+    mechanism = file_config(ds).get("mechanism")
+    return str(mechanism.get("kind") or "rssp") if isinstance(mechanism, dict) else "rssp"
+
+
+def is_planar(ds: xr.Dataset) -> bool:
+    """Whether every case of ``ds`` is of a planar mechanism
+    (``variables.PLANAR_MECHANISMS``): its joints' centres move in one plane of their socket
+    frames."""
+    from ..variables import PLANAR_MECHANISMS
+
+    return all(kind in PLANAR_MECHANISMS for kind in mechanism_kind(ds).split())
+
+
 def configured_clearances(ds: xr.Dataset) -> dict[str, float]:
     """Radial clearance [m] of each joint in the configuration text; empty when there is none.
 

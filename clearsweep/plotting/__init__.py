@@ -33,7 +33,9 @@ Kinds (``KINDS``):
 ``orbit``
     ball-centre offset in the socket frame on the xy, xz and yz planes,
     inside the clearance circle (the journal's and the guide block's on yz, the
-    block's inside its rectangular gap), in mm; cases overlaid.
+    block's inside its rectangular gap), in mm; cases overlaid. A planar mechanism's
+    (the slider-crank's) joints one panel each, on the plane of the socket frame their
+    centre moves in, naming any departure from it beyond round-off.
 ``poincare``
     the Poincare section, once per crank revolution: per clearance joint the ball-centre
     offset over the clearance on the plane of its two most spread axes, and the slider

@@ -486,3 +486,14 @@ def selection_text(ds: xr.Dataset, selection: dict) -> str:
         parts.append(text + (f" ({', '.join(zipped)})" if zipped else ""))
     return "selection: " + ", ".join(parts)
 
+
+def section_axes(offset: np.ndarray, names) -> tuple[str, str]:
+    """The two axes (of ``names``, the last dimension of ``offset``: samples x axes, any
+    cases before) along which the offsets spread most, in axis order; the first two where
+    none spreads (a point, or no data): ``poincare``'s plane of the sections, ``orbit``'s
+    plane of a planar mechanism's joint."""
+    flat = offset.reshape(-1, offset.shape[-1])
+    flat = flat[np.isfinite(flat).all(axis=1)]
+    spread = flat.std(axis=0) if len(flat) else np.zeros(offset.shape[-1])
+    keep = sorted(np.argsort(-spread, kind="stable")[:2])
+    return str(names[keep[0]]), str(names[keep[1]])

@@ -1,5 +1,6 @@
 """``orbit``: the ball-centre offset in the socket frame inside the clearance circle, and the
-guide block's centre inside its rectangular gap."""
+guide block's centre inside its rectangular gap. A planar mechanism's joints (the
+slider-crank's) get one panel each, the plane of the socket frame the centre moves in."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..analysis import bushing_joints, configured_clearances, guide_gap, value_text
+from ..analysis import bushing_joints, configured_clearances, guide_gap, is_planar, value_text
 from .common import (
     QUANTITY_UNITS,
     PlotError,
@@ -21,7 +22,12 @@ from .common import (
     joint_kind,
     joint_name,
     keep_relative_span,
+    section_axes,
 )
+
+#: A planar mechanism's centre off its plane by more than this fraction of the largest offset
+#: drawn is named in its panel's title (round-off stays near 1e-12 of it).
+OFF_PLANE_NOTE_FRACTION = 1e-6
 
 #: Line styles of the clearance circles of ``orbit``, one per clearance drawn.
 _CIRCLE_STYLES = ("--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (8, 2)))
@@ -66,6 +72,10 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     _require(ds, ("ball_offset",), "--kind orbit")
     offset = ds["ball_offset"]
     planes = (("x", "y"), ("x", "z"), ("y", "z"))
+    # a planar mechanism's joints move in the crank's plane: one panel per joint, side by
+    # side, the socket frame's two axes that the centre moves along (a socket on the rod
+    # has the rod's x along it; on the slider or the ground, the global y and z)
+    planar = is_planar(ds)
     cases = _cases(ds)
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     configured = configured_clearances(ds)
@@ -87,7 +97,9 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     # in the unit of a clearance (common.QUANTITY_UNITS), whatever the orbit's size: the
     # axes, the circles and their legend read in the unit every figure gives a clearance in
     factor, unit = QUANTITY_UNITS["length"]
-    if len(joints) == 1:        # one row of panels: no empty band where the other was
+    if planar:
+        fig.set_size_inches(max(4.8 * len(joints), 6.4), 5.2)
+    elif len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 4.8)
     per_joint: list[dict[float, str]] = []   # per joint: clearance [m] -> where it was read
     for joint in joints:
@@ -109,8 +121,22 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
         guide = gap_shape == "rectangle"
         gaps = {g for g in (_gap(case, gap) for _, case, _ in cases) if g is not None} if guide else set()
         across = joint_kind(ds, joint).axial_ideal      # on its axis: its yz plane only
-        for p, (a, b) in enumerate(planes[2:] if across else planes):
-            ax = fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1)
+        shown = planes[2:] if across else planes
+        off_plane = ""
+        if planar and not across:
+            sel = offset.sel(joint=joint)
+            values = np.moveaxis(sel.values, sel.dims.index("axis"), -1)
+            shown = (section_axes(values, sel["axis"].values),)
+            dropped = [k for k, name in enumerate(sel["axis"].values) if str(name) not in shown[0]]
+            finite = values[np.isfinite(values).all(axis=-1)]
+            if len(finite):
+                largest, out = float(np.abs(finite).max()), float(np.abs(finite[:, dropped]).max())
+                if out > OFF_PLANE_NOTE_FRACTION * largest:
+                    name = str(sel["axis"].values[dropped[0]])
+                    off_plane = f"; off it, |d_{name}| up to {out / factor:.3g} {unit}"
+        for p, (a, b) in enumerate(shown):
+            ax = (fig.add_subplot(1, len(joints), j + 1) if planar
+                  else fig.add_subplot(len(joints), len(planes), j * len(planes) + p + 1))
             for text, case, colour in cases:
                 d = case["ball_offset"].sel(joint=joint)
                 ax.plot(d.sel(axis=a).values / factor, d.sel(axis=b).values / factor, lw=0.6,
@@ -142,7 +168,9 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ideal = ("" if clearances else " (bushing)" if value_text(joint) in bushings
                      else " (ideal joint)")
             where = ("journal in the bearing's plane, yz" if bearing
-                     else "block across its guide, yz" if guide else f"{a}{b} plane")
+                     else "block across its guide, yz" if guide
+                     else f"the mechanism's plane, {a}{b}{off_plane}" if planar
+                     else f"{a}{b} plane")
             ax.set_title(f"{joint_name(value_text(joint))}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once

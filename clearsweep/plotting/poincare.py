@@ -27,21 +27,11 @@ from .common import (
     joint_kind,
     joint_name,
     keep_relative_span,
+    section_axes,
 )
 
 #: Fewest revolutions a ``poincare`` figure draws: one section shows no return.
 MIN_REVOLUTIONS = 2
-
-
-def section_axes(offset: np.ndarray, names) -> tuple[str, str]:
-    """The two axes (of ``names``, the last dimension of ``offset``: revolutions x axes, any
-    cases before) along which the sections spread most, in axis order; the first two where
-    none spreads (a point, or no data)."""
-    flat = offset.reshape(-1, offset.shape[-1])
-    flat = flat[np.isfinite(flat).all(axis=1)]
-    spread = flat.std(axis=0) if len(flat) else np.zeros(offset.shape[-1])
-    keep = sorted(np.argsort(-spread, kind="stable")[:2])
-    return str(names[keep[0]]), str(names[keep[1]])
 
 
 def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:

@@ -169,8 +169,14 @@ def drop_timing(ds: xr.Dataset) -> xr.Dataset:
 
 
 def _attrs(plan: SweepPlan) -> dict[str, Any]:
+    from ..variables import mechanism_title
+
+    # the mechanism of its cases (a sweep of mechanism.kind names each)
+    kinds = sorted({plan.base.mechanism.kind}
+                   | {case.config.mechanism.kind for case in plan.cases if case.config is not None})
     return {
-        "title": "clearsweep RSSP mechanism parameter sweep",
+        "title": f"clearsweep {' and '.join(map(mechanism_title, kinds))} parameter sweep",
+        "mechanism": " ".join(kinds),
         "Conventions": "CF-1.8",
         "source": "clearsweep",
         "history": with_command_line(
