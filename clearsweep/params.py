@@ -1223,11 +1223,17 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
 def bushing_row(row: np.ndarray, joint: Any, kind: str, preset: Preset) -> None:
     """A bushing's columns of its jp row (core/bushing.py) at a joint of the table's type
     ``kind``: its own (:func:`bushing_fill`), the axial pair 0 where that type's axial
-    motion is ideal (a revolute's place, O)."""
+    motion is ideal (a revolute's place, O). The slider-crank's A and B are pins whose
+    axial motion (across the plane) the kernel holds: their bushing is radial in the plane
+    whatever its socket body's x axis (the rod's, at A, lies in the plane), so the axial
+    pair repeats the radial one."""
     HOST_HOOKS[BUSHING].fill(row, joint, preset)
     if joint_kind(kind).axial_ideal:
         row[L.J_K_AXIAL] = 0.0
         row[L.J_C_AXIAL] = 0.0
+    elif preset.kind == "slider_crank":
+        row[L.J_K_AXIAL] = row[L.J_K_RADIAL]
+        row[L.J_C_AXIAL] = row[L.J_C_RADIAL]
 
 
 def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
@@ -1336,9 +1342,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     if member is not None and perturb.ball_offset > 0.0:
         for j, row in enumerate(JOINTS):
             shift = member.ball_offset[j].copy()
-            if joint_kind(row.type).axial_ideal:
+            if joint_kind(row.type).axial_ideal or preset.kind == "slider_crank":
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
-                                    # across its guide
+                                    # across its guide, the slider-crank's pins in its plane
             offsets[j] = HOST_HOOKS[row.type].perturb(offsets[j], shift, jp[j])
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],

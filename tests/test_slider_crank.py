@@ -626,3 +626,46 @@ def test_the_rssps_identity_has_no_mechanism_kind():
     slider_crank = run_identity(load_config({"mechanism": SLIDER_CRANK}))
     assert slider_crank["config"]["mechanism"]["kind"] == "slider_crank"
     assert set(slider_crank["config"]["mechanism"]) == before | {"kind"}
+
+
+# ---------------------------------------------------------------------------
+# the pins' plane at the start: ensemble offsets, bushings
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("member", range(4))
+def test_an_ensemble_members_ball_offsets_stay_in_the_plane(member):
+    """An ensemble's scatter of the ball offsets (ensemble.perturb.ball_offset) draws in the
+    crank's plane only: the members of a slider-crank start with every out-of-plane
+    coordinate at 0 (a draw across the plane started B 0.115 mm off it, against the pins'
+    axial rows), the in-plane offset scattered."""
+    cfg = load_config({"mechanism": SLIDER_CRANK,
+                       "joints": {"A": {"clearance": 2e-4}, "B": B_CLEARANCE},
+                       "initial": {"joints": "centred"},
+                       "ensemble": {"members": 4, "member": member,
+                                    "perturb": {"ball_offset": 0.5}},
+                       "solver": {"duration": 1e-3}})
+    pk = pack(cfg, resolve_materials(cfg), seat=False)
+    nominal = pack(cfg.replace(ensemble__perturb__ball_offset=0.0), resolve_materials(cfg),
+                   seat=False)
+    for r in (L.Y_R2, L.Y_R3, L.Y_R4):
+        assert pk.y0[r] == 0.0
+        assert pk.y0[L.Y_QD + r] == 0.0
+    assert pk.y0[L.Y_PHI3] == nominal.y0[L.Y_PHI3]             # the rod in the plane
+    assert np.abs(pk.y0[:L.N_Q] - nominal.y0[:L.N_Q]).max() > 1e-6   # scattered in it
+
+
+def test_a_pin_bushing_is_radial_in_the_plane():
+    """A bushing at the slider-crank's A (its socket the rod, whose x axis lies in the plane)
+    or B is a pin's: its axial pair repeats the radial one (the pin's axial motion is held
+    by its axial row), so its stiffness in the plane is the same along the rod and across
+    it; O's axial pair stays 0 (a revolute's place), and the RSSP's A keeps its own."""
+    bushing = {"type": "bushing", "bushing_stiffness": [2e6, 5e5],
+               "bushing_damping": [400.0, 100.0]}
+    _, pk = packed_case(SLIDER_CRANK, {"A": bushing, "B": bushing, "O": bushing})
+    for name in ("A", "B"):
+        row = pk.jp[INDEX[name]]
+        assert row[L.J_K_AXIAL] == row[L.J_K_RADIAL] == 2e6
+        assert row[L.J_C_AXIAL] == row[L.J_C_RADIAL] == 400.0
+    assert pk.jp[INDEX["O"], L.J_K_AXIAL] == 0.0
+    _, rssp = packed_case({}, {"A": bushing})
+    assert rssp.jp[INDEX["A"], L.J_K_AXIAL] == 5e5
