@@ -55,6 +55,11 @@ ROWS = {
     "sensitivity": (["sweep", "configs/sensitivity.yaml"], ["solver.duration=0.025"],
                     "0.025 of 0.25 s (3,072 cases)"),
     "two_clearances": (["run", "configs/two_clearances.yaml"], [], "whole"),
+    "slider_crank": (["run", "configs/slider_crank.yaml"], [], "whole"),
+    "slider_crank_clearance_sweep": (["sweep", "configs/slider_crank_clearance_sweep.yaml"], [],
+                                     "whole"),
+    "slider_crank_ensemble": (["sweep", "configs/slider_crank_ensemble.yaml"], [], "whole"),
+    "slider_crank_life": (["life", "configs/slider_crank_life.yaml"], [], "whole"),
 }
 _ABOUT = re.compile(r"(expected )?about ([0-9.e+]+) (s|min|h|d)\b")
 _UNIT = {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0}

@@ -50,6 +50,10 @@ CONFIGS = {
     # all four joints clear: the guide's walls hold the corners' track depth (physics.md 5.7)
     "reliability_joints": ("reliability_joints.yaml", "reliability", ["life.max_blocks=3"],
                            ["life.max_blocks=12"]),
+    # the slider-crank benchmark (5 revolutions at 5000 r/min) and its life run
+    "slider_crank": ("slider_crank.yaml", "case", ["solver.revolutions=1"], []),
+    "slider_crank_life": ("slider_crank_life.yaml", "life", ["life.max_blocks=3"],
+                          ["life.max_blocks=12"]),
 }
 
 

@@ -36,6 +36,9 @@ TABLE = {
     # --set "wear.map=[36, 72]") A 0.968, B 0.984, O 1.076, P 1.026 (with the corners' point
     # tracks before: B 1.000, A 1.002, O 1.016, P 1.002 at 72 x 144, 12 blocks)
     "reliability_joints": ([72, 144], 0.932),
+    # the slider-crank benchmark's 5 revolutions at 5000 r/min (B's 0.5 mm socket)
+    "slider_crank": ([144, 288], 0.994),
+    "slider_crank_life": ([72, 144], 1.001),      # 12 blocks: B's worn volume 1.008
 }
 
 
@@ -52,9 +55,12 @@ def test_every_shipped_config_that_reports_a_depth_is_in_the_table():
     # accelerations and forces, no wear depth, on a coarse map that its header states;
     # bifurcation and dynamics_map ask for the motion's period and spectrum, no wear depth;
     # mixed_clearances answers with worn volumes, which the map does not change;
-    # measured_friction compares accelerations and forces under two friction data sets
+    # measured_friction compares accelerations and forces under two friction data sets;
+    # the slider-crank's sweep and ensemble compare accelerations, forces and impacts over 5
+    # revolutions (their base, slider_crank, is in the table)
     assert shipped - set(mc.CONFIGS) == {"ideal", "life_sweep", "sensitivity", "bifurcation",
-                                         "dynamics_map", "mixed_clearances", "measured_friction"}
+                                         "dynamics_map", "mixed_clearances", "measured_friction",
+                                         "slider_crank_clearance_sweep", "slider_crank_ensemble"}
     assert set(TABLE) == set(mc.CONFIGS)
     assert expand(ROOT / "configs" / "life_sweep.yaml").base.wear.map == tuple(TABLE["life"][0])
 

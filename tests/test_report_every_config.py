@@ -177,8 +177,17 @@ FIGURES = {
     # the sample's points drawn against their position, one sweep dimension as any other
     "sensitivity": lambda ds: {"sweep": ["--metric", "slider_acceleration_rms_settled"],
                                "bifurcation": []},
+    # the slider-crank's clearance x speed grid, cut to 2 x 2 cases of 0.25 s: each case
+    # reaches settled sections, so the map and the bifurcation along either key draw
+    "slider_crank_clearance_sweep": lambda ds: {
+        "poincare": [], "sweep": [],
+        "bifurcation": ["--x", "speed_rpm", *first(ds, "B_clearance")],
+        "dynamics-map": ["--x", "speed_rpm", "--y", "B_clearance"]},
 }
 FIGURES |= {"two_clearances": FIGURES["one_clearance"],
+            "slider_crank": FIGURES["one_clearance"],
+            "slider_crank_ensemble": FIGURES["coating_ensemble"],
+            "slider_crank_life": FIGURES["life"],
             "paper_case": lambda ds: dict.fromkeys(
                 ("slider", "forces", "wear-map", "wear-polar", "orbit"), [])}
 
