@@ -473,7 +473,8 @@ class LifeConfig(_Section):
     max_normal_force: float | None = _setting(_limit(), "N", "settled peak normal force limit")
     max_rms_acceleration: float | None = _setting(_limit(), "m s-2",
                                                   "settled RMS slider acceleration limit")
-    #: the largest settled ``|x_slider - x_ideal(theta)|`` of a block (docs/physics.md section 1)
+    #: the largest settled ``|s - s_ideal(theta)|`` of a block, s the slider along its guide
+    #: (docs/physics.md section 1, docs/mechanisms.md)
     max_motion_error: float | None = _setting(_limit(), "m", "slider motion error limit")
     stop_at_wear_through: bool = _setting(Field(False, bool), None,
                                           "stop when a coating is first worn through")
