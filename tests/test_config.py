@@ -246,6 +246,11 @@ def _configs(schema=SCHEMA):
 
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
+    mechanism = raw["mechanism"]       # a preset of its mechanism; the slider-crank's guide ideal
+    presets = config_module.MECHANISM_KINDS[mechanism["kind"]]
+    if mechanism["preset"] not in presets:
+        mechanism["preset"] = presets[0]
+    longest = config_module.PRESET_LINKS_M[mechanism["preset"]][1]
     for joint in raw["joints"].values():      # sizes bounded against the mechanism
         for key in ("clearance", "clearance_y", "clearance_z"):
             if key in joint and joint[key] < config_module.MIN_CLEARANCE_M:
@@ -254,22 +259,20 @@ def _consistent(raw):
             joint["wear_coefficient"] = min(joint["wear_coefficient"], config_module.MAX_WEAR_COEFFICIENT)
         for key in ("length", "base_thickness", "coating_thickness"):
             if key in joint:
-                joint[key] = min(joint[key], config_module.LONGEST_LINK_M)
+                joint[key] = min(joint[key], longest)
                 if key != "length" and 0.0 < joint[key] < config_module.MIN_LAYER_M:
                     joint[key] = config_module.MIN_LAYER_M
     bearing = raw["joints"]["O"]
-    bearing["bearing_radius"] = min(max(bearing["bearing_radius"], config_module.MIN_BEARING_RADIUS_M), 0.035)
+    crank = config_module.PRESET_LINKS_M[mechanism["preset"]][0]   # room for 3 c below
+    bearing["bearing_radius"] = min(max(bearing["bearing_radius"], config_module.MIN_BEARING_RADIUS_M),
+                                    0.25 * crank)
     bearing["clearance"] = min(bearing["clearance"], 0.25 * bearing["bearing_radius"])
     bearing["coating_thickness"] = min(bearing["coating_thickness"], 0.5 * bearing["bearing_radius"])
     guide = raw["joints"]["P"]
-    mechanism = raw["mechanism"]       # a preset of its mechanism; the slider-crank's guide ideal
-    presets = config_module.MECHANISM_KINDS[mechanism["kind"]]
-    if mechanism["preset"] not in presets:
-        mechanism["preset"] = presets[0]
     if mechanism["kind"] == "slider_crank":
         guide["clearance_y"] = guide["clearance_z"] = 0.0
     guide["corner_radius"] = min(max(guide["corner_radius"], config_module.MIN_CORNER_RADIUS_M), 0.01)
-    guide["block"] = [min(side, config_module.LONGEST_LINK_M) for side in guide["block"]]
+    guide["block"] = [min(side, longest) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
         guide["clearance_z"] = guide["clearance_y"]
     guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]
