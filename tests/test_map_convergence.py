@@ -38,7 +38,8 @@ TABLE = {
     "reliability_joints": ([72, 144], 0.932),
     # the slider-crank benchmark's 5 revolutions at 5000 r/min (B's 0.5 mm socket)
     "slider_crank": ([144, 288], 0.994),
-    "slider_crank_life": ([72, 144], 1.001),      # 12 blocks: B's worn volume 1.008
+    # 12 blocks from the centred start, Baumgarte 50 (1.001 and B's worn volume 1.008 seated)
+    "slider_crank_life": ([72, 144], 1.016),      # 12 blocks: B's worn volume 0.990
 }
 
 

@@ -403,6 +403,7 @@ def test_every_figure_of_every_shipped_config_names_the_start_and_clearances_it_
         options = dict(zip(args[::2], args[1::2]))
         selects = [b for a, b in zip(args[::2], args[1::2]) if a == "--select"]
         parts = _title_parts(figure(ds, kind, selects or None, x=options.get("--x"),
+                                    y=options.get("--y"),
                                     metric=options.get("--metric")).get_suptitle())
         case = select_cases(ds, selects) if selects else ds
         swept, value = _case_values(case, "initial.joints")
@@ -454,7 +455,7 @@ def _drawn_figures(ds: xr.Dataset, name: str):
         selects = [b for a, b in zip(args[::2], args[1::2]) if a == "--select"]
         for b10 in ((False, True) if kind == "reliability" else (False,)):
             yield (f"{kind}{' --b10' if b10 else ''}",
-                   figure(ds, kind, selects or None, x=options.get("--x"),
+                   figure(ds, kind, selects or None, x=options.get("--x"), y=options.get("--y"),
                           metric=options.get("--metric"), b10=b10))
 
 
