@@ -615,12 +615,13 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
 def point_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np.ndarray,
                omega: float, wmap: np.ndarray | None) -> np.ndarray:
     """A point contact's seated offset (:func:`seated_offsets`): leaning along the ideal
-    reaction f (its axial part left out where the joint's axial play is ideal), at its own
-    law's static penetration (:func:`leaning_offset`); the journal turned by the friction
-    angle (:func:`journal_seat`); centred where there is no load to lean on."""
+    reaction f (its axial part left out where the joint's axial play is ideal: a revolute's,
+    and the slider-crank's pins, whose axis is x), at its own law's static penetration
+    (:func:`leaning_offset`); the journal turned by the friction angle
+    (:func:`journal_seat`); centred where there is no load to lean on."""
     described = joint_kind(JOINTS[j].type)
     hooks = HOST_HOOKS[described.name]
-    if described.axial_ideal:
+    if described.axial_ideal or p[L.P_GUIDE] == 1.0:
         f[0] = 0.0          # axial: ideal
     law = hooks.law(p)
     size = float(np.linalg.norm(f))
@@ -687,12 +688,17 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
     offsets stop moving (a contraction by about sin(phi) per turn)."""
     from .core.dynamics import start_contacts
 
+    # the slider-crank's pins turn in its plane only (their axial play is ideal: x)
+    planar = p[L.P_GUIDE] == 1.0
     seats = []
     for j, joint in enumerate(JOINTS):
-        size = float(np.linalg.norm(forces[j]))
+        load = forces[j].copy()
+        if planar:
+            load[0] = 0.0
+        size = float(np.linalg.norm(load))
         if (HOST_HOOKS[joint.type].turns_at_start and jp[j, L.J_CLEARANCE] != 0.0
                 and math.isfinite(size) and size > 0.0):
-            seats.append((j, forces[j] / size, size))
+            seats.append((j, load / size, size))
     if p[L.P_FRICTION] == 0.0 or not seats:
         return offsets
     grid = np.zeros((L.N_JOINTS, 1, 1)) if wmap is None else wmap
@@ -712,6 +718,8 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
             mu = ft / fn[j]
             cos, sin = 1.0 / math.sqrt(1.0 + mu * mu), mu / math.sqrt(1.0 + mu * mu)
             across = friction / ft - (friction / ft @ f_hat) * f_hat
+            if planar:
+                across[0] = 0.0
             if not np.linalg.norm(across) > 0.0:
                 continue                                # friction along the load: no turn helps
             g = across / np.linalg.norm(across)

@@ -669,3 +669,22 @@ def test_a_pin_bushing_is_radial_in_the_plane():
     assert pk.jp[INDEX["O"], L.J_K_AXIAL] == 0.0
     _, rssp = packed_case({}, {"A": bushing})
     assert rssp.jp[INDEX["A"], L.J_K_AXIAL] == 5e5
+
+
+def test_a_seated_start_on_worn_pins_stays_in_the_plane():
+    """The seated start leans each pin on its bearing along the ideal reaction turned by its
+    friction (params.ball_seats), on the worn bearings of a life block: in the crank's plane
+    (a seat off it put the rod 1.8e-6 m across the plane at a life run's 4th block, which
+    the pins' axial rows then stopped on), every body's out-of-plane coordinate 0 and the
+    rod in the plane, the pins pressed in at their static penetration."""
+    cfg = load_config({"mechanism": SLIDER_CRANK,
+                       "joints": {"A": {"clearance": 2e-4}, "B": B_CLEARANCE},
+                       "wear": {"map": [12, 24]}, "solver": {"duration": 1e-3}})
+    rng = np.random.default_rng(44)
+    wmap = rng.uniform(0.0, 2e-5, (L.N_JOINTS, 12, 24))
+    pk = pack(cfg, resolve_materials(cfg), wmap)
+    for r in (L.Y_R2, L.Y_R3, L.Y_R4):
+        assert pk.y0[r] == 0.0
+    assert pk.y0[L.Y_PHI3] == math.pi / 2
+    unworn = pack(cfg, resolve_materials(cfg))
+    assert np.abs(pk.y0[:L.N_Q] - unworn.y0[:L.N_Q]).max() > 1e-7   # the worn seat is another
