@@ -778,7 +778,8 @@ def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
     if PRESET_KINDS[preset] != kind:
         raise ConfigError("mechanism.preset", preset,
                           f"a preset of mechanism.kind {kind}: one of "
-                          f"{', '.join(MECHANISM_KINDS[kind])}", source)
+                          f"{', '.join(MECHANISM_KINDS[kind])} (the default, realistic, is the "
+                          "RSSP's)", source)
     if kind == "slider_crank":
         guide = cfg["joints"]["P"]
         for key in ("clearance_y", "clearance_z"):

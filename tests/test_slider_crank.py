@@ -448,10 +448,9 @@ def out_of_plane(pk, raw, ds) -> float:
 def test_the_motion_stays_in_the_plane(name):
     """One revolution: every out-of-plane displacement (:func:`out_of_plane`) stays below
     1e-12 m. Measured: O alone 7e-18 m (the ideal A and B hold the rod in the plane);
-    A 5.9e-16, B 4.5e-16, A, O and B from the centred start 1.7e-13. The planar motion with
-    clearance at A or B is unstable across the plane (the round-off grows 10-1000 times a
-    revolution: test_the_motion_stays_in_the_plane_over_twenty_revolutions), so the
-    round-off level holds for the first revolutions only."""
+    A 5.9e-16, B 4.5e-16, A, O and B from the centred start 1.7e-13 (the pins' axial rows
+    hold the rod in the plane; with balls free across it the round-off grew 10-1000 times a
+    revolution: test_the_motion_stays_in_the_plane_over_twenty_revolutions)."""
     joints, start = PLANAR[name]
     _, pk, raw, ds = run({"joints": joints, "initial": {"joints": start},
                           "solver": {"duration": PERIOD}})

@@ -55,7 +55,9 @@ P_ONSET = 47        # 1.0 = delta_dot0 is the episode's onset value, 0.0 its run
 P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K delta^n
 P_SECTION_PHASE = 49  # crank angle of the Poincare sections, once per revolution [rad]
 P_GUIDE = 50        # the slider guide's global axis: 0.0 x (the RSSP), 1.0 y (the slider-crank)
-N_P = 51
+# p[51]: unused, 0: an even length keeps a device thread's copy of p 16-byte aligned (its
+# paired local loads: at 51 values the A,B build's spill stores rose 992 -> 1,000 B)
+N_P = 52
 
 # --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
 # Each column has one meaning whatever the joint's type; a type that has no use for a column
