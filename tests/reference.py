@@ -198,10 +198,11 @@ class Mechanism:
         self.guide_origin = np.array([0.0, 0.0, self.zs])
         # the block's corner contacts below are written for a guide along x
         assert self.guide == 0 or self.ideal[JOINT_P], "the slider-crank's guide is ideal"
-        # the slider-crank's A and B are pins along the normal of its plane (the plane of the
-        # guide and e_z): with clearance or a bushing, each keeps its axial constraint (a
-        # pin's axial play is ideal); the RSSP's balls keep none
-        self.e_pin = np.cross(self.e_guide, e_z) if self.guide == 1 else None
+        # the slider-crank is planar: its rod is held in the plane of the guide and e_z (its
+        # centroid's offset along the plane's normal 0, its axis in the plane: alpha3 = pi/2),
+        # and its A and B are pins across that plane, whose constraints are the two in it
+        self.planar = self.guide == 1
+        self.in_plane = np.array([self.e_guide, e_z]) if self.planar else np.eye(3)
 
     # spherical joint j: (ball body, ball offset, socket body, socket offset)
     def joint_bodies(self, j):
@@ -214,13 +215,14 @@ class Mechanism:
         k = 3 if self.ideal[JOINT_O] else 1
         out = {"O": slice(0, k), "angles2": slice(k, k + 2), "driver": slice(k + 2, k + 3)}
         k += 3
+        pin = len(self.in_plane)
         for j, name in ((JOINT_A, "A"), (JOINT_B, "B")):
             if self.ideal[j]:
-                out[name] = slice(k, k + 3)
-                k += 3
-            elif self.e_pin is not None:
-                out[name + " axial"] = slice(k, k + 1)
-                k += 1
+                out[name] = slice(k, k + pin)
+                k += pin
+        if self.planar:
+            out["planar"] = slice(k, k + 2)
+            k += 2
         out["spin3"] = slice(k, k + 1)
         rows_p = 5 if self.ideal[JOINT_P] else 0
         out["prismatic"] = slice(k + 1, k + 1 + rows_p)
@@ -234,16 +236,13 @@ class Mechanism:
         c.extend(p_o if self.ideal[JOINT_O] else p_o[:1])        # with clearance, axial only
         c.extend([q[3], q[4]])                                   # alpha2 = beta2 = 0
         c.append(q[5] - (self.theta0 + self.omega * t))          # driver
-        gap_a = point(q, ROD, self.u_A3) - point(q, CRANK, self.u_A2)
         if self.ideal[JOINT_A]:                                  # spherical A: rod - crank pin
-            c.extend(gap_a)
-        elif self.e_pin is not None:                             # the pin's axial row
-            c.append(gap_a @ self.e_pin)
-        gap_b = point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3)
+            c.extend(self.in_plane @ (point(q, ROD, self.u_A3) - point(q, CRANK, self.u_A2)))
         if self.ideal[JOINT_B]:                                  # spherical B: slider - rod end
-            c.extend(gap_b)
-        elif self.e_pin is not None:
-            c.append(gap_b @ self.e_pin)
+            c.extend(self.in_plane @ (point(q, SLIDER, self.u_B4) - point(q, ROD, self.u_B3)))
+        if self.planar:                                          # the rod in the plane
+            normal = np.cross(self.e_guide, np.array([0.0, 0.0, 1.0]))
+            c.extend([q[6:9] @ normal, q[9] - np.pi / 2])
         c.append(q[11])                                          # rod spin gamma3 = 0
         if self.ideal[JOINT_P]:                                  # prismatic: on the guide's
             off = q[12:15] - self.guide_origin                   # line, unrotated
@@ -690,9 +689,6 @@ def evaluate(t, y, p, jp, dv0_stored=(0.0, 0.0), wmap=None) -> Reference:
             joint_force[j] = constraint_force(name)[6 * ball:6 * ball + 3]
         else:
             joint_force[j] = contacts[j].force
-            if name + " axial" in rows:                          # a pin's axial reaction
-                joint_force[j] = joint_force[j] + constraint_force(name + " axial")[
-                    6 * ball:6 * ball + 3]
     # the guide's force on the slider: the prismatic rows' on its centroid, or the corners'
     joint_force[JOINT_P] = (constraint_force("prismatic")[12:15] if mech.ideal[JOINT_P]
                             else contacts[JOINT_P].force)

@@ -315,9 +315,10 @@ def test_simulated_state(simulated_states, joints):
 # effective mass and stiff rate (docs/physics.md section 4)
 # ---------------------------------------------------------------------------
 
-def kernel_point_mobility(k, y, pk, j):
+def kernel_point_mobility(k, y, pk, j, axis=None):
     """Call dynamics.point_mobility with the intermediates evaluate() leaves (C, L) and
-    rebuilds the rest as joint_rate does."""
+    rebuilds the rest as joint_rate does; ``axis``: the guide's axis it is given (default
+    the case's, p[P_GUIDE])."""
     p, jp = pk.p, pk.jp
     t3 = trig(y[9], y[10], y[11])
     r3m = rotation(t3)
@@ -329,8 +330,13 @@ def kernel_point_mobility(k, y, pk, j):
     minv = (1.0 / p[L.P_M3], 1.0 / p[L.P_M4],
             1.0 / p[L.P_M2] if jp[ref_mod.JOINT_O, L.J_CLEARANCE] != 0.0 else 0.0,
             1.0 / p[L.P_M4] if jp[ref_mod.JOINT_P, L.J_CLEARANCE] != 0.0 else 0.0)
-    # the rows of A and B: three where ideal; the slider-crank's pin keeps its axial one
-    nc = sum(3 if jp[i, L.J_CLEARANCE] == 0.0 else int(p[L.P_GUIDE]) for i in range(2))
+    # the rows of A and B where ideal: three, the slider-crank's pins two (its rod held in
+    # its plane: x3 and alpha3 immobile)
+    planar = p[L.P_GUIDE] == 1.0
+    nc = sum((2 if planar else 3) for i in range(2) if jp[i, L.J_CLEARANCE] == 0.0)
+    if planar:
+        mr_inv = (0.0, 0.0, 0.0, 1.0 / mr[4])
+    minv = (*minv, 0.0 if planar else 1.0 / p[L.P_M3])
     dg = k["dg"]
     n = np.array(dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3])
     r3 = np.array(y[6:9])
@@ -340,7 +346,7 @@ def kernel_point_mobility(k, y, pk, j):
         qrod = r3 + np.array(mv(r3m, (0.5 * p[L.P_L3], 0.0, 0.0))) + jp[j, L.J_RJ] * n
     jr = point_jacobian_rot(r3m, mtv(r3m, tuple(qrod - r3)), g3)
     w = point_mobility(j, jr, k["C"], k["L"], nc, minv, mr_inv, np.zeros((VZ_ROWS, NZ)),
-                       int(p[L.P_GUIDE]))
+                       int(p[L.P_GUIDE]) if axis is None else axis)
     xx, xy, xz, yy, yz, zz = w
     return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
 

@@ -183,8 +183,9 @@ def row_dot(A, i, B, k, minv, start):
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
     rows of the work array vz; minv: 1/m3, 1/m4, 1/m2 and 1/m4 again, the third 0 where the
-    crank is held in its bearing, the fourth 0 where the slider is held in its guide)."""
-    vz[out, 0] = minv[0] * vz[v, 0]
+    crank is held in its bearing, the fourth 0 where the slider is held in its guide, and
+    the rod's x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane)."""
+    vz[out, 0] = minv[4] * vz[v, 0]
     vz[out, 1] = minv[0] * vz[v, 1]
     vz[out, 2] = minv[0] * vz[v, 2]
     vz[out, 3] = mr_inv[0] * vz[v, 3] + mr_inv[1] * vz[v, 4]
@@ -257,7 +258,7 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g):
               mr_inv[0] * a0[2] + mr_inv[1] * a1[2])
         b1 = (mr_inv[2] * a0[0] + mr_inv[3] * a1[0], mr_inv[2] * a0[1] + mr_inv[3] * a1[1],
               mr_inv[2] * a0[2] + mr_inv[3] * a1[2])
-        return (im + ex + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
+        return (minv[4] + ex + a0[0] * b0[0] + a1[0] * b1[0], a0[0] * b0[1] + a1[0] * b1[1],
                 a0[0] * b0[2] + a1[0] * b1[2], im + ey + a0[1] * b0[1] + a1[1] * b1[1],
                 a0[1] * b0[2] + a1[1] * b1[2], im + cs + a0[2] * b0[2] + a1[2] * b1[2])
     # general case: g_k = J^T e_k, W_p[a, b] = g_a . (W g_b)
@@ -397,11 +398,29 @@ def slider_rotation(y, p, t4, N4, dy):
     return True
 
 
+HALF_PI = 0.5 * math.pi
+
+
 @compiled(inline="always")
-def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
+def planar_rod(y, p):
+    """The slider-crank's rod held in the crank's plane (Baumgarte rows on x3 = 0 and
+    alpha3 = pi/2, the rod's axis in the plane): their accelerations (x3dd, a3dd). Its pins'
+    axial play is ideal, as the crank bearing's at O: balls free across the plane left it
+    (rounding grew 1,000-fold a revolution under the benchmark's impacts)."""
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    x3dd = -2.0 * a_b * y[Y_QD + Y_R3] - b_b * b_b * y[Y_R3]
+    a3dd = -2.0 * a_b * y[Y_QD + Y_PHI3] - b_b * b_b * (y[Y_PHI3] - HALF_PI)
+    return x3dd, a3dd
+
+
+@compiled(inline="always")
+def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz, g, a3dd):
     """Generalised forces of the free coordinates (x3, y3, z3, alpha3, beta3, x4) into
     vz[VZ_FORCE]; returns (mr_inv, ok): the inverse of the rod's 2x2 rotational mass block
-    over (alpha3, beta3) (row-major 4-tuple) and whether that block is positive definite."""
+    over (alpha3, beta3) (row-major 4-tuple) and whether that block is positive definite.
+    The slider-crank (``g`` 1) holds alpha3 (its acceleration ``a3dd``, :func:`planar_rod`):
+    beta3's 1x1 block alone."""
     qd = Y_QD
     pd3 = (y[qd + Y_PHI3], y[qd + Y_PHI3 + 1], y[qd + Y_PHI3 + 2])
     Qp3, Mr3, _ = euler_equations(J3, t3, pd3, N3)
@@ -411,6 +430,11 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
     vz[VZ_FORCE, 3] = Qp3[0] - Mr3[2] * gdd3
     vz[VZ_FORCE, 4] = Qp3[1] - Mr3[5] * gdd3
     vz[VZ_FORCE, 5] = F4x
+    if g == 1:
+        vz[VZ_FORCE, 4] -= Mr3[3] * a3dd
+        if not Mr3[4] > 0.0:
+            return (0.0, 0.0, 0.0, 0.0), False
+        return (0.0, 0.0, 0.0, 1.0 / Mr3[4]), True
     det = Mr3[0] * Mr3[4] - Mr3[1] * Mr3[3]
     if not det > 0.0:
         return (0.0, 0.0, 0.0, 0.0), False
@@ -418,17 +442,16 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz):
 
 
 @compiled(inline="always")
-def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz):
+def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, a3dd, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
     rows written and the largest position violation of these joints [m]. Where O has
     clearance the crank's centroid acceleration in the bearing's plane (rdd2's y, z) is
     free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side.
-    The slider-crank's A and B (``jointset.guide_axis`` 1) are pins whose axis is the
-    crank's (x): with clearance or a bushing each keeps its axial row (the rows first, x),
-    which holds the rod in the crank's plane; a ball free across the plane would leave it
-    (its lateral equilibrium under the rod's load is unstable: rounding grew 1,000-fold a
-    revolution). ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
+    The slider-crank (``jointset.guide_axis`` 1) holds its rod in the crank's plane (x3 and
+    alpha3 held, :func:`planar_rod`; ``a3dd`` alpha3's acceleration): its A and B are pins
+    across that plane, whose rows are the two in it (y, z), the axial one the rod's hold.
+    ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
     p = model.p
     jp = model.jp
     a_b = p[P_BAUM_A]
@@ -438,13 +461,9 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
     uB3 = (0.5 * p[P_L3], 0.0, 0.0)
     nc = 0
     cons = 0.0
-    # each joint's rows: three where it is ideal; where it has clearance or a bushing, none
-    # at the RSSP's balls, and at the slider-crank's pins the axial one (x, the crank's axis:
-    # a pin's axial play is ideal, as the bearing's at O), which holds the rod in the plane
     g = guide_axis(spec)
-    rows_a = 3 if not is_free(spec, jp, JOINT_A) else (1 if g == 1 else 0)
-    rows_b = 3 if not is_free(spec, jp, JOINT_B) else (1 if g == 1 else 0)
-    if rows_a > 0:
+    i0 = g      # the first row: x (the RSSP), or y (the slider-crank's pins, x held)
+    if not is_free(spec, jp, JOINT_A):
         free = o_free(spec, jp)
         if free:
             rdd2 = (rdd2[0], 0.0, 0.0)
@@ -461,19 +480,23 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
         cpos = sub(p3A, p2A)
         cvel = sub(v3A, v2A)
         quad = point_accel_quadratic(R3, w3, gq3, uA3)
-        for i in range(rows_a):
+        for i in range(i0, 3):
+            r = nc + i - i0
             for k in range(NZ):
-                C[nc + i, k] = 0.0
-            C[nc + i, i] = 1.0
-            C[nc + i, 3] = JrA[3 * i]
-            C[nc + i, 4] = JrA[3 * i + 1]
+                C[r, k] = 0.0
+            C[r, i] = 1.0
+            C[r, 3] = JrA[3 * i]
+            C[r, 4] = JrA[3 * i + 1]
             if free and i > 0:
-                C[nc + i, 5 + i] = -1.0
-            vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
-                                  - quad[i] + a2A[i])
+                C[r, 5 + i] = -1.0
+            rhs = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - JrA[3 * i + 2] * gdd3
+                   - quad[i] + a2A[i])
+            if g == 1:
+                rhs -= JrA[3 * i] * a3dd      # alpha3 held: its acceleration known
+            vz[VZ_RHS, r] = rhs
             cons = max(cons, abs(cpos[i]))
-        nc += rows_a
-    if rows_b > 0:
+        nc += 3 - i0
+    if not is_free(spec, jp, JOINT_B):
         r3, v3, pd3 = body_motion(y, Y_R3, Y_PHI3)
         R3, w3 = body_frame(t3, pd3)
         G3 = gmat(t3)
@@ -484,30 +507,33 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
         cpos = sub(r4, p3B)
         cvel = sub(v4, v3B)
         quad = point_accel_quadratic(R3, w3, gq3, uB3)
-        # the slider's y, z (the slider-crank's x, z): fixed by its guide, or free (columns
-        # 8, 9) where P has clearance; its coordinate along the guide is column 5
+        # the slider's y, z: fixed by its guide, or free (columns 8, 9) where P has
+        # clearance; its coordinate along the guide (x; the slider-crank's y) is column 5
         slide = p_free(spec, jp)
         if slide:
             known4 = (0.0, 0.0, 0.0)
         elif g == 0:
             known4 = (0.0, ydd4, zdd4)
         else:
-            known4 = (ydd4, 0.0, zdd4)
-        for i in range(rows_b):
+            known4 = (ydd4, 0.0, zdd4)     # the slider-crank's x held, y along its guide
+        for i in range(i0, 3):
+            r = nc + i - i0
             for k in range(NZ):
-                C[nc + i, k] = 0.0
-            C[nc + i, i] = -1.0
-            C[nc + i, 3] = -JrB[3 * i]
-            C[nc + i, 4] = -JrB[3 * i + 1]
-            vz[VZ_RHS, nc + i] = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
-                                  + JrB[3 * i + 2] * gdd3 + quad[i])
+                C[r, k] = 0.0
+            C[r, i] = -1.0
+            C[r, 3] = -JrB[3 * i]
+            C[r, 4] = -JrB[3 * i + 1]
+            rhs = (-2.0 * a_b * cvel[i] - b_b * b_b * cpos[i] - known4[i]
+                   + JrB[3 * i + 2] * gdd3 + quad[i])
+            if g == 1:
+                rhs += JrB[3 * i] * a3dd
+            vz[VZ_RHS, r] = rhs
             cons = max(cons, abs(cpos[i]))
-        if rows_b == 3:
-            C[nc + g, 5] = 1.0
+        C[nc, 5] = 1.0          # the guide's row: x's (the RSSP), y's (the slider-crank)
         if slide:
             C[nc + 1, 8] = 1.0
             C[nc + 2, 9] = 1.0
-        nc += rows_b
+        nc += 3 - i0
     return nc, cons
 
 
@@ -650,6 +676,9 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
         cons = max(cons, max(abs(pO[0]), max(abs(pO[1]), abs(pO[2]))))
     if not p_free(spec, jp):
         cons = max(cons, max(abs(y[Y_R4 + 1 - guide_axis(spec)]), abs(y[Y_R4 + 2] - p[P_ZS])))
+    if guide_axis(spec) == 1:
+        # the rod held in the slider-crank's plane: its centroid's x and its ends' (alpha3)
+        cons = max(cons, max(abs(y[Y_R3]), 0.5 * p[P_L3] * abs(y[Y_PHI3] - HALF_PI)))
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
@@ -847,7 +876,8 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
 
     # ---- the free coordinates: rod equations, ideal joints, Schur solve ----
     J3 = (p[P_J3], p[P_J3 + 1], p[P_J3 + 2])
-    mr_inv, ok = rod_equations(F3, N3, F4[g], y, t3, J3, gdd3, vz)
+    x3dd, a3dd = planar_rod(y, p) if g == 1 else (0.0, 0.0)
+    mr_inv, ok = rod_equations(F3, N3, F4[g], y, t3, J3, gdd3, vz, g, a3dd)
     if not ok:
         return ST_SINGULAR
     # the crank's centroid in the bearing's plane: free where O has clearance (forces
@@ -859,12 +889,16 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) else 0.0
     vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
     minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
-            1.0 / p[P_M4] if p_free(spec, jp) else 0.0)
-    nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, C, vz)
+            1.0 / p[P_M4] if p_free(spec, jp) else 0.0, 0.0 if g == 1 else 1.0 / p[P_M3])
+    nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, a3dd, C,
+                                vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
-    zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
-           vz[VZ_ZDD, 5])
+    if g == 1:      # the rod held in the slider-crank's plane
+        zdd = (x3dd, vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], a3dd, vz[VZ_ZDD, 4], vz[VZ_ZDD, 5])
+    else:
+        zdd = (vz[VZ_ZDD, 0], vz[VZ_ZDD, 1], vz[VZ_ZDD, 2], vz[VZ_ZDD, 3], vz[VZ_ZDD, 4],
+               vz[VZ_ZDD, 5])
     if o_free(spec, jp):
         rdd2 = (rdd2[0], vz[VZ_ZDD, 6], vz[VZ_ZDD, 7])
     if p_free(spec, jp):
@@ -878,25 +912,19 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     if not is_free(spec, jp, joint_a):
         fA = (vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1], vz[VZ_LAMBDA, 2])
         k0 = 3
+        if g == 1:      # the slider-crank's pin rows: y, z
+            fA = (0.0, vz[VZ_LAMBDA, 0], vz[VZ_LAMBDA, 1])
+            k0 = 2
         r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
         R2 = rotation(t2)
         qA = add(r2, mv(R2, uA2))
         F2 = add(F2, fA)
         N2 = add(N2, body_moment(R2, r2, qA, fA))
-    elif g == 1:
-        # the slider-crank's pin: its axial row's force on the crank pin, beside the contact's
-        fx = (vz[VZ_LAMBDA, 0], 0.0, 0.0)
-        k0 = 1
-        r2 = (y[Y_R2], y[Y_R2 + 1], y[Y_R2 + 2])
-        R2 = rotation(t2)
-        qA = add(r2, mv(R2, uA2))
-        fA = add(fA, fx)
-        F2 = add(F2, fx)
-        N2 = add(N2, body_moment(R2, r2, qA, fx))
     if not is_free(spec, jp, joint_b):
-        fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
-    elif g == 1:
-        fB = (fB[0] + vz[VZ_LAMBDA, k0], fB[1], fB[2])
+        if g == 1:
+            fB = (0.0, vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1])
+        else:
+            fB = (vz[VZ_LAMBDA, k0], vz[VZ_LAMBDA, k0 + 1], vz[VZ_LAMBDA, k0 + 2])
     # with O's clearance, lamO keeps the axial reaction only (its y, z vanish to rounding)
     torque, lamO = crank_reactions(p, F2, N2, y, t2, pdd2, rdd2)
     dy[Y_WORK] = torque * y[qd + Y_PHI2 + 2]
