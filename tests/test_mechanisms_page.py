@@ -71,8 +71,8 @@ def benchmark():
 def test_the_shipped_benchmark_runs_in_the_plane_with_the_impacts_peaks(benchmark):
     ds = benchmark
     assert str(ds.status.values) == "ok"
-    # in the mechanism's plane: B's offset across it (x) stays at rounding's level (the pins'
-    # axial rows; measured 3.7e-18 m)
+    # in the mechanism's plane: B's offset across it (x) stays at rounding's level (the rod
+    # held in the plane; measured 3.7e-18 m)
     assert float(np.abs(ds.ball_offset.sel(joint="B", axis="x")).max()) < 1e-12
     assert float(ds.constraint_violation.max()) < 1e-7
     ideal = abs(kinematics(math.pi / 2)[2])
@@ -85,7 +85,7 @@ def test_the_shipped_benchmark_runs_in_the_plane_with_the_impacts_peaks(benchmar
 
 
 def test_without_friction_the_pins_stay_in_the_plane():
-    """docs/mechanisms.md, "In the plane": A and B keep their axial rows, so without friction
+    """docs/mechanisms.md, "In the plane": the rod is held in the plane, so without friction
     too the pin at B stays in the plane over the benchmark's 5 revolutions (measured 3.7e-18
     m; a ball free across the plane reached 4.4e-4 m in the 5th revolution of this run)."""
     ds = simulate(CONFIG, ["friction.enabled=false", "solver.save_every=40"])

@@ -448,8 +448,8 @@ def out_of_plane(pk, raw, ds) -> float:
 def test_the_motion_stays_in_the_plane(name):
     """One revolution: every out-of-plane displacement (:func:`out_of_plane`) stays below
     1e-12 m. Measured: O alone 7e-18 m (the ideal A and B hold the rod in the plane);
-    A 5.9e-16, B 4.5e-16, A, O and B from the centred start 1.7e-13 (the pins' axial rows
-    hold the rod in the plane; with balls free across it the round-off grew 10-1000 times a
+    A 5.9e-16, B 4.5e-16, A, O and B from the centred start 1.7e-13 (the rod held in the
+    plane; with balls free across it the round-off grew 10-1000 times a
     revolution: test_the_motion_stays_in_the_plane_over_twenty_revolutions)."""
     joints, start = PLANAR[name]
     _, pk, raw, ds = run({"joints": joints, "initial": {"joints": start},
@@ -635,8 +635,8 @@ def test_the_rssps_identity_has_no_mechanism_kind():
 def test_an_ensemble_members_ball_offsets_stay_in_the_plane(member):
     """An ensemble's scatter of the ball offsets (ensemble.perturb.ball_offset) draws in the
     crank's plane only: the members of a slider-crank start with every out-of-plane
-    coordinate at 0 (a draw across the plane started B 0.115 mm off it, against the pins'
-    axial rows), the in-plane offset scattered."""
+    coordinate at 0 (a draw across the plane started B 0.115 mm off it, against the rod's
+    hold in the plane), the in-plane offset scattered."""
     cfg = load_config({"mechanism": SLIDER_CRANK,
                        "joints": {"A": {"clearance": 2e-4}, "B": B_CLEARANCE},
                        "initial": {"joints": "centred"},
@@ -656,7 +656,7 @@ def test_an_ensemble_members_ball_offsets_stay_in_the_plane(member):
 def test_a_pin_bushing_is_radial_in_the_plane():
     """A bushing at the slider-crank's A (its socket the rod, whose x axis lies in the plane)
     or B is a pin's: its axial pair repeats the radial one (the pin's axial motion is held
-    by its axial row), so its stiffness in the plane is the same along the rod and across
+    with the rod in the plane), so its stiffness in the plane is the same along the rod and across
     it; O's axial pair stays 0 (a revolute's place), and the RSSP's A keeps its own."""
     bushing = {"type": "bushing", "bushing_stiffness": [2e6, 5e5],
                "bushing_damping": [400.0, 100.0]}
@@ -674,7 +674,7 @@ def test_a_seated_start_on_worn_pins_stays_in_the_plane():
     """The seated start leans each pin on its bearing along the ideal reaction turned by its
     friction (params.ball_seats), on the worn bearings of a life block: in the crank's plane
     (a seat off it put the rod 1.8e-6 m across the plane at a life run's 4th block, which
-    the pins' axial rows then stopped on), every body's out-of-plane coordinate 0 and the
+    the rod's hold in the plane then stopped on), every body's out-of-plane coordinate 0 and the
     rod in the plane, the pins pressed in at their static penetration."""
     cfg = load_config({"mechanism": SLIDER_CRANK,
                        "joints": {"A": {"clearance": 2e-4}, "B": B_CLEARANCE},

@@ -4,9 +4,11 @@ dense reference of tests/reference.py.
 The reference's slider-crank is the RSSP's three bodies with the slider's guide along the
 global axis ``p[P_GUIDE]`` = 1 (y): its prismatic rows hold the slider's offset from the
 guide's line through (0, 0, z_s) along the two directions across it (e_z x e_y = -x, and z)
-and its three angles, and leave y free; A and B with clearance or a bushing keep their
-axial rows, the offset along the plane's normal e_guide x e_z (a pin's axial play is ideal,
-which holds the rod in the plane); everything else (the dense KKT system, the
+and its three angles, and leave y free; the rod is held in the plane (its centroid's offset
+along the plane's normal e_guide x e_z, and alpha3 - pi/2), and the ideal pins A and B keep
+the two rows of their offsets projected on the plane (the kernel holds x3 and alpha3 as
+coordinates and writes the pins' y and z rows: the same constraints, written otherwise);
+everything else (the dense KKT system, the
 finite-difference Jacobians, the mass matrix, the contact forces through point Jacobians)
 is the RSSP's. Its elastic law is the benchmark's, Hertz's power law with n = 3/2 at A, B
 and O (``contact.elastic: hertz``), written from its formula.
