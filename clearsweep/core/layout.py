@@ -56,7 +56,8 @@ P_EXPONENT = 48     # 0.0 = the paper's elastic law; n > 0: the power law F = K 
 P_SECTION_PHASE = 49  # crank angle of the Poincare sections, once per revolution [rad]
 P_GUIDE = 50        # the slider guide's global axis: 0.0 x (the RSSP), 1.0 y (the slider-crank)
 # p[51]: unused, 0: an even length keeps a device thread's copy of p 16-byte aligned (its
-# paired local loads: at 51 values the A,B build's spill stores rose 992 -> 1,000 B)
+# paired local loads: at 51 values the A,B build's spill stores rose 992 -> 1,000 B;
+# python -m clearsweep.ptx --joints A,B)
 N_P = 52
 
 # --- per-joint parameters jp[j, :] (j: the joint's row of joints.JOINTS) ------
