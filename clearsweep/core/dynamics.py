@@ -442,16 +442,18 @@ def rod_equations(F3, N3, F4x, y, t3, J3, gdd3, vz, g, a3dd):
 
 
 @compiled(inline="always")
-def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, a3dd, C, vz):
+def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, fixed, C, vz):
     """Rows of C (over the free coordinates) and right-hand sides vz[VZ_RHS] of the ideal
     spherical joints (A: crank pin = rod end; B: rod end = slider). Returns (nc, cons): the
     rows written and the largest position violation of these joints [m]. Where O has
     clearance the crank's centroid acceleration in the bearing's plane (rdd2's y, z) is
     free, a column of A's rows, and rdd2 brings only its axial part to the right-hand side.
     The slider-crank (``jointset.guide_axis`` 1) holds its rod in the crank's plane (x3 and
-    alpha3 held, :func:`planar_rod`; ``a3dd`` alpha3's acceleration): its A and B are pins
-    across that plane, whose rows are the two in it (y, z), the axial one the rod's hold.
-    ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
+    alpha3 held, :func:`planar_rod`): its A and B are pins across that plane, whose rows are
+    the two in it (y, z), the axial one the rod's hold. ``fixed``: the accelerations that
+    single-body constraints fix, (gdd3, ydd4, zdd4, a3dd) (:func:`fixed_accelerations`,
+    :func:`planar_rod`); ``model``: p and jp; ``spec``: the build's joint set (``jointset``)."""
+    gdd3, ydd4, zdd4, a3dd = fixed
     p = model.p
     jp = model.jp
     a_b = p[P_BAUM_A]
@@ -890,7 +892,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
     minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
             1.0 / p[P_M4] if p_free(spec, jp) else 0.0, 0.0 if g == 1 else 1.0 / p[P_M3])
-    nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, gdd3, ydd4, zdd4, a3dd, C,
+    nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, (gdd3, ydd4, zdd4, a3dd), C,
                                 vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
         return ST_SINGULAR
