@@ -359,12 +359,19 @@ def test_constrained_contact_mobility(joints, preset):
     rng = np.random.default_rng(11)
     for t in (0.0, 0.29, 0.6):
         y = contact_state(base_state(pk, pk.p[L.P_OMEGA] * t), pk.p, pk.jp, rng)
-        k = run_evaluate(t, y, pk.p, pk.jp)
-        r = ref_mod.evaluate(t, y, pk.p, pk.jp)
-        for j in r.contacts:
-            wk = kernel_point_mobility(k, y, pk, j)
-            wr = ref_mod.point_mobility(r, j)
-            assert np.max(np.abs(wk - wr)) <= RTOL * np.max(np.abs(wr)), (j, wk, wr)
+        mobilities_agree(t, y, pk)
+
+
+def mobilities_agree(t, y, pk):
+    """The kernel's W_p of every contact of the reference at (t, y) within RTOL of the
+    reference's; returns the kernel's intermediates and the reference's result."""
+    k = run_evaluate(t, y, pk.p, pk.jp)
+    r = ref_mod.evaluate(t, y, pk.p, pk.jp)
+    for j in r.contacts:
+        wk = kernel_point_mobility(k, y, pk, j)
+        wr = ref_mod.point_mobility(r, j)
+        assert np.max(np.abs(wk - wr)) <= RTOL * np.max(np.abs(wr)), (j, wk, wr)
+    return k, r
 
 
 def rate_case(joints, preset, **contact):
