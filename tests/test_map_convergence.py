@@ -38,8 +38,9 @@ TABLE = {
     "reliability_joints": ([72, 144], 0.932),
     # the slider-crank benchmark's 5 revolutions at 5000 r/min (B's 0.5 mm socket)
     "slider_crank": ([144, 288], 0.994),
-    # 12 blocks from the centred start, Baumgarte 50 (1.001 and B's worn volume 1.008 seated)
-    "slider_crank_life": ([72, 144], 1.016),      # 12 blocks: B's worn volume 0.990
+    # 12 blocks from the centred start, Baumgarte 50, the rod held in its plane (1.016 with
+    # the pins' axial rows; 1.001 and B's worn volume 1.008 seated)
+    "slider_crank_life": ([72, 144], 0.998),      # 12 blocks: B's worn volume 0.976
 }
 
 
