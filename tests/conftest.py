@@ -2,10 +2,11 @@
 and the reference runs that several files check, each computed once per session (once per
 test run where :func:`made_once` keeps it).
 
-Tiers: ``python -m pytest -q -n auto`` runs everything, spread over the cores by
-pytest-xdist (each of its worker processes has its own session fixtures);
-``python -m pytest -q -n auto -m "not slow"`` leaves out the long physics runs and builds
-marked ``slow`` (the fast tier, for development).
+Tiers: ``python -m pytest -q -n auto`` (the default run) leaves out the long physics runs
+and builds marked ``slow`` (``pyproject.toml``'s ``addopts``) and spreads the rest over the
+cores by pytest-xdist (each of its worker processes has its own session fixtures);
+``python -m pytest -q -n auto -m slow`` runs the slow ones alone. CI (``.ci/run``) runs
+both.
 """
 
 from __future__ import annotations

@@ -31,6 +31,7 @@ import pytest
 import xarray as xr
 import yaml
 from click.testing import CliRunner
+from conftest import made_once
 
 from clearsweep.analysis import PERIOD_UNKNOWN, design_dims, results_kind
 from clearsweep.choices import KINDS
@@ -113,21 +114,22 @@ def command(doc: dict) -> str:
 
 @pytest.fixture(scope="module")
 def shipped(tmp_path_factory) -> dict[str, Path]:
-    """Every shipped config's short results file, by the config's name."""
-    folder = tmp_path_factory.mktemp("shipped")
-    out = {}
-    for path in sorted(CONFIGS.glob("*.yaml")):
-        doc, sets = shortened(path)
-        config = folder / path.name
-        config.write_text(yaml.safe_dump(doc))
-        verb = command(doc)
-        nc = folder / f"{path.stem}.nc"
-        extra = ["--no-progress", "--workers", "1"] if verb == "sweep" else []
-        result = invoke(verb, config, *[a for s in sets for a in ("--set", s)], *extra, "-q",
-                        "-o", nc)
-        assert result.exit_code == 0, f"{path.name}: {result.output}"
-        out[path.stem] = nc
-    return out
+    """Every shipped config's short results file, by the config's name: made once per test
+    run (``conftest.made_once``), whichever worker process asks first."""
+
+    def make(folder: Path) -> None:
+        for path in sorted(CONFIGS.glob("*.yaml")):
+            doc, sets = shortened(path)
+            config = folder / path.name
+            config.write_text(yaml.safe_dump(doc))
+            verb = command(doc)
+            extra = ["--no-progress", "--workers", "1"] if verb == "sweep" else []
+            result = invoke(verb, config, *[a for s in sets for a in ("--set", s)], *extra,
+                            "-q", "-o", folder / f"{path.stem}.nc")
+            assert result.exit_code == 0, f"{path.name}: {result.output}"
+
+    folder = made_once(tmp_path_factory, "shipped", make)
+    return {path.stem: folder / f"{path.stem}.nc" for path in sorted(CONFIGS.glob("*.yaml"))}
 
 
 def first(ds: xr.Dataset, *dims: str) -> list[str]:
@@ -304,18 +306,20 @@ SUBSETS = ["".join(s) for n in range(5) for s in itertools.combinations("OABP", 
 
 @pytest.fixture(scope="module")
 def subsets(tmp_path_factory) -> dict[str, Path]:
-    """A 20 ms run of configs/ideal.yaml with clearance at each subset of O, A, B and P."""
-    folder = tmp_path_factory.mktemp("subsets")
-    out = {}
-    for subset in SUBSETS:
-        sets = ["solver.duration=0.02", "metrics.settle_time=0.005", "wear.map=[6,12]",
-                *(s for j in subset for s in CLEARANCE[j])]
-        path = folder / f"run_{subset or 'none'}.nc"
-        result = invoke("run", CONFIGS / "ideal.yaml", *[a for s in sets for a in ("--set", s)],
-                        "-q", "-o", path)
-        assert result.exit_code == 0, result.output
-        out[subset] = path
-    return out
+    """A 20 ms run of configs/ideal.yaml with clearance at each subset of O, A, B and P, made
+    once per test run (``conftest.made_once``)."""
+
+    def make(folder: Path) -> None:
+        for subset in SUBSETS:
+            sets = ["solver.duration=0.02", "metrics.settle_time=0.005", "wear.map=[6,12]",
+                    *(s for j in subset for s in CLEARANCE[j])]
+            result = invoke("run", CONFIGS / "ideal.yaml",
+                            *[a for s in sets for a in ("--set", s)], "-q", "-o",
+                            folder / f"run_{subset or 'none'}.nc")
+            assert result.exit_code == 0, result.output
+
+    folder = made_once(tmp_path_factory, "subsets", make)
+    return {subset: folder / f"run_{subset or 'none'}.nc" for subset in SUBSETS}
 
 
 @pytest.mark.parametrize("subset", SUBSETS, ids=[s or "none" for s in SUBSETS])
