@@ -267,7 +267,8 @@ def step_seconds(cfg: Config) -> float:
     """What one output-grid RK4 step of ``cfg`` costs a worker [s]: the ideal step and each
     clearance joint's share (:class:`PlanCosts`); in the slider-crank, also each clearance
     joint's impacts per revolution over the case's steps a revolution."""
-    per_revolution = 60.0 / (cfg.mechanism.speed_rpm * cfg.solver.dt)
+    period_steps = cfg.mechanism.speed_rpm * cfg.solver.dt / 60.0
+    per_revolution = 1.0 / period_steps if period_steps > 0.0 else math.inf
     return plan_costs().step_seconds(clearance_joints(cfg), cfg.mechanism.kind, per_revolution)
 
 
