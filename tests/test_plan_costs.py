@@ -317,3 +317,16 @@ def test_a_life_plan_walks_to_life_cycles_at_the_file_s_wear_pace(tmp_path, monk
     assert "11 blocks to 1e+06 revolutions at the wear pace of" in text
     assert seconds_of(text.split("expected ")[1]) == pytest.approx(
         3.0 + 5.0 + 11 * (block_steps(cfg) * (1e-3 + 8e-3) + 7.0), rel=0.01)
+
+
+def test_a_denormal_crank_speed_is_priced(later_costs):
+    """speed_rpm * dt / 60 underflows to 0 at 5e-324 r/min: the steps a revolution are then
+    infinite, and a step carries no share of the slider-crank's impacts (no division by 0)."""
+    rssp = load_config({}, ["mechanism.speed_rpm=5e-324", "joints.B.clearance=2.5e-4"])
+    assert step_seconds(rssp) == pytest.approx(1e-3 + 8e-3)
+    crank = load_config({"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark",
+                                       "speed_rpm": 5e-324},
+                         "joints": {"B": {"clearance": 5e-4, "socket_radius": 0.01}},
+                         "solver": {"duration": 1e-3}})
+    assert clearance_joints(crank) == "B"
+    assert step_seconds(crank) == pytest.approx(0.5e-3 + 8e-3)
