@@ -803,6 +803,8 @@ def _check_pin_bushings(raw: Any, cfg: dict[str, Any], source: str) -> None:
     refused, as it would be replaced; one not given follows the radial one in the resolved
     config, so that the config says what runs (and a sweep's cases, made from it, give it
     as it is)."""
+    from .jointtypes import elastic
+
     if cfg["mechanism"]["kind"] != "slider_crank":
         return
     joints = raw.get("joints") if isinstance(raw, Mapping) else None
@@ -813,12 +815,12 @@ def _check_pin_bushings(raw: Any, cfg: dict[str, Any], source: str) -> None:
             radial, axial = spec[key]
             if not (isinstance(given, Mapping) and key in given):
                 spec[key] = type(spec[key])((radial, radial))
-            elif axial != radial and spec["type"] == "bushing":
+            elif axial != radial and elastic(spec["type"]):
                 raise ConfigError(
                     f"joints.{joint}.{key}", list(spec[key]),
                     f"(radial, axial) with the axial value the radial one, [{radial:g}, "
-                    f"{radial:g}], where mechanism.kind is slider_crank (a bushing at {joint} "
-                    "is a pin's: radial in the mechanism's plane, the pin held across it, "
+                    f"{radial:g}], where mechanism.kind is slider_crank (a {spec['type']} at "
+                    f"{joint} is a pin's: radial in the mechanism's plane, the pin held across it, "
                     "so the kernel would run the radial value in place of the axial one)",
                     source)
 
