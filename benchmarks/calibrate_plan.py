@@ -237,7 +237,7 @@ def measure_slider_crank(costs: dict, repeats: int, parts: Path) -> dict:
     [s], and what each clearance joint adds per crank revolution [s] beyond its per-step
     share (``joint_step_s``, the RSSP's): the impacts, whose sub-steps the kernel takes at
     the contact's own time scale, so that their cost goes with the impacts, about a fixed
-    number a revolution, not with the steps (0.5 mm at B, 5 revolutions: 0.09-0.11 s over
+    number a revolution, not with the steps (0.5 mm at B, 5 revolutions: 0.08-0.10 s over
     the ideal case's at 1000, 2500 and 5000 r/min, with 5, 2 and 1 times the steps)."""
     slopes = {}
     for joints, sets in SLIDER_CRANK_JOINTS.items():
