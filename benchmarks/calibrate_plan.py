@@ -233,7 +233,7 @@ SLIDER_CRANK_REVOLUTIONS = (3, 9)
 
 
 def measure_slider_crank(costs: dict, repeats: int, parts: Path) -> dict:
-    """The slider-crank's costs (clearsweep.budget.PlanCosts.slider_crank): its ideal step
+    """The slider-crank's costs (PlanCosts.slider_crank_step_s, joint_revolution_s): its ideal step
     [s], and what each clearance joint adds per crank revolution [s] beyond its per-step
     share (``joint_step_s``, the RSSP's): the impacts, whose sub-steps the kernel takes at
     the contact's own time scale, so that their cost goes with the impacts, about a fixed
