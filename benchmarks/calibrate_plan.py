@@ -14,6 +14,7 @@ which a life plan counts the blocks to ``life.cycles`` (clearsweep.budget.WearPa
     .venv/bin/python benchmarks/calibrate_plan.py --dry-run    # measure and print only
     .venv/bin/python benchmarks/calibrate_plan.py --compile    # also a cold compile (~40 s)
     .venv/bin/python benchmarks/calibrate_plan.py --wear-pace  # the wear pace alone (~15 s)
+    .venv/bin/python benchmarks/calibrate_plan.py --slider-crank   # its costs alone (~30 s)
 
 Re-run it when the kernel changes (a joint type, the step, the outputs, the contact or
 wear laws, which move the wear pace): the file records
@@ -217,6 +218,80 @@ def measure_wear_pace() -> dict:
     return pace
 
 
+#: The slider-crank's cases: configs/slider_crank.yaml (5000 r/min, dt 2.5e-6 s, the
+#: benchmark's contact law) with clearance at one joint alone: B's 0.5 mm as the config's,
+#: A's the same pin and bearing, O's journal the RSSP's 0.1 mm.
+SLIDER_CRANK = "configs/slider_crank.yaml"
+SLIDER_CRANK_JOINTS = {"": ["joints.B.clearance=0"],
+                       "O": ["joints.B.clearance=0", "joints.O.clearance=1e-4"],
+                       "A": ["joints.B.clearance=0", "joints.A.clearance=5e-4",
+                             "joints.A.socket_radius=0.01"],
+                       "B": []}
+#: The two lengths of a slider-crank case [crank revolutions], the first left out of the
+#: statistics: the slope between them is the cost per revolution.
+SLIDER_CRANK_REVOLUTIONS = (3, 9)
+
+
+def measure_slider_crank(costs: dict, repeats: int, parts: Path) -> dict:
+    """The slider-crank's costs (PlanCosts.slider_crank_step_s, joint_revolution_s): its ideal step
+    [s], and what each clearance joint adds per crank revolution [s] beyond its per-step
+    share (``joint_step_s``, the RSSP's): the impacts, whose sub-steps the kernel takes at
+    the contact's own time scale, so that their cost goes with the impacts, about a fixed
+    number a revolution, not with the steps (0.5 mm at B, 5 revolutions: 0.08-0.10 s over
+    the ideal case's at 1000, 2500 and 5000 r/min, with 5, 2 and 1 times the steps)."""
+    slopes = {}
+    for joints, sets in SLIDER_CRANK_JOINTS.items():
+        cfgs = [load_config(SLIDER_CRANK, [*sets, f"solver.revolutions={n}"])
+                for n in SLIDER_CRANK_REVOLUTIONS]
+        if clearance_joints(cfgs[0]) != joints:
+            raise SystemExit(f"slider-crank case {joints or 'ideal'}: clearance at "
+                             f"{clearance_joints(cfgs[0]) or 'no joint'}")
+        steps = [round(c.solver.duration / c.solver.dt) for c in cfgs]
+        times = [time_case(c, "summary", repeats, parts) for c in cfgs]
+        slopes[joints] = fit(times[0], times[1], steps[0], steps[1])[0]
+        print(f"  slider-crank {joints or 'ideal'}: {slopes[joints] * 1e6:.3f} us a step "
+              f"({SLIDER_CRANK_REVOLUTIONS[1]} revolutions in {times[1]:.3f} s)", flush=True)
+    per_rev = round(60.0 / cfgs[0].mechanism.speed_rpm / cfgs[0].solver.dt)
+    ideal = slopes[""]
+    revolution = {j: max(0.0, (slopes[j] - ideal - costs["joint_step_s"][j]) * per_rev)
+                  for j in "OAB"}
+    print("  slider-crank per revolution: " + ", ".join(f"{j} {revolution[j]:.4f} s"
+                                                        for j in "OAB"))
+    return {"step_s": ideal, "joint_revolution_s": revolution}
+
+
+def measure_imports(repeats: int) -> dict:
+    """What a process pays once for the summaries' spectrum (``spectrum_s``: scipy.signal,
+    imported by a worker's first case whose settled window holds a spectrum,
+    motion.order_spectrum) and a sweep's driver for an ensemble's statistics
+    (``ensemble_s``: scipy.stats and the intervals, stores.add_ensemble_statistics, on a
+    summary sweep of 2 designs of 8 members), CPU time in a fresh process."""
+    code = ("import time, clearsweep.simulation, clearsweep.summary, xarray; "
+            "t = time.process_time(); import scipy.signal; print(time.process_time() - t)")
+    spectrum = min(float(subprocess.run([sys.executable, "-c", code], check=True,
+                                        capture_output=True, text=True).stdout.split()[-1])
+                   for _ in range(repeats))
+    cli = [sys.executable, "-c", "from clearsweep.cli import main; main()"]
+    drivers = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        base = ("{mechanism: {preset: realistic}, joints: {B: {clearance: 0.0}}, "
+                "solver: {duration: 0.01}%s}")
+        for name, extra, grid in (
+                ("plain", "", ", ".join(f"{60.0 + i * 0.5:g}" for i in range(16))),
+                ("ensemble", ", ensemble: {members: 8, seed: 1, perturb: {crank_phase_deg: 5}}",
+                 "60, 60.5")):
+            path = Path(tmp) / f"{name}.yaml"
+            path.write_text(f"name: {name}\nstore: summary\nbase: {base % extra}\n"
+                            f"sweep: {{grid: {{mechanism.speed_rpm: [{grid}]}}}}\n")
+            drivers[name] = min(tree_cpu([*cli, "sweep", str(path), "-o", str(Path(tmp) / "o.nc"),
+                                          "--overwrite", "--workers", "2", "-q", "--yes"])[1]
+                                for _ in range(repeats))
+    ensemble = max(0.0, drivers["ensemble"] - drivers["plain"])
+    print(f"  spectrum's import {spectrum:.3f} s; an ensemble's statistics {ensemble:.3f} s "
+          f"(driver {drivers['ensemble']:.2f} s against {drivers['plain']:.2f} s, 16 cases each)")
+    return {"spectrum_s": spectrum, "ensemble_s": ensemble}
+
+
 def _reliability_base() -> dict:
     """configs/reliability_joints.yaml's base config (one member's joints and life)."""
     from clearsweep.schema import read_yaml
@@ -342,13 +417,23 @@ def main() -> None:
     parser.add_argument("--dry-run", action="store_true", help="print, do not write the file")
     parser.add_argument("--wear-pace", action="store_true",
                         help="measure the wear pace alone; keep the file's other costs")
+    parser.add_argument("--slider-crank", action="store_true",
+                        help="measure the slider-crank's costs, the spectrum's import and an "
+                        "ensemble's statistics alone; keep the file's other costs")
     parser.add_argument("-o", "--output", default=str(PLAN_COSTS_FILE))
     args = parser.parse_args()
     load_before = os.getloadavg()
     prepare_kernel("rk4")
-    if args.wear_pace:
+    if args.wear_pace or args.slider_crank:
         costs = kept_costs()
-        costs["wear_pace"] = measure_wear_pace()
+        if args.wear_pace:
+            costs["wear_pace"] = measure_wear_pace()
+            costs["pace_when"] = None
+        if args.slider_crank:
+            with tempfile.TemporaryDirectory() as tmp:
+                costs["slider_crank"] = measure_slider_crank(costs, args.repeats, Path(tmp))
+            costs.update(measure_imports(max(1, args.repeats - 1)))
+            costs["later_when"] = None
         write(args, costs, load_before, os.getloadavg())
         return
     with tempfile.TemporaryDirectory() as tmp:
@@ -360,13 +445,16 @@ def main() -> None:
     if args.compile:
         costs["compile_s"] = measure_compile()
     costs["wear_pace"] = measure_wear_pace()
+    with tempfile.TemporaryDirectory() as tmp:
+        costs["slider_crank"] = measure_slider_crank(costs, args.repeats, Path(tmp))
+    costs.update(measure_imports(max(1, args.repeats - 1)))
     load_after = os.getloadavg()
     write(args, costs, load_before, load_after)
 
 
 def kept_costs() -> dict:
-    """The current file's costs (``--wear-pace``: only the pace is measured again), with
-    when and where they were measured."""
+    """The current file's costs (``--wear-pace``, ``--slider-crank``: only those are
+    measured again), with when and where they were measured."""
     from clearsweep.budget import read_plan_costs
 
     old = read_plan_costs()
@@ -381,7 +469,28 @@ def kept_costs() -> dict:
     mark = "# the joints' shares checked on mixes (us a step): "
     lines = [line for line in PLAN_COSTS_FILE.read_text().splitlines() if line.startswith(mark)]
     costs["check"] = lines[0][len(mark):] if lines else "not recorded"
+    # the wear pace and the later costs as they are, with when they were measured
+    costs["wear_pace"] = {"reference": old.wear_pace.reference,
+                          "first_rate_m": old.wear_pace.first_rate_m,
+                          "growth_m2": old.wear_pace.growth_m2,
+                          "clearance_m": old.wear_pace.clearance_m,
+                          "wear_coefficient_m2_per_N": old.wear_pace.wear_coefficient_m2_per_N
+                          } if old.wear_pace is not None else None
+    costs["pace_when"] = _when_line(text, "(fit_wear_pace), measured")
+    if old.slider_crank_step_s is not None:
+        costs["slider_crank"] = {"step_s": old.slider_crank_step_s,
+                                 "joint_revolution_s": dict(old.joint_revolution_s)}
+        costs["spectrum_s"], costs["ensemble_s"] = old.spectrum_s, old.ensemble_s
+        costs["later_when"] = _when_line(text, "(measure_slider_crank, measure_imports), measured")
     return costs
+
+
+def _when_line(text: list[str], mark: str) -> str:
+    """The line after the comment line that ends with ``mark`` (when a part was measured)."""
+    for i, line in enumerate(text[:-1]):
+        if line.endswith(mark):
+            return text[i + 1].lstrip("# ").rstrip(";")
+    return "not recorded"
 
 
 def write(args, costs: dict, load_before, load_after) -> None:
@@ -393,11 +502,14 @@ def write(args, costs: dict, load_before, load_after) -> None:
                             text=True).stdout.strip() or "unknown"
     shares = costs["joint_step_s"]
     pace = costs["wear_pace"]
+    now = (f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
+           f"tree {commit}, load average {load_before[0]:.2f}-{load_after[0]:.2f}")
     if "measured" in costs:
-        # --wear-pace: the other costs keep their own measurement; the pace's is added
+        # --wear-pace, --slider-crank: the other costs keep their own measurement; the
+        # part measured now says when
         measured = costs["measured"]
-        pace_when = (f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, "
-                     f"tree {commit}, load average {load_before[0]:.2f}-{load_after[0]:.2f}")
+        pace_when = costs["pace_when"] or now
+        later_when = costs.get("later_when") or now
     else:
         measured = f"""\
   date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC
@@ -407,7 +519,9 @@ def write(args, costs: dict, load_before, load_after) -> None:
   kernel_cache: {Path(cache_dir()).name}
   repeats: {args.repeats}
   timing: CPU time, the least of the repeats (other work stretches the wall time, not it)"""
-        pace_when = "with the costs above"
+        pace_when = later_when = "with the costs above"
+    sc = costs["slider_crank"]
+    revolution = sc["joint_revolution_s"]
     text = f"""\
 # What clearsweep's plans charge (clearsweep/budget.py, read by `sweep`, `run`, `life`,
 # `validate` and `--dry-run`), measured by benchmarks/calibrate_plan.py: re-run it when the
@@ -454,6 +568,19 @@ wear_pace:
   growth_m2: {pace['growth_m2']:.4g}
   clearance_m: {pace['clearance_m']:.4g}
   wear_coefficient_m2_per_N: {pace['wear_coefficient_m2_per_N']:.4g}
+# the costs below (measure_slider_crank, measure_imports), measured
+# {later_when};
+# once per sweep process whose cases' settled windows hold a spectrum: scipy.signal's
+# import [s]
+spectrum_s: {costs['spectrum_s']:.3g}
+# once per ensemble sweep, in its driver after the cases: the ensemble's statistics [s]
+ensemble_s: {costs['ensemble_s']:.3g}
+# the slider-crank (mechanism.kind: slider_crank, configs/slider_crank.yaml at 5000 r/min):
+# its ideal step [s], and what each joint with clearance adds per crank revolution beyond
+# its share of each step above [s] (the impacts' sub-steps)
+slider_crank:
+  step_s: {sc['step_s']:.4g}
+  joint_revolution_s: {{O: {revolution['O']:.4g}, A: {revolution['A']:.4g}, B: {revolution['B']:.4g}}}
 """
     print(text)
     if not args.dry_run:

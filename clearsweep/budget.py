@@ -19,7 +19,7 @@ import math
 import os
 import sys
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,7 @@ from .config import DEFAULTS, Config, ConfigError
 __all__ = ["Estimate", "estimate", "check_budget", "format_bytes", "MAX_OUTPUT_BYTES", "MAX_STEPS",
            "PlanCosts", "WearPace", "plan_costs", "read_plan_costs", "clearance_joints", "step_seconds",
            "case_seconds", "assembly_seconds", "life_seconds", "sweep_seconds",
+           "spectrum_seconds", "ensemble_seconds",
            "MAX_READ_BYTES", "largest_variable", "machine_memory",
            "memory_limit"]
 
@@ -137,6 +138,21 @@ class PlanCosts:
     wear_pace : WearPace or None
         A socket's wear pace, which a life plan walks to ``life.cycles`` with; None in a
         file without one (the plan then walks to the wear limits alone).
+    spectrum_s : float
+        What a sweep's process pays once, with its first case whose settled window holds a
+        spectrum (``motion.MIN_SEGMENT_REVOLUTIONS`` revolutions): the import of the
+        spectrum's scipy.signal. 0 in a file without it.
+    ensemble_s : float
+        What a sweep's driver spends on an ensemble's statistics once its cases have run
+        (scipy.stats and the intervals). 0 in a file without it.
+    slider_crank_step_s : float or None
+        One output-grid RK4 step of the ideal slider-crank (``mechanism.kind:
+        slider_crank``), as a worker runs it; None in a file without it (:attr:`step_s`).
+    joint_revolution_s : dict
+        What each joint with clearance of the slider-crank (``"O"``, ``"A"``, ``"B"``) adds
+        per crank revolution beyond its step's share: its impacts, whose sub-steps the
+        kernel takes at the contact's own time scale, about a fixed number a revolution
+        whatever the speed and step. Empty in a file without it.
     """
 
     step_s: float
@@ -152,10 +168,22 @@ class PlanCosts:
     compile_s: float
     measured: dict
     wear_pace: WearPace | None = None
+    spectrum_s: float = 0.0
+    ensemble_s: float = 0.0
+    slider_crank_step_s: float | None = None
+    joint_revolution_s: dict = field(default_factory=dict)
 
-    def step_seconds(self, joints: Iterable[str]) -> float:
-        """One step's cost [s] with clearance at ``joints`` (``"OABP"``, ``("B",)``, ...)."""
-        return self.step_s + sum(self.joint_step_s[j] for j in set(joints))
+    def step_seconds(self, joints: Iterable[str], kind: str = "rssp",
+                     steps_per_revolution: float = math.inf) -> float:
+        """One step's cost [s] with clearance at ``joints`` (``"OABP"``, ``("B",)``, ...) of
+        mechanism ``kind``; the slider-crank's joints' cost per revolution shared by the
+        ``steps_per_revolution`` of the case."""
+        joints = set(joints)
+        base = self.step_s
+        if kind == "slider_crank":
+            base = self.step_s if self.slider_crank_step_s is None else self.slider_crank_step_s
+            base += sum(self.joint_revolution_s.get(j, 0.0) for j in joints) / steps_per_revolution
+        return base + sum(self.joint_step_s[j] for j in joints)
 
 
 @functools.lru_cache(maxsize=4)
@@ -169,7 +197,7 @@ def read_plan_costs(path: str | None = None) -> PlanCosts:
              "sweep_start_s", "assemble_case_s", "assemble_row_s", "compile_s")
     try:
         shares = {j: float(doc["joint_step_s"][j]) for j in _JOINTS}
-        values = {name: float(doc[name]) for name in names}
+        values: dict[str, Any] = {name: float(doc[name]) for name in names}
     except (KeyError, TypeError, ValueError) as exc:
         raise ConfigError(None, None, "a plan-costs file as benchmarks/calibrate_plan.py writes "
                           f"it: numbers {', '.join(names)} and joint_step_s of "
@@ -177,7 +205,34 @@ def read_plan_costs(path: str | None = None) -> PlanCosts:
     if not all(math.isfinite(v) and v >= 0.0 for v in [*values.values(), *shares.values()]):
         raise ConfigError(None, None, "a plan-costs file of finite costs >= 0", source)
     return PlanCosts(joint_step_s=shares, measured=dict(doc.get("measured") or {}),
-                     wear_pace=_wear_pace(doc.get("wear_pace"), source), **values)
+                     wear_pace=_wear_pace(doc.get("wear_pace"), source),
+                     **_later_costs(doc, source), **values)
+
+
+def _later_costs(doc: Any, source: str) -> dict:
+    """The costs a plan-costs file may lack (a file written before them charges 0 for each,
+    and the RSSP's step for the slider-crank's): ``spectrum_s``, ``ensemble_s`` and the
+    ``slider_crank`` section (its ``step_s`` and ``joint_revolution_s`` of O, A and B)."""
+    out: dict[str, Any] = {}
+    try:
+        for name in ("spectrum_s", "ensemble_s"):
+            if doc.get(name) is not None:
+                out[name] = float(doc[name])
+        section = doc.get("slider_crank")
+        if section is not None:
+            out["slider_crank_step_s"] = float(section["step_s"])
+            out["joint_revolution_s"] = {j: float(section["joint_revolution_s"][j])
+                                         for j in "OAB"}
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ConfigError(None, None, "a plan-costs file whose spectrum_s and ensemble_s are "
+                          "numbers and whose slider_crank section has numbers step_s and "
+                          f"joint_revolution_s of O, A, B ({type(exc).__name__}: {exc})",
+                          source) from None
+    numbers = [v for v in out.values() if isinstance(v, float)]
+    numbers += list(out.get("joint_revolution_s", {}).values())
+    if not all(math.isfinite(v) and v >= 0.0 for v in numbers):
+        raise ConfigError(None, None, "a plan-costs file of finite costs >= 0", source)
+    return out
 
 
 def _wear_pace(entry: Any, source: str) -> WearPace | None:
@@ -210,8 +265,31 @@ def clearance_joints(cfg: Config) -> str:
 
 def step_seconds(cfg: Config) -> float:
     """What one output-grid RK4 step of ``cfg`` costs a worker [s]: the ideal step and each
-    clearance joint's share (:class:`PlanCosts`)."""
-    return plan_costs().step_seconds(clearance_joints(cfg))
+    clearance joint's share (:class:`PlanCosts`); in the slider-crank, also each clearance
+    joint's impacts per revolution over the case's steps a revolution."""
+    period_steps = cfg.mechanism.speed_rpm * cfg.solver.dt / 60.0
+    per_revolution = 1.0 / period_steps if period_steps > 0.0 else math.inf
+    return plan_costs().step_seconds(clearance_joints(cfg), cfg.mechanism.kind, per_revolution)
+
+
+def spectrum_seconds(cfgs: Iterable[Config]) -> float:
+    """What a sweep of ``cfgs`` pays once for its summaries' spectrum [s]
+    (:attr:`PlanCosts.spectrum_s`): where a case's settled window holds
+    ``motion.MIN_SEGMENT_REVOLUTIONS`` crank revolutions or more, else 0. Each worker
+    pays it once, side by side: once in the wall time."""
+    from .motion import MIN_SEGMENT_REVOLUTIONS
+
+    for cfg in cfgs:
+        settled = (cfg.solver.duration - cfg.metrics.settle_time) * cfg.mechanism.speed_rpm / 60.0
+        if settled >= MIN_SEGMENT_REVOLUTIONS - 1e-9:
+            return plan_costs().spectrum_s
+    return 0.0
+
+
+def ensemble_seconds(cfgs: Iterable[Config]) -> float:
+    """What a sweep's driver spends on the ensemble statistics of ``cfgs`` [s]
+    (:attr:`PlanCosts.ensemble_s`): 0 unless they are an ensemble's members."""
+    return plan_costs().ensemble_s if any(c.ensemble.members > 1 for c in cfgs) else 0.0
 
 
 def case_seconds(cfg: Config, keeps_series: bool = True, est: Estimate | None = None) -> float:
@@ -238,9 +316,15 @@ def assembly_seconds(cfg: Config, keeps_series: bool, est: Estimate | None = Non
 def life_seconds(cfg: Config, blocks: float, steps_per_block: int) -> float:
     """The estimated wall time [s] of a life run of ``cfg`` that takes ``blocks`` blocks of
     ``steps_per_block`` steps: each block's steps priced by the joints with clearance, and
-    its jump (:attr:`PlanCosts.block_s`)."""
+    its jump (:attr:`PlanCosts.block_s`). The slider-crank's impacts
+    (:attr:`PlanCosts.joint_revolution_s`, measured on a fresh bearing) are charged to the
+    first block alone: the later blocks run in the worn bearing, and cost less than their
+    steps without them (benchmarks/README.md, "Plans against measured times")."""
     costs = plan_costs()
-    return costs.case_s + blocks * (steps_per_block * step_seconds(cfg) + costs.block_s)
+    fresh = step_seconds(cfg)
+    worn = costs.step_seconds(clearance_joints(cfg), cfg.mechanism.kind)
+    return (costs.case_s + blocks * (steps_per_block * worn + costs.block_s)
+            + min(blocks, 1.0) * steps_per_block * (fresh - worn))
 
 
 def duration_text(seconds: float) -> str:
@@ -278,20 +362,22 @@ def time_text(cfg: Config, est: Estimate | None = None) -> str:
 
 
 def sweep_seconds(case_times: Iterable[float], workers: int | None = None,
-                  assembly: float = 0.0) -> float:
+                  assembly: float = 0.0, once: float = 0.0) -> float:
     """The estimated wall time [s] of a sweep whose cases cost ``case_times`` [s] on one
-    worker each, shared by ``workers`` cores: the fixed start, then the cases' total over the
-    workers and at least the longest case, then the driver's ``assembly`` [s]
-    (:func:`assembly_seconds` of each case)."""
+    worker each, shared by ``workers`` cores: the fixed start and what each worker pays
+    once (``once``: :func:`spectrum_seconds`), then the cases' total over the workers and at
+    least the longest case, then the driver's ``assembly`` [s] (:func:`assembly_seconds` of
+    each case, and :func:`ensemble_seconds`)."""
     times = list(case_times)
     share = sum(times) / (workers or 1)
-    return plan_costs().sweep_start_s + max(share, max(times, default=0.0)) + assembly
+    return plan_costs().sweep_start_s + once + max(share, max(times, default=0.0)) + assembly
 
 
 def sweep_time_text(case_times: Iterable[float], cfgs: Iterable[Config],
-                    workers: int | None = None, assembly: float = 0.0) -> str:
+                    workers: int | None = None, assembly: float = 0.0,
+                    once: float = 0.0) -> str:
     """:func:`sweep_seconds` in words, with the costs it charges."""
-    seconds = sweep_seconds(case_times, workers, assembly)
+    seconds = sweep_seconds(case_times, workers, assembly, once)
     costs = plan_costs()
     return (f"about {duration_text(seconds)} {_workers_text(workers)} ({steps_text(cfgs)}, "
             f"{costs.case_s:.2g} s per case and {costs.sweep_start_s:.2g} s to start; "

@@ -789,6 +789,42 @@ def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
                                   "clearance at O, A and B)", source)
 
 
+#: The slider-crank's pins: a bushing at one is radial in the mechanism's plane, its axial
+#: pair the radial one (params.bushing_row; docs/mechanisms.md).
+PIN_JOINTS = ("A", "B")
+#: The bushing's (radial, axial) pairs.
+BUSHING_PAIRS = ("bushing_stiffness", "bushing_damping")
+
+
+def _check_pin_bushings(raw: Any, cfg: dict[str, Any], source: str) -> None:
+    """The slider-crank's A and B are pins held across the plane: a bushing there is radial
+    in the plane, and the kernel runs its axial pair as the radial one. An axial value
+    given (in the config, ``--set`` or a sweep) that differs from the radial one is
+    refused, as it would be replaced; one not given follows the radial one in the resolved
+    config, so that the config says what runs (and a sweep's cases, made from it, give it
+    as it is)."""
+    from .jointtypes import elastic
+
+    if cfg["mechanism"]["kind"] != "slider_crank":
+        return
+    joints = raw.get("joints") if isinstance(raw, Mapping) else None
+    for joint in PIN_JOINTS:
+        spec = cfg["joints"][joint]
+        given = joints.get(joint) if isinstance(joints, Mapping) else None
+        for key in BUSHING_PAIRS:
+            radial, axial = spec[key]
+            if not (isinstance(given, Mapping) and key in given):
+                spec[key] = type(spec[key])((radial, radial))
+            elif axial != radial and elastic(spec["type"]):
+                raise ConfigError(
+                    f"joints.{joint}.{key}", list(spec[key]),
+                    f"(radial, axial) with the axial value the radial one, [{radial:g}, "
+                    f"{radial:g}], where mechanism.kind is slider_crank (a {spec['type']} at "
+                    f"{joint} is a pin's: radial in the mechanism's plane, the pin held across it, "
+                    "so the kernel would run the radial value in place of the axial one)",
+                    source)
+
+
 def _check_gapless(joints: Mapping[str, Any], source: str) -> None:
     """A joint whose type has no gap (``jointtypes.JointKind.gap`` False: the bushing) has no
     clearance and no coated surface: a clearance or a coating with it is refused (either
@@ -989,6 +1025,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_mechanism(cfg, source)
+    _check_pin_bushings(raw, cfg, source)
     _check_sizes(cfg["joints"], cfg, source)
     _check_gapless(cfg["joints"], source)
     for joint, spec in cfg["joints"].items():

@@ -271,6 +271,9 @@ def _consistent(raw):
     guide = raw["joints"]["P"]
     if mechanism["kind"] == "slider_crank":
         guide["clearance_y"] = guide["clearance_z"] = 0.0
+        for pin in ("A", "B"):      # a pin's bushing: its axial values the radial ones
+            for key in ("bushing_stiffness", "bushing_damping"):
+                raw["joints"][pin][key] = [raw["joints"][pin][key][0]] * 2
     guide["corner_radius"] = min(max(guide["corner_radius"], config_module.MIN_CORNER_RADIUS_M), 0.01)
     guide["block"] = [min(side, longest) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither

@@ -1559,6 +1559,30 @@ ISSUE44_MECHANISM = [
 ]
 ROWS += ISSUE44_MECHANISM
 
+SLIDER_CRANK = str(CONFIGS / "slider_crank.yaml")
+#: The slider-crank's pins: a bushing at A or B is radial in the plane and runs its axial
+#: pair as the radial one, so an axial value given that differs is refused, not replaced.
+ISSUE44_PIN_BUSHINGS = [
+    ("a slider-crank's B bushing with its own axial stiffness (was: run, its axial 5e5 "
+     "N/m replaced by the radial 2e6 without a word)",
+     lambda t, f: ["run", SLIDER_CRANK, "--set", "joints.B.clearance=0", "--set",
+                   "joints.B.type=bushing", "--set", "joints.B.bushing_stiffness=[2e6,5e5]",
+                   "-o", t / "out.nc"], 2,
+     "joints.B.bushing_stiffness: got [2000000.0, 500000.0] (from --set); expected (radial, "
+     "axial) with the axial value the radial one, [2e+06, 2e+06], where mechanism.kind is "
+     "slider_crank (a bushing at B is a pin's"),
+    ("a slider-crank's A bushing with its own axial damping in a sweep (was: run, its "
+     "axial 100 N s/m replaced by the radial 400)",
+     lambda t, f: ["sweep", _swp(t, "sweep: {grid: {joints.A.bushing_damping: "
+                                 "[[400.0, 400.0], [400.0, 100.0]]}}\n",
+                                 base="{mechanism: {kind: slider_crank, preset: "
+                                 "flores_benchmark}, joints: {A: {type: bushing}}}"),
+                   "--no-progress", "--workers", "1", "-o", Path(t) / "out.nc"], 2,
+     "joints.A.bushing_damping: got [400.0, 100.0]; expected (radial, axial) with the axial "
+     "value the radial one, [400, 400]"),
+]
+ROWS += ISSUE44_PIN_BUSHINGS
+
 
 def friction_materials(tmp: Path, mu: str) -> str:
     """A user materials file giving PTFE the friction coefficient ``mu``."""

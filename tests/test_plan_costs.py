@@ -180,6 +180,83 @@ def test_the_compile_estimate_is_the_file_s(round_costs, monkeypatch):
     assert "about 123 s" in said[0] and "allows clearance at O,P" in said[0], said
 
 
+#: The later costs, round: the spectrum's import, an ensemble's statistics, and the
+#: slider-crank's ideal step and impacts per revolution of each joint.
+LATER = ("spectrum_s: 13.0\nensemble_s: 17.0\nslider_crank: {step_s: 0.5e-3, "
+         "joint_revolution_s: {O: 1.0, A: 2.0, B: 3.0}}\n")
+SLIDER_CRANK = ROOT / "configs" / "slider_crank.yaml"
+
+
+@pytest.fixture
+def later_costs(round_costs):
+    round_costs.write_text(ROUND + LATER)
+    read_plan_costs.cache_clear()
+    yield round_costs
+
+
+def test_the_shipped_file_prices_the_slider_crank_s_impacts():
+    """The slider-crank's cases are impact-driven (configs/slider_crank.yaml: 0.5 mm at B,
+    5000 r/min, up to 16 sub-steps a step): its B costs 0.0227 s a revolution beyond the
+    4,800 ideal steps' 0.0066 s (calibrate_plan.py --slider-crank, 2026-12-06), where the
+    RSSP's per-step share priced it at 0.0008 s and the sweep and the ensemble ran 1.7-2.6x
+    their plans (benchmarks/README.md, "Plans against measured times")."""
+    costs = plan_costs()
+    assert costs.slider_crank_step_s is not None and costs.slider_crank_step_s > 0.0
+    per_revolution = 60.0 / (5000.0 * 2.5e-6)
+    for joint in "AB":
+        assert costs.joint_revolution_s[joint] > 2.0 * per_revolution * costs.slider_crank_step_s
+    assert costs.spectrum_s > 0.0 and costs.ensemble_s > 0.0
+
+
+def test_the_slider_crank_s_impacts_go_with_its_revolutions_not_its_steps(later_costs):
+    """The impacts' sub-steps are taken at the contact's own time scale, about a fixed
+    number a revolution: 5 revolutions cost the same impacts at 1000 r/min (120,000 steps)
+    as at 5000 (24,000); the steps are priced at the slider-crank's ideal step and the
+    joints' shares. The RSSP is priced as before."""
+    fast = load_config(SLIDER_CRANK)
+    slow = load_config(SLIDER_CRANK, ["mechanism.speed_rpm=1000"])
+    for cfg, steps in ((fast, 24_000), (slow, 120_000)):
+        assert budget.estimate(cfg).steps == steps
+        assert case_seconds(cfg, keeps_series=False) == pytest.approx(
+            5.0 + steps * (0.5e-3 + 8e-3) + 5 * 3.0)
+    both = load_config(SLIDER_CRANK, ["joints.O.clearance=1e-4", "joints.A.clearance=5e-4",
+                                      "joints.A.socket_radius=0.01"])
+    assert clearance_joints(both) == "OAB"
+    assert case_seconds(both, keeps_series=False) == pytest.approx(
+        5.0 + 24_000 * (0.5e-3 + 2e-3 + 4e-3 + 8e-3) + 5 * (1.0 + 2.0 + 3.0))
+    rssp = load_config({}, ["joints.O.clearance=1e-4", "joints.B.clearance=2.5e-4"])
+    assert step_seconds(rssp) == pytest.approx(1e-3 + 2e-3 + 8e-3)
+
+
+def test_a_slider_crank_life_plan_charges_the_impacts_to_its_first_block(later_costs):
+    """A life run's later blocks run in the worn bearing: configs/slider_crank_life.yaml's
+    blocks 3-8 took 0.036 s each, less than their steps' price without the impacts; the
+    first block is priced with them (2 revolutions, 3.0 s each here)."""
+    cfg = load_config(ROOT / "configs" / "slider_crank_life.yaml")
+    steps = block_steps(cfg)
+    assert steps == 9_600
+    assert life_seconds(cfg, 4, steps) == pytest.approx(
+        5.0 + 4 * (steps * (0.5e-3 + 8e-3) + 7.0) + 2 * 3.0)
+
+
+def test_a_sweep_plan_charges_the_spectrum_once_and_an_ensemble_s_statistics(later_costs):
+    """A worker imports the spectrum's scipy.signal with its first case whose settled window
+    holds 2 revolutions (each worker once, side by side: once in the wall time), and an
+    ensemble's driver computes its statistics after the cases."""
+    cases = {}
+    for name, ensemble in (("slider_crank_clearance_sweep", 0.0), ("slider_crank_ensemble", 17.0)):
+        plan = expand(ROOT / "configs" / f"{name}.yaml")
+        cases[name] = list(plan.runnable().values())
+        work = sum(case_seconds(c, keeps_series=False) for c in cases[name])
+        expected = 11.0 + 13.0 + work / 2 + 0.5 * len(cases[name]) + ensemble
+        assert seconds_of(plan.describe(2)) == pytest.approx(expected, rel=0.01)
+    # a settled window of 1 revolution holds no spectrum: nothing to import
+    short = load_config(SLIDER_CRANK, ["solver.revolutions=2"])
+    assert budget.spectrum_seconds([short]) == 0.0
+    assert budget.spectrum_seconds([load_config(SLIDER_CRANK)]) == 13.0
+    assert budget.ensemble_seconds(cases["slider_crank_clearance_sweep"]) == 0.0
+
+
 #: A wear pace whose numbers are round: r0 2.5e-11 m a revolution at 0.25 mm of clearance,
 #: and a K so large that the rate stays r0 at any depth (K / (K / r0 + h)).
 PACE = ("wear_pace: {reference: test, first_rate_m: 2.5e-11, growth_m2: 1.0, "
@@ -190,9 +267,12 @@ PACE = ("wear_pace: {reference: test, first_rate_m: 2.5e-11, growth_m2: 1.0, "
                                   ROUND.replace("case_s: 5.0", "case_s: -5.0"),
                                   ROUND + PACE.replace("1.0,", "fast,"),
                                   ROUND + PACE.replace("1.0,", "0,"),
-                                  ROUND + "wear_pace: {first_rate_m: 1.0e-6}\n"],
+                                  ROUND + "wear_pace: {first_rate_m: 1.0e-6}\n",
+                                  ROUND + LATER.replace("B: 3.0}", "}"),
+                                  ROUND + LATER.replace("13.0", "-13.0")],
                          ids=["keys missing", "not a number", "negative", "pace not a number",
-                              "pace of zero", "pace keys missing"])
+                              "pace of zero", "pace keys missing", "slider-crank joint missing",
+                              "negative spectrum"])
 def test_a_broken_costs_file_is_refused_in_one_line(tmp_path, monkeypatch, text):
     path = tmp_path / "costs.yaml"
     path.write_text(text)
@@ -237,3 +317,16 @@ def test_a_life_plan_walks_to_life_cycles_at_the_file_s_wear_pace(tmp_path, monk
     assert "11 blocks to 1e+06 revolutions at the wear pace of" in text
     assert seconds_of(text.split("expected ")[1]) == pytest.approx(
         3.0 + 5.0 + 11 * (block_steps(cfg) * (1e-3 + 8e-3) + 7.0), rel=0.01)
+
+
+def test_a_denormal_crank_speed_is_priced(later_costs):
+    """speed_rpm * dt / 60 underflows to 0 at 5e-324 r/min: the steps a revolution are then
+    infinite, and a step carries no share of the slider-crank's impacts (no division by 0)."""
+    rssp = load_config({}, ["mechanism.speed_rpm=5e-324", "joints.B.clearance=2.5e-4"])
+    assert step_seconds(rssp) == pytest.approx(1e-3 + 8e-3)
+    crank = load_config({"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark",
+                                       "speed_rpm": 5e-324},
+                         "joints": {"B": {"clearance": 5e-4, "socket_radius": 0.01}},
+                         "solver": {"duration": 1e-3}})
+    assert clearance_joints(crank) == "B"
+    assert step_seconds(crank) == pytest.approx(0.5e-3 + 8e-3)

@@ -44,7 +44,13 @@ import numpy as np
 import pytest
 import reference as ref_mod
 
-from clearsweep.config import DEFAULTS, load_config, resolve_materials
+from clearsweep.config import (
+    BUSHING_DAMPING,
+    BUSHING_STIFFNESS,
+    DEFAULTS,
+    load_config,
+    resolve_materials,
+)
 from clearsweep.core import jointset
 from clearsweep.core import layout as L
 from clearsweep.core.joints import INDEX
@@ -657,17 +663,27 @@ def test_a_pin_bushing_is_radial_in_the_plane():
     """A bushing at the slider-crank's A (its socket the rod, whose x axis lies in the plane)
     or B is a pin's: its axial pair repeats the radial one (the pin's axial motion is held
     with the rod in the plane), so its stiffness in the plane is the same along the rod and across
-    it; O's axial pair stays 0 (a revolute's place), and the RSSP's A keeps its own."""
-    bushing = {"type": "bushing", "bushing_stiffness": [2e6, 5e5],
+    it; O's axial pair stays 0 (a revolute's place), and the RSSP's A keeps its own. At A
+    and B an axial value not given follows the radial one in the resolved config (the
+    defaults' 5e5 N/m and 150 N s/m are not run there), and one given must be the radial
+    one (a different one is refused: tests/test_hostile.py)."""
+    pin = {"type": "bushing", "bushing_stiffness": [2e6, 2e6], "bushing_damping": [400.0, 400.0]}
+    journal = {"type": "bushing", "bushing_stiffness": [2e6, 5e5],
                "bushing_damping": [400.0, 100.0]}
-    _, pk = packed_case(SLIDER_CRANK, {"A": bushing, "B": bushing, "O": bushing})
-    for name in ("A", "B"):
-        row = pk.jp[INDEX[name]]
-        assert row[L.J_K_AXIAL] == row[L.J_K_RADIAL] == 2e6
-        assert row[L.J_C_AXIAL] == row[L.J_C_RADIAL] == 400.0
+    _, pk = packed_case(SLIDER_CRANK, {"A": pin, "B": {"type": "bushing"}, "O": journal})
+    row = pk.jp[INDEX["A"]]
+    assert row[L.J_K_AXIAL] == row[L.J_K_RADIAL] == 2e6
+    assert row[L.J_C_AXIAL] == row[L.J_C_RADIAL] == 400.0
+    cfg, _ = packed_case(SLIDER_CRANK, {"B": {"type": "bushing"}})
+    assert tuple(cfg.joints.B.bushing_stiffness) == (BUSHING_STIFFNESS[0],) * 2
+    assert tuple(cfg.joints.B.bushing_damping) == (BUSHING_DAMPING[0],) * 2
+    row = pk.jp[INDEX["B"]]
+    assert row[L.J_K_AXIAL] == row[L.J_K_RADIAL] == BUSHING_STIFFNESS[0]
+    assert row[L.J_C_AXIAL] == row[L.J_C_RADIAL] == BUSHING_DAMPING[0]
     assert pk.jp[INDEX["O"], L.J_K_AXIAL] == 0.0
-    _, rssp = packed_case({}, {"A": bushing})
+    rssp_cfg, rssp = packed_case({}, {"A": journal, "B": {"type": "bushing"}})
     assert rssp.jp[INDEX["A"], L.J_K_AXIAL] == 5e5
+    assert tuple(rssp_cfg.joints.B.bushing_stiffness) == BUSHING_STIFFNESS
 
 
 def test_a_seated_start_on_worn_pins_stays_in_the_plane():

@@ -61,6 +61,9 @@ CLEAR = 2.5e-4
 #: The benchmark's crank speed [rpm] (Flores et al. 2008; docs/mechanisms.md).
 BENCHMARK_RPM = 5000.0
 BUSHING = {"type": "bushing", "bushing_stiffness": [2e6, 5e5], "bushing_damping": [400.0, 100.0]}
+#: A pin's bushing (A, B): its axial pair the radial one (config validation refuses another)
+PIN_BUSHING = {"type": "bushing", "bushing_stiffness": [2e6, 2e6],
+               "bushing_damping": [400.0, 400.0]}
 SC_JOINTS = {
     "ideal": {},
     "B": {"B": {"clearance": CLEAR}},
@@ -70,9 +73,9 @@ SC_JOINTS = {
     "OAB": {"O": {"clearance": CLEAR}, "A": {"clearance": CLEAR}, "B": {"clearance": CLEAR}},
 }
 SC_BUSHINGS = {
-    "B_bushing": {"B": BUSHING},
+    "B_bushing": {"B": PIN_BUSHING},
     "O_bushing_B": {"O": BUSHING, "B": {"clearance": CLEAR}},
-    "A_bushing_O": {"A": BUSHING, "O": {"clearance": CLEAR}},
+    "A_bushing_O": {"A": PIN_BUSHING, "O": {"clearance": CLEAR}},
 }
 
 

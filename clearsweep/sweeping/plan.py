@@ -25,9 +25,11 @@ from ..budget import (
     assembly_seconds,
     case_seconds,
     duration_text,
+    ensemble_seconds,
     estimate,
     format_bytes,
     life_seconds,
+    spectrum_seconds,
     sweep_seconds,
     sweep_time_text,
 )
@@ -294,7 +296,8 @@ class SweepPlan:
         keeps = STORES[self.store].keeps_series
         seconds = times([case_seconds(cfg, keeps, estimates[h]) for h, cfg in runnable.items()])
         assembly = total([assembly_seconds(cfg, keeps, estimates[h])
-                          for h, cfg in runnable.items()])
+                          for h, cfg in runnable.items()]) + ensemble_seconds(runnable.values())
+        once = spectrum_seconds(runnable.values())
         # the file holds the kept cases too
         keeps_series = STORES[self.store].keeps_series
         sizes = [e.output_bytes if keeps_series else e.map_bytes for e in estimates.values()]
@@ -302,7 +305,7 @@ class SweepPlan:
         counts = f"{n_cases:,} cases" + (f" ({skipped:,} skipped)" if skipped else "")
         return (f"sweep {self.name!r}: {counts}{checked}, {to_run:,} to simulate{resumed}, "
                 f"{steps:.3g} RK4 steps: "
-                f"{sweep_time_text(seconds, runnable.values(), workers, assembly)}; "
+                f"{sweep_time_text(seconds, runnable.values(), workers, assembly, once)}; "
                 f"results up to "
                 f"{format_bytes(per_case)} before compression")
 
