@@ -363,8 +363,8 @@ BAD = [
     ("mechanism:\n  preset: flores_benchmark\n", "mechanism.preset", "flores_benchmark",
      "a preset of mechanism.kind rssp: one of realistic, paper"),
     ("mechanism: {kind: slider_crank, preset: flores_benchmark}\n"
-     "joints: {P: {clearance_y: 1.0e-4, clearance_z: 1.0e-4}}\n", "joints.P.clearance_y", 1e-4,
-     "0 where mechanism.kind is slider_crank"),
+     "joints: {P: {clearance_y: 5.0e-5, clearance_z: 1.0e-4}}\n", "joints.P.clearance_y", 5e-5,
+     ">= joints.P.clearance_z (0.0001 m) where mechanism.kind is slider_crank"),
     ("contact:\n  restitution: 0\n", "contact.restitution", 0, "0 < x <= 1"),
     ("contact:\n  restitution: 1.5\n", "contact.restitution", 1.5, "0 < x <= 1"),
     ("contact:\n  layer_rule: paper\n", "contact.layer_rule", "paper", "'series', 'paper_mm'"),
