@@ -20,7 +20,10 @@ Where the slider's guide (joint P) has clearance, the slider's y4, z4 join the f
 coordinates (z gains them as its last two, inverse mass 1/m4, else 0 as for the crank's),
 and its three angles follow from its own rotational equations with the corners' contact
 moments: joint B holds the slider at its centroid, which the angles do not move, so they
-are not coupled to the other free coordinates.
+are not coupled to the other free coordinates. The planar slider-crank's guide (along y)
+frees its z4 alone (column 9; column 8, its x4, held by :func:`planar_slider` with alpha4
+and beta4) and gamma4 (:func:`planar_slider_rotation`), the prismatic type evaluated in the
+guide's frame (:func:`free_slider`).
 """
 
 import math
