@@ -246,7 +246,7 @@ def _configs(schema=SCHEMA):
 
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
-    mechanism = raw["mechanism"]       # a preset of its mechanism; the slider-crank's guide ideal
+    mechanism = raw["mechanism"]       # a preset of its mechanism
     presets = config_module.MECHANISM_KINDS[mechanism["kind"]]
     if mechanism["preset"] not in presets:
         mechanism["preset"] = presets[0]
@@ -269,12 +269,12 @@ def _consistent(raw):
     bearing["clearance"] = min(bearing["clearance"], 0.25 * bearing["bearing_radius"])
     bearing["coating_thickness"] = min(bearing["coating_thickness"], 0.5 * bearing["bearing_radius"])
     guide = raw["joints"]["P"]
-    if mechanism["kind"] == "slider_crank":
-        guide["clearance_y"] = guide["clearance_z"] = 0.0
     guide["corner_radius"] = min(max(guide["corner_radius"], config_module.MIN_CORNER_RADIUS_M), 0.01)
     guide["block"] = [min(side, longest) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
         guide["clearance_z"] = guide["clearance_y"]
+    if mechanism["kind"] == "slider_crank":     # its side gap at least its gap in the plane
+        guide["clearance_y"] = max(guide["clearance_y"], guide["clearance_z"])
     guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]
     guide["coating"] = guide["coating"] if guide["coating"] in ("none", "PTFE", "lead") else "MoS2"
     if guide["clearance_y"] > 0.0:          # a row at least for each of the guide's four walls
