@@ -379,7 +379,10 @@ def free_slider(j, y, t4, model, N4, full, dg, dy, g):
     and moment come back to global axes and the slider's body frame
     (``prismatic.from_guide``), and so do P's force and contact normal in dg (its offset
     stays in the guide's frame: along, side, up); the block turns in the plane only
-    (:func:`planar_slider_rotation`)."""
+    (:func:`planar_slider_rotation`). The type's stiff-rate bound at a corner
+    (``prismatic.corner_mobility``) reads the block's principal inertias in its own body
+    axes, which the turn swaps (x' = y): the same for the ``flores_benchmark`` preset's
+    block, whose three are equal."""
     r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
     gr, gv, gR, gw = GROUND
     zero = (0.0, 0.0, 0.0)
