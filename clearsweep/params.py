@@ -1377,8 +1377,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
             if joint_kind(row.type).axial_ideal or preset.kind == "slider_crank":
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
                                     # across its guide, the slider-crank's pins in its plane
-            if row.type == "prismatic" and preset.kind == "slider_crank":
-                shift[1] = 0.0      # its block in its plane: up (z) only, its side held
+            if preset.kind == "slider_crank":
+                # across its plane: the guide's block moves up (z) only, its side held
+                shift[joint_kind(row.type).off_plane_axis] = 0.0
             offsets[j] = HOST_HOOKS[row.type].perturb(offsets[j], shift, jp[j])
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
