@@ -274,8 +274,9 @@ def test_dopri5_runs_the_guide_in_the_plane(guide_run):
     """``solver.method: dopri5`` (its onset location reads the corners' penetrations through
     ``jointkinds.type_body``, in the guide's frame): one revolution ends ok with impacts at
     P, the block in the plane exactly, its offset across the guide within the clearance and
-    its corners' sink, and its slider acceleration's peak within 20 % of RK4's over the same
-    revolution (impacts at other instants: the motion is sensitive to them)."""
+    its corners' sink, and its slider acceleration's peak within 2 % of RK4's over the same
+    revolution (the two place the impacts' instants differently; the motion is sensitive to
+    them). Measured: 29 impacts, the peaks 6.039e4 and 6.036e4 m/s^2 (ratio 1.0004)."""
     _, _, raw, ds = run({"joints": {"P": GUIDE},
                          "solver": {**SOLVER, "method": "dopri5", "revolutions": 1}})
     assert str(ds.status.values) == "ok"
@@ -285,7 +286,7 @@ def test_dopri5_runs_the_guide_in_the_plane(guide_run):
     assert np.abs(raw.y[:, L.Y_R4 + 2] - PRESET.slider_height_m).max() < CZ + 1e-5
     rk4 = guide_run[3].slider_acceleration.sel(time=slice(0.0, PERIOD))
     assert float(np.abs(ds.slider_acceleration).max()) == pytest.approx(
-        float(np.abs(rk4).max()), rel=0.2)
+        float(np.abs(rk4).max()), rel=0.02)
 
 
 # ---------------------------------------------------------------------------
