@@ -219,7 +219,9 @@ class RevoluteJointConfig(_Section):
 class PrismaticJointConfig(_Section):
     """The slider's guide P: a block in a guide; both clearances 0 (the default) make it
     ideal. The block moves across the guide (y, z) and tilts within its clearances, and
-    touches the walls at its corners."""
+    touches the walls at its corners. In the planar slider-crank (its guide along y) the
+    block moves in the plane only: ``clearance_z`` above and below it, in the plane;
+    ``clearance_y`` its sides' gap across the plane (x), which it never closes."""
 
     clearance_y: float = _setting(Field(0.0, lo=0.0), "m",
                                   "clearance of joint P between the block's sides and the guide")
@@ -772,8 +774,9 @@ def section_class(joint: str) -> Any:
 
 
 def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
-    """The preset is one of the mechanism's; the slider-crank's guide is ideal (its block's
-    contacts are written for the RSSP's guide along x)."""
+    """The preset is one of the mechanism's. The slider-crank's guide with clearance holds
+    its block in the plane, off the side walls (``clearance_y``, across the plane): its
+    clearance is the one in the plane, ``clearance_z``, the smaller of the two."""
     kind, preset = cfg["mechanism"]["kind"], cfg["mechanism"]["preset"]
     if PRESET_KINDS[preset] != kind:
         raise ConfigError("mechanism.preset", preset,
@@ -782,11 +785,13 @@ def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
                           "RSSP's)", source)
     if kind == "slider_crank":
         guide = cfg["joints"]["P"]
-        for key in ("clearance_y", "clearance_z"):
-            if guide[key] != 0.0:
-                raise ConfigError(f"joints.P.{key}", guide[key],
-                                  "0 where mechanism.kind is slider_crank (its guide is ideal; "
-                                  "clearance at O, A and B)", source)
+        if 0.0 < guide["clearance_y"] < guide["clearance_z"]:
+            raise ConfigError("joints.P.clearance_y", guide["clearance_y"],
+                              f"a number >= joints.P.clearance_z ({guide['clearance_z']:g} m) "
+                              "where mechanism.kind is slider_crank: the side walls' gap "
+                              "across the plane, which the block held in the plane never "
+                              "closes; the guide's clearance is clearance_z, in the plane",
+                              source)
 
 
 #: The slider-crank's pins: a bushing at one is radial in the mechanism's plane, its axial

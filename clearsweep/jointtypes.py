@@ -85,6 +85,10 @@ class JointKind:
     #: whether the joint has a gap (contact, impacts, wear); False: an elastic joint (the
     #: bushing), ideal to the contact and wear figures, whose deflection is its orbit
     gap: bool = True
+    #: the component of its offset (``ball_offset``, the start's offsets) across the planar
+    #: slider-crank's plane: x (0) in a socket's frame; the guide's side (1) in the guide's
+    #: frame (along, side, up: the slider-crank's side is -x, docs/mechanisms.md)
+    off_plane_axis: int = 0
 
 
 def _rows_polar(npolar: int) -> int:
@@ -121,7 +125,7 @@ KINDS: Mapping[str, JointKind] = {
         contact_law="elastic foundation on the faces' edge lines, E*",
         columns=("J_BLOCK_LENGTH", "J_CORNER_RADIUS", "J_WIDTH", "J_HEIGHT", "J_CY", "J_CZ",
                  "J_X0", "J_XSPAN"),
-        report_columns=("track_depth",)),
+        report_columns=("track_depth",), off_plane_axis=1),
     "bushing": JointKind(
         name="bushing", centre="ball", surface="bushing", title="bushing", force_on="the ball",
         orbit_gap="none", wear_figure="none", wear_profile=False, equal_bins=False,

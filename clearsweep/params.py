@@ -314,7 +314,9 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     """State at crank angle theta0 moving at omega [rad/s], the ball-centre offsets (global
     frame [m], zero = centred ball) held fixed; velocities from the kinematics with the
     offsets held, so that no ball moves relative to its socket at the start. ``offset_P``:
-    the slider block's offset across its guide (its y and z; x is the guide's)."""
+    the slider block's offset across its guide in the guide's frame (0, side, up): the
+    RSSP's (0, y, z); the slider-crank's (0, -x, z) (``prismatic.PLANAR_GUIDE``,
+    :func:`guide_to_global`)."""
     l2, l3 = preset.crank_length_m, preset.rod_length_m
     st, ct = math.sin(theta0), math.cos(theta0)
     y = np.zeros(L.N_Y)
@@ -327,7 +329,7 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     y[qd + r2:qd + r2 + 3] = (0.0, 0.5 * l2 * ct * omega, 0.5 * l2 * st * omega)
     y[qd + g2] = omega
     g = preset.guide_axis
-    d_p = np.array([0.0, offset_P[1], offset_P[2]])
+    d_p = guide_to_global(np.array([0.0, offset_P[1], offset_P[2]]), g)
     a, b, x4 = rod_endpoints(preset, theta0, offset_A, np.asarray(offset_B, float) + d_p, offset_O)
     va = np.array([0.0, l2 * ct, l2 * st]) * omega
     # |b - a| = l3 with b moving along its guide (axis g) only: (b - a) . (vb - va) = 0
@@ -348,6 +350,21 @@ def initial_state(preset: Preset, theta0: float, omega: float, offset_A=(0.0, 0.
     return y
 
 
+def guide_to_global(v: np.ndarray, guide_axis: int) -> np.ndarray:
+    """A vector of the guide's frame (along, side, up) in global axes: as is for the RSSP
+    (``guide_axis`` 0); Q^T v for the slider-crank's guide along y
+    (``prismatic.PLANAR_GUIDE``: along = y, side = -x, up = z)."""
+    v = np.asarray(v, dtype=float)
+    return v.copy() if guide_axis == 0 else np.array([-v[1], v[0], v[2]])
+
+
+def global_to_guide(v: np.ndarray, guide_axis: int) -> np.ndarray:
+    """A global vector in the guide's frame (along, side, up): the inverse of
+    :func:`guide_to_global`."""
+    v = np.asarray(v, dtype=float)
+    return v.copy() if guide_axis == 0 else np.array([v[1], -v[0], v[2]])
+
+
 def check_guide_reach(joint: PrismaticJointConfig, preset: Preset) -> None:
     """Raise ConfigError where joint P's clearances let the block sit where the rod cannot
     reach it: at some crank angle theta and some offset (y, z) within the clearances,
@@ -355,9 +372,11 @@ def check_guide_reach(joint: PrismaticJointConfig, preset: Preset) -> None:
     start would have no slider position). Names the larger clearance."""
     theta = np.linspace(0.0, 2.0 * math.pi, 7201)
     l2, l3 = preset.crank_length_m, preset.rod_length_m
-    worst = float(np.max((l2 * np.abs(np.sin(theta)) + joint.clearance_y) ** 2
-                         + (np.abs(preset.slider_height_m + l2 * np.cos(theta))
-                            + joint.clearance_z) ** 2))
+    # the RSSP's block moves across its guide in y; the slider-crank's is held in its plane
+    # (x = 0), its guide along y
+    side = l2 * np.abs(np.sin(theta)) + joint.clearance_y if preset.guide_axis == 0 else 0.0
+    worst = float(np.max(side ** 2 + (np.abs(preset.slider_height_m + l2 * np.cos(theta))
+                                      + joint.clearance_z) ** 2))
     if worst < l3 ** 2:
         return
     key = "clearance_y" if joint.clearance_y >= joint.clearance_z else "clearance_z"
@@ -498,6 +517,7 @@ def guide_sink(name: str, j: int, force: np.ndarray, p: np.ndarray, jp: np.ndarr
     stop compares the deepest corner with the smaller clearance, jp[J_C])."""
     c = jp[j, L.J_C]
     key = "clearance_y" if jp[j, L.J_CY] <= jp[j, L.J_CZ] else "clearance_z"
+    force = global_to_guide(force, int(p[L.P_GUIDE]))
     for axis in (1, 2):
         load = abs(float(force[axis]))
         if not (math.isfinite(load) and load > 0.0):
@@ -635,11 +655,14 @@ def point_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np
 
 def guide_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np.ndarray,
                omega: float, wmap: np.ndarray | None) -> np.ndarray:
-    """The block's seated offset in its guide (:func:`seated_offsets`,
-    :func:`seated_block`), on the worn walls where wear feeds back (:func:`worn_walls`)."""
+    """The block's seated offset in its guide's frame (:func:`seated_offsets`,
+    :func:`seated_block`; the ideal guide's force f global), on the worn walls where wear
+    feeds back (:func:`worn_walls`)."""
+    g = int(p[L.P_GUIDE])
+    f = global_to_guide(f, g)
     offset = seated_block(f, jp[j], p)
     if wmap is not None and p[L.P_FEEDBACK] != 0.0:
-        r4 = y_ideal[L.Y_R4:L.Y_R4 + 3] + offset
+        r4 = global_to_guide(y_ideal[L.Y_R4:L.Y_R4 + 3], g) + offset
         offset = seated_block(f, jp[j], p, worn_walls(jp, j, wmap, p, r4))
     return offset
 
@@ -1154,13 +1177,14 @@ def build_of(case_set: int, device: bool = False) -> int:
     device: the case's joints among :data:`SPECIALISED_JOINTS` (or
     :data:`SPECIALISED_JOINTS_DEVICE`), and every other joint; and the case's bushings
     (a build without bushings, every build before them, folds their code away); and the
-    case's mechanism (``jointset.MECHANISMS``), the slider-crank's without P."""
+    case's mechanism (``jointset.MECHANISMS``), the slider-crank's without P unless the
+    case has P's clearance."""
     mask = SPECIALISED_JOINTS_DEVICE if device else SPECIALISED_JOINTS
     build = ((int(case_set) & mask) | (jointset.ALL & ~mask)
              | (int(case_set) & (jointset.BUSHINGS | jointset.MECHANISMS)))
-    if build & jointset.SLIDER_CRANK:
-        # the slider-crank's guide is ideal: its builds fold P away (and jointset.check
-        # refuses a case with P's clearance on them)
+    if build & jointset.SLIDER_CRANK and not int(case_set) & jointset.named("P"):
+        # the slider-crank's guide ideal: its builds fold P away (the builds, and results,
+        # of every slider-crank case before P's clearance in it)
         build &= ~jointset.named("P")
     return build
 
@@ -1353,6 +1377,9 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
             if joint_kind(row.type).axial_ideal or preset.kind == "slider_crank":
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
                                     # across its guide, the slider-crank's pins in its plane
+            if preset.kind == "slider_crank":
+                # across its plane: the guide's block moves up (z) only, its side held
+                shift[joint_kind(row.type).off_plane_axis] = 0.0
             offsets[j] = HOST_HOOKS[row.type].perturb(offsets[j], shift, jp[j])
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],

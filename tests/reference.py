@@ -33,7 +33,10 @@ Everything is built the obvious way, independently of the kernel's structured so
 - the slider's guide along the global axis ``p[P_GUIDE]`` (0: x, the RSSP; 1: y, the planar
   slider-crank, whose bodies are the RSSP's): the guide is the line through (0, 0, z_s) along
   that axis, and the prismatic rows hold the slider's offset from it along the two directions
-  across it (e_z x e_guide and e_z) and its three angles (the slider-crank's guide is ideal);
+  across it (e_z x e_guide and e_z) and its three angles; the slider-crank's guide with
+  clearance keeps the rows of its plane's normal: the slider's offset along e_z x e_guide
+  (x = 0) and its angles alpha4 = beta4 = 0, its block (length along the guide, width along
+  e_z x e_guide, height along e_z) meeting the same four walls;
 - the full dense (18 + m) x (18 + m) KKT system solved with ``numpy.linalg.solve``.
 
 Finite differences use fourth-order five-point stencils (errors stated in ``STEP_*``).
@@ -196,8 +199,8 @@ class Mechanism:
         self.e_across = np.cross(e_z, self.e_guide)       # x: +y (the RSSP); y: -x
         self.e_up = e_z
         self.guide_origin = np.array([0.0, 0.0, self.zs])
-        # the block's corner contacts below are written for a guide along x
-        assert self.guide == 0 or self.ideal[JOINT_P], "the slider-crank's guide is ideal"
+        # the guide's frame: the block's length, width and height along its columns
+        self.guide_basis = np.column_stack([self.e_guide, self.e_across, self.e_up])
         # the slider-crank is planar: its rod is held in the plane of the guide and e_z (its
         # centroid's offset along the plane's normal 0, its axis in the plane: alpha3 = pi/2),
         # and its A and B are pins across that plane, whose constraints are the two in it
@@ -224,7 +227,7 @@ class Mechanism:
             out["planar"] = slice(k, k + 2)
             k += 2
         out["spin3"] = slice(k, k + 1)
-        rows_p = 5 if self.ideal[JOINT_P] else 0
+        rows_p = 5 if self.ideal[JOINT_P] else (3 if self.planar else 0)
         out["prismatic"] = slice(k + 1, k + 1 + rows_p)
         out["m"] = k + 1 + rows_p
         return out
@@ -247,6 +250,9 @@ class Mechanism:
         if self.ideal[JOINT_P]:                                  # prismatic: on the guide's
             off = q[12:15] - self.guide_origin                   # line, unrotated
             c.extend([off @ self.e_across, off @ self.e_up, q[15], q[16], q[17]])
+        elif self.planar:                                        # the free block in the plane
+            off = q[12:15] - self.guide_origin
+            c.extend([off @ self.e_across, q[15], q[16]])
         return np.array(c)
 
     def mass_matrix(self, q):
@@ -489,6 +495,8 @@ def block_contact(mech: Mechanism, q, qd):
     half = 0.5 * np.array([jp[L.J_BLOCK_LENGTH], jp[L.J_WIDTH], jp[L.J_HEIGHT]])
     clear = {1: jp[L.J_CY], 2: jp[L.J_CZ]}
     centre = np.array([0.0, 0.0, mech.zs])
+    # the guide's axes (along, across, up): the block's sides along them at zero rotation
+    basis = mech.guide_basis
     ew = jp[L.J_EW]
     worn = (mech.wmap is not None and mech.p[L.P_FEEDBACK] != 0.0
             and mech.p[L.P_INTERP] != 0.0)
@@ -496,18 +504,19 @@ def block_contact(mech: Mechanism, q, qd):
              for axis in (1, 2)]
 
     def penetration(x, n, axis, wall):
-        h = wall_depth(mech, wall, x[0], x[3 - axis] - centre[3 - axis]) if worn else 0.0
+        local = basis.T @ (x - centre)
+        h = wall_depth(mech, wall, local[0], local[3 - axis]) if worn else 0.0
         return float(n @ (x - centre)) - half[axis] - clear[axis] - h
 
     def normal(signs, axis):
-        n = np.zeros(3)
-        n[axis] = signs[axis]
+        n = signs[axis] * basis[:, axis]
         return n, 2 * (axis - 1) + (0 if signs[axis] > 0 else 1)
 
     depth = {}
     for signs, axis in pairs:
         n, wall = normal(signs, axis)
-        depth[signs, axis] = penetration(point(q, SLIDER, np.array(signs) * half), n, axis, wall)
+        depth[signs, axis] = penetration(point(q, SLIDER, basis @ (np.array(signs) * half)),
+                                         n, axis, wall)
     loads = {}
     for (signs, axis), da in depth.items():
         if signs[0] > 0:
@@ -522,7 +531,7 @@ def block_contact(mech: Mechanism, q, qd):
     pdiss = 0.0
     deepest = None
     for signs, axis in pairs:
-        u = np.array(signs) * half
+        u = basis @ (np.array(signs) * half)
         corner = point(q, SLIDER, u)
         jc = point_jacobian(q, SLIDER, u)
         n, wall = normal(signs, axis)
@@ -554,7 +563,7 @@ def block_contact(mech: Mechanism, q, qd):
             gen = gen + res.generalized
             pdiss += res.pdiss
     r = q[12:15] - centre
-    deepest.ecc = float(np.hypot(r[1], r[2]))
+    deepest.ecc = float(np.hypot(r @ mech.e_across, r @ mech.e_up))
     deepest.force = total
     deepest.generalized = gen
     deepest.pdiss = pdiss

@@ -246,7 +246,7 @@ def _configs(schema=SCHEMA):
 
 def _consistent(raw):
     """Make the drawn values satisfy the relations between fields."""
-    mechanism = raw["mechanism"]       # a preset of its mechanism; the slider-crank's guide ideal
+    mechanism = raw["mechanism"]       # a preset of its mechanism
     presets = config_module.MECHANISM_KINDS[mechanism["kind"]]
     if mechanism["preset"] not in presets:
         mechanism["preset"] = presets[0]
@@ -270,7 +270,6 @@ def _consistent(raw):
     bearing["coating_thickness"] = min(bearing["coating_thickness"], 0.5 * bearing["bearing_radius"])
     guide = raw["joints"]["P"]
     if mechanism["kind"] == "slider_crank":
-        guide["clearance_y"] = guide["clearance_z"] = 0.0
         for pin in ("A", "B"):      # a pin's bushing: its axial values the radial ones
             for key in ("bushing_stiffness", "bushing_damping"):
                 raw["joints"][pin][key] = [raw["joints"][pin][key][0]] * 2
@@ -278,6 +277,8 @@ def _consistent(raw):
     guide["block"] = [min(side, longest) for side in guide["block"]]
     if (guide["clearance_y"] > 0.0) != (guide["clearance_z"] > 0.0):   # both or neither
         guide["clearance_z"] = guide["clearance_y"]
+    if mechanism["kind"] == "slider_crank":     # its side gap at least its gap in the plane
+        guide["clearance_y"] = max(guide["clearance_y"], guide["clearance_z"])
     guide["block"] = [max(side, 2.0 * guide["corner_radius"]) for side in guide["block"]]
     guide["coating"] = guide["coating"] if guide["coating"] in ("none", "PTFE", "lead") else "MoS2"
     if guide["clearance_y"] > 0.0:          # a row at least for each of the guide's four walls
@@ -366,8 +367,8 @@ BAD = [
     ("mechanism:\n  preset: flores_benchmark\n", "mechanism.preset", "flores_benchmark",
      "a preset of mechanism.kind rssp: one of realistic, paper"),
     ("mechanism: {kind: slider_crank, preset: flores_benchmark}\n"
-     "joints: {P: {clearance_y: 1.0e-4, clearance_z: 1.0e-4}}\n", "joints.P.clearance_y", 1e-4,
-     "0 where mechanism.kind is slider_crank"),
+     "joints: {P: {clearance_y: 5.0e-5, clearance_z: 1.0e-4}}\n", "joints.P.clearance_y", 5e-5,
+     ">= joints.P.clearance_z (0.0001 m) where mechanism.kind is slider_crank"),
     ("contact:\n  restitution: 0\n", "contact.restitution", 0, "0 < x <= 1"),
     ("contact:\n  restitution: 1.5\n", "contact.restitution", 1.5, "0 < x <= 1"),
     ("contact:\n  layer_rule: paper\n", "contact.layer_rule", "paper", "'series', 'paper_mm'"),

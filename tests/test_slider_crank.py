@@ -554,8 +554,9 @@ def packed_case(mechanism: dict, joints: dict):
 def test_the_case_says_its_mechanism_and_the_build_keeps_it(joints, names):
     """The slider-crank's packed case says its guide (p[P_GUIDE] = 1), jointset.of reads the
     bit from it (not from jp alone), params.joint_set gives the same set from the config,
-    and the case's build keeps the bit (CPU and device) and folds the guide P away (it is
-    ideal in the slider-crank); the RSSP's case has neither."""
+    and the case's build keeps the bit (CPU and device) and folds the guide P away (ideal in
+    these cases; a case with P's clearance keeps it: tests/test_slider_crank_guide.py); the
+    RSSP's case has neither."""
     cfg, pk = packed_case(SLIDER_CRANK, joints)
     joint_bits = jointset.named(*names)
     assert pk.p[L.P_GUIDE] == 1.0

@@ -499,6 +499,10 @@ _FINAL_WEAR_COLUMNS = (
     _Column("wear_depth_max_final", "Max depth, largest map bin", ".4g"),
     _Column("wear_volume", "Worn volume", ".4g"),
 )
+#: The slider-crank's guide (along y) names its walls in the prismatic type's frame turned
+#: into it (``core.prismatic.PLANAR_GUIDE``): the reports' note.
+PLANAR_WALLS_NOTE = ("; the slider-crank's guide along y: +y and -y its side walls across the "
+                     "plane, at -x and +x, +z and -z its upper and lower walls")
 #: A guide's walls: the corners' track depth on each (docs/physics.md 5.7), where the
 #: results keep the wear map.
 _TRACK_COLUMNS = tuple(_Column(TRACK_DEPTH_COLUMNS[wall], f"Track depth, {wall} wall", ".4g")
@@ -524,7 +528,8 @@ def format_statistics_table(ds: xr.Dataset, fmt: str = "text") -> str:
         ("Wear at the end of the run (the worn volume does not depend on the map's grid)",
          _FINAL_WEAR_COLUMNS, ("joint",)),
         ("Guide walls at the end of the run (the largest depth of the corners' track on each "
-         "wall)", _TRACK_COLUMNS, ("joint",)),
+         "wall" + (PLANAR_WALLS_NOTE if ds.attrs.get("mechanism") == "slider_crank" else "")
+         + ")", _TRACK_COLUMNS, ("joint",)),
         (f"Motion: spectrum and periodicity ({window})", _CHARACTER_COLUMNS, ()))
     for heading, wanted, dims in specs:
         # a column with no value in any case (the settled window of runs that end before

@@ -20,7 +20,7 @@ from numba import literally, njit
 from . import jointkinds as kinds
 from .compiled import compiled
 from .dynamics import NZ, VZ_ROWS, evaluate
-from .jointkinds import ball_body, contacts, is_multi, multi_free
+from .jointkinds import contacts, is_multi, multi_free, type_body
 from .jointset import ALL, has_clearance
 from .layout import (
     D_DELTA,
@@ -221,8 +221,8 @@ def onset_step(p, jp, dg0, dg1, h, model, y0, y1, spec=ALL):
         if not has_clearance(spec, jp, j):
             continue
         if is_multi(j):
-            s0 = ball_body(j, y0)
-            s1 = ball_body(j, y1)
+            s0 = type_body(spec, j, y0)
+            s1 = type_body(spec, j, y1)
             for k in range(contacts(j)):
                 shorter = onset_within(kinds.penetration(j, model, k, s0),
                                        kinds.penetration(j, model, k, s1), h, tol, shorter)

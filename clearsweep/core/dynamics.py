@@ -20,7 +20,10 @@ Where the slider's guide (joint P) has clearance, the slider's y4, z4 join the f
 coordinates (z gains them as its last two, inverse mass 1/m4, else 0 as for the crank's),
 and its three angles follow from its own rotational equations with the corners' contact
 moments: joint B holds the slider at its centroid, which the angles do not move, so they
-are not coupled to the other free coordinates.
+are not coupled to the other free coordinates. The planar slider-crank's guide (along y)
+frees its z4 alone (column 9; column 8, its x4, held by :func:`planar_slider` with alpha4
+and beta4) and gamma4 (:func:`planar_slider_rotation`), the prismatic type evaluated in the
+guide's frame (:func:`free_slider`).
 """
 
 import math
@@ -64,6 +67,7 @@ from .layout import (
     D_JOINT_FORCE,
     D_KE,
     D_NGLOBAL,
+    D_NORMAL,
     D_PDISS,
     D_PDRIVE,
     D_PE_GRAV,
@@ -75,6 +79,7 @@ from .layout import (
     D_UEL,
     D_VT,
     D_WORN,
+    J_BLOCK_LENGTH,
     J_CLEARANCE,
     J_FILM,
     J_RI,
@@ -153,9 +158,11 @@ def o_free(spec, jp):
 @compiled(inline="always")
 def p_free(spec, jp):
     """Whether joint P has clearance, the slider's block free across its guide and in its
-    three angles (read from jp where needed, as :func:`o_free`). The slider-crank's guide
-    (``jointset.guide_axis`` 1) is ideal: its build folds P away."""
-    return guide_axis(spec) == 0 and has_clearance(spec, jp, JOINT_P)
+    angles (read from jp where needed, as :func:`o_free`): the RSSP's block across its guide
+    (y4, z4) and in its three angles; the planar slider-crank's (``jointset.guide_axis`` 1)
+    in its plane only, across the guide (z4) and tilting about x (gamma4), its x4, alpha4
+    and beta4 held (:func:`planar_slider`)."""
+    return has_clearance(spec, jp, JOINT_P)
 
 
 
@@ -184,7 +191,9 @@ def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
     rows of the work array vz; minv: 1/m3, 1/m4, 1/m2 and 1/m4 again, the third 0 where the
     crank is held in its bearing, the fourth 0 where the slider is held in its guide, and
-    the rod's x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane)."""
+    the rod's x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane). The
+    slider-crank's slider takes the columns as: 5 its y4 along the guide, 8 its x4 (held
+    across its plane, :func:`planar_slider`: no row reaches it, its force 0), 9 its z4."""
     vz[out, 0] = minv[4] * vz[v, 0]
     vz[out, 1] = minv[0] * vz[v, 1]
     vz[out, 2] = minv[0] * vz[v, 2]
@@ -247,8 +256,8 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g):
     cs = minv[2] if j != JOINT_B else minv[3]
     if j == JOINT_O and nc == 0:
         return (0.0, 0.0, 0.0, cs, 0.0, cs)
-    # the inverse masses along x and y: the slider-crank's slider moves along y
-    ex = xs if (j != JOINT_B or g == 0) else cs
+    # the inverse masses along x and y: the slider-crank's slider moves along y, held in x
+    ex = xs if (j != JOINT_B or g == 0) else 0.0
     ey = cs if (j != JOINT_B or g == 0) else xs
     if nc == 0:
         im = minv[0]
@@ -274,7 +283,8 @@ def point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g):
         vz[k, 5] = -1.0 if (j == JOINT_B and k == g) else 0.0
         vz[k, 6] = crank if k == 1 else 0.0
         vz[k, 7] = crank if k == 2 else 0.0
-        vz[k, 8] = -1.0 if (j == JOINT_B and k == 1) else 0.0
+        # the slider across its guide: y4 (the RSSP's; the slider-crank's x4 is held)
+        vz[k, 8] = -1.0 if (j == JOINT_B and k == 1 and g == 0) else 0.0
         vz[k, 9] = -1.0 if (j == JOINT_B and k == 2) else 0.0
     for b in range(3):
         constrained_apply(vz, b, C, L, nc, minv, mr_inv, 6, 3, 4)
@@ -357,19 +367,77 @@ def fixed_accelerations(y, p, dy, held, g):
 
 
 @compiled
-def free_slider(j, y, t4, model, N4, full, dg, dy):
+def free_slider(j, y, t4, model, N4, full, dg, dy, g):
     """The slider's block free in its guide (joint P with clearance): the corners' contacts
     (``prismatic.contact``; with ``full``, P's diagnostics into dg) and the block's angular
     accelerations under their moment and ``N4`` (B's, where B has clearance) into dy.
     Returns (the guide's force on the block [N], the power it dissipates [W], whether the
-    rotational mass block was regular)."""
+    rotational mass block was regular).
+
+    The planar slider-crank's guide (``g`` 1, along y) is the prismatic type's turned into
+    it: the type sees the block in its guide's frame (``prismatic.in_guide``) and its force
+    and moment come back to global axes and the slider's body frame
+    (``prismatic.from_guide``), and so do P's force and contact normal in dg (its offset
+    stays in the guide's frame: along, side, up); the block turns in the plane only
+    (:func:`planar_slider_rotation`). The type's stiff-rate bound at a corner
+    (``prismatic.corner_mobility``) reads the block's principal inertias in its own body
+    axes, which the turn swaps (x' = y): the same for the ``flores_benchmark`` preset's
+    block, whose three are equal."""
     r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
     gr, gv, gR, gw = GROUND
     zero = (0.0, 0.0, 0.0)
+    if g == 1:
+        rq, vq, Rq, wq = prismatic.in_guide((r4, v4, R4, w4))
+        force, moment, _, pdiss = prismatic.contact(j, model, (rq, vq, Rq, wq, zero),
+                                                    (gr, gv, gR, gw, zero), full, dg)
+        force = prismatic.from_guide(force)
+        moment = prismatic.from_guide(moment)
+        if full:
+            for at in (D_JOINT_FORCE, D_NGLOBAL, D_NORMAL):
+                back = prismatic.from_guide((dg[at + 3 * j], dg[at + 3 * j + 1],
+                                             dg[at + 3 * j + 2]))
+                for i in range(3):
+                    dg[at + 3 * j + i] = back[i]
+        ok = planar_slider_rotation(y, model.p, t4, add(N4, moment), dy)
+        return force, pdiss, ok
     force, moment, _, pdiss = prismatic.contact(j, model, (r4, v4, R4, w4, zero),
                                                 (gr, gv, gR, gw, zero), full, dg)
     ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
     return force, pdiss, ok
+
+
+@compiled(inline="always")
+def planar_slider(y, p):
+    """The slider-crank's free block held in its plane (Baumgarte rows, as
+    :func:`planar_rod` holds the rod): x4 = 0 and its angles alpha4 = beta4 = 0, so that it
+    tilts about x only (gamma4) and stays off its guide's side walls. Returns the
+    accelerations (x4dd, a4dd, b4dd)."""
+    a_b = p[P_BAUM_A]
+    b_b = p[P_BAUM_B]
+    qd = Y_QD
+    return (-2.0 * a_b * y[qd + Y_R4] - b_b * b_b * y[Y_R4],
+            -2.0 * a_b * y[qd + Y_PHI4] - b_b * b_b * y[Y_PHI4],
+            -2.0 * a_b * y[qd + Y_PHI4 + 1] - b_b * b_b * y[Y_PHI4 + 1])
+
+
+@compiled(inline="always")
+def planar_slider_rotation(y, p, t4, N4, dy):
+    """The slider-crank's free block's angular accelerations (joint P with clearance): alpha4
+    and beta4 held (:func:`planar_slider`), gamma4 from the third of its rotational
+    equations G^T J G phi_dd = G^T (N4 - w x J w - J gdot phi_dot), the held angles'
+    accelerations known (the rows' multipliers act on the first two only); written into
+    dy. False where gamma4's diagonal term is not positive."""
+    qd = Y_QD
+    J4 = (p[P_J4], p[P_J4 + 1], p[P_J4 + 2])
+    pd4 = (y[qd + Y_PHI4], y[qd + Y_PHI4 + 1], y[qd + Y_PHI4 + 2])
+    b, m, _ = euler_equations(J4, t4, pd4, N4)
+    _, a4dd, b4dd = planar_slider(y, p)
+    if not m[8] > 0.0:
+        return False
+    dy[qd + Y_PHI4] = a4dd
+    dy[qd + Y_PHI4 + 1] = b4dd
+    dy[qd + Y_PHI4 + 2] = (b[2] - m[6] * a4dd - m[7] * b4dd) / m[8]
+    return True
 
 
 
@@ -532,9 +600,11 @@ def ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, fixed, C, vz):
             vz[VZ_RHS, r] = rhs
             cons = max(cons, abs(cpos[i]))
         C[nc, 5] = 1.0          # the guide's row: x's (the RSSP), y's (the slider-crank)
-        if slide:
+        if slide and g == 0:
             C[nc + 1, 8] = 1.0
             C[nc + 2, 9] = 1.0
+        elif slide:
+            C[nc + 1, 9] = 1.0  # the slider-crank's z row (its x4 held, column 8 unused)
         nc += 3 - i0
     return nc, cons
 
@@ -681,6 +751,11 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     if guide_axis(spec) == 1:
         # the rod held in the slider-crank's plane: its centroid's x and its ends' (alpha3)
         cons = max(cons, max(abs(y[Y_R3]), 0.5 * p[P_L3] * abs(y[Y_PHI3] - HALF_PI)))
+        if p_free(spec, jp):
+            # the free block held in it too: its x4, its corners' reach of alpha4 and beta4
+            reach = 0.5 * jp[JOINT_P, J_BLOCK_LENGTH]
+            cons = max(cons, max(abs(y[Y_R4]), reach * max(abs(y[Y_PHI4]),
+                                                           abs(y[Y_PHI4 + 1]))))
     dg[D_CONS] = cons
     rate = 0.0
     for j in range(N_JOINTS):
@@ -806,7 +881,7 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(spec, jp):
-        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy)
+        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, guide_axis(spec))
         if not ok:
             return F2, N2, F3, N3, F4, fA, fB, pdiss, False
         F4 = add(F4, fP)
@@ -888,7 +963,8 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     vz[VZ_FORCE, 7] = F2[2] if o_free(spec, jp) else 0.0
     # the slider across its guide likewise, where P has clearance (forces gravity, P's and
     # B's contacts)
-    vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) else 0.0
+    # (the slider-crank's: z4 alone, its column 8 x4 held, :func:`planar_slider`)
+    vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) and g == 0 else 0.0
     vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
     minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
             1.0 / p[P_M4] if p_free(spec, jp) else 0.0, 0.0 if g == 1 else 1.0 / p[P_M3])
@@ -904,7 +980,7 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     if o_free(spec, jp):
         rdd2 = (rdd2[0], vz[VZ_ZDD, 6], vz[VZ_ZDD, 7])
     if p_free(spec, jp):
-        ydd4 = vz[VZ_ZDD, 8]
+        ydd4 = vz[VZ_ZDD, 8] if g == 0 else planar_slider(y, p)[0]
         zdd4 = vz[VZ_ZDD, 9]
 
     assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4, g)

@@ -23,7 +23,7 @@ state vector at the ball's body's slots in ``joints.BODIES``.
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .joints import BODIES, JOINT_TYPES, JOINTS
-from .jointset import has_clearance
+from .jointset import guide_axis, has_clearance
 from .kinematics import gmat, mv, rotation, trig
 from .layout import Y_QD
 
@@ -118,6 +118,29 @@ def ball_body(j, y):
     return ((y[r_at], y[r_at + 1], y[r_at + 2]),
             (y[Y_QD + r_at], y[Y_QD + r_at + 1], y[Y_QD + r_at + 2]),
             rotation(tr), mv(gmat(tr), pd))
+
+
+@compiled(inline="always")
+def type_body(spec, j, y):
+    """:func:`ball_body` in the frame joint j's type is written in: the ball's body as is,
+    but for the planar slider-crank's guide (``jointset.guide_axis`` of the build's set
+    ``spec`` 1, a constant of the build), whose block the prismatic type sees in its
+    guide's frame (``prismatic.in_guide``). What ``rk4`` and ``dopri5`` hand to a type's
+    ``accept``, ``seat`` and ``penetration``."""
+    body = ball_body(j, y)
+    if guide_axis(spec) == 1 and of_kind(PRISMATIC, j):
+        return prismatic.in_guide(body)
+    return body
+
+
+@compiled(inline="always")
+def type_vector(spec, j, v):
+    """A socket-frame vector of joint j (an offset, a rate) in the frame its type is
+    written in: as is, but for the planar slider-crank's guide (``prismatic.to_guide``),
+    as :func:`type_body`."""
+    if guide_axis(spec) == 1 and of_kind(PRISMATIC, j):
+        return prismatic.to_guide(v)
+    return v
 
 
 # --------------------------------------------------------------- the protocol, by row type

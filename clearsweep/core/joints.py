@@ -82,7 +82,10 @@ FreeCoordinate = namedtuple("FreeCoordinate", ["name", "body", "axis", "freed_by
 #: O lets it move, and the slider across its guide only where P does (their angles then
 #: follow from the slider's own rotational equations). The coordinates a joint frees come
 #: last, P's last of all: a build without P's clearance loops over the first ones only
-#: (``dynamics.NZ_HELD``).
+#: (``dynamics.NZ_HELD``). The names are the RSSP's; the planar slider-crank's guide runs
+#: along y, so its columns read: "x4" its y4 along the guide, "y4" its x4 across the plane
+#: (held with its angles alpha4, beta4 where P has clearance: ``dynamics.planar_slider``;
+#: no row reaches the column), "z4" its z4.
 FREE = (
     FreeCoordinate("x3", "rod", "x", None),
     FreeCoordinate("y3", "rod", "y", None),

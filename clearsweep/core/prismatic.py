@@ -115,6 +115,15 @@ CONTACTS = P_SLOTS
 #: The guide's rotation: the global frame (``gap``'s Rs, not read).
 IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
+#: The guide's frame of the planar slider-crank (``jointset.guide_axis`` 1, its guide along
+#: global y): the fixed rotation Q = Rz(-90 deg) that takes its guide to this module's
+#: (along x), x' = y, y' = -x, z' = z, as a row-major 9-tuple. Its block's body frame is
+#: turned likewise (its length along the guide): this module sees the block at
+#: (Q r, Q v, Q R Q^T, Q w) (:func:`in_guide`) and its forces and moments come back by Q^T
+#: (:func:`from_guide`). Its y walls (+y', -y': global -x, +x) face across the mechanism's
+#: plane, its z walls (the upper and lower) within it.
+PLANAR_GUIDE = (0.0, 1.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+
 #: Walls of the guide, in the order of their bands of the wear map.
 WALLS = ("+y", "-y", "+z", "-z")
 
@@ -141,6 +150,30 @@ Slot = namedtuple("Slot", (
     "h",            # the wall's wear depth at the corner [m]
     "u_body",       # the corner in the block's frame [m]
 ))
+
+
+@compiled(inline="always")
+def to_guide(v):
+    """Q v: a global vector (or the slider's body-frame one) in the slider-crank's guide
+    frame (:data:`PLANAR_GUIDE`)."""
+    return (v[1], -v[0], v[2])
+
+
+@compiled(inline="always")
+def from_guide(v):
+    """Q^T v: a vector of the slider-crank's guide frame (:data:`PLANAR_GUIDE`) in global
+    axes (or in the slider's body frame, for a moment)."""
+    return (-v[1], v[0], v[2])
+
+
+@compiled(inline="always")
+def in_guide(body):
+    """The slider-crank's block state (r, v, R, w) (global; R its rotation, w its body
+    angular velocity) as this module's guide frame sees it (:data:`PLANAR_GUIDE`):
+    (Q r, Q v, Q R Q^T, Q w)."""
+    r, v, R, w = body
+    return (to_guide(r), to_guide(v),
+            (R[4], -R[3], R[5], -R[1], R[0], -R[2], R[7], -R[6], R[8]), to_guide(w))
 
 
 @compiled(inline="always")

@@ -17,7 +17,7 @@ from . import jointkinds as kinds
 from .compiled import compiled
 from .contact import episode_impact_velocity, surface
 from .dynamics import NZ, VZ_ROWS, evaluate
-from .jointkinds import MULTI_ROW, ball_body, is_multi, multi_free
+from .jointkinds import MULTI_ROW, is_multi, multi_free
 from .joints import BODIES, JOINTS
 from .jointset import ALL, guide_axis, has_clearance
 from .kinematics import cross, gmat, mtv, mv, point_state, rotation, trig
@@ -688,7 +688,8 @@ def section_offsets(p, jp, ys, sec, k, spec):
             continue
         d = mtv(R, vsub(pb, pos))
         rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
-        off, off_rate = kinds.section_offsets(jp, j, d, rate)
+        off, off_rate = kinds.section_offsets(jp, j, kinds.type_vector(spec, j, d),
+                                              kinds.type_vector(spec, j, rate))
         sec[k, SEC_OFFSET + 3 * j] = off[0]
         sec[k, SEC_RATE + 3 * j] = off_rate[0]
         sec[k, SEC_OFFSET + 3 * j + 1] = off[1]
@@ -801,12 +802,12 @@ def accept_multi(hs, in_settled, model, stats, cur, y, spec):
     """:func:`accept_substep`'s part for the multi-contact joint with clearance
     (``jointkinds.MULTI_ROW``, a constant; ``spec``: the build's joint set): its points'
     impacts and wear (its type's ``accept``) from its ball's body state in y
-    (``jointkinds.ball_body``). A call of its own beside accept_substep, so that the step's
+    (``jointkinds.type_body``). A call of its own beside accept_substep, so that the step's
     bookkeeping of every case without such a joint is what it was before the prismatic
     joint (steps/s, benchmarks/README.md). Returns whether a point's episode changed."""
     if multi_free(spec, model.jp):
-        return kinds.accept(MULTI_ROW, model, ball_body(MULTI_ROW, y), hs, in_settled, stats,
-                            cur)
+        return kinds.accept(MULTI_ROW, model, kinds.type_body(spec, MULTI_ROW, y), hs,
+                            in_settled, stats, cur)
     return False
 
 
@@ -921,7 +922,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec):
             ddot_prev[j] = dg[D_DDOT + j]
             # a clearance joint in contact: its type's seated start
             if has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
-                if kinds.seat(j, model, dg, ball_body(j, y)):
+                if kinds.seat(j, model, dg, kinds.type_body(spec, j, y)):
                     seated = True
         if not seated:
             break

@@ -168,6 +168,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             ideal = ("" if clearances else " (bushing)" if value_text(joint) in bushings
                      else " (ideal joint)")
             where = ("journal in the bearing's plane, yz" if bearing
+                     else "block across its guide, yz (y: its side, -x, held)" if guide and planar
                      else "block across its guide, yz" if guide
                      else f"the mechanism's plane, {a}{b}{off_plane}" if planar
                      else f"{a}{b} plane")

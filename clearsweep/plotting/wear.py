@@ -92,14 +92,25 @@ def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
                        f"exaggerated", fontsize="small", pad=12)
 
 
+#: The guide's walls and axes as the slider-crank names them: its guide along y, the
+#: prismatic type's frame turned into it (``core.prismatic.PLANAR_GUIDE``: x' = y, y' = -x);
+#: its +y' and -y' walls face across the mechanism's plane (at -x and +x), the +z and -z
+#: walls (the upper and lower) within it.
+PLANAR_WALLS = ("-x (side, across the plane)", "+x (side, across the plane)", "+z (upper)",
+                "-z (lower)")
+
+
 def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: str, label: str,
-                    joint: str, extent) -> None:
+                    joint: str, extent, planar: bool = False) -> None:
     """A prismatic joint's wall maps (docs/physics.md 5.7): the map's rows in four bands, one
     per wall (+y, -y, +z, -z, ``core.prismatic.WALLS``), each ``npolar // 4`` rows across the
     wall by ``nazim`` columns along the guide, drawn as four strips one above the other in
     ``spec`` (a slot of the figure's grid), on one depth colour scale, against the position
-    along the guide [mm] and across the wall [mm] (bins where the config cannot be read)."""
+    along the guide [mm] and across the wall [mm] (bins where the config cannot be read).
+    ``planar``: the slider-crank's guide along y, its walls named as :data:`PLANAR_WALLS`."""
     from ..core.prismatic import WALLS
+
+    names = PLANAR_WALLS if planar else WALLS
 
     band = depth.sizes["polar"] // 4
     ncol = depth.sizes["azimuth"]
@@ -107,15 +118,15 @@ def _draw_guide_map(fig: Figure, spec, depth: xr.DataArray, peak: float, unit: s
     strips = spec.subgridspec(len(WALLS), 1)
     axes: list = []
     mesh = None
-    for w, wall in enumerate(WALLS):
+    for w, wall in enumerate(names):
         ax = fig.add_subplot(strips[w, 0], sharex=axes[0] if axes else None)
         if extent is not None:
             x0, span, half_y_wall, half_z_wall = extent
             half = half_y_wall if w < 2 else half_z_wall
             x_edges = 1e3 * (x0 + span * np.arange(ncol + 1) / ncol)
             a_edges = 1e3 * half * (2.0 * np.arange(band + 1) / band - 1.0)
-            xlabel = "position along the guide x [mm]"
-            across = "z - z_s [mm]" if w < 2 else "y [mm]"
+            xlabel = f"position along the guide {'y' if planar else 'x'} [mm]"
+            across = "z - z_s [mm]" if w < 2 else ("-x [mm]" if planar else "y [mm]")
         else:
             x_edges = np.arange(ncol + 1.0)
             a_edges = np.arange(band + 1.0)
@@ -172,7 +183,7 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
             # the depth of the corners' tracks along the guide (docs/physics.md 5.7)
             _draw_guide_map(fig, grid[j, :], depth, peak, unit,
                             axis_label(wear, "track depth", unit), value_text(joint),
-                            guide_extent(ds))
+                            guide_extent(ds), ds.attrs.get("mechanism") == "slider_crank")
             continue
         norm = Normalize(0.0, peak if np.isfinite(peak) and peak > 0 else 1.0)
         ax = fig.add_subplot(grid[j, 0])
