@@ -104,7 +104,8 @@ def test_without_friction_the_pins_stay_in_the_plane():
 def test_the_configs_baumgarte_holds_the_constraints_at_a_longer_step():
     """The config's Baumgarte constants, 50 and 50 1/s: at dt 1e-5 s the benchmark runs 10
     revolutions with its joints' constraints below the 1e-6 m stop (measured 7.4e-8 m over
-    5, 1.1e-7 m over 20; 9.5e-8 and 1.2e-7 m when B was a ball), where the default 5 and 5 reach the stop after 7.5 revolutions."""
+    5, 1.1e-7 m over 20; 9.5e-8 and 1.2e-7 m when B was a ball), where the default 5 and 5
+    reach the stop after 7.5 revolutions."""
     longer = ["solver.dt=1e-5", "solver.save_every=1", "solver.revolutions=10"]
     assert tuple(load_config(CONFIG).solver.baumgarte) == (50.0, 50.0)
     ds = simulate(CONFIG, longer)
