@@ -202,7 +202,8 @@ def wear_mergeable(pend, cur, j, spec):
     """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
     (rows as in integrate: sum V n, sum V, sum V A, and the surface's scale: R_i on a
     sphere, R_i L on a bearing) without moving the cap noticeably (its type's
-    ``cap_mergeable``: within WEAR_MERGE_ANGLE of the cap's angular radius)."""
+    ``cap_mergeable``: within WEAR_MERGE_ANGLE of the cap's angular radius; ``spec``: the
+    build's joint set, which gives the row's type)."""
     ap = pend[j, 4] / pend[j, 3]
     ac = cur[j, 4] / cur[j, 3]
     if abs(ac - ap) > WEAR_MERGE_AREA * ap:
@@ -219,7 +220,8 @@ def wear_mergeable(pend, cur, j, spec):
 @compiled
 def flush_wear(wmap, j, pend, scratch, spec):
     """Spread joint j's waiting wear on its map (volume-weighted mean direction and cap
-    area, its type's ``deposit_cap``); clear it; return the largest depth written [m]."""
+    area, its type's ``deposit_cap`` in the build of joint set ``spec``); clear it; return
+    the largest depth written [m]."""
     size = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
     n = (pend[j, 0] / size, pend[j, 1] / size, pend[j, 2] / size)
     top = kinds.deposit_cap(spec, wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5],
