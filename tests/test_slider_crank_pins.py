@@ -174,3 +174,12 @@ def test_as_section_offsets_are_the_gaps_bearing_frame():
     off, rate = revolute.section_offsets(jp, JA, mtv(Rs, d_global), (0.0, 0.0, 0.0))
     assert off[0] == pytest.approx(2.0e-6 / 5.0e-4, rel=1e-9)     # along global x
     assert off[1:] == pytest.approx((geo[2][1] / 5.0e-4, geo[2][2] / 5.0e-4), rel=1e-12)
+
+
+def test_the_configs_pins_are_the_kernels():
+    """config.SLIDER_CRANK_PINS (whose ``length`` the RSSP refuses) names the joints whose
+    type the slider-crank changes (core.joints.SLIDER_CRANK_TYPES)."""
+    from clearsweep.config import SLIDER_CRANK_PINS
+    from clearsweep.core.joints import SLIDER_CRANK_TYPES
+
+    assert SLIDER_CRANK_PINS == tuple(SLIDER_CRANK_TYPES)
