@@ -127,6 +127,11 @@ class JointConfig(_Section):
     type: str = _setting(Field("spherical", ("spherical", "bushing")), None, "joint type of joint X")
     bushing_stiffness: tuple[float, float] = _bushing_stiffness("X")
     bushing_damping: tuple[float, float] = _bushing_damping("X")
+    #: the slider-crank's pins (A, B: revolute, docs/mechanisms.md): the bearing's length,
+    #: over which its wear strip spreads; null: the preset's (``params.Preset.pin_length_m``).
+    #: The RSSP's balls have none: refused there
+    length: float | None = _setting(Field(None, lo=0.0, lo_open=True, nullable=True), "m",
+                                    "bearing length of joint X (slider-crank)")
 
     @property
     def ball_radius_m(self) -> float:
@@ -688,7 +693,7 @@ def _check_sizes(joints: Mapping[str, Any], cfg: Mapping[str, Any], source: str)
                                   f"a number >= {MIN_LAYER_M:g} m (a layer of more than a few "
                                   "atoms)", source)
         for key in ("length", "base_thickness", "coating_thickness"):
-            if key in spec and spec[key] > longest:
+            if spec.get(key) is not None and spec[key] > longest:
                 raise ConfigError(f"joints.{joint}.{key}", spec[key],
                                   f"a number <= {longest:g} m, the mechanism's longest "
                                   "link (the rod)", source)
@@ -773,16 +778,30 @@ def section_class(joint: str) -> Any:
     return type(getattr(JointsConfig(), joint))
 
 
+#: The joints that are a ball in a socket in the RSSP and a pin in a bearing in the
+#: slider-crank (``core.joints.SLIDER_CRANK_TYPES``): their ``length`` is the pin's.
+SLIDER_CRANK_PINS = ("A", "B")
+
+
 def _check_mechanism(cfg: Mapping[str, Any], source: str) -> None:
-    """The preset is one of the mechanism's. The slider-crank's guide with clearance holds
-    its block in the plane, off the side walls (``clearance_y``, across the plane): its
-    clearance is the one in the plane, ``clearance_z``, the smaller of the two."""
+    """The preset is one of the mechanism's; a pin's ``length`` (A, B) only in the
+    slider-crank. The slider-crank's guide with clearance holds its block in the plane, off
+    the side walls (``clearance_y``, across the plane): its clearance is the one in the
+    plane, ``clearance_z``, the smaller of the two."""
     kind, preset = cfg["mechanism"]["kind"], cfg["mechanism"]["preset"]
     if PRESET_KINDS[preset] != kind:
         raise ConfigError("mechanism.preset", preset,
                           f"a preset of mechanism.kind {kind}: one of "
                           f"{', '.join(MECHANISM_KINDS[kind])} (the default, realistic, is the "
                           "RSSP's)", source)
+    if kind != "slider_crank":
+        for joint in SLIDER_CRANK_PINS:
+            length = cfg["joints"][joint].get("length")
+            if length is not None:
+                raise ConfigError(f"joints.{joint}.length", length,
+                                  "null where mechanism.kind is rssp (its joint is a ball in a "
+                                  "socket, without a length; the slider-crank's pins take one)",
+                                  source)
     if kind == "slider_crank":
         guide = cfg["joints"]["P"]
         if 0.0 < guide["clearance_y"] < guide["clearance_z"]:

@@ -16,6 +16,7 @@ import numpy as np
 
 from .choices import DAMPING_LAWS
 from .config import (
+    SLIDER_CRANK_PINS,
     Config,
     ConfigError,
     EnsembleConfig,
@@ -28,7 +29,7 @@ from .core import jointset
 from .core import layout as L
 from .core.bushing import JOINT_TYPE as BUSHING
 from .core.contact import hysteresis_fraction
-from .core.joints import BODIES, JOINTS
+from .core.joints import BODIES, JOINTS, row_types
 from .jointtypes import kind as joint_kind
 from .materials import FIELDS
 from .version import IDENTITY_VERSION
@@ -55,6 +56,10 @@ class Preset:
     #: (y, z) = (0, z_s); or the planar slider-crank, the crank's plane y-z, its guide along y
     #: at (x, z) = (0, z_s) (docs/mechanisms.md)
     kind: str = "rssp"
+    #: the slider-crank's pins' bearing length [m] (A and B, revolute there): the length of
+    #: their wear strip where ``joints.X.length`` is null; None for the RSSP, whose A and B
+    #: are balls
+    pin_length_m: float | None = None
 
     @property
     def guide_axis(self) -> int:
@@ -84,7 +89,7 @@ PRESETS: dict[str, Preset] = {
                                slider_inertia_kgm2=(1e-4, 1e-4, 1e-4),
                                source="Flores, Ambrosio, Claro & Lankarani 2008, the slider-crank "
                                       "benchmark (docs/mechanisms.md)",
-                               kind="slider_crank"),
+                               kind="slider_crank", pin_length_m=0.02),
 }
 
 BASE_MATERIAL = "steel"  # socket base and ball (docs/physics.md section 6)
@@ -211,6 +216,10 @@ def run_identity(cfg: Config) -> dict[str, Any]:
         # the default mechanism, as every run before mechanism.kind: its finished work stays
         # this run's
         del config["mechanism"]["kind"]
+    for joint in SLIDER_CRANK_PINS:
+        # a pin's length (the slider-crank's) left at the preset's: as every run before it
+        if config["joints"][joint].get("length", 0.0) is None:
+            del config["joints"][joint]["length"]
     table = resolve_materials(cfg)
     used = sorted({BASE_MATERIAL, *(j.coating for _, j in cfg.joints.items() if j.coating != "none")})
     return {"config": config,
@@ -480,7 +489,7 @@ def hertz_sink_warnings(cfg: Config, materials: dict) -> list[str]:
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
         stop = jp[j, L.J_PEN_STOP]
-        found = HOST_HOOKS[joint.type].sink(joint.name, j, forces[j], p, jp,
+        found = HOST_HOOKS[table_type(j, p)].sink(joint.name, j, forces[j], p, jp,
                                             min(jp[j, L.J_C], stop))
         if found is not None:
             sink, text = found
@@ -494,7 +503,7 @@ def point_sink(name: str, j: int, force: np.ndarray, p: np.ndarray, jp: np.ndarr
     its law (``HOST_HOOKS[type].law``) under the static load ``force`` [N] (its axial part
     left out where the joint's axial play is ideal, ``jointtypes.JointKind.axial_ideal``),
     and the warning's text, where it reaches ``limit`` [m]; else None."""
-    described = joint_kind(JOINTS[j].type)
+    described = joint_kind(table_type(j, p))
     f = force.copy()
     if described.axial_ideal:
         f[0] = 0.0
@@ -599,7 +608,7 @@ def worn_contact(jp: np.ndarray, j: int, wmap: np.ndarray, normal_socket: np.nda
 
     n = tuple(float(v) for v in normal_socket)
     wmap = np.ascontiguousarray(wmap, dtype=np.float64)
-    h, worn = HOST_HOOKS[JOINTS[j].type].worn(wmap, j, n, jp, p)
+    h, worn = HOST_HOOKS[table_type(j, p)].worn(wmap, j, n, jp, p)
     ew, _, _ = surface(jp, j, worn)
     return float(jp[j, L.J_C] + h), float(ew)
 
@@ -627,7 +636,7 @@ def seated_offsets(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float,
     for j, joint in enumerate(JOINTS):
         if jp[j, L.J_CLEARANCE] == 0.0:
             continue
-        offsets[j] = HOST_HOOKS[joint.type].seat(j, forces[j].copy(), p, jp, y_ideal, omega,
+        offsets[j] = HOST_HOOKS[table_type(j, p)].seat(j, forces[j].copy(), p, jp, y_ideal, omega,
                                                  wmap)
     return ball_seats(preset, p, jp, theta0, omega, forces, offsets, y_ideal, wmap)
 
@@ -639,7 +648,7 @@ def point_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np
     and the slider-crank's pins, whose axis is x), at its own law's static penetration
     (:func:`leaning_offset`); the journal turned by the friction angle
     (:func:`journal_seat`); centred where there is no load to lean on."""
-    described = joint_kind(JOINTS[j].type)
+    described = joint_kind(table_type(j, p))
     hooks = HOST_HOOKS[described.name]
     if described.axial_ideal or p[L.P_GUIDE] == 1.0:
         f[0] = 0.0          # axial: ideal
@@ -648,7 +657,9 @@ def point_seat(j: int, f: np.ndarray, p: np.ndarray, jp: np.ndarray, y_ideal: np
     if not (math.isfinite(size) and size > 0.0):
         return np.zeros(3)  # no load to lean on: the ball stays centred
     u = f / size            # the contact's force on the ball leans along u
-    if hooks.spins:
+    if hooks.spins and grounded(j):
+        # a journal spinning with the crank in the ground's bearing (O); the slider-crank's
+        # pins, whose bearings turn with the rod or ride the slider, turn in ball_seats
         u, size = journal_seat(u, size, p, jp, j, omega, wmap)
     return leaning_offset(j, u, size, law, p, jp, y_ideal, wmap)
 
@@ -719,13 +730,14 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
         if planar:
             load[0] = 0.0
         size = float(np.linalg.norm(load))
-        if (HOST_HOOKS[joint.type].turns_at_start and jp[j, L.J_CLEARANCE] != 0.0
+        hooks = HOST_HOOKS[table_type(j, p)]
+        turns = hooks.turns_at_start or (hooks.spins and not grounded(j))
+        if (turns and jp[j, L.J_CLEARANCE] != 0.0
                 and math.isfinite(size) and size > 0.0):
-            seats.append((j, load / size, size))
+            seats.append((j, load / size, size, hooks.law(p)))
     if p[L.P_FRICTION] == 0.0 or not seats:
         return offsets
     grid = np.zeros((L.N_JOINTS, 1, 1)) if wmap is None else wmap
-    law = p[L.P_EXPONENT]
     offsets = offsets.copy()
     for _ in range(BALL_SEAT_ITERATIONS):
         by_name = {row.name: offsets[k] for k, row in enumerate(JOINTS)}
@@ -733,7 +745,7 @@ def ball_seats(preset: Preset, p: np.ndarray, jp: np.ndarray, theta0: float, ome
                            by_name["P"])
         force, fn, normal = start_contacts(y0, p, jp, grid)
         moved = 0.0
-        for j, f_hat, size in seats:
+        for j, f_hat, size, law in seats:
             friction = force[j] + fn[j] * normal[j]     # the contact force less its normal part
             ft = float(np.linalg.norm(friction))
             if not (fn[j] > 0.0 and math.isfinite(ft) and ft > 0.0):
@@ -925,8 +937,14 @@ def socket_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
 
 def bearing_fill(row: np.ndarray, joint: AnyJoint, preset: Preset) -> None:
     """The bearing's own columns of its jp row: its length, and with a clearance its
-    lubricant film's coefficient (:func:`film_coefficient`)."""
-    bearing = cast(RevoluteJointConfig, joint)
+    lubricant film's coefficient (:func:`film_coefficient`). The slider-crank's pins (A and
+    B, a ``JointConfig`` section): their ``length``, else the preset's
+    (``Preset.pin_length_m``); dry (no film)."""
+    if not isinstance(joint, RevoluteJointConfig):
+        length = getattr(joint, "length", None)
+        row[L.J_LENGTH] = preset.pin_length_m if length is None else length
+        return
+    bearing = joint
     row[L.J_LENGTH] = bearing.length
     c = bearing.clearance
     if c > 0.0:
@@ -957,10 +975,24 @@ def no_law(p: np.ndarray) -> float:
     raise ValueError("this joint type's contact has no point contact law")
 
 
-def row_type(jp: np.ndarray, j: int) -> str:
+def table_type(j: int, p: np.ndarray) -> str:
+    """Joint j's type in the mechanism of a packed case's ``p`` (``core.joints.row_types``:
+    the slider-crank's A and B revolute, ``p[P_GUIDE]`` 1; else the joint table's)."""
+    return row_types(bool(p[L.P_GUIDE] == 1.0))[j]
+
+
+def grounded(j: int) -> bool:
+    """Whether joint j's socket sits in the ground (O's bearing, P's guide)."""
+    return JOINTS[j].socket.body == "ground"
+
+
+def row_type(jp: np.ndarray, j: int, p: np.ndarray | None = None) -> str:
     """The joint type that joint j of a packed case runs as (its ``HOST_HOOKS`` key): the
-    bushing where its row says so (``J_BUSHING``), else the joint table's type."""
-    return BUSHING if jp[j, L.J_BUSHING] != 0.0 else JOINTS[j].type
+    bushing where its row says so (``J_BUSHING``), else its type in the case's mechanism
+    (:func:`table_type` of ``p``; without ``p`` the joint table's)."""
+    if jp[j, L.J_BUSHING] != 0.0:
+        return BUSHING
+    return JOINTS[j].type if p is None else table_type(j, p)
 
 
 def socket_worn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
@@ -980,6 +1012,9 @@ def bearing_worn(wmap: np.ndarray, j: int, n: tuple, jp: np.ndarray,
     (``revolute.map_read``, ``revolute.worn_through``)."""
     from .core import revolute
 
+    # in the bearing's frame (the socket body's for A and B in the slider-crank's rod and
+    # slider, revolute.to_bearing)
+    n = tuple(float(v) for v in as_python(revolute.to_bearing)(j, n))
     h = (revolute.map_read(wmap, j, n, bool(p[L.P_INTERP] != 0.0))[0]
          if p[L.P_FEEDBACK] != 0.0 else 0.0)
     return h, revolute.worn_through(wmap, j, n, float(jp[j, L.J_COAT]))
@@ -998,7 +1033,7 @@ def point_rate(jp: np.ndarray, j: int, p: np.ndarray, preset: Preset, m_ref: flo
     row = jp[j]
     _, stiffness = as_python(elastic_force)(row[L.J_PEN_STOP], row[L.J_C], row[L.J_EW],
                                             row[L.J_RI], row[L.J_RJ],
-                                            HOST_HOOKS[JOINTS[j].type].law(p))
+                                            HOST_HOOKS[table_type(j, p)].law(p))
     return math.sqrt(stiffness / m_ref)
 
 
@@ -1223,7 +1258,7 @@ def joint_attributes(cfg: Config, packed: Packed) -> dict[str, Any]:
     exponent = float(packed.p[L.P_EXPONENT])
     out: dict[str, Any] = {}
     for j, (name, joint) in enumerate(joint_configs(cfg)):
-        row, kind = packed.jp[j], JOINTS[j].type
+        row, kind = packed.jp[j], table_type(j, packed.p)
         ideal = row[L.J_CLEARANCE] == 0.0
         elastic = row[L.J_BUSHING] != 0.0
         law = "Hertz power law, E*" if power_law_joint(kind, exponent) else \
@@ -1337,7 +1372,7 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_C] = c
         jp[j, L.J_RI] = joint.socket_radius
         jp[j, L.J_RJ] = joint.socket_radius - c
-        kind = JOINTS[j].type
+        kind = table_type(j, p)
         jp[j, L.J_EW] = contact_modulus(joint, kind, materials, contact.layer_rule, p[L.P_EXPONENT])
         jp[j, L.J_MU] = surface.friction_coefficient
         k = joint.wear_coefficient
@@ -1353,7 +1388,8 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
         jp[j, L.J_COAT] = joint.coating_thickness if coated else math.inf
         HOST_HOOKS[kind].fill(jp[j], joint, preset)
         if clear >> (L.N_JOINTS + j) & 1:
-            bushing_row(jp[j], joint, kind, preset)
+            # the joint table's type: the slider-crank's pin bushings keep their axial pair
+            bushing_row(jp[j], joint, JOINTS[j].type, preset)
         if c > 0.0:
             jp[j, L.J_PEN_STOP] = penetration_stop(jp[j], kind, p, contact.max_penetration_fraction,
                                                    contact.load_bound)
@@ -1374,13 +1410,14 @@ def pack(cfg: Config, materials: dict, wmap: np.ndarray | None = None, *,
     if member is not None and perturb.ball_offset > 0.0:
         for j, row in enumerate(JOINTS):
             shift = member.ball_offset[j].copy()
-            if joint_kind(row.type).axial_ideal or preset.kind == "slider_crank":
+            kind = table_type(j, p)
+            if joint_kind(kind).axial_ideal or preset.kind == "slider_crank":
                 shift[0] = 0.0      # the journal moves in the bearing's plane only, the block
                                     # across its guide, the slider-crank's pins in its plane
             if preset.kind == "slider_crank":
                 # across its plane: the guide's block moves up (z) only, its side held
-                shift[joint_kind(row.type).off_plane_axis] = 0.0
-            offsets[j] = HOST_HOOKS[row.type].perturb(offsets[j], shift, jp[j])
+                shift[joint_kind(kind).off_plane_axis] = 0.0
+            offsets[j] = HOST_HOOKS[kind].perturb(offsets[j], shift, jp[j])
     by_name = {row.name: offsets[j] for j, row in enumerate(JOINTS)}
     y0 = initial_state(preset, theta0, omega, by_name["A"], by_name["B"], by_name["O"],
                        by_name["P"])

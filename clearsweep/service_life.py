@@ -247,8 +247,9 @@ def wear_pace(cfg: Config) -> list[tuple[float, float, float, float, float, floa
     at the plan costs' wear pace (:meth:`clearsweep.budget.WearPace.scaled`: Archard's k of
     the surface worn, times ``wear.amplification``, and the clearance); None where the pace
     is unknown: no pace in the plan costs, no wear, or a joint with clearance that is not a
-    ball in its socket (the bearing O, the guide P), whose pace no run has measured."""
-    from .core.joints import JOINTS as TABLE
+    ball in its socket (the bearing O, the guide P, the slider-crank's pins A and B), whose
+    pace no run has measured."""
+    from .core.joints import row_types
     from .params import BASE_MATERIAL, surface_material
 
     pace = plan_costs().wear_pace
@@ -256,10 +257,11 @@ def wear_pace(cfg: Config) -> list[tuple[float, float, float, float, float, floa
         return None
     materials = resolve_materials(cfg)
     out = []
-    for (_, joint), row in zip(joint_configs(cfg), TABLE, strict=True):
+    types = row_types(cfg.mechanism.kind == "slider_crank")
+    for (_, joint), kind in zip(joint_configs(cfg), types, strict=True):
         if joint.clearance <= 0.0:
             continue
-        if row.type not in PACED_TYPES or getattr(joint, "type", row.type) not in PACED_TYPES:
+        if kind not in PACED_TYPES or getattr(joint, "type", kind) not in PACED_TYPES:
             return None
         k = joint.wear_coefficient
         k = surface_material(joint, materials).wear_coefficient_m2_per_N if k is None else k

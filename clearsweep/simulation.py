@@ -53,7 +53,7 @@ def check_step(cfg: Config, packed: Packed) -> None:
     for j in range(L.N_JOINTS):
         if not jointset.frees(packed.jp, j):
             continue
-        rate = HOST_HOOKS[row_type(packed.jp, j)].rate(packed.jp, j, packed.p, preset, m_ref)
+        rate = HOST_HOOKS[row_type(packed.jp, j, packed.p)].rate(packed.jp, j, packed.p, preset, m_ref)
         bounds.append(solver.stability_limit * 2 ** solver.max_substep_level / rate)
     limit = min(bounds)
     if dt > limit:

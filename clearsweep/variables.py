@@ -22,7 +22,8 @@ class VariableSpec:
 
 #: The mechanism's joints, in the joint table's order (the ``joint`` dimension).
 JOINTS = tuple(joint.name for joint in JOINT_TABLE)
-#: Each joint's type by name: ``spherical`` (a ball in a socket: its map covers the socket's
+#: Each joint's type by name in the joint table (the RSSP's; the slider-crank's A and B are
+#: revolute, ``core.joints.SLIDER_CRANK_TYPES``): ``spherical`` (a ball in a socket: its map covers the socket's
 #: sphere) or ``revolute`` (a journal in a bearing: one row of its map, around the bearing).
 JOINT_TYPES = {joint.name: joint.type for joint in JOINT_TABLE}
 AXES = ("x", "y", "z")
@@ -64,7 +65,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
                                 "e - c_eff(n); negative while free flight"),
     "eccentricity": VariableSpec(("time", "joint"), "m", "ball-centre offset e = |d|"),
     "ball_offset": VariableSpec(("time", "joint", "axis"), "m", "ball-centre offset d in the socket frame",
-                                "d = ball centre - socket centre, socket body frame"),
+                                "d = ball centre - socket centre, socket body frame (a bearing's: "
+                                "x its axis; the slider-crank's A: y along the rod)"),
     "wear_depth_max": VariableSpec(("time", "joint"), "m", "maximum wear depth on the wear map",
                                    "largest bin of the socket wear map so far"),
     "energy_kinetic": VariableSpec(("time",), "J", "kinetic energy"),
@@ -76,7 +78,8 @@ CASE_VARIABLES: dict[str, VariableSpec] = {
     "constraint_violation": VariableSpec(("time",), "m", "largest position-constraint violation"),
     "wear_map": VariableSpec(("joint", "polar", "azimuth"), "m", "socket wear depth map",
                              "bin-averaged Archard wear depth over the socket inner sphere, socket "
-                             "frame; O: row 0 around the bearing; P: the guide's walls +y, -y, +z, "
+                             "frame; O (and the slider-crank's A, B): row 0 around the bearing; "
+                             "P: the guide's walls +y, -y, +z, "
                              "-z as four bands of polar // 4 rows across the wall by azimuth bins "
                              "along the guide, each bin the depth of the corners' track over "
                              "it (volume over track width x bin length)"),
@@ -165,8 +168,9 @@ CASE_VARIABLES.update(POINCARE)
 #: Coordinates and their attributes.
 COORDINATES: dict[str, VariableSpec] = {
     "time": VariableSpec(("time",), "s", "time"),
-    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical; O: crank "
-                                          "bearing, revolute; P: slider guide, prismatic)"),
+    "joint": VariableSpec(("joint",), "", "joint (A: crank-rod, B: rod-slider, spherical, revolute "
+                                          "in the slider-crank; O: crank bearing, revolute; P: slider "
+                                          "guide, prismatic)"),
     "axis": VariableSpec(("axis",), "", "Cartesian axis"),
     "polar": VariableSpec(("polar",), "degree", "polar angle of the wear-map bin centre",
                           "measured from the socket frame's +z axis"),

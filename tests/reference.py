@@ -340,8 +340,10 @@ class ContactResult:
 
 
 def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
-    """Contact state and forces of clearance joint j (A, B: spherical; O: the journal; P: the
-    block's corners; a bushing at A, B or O)."""
+    """Contact state and forces of clearance joint j (A, B: spherical in the RSSP, journals in
+    the slider-crank; O: the journal; P: the block's corners; a bushing at A, B or O). A
+    slider-crank pin (``mech.planar``) is a journal in a bearing: its gap in the plane (y,
+    z; the axial offset is the rod's held row), the journal's law as O's."""
     if mech.bushing[j]:
         return bushing_contact(mech, j, q, qd)
     if j == JOINT_O:
@@ -354,14 +356,19 @@ def contact(mech: Mechanism, j, q, qd, dv0_stored=0.0):
     pb = point(q, bb, ub)
     ps = point(q, sb, us)
     d = pb - ps
+    if mech.planar:
+        d[0] = 0.0                                       # a pin: the gap in the plane
     e = np.linalg.norm(d)
     n = d / e if e > 0.0 else np.array([1.0, 0.0, 0.0])  # centred: no contact, any n
     qj = pb + rj * n
     qi = ps + ri * n
     jj = point_jacobian(q, bb, body_offset(q, bb, qj))
     ji = point_jacobian(q, sb, body_offset(q, sb, qi))
+    n_pin = mech.exponent if mech.exponent > 0.0 else JOURNAL_EXPONENT
 
     def law(delta, ddot, kappa):
+        if mech.planar:
+            return journal_force(delta, ddot, c, ew, ri, rj, kappa, n_pin)
         if mech.exponent > 0.0:
             return journal_force(delta, ddot, c, ew, ri, rj, kappa, mech.exponent)
         return normal_force(delta, ddot, c, ew, ri, kappa)

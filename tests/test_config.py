@@ -258,10 +258,13 @@ def _consistent(raw):
         if joint["wear_coefficient"] is not None:
             joint["wear_coefficient"] = min(joint["wear_coefficient"], config_module.MAX_WEAR_COEFFICIENT)
         for key in ("length", "base_thickness", "coating_thickness"):
-            if key in joint:
+            if joint.get(key) is not None:
                 joint[key] = min(joint[key], longest)
                 if key != "length" and 0.0 < joint[key] < config_module.MIN_LAYER_M:
                     joint[key] = config_module.MIN_LAYER_M
+    if mechanism["kind"] != "slider_crank":     # a pin's bearing length: the slider-crank's
+        for name in config_module.SLIDER_CRANK_PINS:
+            raw["joints"][name]["length"] = None
     bearing = raw["joints"]["O"]
     crank = config_module.PRESET_LINKS_M[mechanism["preset"]][0]   # room for 3 c below
     bearing["bearing_radius"] = min(max(bearing["bearing_radius"], config_module.MIN_BEARING_RADIUS_M),
@@ -408,7 +411,7 @@ def test_message_format_exactly():
     assert str(info.value) == (
         "my.yaml: joints.A.clearence: got 0.001; expected one of the keys of joints.A (clearance, "
         "socket_radius, coating, coating_thickness, base_thickness, wear_coefficient, type, "
-        "bushing_stiffness, bushing_damping); "
+        "bushing_stiffness, bushing_damping, length); "
         "did you mean 'joints.A.clearance'?")
     assert info.value.value == 0.001 and info.value.suggestion == "joints.A.clearance"
     assert isinstance(info.value, ValueError)

@@ -1585,6 +1585,23 @@ ISSUE44_PIN_BUSHINGS = [
 ]
 ROWS += ISSUE44_PIN_BUSHINGS
 
+ISSUE44_PINS = [
+    ("a bearing length at the RSSP's ball joint A (was: unknown key joints.A.length)",
+     lambda t, f: ["run", ONE, "--set", "joints.A.length=0.02", "-o", t / "out.nc"], 2,
+     "joints.A.length: got 0.02 (from --set); expected null where mechanism.kind is rssp"),
+    ("a slider-crank pin's bearing length longer than its rod (was: unknown key "
+     "joints.B.length)",
+     lambda t, f: ["validate", ONE, "--set", "mechanism.kind=slider_crank", "--set",
+                   "mechanism.preset=flores_benchmark", "--set", "joints.B.length=0.5"], 2,
+     "joints.B.length: got 0.5 (from --set); expected a number <= 0.12 m, the mechanism's "
+     "longest link (the rod)"),
+    ("a slider-crank pin's bearing length of 0 (was: unknown key joints.B.length)",
+     lambda t, f: ["validate", ONE, "--set", "mechanism.kind=slider_crank", "--set",
+                   "mechanism.preset=flores_benchmark", "--set", "joints.B.length=0"], 2,
+     "joints.B.length: got 0 (from --set)"),
+]
+ROWS += ISSUE44_PINS
+
 
 def friction_materials(tmp: Path, mu: str) -> str:
     """A user materials file giving PTFE the friction coefficient ``mu``."""

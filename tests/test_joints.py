@@ -250,21 +250,29 @@ def test_every_joint_types_protocol_returns_its_shape_and_neutral_values():
 
 
 def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
-    """jointkinds' masks put each row of the table under its own type alone, its multi-contact
-    rows are those whose type has several contact points, and a row's ball body state is the
-    one its body's slots of joints.BODIES give (for the guide's block, bit for bit the state
-    dynamics.evaluate hands the guide's contact)."""
+    """jointkinds' masks put each row of the table under its own type alone (in the RSSP's
+    builds the table's type, in the slider-crank's its own: A and B revolute), its
+    multi-contact rows are those whose type has several contact points, and a row's ball
+    body state is the one its body's slots of joints.BODIES give (for the guide's block, bit
+    for bit the state dynamics.evaluate hands the guide's contact)."""
     from clearsweep.core import jointkinds as kinds
+    from clearsweep.core import jointset
     from clearsweep.core.dynamics import slider_state
 
-    masks = {"spherical": kinds.SPHERICAL, "revolute": kinds.REVOLUTE,
-             "prismatic": kinds.PRISMATIC, "bushing": kinds.BUSHING}
-    assert set(masks) == set(joints.JOINT_TYPES) == set(kinds.MODULES)
-    for j, joint in enumerate(joints.JOINTS):
-        assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [joint.type], joint.name
-        module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[joint.type]}")
-        assert kinds.is_multi(j) == (module.CONTACTS > 1) and kinds.contacts(j) == module.CONTACTS
-        assert (kinds.MULTI_ROW == j) == (module.CONTACTS > 1), joint.name
+    for spec, slider_crank in ((jointset.ALL, False), (jointset.ALL | jointset.SLIDER_CRANK, True)):
+        masks = {"spherical": kinds.spherical_rows(spec), "revolute": kinds.revolute_rows(spec),
+                 "prismatic": kinds.prismatic_rows(spec), "bushing": kinds.BUSHING}
+        assert set(masks) == set(joints.JOINT_TYPES) == set(kinds.MODULES)
+        types = joints.row_types(slider_crank)
+        for j, joint in enumerate(joints.JOINTS):
+            assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [types[j]], joint.name
+            assert kinds.is_revolute(spec, j) == (types[j] == "revolute"), joint.name
+            module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[types[j]]}")
+            assert kinds.is_multi(j) == (module.CONTACTS > 1)
+            assert kinds.contacts(spec, j) == module.CONTACTS
+            assert (kinds.MULTI_ROW == j) == (module.CONTACTS > 1), joint.name
+    assert joints.row_types(False) == tuple(joint.type for joint in joints.JOINTS)
+    assert joints.row_types(True) == ("revolute", "revolute", "revolute", "prismatic")
     rng = np.random.default_rng(3)
     y = rng.normal(scale=0.1, size=L.N_Y)
     bodies = {b.name: b for b in joints.BODIES}

@@ -433,14 +433,14 @@ def out_of_plane(pk, raw, ds) -> float:
     guide, the ball offsets across the plane, and the out-of-plane angles (the crank's
     alpha and beta, the rod's alpha off pi/2 and its spin gamma, the slider's three) times
     the body's length (the rod's, the crank's, the slider block's). The offsets are in
-    their socket's frame: B's the slider's and O's the ground's (x across the plane), A's
-    the rod's, whose y is -x where the rod lies in the plane (alpha3 = pi/2, gamma3 = 0,
-    which the angles check)."""
+    their bearing's frame, x its axis, across the plane (A's turns with the rod; was: A's
+    in the rod's frame, its y across the plane); a bearing's gap drops its axial part, so
+    the centroids' x and the angles carry the check."""
     y = raw.y
     shifts = [np.abs(y[:, r]).max() for r in (L.Y_R2, L.Y_R3, L.Y_R4)]
     shifts.append(np.abs(y[:, L.Y_R4 + 2] - pk.p[L.P_ZS]).max())
     offset = ds.ball_offset.values
-    shifts += [np.abs(offset[:, INDEX["A"], 1]).max(), np.abs(offset[:, INDEX["B"], 0]).max(),
+    shifts += [np.abs(offset[:, INDEX["A"], 0]).max(), np.abs(offset[:, INDEX["B"], 0]).max(),
                np.abs(offset[:, INDEX["O"], 0]).max()]
     block = pk.jp[INDEX["P"], L.J_BLOCK_LENGTH]
     shifts += [L2 * np.abs(y[:, L.Y_PHI2:L.Y_PHI2 + 2]).max(),
@@ -508,19 +508,27 @@ def test_the_benchmark_with_a_clearance_at_b_runs_half_a_second():
 # ---------------------------------------------------------------------------
 
 def test_settled_statistics_converge_with_the_step():
-    """0.5 mm at B, 1000 rpm, five revolutions, the settled window from the second: with dt
-    1e-5, 5e-6 and 2.5e-6 s the same impacts at B (20 settled), and the settled slider
-    acceleration's RMS and peak, B's peak normal force, contact fraction, peak penetration
-    and fastest impact, the crank torque's peak and B's worn volume change by < 1e-2 from
-    the first step to the second and by < 5e-3 from the second to the third. Measured:
-    at most 8.3e-3 (the torque's peak) and 3.5e-3. At the benchmark's 5000 rpm (and from
-    about 2000 rpm) the impacts at B are not periodic and their peaks change by 5-95 %
-    with the step, as expected of an unsteady motion: this check runs below that."""
+    """0.5 mm at B, 1000 rpm, five revolutions, the settled window from the second, the
+    benchmark's Hertz law with Lankarani-Nikravesh damping at restitution 0.5 and
+    Baumgarte's 50 1/s: with dt 5e-6, 2.5e-6 and 1.25e-6 s the impacts at B agree to one
+    (16, 16, 15 settled: an episode at the edge of contact splits at the finest), and the
+    settled slider acceleration's RMS and peak, B's peak normal force, contact fraction,
+    peak penetration and fastest impact, the crank torque's peak and B's worn volume change
+    by < 1e-2 from the first step to the second and by < 2e-3 from the second to the third
+    (measured: at most 4.4e-3 and 5.4e-4). B is a pin (Hertz's law, a bearing's strip):
+    under the paper's layered law of a ball (was) the same three steps from 1e-5 s gave 20
+    impacts each; with the pin's law from 1e-5 s they give 27, 9 and 11, and at restitution
+    0.9 89, 116 and 94. At the
+    benchmark's 5000 rpm (and from about 2000 rpm) the impacts at B are not periodic and
+    their peaks change by 5-95 % with the step, as expected of an unsteady motion: this
+    check runs below that."""
     stats = []
-    for dt in (1e-5, 5e-6, 2.5e-6):
+    law = {"elastic": "hertz", "hertz_exponent": 1.5, "damping": "lankarani_nikravesh",
+           "restitution": 0.5, "impact_velocity": "onset"}
+    for dt in (5e-6, 2.5e-6, 1.25e-6):
         _, _, _, ds = run({"mechanism": {"speed_rpm": 1000.0}, "joints": {"B": B_CLEARANCE},
-                           "metrics": {"settle_revolutions": 1.0},
-                           "solver": {"revolutions": 5.0, "dt": dt,
+                           "metrics": {"settle_revolutions": 1.0}, "contact": law,
+                           "solver": {"revolutions": 5.0, "dt": dt, "baumgarte": [50.0, 50.0],
                                       "save_every": int(round(1e-5 / dt))}})
         assert str(ds.status.values) == "ok"
         b = ds.sel(joint="B")
@@ -534,10 +542,10 @@ def test_settled_statistics_converge_with_the_step():
                                 float(ds.crank_torque_peak_settled),
                                 float(b.wear_volume)])))
     counts = [n for n, _ in stats]
-    assert counts[0] > 5 and len(set(counts)) == 1, counts
+    assert counts[0] > 5 and max(counts) - min(counts) <= 1, counts
     (_, coarse), (_, mid), (_, fine) = stats
     assert np.all(np.abs(mid / coarse - 1) < 1e-2), mid / coarse - 1
-    assert np.all(np.abs(fine / mid - 1) < 5e-3), fine / mid - 1
+    assert np.all(np.abs(fine / mid - 1) < 2e-3), fine / mid - 1
 
 
 # ---------------------------------------------------------------------------
@@ -628,6 +636,11 @@ def test_the_rssps_identity_has_no_mechanism_kind():
     config = DEFAULTS.to_dict()
     config.pop("materials_file", None)
     del config["mechanism"]["kind"]
+    # the slider-crank's pins' length (null in the RSSP) is left out too (was: the key
+    # did not exist)
+    for joint in ("A", "B"):
+        assert config["joints"][joint].pop("length") is None
+        assert "length" not in implicit["config"]["joints"][joint]
     assert implicit["config"] == config
     slider_crank = run_identity(load_config({"mechanism": SLIDER_CRANK}))
     assert slider_crank["config"]["mechanism"]["kind"] == "slider_crank"

@@ -76,21 +76,32 @@ def test_slider_labels_hold_for_either_guide(sc):
 
 
 def test_orbit_draws_each_joint_in_the_mechanism_plane(tmp_path, sc):
-    """One panel per joint, the socket frame's plane that holds the crank's plane: A's socket
-    rides on the rod (x along it, z across it in the plane), B's on the slider (y, z); (was:
-    three panels per joint, xy, xz and yz, two of them a line along the axis off the plane)."""
+    """One panel per joint, the plane of the crank's: the slider-crank's pins A and B are
+    bearings, each journal in its bearing's y-z plane (A's frame turns with the rod, y along
+    it) (was: A drawn as a ball in its socket on the rod, d_x along the rod and d_z, titled
+    "joint A"). A file written when the pins were balls (its recorded types spherical) draws
+    them as balls, each in the plane its offsets span (was, before either: three panels per
+    joint, xy, xz and yz, two of them a line along the axis off the plane)."""
     fig = plot(sc, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
     axes = [(ax.get_xlabel(), ax.get_ylabel(), ax.get_title()) for ax in fig.axes]
     assert len(axes) == 2
-    (ax_a, ay_a, title_a), (ax_b, ay_b, title_b) = axes
-    assert (ax_a, ay_a) == ("d_x [mm]", "d_z [mm]") and title_a.startswith("joint A")
-    assert (ax_b, ay_b) == ("d_y [mm]", "d_z [mm]") and title_b.startswith("joint B")
-    assert "the mechanism's plane" in title_a and "off it" not in title_b
+    for (x_label, y_label, title), name in zip(axes, ("A", "B"), strict=True):
+        assert (x_label, y_label) == ("d_y [mm]", "d_z [mm]")
+        assert title == f"bearing {name}: journal in the bearing's plane, yz"
+    older = sc.copy()
+    older.attrs = {**sc.attrs, "joint_A_type": "spherical", "joint_B_type": "spherical"}
+    fig = plot(older, "orbit", tmp_path / "older.png", dpi=TEST_DPI)
+    title_a, title_b = (ax.get_title() for ax in fig.axes)
+    assert title_a.startswith("joint A: the mechanism's plane")
+    assert title_b.startswith("joint B: the mechanism's plane") and "off it" not in title_b
 
 
 def test_orbit_names_a_departure_from_the_plane(tmp_path, sc):
-    """A centre that leaves the plane by more than round-off says by how much in its panel."""
+    """A ball's centre that leaves the plane by more than round-off says by how much in its
+    panel (a file written when the slider-crank's pins were balls: a bearing's offset has
+    no axial part)."""
     off = sc.copy(deep=True)
+    off.attrs = {**sc.attrs, "joint_A_type": "spherical", "joint_B_type": "spherical"}
     off["ball_offset"].loc[{"joint": "B", "axis": "x"}] = 2.0e-5
     fig = plot(off, "orbit", tmp_path / "orbit.png", dpi=TEST_DPI)
     title = fig.axes[1].get_title()

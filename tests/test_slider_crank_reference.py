@@ -91,19 +91,22 @@ def sc_case(joints, elastic="hertz", **sections):
 
 
 def planar_contact_state(y, pk, rng, delta=2e-6, ddot=3e-3, slip=5e-2):
-    """The balls of A and B (where they have clearance) pressed delta into their sockets in
+    """The pins of A and B (where they have clearance) pressed delta into their bearings in
     random directions of the crank's plane (y-z), approaching at ddot and slipping at
-    ``slip`` in that plane; the rod and slider follow (test_reference.place_balls)."""
+    ``slip`` in that plane; the rod and slider follow (test_reference.place_balls).
+    ``delta`` and ``ddot``: one value for both, or a pair (A's, B's)."""
     p, jp = pk.p, pk.jp
     joints = [j for j in (A, B) if jp[j, L.J_CLEARANCE] != 0.0]
+    deltas = dict(zip((A, B), np.broadcast_to(delta, 2), strict=True))
+    ddots = dict(zip((A, B), np.broadcast_to(ddot, 2), strict=True))
     offsets = {}
     for j in joints:
         phi = rng.uniform(-np.pi, np.pi)
-        offsets[j] = (jp[j, L.J_C] + delta) * np.array([0.0, np.cos(phi), np.sin(phi)])
+        offsets[j] = (jp[j, L.J_C] + deltas[j]) * np.array([0.0, np.cos(phi), np.sin(phi)])
     y = place_balls(y, p, jp, offsets)
     for j in joints:
         # the slip's direction: the plane's tangent of n (set_contact_velocity keeps it)
-        y = set_contact_velocity(y, p, jp, j, ddot, slip * unit(np.array([0.0, 1.0, 1.0])))
+        y = set_contact_velocity(y, p, jp, j, ddots[j], slip * unit(np.array([0.0, 1.0, 1.0])))
     return y
 
 
@@ -185,16 +188,16 @@ def test_reference_against_closed_form(rpm):
 
 @pytest.mark.parametrize("joints", list(SC_JOINTS))
 def test_slider_crank_states(joints):
-    """Drifted states at four crank angles (ideal: drifted only), each clearance joint pressed
+    """Drifted states at six crank angles (ideal: drifted only), each clearance joint pressed
     2e-6 m into contact, approaching at 3e-3 m/s and slipping at 5e-2 m/s in the crank's
-    plane, with and without stored impact velocities; then in random directions; and the
-    start (params.initial_state, seated by pack where a joint has clearance)."""
+    plane, with and without stored impact velocities; and the start (params.initial_state,
+    seated by pack where a joint has clearance). The pins A and B touch in the plane only
+    (was: two of the states in random directions across it, a ball's)."""
     pk = sc_case(SC_JOINTS[joints])
     rng = np.random.default_rng(200 + list(SC_JOINTS).index(joints))
     results = [compare(0.0, pk.y0, pk)]
-    for t, planar in ((0.0, True), (0.13, True), (0.41, True), (0.77, True), (0.29, False),
-                      (0.6, False)):
-        y = sc_state(pk, t, rng, planar)
+    for t in (0.0, 0.13, 0.41, 0.77, 0.29, 0.6):
+        y = sc_state(pk, t, rng)
         res = compare(t, y, pk)
         in_contact(res, pk)
         results.append(res)
@@ -270,8 +273,9 @@ def test_slider_crank_bushings(joints):
 
 
 def test_slider_crank_paper_law():
-    """The paper's elastic law (contact.elastic: paper) at A and B and the journal's Hertz
-    law at O: the reference's other branch."""
+    """Under the paper's elastic law (contact.elastic: paper) the slider-crank's pins A and B
+    take the journal's Hertz law as O does (was: the paper's layered law at A and B, a
+    ball's): the reference's journal branch for the pins."""
     pk = sc_case(SC_JOINTS["OAB"], elastic="paper")
     assert pk.p[L.P_EXPONENT] == 0.0
     rng = np.random.default_rng(500)
@@ -341,8 +345,9 @@ def test_slider_crank_stiff_rate_undamped():
     pk = sc_case(SC_JOINTS["AB"], contact={"restitution": 1.0}, friction={"enabled": False})
     rng = np.random.default_rng(700)
     for t in (0.0, 0.35):
-        y = contact_state(base_state(pk, pk.p[L.P_OMEGA] * t), pk.p, pk.jp, rng,
-                          delta=(-0.5 * CLEAR, 3e-6), ddot=(-1e-3, -1e-4))
+        # in the plane: a pin's gap (was: random directions, a ball's)
+        y = planar_contact_state(base_state(pk, pk.p[L.P_OMEGA] * t), pk, rng,
+                                 delta=(-0.5 * CLEAR, 3e-6), ddot=(-1e-3, -1e-4))
         k = run_evaluate(t, y, pk.p, pk.jp)
         r = ref_mod.evaluate(t, y, pk.p, pk.jp)
         c = r.contacts[B]

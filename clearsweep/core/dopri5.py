@@ -223,9 +223,10 @@ def onset_step(p, jp, dg0, dg1, h, model, y0, y1, spec=ALL):
         if is_multi(j):
             s0 = type_body(spec, j, y0)
             s1 = type_body(spec, j, y1)
-            for k in range(contacts(j)):
-                shorter = onset_within(kinds.penetration(j, model, k, s0),
-                                       kinds.penetration(j, model, k, s1), h, tol, shorter)
+            for k in range(contacts(spec, j)):
+                shorter = onset_within(kinds.penetration(spec, j, model, k, s0),
+                                       kinds.penetration(spec, j, model, k, s1), h, tol,
+                                       shorter)
             continue
         # signed: the gap is -delta before contact
         shorter = onset_within(dg0[D_DELTA + j], dg1[D_DELTA + j], h, tol, shorter)
@@ -381,7 +382,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
         keep_ends(work.prev, dg, y, spec)
         record_sample(stats, work.prev, dg1, y1, jp, hh,
                       max(0.0, (settle - t) / hh) if in_settled else -1.0, spec)
-        merge_wear(wmap, cur, pend, wmax, scratch)
+        merge_wear(wmap, cur, pend, wmax, scratch, spec)
         if multi_free(spec, jp):
             deposit_multi(wmap, cur, wmax, jp, case.wvol, spec)
         # output rows inside the step, from the continuous extension (before y moves on)
@@ -429,7 +430,7 @@ def advance_dopri5(case, t0, n_steps, save_every, out, work, spec):
         status = step_checks(y, dg, p, jp, status, e0, out.track, spec)
         grow = GROW_MAX if err == 0.0 else min(GROW_MAX, SAFETY * err ** -0.2)
         h = min(hh * grow, hmax)
-    flush_all_wear(wmap, pend, wmax, scratch)
+    flush_all_wear(wmap, pend, wmax, scratch, spec)
     if status == ST_OK and n_saved > 0:
         copy_row(out.wmax, n_saved - 1, wmax)
     deepest = 0

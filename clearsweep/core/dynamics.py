@@ -34,6 +34,7 @@ from numba import types
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
+from .jointkinds import is_revolute, is_revolute_on
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
@@ -834,6 +835,10 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if is_bushing(spec, jp, joint_a):
             fA, mA2, mA3, dA = bushing.contact(joint_a, model, (r2, v2, R2, w2, uA2),
                                                (r3, v3, R3, w3, uA3), full, dg)
+        elif is_revolute(spec, joint_a):
+            # the slider-crank's crank pin in the rod's eye
+            fA, mA2, mA3, dA = revolute.contact(joint_a, model, (r2, v2, R2, w2, uA2),
+                                                (r3, v3, R3, w3, uA3), full, dg)
         else:
             fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
                                                  (r3, v3, R3, w3, uA3), full, dg)
@@ -850,6 +855,10 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if is_bushing(spec, jp, joint_b):
             fB, mB3, mB4, dB = bushing.contact(joint_b, model, (r3, v3, R3, w3, uB3),
                                                (r4, v4, R4, w4, zero), full, dg)
+        elif is_revolute(spec, joint_b):
+            # the slider-crank's wrist pin in the slider
+            fB, mB3, mB4, dB = revolute.contact(joint_b, model, (r3, v3, R3, w3, uB3),
+                                                (r4, v4, R4, w4, zero), full, dg)
         else:
             fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
                                                  (r4, v4, R4, w4, zero), full, dg)
@@ -1087,7 +1096,7 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g):
         c_eff = dg[D_CEFF + j]
         ri = jp[j, J_RI]
         rj = jp[j, J_RJ]
-        law = revolute.journal_law(p) if j == JOINT_O else p[P_EXPONENT]
+        law = revolute.journal_law(p) if is_revolute_on(g, j) else p[P_EXPONENT]
         dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri, rj, law)
         kappa = contact_damping(s[j, S_DV0], ddot, p)
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)

@@ -4,10 +4,15 @@
 
 Each registered type's rows of ``joints.JOINTS`` are a bitmask (:data:`SPHERICAL`,
 :data:`REVOLUTE`, :data:`PRISMATIC`, :data:`BUSHING`: bit j, joint j), read when the kernel
-is imported and frozen into it as compile-time constants; :func:`of_kind` tests row j
-against one (a shift and a mask, which LLVM folds where j is known). Every dispatcher here
-takes the protocol function's own parameters and calls the type module's function of the
-same name; ``rk4`` and ``dopri5`` call these and name no joint and no type. A bushing stands
+is imported and frozen into it as compile-time constants; the planar slider-crank's rows
+(``joints.SLIDER_CRANK_TYPES``: its pins A and B revolute) are masks of their own
+(:data:`SC_SPHERICAL`, :data:`SC_REVOLUTE`, ...). :func:`spherical_rows`,
+:func:`revolute_rows` and :func:`prismatic_rows` pick a build's from its joint set ``spec``
+(``jointset.guide_axis``, a constant of the build), and :func:`of_kind` tests row j against
+one (a shift and a mask, which LLVM folds where j is known): an RSSP build's dispatch is the
+table's, its code as before. Every dispatcher here takes the build's joint set and then the
+protocol function's own parameters, and calls the type module's function of the same name;
+``rk4`` and ``dopri5`` call these and name no joint and no type. A bushing stands
 in for a table joint per case (``jointset.is_bushing``, ``dynamics.evaluate``), never as a
 row's type: its mask is 0 and its branches fold away; it never has clearance, so that the
 loops below (which test ``jointset.has_clearance``) pass it by.
@@ -22,7 +27,7 @@ state vector at the ball's body's slots in ``joints.BODIES``.
 
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
-from .joints import BODIES, JOINT_TYPES, JOINTS
+from .joints import BODIES, JOINT_TYPES, JOINTS, row_types
 from .jointset import guide_axis, has_clearance
 from .kinematics import gmat, mv, rotation, trig
 from .layout import Y_QD
@@ -35,9 +40,10 @@ if set(MODULES) != set(JOINT_TYPES):
                       f"are {sorted(JOINT_TYPES)}")
 
 
-def rows_of(type_name: str) -> int:
-    """The joint table's rows of one type, a bitmask (bit j: joint j)."""
-    return sum(1 << j for j, joint in enumerate(JOINTS) if joint.type == type_name)
+def rows_of(type_name: str, slider_crank: bool = False) -> int:
+    """The rows of one type, a bitmask (bit j: joint j): the joint table's (the RSSP's), or
+    with ``slider_crank`` the planar slider-crank's (``joints.row_types``)."""
+    return sum(1 << j for j, kind in enumerate(row_types(slider_crank)) if kind == type_name)
 
 
 SPHERICAL = rows_of("spherical")
@@ -45,6 +51,16 @@ REVOLUTE = rows_of("revolute")
 PRISMATIC = rows_of("prismatic")
 #: 0: a bushing is never a row's type (it stands in per case)
 BUSHING = rows_of("bushing")
+
+#: The slider-crank's rows of each type (``joints.SLIDER_CRANK_TYPES``: its pins A and B
+#: revolute), which a build of that mechanism (``jointset.guide_axis`` 1) dispatches on.
+SC_SPHERICAL = rows_of("spherical", True)
+SC_REVOLUTE = rows_of("revolute", True)
+SC_PRISMATIC = rows_of("prismatic", True)
+SC_BUSHING = rows_of("bushing", True)
+if any(MODULES[kind].CONTACTS > 1 for kind in set(row_types(True)) - set(row_types(False))):
+    raise ImportError("the slider-crank's own types must touch at one point: MULTI and "
+                      "MULTI_ROW are the joint table's")
 
 #: The rows whose type touches at several points (its module's ``CONTACTS`` > 1), a bitmask.
 MULTI = sum(1 << j for j, joint in enumerate(JOINTS) if MODULES[joint.type].CONTACTS > 1)
@@ -78,6 +94,40 @@ def of_kind(rows, j):
 
 
 @compiled(inline="always")
+def is_revolute_on(g, j):
+    """Whether row j is of the revolute type in a build whose slider's guide runs along
+    global axis ``g`` (``jointset.guide_axis``: 1 the slider-crank's, :data:`SC_REVOLUTE`)."""
+    return of_kind(SC_REVOLUTE if g == 1 else REVOLUTE, j)
+
+
+@compiled(inline="always")
+def spherical_rows(spec):
+    """The rows of the spherical type in a build of joint set ``spec`` (a constant of the
+    build: the slider-crank's, :data:`SC_SPHERICAL`, where ``jointset.guide_axis`` is 1)."""
+    return SC_SPHERICAL if guide_axis(spec) == 1 else SPHERICAL
+
+
+@compiled(inline="always")
+def revolute_rows(spec):
+    """The rows of the revolute type in a build of joint set ``spec`` (the slider-crank's
+    O, A and B: :data:`SC_REVOLUTE`)."""
+    return SC_REVOLUTE if guide_axis(spec) == 1 else REVOLUTE
+
+
+@compiled(inline="always")
+def prismatic_rows(spec):
+    """The rows of the prismatic type in a build of joint set ``spec``."""
+    return SC_PRISMATIC if guide_axis(spec) == 1 else PRISMATIC
+
+
+@compiled(inline="always")
+def is_revolute(spec, j):
+    """Whether row j is of the revolute type in a build of joint set ``spec``
+    (``dynamics.evaluate`` chooses A's and B's contact by it)."""
+    return is_revolute_on(guide_axis(spec), j)
+
+
+@compiled(inline="always")
 def is_multi(j):
     """Whether joint j's type touches at several points (:data:`MULTI`)."""
     return of_kind(MULTI, j)
@@ -92,13 +142,13 @@ def multi_free(spec, jp):
 
 
 @compiled(inline="always")
-def contacts(j):
+def contacts(spec, j):
     """Contact points of joint j's type (its module's ``CONTACTS``)."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.CONTACTS
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.CONTACTS
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.CONTACTS
     return bushing.CONTACTS
 
@@ -147,109 +197,109 @@ def type_vector(spec, j, v):
 
 
 @compiled(inline="always")
-def paper_angle(jp, j, pen, e):
+def paper_angle(spec, jp, j, pen, e):
     """``joints.PROTOCOL``'s ``paper_angle`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.paper_angle(jp, j, pen, e)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.paper_angle(jp, j, pen, e)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.paper_angle(jp, j, pen, e)
     return bushing.paper_angle(jp, j, pen, e)
 
 
 @compiled(inline="always")
-def wear_surface(jp, j, pen, e, n):
+def wear_surface(spec, jp, j, pen, e, n):
     """``joints.PROTOCOL``'s ``wear_surface`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.wear_surface(jp, j, pen, e, n)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.wear_surface(jp, j, pen, e, n)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.wear_surface(jp, j, pen, e, n)
     return bushing.wear_surface(jp, j, pen, e, n)
 
 
 @compiled(inline="always")
-def cap_mergeable(j, d2, tol, area, scale):
+def cap_mergeable(spec, j, d2, tol, area, scale):
     """``joints.PROTOCOL``'s ``cap_mergeable`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.cap_mergeable(j, d2, tol, area, scale)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.cap_mergeable(j, d2, tol, area, scale)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.cap_mergeable(j, d2, tol, area, scale)
     return bushing.cap_mergeable(j, d2, tol, area, scale)
 
 
 @compiled(inline="always")
-def deposit_cap(wmap, j, n, vol, area, scale, scratch):
+def deposit_cap(spec, wmap, j, n, vol, area, scale, scratch):
     """``joints.PROTOCOL``'s ``deposit_cap`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.deposit_cap(wmap, j, n, vol, area, scale, scratch)
     return bushing.deposit_cap(wmap, j, n, vol, area, scale, scratch)
 
 
 @compiled(inline="always")
-def accept(j, model, body, hs, in_settled, stats, cur):
+def accept(spec, j, model, body, hs, in_settled, stats, cur):
     """``joints.PROTOCOL``'s ``accept`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.accept(j, model, body, hs, in_settled, stats, cur)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.accept(j, model, body, hs, in_settled, stats, cur)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.accept(j, model, body, hs, in_settled, stats, cur)
     return bushing.accept(j, model, body, hs, in_settled, stats, cur)
 
 
 @compiled(inline="always")
-def deposit_step(wmap, j, jp, cur, wvol):
+def deposit_step(spec, wmap, j, jp, cur, wvol):
     """``joints.PROTOCOL``'s ``deposit_step`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.deposit_step(wmap, j, jp, cur, wvol)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.deposit_step(wmap, j, jp, cur, wvol)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.deposit_step(wmap, j, jp, cur, wvol)
     return bushing.deposit_step(wmap, j, jp, cur, wvol)
 
 
 @compiled(inline="always")
-def penetration(j, model, k, body):
+def penetration(spec, j, model, k, body):
     """``joints.PROTOCOL``'s ``penetration`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.penetration(j, model, k, body)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.penetration(j, model, k, body)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.penetration(j, model, k, body)
     return bushing.penetration(j, model, k, body)
 
 
 @compiled(inline="always")
-def section_offsets(jp, j, d, rate):
+def section_offsets(spec, jp, j, d, rate):
     """``joints.PROTOCOL``'s ``section_offsets`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.section_offsets(jp, j, d, rate)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.section_offsets(jp, j, d, rate)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.section_offsets(jp, j, d, rate)
     return bushing.section_offsets(jp, j, d, rate)
 
 
 @compiled(inline="always")
-def seat(j, model, dg, body):
+def seat(spec, j, model, dg, body):
     """``joints.PROTOCOL``'s ``seat`` of joint j's type."""
-    if of_kind(SPHERICAL, j):
+    if of_kind(spherical_rows(spec), j):
         return spherical.seat(j, model, dg, body)
-    if of_kind(REVOLUTE, j):
+    if of_kind(revolute_rows(spec), j):
         return revolute.seat(j, model, dg, body)
-    if of_kind(PRISMATIC, j):
+    if of_kind(prismatic_rows(spec), j):
         return prismatic.seat(j, model, dg, body)
     return bushing.seat(j, model, dg, body)
 

@@ -68,6 +68,27 @@ JOINTS = (
 #: Joints of the mechanism.
 N_JOINTS = len(JOINTS)
 
+#: The joints whose type the planar slider-crank (``mechanism.kind: slider_crank``,
+#: docs/mechanisms.md) changes from the table's: its crank pin A and wrist pin B are pins
+#: in bearings (revolute), not balls in sockets; O and P keep the table's types.
+SLIDER_CRANK_TYPES = {"A": "revolute", "B": "revolute"}
+
+#: In the slider-crank, each body's two axes (indices into its frame) that span the
+#: mechanism's plane (global y, z) in that order, the third along the bearings' axis
+#: (global x), right-handed with them: the rod's x (along the rod) and z (its alpha held at
+#: pi/2, ``dynamics.planar_rod``: its y axis along -x); the crank's, slider's and ground's
+#: y and z. A revolute joint whose bearing sits in a moving body reads its map in these
+#: (``revolute.gap``).
+PLANE_AXES = {"crank": (1, 2), "rod": (0, 2), "slider": (1, 2), "ground": (1, 2)}
+
+
+def row_types(slider_crank: bool) -> tuple[str, ...]:
+    """Each row's type (a key of :data:`JOINT_TYPES`), in the table's order, in the RSSP
+    (the table's) or, with ``slider_crank``, in the planar slider-crank
+    (:data:`SLIDER_CRANK_TYPES`)."""
+    own = SLIDER_CRANK_TYPES if slider_crank else {}
+    return tuple(own.get(joint.name, joint.type) for joint in JOINTS)
+
 #: A free coordinate of the equations of motion: a column of the ideal joints' constraint
 #: rows and of the free coordinates' mass matrix (``dynamics.NZ`` of them, in this order).
 #: ``body`` names the body it moves, ``axis`` the global axis of a centroid coordinate

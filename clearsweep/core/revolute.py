@@ -1,16 +1,21 @@
-"""The revolute clearance joint: the crank's journal in a worn, possibly coated bearing
-(docs/physics.md section 3.6, docs/modelling.md).
+"""The revolute clearance joint: a journal in a worn, possibly coated bearing: the crank's
+in the ground (O), and in the planar slider-crank the crank pin in the rod's eye (A) and
+the wrist pin in the slider (B) (docs/physics.md section 3.6, docs/modelling.md,
+docs/mechanisms.md).
 
 A joint type of the shape docs/architecture.md ("Joint types") describes, as
-``spherical.py`` is. The bearing sits in the ground at the origin, its axis along the
-global x axis (the crank's axis of rotation); its frame is the global frame. The journal
-centre moves in the bearing's plane (y, z): radial clearance. Axial play and tilt stay
-ideal (the crank's axial position and its two tilt angles are constrained), so the gap,
-the normal and the contact points lie in that plane:
+``spherical.py`` is. Every bearing's axis lies along the global x axis (the crank's axis
+of rotation). O's sits in the ground at the origin: its frame is the global frame. A's
+and B's sit in a body that moves in the plane (the rod turns in it): their frame turns
+with that body about x (:data:`BEARING_U`, :func:`to_bearing`), and their maps with it.
+The journal centre moves in the bearing's plane (y, z): radial clearance. Axial play and
+tilt stay ideal (the crank's axial position and its two tilt angles are constrained, the
+slider-crank's rod is held in its plane), so the gap, the normal and the contact points
+lie in that plane:
 
 - :func:`gap`: eccentricity e of the journal centre in the plane, the normal n (in the
   plane), the penetration against the worn clearance c_eff = c + h(phi) read from the
-  bearing map at the normal's angle phi = atan2(n_z, n_y);
+  bearing map at the normal's angle in the bearing's frame phi = atan2(n_z, n_y);
 - the bearing map: one row (``wmap[j, 0, :]``) of ``nazim`` bins around the bearing, the
   depth uniform along its length (the model does not resolve the length): :func:`map_read`,
   :func:`deposit`;
@@ -33,7 +38,8 @@ import math
 
 from .compiled import compiled
 from .contact import compose, offsets_over, seat_episode, store_contact
-from .kinematics import body_moment, point_state
+from .joints import JOINTS, PLANE_AXES
+from .kinematics import body_moment, mtv, point_state
 from .layout import (
     D_JOINT_FORCE,
     J_C,
@@ -54,6 +60,40 @@ CONTACTS = 1
 
 #: The journal's elastic exponent where the case keeps the paper's (spherical) law.
 JOURNAL_EXPONENT = 1.5
+
+
+def _bearing_axes(joint):
+    """(u, v, sign) of a joint's bearing in its socket body's frame: the body's two axes
+    spanning the mechanism's plane (``joints.PLANE_AXES``) and the sign that makes the
+    bearing's axis (u x v) the body's third axis or its opposite; (-1, -1, 1) for a
+    bearing in the ground, whose frame is the global frame."""
+    body = joint.socket.body
+    if body == "ground":
+        return -1, -1, 1.0
+    u, v = PLANE_AXES[body]
+    return u, v, 1.0 if (u + 1) % 3 == v else -1.0
+
+
+#: Each row's bearing axes in its socket body's frame where that body moves (the
+#: slider-crank's A, in the rod, and B, in the slider): the axes u, v that span the
+#: mechanism's plane; -1 where the bearing sits in the ground (O) and its frame is the
+#: global frame. Rows of other types never read them.
+BEARING_U = tuple(_bearing_axes(joint)[0] for joint in JOINTS)
+BEARING_V = tuple(_bearing_axes(joint)[1] for joint in JOINTS)
+#: The sign of the socket body's third axis along the bearing's axis, u x v.
+BEARING_SIGN = tuple(_bearing_axes(joint)[2] for joint in JOINTS)
+
+
+@compiled(inline="always")
+def to_bearing(j, a):
+    """A vector ``a`` in joint j's socket body's frame in its bearing's frame (x the
+    bearing's axis, u x v; y, z the body's axes u, v in the plane): (sign a_w, a_u, a_v);
+    ``a`` itself where the bearing sits in the ground."""
+    u = BEARING_U[j]
+    if u < 0:
+        return a
+    v = BEARING_V[j]
+    return (BEARING_SIGN[j] * a[3 - u - v], a[u], a[v])
 
 
 @compiled
@@ -100,15 +140,19 @@ def worn_through(wmap, j, n, coat):
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
     """Gap geometry of revolute joint j with journal centre pb and bearing centre ps
-    (global): (e, n, d_s, n_s, h, slope, worn, c_eff, delta), as ``spherical.gap``
-    (``joints.PROTOCOL``; one contact point, k = 0, and the bearing's frame is the global
-    frame: k and the rotation Rs are not read).
+    (global) in a bearing body of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff,
+    delta), as ``spherical.gap`` (``joints.PROTOCOL``; one contact point, k = 0, not read).
 
-    d = pb - ps in the bearing's plane (its axial part dropped: axial play is ideal);
-    e = |d|; n = d / e (e = 0: the y axis); the bearing frame is the global frame, so
-    d_s = d and n_s = n. h [m] is the bearing map's depth at n (0 without feedback);
-    ``slope`` = (dh/dphi / e) e_phi, e_phi = (0, -n_z, n_y), the gradient of h with respect to
-    the journal centre, so that grad_d delta = n - slope.
+    d = pb - ps in the mechanism's plane (global y, z; its axial part dropped: axial play
+    is ideal); e = |d|; n = d / e (e = 0: the y axis). In the ground's bearing (O) the
+    bearing's frame is the global frame: d_s = d, n_s = n, and Rs is not read. In a moving
+    body's (the slider-crank's A in the rod, B in the slider: :data:`BEARING_U`) d_s and
+    n_s are d and n in the bearing's frame (:func:`to_bearing` of R_s^T d), axial part 0:
+    the map's angle phi = atan2(n_s,z, n_s,y) is the angle of n about x less the body's
+    rotation about x. h [m] is the bearing map's depth at n_s (0 without feedback);
+    ``slope`` = (dh/dphi / e) e_phi, e_phi = (0, -n_z, n_y) (global: the body's rotation
+    shifts phi, not its rate), the gradient of h with respect to the journal centre, so
+    that grad_d delta = n - slope.
     """
     d = (0.0, pb[1] - ps[1], pb[2] - ps[2])
     e = math.sqrt(d[1] * d[1] + d[2] * d[2])
@@ -116,15 +160,23 @@ def gap(jp, j, wmap, p, k, pb, ps, Rs):
         n = (0.0, d[1] / e, d[2] / e)
     else:
         n = (0.0, 1.0, 0.0)
+    d_s = d
+    n_s = n
+    if BEARING_U[j] >= 0:
+        # a bearing in a moving body: d and n in its frame (the map turns with the body)
+        d_b = to_bearing(j, mtv(Rs, d))
+        n_b = to_bearing(j, mtv(Rs, n))
+        d_s = (0.0, d_b[1], d_b[2])
+        n_s = (0.0, n_b[1], n_b[2])
     h = 0.0
     slope = (0.0, 0.0, 0.0)
     if p[P_FEEDBACK] != 0.0:
-        h, dh = map_read(wmap, j, n, p[P_INTERP] != 0.0)
+        h, dh = map_read(wmap, j, n_s, p[P_INTERP] != 0.0)
         if e > 0.0 and dh != 0.0:
             slope = (0.0, -dh / e * n[2], dh / e * n[1])
-    worn = worn_through(wmap, j, n, jp[j, J_COAT])
+    worn = worn_through(wmap, j, n_s, jp[j, J_COAT])
     c_eff = jp[j, J_C] + h
-    return e, n, d, n, h, slope, worn, c_eff, e - c_eff
+    return e, n, d_s, n_s, h, slope, worn, c_eff, e - c_eff
 
 
 @compiled
@@ -167,11 +219,12 @@ def deposit(wmap, j, n, vol, area, radius_length):
 @compiled
 def contact(j, model, ball, socket, full, dg):
     """The bearing's action on the journal of revolute clearance joint j, as
-    ``spherical.contact`` (``joints.PROTOCOL``): the journal centre (``ball``: the crank's
+    ``spherical.contact`` (``joints.PROTOCOL``): the journal centre (``ball``: its body's
     (rb, vb, Rb, wb) and the centre's body offset) in the bearing (``socket``: the
-    ground's, all zero and unrotated), composed by ``contact.respond`` with the journal's
-    elastic law (:func:`journal_law`); with ``full`` the joint's contact state into dg,
-    its joint force the contact force (the kernel completes it with the axial reaction)."""
+    ground's, all zero and unrotated, at O; the rod's at A, the slider's at B), composed
+    by ``contact.respond`` with the journal's elastic law (:func:`journal_law`); with
+    ``full`` the joint's contact state into dg, its joint force the contact force (the
+    kernel completes it with the axial reaction)."""
     rb, vb, Rb, wb, ub = ball
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
@@ -241,8 +294,9 @@ def penetration(j, model, k, body):
 @compiled(inline="always")
 def section_offsets(jp, j, d, rate):
     """The journal's section offset and its rate over the clearance c (``joints.PROTOCOL``;
-    the axial part as the table's attachments give it)."""
-    return offsets_over(d, rate, jp[j, J_C])
+    the axial part as the table's attachments give it), in the bearing's frame
+    (:func:`to_bearing` of the socket body's ``d`` and ``rate``, as the gap's d_s)."""
+    return offsets_over(to_bearing(j, d), to_bearing(j, rate), jp[j, J_C])
 
 
 @compiled(inline="always")

@@ -198,11 +198,12 @@ WEAR_MERGE_AREA = 0.05
 
 
 @compiled
-def wear_mergeable(pend, cur, j):
+def wear_mergeable(pend, cur, j, spec):
     """Whether joint j's wear of the step, ``cur[j]``, may join its waiting wear ``pend[j]``
     (rows as in integrate: sum V n, sum V, sum V A, and the surface's scale: R_i on a
     sphere, R_i L on a bearing) without moving the cap noticeably (its type's
-    ``cap_mergeable``: within WEAR_MERGE_ANGLE of the cap's angular radius)."""
+    ``cap_mergeable``: within WEAR_MERGE_ANGLE of the cap's angular radius; ``spec``: the
+    build's joint set, which gives the row's type)."""
     ap = pend[j, 4] / pend[j, 3]
     ac = cur[j, 4] / cur[j, 3]
     if abs(ac - ap) > WEAR_MERGE_AREA * ap:
@@ -213,16 +214,18 @@ def wear_mergeable(pend, cur, j):
     for i in range(3):
         d = pend[j, i] / np_ - cur[j, i] / nc
         d2 += d * d
-    return kinds.cap_mergeable(j, d2, WEAR_MERGE_ANGLE, ap, pend[j, 5])
+    return kinds.cap_mergeable(spec, j, d2, WEAR_MERGE_ANGLE, ap, pend[j, 5])
 
 
 @compiled
-def flush_wear(wmap, j, pend, scratch):
+def flush_wear(wmap, j, pend, scratch, spec):
     """Spread joint j's waiting wear on its map (volume-weighted mean direction and cap
-    area, its type's ``deposit_cap``); clear it; return the largest depth written [m]."""
+    area, its type's ``deposit_cap`` in the build of joint set ``spec``); clear it; return
+    the largest depth written [m]."""
     size = math.sqrt(pend[j, 0] * pend[j, 0] + pend[j, 1] * pend[j, 1] + pend[j, 2] * pend[j, 2])
     n = (pend[j, 0] / size, pend[j, 1] / size, pend[j, 2] / size)
-    top = kinds.deposit_cap(wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5], scratch)
+    top = kinds.deposit_cap(spec, wmap, j, n, pend[j, 3], pend[j, 4] / pend[j, 3], pend[j, 5],
+                            scratch)
     for i in range(6):
         pend[j, i] = 0.0
     return top
@@ -688,7 +691,7 @@ def section_offsets(p, jp, ys, sec, k, spec):
             continue
         d = mtv(R, vsub(pb, pos))
         rate = vsub(mtv(R, vsub(vb, vel)), cross(w, d))
-        off, off_rate = kinds.section_offsets(jp, j, kinds.type_vector(spec, j, d),
+        off, off_rate = kinds.section_offsets(spec, jp, j, kinds.type_vector(spec, j, d),
                                               kinds.type_vector(spec, j, rate))
         sec[k, SEC_OFFSET + 3 * j] = off[0]
         sec[k, SEC_RATE + 3 * j] = off_rate[0]
@@ -740,7 +743,7 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
             beta = math.pi
             paper = False
             if paper_slip:
-                beta, paper = kinds.paper_angle(jp, j, pen, e)
+                beta, paper = kinds.paper_angle(spec, jp, j, pen, e)
             if wear_on and fn > 0.0:
                 if not paper:
                     ds = dg[D_VT + j] * hs
@@ -752,7 +755,7 @@ def accept_substep(hs, in_settled, model, dg, stats, wear, nbuf, ddot_prev, spec
                        dg[D_NORMAL + 3 * j + 2])
                 # the type's surface: a sphere's cap (weights |n|), a bearing's strip 2 psi
                 # R_i L (its depth projected about the bearing's axis)
-                area, wx, wy, wz, scale_j = kinds.wear_surface(jp, j, pen, e, nrm)
+                area, wx, wy, wz, scale_j = kinds.wear_surface(spec, jp, j, pen, e, nrm)
                 bx, by, bz = projection_bins(nrm, N_ANGLE_BINS)
                 buf_i[nbuf, 0] = j
                 buf_i[nbuf, 1] = bx
@@ -806,7 +809,7 @@ def accept_multi(hs, in_settled, model, stats, cur, y, spec):
     bookkeeping of every case without such a joint is what it was before the prismatic
     joint (steps/s, benchmarks/README.md). Returns whether a point's episode changed."""
     if multi_free(spec, model.jp):
-        return kinds.accept(MULTI_ROW, model, kinds.type_body(spec, MULTI_ROW, y), hs,
+        return kinds.accept(spec, MULTI_ROW, model, kinds.type_body(spec, MULTI_ROW, y), hs,
                             in_settled, stats, cur)
     return False
 
@@ -922,7 +925,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec):
             ddot_prev[j] = dg[D_DDOT + j]
             # a clearance joint in contact: its type's seated start
             if has_clearance(spec, jp, j) and dg[D_DELTA + j] > 0.0:
-                if kinds.seat(j, model, dg, kinds.type_body(spec, j, y)):
+                if kinds.seat(spec, j, model, dg, kinds.type_body(spec, j, y)):
                     seated = True
         if not seated:
             break
@@ -931,7 +934,7 @@ def begin_case(t0, y, model, k1, dg, solve, ddot_prev, stats, prev, spec):
 
 
 @compiled
-def merge_wear(wmap, cur, pend, wmax, scratch):
+def merge_wear(wmap, cur, pend, wmax, scratch, spec):
     """After an accepted step: its wear ``cur`` joins the waiting cap ``pend`` when close
     enough (wear_mergeable), else the waiting cap is spread on the map first; a joint
     without wear this step spreads its waiting cap. ``wmax`` keeps the deepest bin [m].
@@ -940,13 +943,13 @@ def merge_wear(wmap, cur, pend, wmax, scratch):
         if is_multi(j):
             continue
         if cur[j, 3] > 0.0:
-            if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j):
-                wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+            if pend[j, 3] > 0.0 and not wear_mergeable(pend, cur, j, spec):
+                wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch, spec))
             for i in range(6):
                 pend[j, i] += cur[j, i]
             pend[j, 5] = cur[j, 5]
         elif pend[j, 3] > 0.0:
-            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch, spec))
 
 
 @compiled
@@ -956,16 +959,17 @@ def deposit_multi(wmap, cur, wmax, jp, wvol, spec):
     wear of the step on its map (its type's ``deposit_step``, which adds it to the worn
     volume ``wvol``); ``wmax`` keeps the deepest bin [m]."""
     if multi_free(spec, jp):
-        wmax[MULTI_ROW] = max(wmax[MULTI_ROW], kinds.deposit_step(wmap, MULTI_ROW, jp, cur, wvol))
+        wmax[MULTI_ROW] = max(wmax[MULTI_ROW], kinds.deposit_step(spec, wmap, MULTI_ROW, jp, cur,
+                                                                  wvol))
 
 
 @compiled
-def flush_all_wear(wmap, pend, wmax, scratch):
+def flush_all_wear(wmap, pend, wmax, scratch, spec=ALL):
     """At the end of a run: spread every joint's waiting wear on its map (``wmax`` keeps the
     deepest bin [m]). Every integrator ends with it."""
     for j in range(N_JOINTS):
         if not is_multi(j) and pend[j, 3] > 0.0:
-            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch))
+            wmax[j] = max(wmax[j], flush_wear(wmap, j, pend, scratch, spec))
 
 
 @compiled
@@ -1300,7 +1304,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
             break
         total += 1 << level
         deepest = max(deepest, level)
-        merge_wear(case.wmap, work.cur, work.pend, work.wmax, work.scratch)
+        merge_wear(case.wmap, work.cur, work.pend, work.wmax, work.scratch, spec)
         if slides:
             deposit_multi(case.wmap, work.cur, work.wmax, jp, case.wvol, spec)
         # the accepted step's section (at most one: a step turns the crank 0.05 rad at most):
@@ -1319,7 +1323,7 @@ def advance(case, t0, n_steps, save_every, keep_rows, out, work, spec):
             n_saved += 1
         if status != ST_OK:
             break
-    flush_all_wear(case.wmap, work.pend, work.wmax, work.scratch)
+    flush_all_wear(case.wmap, work.pend, work.wmax, work.scratch, spec)
     out.info[I_SECTIONS] = int(secnext[SN_ROW])
     end_sections(sec, out.info[I_SECTIONS])
     if keep_rows and status == ST_OK and n_saved > 0:

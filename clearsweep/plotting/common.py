@@ -129,12 +129,14 @@ class PlotError(ValueError):
     """The dataset cannot give the figure asked for (missing variables, too many cases)."""
 
 
-def joint_name(joint) -> str:
-    """``"bearing O"``, ``"guide P"``, ``"joint A"``: a joint named as what it is."""
+def joint_name(joint, ds: xr.Dataset | None = None) -> str:
+    """``"bearing O"``, ``"guide P"``, ``"joint A"``: a joint named as what it is (the type
+    ``ds`` records, the slider-crank's pins "bearing A", "bearing B"; else the joint
+    table's)."""
     from ..jointtypes import kind_of
 
     name = str(joint)
-    kind = kind_of(name)
+    kind = kind_of(name, None if ds is None else ds.attrs)
     return f"{'joint' if kind is None else kind.title} {name}"
 
 

@@ -57,7 +57,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
             for joint in var["joint"].values:
                 values = var.sel(joint=joint).values / factor
                 if np.isfinite(values).any():
-                    ax.plot(cycles, values, marker=".", label=joint_name(value_text(joint)))
+                    ax.plot(cycles, values, marker=".", label=joint_name(value_text(joint), ds))
         else:
             ax.plot(cycles, var.values / factor, marker=".")
         limit = _life_limit(config, limits.get(name))
@@ -101,7 +101,7 @@ def _draw_life(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_ylim(180.0, 0.0)
             ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"), fontsize="x-small")
             ax.set_ylabel(axis_label(ds["polar"], "polar"), fontsize="x-small")
-        ax.set_title(f"{joint_name(joint)}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
+        ax.set_title(f"{joint_name(joint, ds)}, {float(ds['snapshot_cycle'][s]):.3g} revolutions", fontsize="small")
     if mesh is not None:
         fig.colorbar(mesh, ax=fig.axes[-len(picks):]).set_label(axis_label(snaps, "wear depth", unit))
     fig.suptitle(f"Service life: stopped by {ds['stop_reason'].values}\n"

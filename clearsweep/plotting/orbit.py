@@ -152,7 +152,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
             for radius, source in sorted(circles):
                 ax.plot(radius / factor * np.cos(circle), radius / factor * np.sin(circle), lw=0.9,
                         ls=styles[radius][0], color=styles[radius][1],
-                        label=f"{joint_name(value_text(joint))} clearance {radius / factor:.3g} {unit} "
+                        label=f"{joint_name(value_text(joint), ds)} clearance {radius / factor:.3g} {unit} "
                               f"({source})")
             # a ball at a fixed point (a round-off spread) draws as one point, not as that
             # spread at full scale: each axis spans at least MIN_RELATIVE_SPAN of the offset's
@@ -172,7 +172,7 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
                      else "block across its guide, yz" if guide
                      else f"the mechanism's plane, {a}{b}{off_plane}" if planar
                      else f"{a}{b} plane")
-            ax.set_title(f"{joint_name(value_text(joint))}{ideal}: {where}", fontsize="small")
+            ax.set_title(f"{joint_name(value_text(joint), ds)}{ideal}: {where}", fontsize="small")
             ax.grid(alpha=0.3)
     # one legend below the panels: the cases, then each joint's clearance circles once
     figure_legend(fig)

@@ -72,7 +72,7 @@ def _draw_poincare(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_xlabel(axis_label(offset, f"d_{a} / c"))
         ax.set_ylabel(axis_label(offset, f"d_{b} / c"))
         centre = joint_kind(ds, joint).centre
-        ax.set_title(f"{joint_name(value_text(joint))}: {centre} centre, {a}{b} plane",
+        ax.set_title(f"{joint_name(value_text(joint), ds)}: {centre} centre, {a}{b} plane",
                      fontsize="small")
         ax.grid(alpha=0.3)
     ax = fig.add_subplot(1, panels, panels)

@@ -46,7 +46,7 @@ def _draw_forces(fig: Figure, ds: xr.Dataset, x: str) -> None:
     rows = [(f"{joint_name('O')}: reaction (ground on crank)", "reaction_O", None)]
     # the revolute joint at O: its force on the journal is the reaction at O, drawn once
     # the prismatic joint's: the guide's force on the slider
-    rows += [(f"{joint_name(value_text(j))} (on {joint_kind(ds, j).force_on})", "joint_force", j)
+    rows += [(f"{joint_name(value_text(j), ds)} (on {joint_kind(ds, j).force_on})", "joint_force", j)
              for j in ds["joint"].values if joint_kind(ds, j).force_on is not None]
     components = ("magnitude", *(str(a) for a in ds["axis"].values))
     cases = _cases(ds)

@@ -65,11 +65,12 @@ def _life_wear_map(ds: xr.Dataset, select) -> xr.Dataset:
 
 
 def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
-                      unit: str, label: str, joint: str) -> None:
+                      unit: str, label: str, joint: str, ds: xr.Dataset | None = None) -> None:
     """A revolute joint's bearing map (docs/physics.md 5.6: its first row, the depth around
-    the bearing, uniform along its length): the depth against the angle around the bearing,
-    and the bearing's cross-section with the worn profile exaggerated (``at``: the two slots
-    of the figure's grid)."""
+    the bearing, uniform along its length): the depth against the angle around the bearing
+    in its frame (the slider-crank's A: the rod's, y along the rod), and the bearing's
+    cross-section with the worn profile exaggerated (``at``: the two slots of the figure's
+    grid; ``ds``: the run, whose recorded types name the joint)."""
     ring = depth.isel(polar=0)
     phi = ring["azimuth"].values
     ax = fig.add_subplot(at[0])
@@ -78,7 +79,7 @@ def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
     ax.set_xlabel(axis_label(ring["azimuth"], "angle around the bearing, atan2(z, y)"))
     ax.set_ylabel(label)
     ax.grid(alpha=0.3)
-    ax.set_title(f"{joint_name(joint)}: wear around the bearing (max {peak:.3g} {unit})",
+    ax.set_title(f"{joint_name(joint, ds)}: wear around the bearing (max {peak:.3g} {unit})",
                  fontsize="small")
     polar_ax = fig.add_subplot(at[1], projection="polar")
     scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
@@ -88,7 +89,7 @@ def _draw_bearing_map(fig: Figure, at: tuple, depth: xr.DataArray, peak: float,
     polar_ax.plot(closed, 1.0 + scale * np.nan_to_num(profile), color="C3", lw=1.2)
     polar_ax.set_ylim(0.0, 1.0 + 1.2 * WEAR_POLAR_EXAGGERATION)
     polar_ax.set_yticks([])
-    polar_ax.set_title(f"{joint_name(joint)}: cross-section (y right, z up), worn profile "
+    polar_ax.set_title(f"{joint_name(joint, ds)}: cross-section (y right, z up), worn profile "
                        f"exaggerated", fontsize="small", pad=12)
 
 
@@ -177,7 +178,7 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         peak = float(depth.max())
         if figures[joint] == "bearing":
             _draw_bearing_map(fig, (grid[j, 0], grid[j, 1]), depth, peak, unit, label,
-                              value_text(joint))
+                              value_text(joint), ds)
             continue
         if figures[joint] == "walls":
             # the depth of the corners' tracks along the guide (docs/physics.md 5.7)
@@ -192,7 +193,7 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
         ax.set_ylim(180.0, 0.0)
         ax.set_xlabel(axis_label(ds["azimuth"], "azimuth"))
         ax.set_ylabel(axis_label(ds["polar"], "polar angle from +z"))
-        ax.set_title(f"{joint_name(value_text(joint))}: socket wear map (max {peak:.3g} {unit})",
+        ax.set_title(f"{joint_name(value_text(joint), ds)}: socket wear map (max {peak:.3g} {unit})",
                      fontsize="small")
         fig.colorbar(mesh, ax=ax).set_label(label)
         ax3 = fig.add_subplot(grid[j, 1], projection="3d")
@@ -210,7 +211,7 @@ def _draw_wear_map(fig: Figure, ds: xr.Dataset) -> None:
                                            (ax3.set_zlabel, ax3.set_zticks, "z")):
             set_ticks([-1.0, 0.0, 1.0], ["", "", ""])
             set_label(f"{name} [{DIMENSIONLESS}]", labelpad=-12)
-        ax3.set_title(f"{joint_name(value_text(joint))}: unit sphere, socket frame", fontsize="small",
+        ax3.set_title(f"{joint_name(value_text(joint), ds)}: unit sphere, socket frame", fontsize="small",
                       pad=12)
         fig.colorbar(ScalarMappable(norm, cmap), ax=ax3, shrink=0.7).set_label(label)
     snapshot = ds.attrs.get("snapshot")     # a life run's snapshot (_life_wear_map)
@@ -239,8 +240,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
     guides = [j for j in named if not joint_kind(ds, j).wear_profile]
     named = [j for j in named if j not in guides]
     joints = [j for j in named if np.nan_to_num(projection.sel(joint=j).values).any()] or named
-    scales = [f"{joint_name(value_text(j))}: no wear" for j in named if j not in joints]
-    scales += [f"{joint_name(value_text(j))}: not applicable (flat walls, see wear-map)"
+    scales = [f"{joint_name(value_text(j), ds)}: no wear" for j in named if j not in joints]
+    scales += [f"{joint_name(value_text(j), ds)}: not applicable (flat walls, see wear-map)"
                for j in guides]
     if len(joints) == 1:        # one row of panels: no empty band where the other was
         fig.set_size_inches(fig.get_figwidth(), 5.6)
@@ -249,8 +250,8 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
         scale = WEAR_POLAR_EXAGGERATION / peak if np.isfinite(peak) and peak > 0 else 0.0
         factor, unit = display_scale([peak], "m")
         # a no-break space keeps the value and its unit on one line of the wrapped title
-        scales.append(f"{joint_name(value_text(joint))}: {peak / factor:.3g}\u00a0{unit}" if scale
-                      else f"{joint_name(value_text(joint))}: no wear")
+        scales.append(f"{joint_name(value_text(joint), ds)}: {peak / factor:.3g}\u00a0{unit}" if scale
+                      else f"{joint_name(value_text(joint), ds)}: no wear")
         for k, axis in enumerate(axes_names):
             ax = fig.add_subplot(len(joints), len(axes_names), j * len(axes_names) + k + 1,
                                  projection="polar")
@@ -265,7 +266,7 @@ def _draw_wear_polar(fig: Figure, ds: xr.Dataset) -> None:
             ax.set_rlim(  # type: ignore[attr-defined]
                 0.0, 1.0 + 1.15 * WEAR_POLAR_EXAGGERATION)
             ax.set_yticks([])
-            ax.set_title(f"{joint_name(value_text(joint))}, about {axis}", fontsize="small")
+            ax.set_title(f"{joint_name(value_text(joint), ds)}, about {axis}", fontsize="small")
             ax.set_xlabel(axis_label(ds["angle"], f"angle about {axis}"), fontsize="small")
     # one legend below the panels, in two columns where an entry is long (three of a sweep's
     # long case labels ran off the figure's sides)
