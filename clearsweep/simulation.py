@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -17,6 +18,7 @@ from .budget import check_budget
 from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import jointset
 from .core import layout as L
+from .core.compiled import compile_lock
 from .core.work import Case, Out
 from .params import HOST_HOOKS, PRESETS, Packed, as_python, build_of, joint_attributes, kernel_build, pack, row_type
 from .variables import mechanism_title
@@ -120,7 +122,9 @@ def kernel_needs_compiling(method: str = "rk4", build: int | None = None) -> boo
 def prepare_kernel(method: str = "rk4", build: int | None = None) -> float:
     """Compile (or load from the cache) the kernel of ``method`` for the joint set
     ``build`` (``params.kernel_build``; None: the two-clearance case's, A and B) with a
-    run of no steps; seconds taken.
+    run of no steps, under ``core.compiled.compile_lock`` where the on-disk cache does not
+    hold it (one compile per machine: the other processes that ask wait, then load it);
+    seconds taken.
 
     Run before a timed run so that its ``wall_time`` and steps/s count stepping only.
     """
@@ -135,7 +139,10 @@ def prepare_kernel(method: str = "rk4", build: int | None = None) -> float:
     packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
-    run_kernel(packed, build=build)
+    # a build in the on-disk cache loads without the lock (many workers load at once)
+    cold = kernel_needs_compiling(method, build)
+    with compile_lock(_kernel(method), int(build)) if cold else nullcontext():
+        _integrate(packed, build=build)
     return time.perf_counter() - start
 
 
@@ -197,17 +204,26 @@ def run_kernel(packed: Packed, wmap0: np.ndarray | None = None,
     run); copied, not changed. Default: unworn. ``t0`` [s]: the time of ``packed.y0`` (a
     block continued from a saved state: the drive angle and the sections run on from it;
     the contact episodes begin afresh, as at a run's start). ``wall_time`` times the integration call
-    alone (compiling included when the kernel has not been compiled yet: ``simulate``
-    calls ``prepare_kernel`` first).
+    alone (the compile, where the build was not compiled yet, comes before it).
 
     ``build``: the joint set of the kernel build to run (``core.jointset``); default the
     case's own, ``params.build_of`` the joints it has with clearance. ValueError for a
-    build without one of them (it would run the joint as ideal).
+    build without one of them (it would run the joint as ideal). A build that this process
+    has not compiled yet is compiled (or loaded from the cache) first, by
+    :func:`prepare_kernel`, once per machine where several processes ask at once.
     """
-    integrate = _kernel(packed.method)
     case_set = jointset.of(packed.jp, packed.p)
     build = build_of(case_set) if build is None else int(build)
     jointset.check(case_set, build)
+    prepare_kernel(packed.method, build)
+    return _integrate(packed, wmap0, wvol0, t0, build=build)
+
+
+def _integrate(packed: Packed, wmap0: np.ndarray | None = None,
+               wvol0: np.ndarray | None = None, t0: float = 0.0, *, build: int) -> KernelRun:
+    """:func:`run_kernel` on the build ``build``, checked there, compiling it in place
+    where this process has not (:func:`prepare_kernel`'s run of no steps)."""
+    integrate = _kernel(packed.method)
     n_save = packed.n_steps // packed.save_every + 1
     wmap = np.zeros((L.N_JOINTS,) + packed.map_shape) if wmap0 is None else np.array(wmap0, dtype=float)
     if wmap.shape != (L.N_JOINTS,) + tuple(packed.map_shape):

@@ -20,7 +20,16 @@ in :data:`ALLOCATING` (tests/test_kernel_rules.py checks every other kernel func
 
 The CUDA build compiles the same Python functions with the options copied (numba-cuda's
 device dispatcher), where the runtime is off by default as well.
+
+A build compiles once per machine, not once per process: :func:`compile_lock` is held
+around a first call that may compile (``simulation.prepare_kernel``, the host's
+evaluations in ``dynamics``), so that processes needing the same build at once with a cold
+cache (a test run's workers, Dask workers) wait for the first and load its machine code
+from the cache.
 """
+
+import os
+from contextlib import contextmanager
 
 from numba import njit
 
@@ -39,3 +48,39 @@ def compiled(func=None, **options):
     if func is None:
         return njit(**OPTIONS, **options)
     return njit(func, **OPTIONS, **options)
+
+
+def lock_path(dispatcher, tag) -> str | None:
+    """The file :func:`compile_lock` locks for ``dispatcher``'s build ``tag``: beside the
+    function's Numba cache index (``<index>.build<tag>.lock``); None where it has no
+    on-disk cache (plain Python under NUMBA_DISABLE_JIT)."""
+    cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    index = getattr(cache_file, "_index_path", None)
+    return f"{os.path.splitext(index)[0]}.build{tag}.lock" if index else None
+
+
+@contextmanager
+def compile_lock(dispatcher, tag):
+    """Hold an exclusive ``flock`` on :func:`lock_path` of ``dispatcher`` and ``tag`` (a
+    build's joint set) while this process compiles that build or loads it: another process
+    asking for the same build waits, then loads it from the cache; builds of other tags do
+    not wait on each other. Without a cache folder that can be written (or ``fcntl``), no
+    lock: each process compiles, as Numba does."""
+    path = lock_path(dispatcher, tag)
+    fd = None
+    if path:
+        try:
+            import fcntl
+
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        except (ImportError, OSError):
+            if fd is not None:
+                os.close(fd)
+            fd = None
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)        # releases the flock

@@ -32,7 +32,7 @@ import numpy as np
 from numba import types
 
 from . import bushing, prismatic, revolute, spherical
-from .compiled import compiled
+from .compiled import compile_lock, compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .jointkinds import is_revolute, is_revolute_on
 from .joints import BODIES, FREE, INDEX, JOINTS
@@ -1155,10 +1155,24 @@ def _diagnostics_at(t, y, p, jp, wmap, ideal=False):
             dg, True, solve)
     if p[P_GUIDE] == 1.0:
         # the slider-crank's builds (its guide along y): the set a constant, as the kernel's
-        status = evaluate(*args, Build((NONE if ideal else ALL) | SLIDER_CRANK))
+        build = (NONE if ideal else ALL) | SLIDER_CRANK
+        fn, extra = evaluate, (Build(build),)
     else:
-        status = (evaluate_ideal if ideal else evaluate)(*args)
+        build = NONE if ideal else ALL
+        fn, extra = (evaluate_ideal if ideal else evaluate), ()
+    if (fn, build) in _HOST_READY:
+        status = fn(*args, *extra)
+    else:
+        # the first call in this process may compile: once per machine (compiled.compile_lock)
+        with compile_lock(fn, f"host{build}"):
+            status = fn(*args, *extra)
+        _HOST_READY.add((fn, build))
     return dg if status == ST_OK else None
+
+
+#: The host's evaluations (:func:`_diagnostics_at`) this process has compiled or loaded:
+#: (function, joint set).
+_HOST_READY: set = set()
 
 
 def ideal_joint_forces(t, y, p, jp):
