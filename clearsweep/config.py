@@ -122,9 +122,12 @@ class JointConfig(_Section):
     #: None: the surface material's own coefficient
     wear_coefficient: float | None = _setting(Field(None, lo=0.0, nullable=True), "m2 N-1",
                                               "Archard wear coefficient of joint X's socket")
-    #: bushing: an elastic bushing (core/bushing.py) in place of the spherical joint: no
-    #: clearance, no coating, its stiffness and damping below
-    type: str = _setting(Field("spherical", ("spherical", "bushing")), None, "joint type of joint X")
+    #: bushing: an elastic bushing (core/bushing.py) in place of the joint: no clearance, no
+    #: coating, its stiffness and damping below. The joint itself is the mechanism's: the
+    #: RSSP's spherical, the slider-crank's revolute pin (validation resolves the default
+    #: to the mechanism's, and refuses the other mechanism's type)
+    type: str = _setting(Field("spherical", ("spherical", "revolute", "bushing")), None,
+                         "joint type of joint X")
     bushing_stiffness: tuple[float, float] = _bushing_stiffness("X")
     bushing_damping: tuple[float, float] = _bushing_damping("X")
     #: the slider-crank's pins (A, B: revolute, docs/mechanisms.md): the bearing's length,
@@ -820,6 +823,31 @@ PIN_JOINTS = ("A", "B")
 BUSHING_PAIRS = ("bushing_stiffness", "bushing_damping")
 
 
+#: The type of the joints A and B (not bushings) in each mechanism (core.joints'
+#: ``JOINTS`` and ``SLIDER_CRANK_TYPES``).
+PIN_TYPES = {"rssp": "spherical", "slider_crank": "revolute"}
+
+
+def _check_pin_types(raw: Any, cfg: dict[str, Any], source: str) -> None:
+    """``joints.A.type`` and ``joints.B.type``: the mechanism's type (the RSSP's balls in
+    sockets, spherical; the slider-crank's pins, revolute) or ``bushing``. One not given
+    resolves to the mechanism's, so that the resolved config says what runs; the other
+    mechanism's, given, is refused."""
+    kind = cfg["mechanism"]["kind"]
+    joints = raw.get("joints") if isinstance(raw, Mapping) else None
+    for joint in PIN_JOINTS:
+        spec = cfg["joints"][joint]
+        given = joints.get(joint) if isinstance(joints, Mapping) else None
+        if not (isinstance(given, Mapping) and "type" in given):
+            if spec["type"] in PIN_TYPES.values():
+                spec["type"] = PIN_TYPES[kind]
+        elif spec["type"] in PIN_TYPES.values() and spec["type"] != PIN_TYPES[kind]:
+            what = "balls in sockets" if kind == "rssp" else "pins in bearings"
+            raise ConfigError(f"joints.{joint}.type", spec["type"],
+                              f"{PIN_TYPES[kind]} or bushing where mechanism.kind is {kind} "
+                              f"(its A and B are {what})", source)
+
+
 def _check_pin_bushings(raw: Any, cfg: dict[str, Any], source: str) -> None:
     """The slider-crank's A and B are pins held across the plane: a bushing there is radial
     in the plane, and the kernel runs its axial pair as the radial one. An axial value
@@ -1049,6 +1077,7 @@ def _validate(raw: Any, source: str, base_dir: str) -> Config:
             raise ConfigError(key, value, f"a number {op} {other} ({bound!r})", source)
     _check_together(cfg, source)
     _check_mechanism(cfg, source)
+    _check_pin_types(raw, cfg, source)
     _check_pin_bushings(raw, cfg, source)
     _check_sizes(cfg["joints"], cfg, source)
     _check_gapless(cfg["joints"], source)

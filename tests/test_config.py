@@ -251,6 +251,9 @@ def _consistent(raw):
     if mechanism["preset"] not in presets:
         mechanism["preset"] = presets[0]
     longest = config_module.PRESET_LINKS_M[mechanism["preset"]][1]
+    for pin in config_module.PIN_JOINTS:      # a pin's type: its mechanism's, or a bushing
+        if raw["joints"][pin]["type"] != "bushing":
+            raw["joints"][pin]["type"] = config_module.PIN_TYPES[mechanism["kind"]]
     for joint in raw["joints"].values():      # sizes bounded against the mechanism
         for key in ("clearance", "clearance_y", "clearance_z"):
             if key in joint and joint[key] < config_module.MIN_CLEARANCE_M:

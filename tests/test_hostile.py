@@ -1602,6 +1602,23 @@ ISSUE44_PINS = [
 ]
 ROWS += ISSUE44_PINS
 
+#: A and B are the mechanism's own type (the RSSP's spherical, the slider-crank's
+#: revolute) or a bushing: the other mechanism's type is refused.
+ISSUE44_PIN_TYPES = [
+    ("a revolute A in the RSSP (was: unknown value revolute, the choices spherical and "
+     "bushing)",
+     lambda t, f: ["run", ONE, "--set", "joints.A.type=revolute", "-o", t / "out.nc"], 2,
+     "joints.A.type: got 'revolute' (from --set); expected spherical or bushing where "
+     "mechanism.kind is rssp (its A and B are balls in sockets)"),
+    ("a spherical B in the slider-crank (was: run as the revolute pin, the config saying "
+     "spherical)",
+     lambda t, f: ["run", SLIDER_CRANK, "--set", "joints.B.type=spherical", "-o",
+                   t / "out.nc"], 2,
+     "joints.B.type: got 'spherical' (from --set); expected revolute or bushing where "
+     "mechanism.kind is slider_crank (its A and B are pins in bearings)"),
+]
+ROWS += ISSUE44_PIN_TYPES
+
 
 def friction_materials(tmp: Path, mu: str) -> str:
     """A user materials file giving PTFE the friction coefficient ``mu``."""

@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from clearsweep.config import load_config
 from clearsweep.core import layout as L
 from clearsweep.core import revolute
 from clearsweep.core.joints import INDEX
@@ -53,6 +54,20 @@ def test_the_dataset_says_the_pins_are_revolute(pins):
     assert pins.attrs["joint_O_type"] == "revolute"
     rssp = simulate({"solver": {"duration": 1e-3}})
     assert rssp.attrs["joint_A_type"] == "spherical" and rssp.attrs["joint_B_type"] == "spherical"
+
+
+def test_the_resolved_config_says_what_the_pins_run_as():
+    """``joints.A.type`` and ``joints.B.type`` not given resolve to the mechanism's type, so
+    that a results file's config says what ran (was: 'spherical' in the slider-crank, whose
+    pins run as the revolute type); a bushing stays a bushing."""
+    sc = load_config({"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark"},
+                      "joints": {"A": {"type": "bushing"}}})
+    assert (sc.joints.A.type, sc.joints.B.type) == ("bushing", "revolute")
+    rssp = load_config({})
+    assert (rssp.joints.A.type, rssp.joints.B.type) == ("spherical", "spherical")
+    stated = load_config({"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark"},
+                          "joints": {"B": {"type": "revolute"}}})
+    assert stated == sc.replace(joints__A__type="revolute")
 
 
 @pytest.mark.parametrize("joint, length", [("A", 0.015), ("B", 0.02)])
