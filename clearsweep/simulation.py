@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     import xarray as xr
 
 from .budget import check_budget
-from .config import DEFAULTS, Config, ConfigError, dump_config, load_config, resolve_materials
+from .config import Config, ConfigError, dump_config, load_config, resolve_materials
 from .core import jointset
 from .core import layout as L
 from .core.compiled import compile_lock
@@ -133,9 +133,10 @@ def prepare_kernel(method: str = "rk4", build: int | None = None) -> float:
         build = build_of(jointset.named("A", "B"))
     if _compiled_for(_kernel(method), build):
         return 0.0
-    cfg = DEFAULTS.replace(solver__method=method)     # ideal: any build of its mechanism runs it
-    if build & jointset.SLIDER_CRANK:
-        cfg = cfg.replace(mechanism__kind="slider_crank", mechanism__preset="flores_benchmark")
+    # ideal: any build of its mechanism runs it
+    mechanism = ({"kind": "slider_crank", "preset": "flores_benchmark"}
+                 if build & jointset.SLIDER_CRANK else {})
+    cfg = load_config({"mechanism": mechanism, "solver": {"method": method}})
     packed = pack(cfg, resolve_materials(cfg))
     packed.n_steps = 0
     packed.map_shape = (1, 1)
