@@ -88,9 +88,13 @@ def test_orbit_draws_each_joint_in_the_mechanism_plane(tmp_path, sc):
     for (x_label, y_label, title), name in zip(axes, ("A", "B"), strict=True):
         assert (x_label, y_label) == ("d_y [mm]", "d_z [mm]")
         assert title == f"bearing {name}: journal in the bearing's plane, yz"
+    # the figure's title names journals in bearings where every panel is one (was: "Ball-
+    # centre orbit in the socket frame" over two bearings)
+    assert fig.get_suptitle().startswith("Journal-centre orbit in the bearing's frame")
     older = sc.copy()
     older.attrs = {**sc.attrs, "joint_A_type": "spherical", "joint_B_type": "spherical"}
     fig = plot(older, "orbit", tmp_path / "older.png", dpi=TEST_DPI)
+    assert fig.get_suptitle().startswith("Ball-centre orbit in the socket frame")
     title_a, title_b = (ax.get_title() for ax in fig.axes)
     assert title_a.startswith("joint A: the mechanism's plane")
     assert title_b.startswith("joint B: the mechanism's plane") and "off it" not in title_b

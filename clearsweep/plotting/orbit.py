@@ -177,5 +177,9 @@ def _draw_orbit(fig: Figure, ds: xr.Dataset) -> None:
     # one legend below the panels: the cases, then each joint's clearance circles once
     figure_legend(fig)
     left_out = f"\nnot drawn: joint {', '.join(empty)}, ball at the centre" if empty else ""
-    fig.suptitle("Ball-centre orbit in the socket frame" + _legend_note(len(cases)) + left_out)
+    shapes = {joint_kind(ds, joint).orbit_gap for joint in joints}
+    title = ("Journal-centre orbit in the bearing's frame" if shapes == {"circle"}
+             else "Block-centre orbit in the guide's frame" if shapes == {"rectangle"}
+             else "Ball-centre orbit in the socket frame")
+    fig.suptitle(title + _legend_note(len(cases)) + left_out)
 
