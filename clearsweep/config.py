@@ -823,28 +823,40 @@ PIN_JOINTS = ("A", "B")
 BUSHING_PAIRS = ("bushing_stiffness", "bushing_damping")
 
 
-#: The type of the joints A and B (not bushings) in each mechanism (core.joints'
-#: ``JOINTS`` and ``SLIDER_CRANK_TYPES``).
-PIN_TYPES = {"rssp": "spherical", "slider_crank": "revolute"}
+def pin_type(kind: str) -> str:
+    """The type of the joints A and B (not bushings) in mechanism ``kind``, as the kernel's
+    joint table gives it (``core.joints.row_types``): the RSSP's balls in sockets,
+    spherical; the slider-crank's pins, revolute."""
+    from .core.joints import INDEX, row_types
+
+    types = row_types(kind == "slider_crank")
+    return types[INDEX[PIN_JOINTS[0]]]
+
+
+def _given(raw: Any, joint: str, key: str) -> bool:
+    """Whether the raw config (a file, ``--set`` or a sweep's case) gives ``joints.<joint>.<key>``
+    (else the resolved value is a default)."""
+    joints = raw.get("joints") if isinstance(raw, Mapping) else None
+    given = joints.get(joint) if isinstance(joints, Mapping) else None
+    return isinstance(given, Mapping) and key in given
 
 
 def _check_pin_types(raw: Any, cfg: dict[str, Any], source: str) -> None:
-    """``joints.A.type`` and ``joints.B.type``: the mechanism's type (the RSSP's balls in
-    sockets, spherical; the slider-crank's pins, revolute) or ``bushing``. One not given
-    resolves to the mechanism's, so that the resolved config says what runs; the other
-    mechanism's, given, is refused."""
+    """``joints.A.type`` and ``joints.B.type``: the mechanism's type (:func:`pin_type`) or
+    ``bushing``. One not given resolves to the mechanism's, so that the resolved config says
+    what runs; the other mechanism's, given, is refused."""
     kind = cfg["mechanism"]["kind"]
-    joints = raw.get("joints") if isinstance(raw, Mapping) else None
+    own = pin_type(kind)
+    either = {pin_type(k) for k in MECHANISM_KINDS}
     for joint in PIN_JOINTS:
         spec = cfg["joints"][joint]
-        given = joints.get(joint) if isinstance(joints, Mapping) else None
-        if not (isinstance(given, Mapping) and "type" in given):
-            if spec["type"] in PIN_TYPES.values():
-                spec["type"] = PIN_TYPES[kind]
-        elif spec["type"] in PIN_TYPES.values() and spec["type"] != PIN_TYPES[kind]:
+        if not _given(raw, joint, "type"):
+            if spec["type"] in either:
+                spec["type"] = own
+        elif spec["type"] in either and spec["type"] != own:
             what = "balls in sockets" if kind == "rssp" else "pins in bearings"
             raise ConfigError(f"joints.{joint}.type", spec["type"],
-                              f"{PIN_TYPES[kind]} or bushing where mechanism.kind is {kind} "
+                              f"{own} or bushing where mechanism.kind is {kind} "
                               f"(its A and B are {what})", source)
 
 
@@ -859,13 +871,11 @@ def _check_pin_bushings(raw: Any, cfg: dict[str, Any], source: str) -> None:
 
     if cfg["mechanism"]["kind"] != "slider_crank":
         return
-    joints = raw.get("joints") if isinstance(raw, Mapping) else None
     for joint in PIN_JOINTS:
         spec = cfg["joints"][joint]
-        given = joints.get(joint) if isinstance(joints, Mapping) else None
         for key in BUSHING_PAIRS:
             radial, axial = spec[key]
-            if not (isinstance(given, Mapping) and key in given):
+            if not _given(raw, joint, key):
                 spec[key] = type(spec[key])((radial, radial))
             elif axial != radial and elastic(spec["type"]):
                 raise ConfigError(

@@ -253,7 +253,7 @@ def _consistent(raw):
     longest = config_module.PRESET_LINKS_M[mechanism["preset"]][1]
     for pin in config_module.PIN_JOINTS:      # a pin's type: its mechanism's, or a bushing
         if raw["joints"][pin]["type"] != "bushing":
-            raw["joints"][pin]["type"] = config_module.PIN_TYPES[mechanism["kind"]]
+            raw["joints"][pin]["type"] = config_module.pin_type(mechanism["kind"])
     for joint in raw["joints"].values():      # sizes bounded against the mechanism
         for key in ("clearance", "clearance_y", "clearance_z"):
             if key in joint and joint[key] < config_module.MIN_CLEARANCE_M:

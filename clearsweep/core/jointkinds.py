@@ -57,7 +57,6 @@ BUSHING = rows_of("bushing")
 SC_SPHERICAL = rows_of("spherical", True)
 SC_REVOLUTE = rows_of("revolute", True)
 SC_PRISMATIC = rows_of("prismatic", True)
-SC_BUSHING = rows_of("bushing", True)
 if any(MODULES[kind].CONTACTS > 1 for kind in set(row_types(True)) - set(row_types(False))):
     raise ImportError("the slider-crank's own types must touch at one point: MULTI and "
                       "MULTI_ROW are the joint table's")
