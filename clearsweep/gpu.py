@@ -9,10 +9,12 @@ sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 Memory per case (:func:`case_bytes`), structure-of-arrays: the wear maps of the batch's
 clearance joints alone (8 * nazim bytes per map row: npolar rows for A, B and P's walls,
 one for the bearing O, :func:`map_layout`), 8,640 bytes of projections per joint of A, B
-and O with clearance, an undo buffer of 64 * 2**max_substep_level bytes per such joint, the
+and O with clearance, an undo buffer of 64 * 2**level bytes per such joint (the level a
+launch holds it for, :func:`launch_level`: :data:`UNDO_LEVEL`, where the cases' cap is
+deeper; a case that needs more runs again with its cap's, :func:`run_packed`), the
 parameters that differ across the batch (the others are one shared row), and about 8 kB
-of other work arrays and results: 0.74 MB for the two-clearance case (A and B) on the
-default map [144, 288] at level 8, 1.46 MB case by case. Cases are grouped by
+of other work arrays and results: 0.71 MB for the two-clearance case (A and B) on the
+default map [144, 288] at level cap 8, 1.46 MB case by case. Cases are grouped by
 :func:`batch_key` (the wear-map shape and the kernel build, ``params.build_of`` their
 joints with clearance: one compiled kernel per joint set; sweep cases and ensemble members
 share launches) and run in batches that fit the device's free memory, stored
@@ -22,6 +24,7 @@ capacity (:data:`CAPACITIES`, :func:`batch_plan`): a batch takes capacity x case
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -52,6 +55,14 @@ DEVICE_MEMORY_FRACTION = 0.5
 #: thousands of cases to fill the device: on an H200, one launch of 1,470 cases ran
 #: 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
 HOST_BATCH_BYTES = 16 << 30
+
+#: Sub-step level whose undo buffer a structure-of-arrays launch holds first
+#: (:func:`launch_level`): a case that needs a deeper level stops before its attempt there
+#: and runs again in a launch of the level it allows (:func:`run_packed`). The shipped
+#: cases stay at level 2 or shallower at their settings (``configs/*.yaml``, 30 ms each on
+#: the CPU kernel); the paper's preset at h = 1e-5 s reaches 4 within 0.2 ms. Level 4 holds
+#: 16 sub-steps' rows, 1 kB per undone joint against 16 kB at the default cap of 8.
+UNDO_LEVEL = 4
 
 #: Cases per batch in numba's CUDA simulator (every thread is a Python thread).
 SIMULATOR_BATCH = 64
@@ -218,11 +229,19 @@ def map_layout(joints: Sequence[bool], npolar: int) -> dict[str, tuple[int, int,
 
 
 def undo_rows(joints: Sequence[bool], max_level: int) -> int:
-    """Rows of the undo buffer for a case of the clearance joints ``joints`` and sub-step
-    level cap max_level: one per undone joint with clearance and sub-step of the deepest
-    level (one row at least: no zero-size array for the device)."""
+    """Rows of the undo buffer for a case of the clearance joints ``joints`` whose attempts
+    go no deeper than sub-step level max_level (the level a launch holds the buffer for,
+    :func:`launch_level`): one per undone joint with clearance and sub-step of that level
+    (one row at least: no zero-size array for the device)."""
     undone = sum(1 for n, c in zip(JOINT_NAMES, joints) if c and n in UNDO_JOINTS)
     return max(1, undone) * (1 << int(max_level))
+
+
+def launch_level(max_level: int, undo_level: int | None = UNDO_LEVEL) -> int:
+    """The sub-step level whose undo buffer a structure-of-arrays launch holds for cases that
+    allow max_level at most: ``undo_level`` where that is shallower (:data:`UNDO_LEVEL` by
+    default), else max_level (None: max_level, the full buffer)."""
+    return int(max_level) if undo_level is None else min(int(max_level), int(undo_level))
 
 
 ALL_JOINTS = (True,) * L.N_JOINTS
@@ -261,12 +280,13 @@ def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0,
 def config_bytes(cfg: Config) -> int:
     """:func:`case_bytes` of a resolved config in the structure-of-arrays layout (its
     revolutions, one section each, rounded up; its clearance joints; every parameter per
-    case, as a batch of it may hold)."""
+    case, as a batch of it may hold; the undo buffer of the level a launch holds first,
+    :func:`launch_level`)."""
     from .params import joint_configs
 
     sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
     joints = tuple(joint.clearance > 0.0 for _, joint in joint_configs(cfg))
-    return case_bytes(cfg.wear.map, cfg.solver.max_substep_level, sections, joints)
+    return case_bytes(cfg.wear.map, launch_level(cfg.solver.max_substep_level), sections, joints)
 
 
 def host_batch_bytes() -> int:
@@ -314,13 +334,16 @@ def shared_columns(rows: np.ndarray) -> np.ndarray:
     return np.all(bits == bits[:1], axis=0)
 
 
-def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tuple[int, ...], Any, float]]:
+def _shapes(group: Sequence[Packed], layout: str = "aos",
+            level: int | None = None) -> dict[str, tuple[tuple[int, ...], Any, float]]:
     """Per-case shape, dtype and initial value of run_cases' arguments but the inputs p, jp,
     y0, n_steps, save_every, pcols and geom, by name (``core.device.ARGS``' order), for one
     batch of cases of one map shape: in the structure-of-arrays layout ("soa") the maps, the
-    projections and the undo buffer hold the rows of the batch's clearance joints alone."""
+    projections and the undo buffer hold the rows of the batch's clearance joints alone, the
+    undo buffer those of sub-step level ``level`` (None: the deepest the cases allow)."""
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
+    undo_level = max_level if level is None else int(level)
     map_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
     proj_rows: tuple[int, ...] = (L.N_JOINTS, 3)
     if layout != "aos":
@@ -336,7 +359,7 @@ def _shapes(group: Sequence[Packed], layout: str = "aos") -> dict[str, tuple[tup
         "sec": ((max(1, max(section_rows(pk) for pk in group)), L.N_SEC), np.float64, np.nan)}
     for name, shape in work_shapes(max_level, npolar).items():
         if layout != "aos" and name in ("buf_i", "buf_v"):
-            shape = (undo_rows(joints, max_level), 4)
+            shape = (undo_rows(joints, undo_level), 4)
         if layout == "soa-local" and name in LOCAL_WORK:
             shape = (1,) * len(shape)       # not read: the thread's local arrays
         shapes[name] = (shape, np.int64 if name in INT_WORK else np.float64, 0)
@@ -355,7 +378,7 @@ def _geom(group: Sequence[Packed]) -> np.ndarray:
 
 
 def _allocate(group: Sequence[Packed], layout: str = "aos",
-              capacity: int | None = None) -> dict[str, np.ndarray]:
+              capacity: int | None = None, level: int | None = None) -> dict[str, np.ndarray]:
     """Host arrays of run_cases' arguments, by name (``core.device.ARGS``), for one batch of
     cases of one map shape: with the case first ("aos"), or stored structure-of-arrays with
     the case last, padded to ``capacity`` cases ("soa": ``core.device.soa_kernel``; the
@@ -363,7 +386,11 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
     the batch's cases alone in either layout. In "soa" the parameters every case shares
     (:func:`shared_columns`) are one row (``jp``), the others per case (``p``: their
     columns, ``pcols``: each parameter's column there or -1), and the maps hold the batch's
-    clearance joints' rows alone (``geom``: :func:`map_layout`)."""
+    clearance joints' rows alone (``geom``: :func:`map_layout`). ``level`` ("soa" alone): the
+    sub-step level the undo buffer holds (:func:`launch_level`), each case's level cap
+    p[P_MAX_LEVEL] lowered to it where deeper, so that a case that needs a deeper level
+    stops with status unstable_step before its attempt there (None: the cases' own caps, the
+    buffer of the deepest)."""
     n = len(group)
     arrays: dict[str, np.ndarray] = {}
     if layout == "aos":
@@ -373,6 +400,8 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
     else:
         cap = capacity if capacity is not None else capacity_for(n)
         rows = parameter_rows(group)
+        if level is not None:
+            rows[:, L.P_MAX_LEVEL] = np.minimum(rows[:, L.P_MAX_LEVEL], float(level))
         shared = shared_columns(rows)
         varying = np.flatnonzero(~shared)
         pcols = np.full(N_PJ, -1, dtype=np.int64)
@@ -382,7 +411,7 @@ def _allocate(group: Sequence[Packed], layout: str = "aos",
                       geom=_geom(group), y0=to_soa(np.stack([pk.y0 for pk in group]), cap))
     arrays["n_steps"] = np.array([pk.n_steps for pk in group], dtype=np.int64)
     arrays["save_every"] = np.array([pk.save_every for pk in group], dtype=np.int64)
-    for name, (shape, dtype, fill) in _shapes(group, layout).items():
+    for name, (shape, dtype, fill) in _shapes(group, layout, level).items():
         full = (n,) + shape if layout == "aos" else shape + (cap,)
         if layout == "soa-local" and name in LOCAL_WORK:
             full = shape + (1,)
@@ -472,19 +501,27 @@ def batch_key(pk: Packed) -> tuple[tuple[int, ...], int]:
     kernel build (``params.build_of`` the case's joints with clearance, for the device).
     Anything else may differ within a launch (sweep cases and ensemble members alike):
     parameters the batch does not share are per case, the maps hold the rows of every joint
-    that any case gives clearance, the undo buffer the deepest level any case allows."""
+    that any case gives clearance, the undo buffer the rows of :func:`launch_level` of the
+    deepest level any case allows (a case that needs more runs again, :func:`run_packed`)."""
     return tuple(pk.map_shape), build_of(jointset.of(pk.jp, pk.p), device=True)
 
 
 def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
-               capacity: int | None = None) -> list[KernelRun]:
+               capacity: int | None = None, undo_level: int | None = UNDO_LEVEL) -> list[KernelRun]:
     """Run cases on the device; per case what ``simulation.run_kernel`` returns, with one
     NaN row for the time series (none is kept) and the batch's wall time shared out.
     ``layout``: "soa" (structure of arrays, :func:`batch_plan`'s capacities), "soa-local"
     (the same, the fixed-size work arrays in each thread's local memory,
     ``core.device.LOCAL_WORK``) or "aos" (case by case); ``capacity``: the launch capacity
     of every structure-of-arrays batch, of at most that many cases (a benchmark compiles
-    the kernel of the capacity it times)."""
+    the kernel of the capacity it times).
+
+    ``undo_level`` (the structure-of-arrays layouts): the sub-step level whose undo buffer a
+    launch holds first (:func:`launch_level`; None: the deepest level the cases allow, the
+    full buffer). A case that needs a deeper level stops before its attempt there (its
+    level cap lowered to the buffer's: status unstable_step) and runs again, with the other
+    such cases of its group, in a launch of the full buffer: its results are that launch's
+    (the kernel is deterministic), its wall time the sum of both."""
     if layout not in LAYOUTS:
         raise ValueError(f"device layout {layout!r}: expected one of {LAYOUTS}")
     device_name()
@@ -493,41 +530,68 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
     for i, pk in enumerate(packed):
         groups.setdefault(batch_key(pk), []).append(i)
     for (shape, build), members in groups.items():
-        rows = max(section_rows(packed[i]) for i in members)
-        level = max(int(packed[i].p[L.P_MAX_LEVEL]) for i in members)
-        joints = None if layout == "aos" else batch_joints([packed[i] for i in members])
-        need = case_bytes(shape, level, rows, joints)
-        fit = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
-        cap = None
-        if layout == "aos":
-            size = fit
-        elif capacity is not None:
-            size, cap = min(fit, capacity), capacity
-        else:
-            size, cap = batch_plan(len(members), fit)
-        for start in range(0, len(members), size):
-            batch = members[start:start + size]
-            group = [packed[i] for i in batch]
-            began = time.perf_counter()
-            res = _run_on_device(_allocate(group, layout, cap), layout, build,
-                                 [jointset.of(pk.jp, pk.p) for pk in group])
-            wall = (time.perf_counter() - began) / len(batch)
-            if layout != "aos":
-                joints, npolar = batch_joints(group), shape[0]
-                lay = map_layout(joints, npolar)
-                map_rows = [MAP_ROWS[n](npolar) if c else 0 for n, c in zip(JOINT_NAMES, joints)]
-                proj_rows = [PROJ_ROWS[n] if c else 0 for n, c in zip(JOINT_NAMES, joints)]
-            for k, i in enumerate(batch):
-                # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
-                # batch gives strided views), one case at a time
-                one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
-                if layout != "aos":
-                    one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], map_rows, npolar)
-                    one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], proj_rows, 3)
-                out[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
-                              one["stats"], one["track"], one["pairs"][PAIR_FIRST],
-                              one["sec"][:section_rows(packed[i])], wall)
+        first = None if layout == "aos" else undo_level
+        runs = _run_group(packed, members, shape, build, layout, capacity, first)
+        deeper = [i for i in members if first is not None and _needs_deeper(packed[i], runs[i], first)]
+        if deeper:
+            again = _run_group(packed, deeper, shape, build, layout, capacity, None)
+            for i in deeper:
+                runs[i] = dataclasses.replace(again[i], wall_time=again[i].wall_time + runs[i].wall_time)
+        for i in members:
+            out[i] = runs[i]
     return [r for r in out if r is not None]
+
+
+def _needs_deeper(pk: Packed, run: KernelRun, level: int) -> bool:
+    """Whether a case run with an undo buffer of sub-step level ``level`` stopped for want of
+    a deeper one: status unstable_step, where its own cap allows deeper than the buffer (the
+    launch lowered its cap to the buffer's level, :func:`_allocate`)."""
+    return run.status == L.STATUS_NAMES[L.ST_UNSTABLE_STEP] and int(pk.p[L.P_MAX_LEVEL]) > level
+
+
+def _run_group(packed: Sequence[Packed], members: Sequence[int], shape: tuple[int, ...],
+               build: int, layout: str, capacity: int | None,
+               undo_level: int | None) -> dict[int, KernelRun]:
+    """:func:`run_packed` for the cases ``members`` of one :func:`batch_key` (``shape``,
+    ``build``), in as many launches as the device's memory needs, the structure-of-arrays
+    ones with the undo buffer of :func:`launch_level` (``undo_level``); per case its run."""
+    runs: dict[int, KernelRun] = {}
+    rows = max(section_rows(packed[i]) for i in members)
+    allowed = max(int(packed[i].p[L.P_MAX_LEVEL]) for i in members)
+    level = None if layout == "aos" else launch_level(allowed, undo_level)
+    joints = None if layout == "aos" else batch_joints([packed[i] for i in members])
+    need = case_bytes(shape, allowed if level is None else level, rows, joints)
+    fit = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
+    cap = None
+    if layout == "aos":
+        size = fit
+    elif capacity is not None:
+        size, cap = min(fit, capacity), capacity
+    else:
+        size, cap = batch_plan(len(members), fit)
+    for start in range(0, len(members), size):
+        batch = members[start:start + size]
+        group = [packed[i] for i in batch]
+        began = time.perf_counter()
+        res = _run_on_device(_allocate(group, layout, cap, level), layout, build,
+                             [jointset.of(pk.jp, pk.p) for pk in group])
+        wall = (time.perf_counter() - began) / len(batch)
+        if layout != "aos":
+            joints, npolar = batch_joints(group), shape[0]
+            lay = map_layout(joints, npolar)
+            map_rows = [MAP_ROWS[n](npolar) if c else 0 for n, c in zip(JOINT_NAMES, joints)]
+            proj_rows = [PROJ_ROWS[n] if c else 0 for n, c in zip(JOINT_NAMES, joints)]
+        for k, i in enumerate(batch):
+            # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
+            # batch gives strided views), one case at a time
+            one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
+            if layout != "aos":
+                one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], map_rows, npolar)
+                one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], proj_rows, 3)
+            runs[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
+                           one["stats"], one["track"], one["pairs"][PAIR_FIRST],
+                           one["sec"][:section_rows(packed[i])], wall)
+    return runs
 
 
 def _raw(pk: Packed, wmap, proj, wvol, info, stats, track, first, sec, wall: float) -> KernelRun:

@@ -347,8 +347,10 @@ def test_case_bytes_shrink_for_a_case_without_O_P_clearance():
     sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
     every = gpu.case_bytes(cfg.wear.map, level, sections)
     mine = gpu.config_bytes(cfg)
-    undo_saved = 2 * 4 * 2 * (1 << level)       # buf_i and buf_v: 4 columns, 2 joints' rows
-    assert every - mine == 8 * (2 * npolar * nazim + 2 * 3 * N_ANGLE_BINS + undo_saved)
+    # buf_i and buf_v, 4 columns: every joint's rows at the level cap against A's and B's at
+    # the level a launch holds first
+    undo_saved = 2 * 4 * (4 * (1 << level) - 2 * (1 << gpu.UNDO_LEVEL))
+    assert every - mine == 8 * (2 * npolar * nazim + 2 * 3 * N_ANGLE_BINS) + 8 * undo_saved
     assert mine < 0.52 * every
     bearing = (False, False, True, False)         # the kernel's order: A, B, O, P
     # ideal: one map row and one projection row (no zero-size arrays); the bearing: its row
@@ -388,6 +390,7 @@ def test_joint_rows_keep_every_clearance_joints_rows_apart(present):
 SHARED_SCRIPT = r"""
 import sys
 import numpy as np
+from clearsweep.core.layout import P_MAX_LEVEL
 from clearsweep.config import DEFAULTS, resolve_materials
 from clearsweep.params import pack
 from clearsweep import gpu
@@ -408,6 +411,8 @@ aos = gpu.run_packed(packed, layout="aos")
 soa = gpu.run_packed(packed, layout="soa")
 batch = seen[-1]
 rows = gpu.parameter_rows(packed)
+# the launch's level cap: the level its undo buffer holds (gpu.launch_level)
+rows[:, P_MAX_LEVEL] = np.minimum(rows[:, P_MAX_LEVEL], gpu.UNDO_LEVEL)
 varying = np.flatnonzero((rows != rows[:1]).any(axis=0))
 # the per-case array holds the varying parameters alone; the shared row the rest
 assert np.array_equal(np.flatnonzero(batch["pcols"] >= 0), varying), (batch["pcols"], varying)
@@ -567,3 +572,87 @@ def test_simulated_slider_crank_agrees_with_the_cpu_backend(tmp_path):
     assert float(cpu["wear_volume"].sel(joint="B").min()) > 0.0
     assert float(cpu["slider_acceleration_peak"].min()) > 1.0e4     # the benchmark's scale
     assert_summaries_agree(cpu, gpu)
+
+
+def test_the_undo_buffer_is_held_for_the_first_launchs_level():
+    """A launch holds the undo buffer for gpu.UNDO_LEVEL, not the level cap: per undone
+    joint 16 rows of (4 int64 + 4 float64) where the default cap of 8 took 256. The
+    two-clearance benchmark case (A and B) on the default map at level 8 took 742,688 B with
+    the buffer of the cap (case_bytes before this change) and takes 30,720 B less now; the
+    two clearances of the bearing O and the spherical joint B likewise."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    cfg = load_config(str(ROOT / "configs" / "two_clearances.yaml"))
+    level = cfg.solver.max_substep_level
+    assert level == 8 and gpu.UNDO_LEVEL < level
+    sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
+    for joints in [(True, True, False, False), (False, True, True, False)]:
+        full = gpu.case_bytes(cfg.wear.map, level, sections, joints)
+        first = gpu.case_bytes(cfg.wear.map, gpu.launch_level(level), sections, joints)
+        assert full - first == 2 * 2 * 4 * 8 * ((1 << level) - (1 << gpu.UNDO_LEVEL)) == 30_720
+    ab = (True, True, False, False)
+    assert gpu.case_bytes(cfg.wear.map, level, sections, ab) == 742_688
+    assert gpu.config_bytes(cfg) == gpu.case_bytes(cfg.wear.map, gpu.UNDO_LEVEL, sections, ab) \
+        == 711_968
+    # a cap below the first launch's level keeps its own (smaller) buffer; None: the cap's
+    assert gpu.launch_level(2) == 2 and gpu.launch_level(12, None) == 12
+    assert gpu.undo_rows(ab, gpu.launch_level(level)) == 2 * 16
+
+
+UNDO_SCRIPT = r"""
+import json
+import numpy as np
+from clearsweep.core.layout import P_MAX_LEVEL
+from clearsweep.config import load_config, resolve_materials
+from clearsweep.core import device
+from clearsweep.params import pack
+from clearsweep.simulation import run_kernel
+from clearsweep import gpu
+
+# the paper's preset (its light rod: fast contact rates) at the default step and level cap,
+# seated, 20 steps: at 60 r/min its steps split into 16 sub-steps at most, at 30 r/min into
+# 64 (measured: deepest levels 4 and 6)
+base = load_config("configs/paper_case.yaml", ["solver.dt=1e-5", "solver.duration=0.0002",
+                   "solver.max_substep_level=8", "solver.save_every=1", "wear.map=[6,12]",
+                   "wear.amplification=1000.0"])
+cfgs = [base, base.replace(mechanism__speed_rpm=30.0)]
+packed = [pack(c, resolve_materials(c)) for c in cfgs]
+launches = []
+launch = device.launch
+def spy(arrays, layout="aos", spec=device.ALL, case_sets=()):
+    n, col = int(arrays["n_steps"].shape[0]), int(arrays["pcols"][P_MAX_LEVEL])
+    caps = arrays["p"][col, :n] if col >= 0 else [arrays["jp"][P_MAX_LEVEL]]
+    launches.append([n, int(arrays["buf_i"].shape[0]), sorted({float(v) for v in caps})])
+    return launch(arrays, layout, spec, case_sets)
+device.launch = spy
+first = gpu.run_packed(packed)
+once = list(launches)
+launches.clear()
+full = gpu.run_packed(packed, undo_level=None)
+cpu = [run_kernel(pk) for pk in packed]
+for k, (a, b, c) in enumerate(zip(first, full, cpu)):
+    assert a.status == b.status == c.status == "ok", (k, a.status, b.status, c.status)
+    for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+        x, y, z = (np.asarray(getattr(r, name)) for r in (a, b, c))
+        assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True), (k, name)
+    for name in ("residual_max", "ke_peak", "rk4_steps", "deepest", "t_end"):
+        assert getattr(a, name) == getattr(b, name) == getattr(c, name), (k, name)
+print("LAUNCHES " + json.dumps([once, launches, [r.deepest for r in first]]))
+"""
+
+
+@pytest.mark.slow
+def test_a_case_deeper_than_the_undo_buffer_runs_again_to_the_same_bits():
+    """Two cases of the paper's preset in one launch, whose steps split to levels 4 and 6:
+    the first launch holds A's and B's undo rows of level gpu.UNDO_LEVEL (4: 2 x 16 rows)
+    and lowers the cases' level cap to it; the case that needs level 6 stops there, before
+    its attempt, and runs again alone with the rows of its cap (8: 2 x 256). Both cases end
+    with the bits of one launch of the full buffer and of the CPU kernel (its Python source,
+    run in the same process)."""
+    proc = run_simulated(UNDO_SCRIPT)
+    line = [x for x in proc.stdout.splitlines() if x.startswith("LAUNCHES")][-1]
+    once, full, deepest = json.loads(line.split(" ", 1)[1])
+    assert deepest == [4, 6]
+    assert once == [[2, 2 * 16, [4.0]], [1, 2 * 256, [8.0]]]
+    assert full == [[2, 2 * 256, [8.0]]]
