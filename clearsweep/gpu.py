@@ -49,12 +49,28 @@ NO_DEVICE = "no CUDA device: use --backend processes"
 #: Share of the device's free memory that one batch may take.
 DEVICE_MEMORY_FRACTION = 0.5
 
-#: Host memory [bytes] that one batch's arrays and results may take at most: 16 GiB (23,143
-#: two-clearance cases of the default map at 0.74 MB each), or a quarter of the
-#: machine's memory where that is less (:func:`host_batch_bytes`). A batch must hold
-#: thousands of cases to fill the device: on an H200, one launch of 1,470 cases ran
-#: 7.4e6 RK4 steps/s, of 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
+#: Share of the host's available memory (:func:`available_memory`) that one window of a
+#: sweep's cases may take, their batch arrays and their results together
+#: (:func:`host_batch_bytes`, :func:`host_case_bytes`). A batch must hold thousands of cases
+#: to fill the device: on an H200, one launch of 1,470 cases ran 7.4e6 RK4 steps/s, of
+#: 10,000 cases 1.71e7 (benchmarks/README.md, "CUDA backend").
+HOST_MEMORY_FRACTION = 0.5
+
+#: Host memory [bytes] a window may take where the machine does not say what it has
+#: available (no /proc/meminfo, no sysconf): 16 GiB, the fixed bound of before.
 HOST_BATCH_BYTES = 16 << 30
+
+#: The environment variable that sets a window's host memory [bytes] in place of
+#: :data:`HOST_MEMORY_FRACTION` of the available memory: a whole number of bytes, or one with
+#: a suffix K, M, G or T (powers of 1024): ``CLEARSWEEP_HOST_MEMORY=64G``.
+HOST_MEMORY_ENV = "CLEARSWEEP_HOST_MEMORY"
+_UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+
+#: Where Linux says what memory is available, and a memory cgroup (v2, v1) its limit and use.
+MEMINFO = "/proc/meminfo"
+CGROUP_MEMORY = (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                 ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                  "/sys/fs/cgroup/memory/memory.usage_in_bytes"))
 
 #: Sub-step level whose undo buffer a structure-of-arrays launch holds first
 #: (:func:`launch_level`): a case that needs a deeper level stops before its attempt there
@@ -289,23 +305,103 @@ def config_bytes(cfg: Config) -> int:
     return case_bytes(cfg.wear.map, launch_level(cfg.solver.max_substep_level), sections, joints)
 
 
-def host_batch_bytes() -> int:
-    """Host memory [bytes] one batch may take: :data:`HOST_BATCH_BYTES`, or a quarter of
-    the machine's physical memory where that is less."""
+def host_case_bytes(cfg: Config) -> int:
+    """Host memory [bytes] one case of a sweep's window takes: its share of the batch arrays
+    (:func:`config_bytes`) and its results, held until the window's parts are written: the
+    wear map and the projections in the CPU kernel's shape, every joint's (a case's dataset:
+    ``simulation.case_dataset``). Measured in the simulator: 2.06 MB per two-clearance case
+    of the default map in a batch of 64 (its capacity), 0.71 MB of them the batch's."""
+    npolar, nazim = (int(n) for n in cfg.wear.map)
+    results = L.N_JOINTS * npolar * nazim + L.N_JOINTS * 3 * L.N_ANGLE_BINS
+    return config_bytes(cfg) + 8 * results
+
+
+def _cgroup_available() -> int | None:
+    """What the process's memory cgroup leaves it [bytes] (v2: memory.max - memory.current;
+    v1: memory.limit_in_bytes - memory.usage_in_bytes), None where it sets no limit."""
+    for limit, usage in CGROUP_MEMORY:
+        try:
+            with open(limit) as f:
+                text = f.read().strip()
+            if text == "max":
+                return None
+            with open(usage) as f:
+                used = int(f.read().strip())
+            cap = int(text)
+        except (OSError, ValueError):
+            continue
+        if cap >= 1 << 60:          # v1's "no limit"
+            return None
+        return max(0, cap - used)
+    return None
+
+
+def available_memory() -> int | None:
+    """The host memory [bytes] available to new allocations: Linux's MemAvailable (free
+    memory and the caches it can drop), or free pages where there is no /proc/meminfo, the
+    less where a memory cgroup leaves less; None where the machine says neither."""
     import os
 
+    available: int | None = None
     try:
-        physical = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):    # no sysconf: the fixed bound alone
+        with open(MEMINFO) as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    available = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
+        available = None
+    if available is None:
+        try:
+            available = int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+        except (ValueError, OSError, AttributeError):
+            available = None
+    group = _cgroup_available()
+    if group is not None:
+        available = group if available is None else min(available, group)
+    return available
+
+
+def host_memory_setting(text: str) -> int:
+    """Bytes of a :data:`HOST_MEMORY_ENV` value: a whole number, or one with a suffix K, M,
+    G or T (powers of 1024, an optional "iB" or "B" after it); ConfigError naming the
+    variable otherwise."""
+    from .config import ConfigError
+
+    raw = text.strip()
+    body = raw.upper().removesuffix("IB").removesuffix("B") if raw[-1:].isalpha() else raw
+    unit = body[-1:] if body[-1:].isalpha() else ""
+    digits = body[:-1] if unit else body
+    if unit in _UNITS and digits.isascii() and digits.isdigit() and int(digits) > 0:
+        return int(digits) * _UNITS[unit]
+    raise ConfigError(HOST_MEMORY_ENV, text, "a whole number of bytes > 0, or one with K, M, G "
+                      "or T (powers of 1024): 64G", "environment")
+
+
+def host_batch_bytes() -> int:
+    """Host memory [bytes] one window of a sweep's cases may take: :data:`HOST_MEMORY_ENV`
+    where it is set, else :data:`HOST_MEMORY_FRACTION` of the memory available now
+    (:func:`available_memory`), else :data:`HOST_BATCH_BYTES`."""
+    import os
+
+    given = os.environ.get(HOST_MEMORY_ENV)
+    if given is not None and given.strip():
+        return host_memory_setting(given)
+    available = available_memory()
+    if available is None:
         return HOST_BATCH_BYTES
-    return min(HOST_BATCH_BYTES, max(int(physical) // 4, 1))
+    return max(int(HOST_MEMORY_FRACTION * available), 1)
 
 
 def batch_window(configs: Sequence[Config]) -> int:
-    """Cases per batch that a sweep hands to :func:`simulate_batch` (host memory bound)."""
+    """Cases per window that a sweep hands to :func:`simulate_batch`: as many as
+    :func:`host_batch_bytes` holds at :func:`host_case_bytes` each, and no more than one
+    launch of the largest capacity (a larger window fills no launch further, and holds more
+    results before any part of it is written)."""
     if not configs:
         return 1
-    return max(1, min(len(configs), host_batch_bytes() // max(config_bytes(c) for c in configs)))
+    per_case = max(host_case_bytes(c) for c in configs)
+    return max(1, min(len(configs), CAPACITIES[-1], host_batch_bytes() // per_case))
 
 
 def _device_budget() -> int:
