@@ -7,8 +7,9 @@ projections, the worn volume, the counters and the energy residual; no time seri
 sweep runs the cases whose series it keeps on the CPU: ``sweeping.backends``).
 
 Memory per case (:func:`case_bytes`), structure-of-arrays: the wear maps of the batch's
-clearance joints alone (8 * nazim bytes per map row: npolar rows for A, B and P's walls,
-one for the bearing O, :func:`map_layout`), 8,640 bytes of projections per joint of A, B
+clearance joints alone, in the rows each type uses (8 * nazim bytes per map row: npolar
+rows for the RSSP's A and B, 4 * (npolar // 4) for P's walls, one for a bearing: O and the
+slider-crank's pins, :func:`map_rows`), 8,640 bytes of projections per joint of A, B
 and O with clearance, an undo buffer of 64 * 2**level bytes per such joint (the level a
 launch holds it for, :func:`launch_level`: :data:`UNDO_LEVEL`, where the cases' cap is
 deeper; a case that needs more runs again with its cap's, :func:`run_packed`), the
@@ -36,7 +37,7 @@ import numpy as np
 from .config import Config, resolve_materials
 from .core import jointset
 from .core import layout as L
-from .core.joints import INDEX
+from .core.joints import INDEX, row_types
 from .core.joints import JOINTS as JOINT_TABLE
 from .core.rk4 import INT_WORK, PAIR_FIRST, work_shapes
 from .jointtypes import kind
@@ -181,15 +182,43 @@ def device_name() -> str:
 #: Joints in the kernel's order (``core.joints.INDEX``): A, B, O, P.
 JOINT_NAMES = tuple(sorted(INDEX, key=INDEX.__getitem__))
 
-#: Rows of the wear map that a clearance joint's map takes in a structure-of-arrays batch,
-#: by joint, as a function of the map's polar bins: the bearing O's map is one row of nazim
-#: bins (``revolute``), the spherical joints' and the guide P's wall maps (four bands) are
-#: npolar rows. A joint without clearance takes none.
-MAP_ROWS = {joint.name: kind(joint.type).map_rows for joint in JOINT_TABLE}
+#: Rows of its map that a joint type uses where fewer than its ``map_rows`` (the CPU kernel's
+#: map gives it npolar rows): the guide's walls are four bands of npolar // 4 rows each
+#: (``prismatic.wall_bin``, ``wall_read``, ``deposit``), so that 4 * (npolar // 4) rows hold
+#: them and a remainder of npolar % 4 rows is never touched.
+USED_ROWS = {"prismatic": lambda npolar: 4 * (npolar // 4)}
+
+
+def type_map_rows(type_name: str, npolar: int) -> int:
+    """Rows of the wear map that a clearance joint of the type ``type_name`` takes in a
+    structure-of-arrays batch of npolar polar bins: the rows its map uses (:data:`USED_ROWS`,
+    else its type's ``map_rows``): a spherical socket's npolar, a bearing's one row of nazim
+    bins (``revolute``), the guide's four wall bands."""
+    return int(USED_ROWS.get(type_name, kind(type_name).map_rows)(int(npolar)))
+
+
+#: Rows of the wear map that a clearance joint's map takes in a structure-of-arrays batch of
+#: the RSSP, by joint, as a function of the map's polar bins (:func:`type_map_rows`; the
+#: slider-crank's pins are bearings: :func:`map_rows`). A joint without clearance takes none.
+MAP_ROWS = {joint.name: functools.partial(type_map_rows, joint.type) for joint in JOINT_TABLE}
 
 #: Rows of N_ANGLE_BINS projection bins a clearance joint's projections take: three (x, y,
 #: z) for O, A and B; none for P, whose wear the projections do not hold (``rk4.accept_substep``).
 PROJ_ROWS = {joint.name: kind(joint.type).proj_rows for joint in JOINT_TABLE}
+
+
+def map_rows(joints: Sequence[bool], npolar: int, slider_crank: bool = False) -> list[int]:
+    """Per joint (the kernel's order) the wear-map rows a case of the clearance joints
+    ``joints`` takes in a structure-of-arrays batch, by the joint's type in its mechanism
+    (``core.joints.row_types``: the slider-crank's pins A and B are bearings, one row each)."""
+    return [type_map_rows(t, npolar) if c else 0
+            for t, c in zip(row_types(bool(slider_crank)), joints)]
+
+
+def proj_rows(joints: Sequence[bool], slider_crank: bool = False) -> list[int]:
+    """Per joint (the kernel's order) the projection rows a case of the clearance joints
+    ``joints`` takes, by the joint's type in its mechanism."""
+    return [int(kind(t).proj_rows) if c else 0 for t, c in zip(row_types(bool(slider_crank)), joints)]
 
 #: Joints whose wear the undo buffer holds, one row per accepted sub-step (P's is not undone
 #: row by row: ``rk4.accept_substep``).
@@ -235,13 +264,13 @@ def clearance_joints(jp: np.ndarray) -> tuple[bool, ...]:
     return tuple(bool(mask >> j & 1) for j in range(L.N_JOINTS))
 
 
-def map_layout(joints: Sequence[bool], npolar: int) -> dict[str, tuple[int, int, int]]:
+def map_layout(joints: Sequence[bool], npolar: int,
+               slider_crank: bool = False) -> dict[str, tuple[int, int, int]]:
     """The structure-of-arrays batch's joint layout for the clearance joints ``joints`` (per
-    joint, the kernel's order): (r0, dj, total rows) of the wear map ("wmap") and of the
-    projections ("proj"), :func:`joint_rows`."""
-    names = JOINT_NAMES
-    return {"wmap": joint_rows([MAP_ROWS[n](npolar) if c else 0 for n, c in zip(names, joints)]),
-            "proj": joint_rows([PROJ_ROWS[n] if c else 0 for n, c in zip(names, joints)])}
+    joint, the kernel's order) of the RSSP or the slider-crank: (r0, dj, total rows) of the
+    wear map ("wmap": :func:`map_rows`) and of the projections ("proj"), :func:`joint_rows`."""
+    return {"wmap": joint_rows(map_rows(joints, npolar, slider_crank)),
+            "proj": joint_rows(proj_rows(joints, slider_crank))}
 
 
 def undo_rows(joints: Sequence[bool], max_level: int) -> int:
@@ -264,14 +293,16 @@ ALL_JOINTS = (True,) * L.N_JOINTS
 
 
 def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0,
-               joints: Sequence[bool] | None = None, shared: int = 0) -> int:
+               joints: Sequence[bool] | None = None, shared: int = 0,
+               slider_crank: bool = False) -> int:
     """Device memory [bytes] that one case of a batch takes (inputs, results, work);
     ``sections``: the Poincare section rows its batch holds. ``joints`` (per joint, the
     kernel's order: whether it has clearance): the structure-of-arrays layout, which holds
     maps and projections for the clearance joints alone (:func:`map_layout`), the undo
     buffer for their rows (:func:`undo_rows`), and of the parameters only the ``N_PJ -
     shared`` that differ across the batch; None: the case-by-case layout, every joint's map
-    and every parameter per case."""
+    and every parameter per case. ``slider_crank``: the joints' types are the slider-crank's
+    (its pins A and B bearings of one map row, :func:`map_rows`)."""
     npolar, nazim = int(map_shape[0]), int(map_shape[1])
     nj = L.N_JOINTS
     work = work_shapes(max_level, npolar)
@@ -281,7 +312,7 @@ def case_bytes(map_shape: Sequence[int], max_level: int, sections: int = 0,
         undo = 2 * 4 * work["buf_i"][0]
     else:
         params = max(1, N_PJ - int(shared))
-        lay = map_layout(joints, npolar)
+        lay = map_layout(joints, npolar, slider_crank)
         maps = lay["wmap"][2] * nazim + lay["proj"][2] * L.N_ANGLE_BINS
         undo = 2 * 4 * undo_rows(joints, max_level)
     items = (params + L.N_Y + 2                    # parameters, y0, n_steps, save_every
@@ -302,7 +333,8 @@ def config_bytes(cfg: Config) -> int:
 
     sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
     joints = tuple(joint.clearance > 0.0 for _, joint in joint_configs(cfg))
-    return case_bytes(cfg.wear.map, launch_level(cfg.solver.max_substep_level), sections, joints)
+    return case_bytes(cfg.wear.map, launch_level(cfg.solver.max_substep_level), sections, joints,
+                      slider_crank=cfg.mechanism.kind == "slider_crank")
 
 
 def host_case_bytes(cfg: Config) -> int:
@@ -418,6 +450,12 @@ def batch_joints(group: Sequence[Packed]) -> tuple[bool, ...]:
     return tuple(any(f[j] for f in flags) for j in range(L.N_JOINTS))
 
 
+def is_slider_crank(group: Sequence[Packed]) -> bool:
+    """Whether a batch's cases are the slider-crank's (``jointset.SLIDER_CRANK``: one
+    :func:`batch_key` holds one mechanism's cases)."""
+    return bool(jointset.of(group[0].jp, group[0].p) & jointset.SLIDER_CRANK)
+
+
 def parameter_rows(group: Sequence[Packed]) -> np.ndarray:
     """Each case's parameters as one row (n, N_PJ): p, then jp's rows."""
     return np.stack([np.concatenate([pk.p, pk.jp.reshape(-1)]) for pk in group])
@@ -440,15 +478,15 @@ def _shapes(group: Sequence[Packed], layout: str = "aos",
     npolar, nazim = group[0].map_shape
     max_level = max(int(pk.p[L.P_MAX_LEVEL]) for pk in group)
     undo_level = max_level if level is None else int(level)
-    map_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
-    proj_rows: tuple[int, ...] = (L.N_JOINTS, 3)
+    wmap_rows: tuple[int, ...] = (L.N_JOINTS, npolar)
+    proj_n: tuple[int, ...] = (L.N_JOINTS, 3)
     if layout != "aos":
         joints = batch_joints(group)
-        lay = map_layout(joints, npolar)
-        map_rows, proj_rows = (lay["wmap"][2],), (lay["proj"][2],)
+        lay = map_layout(joints, npolar, is_slider_crank(group))
+        wmap_rows, proj_n = (lay["wmap"][2],), (lay["proj"][2],)
     shapes: dict[str, tuple[tuple[int, ...], Any, float]] = {
-        "wmap": (map_rows + (nazim,), np.float64, 0.0),
-        "proj": (proj_rows + (L.N_ANGLE_BINS,), np.float64, 0.0),
+        "wmap": (wmap_rows + (nazim,), np.float64, 0.0),
+        "proj": (proj_n + (L.N_ANGLE_BINS,), np.float64, 0.0),
         "wvol": ((L.N_JOINTS,), np.float64, 0.0), "info": ((L.N_INFO,), np.int64, 0),
         "stats": ((L.N_WINDOWS, L.N_M), np.float64, 0.0), "track": ((L.N_TRACK,), np.float64, 0.0),
         # one row at least: no zero-size array for the device
@@ -468,7 +506,7 @@ def _geom(group: Sequence[Packed]) -> np.ndarray:
     """The structure-of-arrays kernel's ``geom`` for a batch (``core.device.GEOM_*``): the
     map's polar bins, (r0, dj) of the maps and of the projections (:func:`map_layout`)."""
     npolar = group[0].map_shape[0]
-    lay = map_layout(batch_joints(group), npolar)
+    lay = map_layout(batch_joints(group), npolar, is_slider_crank(group))
     return np.array([npolar, lay["wmap"][0], lay["wmap"][1], lay["proj"][0], lay["proj"][1]],
                     dtype=np.int64)
 
@@ -656,7 +694,8 @@ def _run_group(packed: Sequence[Packed], members: Sequence[int], shape: tuple[in
     allowed = max(int(packed[i].p[L.P_MAX_LEVEL]) for i in members)
     level = None if layout == "aos" else launch_level(allowed, undo_level)
     joints = None if layout == "aos" else batch_joints([packed[i] for i in members])
-    need = case_bytes(shape, allowed if level is None else level, rows, joints)
+    need = case_bytes(shape, allowed if level is None else level, rows, joints,
+                      slider_crank=is_slider_crank([packed[i] for i in members]))
     fit = SIMULATOR_BATCH if simulated() else max(1, _device_budget() // need)
     cap = None
     if layout == "aos":
@@ -673,17 +712,16 @@ def _run_group(packed: Sequence[Packed], members: Sequence[int], shape: tuple[in
                              [jointset.of(pk.jp, pk.p) for pk in group])
         wall = (time.perf_counter() - began) / len(batch)
         if layout != "aos":
-            joints, npolar = batch_joints(group), shape[0]
-            lay = map_layout(joints, npolar)
-            map_rows = [MAP_ROWS[n](npolar) if c else 0 for n, c in zip(JOINT_NAMES, joints)]
-            proj_rows = [PROJ_ROWS[n] if c else 0 for n, c in zip(JOINT_NAMES, joints)]
+            joints, npolar, planar = batch_joints(group), shape[0], is_slider_crank(group)
+            lay = map_layout(joints, npolar, planar)
+            rows_map, rows_proj = map_rows(joints, npolar, planar), proj_rows(joints, planar)
         for k, i in enumerate(batch):
             # each case's arrays contiguous, as the CPU kernel's (a structure-of-arrays
             # batch gives strided views), one case at a time
             one = {name: np.ascontiguousarray(a[k]) for name, a in res.items()}
             if layout != "aos":
-                one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], map_rows, npolar)
-                one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], proj_rows, 3)
+                one["wmap"] = expand_joints(one["wmap"], *lay["wmap"][:2], rows_map, npolar)
+                one["proj"] = expand_joints(one["proj"], *lay["proj"][:2], rows_proj, 3)
             runs[i] = _raw(packed[i], one["wmap"], one["proj"], one["wvol"], one["info"],
                            one["stats"], one["track"], one["pairs"][PAIR_FIRST],
                            one["sec"][:section_rows(packed[i])], wall)

@@ -753,3 +753,93 @@ def test_a_window_holds_what_host_case_bytes_says_per_case():
     peak, estimate, device_bytes = (float(v) for v in line.split()[1:])
     assert 0.98 * estimate <= peak <= 1.02 * estimate, (peak, estimate)
     assert peak > 2.5 * device_bytes
+
+
+MAP_ROWS_SCRIPT = r"""
+import json
+import numpy as np
+from clearsweep.config import DEFAULTS, load_config, resolve_materials
+from clearsweep.core import device
+from clearsweep.params import pack
+from clearsweep.simulation import run_kernel
+from clearsweep import gpu
+
+# on a [6, 12] map, whose 6 polar rows the guide's four wall bands use 4 of: A, B and the
+# guide P with clearance (seated: the block on its walls from the first step, worn
+# amplified); the slider-crank's benchmark with clearance at B, and at O, A and B
+rssp = DEFAULTS.replace(solver__duration=0.001, wear__map=[6, 12], wear__amplification=1.0e5,
+                        wear__interpolate=True, metrics__settle_time=0.0005,
+                        joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4,
+                        joints__P__clearance_y=1.0e-4, joints__P__clearance_z=1.0e-4)
+crank = {"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark", "speed_rpm": 5000.0},
+         "joints": {"B": {"clearance": 5.0e-4, "socket_radius": 0.01}},
+         "wear": {"map": [6, 12], "amplification": 100.0}, "metrics": {"settle_time": 0.0005},
+         "solver": {"dt": 1.0e-5, "duration": 0.001}}
+oab = json.loads(json.dumps(crank))
+oab["joints"].update(A={"clearance": 2.0e-4}, O={"clearance": 2.0e-4})
+batches = [[rssp], [load_config(crank), load_config(oab)]]
+rows = []
+launch = device.launch
+def spy(arrays, layout="aos", spec=device.ALL, case_sets=()):
+    if layout == "soa":
+        rows.append(int(arrays["wmap"].shape[0]))
+    return launch(arrays, layout, spec, case_sets)
+device.launch = spy
+for cfgs in batches:
+    packed = [pack(c, resolve_materials(c)) for c in cfgs]
+    soa = gpu.run_packed(packed, layout="soa")
+    aos = gpu.run_packed(packed, layout="aos")
+    cpu = [run_kernel(pk) for pk in packed]
+    for k, (a, b, c) in enumerate(zip(soa, aos, cpu)):
+        assert a.status == b.status == c.status == "ok", (k, a.status, b.status, c.status)
+        for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+            x, y, z = (np.asarray(getattr(r, name)) for r in (a, b, c))
+            assert x.shape == y.shape == z.shape, (k, name)
+            assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True), (k, name)
+        for name in ("residual_max", "ke_peak", "rk4_steps", "deepest"):
+            assert getattr(a, name) == getattr(b, name) == getattr(c, name), (k, name)
+    worn = [float(r.wvol.max()) for r in soa]
+    assert min(worn) > 0.0, worn
+print("ROWS " + json.dumps([rows, [r.deepest for r in soa], float(soa[1].wmap[0, 0].max()),
+                           float(abs(soa[1].wmap[0, 1:]).max())]))
+"""
+
+
+@pytest.mark.slow
+def test_each_joint_type_holds_the_map_rows_it_uses_on_the_device():
+    """The structure-of-arrays maps hold the rows each clearance joint's type uses: on a
+    [6, 12] map the guide P's four wall bands take 4 rows (6 before), so that A, B and P
+    take 3 x 6 + 4 = 22 rows (24); the slider-crank's pins A and B, bearings, one row each
+    (6 before), so that O, A and B take 3 rows (13). The guide's walls and the pins'
+    bearings wear, and every result is the case-by-case layout's (the CPU kernel's map
+    shape, every row) and the CPU kernel's (its Python source, in the same process) to the
+    bit."""
+    proc = run_simulated(MAP_ROWS_SCRIPT)
+    line = [x for x in proc.stdout.splitlines() if x.startswith("ROWS")][-1]
+    rows, deepest, pin_row0, pin_rest = json.loads(line.split(" ", 1)[1])
+    # one launch per build: A, B and P; the slider-crank's B; its O, A and B, whose case
+    # reaches sub-step level 5 and runs again with the full undo buffer
+    assert rows == [22, 1, 3, 3] and deepest == [3, 5]
+    assert pin_row0 > 0.0 and pin_rest == 0.0      # A's bearing: its row 0 alone
+
+
+def test_case_bytes_of_the_rows_each_type_uses():
+    """Device memory per case on the default map [144, 288]: the slider-crank's benchmark
+    (B) 371,360 -> 41,888 B (B's map one row, not 144); with clearance at O, A and B
+    724,768 -> 65,824 B; with B and the guide P 703,136 -> 373,664 B. The RSSP's guide on
+    the default map uses all of its 144 rows (1,375,520 B with A, B and P, as before); on a
+    [150, 300] map it uses 148: 1,488,992 -> 1,484,192 B (before: computed by this function
+    on the tree before the change)."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    crank = str(ROOT / "configs" / "slider_crank.yaml")
+    rssp = str(ROOT / "configs" / "two_clearances.yaml")
+    guide = ["joints.P.clearance_z=1e-4", "joints.P.clearance_y=1e-4"]
+    cases = [(crank, [], 41_888), (crank, ["joints.A.clearance=2e-4", "joints.O.clearance=2e-4"], 65_824),
+             (crank, guide, 373_664), (rssp, guide, 1_375_520),
+             (rssp, guide + ["wear.map=[150,300]"], 1_484_192)]
+    for path, overrides, expected in cases:
+        assert gpu.config_bytes(load_config(path, overrides)) == expected, (path, overrides)
+    assert gpu.map_rows((False, True, False, True), 150, slider_crank=True) == [0, 1, 0, 148]
+    assert gpu.map_rows((True, True, True, True), 144) == [144, 144, 1, 144]
