@@ -86,7 +86,7 @@ SIMULATOR_BATCH = 64
 
 #: The device layouts and launch capacities (``core.device``, which imports numba.cuda:
 #: stated here too, so that planning a batch needs no CUDA import; tests check they agree).
-LAYOUTS = ("soa", "aos", "soa-local")
+LAYOUTS = ("soa", "aos", "soa-local", "soa-one-evaluate")
 #: The work arrays the "soa-local" layout keeps in each thread's local memory
 #: (``core.device.LOCAL_WORK``): the launch holds a placeholder for each.
 LOCAL_WORK = ("vec", "diag", "cstate", "msave", "mats", "vz", "caps")
@@ -646,7 +646,8 @@ def run_packed(packed: Sequence[Packed], layout: str = DEFAULT_LAYOUT,
     NaN row for the time series (none is kept) and the batch's wall time shared out.
     ``layout``: "soa" (structure of arrays, :func:`batch_plan`'s capacities), "soa-local"
     (the same, the fixed-size work arrays in each thread's local memory,
-    ``core.device.LOCAL_WORK``) or "aos" (case by case); ``capacity``: the launch capacity
+    ``core.device.LOCAL_WORK``), "soa-one-evaluate" (the same as "soa", each step's
+    evaluations at one call site, ``core.onestep``) or "aos" (case by case); ``capacity``: the launch capacity
     of every structure-of-arrays batch, of at most that many cases (a benchmark compiles
     the kernel of the capacity it times).
 

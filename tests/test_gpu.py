@@ -314,7 +314,7 @@ cfgs = [base.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4),
 packed = [pack(c, resolve_materials(c)) for c in cfgs]
 aos = gpu.run_packed(packed, layout="aos")
 pairs = []
-for layout in ("soa", "soa-local"):
+for layout in ("soa", "soa-local", "soa-one-evaluate"):
     pairs += list(zip(aos, gpu.run_packed(packed, layout=layout)))
 for k, (a, b) in enumerate(pairs):
     assert a.status == b.status == "ok", (k, a.status, b.status)
@@ -332,11 +332,12 @@ print("compared", len(pairs), "cases; largest statistic", impacts)
 def test_simulated_layouts_agree_bit_for_bit():
     """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity),
     the same with the fixed-size work arrays in each thread's local memory ("soa-local",
-    their launch arrays placeholders) and the case-by-case one compute the same bits in the
+    their launch arrays placeholders), the same with each step's evaluations at one call
+    site ("soa-one-evaluate", ``core.onestep``) and the case-by-case one compute the same bits in the
     simulator, where each runs the kernel's Python source: clearance at A and B, at B and O
     from the centred start (impacts), and ideal joints, in one batch."""
     proc = run_simulated(LAYOUT_SCRIPT)
-    assert "compared 6 cases" in proc.stdout
+    assert "compared 9 cases" in proc.stdout
 
 
 def test_the_numpy_numba_cuda_pairing_is_pinned_as_the_check_states():
