@@ -431,11 +431,11 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False, one_evaluate
         raise ValueError(f"launch capacity {capacity}: expected one of {CAPACITIES}")
     spec = int(spec)
     local = bool(local)
-    key = (capacity, spec, local, bool(one_evaluate))
+    one = bool(one_evaluate)
+    key = (capacity, spec, local, one)
     if key in _SOA_KERNELS:
         return _SOA_KERNELS[key]
     cap = capacity      # a constant of the kernel (a closure variable), as the joint set
-    step = _advance_one if one_evaluate else _advance     # the build's advance
 
     @_jit
     def run_cases_soa(p, jp, y0, n_steps, save_every, wmap, proj, wvol, info, stats, track,
@@ -500,7 +500,10 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False, one_evaluate
                                soa_block(buf_v, i, 0, (nbuf, 4), cap), lk[0], lk[1],
                                soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
                                lv[7], ld[2], lv[8], lv[9])
-                step(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                if one:
+                    _advance_one(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                    return
+                _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
                 return
             work = Rk4Work(soa_block(vec, i, 0, (N_Y,), cap), soa_block(vec, i, 1, (N_Y,), cap),
                            soa_block(vec, i, 2, (N_Y,), cap), soa_block(vec, i, 3, (N_Y,), cap),
@@ -524,7 +527,11 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False, one_evaluate
                            soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
                            soa_block(vec, i, 7, (N_Y,), cap), soa_block(diag, i, 2, (N_D,), cap),
                            soa_block(vec, i, 8, (N_Y,), cap), soa_block(vec, i, 9, (N_Y,), cap))
-            step(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+            if one:
+                # the step with one evaluate call site (a constant of the build, as local)
+                _advance_one(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                return
+            _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
 
     _SOA_KERNELS[key] = run_cases_soa
     return run_cases_soa
