@@ -166,7 +166,8 @@ def main(argv=None) -> int:
                     help="override of every case's config, e.g. joints.O.clearance=2.5e-4")
     ap.add_argument("--simulator", action="store_true",
                     help="run the CUDA path in numba's CUDA simulator (tiny sizes only)")
-    ap.add_argument("--layout", choices=("soa", "aos", "soa-local"), default="soa",
+    ap.add_argument("--layout", choices=("soa", "aos", "soa-local", "soa-one-evaluate"),
+                    default="soa",
                     help="the device layout (--kernel-only): structure of arrays, case by case, "
                          "or structure of arrays with the work arrays in each thread's local "
                          "memory")

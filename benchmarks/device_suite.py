@@ -20,8 +20,9 @@ that), so that the call is known to work before device time is spent. Steps, in 
    the host's CPU workers (``--backend processes``), side by side in the same call; its
    cases/s against the device's.
 4b. **variants** (issue 43 item 6), where time is left: the kernel step again for the
-   work arrays in each thread's local memory (layout soa-local) and for the
-   structure-of-arrays kernel built to prefer the most L1 (``CLEARSWEEP_CUDA_CARVEOUT=maxl1``).
+   work arrays in each thread's local memory (layout soa-local), for the
+   structure-of-arrays kernel built to prefer the most L1 (``CLEARSWEEP_CUDA_CARVEOUT=maxl1``)
+   and for its step with one ``evaluate`` call site (layout soa-one-evaluate).
 5. **ncu**, where ``ncu`` is on the PATH: achieved occupancy, L1/L2 hit rates, DRAM
    throughput, sectors per request and the warp stall reasons of one launch of 2,000 short
    cases per layout (the raw CSV kept).
@@ -192,10 +193,13 @@ KERNELS = (("aos", "aos", {}), ("soa", "soa", {}))
 #: the fixed-size work arrays in each thread's local memory ("soa-local", which the
 #: hardware interleaves thread by thread), and the structure-of-arrays kernel preferring
 #: the most L1 over shared memory (``core.device.CARVEOUT``; compiled in its own process,
-#: outside the on-disk cache, so that no build of another carve-out is loaded for it).
+#: outside the on-disk cache, so that no build of another carve-out is loaded for it), and
+#: the step with one ``evaluate`` call site (``core.onestep``: a quarter less PTX, more spill
+#: stores and fewer loads, ptxas says; its time decides).
 VARIANTS = (("soa-local", "soa-local", {}),
             ("soa-maxl1", "soa", {"CLEARSWEEP_CUDA_CARVEOUT": "maxl1",
-                                  "CLEARSWEEP_CUDA_CACHE": "0"}))
+                                  "CLEARSWEEP_CUDA_CACHE": "0"}),
+            ("soa-one-evaluate", "soa-one-evaluate", {}))
 
 
 def kernel(suite: Suite, sizes: list[int], duration: float, kernels=KERNELS,
@@ -411,7 +415,8 @@ def main(argv=None) -> int:
         (args.out / "suite.json").write_text(json.dumps(suite.record, indent=1))
         return 2
     kernels = [("cpu", 0), ("aos", capacity_for(max(sizes))), ("soa", capacity_for(max(sizes))),
-               ("soa", capacity_for(n)), ("soa-local", capacity_for(max(sizes)))]
+               ("soa", capacity_for(n)), ("soa-local", capacity_for(max(sizes))),
+               ("soa-one-evaluate", capacity_for(max(sizes)))]
     builds(suite, list(dict.fromkeys(kernels)), args.ptxas)
     kernel(suite, sizes, kdur)
     sweeps(suite, n, sdur, cpu_cases, workers)

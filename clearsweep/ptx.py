@@ -8,7 +8,7 @@ answers while the compile runs. :func:`ptxas_report` assembles the PTX with the 
 of the ``nvidia-cuda-nvcc`` wheel (what ``numba-cuda[cu12]`` installs) and reads its
 resource figures per thread: registers, stack frame, spill stores and loads.
 
-``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos|soa-local] [--capacity N]
+``python -m clearsweep.ptx [PTX_FILE] [--arch sm_XY] [--layout soa|aos|soa-local|soa-one-evaluate] [--capacity N]
 [--joints A,B]`` prints them for the kernel built for a joint set (``core.jointset``; default
 every joint, the generic build), keeping the PTX text in PTX_FILE if given
 (tests/test_ptx.py checks them in CI; benchmarks/README.md records them).
@@ -84,7 +84,8 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
     """PTX of the batch kernel of ``layout`` built for the joint set ``spec``
     (``core.jointset``; None: every joint, the generic build) for compute capability cc:
     "soa", ``core.device.soa_kernel(capacity, spec)`` (the default), "soa-local" (the same
-    with its fixed-size work arrays in each thread's local memory), or "aos",
+    with its fixed-size work arrays in each thread's local memory), "soa-one-evaluate" (the
+    same as "soa", each step's evaluations at one call site: ``core.onestep``), or "aos",
     ``core.device.aos_kernel(spec)`` (the arrays of either have the same dimensions). Needs
     numba-cuda with NVVM (``pip install numba-cuda[cu12]``), no device. About a minute on
     one core: the whole kernel is compiled, every device function inlined."""
@@ -100,7 +101,8 @@ def compile_run_cases_ptx(cc: tuple[int, int] = DEFAULT_CC, layout: str = "soa",
 
     spec = ALL if spec is None else spec
     kernel = (device.aos_kernel(spec) if layout == "aos"
-              else device.soa_kernel(capacity, spec, local=layout == "soa-local"))
+              else device.soa_kernel(capacity, spec, local=layout == "soa-local",
+                                     one_evaluate=layout == "soa-one-evaluate"))
     with _device_of_capability(cc):
         ptx, _ = cuda.compile_ptx(kernel.py_func, run_cases_signature(layout), cc=cc)
     return ptx
@@ -114,7 +116,8 @@ def build_kernel(layout: str = "soa", capacity: int = DEFAULT_CAPACITY) -> float
     from .core import device
 
     kernel = (device.run_cases if layout == "aos"
-              else device.soa_kernel(capacity, local=layout == "soa-local"))
+              else device.soa_kernel(capacity, local=layout == "soa-local",
+                                     one_evaluate=layout == "soa-one-evaluate"))
     began = time.perf_counter()
     kernel.compile(run_cases_signature(layout))
     return time.perf_counter() - began
@@ -201,9 +204,11 @@ def parse_args(argv: list[str] | None = None):
     parser.add_argument("--arch", default=f"sm_{DEFAULT_CC[0]}{DEFAULT_CC[1]}",
                         help="the compute capability to build for, as sm_XY "
                              "(default: %(default)s, an H100)")
-    parser.add_argument("--layout", choices=("soa", "aos", "soa-local"), default="soa",
-                        help="the device layout: structure of arrays (the default) or case by "
-                             "case")
+    parser.add_argument("--layout", choices=("soa", "aos", "soa-local", "soa-one-evaluate"),
+                        default="soa",
+                        help="the device layout: structure of arrays (the default), case by "
+                             "case, the work arrays in each thread's local memory, or one "
+                             "evaluate call site per step")
     parser.add_argument("--capacity", type=int, default=DEFAULT_CAPACITY,
                         help="the launch capacity of the soa layout (default: %(default)s; "
                              f"one of {', '.join(map(str, CAPACITIES))})")

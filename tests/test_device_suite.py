@@ -28,8 +28,9 @@ def test_the_device_suite_runs_in_the_simulator(tmp_path):
     record = json.loads((out / "suite.json").read_text())
     assert record["simulator"] and record["device"] == "numba CUDA simulator"
     kernel = {k["kernel"]: k for k in record["steps"]["kernel"] + record["steps"]["variants"]}
-    # step 2, and issue 43 item 6's arrangements (4b): local work arrays, the L1 carve-out
-    assert sorted(kernel) == ["aos", "soa", "soa-local", "soa-maxl1"]
+    # step 2, and issue 43 item 6's arrangements (4b): local work arrays, the L1 carve-out,
+    # one evaluate call site per step
+    assert sorted(kernel) == ["aos", "soa", "soa-local", "soa-maxl1", "soa-one-evaluate"]
     for layout, k in kernel.items():
         assert k["rc"] == 0, k["tail"]
         assert [launch["cases"] for launch in k["launches"]] == [8]
@@ -46,7 +47,7 @@ def test_the_device_suite_runs_in_the_simulator(tmp_path):
     assert set(record["skipped"]) == {"builds", "ncu"}
     table = (out / "suite.md").read_text()
     assert "| step | layout | cases |" in table
-    assert table.count("| kernel | ") == 4 and "device / CPU workers" in table
+    assert table.count("| kernel | ") == 5 and "device / CPU workers" in table
 
 
 def _suite_module():

@@ -208,26 +208,94 @@ def test_cuda_backend_refuses_what_the_device_does_not_run(tmp_path, store, key)
 
 
 def test_batch_window_fills_the_device_within_the_host_bound(monkeypatch):
-    """A sweep's CUDA window holds as many default-map two-clearance cases as the host bound
-    allows: at least the 10,000 whose one launch ran 2.3x the steps/s of 1,470 on an H200
-    (benchmarks/README.md), and never more than a quarter of the machine's memory. (Cases
-    without clearance carry no maps: 20,000 of them fit any window here.)"""
+    """A sweep's CUDA window takes half the host memory available now, at what a case holds
+    on the host (its batch arrays and its results): on a device host of 128 GiB with 120
+    available, nearly a full launch of the largest capacity of default-map two-clearance
+    cases (before: 16 GiB at most, 23,132 of them at 0.74 MB each, where each held 2.1 MB);
+    never more than one such launch; where the machine does not say, the fixed 16 GiB; the
+    environment's CLEARSWEEP_HOST_MEMORY in place of either."""
     from clearsweep import gpu
     from clearsweep.config import Config
 
+    monkeypatch.delenv(gpu.HOST_MEMORY_ENV, raising=False)
     cfg = Config().replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4)
     cases = [cfg] * 40_000
-    per_case = gpu.config_bytes(cfg)
-    assert gpu.batch_window([Config()] * 20_000) == 20_000
+    per_case = gpu.host_case_bytes(cfg)
     gib = 1 << 30
-    monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 128 * gib // 4096,
-                                                    "SC_PAGE_SIZE": 4096}[name])
-    assert gpu.batch_window(cases) == gpu.HOST_BATCH_BYTES // per_case
-    assert gpu.batch_window(cases) >= 10_000
-    monkeypatch.setattr("os.sysconf", lambda name: {"SC_PHYS_PAGES": 4 * gib // 4096,
-                                                    "SC_PAGE_SIZE": 4096}[name])
-    assert gpu.batch_window(cases) == gib // per_case        # a quarter of 4 GiB
+    monkeypatch.setattr(gpu, "available_memory", lambda: 120 * gib)
+    assert gpu.batch_window(cases) == 60 * gib // per_case
+    assert 30_000 < gpu.batch_window(cases) < gpu.CAPACITIES[-1]
     assert gpu.batch_window(cases[:3]) == 3
+    # ideal cases: no maps on the device, every joint's in their results; a full launch
+    ideal = gpu.host_case_bytes(Config())
+    assert gpu.batch_window([Config()] * 40_000) == gpu.CAPACITIES[-1] < 60 * gib // ideal
+    monkeypatch.setattr(gpu, "available_memory", lambda: 4 * gib)
+    assert gpu.batch_window(cases) == 2 * gib // per_case
+    monkeypatch.setattr(gpu, "available_memory", lambda: None)
+    assert gpu.batch_window(cases) == gpu.HOST_BATCH_BYTES // per_case
+    monkeypatch.setenv(gpu.HOST_MEMORY_ENV, "1T")
+    assert gpu.batch_window(cases) == gpu.CAPACITIES[-1]       # one full launch at most
+    monkeypatch.setenv(gpu.HOST_MEMORY_ENV, "8G")
+    monkeypatch.setattr(gpu, "available_memory", lambda: 120 * gib)
+    assert gpu.batch_window(cases) == 8 * gib // per_case
+
+
+def test_host_case_bytes_hold_the_results_in_the_cpu_kernels_shape():
+    """What a window's case holds on the host: its device arrays and, until its part is
+    written, its results' wear map and projections for every joint (the CPU kernel's shape),
+    1.36 MB on the default map: 2.07 MB for the two-clearance case."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    cfg = load_config(str(ROOT / "configs" / "two_clearances.yaml"))
+    results = 8 * (4 * 144 * 288 + 4 * 3 * N_ANGLE_BINS)
+    assert gpu.host_case_bytes(cfg) - gpu.config_bytes(cfg) == results == 1_361_664
+    assert gpu.host_case_bytes(cfg) == 2_073_632
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("64G", 64 << 30), ("64GiB", 64 << 30), ("512m", 512 << 20), ("1T", 1 << 40),
+    ("123456789", 123456789), ("8KB", 8 << 10), (" 2G ", 2 << 30),
+    ("0", None), ("-5G", None), ("1.5G", None), ("12x", None), ("G", None), ("2\u00b2", None),
+    ("64 P", None)])
+def test_host_memory_setting(text, expected):
+    from clearsweep import gpu
+    from clearsweep.config import ConfigError
+
+    if expected is not None:
+        assert gpu.host_memory_setting(text) == expected
+        return
+    with pytest.raises(ConfigError, match=f"{gpu.HOST_MEMORY_ENV}: got") as info:
+        gpu.host_memory_setting(text)
+    assert "64G" in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("meminfo, cgroup, expected", [
+    ("MemTotal: 24683792 kB\nMemFree: 2013 kB\nMemAvailable: 23166124 kB\n", None,
+     23166124 * 1024),
+    ("MemTotal: 24683792 kB\nMemAvailable: 23166124 kB\n", ("max", "100"), 23166124 * 1024),
+    ("MemTotal: 24683792 kB\nMemAvailable: 23166124 kB\n", (str(8 << 30), str(3 << 30)),
+     5 << 30),
+    (None, (str(8 << 30), str(3 << 30)), 5 << 30)])
+def test_available_memory_reads_meminfo_and_the_cgroups_limit(tmp_path, monkeypatch, meminfo,
+                                                              cgroup, expected):
+    """MemAvailable of /proc/meminfo, or less where the memory cgroup leaves less (a
+    container's limit: MemAvailable is the whole machine's there)."""
+    from clearsweep import gpu
+
+    info = tmp_path / "meminfo"
+    if meminfo is not None:
+        info.write_text(meminfo)
+    limit, usage = tmp_path / "memory.max", tmp_path / "memory.current"
+    if cgroup is not None:
+        limit.write_text(cgroup[0] + "\n")
+        usage.write_text(cgroup[1] + "\n")
+    monkeypatch.setattr(gpu, "MEMINFO", str(info))
+    monkeypatch.setattr(gpu, "CGROUP_MEMORY", ((str(limit), str(usage)),))
+    if meminfo is None:
+        monkeypatch.setattr("os.sysconf", lambda name: {"SC_AVPHYS_PAGES": 4 << 20,
+                                                        "SC_PAGE_SIZE": 4096}[name])
+    assert gpu.available_memory() == expected
 
 
 LAYOUT_SCRIPT = r"""
@@ -246,7 +314,7 @@ cfgs = [base.replace(joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4),
 packed = [pack(c, resolve_materials(c)) for c in cfgs]
 aos = gpu.run_packed(packed, layout="aos")
 pairs = []
-for layout in ("soa", "soa-local"):
+for layout in ("soa", "soa-local", "soa-one-evaluate"):
     pairs += list(zip(aos, gpu.run_packed(packed, layout=layout)))
 for k, (a, b) in enumerate(pairs):
     assert a.status == b.status == "ok", (k, a.status, b.status)
@@ -264,11 +332,12 @@ print("compared", len(pairs), "cases; largest statistic", impacts)
 def test_simulated_layouts_agree_bit_for_bit():
     """The structure-of-arrays kernel (strided views of arrays padded to a launch capacity),
     the same with the fixed-size work arrays in each thread's local memory ("soa-local",
-    their launch arrays placeholders) and the case-by-case one compute the same bits in the
+    their launch arrays placeholders), the same with each step's evaluations at one call
+    site ("soa-one-evaluate", ``core.onestep``) and the case-by-case one compute the same bits in the
     simulator, where each runs the kernel's Python source: clearance at A and B, at B and O
     from the centred start (impacts), and ideal joints, in one batch."""
     proc = run_simulated(LAYOUT_SCRIPT)
-    assert "compared 6 cases" in proc.stdout
+    assert "compared 9 cases" in proc.stdout
 
 
 def test_the_numpy_numba_cuda_pairing_is_pinned_as_the_check_states():
@@ -347,8 +416,10 @@ def test_case_bytes_shrink_for_a_case_without_O_P_clearance():
     sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
     every = gpu.case_bytes(cfg.wear.map, level, sections)
     mine = gpu.config_bytes(cfg)
-    undo_saved = 2 * 4 * 2 * (1 << level)       # buf_i and buf_v: 4 columns, 2 joints' rows
-    assert every - mine == 8 * (2 * npolar * nazim + 2 * 3 * N_ANGLE_BINS + undo_saved)
+    # buf_i and buf_v, 4 columns: every joint's rows at the level cap against A's and B's at
+    # the level a launch holds first
+    undo_saved = 2 * 4 * (4 * (1 << level) - 2 * (1 << gpu.UNDO_LEVEL))
+    assert every - mine == 8 * (2 * npolar * nazim + 2 * 3 * N_ANGLE_BINS) + 8 * undo_saved
     assert mine < 0.52 * every
     bearing = (False, False, True, False)         # the kernel's order: A, B, O, P
     # ideal: one map row and one projection row (no zero-size arrays); the bearing: its row
@@ -388,6 +459,7 @@ def test_joint_rows_keep_every_clearance_joints_rows_apart(present):
 SHARED_SCRIPT = r"""
 import sys
 import numpy as np
+from clearsweep.core.layout import P_MAX_LEVEL
 from clearsweep.config import DEFAULTS, resolve_materials
 from clearsweep.params import pack
 from clearsweep import gpu
@@ -408,6 +480,8 @@ aos = gpu.run_packed(packed, layout="aos")
 soa = gpu.run_packed(packed, layout="soa")
 batch = seen[-1]
 rows = gpu.parameter_rows(packed)
+# the launch's level cap: the level its undo buffer holds (gpu.launch_level)
+rows[:, P_MAX_LEVEL] = np.minimum(rows[:, P_MAX_LEVEL], gpu.UNDO_LEVEL)
 varying = np.flatnonzero((rows != rows[:1]).any(axis=0))
 # the per-case array holds the varying parameters alone; the shared row the rest
 assert np.array_equal(np.flatnonzero(batch["pcols"] >= 0), varying), (batch["pcols"], varying)
@@ -567,3 +641,206 @@ def test_simulated_slider_crank_agrees_with_the_cpu_backend(tmp_path):
     assert float(cpu["wear_volume"].sel(joint="B").min()) > 0.0
     assert float(cpu["slider_acceleration_peak"].min()) > 1.0e4     # the benchmark's scale
     assert_summaries_agree(cpu, gpu)
+
+
+def test_the_undo_buffer_is_held_for_the_first_launchs_level():
+    """A launch holds the undo buffer for gpu.UNDO_LEVEL, not the level cap: per undone
+    joint 16 rows of (4 int64 + 4 float64) where the default cap of 8 took 256. The
+    two-clearance benchmark case (A and B) on the default map at level 8 took 742,688 B with
+    the buffer of the cap (case_bytes before this change) and takes 30,720 B less now; the
+    two clearances of the bearing O and the spherical joint B likewise."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    cfg = load_config(str(ROOT / "configs" / "two_clearances.yaml"))
+    level = cfg.solver.max_substep_level
+    assert level == 8 and gpu.UNDO_LEVEL < level
+    sections = math.ceil(cfg.solver.duration * cfg.mechanism.speed_rpm / 60.0) + 1
+    for joints in [(True, True, False, False), (False, True, True, False)]:
+        full = gpu.case_bytes(cfg.wear.map, level, sections, joints)
+        first = gpu.case_bytes(cfg.wear.map, gpu.launch_level(level), sections, joints)
+        assert full - first == 2 * 2 * 4 * 8 * ((1 << level) - (1 << gpu.UNDO_LEVEL)) == 30_720
+    ab = (True, True, False, False)
+    assert gpu.case_bytes(cfg.wear.map, level, sections, ab) == 742_688
+    assert gpu.config_bytes(cfg) == gpu.case_bytes(cfg.wear.map, gpu.UNDO_LEVEL, sections, ab) \
+        == 711_968
+    # a cap below the first launch's level keeps its own (smaller) buffer; None: the cap's
+    assert gpu.launch_level(2) == 2 and gpu.launch_level(12, None) == 12
+    assert gpu.undo_rows(ab, gpu.launch_level(level)) == 2 * 16
+
+
+UNDO_SCRIPT = r"""
+import json
+import numpy as np
+from clearsweep.core.layout import P_MAX_LEVEL
+from clearsweep.config import load_config, resolve_materials
+from clearsweep.core import device
+from clearsweep.params import pack
+from clearsweep.simulation import run_kernel
+from clearsweep import gpu
+
+# the paper's preset (its light rod: fast contact rates) at the default step and level cap,
+# seated, 20 steps: at 60 r/min its steps split into 16 sub-steps at most, at 30 r/min into
+# 64 (measured: deepest levels 4 and 6)
+base = load_config("configs/paper_case.yaml", ["solver.dt=1e-5", "solver.duration=0.0002",
+                   "solver.max_substep_level=8", "solver.save_every=1", "wear.map=[6,12]",
+                   "wear.amplification=1000.0"])
+cfgs = [base, base.replace(mechanism__speed_rpm=30.0)]
+packed = [pack(c, resolve_materials(c)) for c in cfgs]
+launches = []
+launch = device.launch
+def spy(arrays, layout="aos", spec=device.ALL, case_sets=()):
+    n, col = int(arrays["n_steps"].shape[0]), int(arrays["pcols"][P_MAX_LEVEL])
+    caps = arrays["p"][col, :n] if col >= 0 else [arrays["jp"][P_MAX_LEVEL]]
+    launches.append([n, int(arrays["buf_i"].shape[0]), sorted({float(v) for v in caps})])
+    return launch(arrays, layout, spec, case_sets)
+device.launch = spy
+first = gpu.run_packed(packed)
+once = list(launches)
+launches.clear()
+full = gpu.run_packed(packed, undo_level=None)
+cpu = [run_kernel(pk) for pk in packed]
+for k, (a, b, c) in enumerate(zip(first, full, cpu)):
+    assert a.status == b.status == c.status == "ok", (k, a.status, b.status, c.status)
+    for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+        x, y, z = (np.asarray(getattr(r, name)) for r in (a, b, c))
+        assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True), (k, name)
+    for name in ("residual_max", "ke_peak", "rk4_steps", "deepest", "t_end"):
+        assert getattr(a, name) == getattr(b, name) == getattr(c, name), (k, name)
+print("LAUNCHES " + json.dumps([once, launches, [r.deepest for r in first]]))
+"""
+
+
+@pytest.mark.slow
+def test_a_case_deeper_than_the_undo_buffer_runs_again_to_the_same_bits():
+    """Two cases of the paper's preset in one launch, whose steps split to levels 4 and 6:
+    the first launch holds A's and B's undo rows of level gpu.UNDO_LEVEL (4: 2 x 16 rows)
+    and lowers the cases' level cap to it; the case that needs level 6 stops there, before
+    its attempt, and runs again alone with the rows of its cap (8: 2 x 256). Both cases end
+    with the bits of one launch of the full buffer and of the CPU kernel (its Python source,
+    run in the same process)."""
+    proc = run_simulated(UNDO_SCRIPT)
+    line = [x for x in proc.stdout.splitlines() if x.startswith("LAUNCHES")][-1]
+    once, full, deepest = json.loads(line.split(" ", 1)[1])
+    assert deepest == [4, 6]
+    assert once == [[2, 2 * 16, [4.0]], [1, 2 * 256, [8.0]]]
+    assert full == [[2, 2 * 256, [8.0]]]
+
+
+HOST_MEMORY_SCRIPT = r"""
+import tracemalloc
+from clearsweep import gpu
+from clearsweep.config import load_config
+
+cfg = load_config("configs/two_clearances.yaml", ["solver.duration=0.00003"])
+cfgs = [cfg.replace(joints__B__clearance=2.5e-4 + 1e-6 * k) for k in range(gpu.SIMULATOR_BATCH)]
+gpu.simulate_batch(cfgs[:1])            # imports and first uses outside the count
+tracemalloc.start()
+results = gpu.simulate_batch(cfgs)
+peak = tracemalloc.get_traced_memory()[1]
+assert not any(isinstance(r, BaseException) for r in results), results
+print("PER_CASE", peak / len(cfgs), gpu.host_case_bytes(cfg), gpu.config_bytes(cfg))
+"""
+
+
+@pytest.mark.slow
+def test_a_window_holds_what_host_case_bytes_says_per_case():
+    """A batch of 64 two-clearance cases on the default map (3 steps each) in the simulator:
+    the host's peak of new allocations per case while it runs and its datasets are made
+    (tracemalloc) is within 2 % of gpu.host_case_bytes (measured: 2.06 MB of 2.07), near
+    three times the 0.71 MB of device arrays (config_bytes) that the window counted before."""
+    proc = run_simulated(HOST_MEMORY_SCRIPT)
+    line = [x for x in proc.stdout.splitlines() if x.startswith("PER_CASE")][-1]
+    peak, estimate, device_bytes = (float(v) for v in line.split()[1:])
+    assert 0.98 * estimate <= peak <= 1.02 * estimate, (peak, estimate)
+    assert peak > 2.5 * device_bytes
+
+
+MAP_ROWS_SCRIPT = r"""
+import json
+import numpy as np
+from clearsweep.config import DEFAULTS, load_config, resolve_materials
+from clearsweep.core import device
+from clearsweep.params import pack
+from clearsweep.simulation import run_kernel
+from clearsweep import gpu
+
+# on a [6, 12] map, whose 6 polar rows the guide's four wall bands use 4 of: A, B and the
+# guide P with clearance (seated: the block on its walls from the first step, worn
+# amplified); the slider-crank's benchmark with clearance at B, and at O, A and B
+rssp = DEFAULTS.replace(solver__duration=0.001, wear__map=[6, 12], wear__amplification=1.0e5,
+                        wear__interpolate=True, metrics__settle_time=0.0005,
+                        joints__A__clearance=2.5e-4, joints__B__clearance=2.5e-4,
+                        joints__P__clearance_y=1.0e-4, joints__P__clearance_z=1.0e-4)
+crank = {"mechanism": {"kind": "slider_crank", "preset": "flores_benchmark", "speed_rpm": 5000.0},
+         "joints": {"B": {"clearance": 5.0e-4, "socket_radius": 0.01}},
+         "wear": {"map": [6, 12], "amplification": 100.0}, "metrics": {"settle_time": 0.0005},
+         "solver": {"dt": 1.0e-5, "duration": 0.001}}
+oab = json.loads(json.dumps(crank))
+oab["joints"].update(A={"clearance": 2.0e-4}, O={"clearance": 2.0e-4})
+batches = [[rssp], [load_config(crank), load_config(oab)]]
+rows = []
+launch = device.launch
+def spy(arrays, layout="aos", spec=device.ALL, case_sets=()):
+    if layout == "soa":
+        rows.append(int(arrays["wmap"].shape[0]))
+    return launch(arrays, layout, spec, case_sets)
+device.launch = spy
+for cfgs in batches:
+    packed = [pack(c, resolve_materials(c)) for c in cfgs]
+    soa = gpu.run_packed(packed, layout="soa")
+    aos = gpu.run_packed(packed, layout="aos")
+    cpu = [run_kernel(pk) for pk in packed]
+    for k, (a, b, c) in enumerate(zip(soa, aos, cpu)):
+        assert a.status == b.status == c.status == "ok", (k, a.status, b.status, c.status)
+        for name in ("stats", "wmap", "proj", "wvol", "sec", "first_impact"):
+            x, y, z = (np.asarray(getattr(r, name)) for r in (a, b, c))
+            assert x.shape == y.shape == z.shape, (k, name)
+            assert np.array_equal(x, y, equal_nan=True) and np.array_equal(x, z, equal_nan=True), (k, name)
+        for name in ("residual_max", "ke_peak", "rk4_steps", "deepest"):
+            assert getattr(a, name) == getattr(b, name) == getattr(c, name), (k, name)
+    worn = [float(r.wvol.max()) for r in soa]
+    assert min(worn) > 0.0, worn
+print("ROWS " + json.dumps([rows, [r.deepest for r in soa], float(soa[1].wmap[0, 0].max()),
+                           float(abs(soa[1].wmap[0, 1:]).max())]))
+"""
+
+
+@pytest.mark.slow
+def test_each_joint_type_holds_the_map_rows_it_uses_on_the_device():
+    """The structure-of-arrays maps hold the rows each clearance joint's type uses: on a
+    [6, 12] map the guide P's four wall bands take 4 rows (6 before), so that A, B and P
+    take 3 x 6 + 4 = 22 rows (24); the slider-crank's pins A and B, bearings, one row each
+    (6 before), so that O, A and B take 3 rows (13). The guide's walls and the pins'
+    bearings wear, and every result is the case-by-case layout's (the CPU kernel's map
+    shape, every row) and the CPU kernel's (its Python source, in the same process) to the
+    bit."""
+    proc = run_simulated(MAP_ROWS_SCRIPT)
+    line = [x for x in proc.stdout.splitlines() if x.startswith("ROWS")][-1]
+    rows, deepest, pin_row0, pin_rest = json.loads(line.split(" ", 1)[1])
+    # one launch per build: A, B and P; the slider-crank's B; its O, A and B, whose case
+    # reaches sub-step level 5 and runs again with the full undo buffer
+    assert rows == [22, 1, 3, 3] and deepest == [3, 5]
+    assert pin_row0 > 0.0 and pin_rest == 0.0      # A's bearing: its row 0 alone
+
+
+def test_case_bytes_of_the_rows_each_type_uses():
+    """Device memory per case on the default map [144, 288]: the slider-crank's benchmark
+    (B) 371,360 -> 41,888 B (B's map one row, not 144); with clearance at O, A and B
+    724,768 -> 65,824 B; with B and the guide P 703,136 -> 373,664 B. The RSSP's guide on
+    the default map uses all of its 144 rows (1,375,520 B with A, B and P, as before); on a
+    [150, 300] map it uses 148: 1,488,992 -> 1,484,192 B (before: computed by this function
+    on the tree before the change)."""
+    from clearsweep import gpu
+    from clearsweep.config import load_config
+
+    crank = str(ROOT / "configs" / "slider_crank.yaml")
+    rssp = str(ROOT / "configs" / "two_clearances.yaml")
+    guide = ["joints.P.clearance_z=1e-4", "joints.P.clearance_y=1e-4"]
+    cases = [(crank, [], 41_888), (crank, ["joints.A.clearance=2e-4", "joints.O.clearance=2e-4"], 65_824),
+             (crank, guide, 373_664), (rssp, guide, 1_375_520),
+             (rssp, guide + ["wear.map=[150,300]"], 1_484_192)]
+    for path, overrides, expected in cases:
+        assert gpu.config_bytes(load_config(path, overrides)) == expected, (path, overrides)
+    assert gpu.map_rows((False, True, False, True), 150, slider_crank=True) == [0, 1, 0, 148]
+    assert gpu.map_rows((True, True, True, True), 144) == [144, 144, 1, 144]

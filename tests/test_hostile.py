@@ -264,6 +264,9 @@ ROWS = [
      "numpy's AttributeError)",
      lambda t, f: ["sweep", CONFIGS / "sensitivity.yaml", "--backend", "cuda", "-o", t / "out.nc"],
      2, "numba-cuda 0.30.4 does not compile the kernel with numpy 2.5.0: install numpy below 2.5"),
+    ("--backend cuda with CLEARSWEEP_HOST_MEMORY=12x (was: not read, the window 16 GiB at most)",
+     lambda t, f: ["sweep", CONFIGS / "sensitivity.yaml", "--backend", "cuda", "-o", t / "out.nc"],
+     2, "environment: CLEARSWEEP_HOST_MEMORY: got '12x'; expected a whole number of bytes > 0"),
     # --- fresh round: results files of older versions
     ("report a life file without stop_reason (was: KeyError)",
      lambda t, f: ["report", f / "old_life.nc"], 2, "has no 'stop_reason'"),
@@ -1694,8 +1697,9 @@ ROWS += SETTLED_WINDOW
 @pytest.fixture
 def device(monkeypatch):
     """The CUDA device as the row needs it: none for ``--backend cuda``, a stand-in for
-    ``--keep-series`` (refused before any batch is made), the real check under a faked
-    numpy / numba-cuda mismatch for the pairing's row."""
+    ``--keep-series`` and a bad CLEARSWEEP_HOST_MEMORY (set for its row; both refused before
+    any batch is made), the real check under a faked numpy / numba-cuda mismatch for the
+    pairing's row."""
     import clearsweep.gpu as gpu
 
     def none():
@@ -1706,7 +1710,9 @@ def device(monkeypatch):
             monkeypatch.setattr(gpu, "simulated", lambda: False)
             monkeypatch.setattr(gpu, "installed_versions", lambda: ("2.5.0", "0.30.4"))
             return
-        present = "--keep-series beyond" in name
+        if gpu.HOST_MEMORY_ENV in name:
+            monkeypatch.setenv(gpu.HOST_MEMORY_ENV, name.split("=", 1)[1].split()[0])
+        present = "--keep-series beyond" in name or gpu.HOST_MEMORY_ENV in name
         monkeypatch.setattr(gpu, "device_name", (lambda: "stand-in") if present else none)
 
     return setup

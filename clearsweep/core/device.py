@@ -61,6 +61,7 @@ from .layout import (
     N_Y,
 )
 from .numba_compat import simulator_array
+from .onestep import advance_one_call as _cpu_advance_one
 from .rk4 import (
     CAP_ROWS,
     CSTATE_ROWS,
@@ -257,6 +258,9 @@ if SIMULATED:
     def _advance(*args):
         return _cpu_advance(*(_unwrap(a) for a in args))
 
+    def _advance_one(*args):
+        return _cpu_advance_one(*(_unwrap(a) for a in args))
+
     def block(arr, i, k, shape):
         """Block k, of shape ``shape``, of case i's part of arr, as a view: case i's
         elements k * prod(shape) to (k + 1) * prod(shape), in C order."""
@@ -317,6 +321,7 @@ else:
     #: structure-of-arrays: joint j, row r at the array's row r0 + j * dj + r.
     soa_joint_rows = intrinsic(soa_joint_rows_typer)
     _advance = _cpu_advance
+    _advance_one = _cpu_advance_one
 
 
 #: The case-by-case ("aos") kernels built so far, by joint set (:func:`aos_kernel`).
@@ -385,8 +390,10 @@ CAPACITIES = (64, 1024, 4096, 16384, 32768)
 
 #: The device layouts: "soa" (structure of arrays, the default: element e of case i at
 #: e * capacity + i, so that a warp's 32 threads read 32 consecutive words) and "aos" (array
-#: of structures, case by case: :func:`run_cases`, kept to measure one against the other).
-LAYOUTS = ("soa", "aos", "soa-local")
+#: of structures, case by case: :func:`run_cases`, kept to measure one against the other);
+#: two arrangements of "soa" to time against it: "soa-local" (:data:`LOCAL_WORK`) and
+#: "soa-one-evaluate" (``onestep.advance_one_call``: one ``evaluate`` call site per step).
+LAYOUTS = ("soa", "aos", "soa-local", "soa-one-evaluate")
 DEFAULT_LAYOUT = "soa"
 
 
@@ -410,20 +417,24 @@ _SOA_KERNELS: dict = {}
 LOCAL_WORK = ("vec", "diag", "cstate", "msave", "mats", "vz", "caps")
 
 
-def soa_kernel(capacity: int, spec: int = ALL, local: bool = False):
+def soa_kernel(capacity: int, spec: int = ALL, local: bool = False, one_evaluate: bool = False):
     """:func:`run_cases` over arrays stored structure-of-arrays for ``capacity`` cases (one
     of :data:`CAPACITIES`), built for the joint set ``spec`` (as :func:`aos_kernel`) once per
     capacity, set, arrangement and process: the same arguments, each per-case array of shape
     (per-case shape..., capacity) with the case as its last axis; n_steps and save_every
     hold the batch's n cases (threads past n do nothing). ``local`` (the "soa-local"
     layout): the work arrays of :data:`LOCAL_WORK` are each thread's local arrays, and the
-    launch's arrays of those names are not read."""
+    launch's arrays of those names are not read. ``one_evaluate`` (the "soa-one-evaluate"
+    layout): each step evaluates the right-hand side from one call site
+    (``onestep.advance_one_call``), where ``rk4.advance`` has three."""
     if capacity not in CAPACITIES:
         raise ValueError(f"launch capacity {capacity}: expected one of {CAPACITIES}")
     spec = int(spec)
     local = bool(local)
-    if (capacity, spec, local) in _SOA_KERNELS:
-        return _SOA_KERNELS[capacity, spec, local]
+    one = bool(one_evaluate)
+    key = (capacity, spec, local, one)
+    if key in _SOA_KERNELS:
+        return _SOA_KERNELS[key]
     cap = capacity      # a constant of the kernel (a closure variable), as the joint set
 
     @_jit
@@ -489,6 +500,9 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False):
                                soa_block(buf_v, i, 0, (nbuf, 4), cap), lk[0], lk[1],
                                soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
                                lv[7], ld[2], lv[8], lv[9])
+                if one:
+                    _advance_one(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                    return
                 _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
                 return
             work = Rk4Work(soa_block(vec, i, 0, (N_Y,), cap), soa_block(vec, i, 1, (N_Y,), cap),
@@ -513,9 +527,13 @@ def soa_kernel(capacity: int, spec: int = ALL, local: bool = False):
                            soa_block(scratch, i, 0, (scratch.shape[0], 3), cap),
                            soa_block(vec, i, 7, (N_Y,), cap), soa_block(diag, i, 2, (N_D,), cap),
                            soa_block(vec, i, 8, (N_Y,), cap), soa_block(vec, i, 9, (N_Y,), cap))
+            if one:
+                # the step with one evaluate call site (a constant of the build, as local)
+                _advance_one(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
+                return
             _advance(case, 0.0, n_steps[i], save_every[i], False, out, work, spec)
 
-    _SOA_KERNELS[capacity, spec, local] = run_cases_soa
+    _SOA_KERNELS[key] = run_cases_soa
     return run_cases_soa
 
 
@@ -591,7 +609,8 @@ def launch(arrays: dict, layout: str = "aos", spec: int = ALL, case_sets=()) -> 
                                  f"{arrays[name].shape[:-1]}, expected {shape}")
         if n > cap:
             raise ValueError(f"{n} cases exceed the arrays' capacity {cap}")
-        kernel = soa_kernel(cap, spec, local=layout == "soa-local")
+        kernel = soa_kernel(cap, spec, local=layout == "soa-local",
+                            one_evaluate=layout == "soa-one-evaluate")
     blocks = (n + THREADS_PER_BLOCK - 1) // THREADS_PER_BLOCK
     kernel[blocks, THREADS_PER_BLOCK](*(arrays[name] for name in ARGS))
     cuda.synchronize()
