@@ -1,7 +1,8 @@
 """The constrained solve's small systems (core/multibody.py, core/dynamics.py): the CPU's
-arrangement for three rows (one ideal joint of the RSSP's two: the Schur complement of a
-one-clearance case, and the contact mobility at its step's end) computes what the loops
-compute, operation for operation, so that results stay the same to the bit."""
+arrangements for three rows (one ideal joint of the RSSP's A and B: a one-clearance case's
+Schur complement, and its contact's mobility at a step's end), written out, and for six
+(both ideal), the loops with their count a constant, compute what the loops compute,
+operation for operation, so that results stay the same to the bit."""
 
 from __future__ import annotations
 
@@ -64,8 +65,8 @@ def solve_spd_reference(S, vz, b, nc, L):
 @pytest.mark.parametrize("nc", [1, 2, 3, 4, 6])
 @pytest.mark.parametrize("scale", [1e-4, 1.0, 1e3])
 def test_the_solves_compute_the_loops_sums(nc, scale):
-    """Three rows take the CPU's arrangement written out, the other sizes the loops: both
-    give the loops' values to the bit."""
+    """Three rows take the CPU's arrangement written out, six the loops with their count a
+    constant, the other sizes the loops: each gives the loops' values to the bit."""
     rng = np.random.default_rng(42)
     for _ in range(100):
         a = rng.normal(size=(nc, nc + 2)) * scale

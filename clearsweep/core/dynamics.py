@@ -224,11 +224,22 @@ def constrained_apply(vz, g, C, L, nc, minv, mr_inv, w1, w2, lam):
 @compiled
 def back_substitute(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
     """vz[out] = M_zz^-1 (vz[f] - C^T vz[lam]): free accelerations from the multipliers
-    (f, lam, tmp, out: rows of the work array vz). Three multipliers (one ideal joint) are
-    read once on a CPU (:func:`back_substitute3`), the same sums in the same order."""
-    if not on_device() and nc == 3:
-        back_substitute3(vz, f, C, lam, minv, mr_inv, tmp, out)
-        return
+    (f, lam, tmp, out: rows of the work array vz). On a CPU, three multipliers take
+    :func:`back_substitute3` and six :func:`back_substitute_rows` with their count a
+    constant (as ``multibody.solve_spd``; the same sums in the same order)."""
+    if not on_device():
+        if nc == 3:
+            back_substitute3(vz, f, C, lam, minv, mr_inv, tmp, out)
+            return
+        if nc == 6:
+            back_substitute_rows(vz, f, C, lam, 6, minv, mr_inv, tmp, out)
+            return
+    back_substitute_rows(vz, f, C, lam, nc, minv, mr_inv, tmp, out)
+
+
+@compiled(inline="always")
+def back_substitute_rows(vz, f, C, lam, nc, minv, mr_inv, tmp, out):
+    """:func:`back_substitute`'s loops."""
     for k in range(NZ_HELD):
         acc = vz[f, k]
         for i in range(nc):

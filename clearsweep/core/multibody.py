@@ -22,10 +22,28 @@ GROUND = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 
 @compiled
 def solve_spd(S, vz, b, nc, L):
     """Solve S x = vz[b] in place (vz[b] <- x) by Cholesky; L receives the factor. False if
-    singular. Three rows (the RSSP's one ideal joint of A and B) take the CPU's arrangement
-    written out, :func:`solve_spd3`; other sizes, and a device build, the loops."""
-    if not on_device() and nc == 3:
-        return solve_spd3(S, vz, b, L)
+    singular.
+
+    On a CPU, six rows (the RSSP's Schur complement with A and B ideal) run
+    :func:`cholesky` with the count a constant, which the compiler writes out: no loop
+    counters, and the factor's entries forwarded in registers from their stores rather
+    than read back between the divisions and square roots of each recurrence. Three rows
+    (one of A and B ideal) take :func:`solve_spd3`, the same written out by hand, which
+    holds the right-hand side in registers too (the compiler's version of three rows ran
+    the one-clearance case about 2 % slower). The same operations in the same order:
+    results to the bit (tests/test_multibody.py). Other sizes, and a device build, run the
+    loops as they are."""
+    if not on_device():
+        if nc == 3:
+            return solve_spd3(S, vz, b, L)
+        if nc == 6:
+            return cholesky(S, vz, b, 6, L)
+    return cholesky(S, vz, b, nc, L)
+
+
+@compiled(inline="always")
+def cholesky(S, vz, b, nc, L):
+    """:func:`solve_spd`'s loops: the factor row by row, then :func:`substitute`."""
     for i in range(nc):
         for j in range(i + 1):
             acc = S[i, j]
@@ -37,16 +55,27 @@ def solve_spd(S, vz, b, nc, L):
                 L[i, i] = math.sqrt(acc)
             else:
                 L[i, j] = acc / L[j, j]
-    chol_solve(L, vz, b, nc)
+    substitute(L, vz, b, nc)
     return True
 
 
 @compiled
 def chol_solve(L, vz, b, nc):
-    """Solve L L^T x = vz[b] in place (three rows on a CPU: :func:`chol_solve3`)."""
-    if not on_device() and nc == 3:
-        chol_solve3(L, vz, b)
-        return
+    """Solve L L^T x = vz[b] in place (:func:`substitute`; on a CPU, three rows by
+    :func:`chol_solve3` and six with the count a constant, as :func:`solve_spd`)."""
+    if not on_device():
+        if nc == 3:
+            chol_solve3(L, vz, b)
+            return
+        if nc == 6:
+            substitute(L, vz, b, 6)
+            return
+    substitute(L, vz, b, nc)
+
+
+@compiled(inline="always")
+def substitute(L, vz, b, nc):
+    """L L^T x = vz[b] in place: forward, then back substitution."""
     for i in range(nc):
         acc = vz[b, i]
         for k in range(i):
@@ -64,8 +93,9 @@ def solve_spd3(S, vz, b, L):
     """:func:`solve_spd` of three rows, its loops written out: the same operations in the
     same order (results to the bit), the factor's entries and the right-hand side held in
     registers rather than stored to L and vz and read back between the steps of each
-    recurrence, whose divisions and square roots follow one another (a one-clearance case
-    steps 3-4 % faster; benchmarks/README.md, "Issue 42's CPU goals, measured again")."""
+    recurrence, whose divisions and square roots follow one another (the one-clearance
+    case's step-end evaluation about 8 % faster with :func:`dynamics.back_substitute3`;
+    benchmarks/README.md, "Issue 42's CPU goals, measured again")."""
     acc = S[0, 0]
     if acc <= 0.0:
         return False
