@@ -211,3 +211,23 @@ def test_a_step_attempt_is_compiled_into_advance():
     assert not rk4.attempt_step.locals
     local_types = rk4.advance.locals
     assert local_types["step_end"] == local_types["stage"] == types.boolean
+
+
+def test_kernel_functions_divide_without_a_zero_check():
+    """Every kernel function compiles float division with numpy's error model
+    (core/compiled.py): no test of each divisor for zero and no raise path behind it, which
+    cost the one-clearance case about 2.5 % of its steps per CPU second (benchmarks/README.md,
+    "Issue 42's CPU goals, measured again"). A division by zero gives inf or NaN, which the
+    step's checks stop as a non-finite state (layout.ST_NONFINITE), where it raised
+    ZeroDivisionError; a run without one computes the same values to the bit."""
+    from clearsweep.core.compiled import ALLOCATING
+    from clearsweep.core.multibody import chol_solve
+
+    # the allocating entry points (plain njit) divide nothing themselves: they allocate
+    # and call the step
+    python_model = sorted(name for name, disp in kernel_dispatchers().items()
+                          if disp.targetoptions.get("error_model", "python") != "numpy")
+    assert python_model == sorted(ALLOCATING)
+    vz = np.ones((8, 10))
+    chol_solve(np.zeros((10, 10)), vz, 0, 2)      # a zero pivot: no ZeroDivisionError
+    assert not np.isfinite(vz[0, :2]).any()

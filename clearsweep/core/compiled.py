@@ -13,6 +13,12 @@ locals=...)``): ``numba.njit`` with
   time (``perf``: NRT_incref and NRT_decref), and taking it away gives 1.5-1.9x the steps
   per second (benchmarks/README.md). No arithmetic changes: results are the same to the
   bit.
+- numpy's error model (``error_model="numpy"``): a float division is the machine's, with no
+  test of the divisor for zero and no path to raise ZeroDivisionError behind it (the kernel
+  raises nothing: a status code comes back). A division by zero gives inf or NaN, which the
+  step's checks stop as a non-finite state; every other division gives the same bits. The
+  tests and their branches cost the one-clearance case about 2.5 % of its steps per CPU
+  second (benchmarks/README.md, "Issue 42's CPU goals, measured again").
 
 The entry points that allocate their work arrays (``rk4.integrate``, ``rk4.kernel_result``,
 ``dopri5.integrate_dopri5``) keep the runtime: they are plain ``njit(cache=True)``, listed
@@ -36,7 +42,7 @@ from numba import njit
 from .numba_compat import NO_RUNTIME
 
 #: Options of every kernel function that does not allocate.
-OPTIONS = {"cache": True, **NO_RUNTIME}
+OPTIONS = {"cache": True, "error_model": "numpy", **NO_RUNTIME}
 
 #: Kernel functions that allocate, compiled with Numba's runtime: "module.function".
 ALLOCATING = frozenset({"rk4.integrate", "rk4.kernel_result", "dopri5.integrate_dopri5"})
