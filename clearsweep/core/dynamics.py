@@ -31,10 +31,11 @@ import math
 import numpy as np
 from numba import types
 
-from . import bushing, prismatic, revolute, spherical
+from . import bushing, prismatic, revolute
+from . import jointkinds as kinds
 from .compiled import compile_lock, compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .jointkinds import is_revolute, is_revolute_on
+from .jointkinds import is_revolute_on
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
@@ -832,16 +833,8 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        if is_bushing(spec, jp, joint_a):
-            fA, mA2, mA3, dA = bushing.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                               (r3, v3, R3, w3, uA3), full, dg)
-        elif is_revolute(spec, joint_a):
-            # the slider-crank's crank pin in the rod's eye
-            fA, mA2, mA3, dA = revolute.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                                (r3, v3, R3, w3, uA3), full, dg)
-        else:
-            fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                                 (r3, v3, R3, w3, uA3), full, dg)
+        fA, mA2, mA3, dA = kinds.contact(spec, joint_a, model, (r2, v2, R2, w2, uA2),
+                                         (r3, v3, R3, w3, uA3), full, dg)
         F2 = add(F2, fA)
         N2 = add(N2, mA2)
         F3 = sub(F3, fA)
@@ -852,16 +845,8 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        if is_bushing(spec, jp, joint_b):
-            fB, mB3, mB4, dB = bushing.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                               (r4, v4, R4, w4, zero), full, dg)
-        elif is_revolute(spec, joint_b):
-            # the slider-crank's wrist pin in the slider
-            fB, mB3, mB4, dB = revolute.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                                (r4, v4, R4, w4, zero), full, dg)
-        else:
-            fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                                 (r4, v4, R4, w4, zero), full, dg)
+        fB, mB3, mB4, dB = kinds.contact(spec, joint_b, model, (r3, v3, R3, w3, uB3),
+                                         (r4, v4, R4, w4, zero), full, dg)
         F3 = add(F3, fB)
         N3 = add(N3, mB3)
         F4 = sub(F4, fB)
@@ -876,14 +861,9 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         # with full, the contact force on the journal into dg, completed by the axial
         # reaction below (kept there rather than live across the solve: a GPU thread's
         # registers)
-        if is_bushing(spec, jp, joint_o):
-            fO, mO2, _, dO = bushing.contact(joint_o, model,
-                                             (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                                             (gr, gv, gR, gw, zero), full, dg)
-        else:
-            fO, mO2, _, dO = revolute.contact(joint_o, model,
-                                              (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                                              (gr, gv, gR, gw, zero), full, dg)
+        fO, mO2, _, dO = kinds.contact(spec, joint_o, model,
+                                       (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                                       (gr, gv, gR, gw, zero), full, dg)
         F2 = add(F2, fO)
         N2 = add(N2, mO2)
         pdiss += dO

@@ -15,8 +15,9 @@ protocol function's own parameters, and calls the type module's function of the 
 one factory makes them all (:func:`dispatcher`, from ``joints.PROTOCOL`` and
 :data:`MODULES`: one test per distinct function, the types that take the same function of
 ``shared`` tested together); ``rk4`` and ``dopri5`` call these and name no joint and no
-type. A bushing stands in for a table joint per case (``jointset.is_bushing``,
-``dynamics.evaluate``), never as a row's type: its mask is 0 and its branches fold away; it
+type. A bushing stands in for a table joint per case (``jointset.is_bushing``), never as a
+row's type: its mask is 0 and its branches fold away; :func:`contact` tests for it before
+the row's type (``dynamics.applied_loads`` applies every joint's contact through it); it
 never has clearance, so that the loops below (which test ``jointset.has_clearance``) pass
 it by.
 
@@ -31,7 +32,7 @@ state vector at the ball's body's slots in ``joints.BODIES``.
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
 from .joints import BODIES, JOINT_TYPES, JOINTS, PROTOCOL, row_types
-from .jointset import guide_axis, has_clearance
+from .jointset import guide_axis, has_clearance, is_bushing
 from .kinematics import gmat, mv, rotation, trig
 from .layout import Y_QD
 
@@ -120,13 +121,6 @@ def revolute_rows(spec):
 def prismatic_rows(spec):
     """The rows of the prismatic type in a build of joint set ``spec``."""
     return SC_PRISMATIC if guide_axis(spec) == 1 else PRISMATIC
-
-
-@compiled(inline="always")
-def is_revolute(spec, j):
-    """Whether row j is of the revolute type in a build of joint set ``spec``
-    (``dynamics.evaluate`` chooses A's and B's contact by it)."""
-    return is_revolute_on(guide_axis(spec), j)
 
 
 @compiled(inline="always")
@@ -269,3 +263,17 @@ penetration = dispatcher("penetration")
 section_offsets = dispatcher("section_offsets")
 seat = dispatcher("seat")
 
+#: ``joints.PROTOCOL``'s ``contact`` by the row's type alone (:func:`contact` tests for a
+#: bushing first).
+row_contact = dispatcher("contact", "row_contact")
+
+
+@compiled(inline="always")
+def contact(spec, j, model, ball, socket, full, dg):
+    """``joints.PROTOCOL``'s ``contact`` of joint j: the bushing's where the case makes j
+    a bushing (``jointset.is_bushing``: a constant False in a build without bushings),
+    else its row's type's (:data:`row_contact`). ``dynamics.applied_loads`` applies every
+    joint's contact through it, naming no type."""
+    if is_bushing(spec, model.jp, j):
+        return bushing.contact(j, model, ball, socket, full, dg)
+    return row_contact(spec, j, model, ball, socket, full, dg)
