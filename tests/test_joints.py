@@ -536,6 +536,37 @@ def test_the_free_coordinates_table_sizes_the_solve():
             assert joint.ball.body == c.body and c.axis in ("y", "z"), c
 
 
+@pytest.mark.parametrize("free", [False, True], ids=["O and P ideal", "O and P free"])
+def test_the_inverse_masses_come_from_the_free_coordinates_table(free):
+    """``dynamics.minv_apply`` with the inverse masses evaluate forms from ``joints.FREE``
+    and ``joints.BODIES`` (``dynamics.group_inverse_mass``) puts on each centroid
+    coordinate's column 1/m of the body the table names, or 0 where the table frees it by a
+    joint that is ideal in the case, and nothing on another column."""
+    from clearsweep.core import dynamics, jointset
+
+    over = (["joints.O.clearance=2.5e-4", "joints.P.clearance_y=2.5e-4",
+             "joints.P.clearance_z=2.5e-4"] if free else [])
+    cfg = load_config({}, over)
+    pk = pack(cfg, resolve_materials(cfg))
+    mass = {"crank": pk.p[L.P_M2], "rod": pk.p[L.P_M3], "slider": pk.p[L.P_M4]}
+    groups = dynamics.MASS_GROUPS
+    minv = tuple(dynamics.group_inverse_mass(jointset.ALL, pk.p, pk.jp, k)
+                 for k in range(len(groups))) + (1.0 / pk.p[L.P_M3],)
+    nz = dynamics.NZ
+    vz = np.zeros((2, nz))
+    for k, c in enumerate(joints.FREE):
+        if c.axis not in ("x", "y", "z"):
+            continue
+        vz[0] = 0.0
+        vz[0, k] = 1.0
+        dynamics.minv_apply(minv, (0.0, 0.0, 0.0, 0.0), vz, 0, 1)
+        held = c.freed_by is not None and not free
+        assert vz[1, k] == (0.0 if held else 1.0 / mass[c.body]), c.name
+        assert np.count_nonzero(vz[1]) == (0 if held else 1), c.name
+    assert dynamics.mass_groups(joints.FREE) == groups
+    assert dynamics.mass_groups(joints.FREE[::-1]) != groups      # another order, other groups
+
+
 def _state_index(c):
     body = {b.name: b for b in joints.BODIES}[c.body]
     if c.axis in ("x", "y", "z"):

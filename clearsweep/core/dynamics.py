@@ -173,6 +173,54 @@ def p_free(spec, jp):
 #: free only where P has clearance).
 NZ_HELD = sum(1 for coordinate in FREE if coordinate.freed_by != "P")
 
+#: Each moving body's packed mass (``layout.P_M*``), by its name in ``joints.BODIES``.
+BODY_MASS = {"crank": P_M2, "rod": P_M3, "slider": P_M4}
+if set(BODY_MASS) != {body.name for body in BODIES if body.y_r is not None}:
+    raise ImportError("dynamics.BODY_MASS names another set of bodies than joints.BODIES")
+
+
+def mass_groups(free):
+    """The inverse-mass groups of the free coordinates ``free`` (``joints.FREE``): each
+    distinct (body, the joint that frees it) among the centroid coordinates, in the table's
+    order. A group's coordinates share one inverse mass, 1/m of the body or 0 where its
+    joint holds it; the rod's two angles are its rotational block (``rod_equations``'
+    mr_inv), no group."""
+    groups: list[tuple[str, str | None]] = []
+    for coordinate in free:
+        key = (coordinate.body, coordinate.freed_by)
+        if coordinate.axis in ("x", "y", "z") and key not in groups:
+            groups.append(key)
+    return tuple(groups)
+
+
+#: The free coordinates' inverse-mass groups (:func:`mass_groups` of ``joints.FREE``): the
+#: rod's centroid, the slider along its guide, the crank's centroid in the bearing's plane
+#: (freed by O), the slider across its guide (freed by P); :func:`minv_apply`'s minv[0] to
+#: minv[3] in that order.
+MASS_GROUPS = mass_groups(FREE)
+#: Each group's body's packed mass (``layout.P_M*``), a compile-time tuple.
+GROUP_MASS = tuple(BODY_MASS[body] for body, _ in MASS_GROUPS)
+#: Each group's freeing joint's row (-1: free in every build), a compile-time tuple.
+GROUP_JOINT = tuple(-1 if joint is None else INDEX[joint] for _, joint in MASS_GROUPS)
+#: Each free coordinate's group (its index in :data:`MASS_GROUPS`; -1: the rod's angles),
+#: which :func:`minv_apply` applies column by column.
+COLUMN_GROUP = tuple(MASS_GROUPS.index((c.body, c.freed_by)) if c.axis in ("x", "y", "z")
+                     else -1 for c in FREE)
+if COLUMN_GROUP != (0, 0, 0, -1, -1, 1, 2, 2, 3, 3):
+    raise ImportError(f"minv_apply applies the groups by column as (0, 0, 0, -1, -1, 1, 2, 2, "
+                      f"3, 3); joints.FREE gives {COLUMN_GROUP}")
+
+
+@compiled(inline="always")
+def group_inverse_mass(spec, p, jp, k):
+    """The inverse mass [1/kg] of group k of :data:`MASS_GROUPS`: 1/m of its body, or 0
+    where its joint holds it (neither clearance nor a bushing: ``jointset.is_free``, a
+    constant False where the build has neither)."""
+    joint = GROUP_JOINT[k]
+    if joint >= 0 and not is_free(spec, jp, joint):
+        return 0.0
+    return 1.0 / p[GROUP_MASS[k]]
+
 
 @compiled(inline="always")
 def row_dot(A, i, B, k, minv, start):
@@ -191,9 +239,10 @@ def row_dot(A, i, B, k, minv, start):
 @compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
-    rows of the work array vz; minv: 1/m3, 1/m4, 1/m2 and 1/m4 again, the third 0 where the
-    crank is held in its bearing, the fourth 0 where the slider is held in its guide, and
-    the rod's x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane). The
+    rows of the work array vz; minv: the inverse masses of :data:`MASS_GROUPS` (1/m3, 1/m4,
+    1/m2 and 1/m4 again, the third 0 where the crank is held in its bearing, the fourth 0
+    where the slider is held in its guide), applied by :data:`COLUMN_GROUP`, and the rod's
+    x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane). The
     slider-crank's slider takes the columns as: 5 its y4 along the guide, 8 its x4 (held
     across its plane, :func:`planar_slider`: no row reaches it, its force 0), 9 its z4."""
     vz[out, 0] = minv[4] * vz[v, 0]
@@ -955,8 +1004,11 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     # (the slider-crank's: z4 alone, its column 8 x4 held, :func:`planar_slider`)
     vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) and g == 0 else 0.0
     vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
-    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
-            1.0 / p[P_M4] if p_free(spec, jp) else 0.0, 0.0 if g == 1 else 1.0 / p[P_M3])
+    # the groups' inverse masses from the free-coordinate table, and the rod's x3's (held
+    # in the slider-crank's plane, :func:`planar_rod`)
+    minv = (group_inverse_mass(spec, p, jp, 0), group_inverse_mass(spec, p, jp, 1),
+            group_inverse_mass(spec, p, jp, 2), group_inverse_mass(spec, p, jp, 3),
+            0.0 if g == 1 else 1.0 / p[GROUP_MASS[0]])
     nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, (gdd3, ydd4, zdd4, a3dd), C,
                                 vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):
