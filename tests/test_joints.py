@@ -394,6 +394,14 @@ def test_the_dispatchers_are_made_from_the_protocol_and_call_each_rows_function(
         distinct = {id(getattr(m, fn.name)) for m in kinds.MODULES.values()}
         assert source.count("if of_kind(") == len(distinct) - 1, fn.name
         assert {id(f) for f in scope.values()} == distinct, fn.name
+    # the contact dispatcher's types are the one-point ones, and every row whose contact
+    # dynamics applies through it (all but the multi-contact row) is of one of them
+    assert kinds.ONE_POINT == tuple(k for k, m in kinds.MODULES.items() if m.CONTACTS == 1)
+    assert "prismatic" not in kinds.dispatch_source("contact", kinds.ONE_POINT)[0]
+    for slider_crank in (False, True):
+        types_ = joints.row_types(slider_crank)
+        assert [t in kinds.ONE_POINT for t in types_] == [
+            j != kinds.MULTI_ROW for j in range(joints.N_JOINTS)]
     accept, _ = kinds.dispatch_source("accept")
     assert "prismatic_rows(spec)" in accept and "spherical_rows" not in accept
     assert kinds.dispatch_source("accept")[1]["accept_0"] is shared.neutral_accept

@@ -208,24 +208,26 @@ def bushing_rows(spec):
     return BUSHING
 
 
-def dispatch_source(name: str) -> tuple[str, dict]:
+def dispatch_source(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)) -> tuple[str, dict]:
     """The source of the dispatcher of protocol function ``name`` (``joints.PROTOCOL``) and
     the names it calls: ``name(spec, <the protocol's parameters>)`` tests row j against the
-    rows of each distinct function the registered types provide for it (the types that
-    take the same function, ``shared``'s, tested together as one mask: ``of_kind`` of the
-    masks' union), and calls it with the protocol's parameters; the bushing's function
-    (no row's type) is the fall-through, a row of no type's as before."""
+    rows of each distinct function the types ``kinds_of`` (every registered type) provide
+    for it (the types that take the same function, ``shared``'s, tested together as one
+    mask: ``of_kind`` of the masks' union), and calls it with the protocol's parameters;
+    the bushing's function (no row's type) is the fall-through, a row of no type's as
+    before, or without the bushing among ``kinds_of`` the last type's."""
     params = ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
     groups: list[tuple[object, list[str]]] = []
-    for kind, module in MODULES.items():
-        func = getattr(module, name)
+    for kind in kinds_of:
+        func = getattr(MODULES[kind], name)
         for known, kinds in groups:
             if known is func:
                 kinds.append(kind)
                 break
         else:
             groups.append((func, [kind]))
-    last = next(i for i, (_, kinds) in enumerate(groups) if "bushing" in kinds)
+    last = next((i for i, (_, kinds) in enumerate(groups) if "bushing" in kinds),
+                len(groups) - 1)
     scope = {}
     lines = [f"def {name}(spec, {params}):"]
     for i, (func, kinds) in enumerate(groups):
@@ -237,14 +239,14 @@ def dispatch_source(name: str) -> tuple[str, dict]:
     return "\n".join(lines) + "\n", scope
 
 
-def dispatcher(name: str, label: str | None = None):
+def dispatcher(name: str, label: str | None = None, kinds_of: tuple[str, ...] = tuple(MODULES)):
     """The compiled dispatcher of protocol function ``name`` (:func:`dispatch_source`):
     ``joints.PROTOCOL``'s ``name`` of joint j's type, given the build's joint set first.
     Compiled from its source like every kernel function (``@compiled``, inlined: the masks
     are constants of the build, so that LLVM folds each test where j is known, as it does
     the hand-written chains it replaces); its code object is named for this file, so that
     Numba caches its callers as it does any function of this module."""
-    source, scope = dispatch_source(name)
+    source, scope = dispatch_source(name, kinds_of)
     namespace = dict(globals(), **scope)
     exec(compile(source, __file__, "exec"), namespace)
     func = namespace[name]
@@ -263,17 +265,24 @@ penetration = dispatcher("penetration")
 section_offsets = dispatcher("section_offsets")
 seat = dispatcher("seat")
 
-#: ``joints.PROTOCOL``'s ``contact`` by the row's type alone (:func:`contact` tests for a
-#: bushing first).
-row_contact = dispatcher("contact", "row_contact")
+#: The types that touch at one point (their module's ``CONTACTS`` 1), whose joints'
+#: contact :func:`contact` applies.
+ONE_POINT = tuple(kind for kind, module in MODULES.items() if module.CONTACTS == 1)
+
+#: ``joints.PROTOCOL``'s ``contact`` of a row of a one-point type (:data:`ONE_POINT`), by
+#: its type alone: a multi-contact type's contact is not among its branches, so that a call
+#: site typed with a one-point joint's bodies compiles none of it (the guide's block is
+#: ``dynamics.free_slider``'s, in its guide's frame).
+row_contact = dispatcher("contact", "row_contact", ONE_POINT)
 
 
 @compiled(inline="always")
 def contact(spec, j, model, ball, socket, full, dg):
-    """``joints.PROTOCOL``'s ``contact`` of joint j: the bushing's where the case makes j
-    a bushing (``jointset.is_bushing``: a constant False in a build without bushings),
-    else its row's type's (:data:`row_contact`). ``dynamics.applied_loads`` applies every
-    joint's contact through it, naming no type."""
+    """``joints.PROTOCOL``'s ``contact`` of joint j, a row of a one-point type: the
+    bushing's where the case makes j a bushing (``jointset.is_bushing``: a constant False
+    in a build without bushings), else its row's type's (:data:`row_contact`).
+    ``dynamics.applied_loads`` applies A's, B's and O's contact through it, naming no
+    type."""
     if is_bushing(spec, model.jp, j):
         return bushing.contact(j, model, ball, socket, full, dg)
     return row_contact(spec, j, model, ball, socket, full, dg)
