@@ -35,6 +35,24 @@ def compiled_here(module, name):
     return isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__
 
 
+#: The module of the protocol functions that several types share (core/shared.py), which a
+#: type takes by name rather than compiling a copy.
+SHARED = "clearsweep.core.shared"
+
+
+def unprovided(module):
+    """The functions of ``joints.PROVIDES`` that a joint-type module does not provide: one
+    that is missing or not compiled, or compiled elsewhere than in the module itself or in
+    core/shared.py (another type's, say)."""
+    out = []
+    for name in joints.PROVIDES:
+        obj = getattr(module, name, None)
+        if not (isinstance(obj, CPUDispatcher)
+                and obj.py_func.__module__ in (module.__name__, SHARED)):
+            out.append(name)
+    return out
+
+
 def test_every_joint_type_module_is_registered():
     """A module of core/ that declares JOINT_TYPE, or compiles a joint type's gap and
     contact, is registered under its type name."""
@@ -61,8 +79,8 @@ def test_a_registered_joint_type_has_its_module_functions_and_docs(type_name, mo
         # so (tests/test_bushing.py: the bushing's gap reports no penetration)
         assert "does not wear" in (module.__doc__ or ""), (
             f"core/{module_name}.py has no contact points without saying it does not wear")
-    missing = [f for f in joints.PROVIDES if not compiled_here(module, f)]
-    assert not missing, f"core/{module_name}.py does not compile {missing}"
+    missing = unprovided(module)
+    assert not missing, f"core/{module_name}.py does not compile or share {missing}"
     arch = (ROOT / "docs" / "architecture.md").read_text()
     assert f"`{module_name}.py`" in arch and f"`{type_name}`" in arch, (
         f"docs/architecture.md does not describe the joint type {type_name}")
@@ -124,6 +142,79 @@ def test_a_joint_type_with_another_signature_fails_the_protocol_check():
     for name in joints.PROVIDES:
         setattr(copied, name, getattr(spherical, name))
     assert protocol_mismatches(copied) == []
+
+
+def test_a_type_provides_each_function_itself_or_from_the_shared_module():
+    """A type module may take a protocol function from core/shared.py by name; one that
+    lacks a function, holds it uncompiled, or takes another type's is named."""
+    from clearsweep.core import prismatic, shared, spherical
+
+    def like_spherical():
+        module = types.ModuleType(spherical.__name__)
+        for name in joints.PROVIDES:
+            setattr(module, name, getattr(spherical, name))
+        return module
+
+    assert unprovided(like_spherical()) == []
+    assert spherical.accept is shared.neutral_accept          # shared, not a copy
+    lacking = like_spherical()
+    del lacking.seat
+    lacking.penetration = spherical.penetration.py_func      # not compiled
+    lacking.accept = prismatic.accept                        # another type's
+    assert unprovided(lacking) == ["accept", "penetration", "seat"]
+
+
+def protocol_bodies(module):
+    """The protocol functions that ``module`` compiles itself, as (protocol name, its
+    body's AST as text, docstring dropped): a type module's under the protocol's names,
+    core/shared.py's under ``<group>_<name>``."""
+    import ast
+
+    out = []
+    for attr, obj in vars(module).items():
+        if not (isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__):
+            continue
+        name = next((f for f in joints.PROVIDES if attr == f or attr.endswith("_" + f)), None)
+        if name is None or (attr != name and module.__name__ != SHARED):
+            continue
+        body = ast.parse(inspect.cleandoc("\n" + inspect.getsource(obj.py_func))).body[0].body
+        if isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+            body = body[1:]
+        out.append((name, "".join(ast.dump(node) for node in body)))
+    return out
+
+
+def copies(modules):
+    """Protocol functions written twice: the same protocol function with the same body
+    compiled in two places (modules' names, the function's name)."""
+    seen: dict = {}
+    found = []
+    for module in modules:
+        for name, body in protocol_bodies(module):
+            if (name, body) in seen:
+                found.append(f"{name}: {seen[name, body]} and {module.__name__}")
+            seen.setdefault((name, body), module.__name__)
+    return found
+
+
+def _copied_accept(j, model, body, hs, in_settled, stats, cur):
+    """A copy of the neutral accept, written again."""
+    return False
+
+
+def test_no_protocol_function_is_written_twice():
+    """The joint types' protocol functions and core/shared.py's: no two are the same
+    function with the same body (a type takes the shared one by name instead); a type
+    that compiles a copy of a shared function is named."""
+    from clearsweep.core import shared
+
+    modules = [importlib.import_module(f"clearsweep.core.{name}")
+               for name in sorted(set(joints.JOINT_TYPES.values()))]
+    assert copies(modules + [shared]) == []
+    copied = types.ModuleType(__name__)
+    copied.accept = compiled(_copied_accept)
+    copied.accept.py_func.__name__ = "accept"
+    assert copies([shared, copied]) == [f"accept: {SHARED} and {__name__}"]
 
 
 def body_states(pk):
@@ -266,7 +357,8 @@ def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
         types = joints.row_types(slider_crank)
         for j, joint in enumerate(joints.JOINTS):
             assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [types[j]], joint.name
-            assert kinds.is_revolute(spec, j) == (types[j] == "revolute"), joint.name
+            assert kinds.is_revolute_on(jointset.guide_axis(spec), j) == (
+                types[j] == "revolute"), joint.name
             module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[types[j]]}")
             assert kinds.is_multi(j) == (module.CONTACTS > 1)
             assert kinds.contacts(spec, j) == module.CONTACTS
@@ -284,6 +376,47 @@ def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
         assert R == rotation(trig(*y[body.y_phi:body.y_phi + 3])), joint.name
         if body.name == "slider":
             assert (r, v, R, w) == slider_state(y)
+
+
+def test_the_dispatchers_are_made_from_the_protocol_and_call_each_rows_function():
+    """Each dispatcher of jointkinds is made by its factory from ``joints.PROTOCOL``: it takes
+    the build's joint set and the protocol's parameters, tests one mask per distinct function
+    the types provide (the types that share core/shared.py's function tested together, the
+    bushing's the fall-through), and returns for each row of either mechanism what that
+    row's type's own function returns."""
+    from clearsweep.core import jointkinds as kinds
+    from clearsweep.core import jointset, shared
+
+    for fn in joints.PROTOCOL[2:]:
+        dispatch = getattr(kinds, fn.name)
+        assert tuple(inspect.signature(dispatch.py_func).parameters) == ("spec", *fn.params)
+        source, scope = kinds.dispatch_source(fn.name)
+        distinct = {id(getattr(m, fn.name)) for m in kinds.MODULES.values()}
+        assert source.count("if of_kind(") == len(distinct) - 1, fn.name
+        assert {id(f) for f in scope.values()} == distinct, fn.name
+    # the contact dispatcher's types are the one-point ones, and every row whose contact
+    # dynamics applies through it (all but the multi-contact row) is of one of them
+    assert kinds.ONE_POINT == tuple(k for k, m in kinds.MODULES.items() if m.CONTACTS == 1)
+    assert "prismatic" not in kinds.dispatch_source("contact", kinds.ONE_POINT)[0]
+    for slider_crank in (False, True):
+        types_ = joints.row_types(slider_crank)
+        assert [t in kinds.ONE_POINT for t in types_] == [
+            j != kinds.MULTI_ROW for j in range(joints.N_JOINTS)]
+    accept, _ = kinds.dispatch_source("accept")
+    assert "prismatic_rows(spec)" in accept and "spherical_rows" not in accept
+    assert kinds.dispatch_source("accept")[1]["accept_0"] is shared.neutral_accept
+    cfg = DEFAULTS.replace(joints__A__clearance=1e-4, joints__B__clearance=1e-4,
+                           joints__O__clearance=1e-4, joints__P__clearance_y=1e-4,
+                           joints__P__clearance_z=1e-4)
+    pk = pack(cfg, resolve_materials(cfg))
+    d, rate = (1e-5, 2e-5, 3e-5), (0.1, 0.2, 0.3)
+    for spec, slider_crank in ((jointset.ALL, False), (jointset.ALL | jointset.SLIDER_CRANK, True)):
+        for j, kind in enumerate(joints.row_types(slider_crank)):
+            module = kinds.MODULES[kind]
+            assert (kinds.paper_angle(spec, pk.jp, j, 1e-7, 1e-4)
+                    == module.paper_angle(pk.jp, j, 1e-7, 1e-4)), (kind, j)
+            assert (kinds.section_offsets(spec, pk.jp, j, d, rate)
+                    == module.section_offsets(pk.jp, j, d, rate)), (kind, j)
 
 
 #: Kernel modules that dispatch on a joint's type (core/jointkinds.py) and must not name a
@@ -409,6 +542,37 @@ def test_the_free_coordinates_table_sizes_the_solve():
         if c.freed_by is not None:
             joint = joints.JOINTS[names.index(c.freed_by)]
             assert joint.ball.body == c.body and c.axis in ("y", "z"), c
+
+
+@pytest.mark.parametrize("free", [False, True], ids=["O and P ideal", "O and P free"])
+def test_the_inverse_masses_come_from_the_free_coordinates_table(free):
+    """``dynamics.minv_apply`` with the inverse masses evaluate forms from ``joints.FREE``
+    and ``joints.BODIES`` (``dynamics.group_inverse_mass``) puts on each centroid
+    coordinate's column 1/m of the body the table names, or 0 where the table frees it by a
+    joint that is ideal in the case, and nothing on another column."""
+    from clearsweep.core import dynamics, jointset
+
+    over = (["joints.O.clearance=2.5e-4", "joints.P.clearance_y=2.5e-4",
+             "joints.P.clearance_z=2.5e-4"] if free else [])
+    cfg = load_config({}, over)
+    pk = pack(cfg, resolve_materials(cfg))
+    mass = {"crank": pk.p[L.P_M2], "rod": pk.p[L.P_M3], "slider": pk.p[L.P_M4]}
+    groups = dynamics.MASS_GROUPS
+    minv = tuple(dynamics.group_inverse_mass(jointset.ALL, pk.p, pk.jp, k)
+                 for k in range(len(groups))) + (1.0 / pk.p[L.P_M3],)
+    nz = dynamics.NZ
+    vz = np.zeros((2, nz))
+    for k, c in enumerate(joints.FREE):
+        if c.axis not in ("x", "y", "z"):
+            continue
+        vz[0] = 0.0
+        vz[0, k] = 1.0
+        dynamics.minv_apply(minv, (0.0, 0.0, 0.0, 0.0), vz, 0, 1)
+        held = c.freed_by is not None and not free
+        assert vz[1, k] == (0.0 if held else 1.0 / mass[c.body]), c.name
+        assert np.count_nonzero(vz[1]) == (0 if held else 1), c.name
+    assert dynamics.mass_groups(joints.FREE) == groups
+    assert dynamics.mass_groups(joints.FREE[::-1]) != groups      # another order, other groups
 
 
 def _state_index(c):

@@ -33,13 +33,15 @@ ideal, as with its clearance (revolute.py).
 - :func:`rate`: its largest stiff rate on the mobility of the joint's point
   (``dynamics.bushing_rate``), for the sub-step (docs/physics.md section 4).
 
-The rest of ``joints.PROTOCOL`` returns its neutral values: a bushing does not wear (no
+The rest of ``joints.PROTOCOL`` is the shared neutral functions (``shared.neutral_*``,
+taken by name): a bushing does not wear (no
 wear surface, caps or deposit), has no contact episodes (no seat, no accept, no
 penetration: ``CONTACTS = 0``) and no clearance to scale a section's offsets by (NaN).
 """
 
 import math
 
+from . import shared
 from .compiled import compiled
 from .contact import ContactState, relative_velocity, stiff_rate, store_contact
 from .kinematics import add, body_moment, dot, mtv, point_state, scale, sub
@@ -178,56 +180,22 @@ def rate(jp, j, wp, a, t1, t2):
     return stiff_rate(1.0, lk, lc)
 
 
-@compiled(inline="always")
-def paper_angle(jp, j, pen, e):
-    """(pi, False): no contact (``joints.PROTOCOL``)."""
-    return math.pi, False
-
-
-@compiled(inline="always")
-def wear_surface(jp, j, pen, e, n):
-    """Zeros: a bushing does not wear (``joints.PROTOCOL``)."""
-    return 0.0, 0.0, 0.0, 0.0, 0.0
-
-
-@compiled(inline="always")
-def cap_mergeable(j, d2, tol, area, scale):
-    """False: no wear caps (``joints.PROTOCOL``)."""
-    return False
-
-
-@compiled(inline="always")
-def deposit_cap(wmap, j, n, vol, area, scale, scratch):
-    """0: no wear (``joints.PROTOCOL``)."""
-    return 0.0
-
-
-@compiled(inline="always")
-def accept(j, model, body, hs, in_settled, stats, cur):
-    """False: no contact episodes (``joints.PROTOCOL``)."""
-    return False
-
-
-@compiled(inline="always")
-def deposit_step(wmap, j, jp, cur, wvol):
-    """0: no wear (``joints.PROTOCOL``)."""
-    return 0.0
-
-
-@compiled(inline="always")
-def penetration(j, model, k, body):
-    """-inf: never in contact (``joints.PROTOCOL``)."""
-    return -math.inf
-
-
-@compiled(inline="always")
-def section_offsets(jp, j, d, rate):
-    """NaN: no clearance to scale by (``joints.PROTOCOL``; a bushing's deflection is its
-    diagnostics' offset)."""
-    return (math.nan, math.nan, math.nan), (math.nan, math.nan, math.nan)
-
-
-@compiled(inline="always")
-def seat(j, model, dg, body):
-    """False: never in contact, nothing to seat (``joints.PROTOCOL``)."""
-    return False
+# The rest of ``joints.PROTOCOL``: the neutral functions (``shared``), written once.
+#: (pi, False): no contact.
+paper_angle = shared.neutral_paper_angle
+#: Zeros: a bushing does not wear.
+wear_surface = shared.neutral_wear_surface
+#: False: no wear caps.
+cap_mergeable = shared.neutral_cap_mergeable
+#: 0: no wear.
+deposit_cap = shared.neutral_deposit_cap
+#: False: no contact episodes.
+accept = shared.neutral_accept
+#: 0: no wear.
+deposit_step = shared.neutral_deposit_step
+#: -inf: never in contact.
+penetration = shared.neutral_penetration
+#: NaN: no clearance to scale by (a bushing's deflection is its diagnostics' offset).
+section_offsets = shared.neutral_section_offsets
+#: False: never in contact, nothing to seat.
+seat = shared.neutral_seat

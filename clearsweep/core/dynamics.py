@@ -31,10 +31,11 @@ import math
 import numpy as np
 from numba import types
 
-from . import bushing, prismatic, revolute, spherical
+from . import bushing, prismatic, revolute
+from . import jointkinds as kinds
 from .compiled import compile_lock, compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .jointkinds import is_revolute, is_revolute_on
+from .jointkinds import is_revolute_on
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
@@ -172,6 +173,54 @@ def p_free(spec, jp):
 #: free only where P has clearance).
 NZ_HELD = sum(1 for coordinate in FREE if coordinate.freed_by != "P")
 
+#: Each moving body's packed mass (``layout.P_M*``), by its name in ``joints.BODIES``.
+BODY_MASS = {"crank": P_M2, "rod": P_M3, "slider": P_M4}
+if set(BODY_MASS) != {body.name for body in BODIES if body.y_r is not None}:
+    raise ImportError("dynamics.BODY_MASS names another set of bodies than joints.BODIES")
+
+
+def mass_groups(free):
+    """The inverse-mass groups of the free coordinates ``free`` (``joints.FREE``): each
+    distinct (body, the joint that frees it) among the centroid coordinates, in the table's
+    order. A group's coordinates share one inverse mass, 1/m of the body or 0 where its
+    joint holds it; the rod's two angles are its rotational block (``rod_equations``'
+    mr_inv), no group."""
+    groups: list[tuple[str, str | None]] = []
+    for coordinate in free:
+        key = (coordinate.body, coordinate.freed_by)
+        if coordinate.axis in ("x", "y", "z") and key not in groups:
+            groups.append(key)
+    return tuple(groups)
+
+
+#: The free coordinates' inverse-mass groups (:func:`mass_groups` of ``joints.FREE``): the
+#: rod's centroid, the slider along its guide, the crank's centroid in the bearing's plane
+#: (freed by O), the slider across its guide (freed by P); :func:`minv_apply`'s minv[0] to
+#: minv[3] in that order.
+MASS_GROUPS = mass_groups(FREE)
+#: Each group's body's packed mass (``layout.P_M*``), a compile-time tuple.
+GROUP_MASS = tuple(BODY_MASS[body] for body, _ in MASS_GROUPS)
+#: Each group's freeing joint's row (-1: free in every build), a compile-time tuple.
+GROUP_JOINT = tuple(-1 if joint is None else INDEX[joint] for _, joint in MASS_GROUPS)
+#: Each free coordinate's group (its index in :data:`MASS_GROUPS`; -1: the rod's angles),
+#: which :func:`minv_apply` applies column by column.
+COLUMN_GROUP = tuple(MASS_GROUPS.index((c.body, c.freed_by)) if c.axis in ("x", "y", "z")
+                     else -1 for c in FREE)
+if COLUMN_GROUP != (0, 0, 0, -1, -1, 1, 2, 2, 3, 3):
+    raise ImportError(f"minv_apply applies the groups by column as (0, 0, 0, -1, -1, 1, 2, 2, "
+                      f"3, 3); joints.FREE gives {COLUMN_GROUP}")
+
+
+@compiled(inline="always")
+def group_inverse_mass(spec, p, jp, k):
+    """The inverse mass [1/kg] of group k of :data:`MASS_GROUPS`: 1/m of its body, or 0
+    where its joint holds it (neither clearance nor a bushing: ``jointset.is_free``, a
+    constant False where the build has neither)."""
+    joint = GROUP_JOINT[k]
+    if joint >= 0 and not is_free(spec, jp, joint):
+        return 0.0
+    return 1.0 / p[GROUP_MASS[k]]
+
 
 @compiled(inline="always")
 def row_dot(A, i, B, k, minv, start):
@@ -190,9 +239,10 @@ def row_dot(A, i, B, k, minv, start):
 @compiled
 def minv_apply(minv, mr_inv, vz, v, out):
     """vz[out] = M_zz^-1 vz[v] for the block-diagonal free-coordinate mass matrix (v, out:
-    rows of the work array vz; minv: 1/m3, 1/m4, 1/m2 and 1/m4 again, the third 0 where the
-    crank is held in its bearing, the fourth 0 where the slider is held in its guide, and
-    the rod's x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane). The
+    rows of the work array vz; minv: the inverse masses of :data:`MASS_GROUPS` (1/m3, 1/m4,
+    1/m2 and 1/m4 again, the third 0 where the crank is held in its bearing, the fourth 0
+    where the slider is held in its guide), applied by :data:`COLUMN_GROUP`, and the rod's
+    x3's, 1/m3, or 0 where the slider-crank holds its rod in its plane). The
     slider-crank's slider takes the columns as: 5 its y4 along the guide, 8 its x4 (held
     across its plane, :func:`planar_slider`: no row reaches it, its force 0), 9 its z4."""
     vz[out, 0] = minv[4] * vz[v, 0]
@@ -871,16 +921,8 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if local:
             r2, v2, R2, w2 = body_state(y, t2, Y_R2, Y_PHI2)
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
-        if is_bushing(spec, jp, joint_a):
-            fA, mA2, mA3, dA = bushing.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                               (r3, v3, R3, w3, uA3), full, dg)
-        elif is_revolute(spec, joint_a):
-            # the slider-crank's crank pin in the rod's eye
-            fA, mA2, mA3, dA = revolute.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                                (r3, v3, R3, w3, uA3), full, dg)
-        else:
-            fA, mA2, mA3, dA = spherical.contact(joint_a, model, (r2, v2, R2, w2, uA2),
-                                                 (r3, v3, R3, w3, uA3), full, dg)
+        fA, mA2, mA3, dA = kinds.contact(spec, joint_a, model, (r2, v2, R2, w2, uA2),
+                                         (r3, v3, R3, w3, uA3), full, dg)
         F2 = add(F2, fA)
         N2 = add(N2, mA2)
         F3 = sub(F3, fA)
@@ -891,16 +933,8 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         if local:
             r3, v3, R3, w3 = body_state(y, t3, Y_R3, Y_PHI3)
         r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
-        if is_bushing(spec, jp, joint_b):
-            fB, mB3, mB4, dB = bushing.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                               (r4, v4, R4, w4, zero), full, dg)
-        elif is_revolute(spec, joint_b):
-            # the slider-crank's wrist pin in the slider
-            fB, mB3, mB4, dB = revolute.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                                (r4, v4, R4, w4, zero), full, dg)
-        else:
-            fB, mB3, mB4, dB = spherical.contact(joint_b, model, (r3, v3, R3, w3, uB3),
-                                                 (r4, v4, R4, w4, zero), full, dg)
+        fB, mB3, mB4, dB = kinds.contact(spec, joint_b, model, (r3, v3, R3, w3, uB3),
+                                         (r4, v4, R4, w4, zero), full, dg)
         F3 = add(F3, fB)
         N3 = add(N3, mB3)
         F4 = sub(F4, fB)
@@ -915,14 +949,9 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
         # with full, the contact force on the journal into dg, completed by the axial
         # reaction below (kept there rather than live across the solve: a GPU thread's
         # registers)
-        if is_bushing(spec, jp, joint_o):
-            fO, mO2, _, dO = bushing.contact(joint_o, model,
-                                             (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                                             (gr, gv, gR, gw, zero), full, dg)
-        else:
-            fO, mO2, _, dO = revolute.contact(joint_o, model,
-                                              (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
-                                              (gr, gv, gR, gw, zero), full, dg)
+        fO, mO2, _, dO = kinds.contact(spec, joint_o, model,
+                                       (r2, v2, R2, w2, (0.0, 0.0, 0.5 * p[P_L2])),
+                                       (gr, gv, gR, gw, zero), full, dg)
         F2 = add(F2, fO)
         N2 = add(N2, mO2)
         pdiss += dO
@@ -1014,8 +1043,11 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     # (the slider-crank's: z4 alone, its column 8 x4 held, :func:`planar_slider`)
     vz[VZ_FORCE, 8] = F4[1] if p_free(spec, jp) and g == 0 else 0.0
     vz[VZ_FORCE, 9] = F4[2] if p_free(spec, jp) else 0.0
-    minv = (1.0 / p[P_M3], 1.0 / p[P_M4], 1.0 / p[P_M2] if o_free(spec, jp) else 0.0,
-            1.0 / p[P_M4] if p_free(spec, jp) else 0.0, 0.0 if g == 1 else 1.0 / p[P_M3])
+    # the groups' inverse masses from the free-coordinate table, and the rod's x3's (held
+    # in the slider-crank's plane, :func:`planar_rod`)
+    minv = (group_inverse_mass(spec, p, jp, 0), group_inverse_mass(spec, p, jp, 1),
+            group_inverse_mass(spec, p, jp, 2), group_inverse_mass(spec, p, jp, 3),
+            0.0 if g == 1 else 1.0 / p[GROUP_MASS[0]])
     nc, cons = ideal_joint_rows(model, spec, y, t2, t3, wd2, rdd2, (gdd3, ydd4, zdd4, a3dd), C,
                                 vz)
     if not schur_solve(C, S, L, nc, minv, mr_inv, vz):

@@ -12,10 +12,14 @@ is imported and frozen into it as compile-time constants; the planar slider-cran
 one (a shift and a mask, which LLVM folds where j is known): an RSSP build's dispatch is the
 table's, its code as before. Every dispatcher here takes the build's joint set and then the
 protocol function's own parameters, and calls the type module's function of the same name;
-``rk4`` and ``dopri5`` call these and name no joint and no type. A bushing stands
-in for a table joint per case (``jointset.is_bushing``, ``dynamics.evaluate``), never as a
-row's type: its mask is 0 and its branches fold away; it never has clearance, so that the
-loops below (which test ``jointset.has_clearance``) pass it by.
+one factory makes them all (:func:`dispatcher`, from ``joints.PROTOCOL`` and
+:data:`MODULES`: one test per distinct function, the types that take the same function of
+``shared`` tested together); ``rk4`` and ``dopri5`` call these and name no joint and no
+type. A bushing stands in for a table joint per case (``jointset.is_bushing``), never as a
+row's type: its mask is 0 and its branches fold away; :func:`contact` tests for it before
+the row's type (``dynamics.applied_loads`` applies every joint's contact through it); it
+never has clearance, so that the loops below (which test ``jointset.has_clearance``) pass
+it by.
 
 A type touches its socket at one point (``CONTACTS`` 1: the kernel's one-point rules of
 ``rk4.accept_substep``, ``rk4.merge_wear``, ...) or at several (:data:`MULTI`: the type's own
@@ -27,8 +31,8 @@ state vector at the ball's body's slots in ``joints.BODIES``.
 
 from . import bushing, prismatic, revolute, spherical
 from .compiled import compiled
-from .joints import BODIES, JOINT_TYPES, JOINTS, row_types
-from .jointset import guide_axis, has_clearance
+from .joints import BODIES, JOINT_TYPES, JOINTS, PROTOCOL, row_types
+from .jointset import guide_axis, has_clearance, is_bushing
 from .kinematics import gmat, mv, rotation, trig
 from .layout import Y_QD
 
@@ -120,13 +124,6 @@ def prismatic_rows(spec):
 
 
 @compiled(inline="always")
-def is_revolute(spec, j):
-    """Whether row j is of the revolute type in a build of joint set ``spec``
-    (``dynamics.evaluate`` chooses A's and B's contact by it)."""
-    return is_revolute_on(guide_axis(spec), j)
-
-
-@compiled(inline="always")
 def is_multi(j):
     """Whether joint j's type touches at several points (:data:`MULTI`)."""
     return of_kind(MULTI, j)
@@ -195,110 +192,97 @@ def type_vector(spec, j, v):
 # --------------------------------------------------------------- the protocol, by row type
 
 
-@compiled(inline="always")
-def paper_angle(spec, jp, j, pen, e):
-    """``joints.PROTOCOL``'s ``paper_angle`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.paper_angle(jp, j, pen, e)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.paper_angle(jp, j, pen, e)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.paper_angle(jp, j, pen, e)
-    return bushing.paper_angle(jp, j, pen, e)
+#: The rows of each type in a build of joint set ``spec``, by type name: the functions
+#: above (the bushing's rows: :data:`BUSHING`, none).
+ROWS_OF = {"spherical": "spherical_rows", "revolute": "revolute_rows",
+           "prismatic": "prismatic_rows", "bushing": "bushing_rows"}
+if set(ROWS_OF) != set(MODULES):
+    raise ImportError(f"jointkinds reads the rows of {sorted(ROWS_OF)}, the registered joint "
+                      f"types are {sorted(MODULES)}")
 
 
 @compiled(inline="always")
-def wear_surface(spec, jp, j, pen, e, n):
-    """``joints.PROTOCOL``'s ``wear_surface`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.wear_surface(jp, j, pen, e, n)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.wear_surface(jp, j, pen, e, n)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.wear_surface(jp, j, pen, e, n)
-    return bushing.wear_surface(jp, j, pen, e, n)
+def bushing_rows(spec):
+    """The rows of the bushing type: none (:data:`BUSHING`, 0; a bushing stands in per case,
+    ``jointset.is_bushing``)."""
+    return BUSHING
+
+
+def dispatch_source(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)) -> tuple[str, dict]:
+    """The source of the dispatcher of protocol function ``name`` (``joints.PROTOCOL``) and
+    the names it calls: ``name(spec, <the protocol's parameters>)`` tests row j against the
+    rows of each distinct function the types ``kinds_of`` (every registered type) provide
+    for it (the types that take the same function, ``shared``'s, tested together as one
+    mask: ``of_kind`` of the masks' union), and calls it with the protocol's parameters;
+    the bushing's function (no row's type) is the fall-through, a row of no type's as
+    before, or without the bushing among ``kinds_of`` the last type's."""
+    params = ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
+    groups: list[tuple[object, list[str]]] = []
+    for kind in kinds_of:
+        func = getattr(MODULES[kind], name)
+        for known, kinds in groups:
+            if known is func:
+                kinds.append(kind)
+                break
+        else:
+            groups.append((func, [kind]))
+    last = next((i for i, (_, kinds) in enumerate(groups) if "bushing" in kinds),
+                len(groups) - 1)
+    scope = {}
+    lines = [f"def {name}(spec, {params}):"]
+    for i, (func, kinds) in enumerate(groups):
+        scope[f"{name}_{i}"] = func
+        if i != last:
+            rows = " | ".join(f"{ROWS_OF[kind]}(spec)" for kind in kinds)
+            lines += [f"    if of_kind({rows}, j):", f"        return {name}_{i}({params})"]
+    lines.append(f"    return {name}_{last}({params})")
+    return "\n".join(lines) + "\n", scope
+
+
+def dispatcher(name: str, label: str | None = None, kinds_of: tuple[str, ...] = tuple(MODULES)):
+    """The compiled dispatcher of protocol function ``name`` (:func:`dispatch_source`):
+    ``joints.PROTOCOL``'s ``name`` of joint j's type, given the build's joint set first.
+    Compiled from its source like every kernel function (``@compiled``, inlined: the masks
+    are constants of the build, so that LLVM folds each test where j is known, as it does
+    the hand-written chains it replaces); its code object is named for this file, so that
+    Numba caches its callers as it does any function of this module."""
+    source, scope = dispatch_source(name, kinds_of)
+    namespace = dict(globals(), **scope)
+    exec(compile(source, __file__, "exec"), namespace)
+    func = namespace[name]
+    func.__name__ = func.__qualname__ = label or name     # Numba's cache file is named by it
+    func.__doc__ = f"``joints.PROTOCOL``'s ``{name}`` of joint j's type (:func:`dispatcher`)."
+    return compiled(inline="always")(func)
+
+
+paper_angle = dispatcher("paper_angle")
+wear_surface = dispatcher("wear_surface")
+cap_mergeable = dispatcher("cap_mergeable")
+deposit_cap = dispatcher("deposit_cap")
+accept = dispatcher("accept")
+deposit_step = dispatcher("deposit_step")
+penetration = dispatcher("penetration")
+section_offsets = dispatcher("section_offsets")
+seat = dispatcher("seat")
+
+#: The types that touch at one point (their module's ``CONTACTS`` 1), whose joints'
+#: contact :func:`contact` applies.
+ONE_POINT = tuple(kind for kind, module in MODULES.items() if module.CONTACTS == 1)
+
+#: ``joints.PROTOCOL``'s ``contact`` of a row of a one-point type (:data:`ONE_POINT`), by
+#: its type alone: a multi-contact type's contact is not among its branches, so that a call
+#: site typed with a one-point joint's bodies compiles none of it (the guide's block is
+#: ``dynamics.free_slider``'s, in its guide's frame).
+row_contact = dispatcher("contact", "row_contact", ONE_POINT)
 
 
 @compiled(inline="always")
-def cap_mergeable(spec, j, d2, tol, area, scale):
-    """``joints.PROTOCOL``'s ``cap_mergeable`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.cap_mergeable(j, d2, tol, area, scale)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.cap_mergeable(j, d2, tol, area, scale)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.cap_mergeable(j, d2, tol, area, scale)
-    return bushing.cap_mergeable(j, d2, tol, area, scale)
-
-
-@compiled(inline="always")
-def deposit_cap(spec, wmap, j, n, vol, area, scale, scratch):
-    """``joints.PROTOCOL``'s ``deposit_cap`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-    return bushing.deposit_cap(wmap, j, n, vol, area, scale, scratch)
-
-
-@compiled(inline="always")
-def accept(spec, j, model, body, hs, in_settled, stats, cur):
-    """``joints.PROTOCOL``'s ``accept`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.accept(j, model, body, hs, in_settled, stats, cur)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.accept(j, model, body, hs, in_settled, stats, cur)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.accept(j, model, body, hs, in_settled, stats, cur)
-    return bushing.accept(j, model, body, hs, in_settled, stats, cur)
-
-
-@compiled(inline="always")
-def deposit_step(spec, wmap, j, jp, cur, wvol):
-    """``joints.PROTOCOL``'s ``deposit_step`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.deposit_step(wmap, j, jp, cur, wvol)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.deposit_step(wmap, j, jp, cur, wvol)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.deposit_step(wmap, j, jp, cur, wvol)
-    return bushing.deposit_step(wmap, j, jp, cur, wvol)
-
-
-@compiled(inline="always")
-def penetration(spec, j, model, k, body):
-    """``joints.PROTOCOL``'s ``penetration`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.penetration(j, model, k, body)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.penetration(j, model, k, body)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.penetration(j, model, k, body)
-    return bushing.penetration(j, model, k, body)
-
-
-@compiled(inline="always")
-def section_offsets(spec, jp, j, d, rate):
-    """``joints.PROTOCOL``'s ``section_offsets`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.section_offsets(jp, j, d, rate)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.section_offsets(jp, j, d, rate)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.section_offsets(jp, j, d, rate)
-    return bushing.section_offsets(jp, j, d, rate)
-
-
-@compiled(inline="always")
-def seat(spec, j, model, dg, body):
-    """``joints.PROTOCOL``'s ``seat`` of joint j's type."""
-    if of_kind(spherical_rows(spec), j):
-        return spherical.seat(j, model, dg, body)
-    if of_kind(revolute_rows(spec), j):
-        return revolute.seat(j, model, dg, body)
-    if of_kind(prismatic_rows(spec), j):
-        return prismatic.seat(j, model, dg, body)
-    return bushing.seat(j, model, dg, body)
-
+def contact(spec, j, model, ball, socket, full, dg):
+    """``joints.PROTOCOL``'s ``contact`` of joint j, a row of a one-point type: the
+    bushing's where the case makes j a bushing (``jointset.is_bushing``: a constant False
+    in a build without bushings), else its row's type's (:data:`row_contact`).
+    ``dynamics.applied_loads`` applies A's, B's and O's contact through it, naming no
+    type."""
+    if is_bushing(spec, model.jp, j):
+        return bushing.contact(j, model, ball, socket, full, dg)
+    return row_contact(spec, j, model, ball, socket, full, dg)

@@ -45,6 +45,7 @@ impact velocity, and the improved Coulomb friction on the corner's slip over the
 import math
 from collections import namedtuple
 
+from . import shared
 from .compiled import compiled
 from .contact import (
     contact_damping,
@@ -908,25 +909,11 @@ def section_offsets(jp, j, d, rate):
     return (0.0 / c, d[1] / cy, d[2] / cz), (0.0 / c, rate[1] / cy, rate[2] / cz)
 
 
-@compiled(inline="always")
-def paper_angle(jp, j, pen, e):
-    """(pi, False): the slots' wear is :func:`accept`'s (``joints.PROTOCOL``)."""
-    return math.pi, False
-
-
-@compiled(inline="always")
-def wear_surface(jp, j, pen, e, n):
-    """Zeros: the slots' wear is :func:`accept`'s (``joints.PROTOCOL``)."""
-    return 0.0, 0.0, 0.0, 0.0, 0.0
-
-
-@compiled(inline="always")
-def cap_mergeable(j, d2, tol, area, scale):
-    """False: the walls' wear waits per edge line, not as a cap (``joints.PROTOCOL``)."""
-    return False
-
-
-@compiled(inline="always")
-def deposit_cap(wmap, j, n, vol, area, scale, scratch):
-    """0: the walls' wear is :func:`deposit_step`'s (``joints.PROTOCOL``)."""
-    return 0.0
+#: (pi, False): the slots' wear is :func:`accept`'s (``shared``).
+paper_angle = shared.neutral_paper_angle
+#: Zeros: the slots' wear is :func:`accept`'s (``shared``).
+wear_surface = shared.neutral_wear_surface
+#: False: the walls' wear waits per edge line, not as a cap (``shared``).
+cap_mergeable = shared.neutral_cap_mergeable
+#: 0: the walls' wear is :func:`deposit_step`'s (``shared``).
+deposit_cap = shared.neutral_deposit_cap

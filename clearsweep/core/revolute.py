@@ -36,8 +36,9 @@ lie in that plane:
 
 import math
 
+from . import shared
 from .compiled import compiled
-from .contact import compose, offsets_over, seat_episode, store_contact
+from .contact import compose, store_contact
 from .joints import JOINTS, PLANE_AXES
 from .kinematics import body_moment, mtv, point_state
 from .layout import (
@@ -239,11 +240,9 @@ def contact(j, model, ball, socket, full, dg):
             body_moment(Rs, rs, c.q_socket, c.force), c.diss_power)
 
 
-@compiled(inline="always")
-def paper_angle(jp, j, pen, e):
-    """(pi, False): the paper's slip rule is a sphere's; a bearing's sliding distance is
-    the slip times the step (``joints.PROTOCOL``)."""
-    return math.pi, False
+#: (pi, False): the paper's slip rule is a sphere's; a bearing's sliding distance is the
+#: slip times the step (``shared``).
+paper_angle = shared.neutral_paper_angle
 
 
 @compiled(inline="always")
@@ -271,36 +270,24 @@ def deposit_cap(wmap, j, n, vol, area, scale, scratch):
     return deposit(wmap, j, n, vol, area, scale)
 
 
-@compiled(inline="always")
-def accept(j, model, body, hs, in_settled, stats, cur):
-    """Nothing: the journal's step is the kernel's one-point rule (``rk4.accept_substep``);
-    False (``joints.PROTOCOL``)."""
-    return False
-
-
-@compiled(inline="always")
-def deposit_step(wmap, j, jp, cur, wvol):
-    """Nothing: the journal's wear waits as a strip (:func:`deposit_cap`); 0
-    (``joints.PROTOCOL``)."""
-    return 0.0
-
-
-@compiled(inline="always")
-def penetration(j, model, k, body):
-    """-inf: the journal's one contact is the diagnostics' (``joints.PROTOCOL``)."""
-    return -math.inf
+#: Nothing: the journal's step is the kernel's one-point rule (``rk4.accept_substep``);
+#: False (``shared``).
+accept = shared.neutral_accept
+#: Nothing: the journal's wear waits as a strip (:func:`deposit_cap`); 0 (``shared``).
+deposit_step = shared.neutral_deposit_step
+#: -inf: the journal's one contact is the diagnostics' (``shared``).
+penetration = shared.neutral_penetration
 
 
 @compiled(inline="always")
 def section_offsets(jp, j, d, rate):
     """The journal's section offset and its rate over the clearance c (``joints.PROTOCOL``;
     the axial part as the table's attachments give it), in the bearing's frame
-    (:func:`to_bearing` of the socket body's ``d`` and ``rate``, as the gap's d_s)."""
-    return offsets_over(to_bearing(j, d), to_bearing(j, rate), jp[j, J_C])
+    (:func:`to_bearing` of the socket body's ``d`` and ``rate``, as the gap's d_s): the
+    one-point offsets (``shared.one_point_section_offsets``) there."""
+    return shared.one_point_section_offsets(jp, j, to_bearing(j, d), to_bearing(j, rate))
 
 
-@compiled(inline="always")
-def seat(j, model, dg, body):
-    """A seated journal (``joints.PROTOCOL``): its episode begins without an impact
-    (``contact.seat_episode``); its slip angle stays pi; True."""
-    return seat_episode(j, model, dg)
+#: A seated journal: its episode begins without an impact (``shared.one_point_seat``);
+#: its slip angle stays pi; True.
+seat = shared.one_point_seat

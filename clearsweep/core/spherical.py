@@ -26,8 +26,9 @@ written elsewhere.
 
 import math
 
+from . import shared
 from .compiled import compiled
-from .contact import compose, offsets_over, seat_episode, store_contact
+from .contact import compose, seat_episode, store_contact
 from .kinematics import body_moment, dot, mtv, mv, point_state, scale, sub
 from .layout import (
     D_DELTA,
@@ -157,30 +158,15 @@ def deposit_cap(wmap, j, n, vol, area, scale, scratch):
     return deposit(wmap, j, n, vol, area, scale, scratch)
 
 
-@compiled(inline="always")
-def accept(j, model, body, hs, in_settled, stats, cur):
-    """Nothing: the ball's step is the kernel's one-point rule (``rk4.accept_substep``);
-    False (``joints.PROTOCOL``)."""
-    return False
-
-
-@compiled(inline="always")
-def deposit_step(wmap, j, jp, cur, wvol):
-    """Nothing: the ball's wear waits as a cap (:func:`deposit_cap`); 0
-    (``joints.PROTOCOL``)."""
-    return 0.0
-
-
-@compiled(inline="always")
-def penetration(j, model, k, body):
-    """-inf: the ball's one contact is the diagnostics' (``joints.PROTOCOL``)."""
-    return -math.inf
-
-
-@compiled(inline="always")
-def section_offsets(jp, j, d, rate):
-    """The ball's section offset and its rate over the clearance c (``joints.PROTOCOL``)."""
-    return offsets_over(d, rate, jp[j, J_C])
+#: Nothing: the ball's step is the kernel's one-point rule (``rk4.accept_substep``); False
+#: (``shared``).
+accept = shared.neutral_accept
+#: Nothing: the ball's wear waits as a cap (:func:`deposit_cap`); 0 (``shared``).
+deposit_step = shared.neutral_deposit_step
+#: -inf: the ball's one contact is the diagnostics' (``shared``).
+penetration = shared.neutral_penetration
+#: The ball's section offset and its rate over the clearance c (``shared``).
+section_offsets = shared.one_point_section_offsets
 
 
 @compiled(inline="always")
