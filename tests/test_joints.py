@@ -15,7 +15,7 @@ from numba.core.registry import CPUDispatcher
 
 import clearsweep.core as core
 from clearsweep.config import DEFAULTS, JointsConfig, load_config, resolve_materials
-from clearsweep.core import joints
+from clearsweep.core import joints, revolute
 from clearsweep.core import layout as L
 from clearsweep.core.compiled import compiled
 from clearsweep.core.kinematics import mv, rotation, trig
@@ -281,6 +281,7 @@ def protocol_arguments(module, j, pk, model, body):
     dg = np.zeros(L.N_D)
     dg[L.D_DELTA + j], dg[L.D_DDOT + j], dg[L.D_ECC + j] = pen, 0.01, e
     return {
+        "elastic_law": (pk.p, j),
         "paper_angle": (jp, j, pen, e),
         "wear_surface": (jp, j, pen, e, n),
         "cap_mergeable": (j, 1e-6, 0.05, area, scale),
@@ -357,8 +358,16 @@ def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
         types = joints.row_types(slider_crank)
         for j, joint in enumerate(joints.JOINTS):
             assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [types[j]], joint.name
-            assert kinds.is_revolute_on(jointset.guide_axis(spec), j) == (
-                types[j] == "revolute"), joint.name
+            # the elastic law the stiff rate reads (dynamics.joint_rate): a journal's own
+            # where the case keeps the paper's, the case's for every other type
+            for exponent in (0.0, 1.5, 1.0):
+                p = np.zeros(L.N_P)
+                p[L.P_EXPONENT] = exponent
+                law = kinds.elastic_law(spec, p, j)
+                if types[j] == "revolute":
+                    assert law == (exponent or revolute.JOURNAL_EXPONENT), joint.name
+                else:
+                    assert law == exponent, joint.name
             module = importlib.import_module(f"clearsweep.core.{joints.JOINT_TYPES[types[j]]}")
             assert kinds.is_multi(j) == (module.CONTACTS > 1)
             assert kinds.contacts(spec, j) == module.CONTACTS

@@ -181,6 +181,8 @@ def rate(jp, j, wp, a, t1, t2):
 
 
 # The rest of ``joints.PROTOCOL``: the neutral functions (``shared``), written once.
+#: The case's elastic law, never read: the bushing's force is its spring's.
+elastic_law = shared.case_elastic_law
 #: (pi, False): no contact.
 paper_angle = shared.neutral_paper_angle
 #: Zeros: a bushing does not wear.

@@ -31,11 +31,10 @@ import math
 import numpy as np
 from numba import types
 
-from . import bushing, prismatic, revolute
+from . import bushing, prismatic
 from . import jointkinds as kinds
 from .compiled import compile_lock, compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
-from .jointkinds import is_revolute_on
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
@@ -93,7 +92,6 @@ from .layout import (
     P_BAUM_A,
     P_BAUM_B,
     P_DT,
-    P_EXPONENT,
     P_FRICTION,
     P_G,
     P_GUIDE,
@@ -861,7 +859,8 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
         delta = dg[D_DELTA + j]
         if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
             rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
-                                        minv, mr_inv, guide_axis(spec)))
+                                        minv, mr_inv, guide_axis(spec),
+                                        kinds.elastic_law(spec, p, j)))
     dg[D_RATE] = rate
 
 
@@ -1127,7 +1126,7 @@ def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv, g):
 
 
 @compiled
-def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g):
+def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g, law):
     """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
 
     The effective masses are those of the relative contact motion with every constraint in
@@ -1135,7 +1134,8 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g):
     state, an approaching joint (delta_dot > 0) whose gap closes within one output step
     is also rated at the penetration its kinetic energy can reach,
     delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from U ~ 2 K delta^3 / (3 c)),
-    so that an impact that begins and ends inside one step still sets the sub-step.
+    so that an impact that begins and ends inside one step still sets the sub-step, under
+    the joint's elastic law ``law`` (its type's ``elastic_law``, ``jointkinds``).
     """
     p = model.p
     jp = model.jp
@@ -1167,7 +1167,6 @@ def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g):
         c_eff = dg[D_CEFF + j]
         ri = jp[j, J_RI]
         rj = jp[j, J_RJ]
-        law = revolute.journal_law(p) if is_revolute_on(g, j) else p[P_EXPONENT]
         dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri, rj, law)
         kappa = contact_damping(s[j, S_DV0], ddot, p)
         _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)

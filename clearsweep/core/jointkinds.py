@@ -97,13 +97,6 @@ def of_kind(rows, j):
 
 
 @compiled(inline="always")
-def is_revolute_on(g, j):
-    """Whether row j is of the revolute type in a build whose slider's guide runs along
-    global axis ``g`` (``jointset.guide_axis``: 1 the slider-crank's, :data:`SC_REVOLUTE`)."""
-    return of_kind(SC_REVOLUTE if g == 1 else REVOLUTE, j)
-
-
-@compiled(inline="always")
 def spherical_rows(spec):
     """The rows of the spherical type in a build of joint set ``spec`` (a constant of the
     build: the slider-crank's, :data:`SC_SPHERICAL`, where ``jointset.guide_axis`` is 1)."""
@@ -255,6 +248,7 @@ def dispatcher(name: str, label: str | None = None, kinds_of: tuple[str, ...] = 
     return compiled(inline="always")(func)
 
 
+elastic_law = dispatcher("elastic_law")
 paper_angle = dispatcher("paper_angle")
 wear_surface = dispatcher("wear_surface")
 cap_mergeable = dispatcher("cap_mergeable")

@@ -161,6 +161,13 @@ PROTOCOL = (
              "body's frame], the opposite force's moment on the socket's body [N m, its "
              "frame] and the power dissipated by damping and friction [W]; with ``full`` (a "
              "step's end) the joint's diagnostics into dg"),
+    Protocol("elastic_law", ("p", "j"), ("law",),
+             "the elastic law of joint j's one-point contact force (``contact.respond``'s "
+             "``law``: 0 the paper's, n > 0 the power law F_el = A c (delta / c)^n), which "
+             "its ``contact`` takes and the step's stiff rate reads (``dynamics.joint_rate``) "
+             "from the case's parameters p: the case's (``contact.elastic``) for a ball, a "
+             "journal's own where the case keeps the paper's; a type whose force is not a "
+             "one-point law (the guide's lines, a bushing): the case's, never read"),
     Protocol("paper_angle", ("jp", "j", "pen", "e"), ("beta", "paper"),
              "a one-point contact's angle beta [rad] of the paper's slip rule at the "
              "penetration pen against the unworn radii [m] and the eccentricity e [m] "

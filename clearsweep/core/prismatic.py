@@ -909,6 +909,9 @@ def section_offsets(jp, j, d, rate):
     return (0.0 / c, d[1] / cy, d[2] / cz), (0.0 / c, rate[1] / cy, rate[2] / cz)
 
 
+#: The case's elastic law, never read: the walls' force is the lines' own
+#: (:func:`line_load`; ``shared``).
+elastic_law = shared.case_elastic_law
 #: (pi, False): the slots' wear is :func:`accept`'s (``shared``).
 paper_angle = shared.neutral_paper_angle
 #: Zeros: the slots' wear is :func:`accept`'s (``shared``).

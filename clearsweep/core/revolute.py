@@ -231,7 +231,7 @@ def contact(j, model, ball, socket, full, dg):
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
-    c = compose(j, model, ball, socket, pb, ps, geo, journal_law(model.p), full)
+    c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)
         for i in range(3):
@@ -243,6 +243,12 @@ def contact(j, model, ball, socket, full, dg):
 #: (pi, False): the paper's slip rule is a sphere's; a bearing's sliding distance is the
 #: slip times the step (``shared``).
 paper_angle = shared.neutral_paper_angle
+
+
+@compiled(inline="always")
+def elastic_law(p, j):
+    """The journal's elastic law (``joints.PROTOCOL``): :func:`journal_law`."""
+    return journal_law(p)
 
 
 @compiled(inline="always")

@@ -13,6 +13,8 @@ written twice.
   the paper's slip rule, the wear caps of a type that does not wear by caps, the
   multi-contact steps of a one-point type, and the contact episodes and section offsets
   of a type that never touches (the bushing);
+- ``case_elastic_law``: the case's elastic law (``p[P_EXPONENT]``), a ball's and the
+  law of a type that has no one-point force (never read there);
 - ``one_point_<name>``: what the one-point types (a ball, a journal: ``CONTACTS`` 1)
   share: the seated start's episode (``contact.seat_episode``) and the section offsets
   over the radial clearance (``contact.offsets_over``).
@@ -25,9 +27,17 @@ import math
 
 from .compiled import compiled
 from .contact import offsets_over, seat_episode
-from .layout import J_C
+from .layout import J_C, P_EXPONENT
 
 # ------------------------------------------------------------------------ neutral values
+
+
+@compiled(inline="always")
+def case_elastic_law(p, j):
+    """The case's elastic law (``contact.elastic``: ``p[P_EXPONENT]``, 0 the paper's): a
+    ball's; a type without a one-point force law (the guide's lines, a bushing) names it and
+    never reads it."""
+    return p[P_EXPONENT]
 
 
 @compiled(inline="always")

@@ -38,7 +38,6 @@ from .layout import (
     J_COAT,
     J_RI,
     J_RJ,
-    P_EXPONENT,
     P_FEEDBACK,
     P_INTERP,
     S_BETA,
@@ -119,7 +118,7 @@ def contact(j, model, ball, socket, full, dg):
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
     geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
-    c = compose(j, model, ball, socket, pb, ps, geo, model.p[P_EXPONENT], full)
+    c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)
     return (c.force, body_moment(Rb, rb, c.q_ball, c.force),
@@ -158,6 +157,8 @@ def deposit_cap(wmap, j, n, vol, area, scale, scratch):
     return deposit(wmap, j, n, vol, area, scale, scratch)
 
 
+#: The case's elastic law (``contact.elastic``), the ball's contact's (``shared``).
+elastic_law = shared.case_elastic_law
 #: Nothing: the ball's step is the kernel's one-point rule (``rk4.accept_substep``); False
 #: (``shared``).
 accept = shared.neutral_accept
