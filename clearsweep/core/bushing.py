@@ -34,7 +34,7 @@ ideal, as with its clearance (revolute.py).
   (``dynamics.bushing_rate``), for the sub-step (docs/physics.md section 4).
 
 The rest of ``joints.PROTOCOL`` is the shared neutral functions (``shared.neutral_*``,
-taken by name): a bushing does not wear (no
+and the case's elastic law, never read: ``shared.case_elastic_law``; taken by name): a bushing does not wear (no
 wear surface, caps or deposit), has no contact episodes (no seat, no accept, no
 penetration: ``CONTACTS = 0``) and no clearance to scale a section's offsets by (NaN).
 """
