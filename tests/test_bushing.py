@@ -141,6 +141,27 @@ def test_the_rate_of_one_direction_is_the_oscillator_s():
     assert r == pytest.approx(np.sqrt(4e6 / 0.25), rel=1e-12)
 
 
+def test_the_rate_reads_the_axis_of_the_socket_s_body():
+    """The protocol's force_rate of a bushing: its axis is the socket body's local x axis.
+    On a mobility of the global y direction alone, a socket unrotated rates the radial
+    spring, a socket turned a quarter turn about z (its x axis along global y) the axial
+    one: the oscillators' sqrt(k / m)."""
+    from clearsweep.core.work import Model
+
+    jp = np.zeros((4, L.N_JP))
+    jp[0, L.J_K_RADIAL], jp[0, L.J_K_AXIAL] = 4e6, 1e9
+    model = Model(np.zeros(L.N_P), jp, np.zeros((4, L.N_S)), np.zeros((4, 1, 1)))
+    wp = (0.0, 0.0, 0.0, 1.0 / 0.25, 0.0, 0.0)      # only y moves, 0.25 kg
+    dg = np.zeros(L.N_D)
+    unrotated = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    turned = (0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)    # x -> y, y -> -x
+    assert bushing.rate_point(0, model, dg) == (True, True, (0.0,) * 3, (0.0,) * 3)
+    assert bushing.force_rate(0, model, dg, wp, unrotated, 0.0) == pytest.approx(
+        np.sqrt(4e6 / 0.25), rel=1e-12)
+    assert bushing.force_rate(0, model, dg, wp, turned, 0.0) == pytest.approx(
+        np.sqrt(1e9 / 0.25), rel=1e-12)
+
+
 def test_the_build_holds_the_case_s_bushings():
     cfg = load_config({}, ["joints.A.clearance=0", "joints.B.clearance=2.5e-4",
                            "joints.O.type=bushing"])

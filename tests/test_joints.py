@@ -263,7 +263,8 @@ def test_every_joint_types_functions_return_the_protocols_shape():
 
 
 #: Vector results of the protocol (3-tuples), by function.
-VECTORS = {"section_offsets": ("offset", "offset_rate")}
+VECTORS = {"section_offsets": ("offset", "offset_rate"),
+           "rate_point": ("offset_ball", "offset_socket")}
 
 
 def protocol_arguments(module, j, pk, model, body):
@@ -280,6 +281,11 @@ def protocol_arguments(module, j, pk, model, body):
     cur = np.zeros((L.N_CAP_ROWS, L.N_CAP))
     dg = np.zeros(L.N_D)
     dg[L.D_DELTA + j], dg[L.D_DDOT + j], dg[L.D_ECC + j] = pen, 0.01, e
+    dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3] = n
+    dg[L.D_PRATE] = 1.25e5
+    # the mobility of a 2 kg point free in every direction, the socket unrotated
+    wp = (0.5, 0.0, 0.0, 0.5, 0.0, 0.5)
+    eye = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     return {
         "elastic_law": (pk.p, j),
         "paper_angle": (jp, j, pen, e),
@@ -291,6 +297,8 @@ def protocol_arguments(module, j, pk, model, body):
         "penetration": (j, model, 0, body),
         "section_offsets": (jp, j, (1e-5, 2e-5, 3e-5), (0.1, 0.2, 0.3)),
         "seat": (j, model, dg, body),
+        "rate_point": (j, model, dg),
+        "force_rate": (j, model, dg, wp, eye, pk.p[L.P_EXPONENT]),
     }
 
 
@@ -332,13 +340,23 @@ def test_every_joint_types_protocol_returns_its_shape_and_neutral_values():
             c = pk.jp[j, L.J_C]
             assert out["section_offsets"] == ((1e-5 / c, 2e-5 / c, 3e-5 / c),
                                               (0.1 / c, 0.2 / c, 0.3 / c)), type_name
+            # the contact points at the radii along the normal, due in contact; rated on
+            # their mobility: the approach's reachable penetration gives a positive rate
+            assert out["rate_point"] == (True, True, tuple(pk.jp[j, L.J_RJ] * np.array(
+                (0.0, 0.6, 0.8))), tuple(pk.jp[j, L.J_RI] * np.array((0.0, 0.6, 0.8)))), type_name
+            assert out["force_rate"] > 0.0, type_name
         elif module.CONTACTS > 1:
             assert out["wear_surface"] == (0.0,) * 5 and out["deposit_cap"] == 0.0, type_name
             assert out["paper_angle"] == (np.pi, False), type_name
             assert np.isfinite(out["penetration"]) and out["section_offsets"][0][0] == 0.0
+            # the guide's rate is its corners' own, stored by its contact
+            assert out["rate_point"] == (True, False, (0.0,) * 3, (0.0,) * 3), type_name
+            assert out["force_rate"] == 1.25e5, type_name
         else:
             assert out["seat"] is False and out["accept"] is False, type_name
             assert np.isnan(out["section_offsets"][0]).all(), type_name
+            # a bushing's rate is always due, at its centres themselves
+            assert out["rate_point"] == (True, True, (0.0,) * 3, (0.0,) * 3), type_name
 
 
 def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
@@ -358,7 +376,7 @@ def test_the_dispatch_reads_each_rows_type_and_ball_body_from_the_table():
         types = joints.row_types(slider_crank)
         for j, joint in enumerate(joints.JOINTS):
             assert [t for t, m in masks.items() if kinds.of_kind(m, j)] == [types[j]], joint.name
-            # the elastic law the stiff rate reads (dynamics.joint_rate): a journal's own
+            # the elastic law the stiff rate reads (its force_rate): a journal's own
             # where the case keeps the paper's, the case's for every other type
             for exponent in (0.0, 1.5, 1.0):
                 p = np.zeros(L.N_P)

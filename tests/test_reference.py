@@ -317,7 +317,7 @@ def test_simulated_state(simulated_states, joints):
 
 def kernel_point_mobility(k, y, pk, j, axis=None):
     """Call dynamics.point_mobility with the intermediates evaluate() leaves (C, L) and
-    rebuilds the rest as joint_rate does; ``axis``: the guide's axis it is given (default
+    rebuilds the rest as dynamics.rate_mobility does; ``axis``: the guide's axis it is given (default
     the case's, p[P_GUIDE])."""
     p, jp = pk.p, pk.jp
     t3 = trig(y[9], y[10], y[11])
@@ -438,7 +438,7 @@ def rates_in_ramp(t, y, pk, j):
 
 def test_stiff_rate_predictive():
     """Approaching (delta_dot > 0): the rate at delta_pred^3 = delta^3 + 3 m_eff delta_dot^2
-    c / (4 K) (dynamics.joint_rate) with the reference m_eff and F_N slopes there."""
+    c / (4 K) (shared.one_point_force_rate) with the reference m_eff and F_N slopes there."""
     pk = rate_case("one", "realistic")
     rng = np.random.default_rng(9)
     y = contact_state(base_state(pk, 0.4), pk.p, pk.jp, rng, delta=(0.0, 1e-6),

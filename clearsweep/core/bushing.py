@@ -30,8 +30,9 @@ ideal, as with its clearance (revolute.py).
 - :func:`gap`: the offset's geometry in the ``spherical.gap`` shape (no clearance: c_eff
   and the penetration are 0, so that no contact, impact or wear is ever counted);
 - :func:`contact`: the law above as a ``contact.ContactState``;
-- :func:`rate`: its largest stiff rate on the mobility of the joint's point
-  (``dynamics.bushing_rate``), for the sub-step (docs/physics.md section 4).
+- :func:`rate`: its largest stiff rate on the mobility of the joint's point, for the
+  sub-step (docs/physics.md section 4): the protocol's :func:`force_rate`, at the point
+  :func:`rate_point` names (the joint's centres, always due).
 
 The rest of ``joints.PROTOCOL`` is the shared neutral functions (``shared.neutral_*``,
 and the case's elastic law, never read: ``shared.case_elastic_law``; taken by name): a bushing does not wear (no
@@ -46,6 +47,7 @@ from .compiled import compiled
 from .contact import ContactState, relative_velocity, stiff_rate, store_contact
 from .kinematics import add, body_moment, dot, mtv, point_state, scale, sub
 from .layout import D_JOINT_FORCE, J_C_AXIAL, J_C_RADIAL, J_K_AXIAL, J_K_RADIAL
+from .multibody import tangent_basis
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "bushing"
@@ -178,6 +180,25 @@ def rate(jp, j, wp, a, t1, t2):
     lk = scaled_top(wp, basis, (jp[j, J_K_AXIAL], kr, kr))
     lc = scaled_top(wp, basis, (jp[j, J_C_AXIAL], cr, cr))
     return stiff_rate(1.0, lk, lc)
+
+
+@compiled(inline="always")
+def rate_point(j, model, dg):
+    """(True, True, zero, zero): the bushing's stiff rate is always due, on the mobility
+    of its centres themselves (its small deflection left out; ``joints.PROTOCOL``)."""
+    zero = (0.0, 0.0, 0.0)
+    return True, True, zero, zero
+
+
+@compiled
+def force_rate(j, model, dg, wp, Rs, law):
+    """The bushing's largest stiff rate [1/s] (:func:`rate`) on the mobility wp of its
+    centres, its axis the socket body's local x axis (:func:`axis_of` of the socket's
+    rotation Rs; the ground's: global x) and the two unit vectors across it
+    (``multibody.tangent_basis``; ``joints.PROTOCOL``: dg and law not read)."""
+    a = axis_of(Rs)
+    t1, t2 = tangent_basis(a)
+    return rate(model.jp, j, wp, a, t1, t2)
 
 
 # The rest of ``joints.PROTOCOL``: the neutral functions (``shared``), written once.

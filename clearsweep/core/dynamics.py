@@ -31,10 +31,9 @@ import math
 import numpy as np
 from numba import types
 
-from . import bushing, prismatic
 from . import jointkinds as kinds
+from . import prismatic
 from .compiled import compile_lock, compiled
-from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
 from .kinematics import (
@@ -72,27 +71,20 @@ from .layout import (
     D_PDISS,
     D_PDRIVE,
     D_PE_GRAV,
-    D_PRATE,
     D_RATE,
     D_REACTION_O,
     D_SLIDER_ACC,
     D_TORQUE,
     D_UEL,
     D_VT,
-    D_WORN,
     J_BLOCK_LENGTH,
     J_CLEARANCE,
-    J_FILM,
-    J_RI,
-    J_RJ,
     N_D,
     N_JOINTS,
     N_Q,
     N_S,
     P_BAUM_A,
     P_BAUM_B,
-    P_DT,
-    P_FRICTION,
     P_G,
     P_GUIDE,
     P_J2,
@@ -105,10 +97,7 @@ from .layout import (
     P_M4,
     P_OMEGA,
     P_THETA0,
-    P_V0,
-    P_V1,
     P_ZS,
-    S_DV0,
     ST_OK,
     ST_SINGULAR,
     Y_DISS,
@@ -128,9 +117,7 @@ from .multibody import (
     body_state,
     chol_solve,
     euler_equations,
-    quad_form,
     solve_spd,
-    tangent_basis,
 )
 from .target import on_device
 from .work import Model, Solve
@@ -787,6 +774,61 @@ def assemble_qdd(dy, y, rdd2, pdd2, zdd, gdd3, ydd4, zdd4, g):
     dy[qd + Y_R4 + 2] = zdd4
 
 
+def _rod_side(joint):
+    """+1 where the rod carries the joint's ball, -1 its socket, 0 neither."""
+    return 1 if joint.ball.body == "rod" else (-1 if joint.socket.body == "rod" else 0)
+
+
+#: Each joint's side on the rod (``joints.JOINTS``): +1 the rod carries its ball (B), -1
+#: its socket (A), 0 neither (O, P): the one body of the RSSP whose rotation a joint's
+#: mobility reads (:func:`point_mobility`).
+ROD_SIDE = tuple(_rod_side(joint) for joint in JOINTS)
+
+#: Each joint's attachment on the rod (its offsets as multiples of l3, along the rod's x
+#: axis; 0 where the rod carries neither side).
+ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
+                         if att.body == "rod"), 0.0) for joint in JOINTS)
+
+#: Each joint's socket body (an index into the evaluation's (t2, t3, t4), -1 for the
+#: ground): the body whose rotation a joint type's ``force_rate`` reads.
+SOCKET_BODY = tuple(next((k for k, body in enumerate(BODIES[:3])
+                          if body.name == joint.socket.body), -1) for joint in JOINTS)
+_EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+@compiled(inline="always")
+def socket_rotation(j, trigs):
+    """The rotation of joint j's socket body (row-major), from the bodies' sines and
+    cosines ``trigs`` (t2, t3, t4); the ground's: the identity."""
+    k = SOCKET_BODY[j]
+    if k < 0:
+        return _EYE
+    return rotation(trigs[k])
+
+
+@compiled
+def rate_mobility(j, p, R3, G3, r3, off_ball, off_socket, solve, mobility, g):
+    """Mobility W_p of joint j's relative motion at the points its type's ``rate_point``
+    names (:func:`point_mobility`, every constraint in place; ``mobility``: the solve's
+    (cons, nc, minv, mr_inv)). The rod's side is read at the joint's attachment on the rod
+    moved by its offset there (``off_ball`` where the rod carries the ball, ``off_socket``
+    where it carries the socket): a zero offset is the attachment itself, a contact
+    point's through the rod's frame; a joint the rod carries neither side of has no rod
+    Jacobian."""
+    _, nc, minv, mr_inv = mobility
+    side = ROD_SIDE[j]
+    u = (ROD_FACTOR[j] * p[P_L3], 0.0, 0.0)
+    off = off_ball if side > 0 else off_socket
+    if off[0] == 0.0 and off[1] == 0.0 and off[2] == 0.0:
+        Jr = point_jacobian_rot(R3, u, G3)
+    elif side == 0:
+        Jr = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    else:
+        qrod = add(add(r3, mv(R3, u)), off)
+        Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
+    return point_mobility(j, Jr, solve.C, solve.L, nc, minv, mr_inv, solve.vz, g)
+
+
 @compiled(inline="always")
 def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     """The diagnostics of an evaluation at a (sub-)step's end (:func:`evaluate` with
@@ -845,22 +887,23 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
             cons = max(cons, max(abs(y[Y_R4]), reach * max(abs(y[Y_PHI4]),
                                                            abs(y[Y_PHI4 + 1]))))
     dg[D_CONS] = cons
+    # the stiff rate of each joint with clearance or a bushing: its type's, on the mobility
+    # of the points it names (docs/physics.md section 4)
+    R3 = rotation(t3)
+    G3 = gmat(t3)
     rate = 0.0
     for j in range(N_JOINTS):
-        if is_bushing(spec, jp, j):
-            rate = max(rate, bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv,
-                                          guide_axis(spec)))
+        if not (is_bushing(spec, jp, j) or has_clearance(spec, jp, j)):
             continue
-        if not has_clearance(spec, jp, j):
+        due, mobile, off_ball, off_socket = kinds.rate_point(spec, j, model, dg)
+        if not due:
             continue
-        if j == JOINT_P:
-            rate = max(rate, dg[D_PRATE])   # the corners' own, prismatic.contact
-            continue
-        delta = dg[D_DELTA + j]
-        if delta > 0.0 or delta + dg[D_DDOT + j] * p[P_DT] > 0.0:
-            rate = max(rate, joint_rate(j, model, dg, rotation(t3), gmat(t3), r3, solve, nc,
-                                        minv, mr_inv, guide_axis(spec),
-                                        kinds.elastic_law(spec, p, j)))
+        wp = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        if mobile:
+            wp = rate_mobility(j, p, R3, G3, r3, off_ball, off_socket, solve, mobility,
+                               guide_axis(spec))
+        rate = max(rate, kinds.force_rate(spec, j, model, dg, wp, socket_rotation(j, trigs),
+                                          kinds.elastic_law(spec, p, j)))
     dg[D_RATE] = rate
 
 
@@ -1092,99 +1135,6 @@ def evaluate(t, y, model, dy, dg, full, solve, spec=ALL):
     end_diagnostics(model, spec, y, (t2, t3, t4), dy, dg, solve, (zdd, ydd4, zdd4),
                     (fA, fB, torque, lamO, pdiss), (cons, nc, minv, mr_inv))
     return ST_OK
-
-
-#: Each joint's socket body's Euler angles in the state (layout.Y_*), -1 for the ground:
-#: the bushing's axis is that body's local x axis.
-SOCKET_PHI = tuple(-1 if body.y_phi is None else body.y_phi
-                   for joint in JOINTS for body in BODIES if body.name == joint.socket.body)
-
-#: Each joint's point on the rod (layout's attachment offsets as multiples of l3, along the
-#: rod's x axis), where its mobility is read for a bushing's rate: the rod carries one side
-#: of A and B, neither of O.
-ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
-                         if att.body == "rod"), 0.0) for joint in JOINTS)
-
-
-@compiled
-def bushing_rate(j, model, y, t3, solve, nc, minv, mr_inv, g):
-    """Largest stiff rate [1/s] of bushing j (``bushing.rate``) on the mobility of its point
-    (:func:`point_mobility`, every constraint in place), its axis the socket body's local x
-    axis (the global x axis on the ground). The point is read at the joint's attachment on
-    the rod, the bushing's small deflection left out."""
-    p = model.p
-    R3 = rotation(t3)
-    Jr = point_jacobian_rot(R3, (ROD_FACTOR[j] * p[P_L3], 0.0, 0.0), gmat(t3))
-    wp = point_mobility(j, Jr, solve.C, solve.L, nc, minv, mr_inv, solve.vz, g)
-    phi = SOCKET_PHI[j]
-    a = (1.0, 0.0, 0.0)
-    if phi >= 0:
-        Rs = rotation(trig(y[phi], y[phi + 1], y[phi + 2]))
-        a = (Rs[0], Rs[3], Rs[6])
-    t1, t2 = tangent_basis(a)
-    return bushing.rate(model.jp, j, wp, a, t1, t2)
-
-
-@compiled
-def joint_rate(j, model, dg, R3, G3, r3, solve, nc, minv, mr_inv, g, law):
-    """Largest stiff rate of clearance joint j's contact: elastic/damping and friction (docs/physics.md section 4).
-
-    The effective masses are those of the relative contact motion with every constraint in
-    place (the crank is driven, hence of infinite mass). Besides the rates at the current
-    state, an approaching joint (delta_dot > 0) whose gap closes within one output step
-    is also rated at the penetration its kinetic energy can reach,
-    delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from U ~ 2 K delta^3 / (3 c)),
-    so that an impact that begins and ends inside one step still sets the sub-step, under
-    the joint's elastic law ``law`` (its type's ``elastic_law``, ``jointkinds``).
-    """
-    p = model.p
-    jp = model.jp
-    s = model.s
-    C = solve.C
-    L = solve.L
-    vz = solve.vz
-    n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
-    if j == JOINT_O:
-        # the rod carries neither side of O: no rod Jacobian (point_mobility ignores it)
-        Jr = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    else:
-        if j == JOINT_A:
-            # the socket point Q_i on the rod
-            qrod = add(add(r3, mv(R3, (-0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RI], n))
-        else:
-            # the ball point Q_j on the rod
-            qrod = add(add(r3, mv(R3, (0.5 * p[P_L3], 0.0, 0.0))), scale(jp[j, J_RJ], n))
-        Jr = point_jacobian_rot(R3, mtv(R3, sub(qrod, r3)), G3)
-    wp = point_mobility(j, Jr, C, L, nc, minv, mr_inv, vz, g)
-    inv_m = quad_form(wp, n, n)
-    if not inv_m > 0.0:
-        return 0.0
-    m_eff = 1.0 / inv_m
-    rate = stiff_rate(m_eff, dg[D_DFD + j], dg[D_DFDD + j])
-    ddot = dg[D_DDOT + j]
-    ew, mu, _ = surface(jp, j, dg[D_WORN + j] != 0.0)
-    if ddot > 0.0:
-        c_eff = dg[D_CEFF + j]
-        ri = jp[j, J_RI]
-        rj = jp[j, J_RJ]
-        dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri, rj, law)
-        kappa = contact_damping(s[j, S_DV0], ddot, p)
-        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
-        rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
-    fn = dg[D_FN + j]
-    film = jp[j, J_FILM]
-    if p[P_FRICTION] != 0.0 and (mu > 0.0 or film > 0.0) and fn > 0.0:
-        # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
-        t1, t2 = tangent_basis(n)
-        a = quad_form(wp, t1, t1)
-        b = quad_form(wp, t1, t2)
-        d = quad_form(wp, t2, t2)
-        inv_t = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b)
-        vt = dg[D_VT + j]
-        slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
-        # Coulomb's ramp and the film's viscous shear (its rate: the coefficient over the mass)
-        rate = max(rate, (mu * fn * slope + film) * inv_t)
-    return rate
 
 
 @compiled(inline="always")

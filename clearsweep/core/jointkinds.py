@@ -263,20 +263,36 @@ seat = dispatcher("seat")
 #: contact :func:`contact` applies.
 ONE_POINT = tuple(kind for kind, module in MODULES.items() if module.CONTACTS == 1)
 
-#: ``joints.PROTOCOL``'s ``contact`` of a row of a one-point type (:data:`ONE_POINT`), by
-#: its type alone: a multi-contact type's contact is not among its branches, so that a call
-#: site typed with a one-point joint's bodies compiles none of it (the guide's block is
-#: ``dynamics.free_slider``'s, in its guide's frame).
-row_contact = dispatcher("contact", "row_contact", ONE_POINT)
+
+def per_case(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)):
+    """The compiled dispatcher of protocol function ``name`` for joint j as the case has it:
+    the bushing's where the case makes j a bushing (``jointset.is_bushing``: a constant
+    False in a build without bushings), else its row's type's (:func:`dispatcher` of the
+    types ``kinds_of``, named ``row_<name>``). Every function it serves takes ``model``
+    (the bushing's test reads ``model.jp``)."""
+    row = dispatcher(name, f"row_{name}", kinds_of)
+    params = ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
+    source = (f"def {name}(spec, {params}):\n"
+              f"    if is_bushing(spec, model.jp, j):\n"
+              f"        return bushing_{name}({params})\n"
+              f"    return row_{name}(spec, {params})\n")
+    namespace = dict(globals(), is_bushing=is_bushing,
+                     **{f"row_{name}": row, f"bushing_{name}": getattr(bushing, name)})
+    exec(compile(source, __file__, "exec"), namespace)
+    func = namespace[name]
+    func.__doc__ = (f"``joints.PROTOCOL``'s ``{name}`` of joint j as the case has it: the "
+                    f"bushing's or its row's type's (:func:`per_case`).")
+    return compiled(inline="always")(func)
 
 
-@compiled(inline="always")
-def contact(spec, j, model, ball, socket, full, dg):
-    """``joints.PROTOCOL``'s ``contact`` of joint j, a row of a one-point type: the
-    bushing's where the case makes j a bushing (``jointset.is_bushing``: a constant False
-    in a build without bushings), else its row's type's (:data:`row_contact`).
-    ``dynamics.applied_loads`` applies A's, B's and O's contact through it, naming no
-    type."""
-    if is_bushing(spec, model.jp, j):
-        return bushing.contact(j, model, ball, socket, full, dg)
-    return row_contact(spec, j, model, ball, socket, full, dg)
+#: ``joints.PROTOCOL``'s ``contact`` of joint j, a row of a one-point type (:data:`ONE_POINT`)
+#: or a bushing (:func:`per_case`): a multi-contact type's contact is not among its
+#: branches, so that a call site typed with a one-point joint's bodies compiles none of it
+#: (the guide's block is ``dynamics.free_slider``'s, in its guide's frame).
+#: ``dynamics.applied_loads`` applies A's, B's and O's contact through it, naming no type.
+contact = per_case("contact", ONE_POINT)
+#: ``joints.PROTOCOL``'s ``rate_point`` and ``force_rate`` of joint j (:func:`per_case`):
+#: the step's stiff rate of each joint with clearance or a bushing
+#: (``dynamics.end_diagnostics``), naming no type.
+rate_point = per_case("rate_point")
+force_rate = per_case("force_rate")

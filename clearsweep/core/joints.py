@@ -8,7 +8,8 @@ of the packed ``jp`` (``layout.J_*``), in the table's order. A joint type is one
 ``core/`` that declares ``JOINT_TYPE`` and ``CONTACTS`` and compiles :data:`PROVIDES`
 with the signatures of :data:`PROTOCOL` (its gap and contact; the wear surface of a
 one-point contact, its caps and their deposit; a multi-contact type's steps, deposit and
-penetrations; the Poincare section's offsets; the seated start); it is registered in
+penetrations; the Poincare section's offsets; the seated start; its force's stiff rate);
+it is registered in
 :data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
 registration without its module, functions, signatures or docs). The integrators reach
 the types through ``jointkinds``, which reads each row's type here and dispatches on it:
@@ -164,7 +165,7 @@ PROTOCOL = (
     Protocol("elastic_law", ("p", "j"), ("law",),
              "the elastic law of joint j's one-point contact force (``contact.respond``'s "
              "``law``: 0 the paper's, n > 0 the power law F_el = A c (delta / c)^n), which "
-             "its ``contact`` takes and the step's stiff rate reads (``dynamics.joint_rate``) "
+             "its ``contact`` takes and the step's stiff rate reads (``force_rate``) "
              "from the case's parameters p: the case's (``contact.elastic``) for a ball, a "
              "journal's own where the case keeps the paper's; a type whose force is not a "
              "one-point law (the guide's lines, a bushing): the case's, never read"),
@@ -219,6 +220,23 @@ PROTOCOL = (
              "start: dg the diagnostics, ``body`` the ball's body state (r, v, R, w)): its "
              "contact episode begins without an impact (its state in model.s); whether the "
              "start must be evaluated again. A type that never touches: False"),
+    Protocol("rate_point", ("j", "model", "dg"),
+             ("due", "mobile", "offset_ball", "offset_socket"),
+             "where joint j's force acts for its stiff rate at a step's end (dg: that "
+             "evaluation's diagnostics; docs/physics.md section 4): whether a rate is due "
+             "(a one-point contact: in contact or closing within one output step; a "
+             "bushing: always), whether it is rated on the mobility of the joint's points "
+             "(False: the type rates its force on its own, as the guide's corners do), and "
+             "the points' offsets from the ball's and the socket's centres [m, global] (a "
+             "contact's: its radii along the normal; zero: the centres themselves)"),
+    Protocol("force_rate", ("j", "model", "dg", "wp", "Rs", "law"), ("rate",),
+             "the largest stiff rate [1/s] of joint j's force at a step's end (docs/physics."
+             "md section 4), on the mobility wp of the points ``rate_point`` names (packed "
+             "symmetric 3x3 [1/kg], every constraint in place; zeros where it names none), "
+             "the socket's body's rotation Rs (row-major; a bushing's axis is its local x "
+             "axis) and the joint's elastic law ``law`` (its ``elastic_law``): a one-point "
+             "contact's elastic, damping and friction rates; a bushing's spring and damper; "
+             "the guide's, its corners' own (stored by its ``contact``)"),
 )
 
 #: What a joint-type module provides, compiled in that module: the names of

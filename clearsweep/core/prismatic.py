@@ -920,3 +920,19 @@ wear_surface = shared.neutral_wear_surface
 cap_mergeable = shared.neutral_cap_mergeable
 #: 0: the walls' wear is :func:`deposit_step`'s (``shared``).
 deposit_cap = shared.neutral_deposit_cap
+
+
+@compiled(inline="always")
+def rate_point(j, model, dg):
+    """(True, False, zero, zero): the guide's stiff rate is its corners' own, always due,
+    on no mobility of the kernel's (``joints.PROTOCOL``; :func:`force_rate`)."""
+    zero = (0.0, 0.0, 0.0)
+    return True, False, zero, zero
+
+
+@compiled(inline="always")
+def force_rate(j, model, dg, wp, Rs, law):
+    """The largest stiff rate [1/s] of the corners' slots at the step's end, which
+    :func:`contact` stored with ``full`` (dg[D_PRATE], :func:`slot_rate` on each corner's
+    own mobility; ``joints.PROTOCOL``: wp, Rs and law not read)."""
+    return dg[D_PRATE]

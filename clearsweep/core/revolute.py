@@ -297,3 +297,11 @@ def section_offsets(jp, j, d, rate):
 #: A seated journal: its episode begins without an impact (``shared.one_point_seat``);
 #: its slip angle stays pi; True.
 seat = shared.one_point_seat
+
+
+#: The journal's contact points, at R_j and R_i along the normal, rated in or near contact
+#: (``shared``).
+rate_point = shared.one_point_rate_point
+#: The stiff rate of the journal's contact force on the mobility of its points, under its
+#: own elastic law (``law``, :func:`elastic_law`; ``shared``).
+force_rate = shared.one_point_force_rate

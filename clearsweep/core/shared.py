@@ -16,8 +16,11 @@ written twice.
 - ``case_elastic_law``: the case's elastic law (``p[P_EXPONENT]``), a ball's and the
   law of a type that has no one-point force (never read there);
 - ``one_point_<name>``: what the one-point types (a ball, a journal: ``CONTACTS`` 1)
-  share: the seated start's episode (``contact.seat_episode``) and the section offsets
-  over the radial clearance (``contact.offsets_over``).
+  share: the seated start's episode (``contact.seat_episode``), the section offsets
+  over the radial clearance (``contact.offsets_over``), and the stiff rate of a contact
+  force (docs/physics.md section 4): where it acts and when it is due
+  (:func:`one_point_rate_point`), and its rate on the mobility there
+  (:func:`one_point_force_rate`).
 
 A function here is compiled once whatever the types that take it (one Numba dispatcher),
 and ``jointkinds`` dispatches a protocol function to each distinct one once.
@@ -26,8 +29,38 @@ and ``jointkinds`` dispatches a protocol function to each distinct one once.
 import math
 
 from .compiled import compiled
-from .contact import offsets_over, seat_episode
-from .layout import J_C, P_EXPONENT
+from .contact import (
+    contact_damping,
+    normal_force,
+    offsets_over,
+    reachable_penetration,
+    seat_episode,
+    stiff_rate,
+    surface,
+)
+from .kinematics import scale
+from .layout import (
+    D_CEFF,
+    D_DDOT,
+    D_DELTA,
+    D_DFD,
+    D_DFDD,
+    D_FN,
+    D_NGLOBAL,
+    D_VT,
+    D_WORN,
+    J_C,
+    J_FILM,
+    J_RI,
+    J_RJ,
+    P_DT,
+    P_EXPONENT,
+    P_FRICTION,
+    P_V0,
+    P_V1,
+    S_DV0,
+)
+from .multibody import quad_form, tangent_basis
 
 # ------------------------------------------------------------------------ neutral values
 
@@ -118,3 +151,66 @@ def one_point_seat(j, model, dg, body):
     """A seated one-point joint: its episode begins without an impact
     (``contact.seat_episode``); True (``body`` not read)."""
     return seat_episode(j, model, dg)
+
+
+@compiled(inline="always")
+def one_point_rate_point(j, model, dg):
+    """Where a one-point joint's contact force acts, for its stiff rate at a step's end
+    (``joints.PROTOCOL``'s ``rate_point``): due in contact (delta > 0) or when the gap
+    closes within one output step at its approach rate; the pair of contact points, each
+    on the mobility of its body (True), at the ball's radius R_j and the socket's R_i along
+    the contact normal n (dg, global) from the joint's centres [m]."""
+    jp = model.jp
+    delta = dg[D_DELTA + j]
+    n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
+    due = delta > 0.0 or delta + dg[D_DDOT + j] * model.p[P_DT] > 0.0
+    return due, True, scale(jp[j, J_RJ], n), scale(jp[j, J_RI], n)
+
+
+@compiled
+def one_point_force_rate(j, model, dg, wp, Rs, law):
+    """Largest stiff rate [1/s] of a one-point joint's contact: elastic/damping and
+    friction (docs/physics.md section 4), on the mobility wp of its contact points
+    (packed symmetric 3x3 [1/kg], every constraint in place: the crank is driven, hence
+    of infinite mass), under the joint's elastic law ``law`` (its type's ``elastic_law``;
+    ``Rs`` not read).
+
+    Besides the rates at the current state, an approaching joint (delta_dot > 0) whose gap
+    closes within one output step is also rated at the penetration its kinetic energy can
+    reach, delta_pred^3 = delta^3 + 3 m_eff delta_dot^2 c / (4 K) (from
+    U ~ 2 K delta^3 / (3 c)), so that an impact that begins and ends inside one step still
+    sets the sub-step.
+    """
+    p = model.p
+    jp = model.jp
+    n = (dg[D_NGLOBAL + 3 * j], dg[D_NGLOBAL + 3 * j + 1], dg[D_NGLOBAL + 3 * j + 2])
+    inv_m = quad_form(wp, n, n)
+    if not inv_m > 0.0:
+        return 0.0
+    m_eff = 1.0 / inv_m
+    rate = stiff_rate(m_eff, dg[D_DFD + j], dg[D_DFDD + j])
+    ddot = dg[D_DDOT + j]
+    ew, mu, _ = surface(jp, j, dg[D_WORN + j] != 0.0)
+    if ddot > 0.0:
+        c_eff = dg[D_CEFF + j]
+        ri = jp[j, J_RI]
+        rj = jp[j, J_RJ]
+        dpred = reachable_penetration(max(dg[D_DELTA + j], 0.0), m_eff, ddot, c_eff, ew, ri,
+                                      rj, law)
+        kappa = contact_damping(model.s[j, S_DV0], ddot, p)
+        _, _, dfd, dfdd = normal_force(dpred, ddot, c_eff, ew, ri, rj, law, kappa)
+        rate = max(rate, stiff_rate(m_eff, dfd, dfdd))
+    fn = dg[D_FN + j]
+    film = jp[j, J_FILM]
+    if p[P_FRICTION] != 0.0 and (mu > 0.0 or film > 0.0) and fn > 0.0:
+        # largest tangential inverse mass: top eigenvalue of the 2x2 projection of W_p
+        t1, t2 = tangent_basis(n)
+        a = quad_form(wp, t1, t1)
+        b = quad_form(wp, t1, t2)
+        d = quad_form(wp, t2, t2)
+        inv_t = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b)
+        vt = dg[D_VT + j]
+        slope = 1.0 / (p[P_V1] - p[P_V0]) if vt < p[P_V1] else 1.0 / vt
+        # Coulomb's ramp and the film's viscous shear (its rate: the coefficient over the mass)
+        rate = max(rate, (mu * fn * slope + film) * inv_t)
+    return rate

@@ -179,3 +179,10 @@ def seat(j, model, dg, body):
     model.s[j, S_BETA] = contact_angle(dg[D_DELTA + j] + dg[D_HWEAR + j], dg[D_ECC + j],
                                        model.jp[j, J_RI], model.jp[j, J_RJ])
     return seated
+
+
+#: The ball's contact points, at R_j and R_i along the normal, rated in or near contact
+#: (``shared``).
+rate_point = shared.one_point_rate_point
+#: The stiff rate of the ball's contact force on the mobility of its points (``shared``).
+force_rate = shared.one_point_force_rate
