@@ -142,10 +142,11 @@ def test_the_rate_of_one_direction_is_the_oscillator_s():
 
 
 def test_the_rate_reads_the_axis_of_the_socket_s_body():
-    """The protocol's force_rate of a bushing: its axis is the socket body's local x axis.
-    On a mobility of the global y direction alone, a socket unrotated rates the radial
-    spring, a socket turned a quarter turn about z (its x axis along global y) the axial
-    one: the oscillators' sqrt(k / m)."""
+    """The protocol's force_rate of a bushing at A: its axis is the socket body's (the
+    rod's) local x axis at the state. On a mobility of the global y direction alone, the
+    rod unrotated rates the radial spring, the rod turned a quarter turn (alpha3 = pi/2:
+    its x axis along global y) the axial one: the oscillators' sqrt(k / m)."""
+    from clearsweep.core.kinematics import rotation, trig
     from clearsweep.core.work import Model
 
     jp = np.zeros((4, L.N_JP))
@@ -153,12 +154,13 @@ def test_the_rate_reads_the_axis_of_the_socket_s_body():
     model = Model(np.zeros(L.N_P), jp, np.zeros((4, L.N_S)), np.zeros((4, 1, 1)))
     wp = (0.0, 0.0, 0.0, 1.0 / 0.25, 0.0, 0.0)      # only y moves, 0.25 kg
     dg = np.zeros(L.N_D)
-    unrotated = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-    turned = (0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)    # x -> y, y -> -x
+    y = np.zeros(L.N_Y)
     assert bushing.rate_point(0, model, dg) == (True, True, (0.0,) * 3, (0.0,) * 3)
-    assert bushing.force_rate(0, model, dg, wp, unrotated, 0.0) == pytest.approx(
+    assert bushing.force_rate(0, model, dg, wp, y, 0.0) == pytest.approx(
         np.sqrt(4e6 / 0.25), rel=1e-12)
-    assert bushing.force_rate(0, model, dg, wp, turned, 0.0) == pytest.approx(
+    y[L.Y_PHI3] = 0.5 * np.pi
+    assert np.allclose(rotation(trig(*y[L.Y_PHI3:L.Y_PHI3 + 3]))[0::3], (0.0, 1.0, 0.0))
+    assert bushing.force_rate(0, model, dg, wp, y, 0.0) == pytest.approx(
         np.sqrt(1e9 / 0.25), rel=1e-12)
 
 

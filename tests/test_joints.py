@@ -283,9 +283,8 @@ def protocol_arguments(module, j, pk, model, body):
     dg[L.D_DELTA + j], dg[L.D_DDOT + j], dg[L.D_ECC + j] = pen, 0.01, e
     dg[L.D_NGLOBAL + 3 * j:L.D_NGLOBAL + 3 * j + 3] = n
     dg[L.D_PRATE] = 1.25e5
-    # the mobility of a 2 kg point free in every direction, the socket unrotated
+    # the mobility of a 2 kg point free in every direction
     wp = (0.5, 0.0, 0.0, 0.5, 0.0, 0.5)
-    eye = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     return {
         "elastic_law": (pk.p, j),
         "paper_angle": (jp, j, pen, e),
@@ -298,7 +297,7 @@ def protocol_arguments(module, j, pk, model, body):
         "section_offsets": (jp, j, (1e-5, 2e-5, 3e-5), (0.1, 0.2, 0.3)),
         "seat": (j, model, dg, body),
         "rate_point": (j, model, dg),
-        "force_rate": (j, model, dg, wp, eye, pk.p[L.P_EXPONENT]),
+        "force_rate": (j, model, dg, wp, pk.y0, pk.p[L.P_EXPONENT]),
     }
 
 

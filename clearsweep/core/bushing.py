@@ -45,7 +45,8 @@ import math
 from . import shared
 from .compiled import compiled
 from .contact import ContactState, relative_velocity, stiff_rate, store_contact
-from .kinematics import add, body_moment, dot, mtv, point_state, scale, sub
+from .joints import BODIES, JOINTS
+from .kinematics import add, body_moment, dot, mtv, point_state, rotation, scale, sub, trig
 from .layout import D_JOINT_FORCE, J_C_AXIAL, J_C_RADIAL, J_K_AXIAL, J_K_RADIAL
 from .multibody import tangent_basis
 
@@ -190,13 +191,22 @@ def rate_point(j, model, dg):
     return True, True, zero, zero
 
 
+#: Each joint's socket body's Euler angles in the state (``layout.Y_*``, the body's slots
+#: of ``joints.BODIES``), -1 for the ground: the bushing's axis is that body's local x axis.
+SOCKET_PHI = tuple(-1 if body.y_phi is None else body.y_phi
+                   for joint in JOINTS for body in BODIES if body.name == joint.socket.body)
+
+
 @compiled
-def force_rate(j, model, dg, wp, Rs, law):
+def force_rate(j, model, dg, wp, y, law):
     """The bushing's largest stiff rate [1/s] (:func:`rate`) on the mobility wp of its
-    centres, its axis the socket body's local x axis (:func:`axis_of` of the socket's
-    rotation Rs; the ground's: global x) and the two unit vectors across it
+    centres, its axis the socket body's local x axis at the state y (:func:`axis_of` of
+    that body's rotation; the ground's: global x) and the two unit vectors across it
     (``multibody.tangent_basis``; ``joints.PROTOCOL``: dg and law not read)."""
-    a = axis_of(Rs)
+    a = (1.0, 0.0, 0.0)
+    phi = SOCKET_PHI[j]
+    if phi >= 0:
+        a = axis_of(rotation(trig(y[phi], y[phi + 1], y[phi + 2])))
     t1, t2 = tangent_basis(a)
     return rate(model.jp, j, wp, a, t1, t2)
 

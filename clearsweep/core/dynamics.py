@@ -789,33 +789,20 @@ ROD_SIDE = tuple(_rod_side(joint) for joint in JOINTS)
 ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
                          if att.body == "rod"), 0.0) for joint in JOINTS)
 
-#: Each joint's socket body (an index into the evaluation's (t2, t3, t4), -1 for the
-#: ground): the body whose rotation a joint type's ``force_rate`` reads.
-SOCKET_BODY = tuple(next((k for k, body in enumerate(BODIES[:3])
-                          if body.name == joint.socket.body), -1) for joint in JOINTS)
-_EYE = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-
-
-@compiled(inline="always")
-def socket_rotation(j, trigs):
-    """The rotation of joint j's socket body (row-major), from the bodies' sines and
-    cosines ``trigs`` (t2, t3, t4); the ground's: the identity."""
-    k = SOCKET_BODY[j]
-    if k < 0:
-        return _EYE
-    return rotation(trigs[k])
-
-
 @compiled
-def rate_mobility(j, p, R3, G3, r3, off_ball, off_socket, solve, mobility, g):
+def rate_mobility(j, p, t3, r3, off_ball, off_socket, solve, mobility, g):
     """Mobility W_p of joint j's relative motion at the points its type's ``rate_point``
     names (:func:`point_mobility`, every constraint in place; ``mobility``: the solve's
-    (cons, nc, minv, mr_inv)). The rod's side is read at the joint's attachment on the rod
+    (cons, nc, minv, mr_inv); t3, r3: the rod's sines and cosines and centroid; the rod's
+    rotation formed here, where it is used: kept live across the rate loop it spilled the
+    device build). The rod's side is read at the joint's attachment on the rod
     moved by its offset there (``off_ball`` where the rod carries the ball, ``off_socket``
     where it carries the socket): a zero offset is the attachment itself, a contact
     point's through the rod's frame; a joint the rod carries neither side of has no rod
     Jacobian."""
     _, nc, minv, mr_inv = mobility
+    R3 = rotation(t3)
+    G3 = gmat(t3)
     side = ROD_SIDE[j]
     u = (ROD_FACTOR[j] * p[P_L3], 0.0, 0.0)
     off = off_ball if side > 0 else off_socket
@@ -889,8 +876,6 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
     dg[D_CONS] = cons
     # the stiff rate of each joint with clearance or a bushing: its type's, on the mobility
     # of the points it names (docs/physics.md section 4)
-    R3 = rotation(t3)
-    G3 = gmat(t3)
     rate = 0.0
     for j in range(N_JOINTS):
         if not (is_bushing(spec, jp, j) or has_clearance(spec, jp, j)):
@@ -900,9 +885,9 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
             continue
         wp = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         if mobile:
-            wp = rate_mobility(j, p, R3, G3, r3, off_ball, off_socket, solve, mobility,
+            wp = rate_mobility(j, p, t3, r3, off_ball, off_socket, solve, mobility,
                                guide_axis(spec))
-        rate = max(rate, kinds.force_rate(spec, j, model, dg, wp, socket_rotation(j, trigs),
+        rate = max(rate, kinds.force_rate(spec, j, model, dg, wp, y,
                                           kinds.elastic_law(spec, p, j)))
     dg[D_RATE] = rate
 

@@ -229,12 +229,13 @@ PROTOCOL = (
              "(False: the type rates its force on its own, as the guide's corners do), and "
              "the points' offsets from the ball's and the socket's centres [m, global] (a "
              "contact's: its radii along the normal; zero: the centres themselves)"),
-    Protocol("force_rate", ("j", "model", "dg", "wp", "Rs", "law"), ("rate",),
+    Protocol("force_rate", ("j", "model", "dg", "wp", "y", "law"), ("rate",),
              "the largest stiff rate [1/s] of joint j's force at a step's end (docs/physics."
              "md section 4), on the mobility wp of the points ``rate_point`` names (packed "
              "symmetric 3x3 [1/kg], every constraint in place; zeros where it names none), "
-             "the socket's body's rotation Rs (row-major; a bushing's axis is its local x "
-             "axis) and the joint's elastic law ``law`` (its ``elastic_law``): a one-point "
+             "the state y (where a type reads a body's orientation: a bushing's axis is its "
+             "socket body's local x axis) and the joint's elastic law ``law`` (its "
+             "``elastic_law``): a one-point "
              "contact's elastic, damping and friction rates; a bushing's spring and damper; "
              "the guide's, its corners' own (stored by its ``contact``)"),
 )

@@ -931,8 +931,8 @@ def rate_point(j, model, dg):
 
 
 @compiled(inline="always")
-def force_rate(j, model, dg, wp, Rs, law):
+def force_rate(j, model, dg, wp, y, law):
     """The largest stiff rate [1/s] of the corners' slots at the step's end, which
     :func:`contact` stored with ``full`` (dg[D_PRATE], :func:`slot_rate` on each corner's
-    own mobility; ``joints.PROTOCOL``: wp, Rs and law not read)."""
+    own mobility; ``joints.PROTOCOL``: wp, y and law not read)."""
     return dg[D_PRATE]

@@ -168,12 +168,12 @@ def one_point_rate_point(j, model, dg):
 
 
 @compiled
-def one_point_force_rate(j, model, dg, wp, Rs, law):
+def one_point_force_rate(j, model, dg, wp, y, law):
     """Largest stiff rate [1/s] of a one-point joint's contact: elastic/damping and
     friction (docs/physics.md section 4), on the mobility wp of its contact points
     (packed symmetric 3x3 [1/kg], every constraint in place: the crank is driven, hence
     of infinite mass), under the joint's elastic law ``law`` (its type's ``elastic_law``;
-    ``Rs`` not read).
+    the state y not read).
 
     Besides the rates at the current state, an approaching joint (delta_dot > 0) whose gap
     closes within one output step is also rated at the penetration its kinetic energy can
