@@ -22,8 +22,13 @@ and its three angles follow from its own rotational equations with the corners' 
 moments: joint B holds the slider at its centroid, which the angles do not move, so they
 are not coupled to the other free coordinates. The planar slider-crank's guide (along y)
 frees its z4 alone (column 9; column 8, its x4, held by :func:`planar_slider` with alpha4
-and beta4) and gamma4 (:func:`planar_slider_rotation`), the prismatic type evaluated in the
-guide's frame (:func:`free_slider`).
+and beta4) and gamma4 (:func:`planar_slider_rotation`), the guide's type evaluated in the
+frame it is written in (:func:`free_slider`).
+
+The joints' contacts are their types' ``contact`` (``joints.PROTOCOL``), reached through
+``jointkinds``: a one-point joint's through ``jointkinds.contact``, the guide's block through
+``jointkinds.multi_contact`` (with ``in_type_frame`` and ``from_type_frame`` for the
+slider-crank's guide); this module calls no type's contact by name.
 """
 
 import math
@@ -31,7 +36,7 @@ import math
 import numpy as np
 from numba import types
 
-from . import bushing, prismatic
+from . import bushing
 from . import jointkinds as kinds
 from .compiled import compile_lock, compiled
 from .contact import contact_damping, normal_force, reachable_penetration, stiff_rate, surface
@@ -455,18 +460,21 @@ def fixed_accelerations(y, p, dy, held, g):
 
 
 @compiled
-def free_slider(j, y, t4, model, N4, full, dg, dy, g):
+def free_slider(j, y, t4, model, N4, full, dg, dy, spec):
     """The slider's block free in its guide (joint P with clearance): the corners' contacts
-    (``prismatic.contact``; with ``full``, P's diagnostics into dg) and the block's angular
-    accelerations under their moment and ``N4`` (B's, where B has clearance) into dy.
-    Returns (the guide's force on the block [N], the power it dissipates [W], whether the
-    rotational mass block was regular).
+    (its type's ``contact``, through ``jointkinds.multi_contact``; with ``full``, P's
+    diagnostics into dg) and the block's angular accelerations under their moment and
+    ``N4`` (B's, where B has clearance) into dy. Returns (the guide's force on the block
+    [N], the power it dissipates [W], whether the rotational mass block was regular).
+    ``spec``: the build's joint set, here a run-time value (one build of this function
+    serves every set; the guide's axis, ``jointset.guide_axis``, tested at run time as
+    before).
 
-    The planar slider-crank's guide (``g`` 1, along y) is the prismatic type's turned into
-    it: the type sees the block in its guide's frame (``prismatic.in_guide``) and its force
-    and moment come back to global axes and the slider's body frame
-    (``prismatic.from_guide``), and so do P's force and contact normal in dg (its offset
-    stays in the guide's frame: along, side, up); the block turns in the plane only
+    The planar slider-crank's guide (axis 1, along y) is the type's turned into it: the
+    type sees the block in the frame it is written in (``jointkinds.in_type_frame``) and
+    its force and moment come back to global axes and the slider's body frame
+    (``jointkinds.from_type_frame``), and so do P's force and contact normal in dg (its
+    offset stays in the type's frame: along, side, up); the block turns in the plane only
     (:func:`planar_slider_rotation`). The type's stiff-rate bound at a corner
     (``prismatic.corner_mobility``) reads the block's principal inertias in its own body
     axes, which the turn swaps (x' = y): the same for the ``flores_benchmark`` preset's
@@ -474,22 +482,22 @@ def free_slider(j, y, t4, model, N4, full, dg, dy, g):
     r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
     gr, gv, gR, gw = GROUND
     zero = (0.0, 0.0, 0.0)
-    if g == 1:
-        rq, vq, Rq, wq = prismatic.in_guide((r4, v4, R4, w4))
-        force, moment, _, pdiss = prismatic.contact(j, model, (rq, vq, Rq, wq, zero),
-                                                    (gr, gv, gR, gw, zero), full, dg)
-        force = prismatic.from_guide(force)
-        moment = prismatic.from_guide(moment)
+    if guide_axis(spec) == 1:
+        rq, vq, Rq, wq = kinds.in_type_frame(spec, j, (r4, v4, R4, w4))
+        force, moment, _, pdiss = kinds.multi_contact(spec, j, model, (rq, vq, Rq, wq, zero),
+                                                      (gr, gv, gR, gw, zero), full, dg)
+        force = kinds.from_type_frame(spec, j, force)
+        moment = kinds.from_type_frame(spec, j, moment)
         if full:
             for at in (D_JOINT_FORCE, D_NGLOBAL, D_NORMAL):
-                back = prismatic.from_guide((dg[at + 3 * j], dg[at + 3 * j + 1],
-                                             dg[at + 3 * j + 2]))
+                back = kinds.from_type_frame(spec, j, (dg[at + 3 * j], dg[at + 3 * j + 1],
+                                                       dg[at + 3 * j + 2]))
                 for i in range(3):
                     dg[at + 3 * j + i] = back[i]
         ok = planar_slider_rotation(y, model.p, t4, add(N4, moment), dy)
         return force, pdiss, ok
-    force, moment, _, pdiss = prismatic.contact(j, model, (r4, v4, R4, w4, zero),
-                                                (gr, gv, gR, gw, zero), full, dg)
+    force, moment, _, pdiss = kinds.multi_contact(spec, j, model, (r4, v4, R4, w4, zero),
+                                                  (gr, gv, gR, gw, zero), full, dg)
     ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
     return force, pdiss, ok
 
@@ -867,7 +875,7 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
 #: Local variables that Numba must type as plain int64: a constant argument would otherwise
 #: compile the callee once per value (a Literal specialisation).
 _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64,
-                "joint_p": types.int64}
+                "joint_p": types.int64, "joint_set": types.int64}
 
 
 @compiled(inline="always", locals=_NOT_LITERAL)
@@ -957,7 +965,8 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(spec, jp):
-        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, guide_axis(spec))
+        joint_set = spec    # a run-time int64: one build of free_slider serves every set
+        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, joint_set)
         if not ok:
             return F2, N2, F3, N3, F4, fA, fB, pdiss, False
         F4 = add(F4, fP)
