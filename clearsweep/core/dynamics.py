@@ -875,7 +875,7 @@ def end_diagnostics(model, spec, y, trigs, dy, dg, solve, acc, loads, mobility):
 #: Local variables that Numba must type as plain int64: a constant argument would otherwise
 #: compile the callee once per value (a Literal specialisation).
 _NOT_LITERAL = {"joint_a": types.int64, "joint_b": types.int64, "joint_o": types.int64,
-                "joint_p": types.int64, "joint_set": types.int64}
+                "joint_p": types.int64}
 
 
 @compiled(inline="always", locals=_NOT_LITERAL)
@@ -965,8 +965,9 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(spec, jp):
-        joint_set = spec    # a run-time int64: one build of free_slider serves every set
-        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, joint_set)
+        # the joint set as a run-time int64, not the build's literal: one build of
+        # free_slider serves every set, as one did when it took the guide's axis
+        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, np.int64(spec))
         if not ok:
             return F2, N2, F3, N3, F4, fA, fB, pdiss, False
         F4 = add(F4, fP)
