@@ -445,6 +445,47 @@ def test_the_dispatchers_are_made_from_the_protocol_and_call_each_rows_function(
                     == module.section_offsets(pk.jp, j, d, rate)), (kind, j)
 
 
+def test_the_type_frame_turns_the_slider_cranks_guide_alone_and_back():
+    """The guide's block reaches its type in the frame the type is written in: in a
+    slider-crank build the guide's row sees the block turned by the rotation Q of
+    ``prismatic.PLANAR_GUIDE`` (Q r, Q v, Q R Q^T, Q w: the same rigid motion) and its
+    vectors come back by Q^T, exactly (Q permutes and negates); every other row, and every
+    row of an RSSP build, as is. Its contact is the multi-contact types' dispatcher's, whose
+    one type is called without a test."""
+    from clearsweep.core import jointkinds as kinds
+    from clearsweep.core import jointset, prismatic
+
+    Q = np.asarray(prismatic.PLANAR_GUIDE).reshape(3, 3)
+    assert np.array_equal(Q.T @ Q, np.eye(3)) and np.isclose(np.linalg.det(Q), 1.0)
+    rng = np.random.default_rng(5)
+    r, v, w = (tuple(rng.normal(size=3)) for _ in range(3))
+    R = rotation(trig(*rng.normal(size=3)))
+    body = (r, v, R, w)
+    for spec, slider_crank in ((jointset.ALL, False), (jointset.ALL | jointset.SLIDER_CRANK, True)):
+        for j, kind in enumerate(joints.row_types(slider_crank)):
+            turned = slider_crank and kinds.MODULES[kind].CONTACTS > 1
+            assert kinds.turns_frame(spec, j) == turned, (spec, j)
+            rq, vq, Rq, wq = kinds.in_type_frame(spec, j, body)
+            if turned:
+                Rm = np.asarray(R).reshape(3, 3)
+                assert np.array_equal(rq, Q @ r) and np.array_equal(vq, Q @ v)
+                assert np.array_equal(np.asarray(Rq).reshape(3, 3), Q @ Rm @ Q.T)
+                assert np.array_equal(wq, Q @ w)
+            else:
+                assert (rq, vq, Rq, wq) == body
+            for vec in (r, v, w):
+                back = kinds.from_type_frame(spec, j, vec)
+                assert np.array_equal(back, Q.T @ vec if turned else vec)
+                assert kinds.from_type_frame(spec, j, kinds.type_vector(spec, j, vec)) == vec
+    assert kinds.MULTI_TYPES == tuple(k for k, m in kinds.MODULES.items() if m.CONTACTS > 1)
+    for slider_crank in (False, True):
+        assert joints.row_types(slider_crank)[kinds.MULTI_ROW] in kinds.MULTI_TYPES
+    source, scope = kinds.dispatch_source("contact", kinds.MULTI_TYPES)
+    assert "of_kind" not in source
+    assert {id(f) for f in scope.values()} == {
+        id(kinds.MODULES[k].contact) for k in kinds.MULTI_TYPES}
+
+
 #: Kernel modules that dispatch on a joint's type (core/jointkinds.py) and must not name a
 #: joint of the table.
 NAMELESS = ("rk4.py", "dopri5.py", "wear.py", "device.py", "jointkinds.py")
@@ -490,6 +531,59 @@ def test_the_scan_finds_a_joint_named_in_any_form():
     assert sorted(joint_mentions(source)) == ["line 1: import JOINT_P", "line 3: JOINT_O",
                                               "line 4: .JOINT_A", "line 4: INDEX[...]",
                                               "line 4: INDEX[...]"]
+
+
+#: Kernel modules that reach the joint types through core/jointkinds.py alone.
+TYPELESS = ("dynamics.py", "rk4.py", "dopri5.py", "wear.py", "device.py")
+
+
+def type_module_imports(source):
+    """The joint-type modules (``joints.JOINT_TYPES``' modules) that the Python source of a
+    module of ``clearsweep.core`` imports, in any form: ``from . import m``, ``from .m import
+    f``, ``from clearsweep.core import m``, ``import clearsweep.core.m`` (a name of another
+    module, ``from .joints import JOINTS``, is none)."""
+    import ast
+
+    types_ = set(joints.JOINT_TYPES.values())
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom):
+            package = "clearsweep.core" if node.level == 1 else "clearsweep" if node.level == 2 else ""
+            base = ".".join(part for part in (package, node.module or "") if part)
+            names = [base] + [f"{base}.{alias.name}" for alias in node.names]
+        elif isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        else:
+            continue
+        for name in names:
+            parent, _, module = name.rpartition(".")
+            if parent == "clearsweep.core" and module in types_:
+                found.add(module)
+    return found
+
+
+@pytest.mark.parametrize("name", TYPELESS)
+def test_the_kernel_reaches_the_joint_types_through_jointkinds(name):
+    """Dynamics and the integrators import no joint-type module: each type's functions are
+    reached through core/jointkinds.py's dispatch (the guide's block in
+    ``dynamics.free_slider``: ``jointkinds.multi_contact`` in the frame its type is written
+    in, ``in_type_frame``, ``from_type_frame``; a bushing's contact and every joint's stiff
+    rate through ``jointkinds.per_case``'s ``contact``, ``rate_point`` and ``force_rate``),
+    so that they call no type by name."""
+    source = (ROOT / "clearsweep" / "core" / name).read_text()
+    assert sorted(type_module_imports(source)) == [], f"core/{name} imports a joint type"
+
+
+def test_the_import_scan_finds_a_type_module_imported_in_any_form():
+    source = ("from . import jointkinds as kinds, prismatic\n"
+              "from .spherical import contact\n"
+              "from clearsweep.core import revolute as rv\n"
+              "import clearsweep.core.bushing\n"
+              "from .joints import JOINTS\n"
+              "from ..core import layout\n")
+    assert type_module_imports(source) == {"prismatic", "spherical", "revolute", "bushing"}
+    assert type_module_imports("from ..core import prismatic\n") == {"prismatic"}
+    assert type_module_imports("from .jointkinds import in_type_frame, prismatic_rows\n") == set()
 
 
 def test_the_table_names_registered_types_bodies_and_config_sections():

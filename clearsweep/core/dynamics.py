@@ -22,8 +22,13 @@ and its three angles follow from its own rotational equations with the corners' 
 moments: joint B holds the slider at its centroid, which the angles do not move, so they
 are not coupled to the other free coordinates. The planar slider-crank's guide (along y)
 frees its z4 alone (column 9; column 8, its x4, held by :func:`planar_slider` with alpha4
-and beta4) and gamma4 (:func:`planar_slider_rotation`), the prismatic type evaluated in the
-guide's frame (:func:`free_slider`).
+and beta4) and gamma4 (:func:`planar_slider_rotation`), the guide's type evaluated in the
+frame it is written in (:func:`free_slider`).
+
+The joints' contacts are their types' ``contact`` (``joints.PROTOCOL``), reached through
+``jointkinds``: a one-point joint's through ``jointkinds.contact``, the guide's block through
+``jointkinds.multi_contact`` (with ``in_type_frame`` and ``from_type_frame`` for the
+slider-crank's guide); this module calls no type's contact by name.
 """
 
 import math
@@ -32,7 +37,6 @@ import numpy as np
 from numba import types
 
 from . import jointkinds as kinds
-from . import prismatic
 from .compiled import compile_lock, compiled
 from .joints import BODIES, FREE, INDEX, JOINTS
 from .jointset import ALL, NONE, SLIDER_CRANK, Build, guide_axis, has_clearance, is_bushing, is_free
@@ -442,18 +446,21 @@ def fixed_accelerations(y, p, dy, held, g):
 
 
 @compiled
-def free_slider(j, y, t4, model, N4, full, dg, dy, g):
+def free_slider(j, y, t4, model, N4, full, dg, dy, spec):
     """The slider's block free in its guide (joint P with clearance): the corners' contacts
-    (``prismatic.contact``; with ``full``, P's diagnostics into dg) and the block's angular
-    accelerations under their moment and ``N4`` (B's, where B has clearance) into dy.
-    Returns (the guide's force on the block [N], the power it dissipates [W], whether the
-    rotational mass block was regular).
+    (its type's ``contact``, through ``jointkinds.multi_contact``; with ``full``, P's
+    diagnostics into dg) and the block's angular accelerations under their moment and
+    ``N4`` (B's, where B has clearance) into dy. Returns (the guide's force on the block
+    [N], the power it dissipates [W], whether the rotational mass block was regular).
+    ``spec``: the build's joint set, here a run-time value (one build of this function
+    serves every set; the guide's axis, ``jointset.guide_axis``, tested at run time as
+    before).
 
-    The planar slider-crank's guide (``g`` 1, along y) is the prismatic type's turned into
-    it: the type sees the block in its guide's frame (``prismatic.in_guide``) and its force
-    and moment come back to global axes and the slider's body frame
-    (``prismatic.from_guide``), and so do P's force and contact normal in dg (its offset
-    stays in the guide's frame: along, side, up); the block turns in the plane only
+    The planar slider-crank's guide (axis 1, along y) is the type's turned into it: the
+    type sees the block in the frame it is written in (``jointkinds.in_type_frame``) and
+    its force and moment come back to global axes and the slider's body frame
+    (``jointkinds.from_type_frame``), and so do P's force and contact normal in dg (its
+    offset stays in the type's frame: along, side, up); the block turns in the plane only
     (:func:`planar_slider_rotation`). The type's stiff-rate bound at a corner
     (``prismatic.corner_mobility``) reads the block's principal inertias in its own body
     axes, which the turn swaps (x' = y): the same for the ``flores_benchmark`` preset's
@@ -461,22 +468,22 @@ def free_slider(j, y, t4, model, N4, full, dg, dy, g):
     r4, v4, R4, w4 = body_state(y, t4, Y_R4, Y_PHI4)
     gr, gv, gR, gw = GROUND
     zero = (0.0, 0.0, 0.0)
-    if g == 1:
-        rq, vq, Rq, wq = prismatic.in_guide((r4, v4, R4, w4))
-        force, moment, _, pdiss = prismatic.contact(j, model, (rq, vq, Rq, wq, zero),
-                                                    (gr, gv, gR, gw, zero), full, dg)
-        force = prismatic.from_guide(force)
-        moment = prismatic.from_guide(moment)
+    if guide_axis(spec) == 1:
+        rq, vq, Rq, wq = kinds.in_type_frame(spec, j, (r4, v4, R4, w4))
+        force, moment, _, pdiss = kinds.multi_contact(spec, j, model, (rq, vq, Rq, wq, zero),
+                                                      (gr, gv, gR, gw, zero), full, dg)
+        force = kinds.from_type_frame(spec, j, force)
+        moment = kinds.from_type_frame(spec, j, moment)
         if full:
             for at in (D_JOINT_FORCE, D_NGLOBAL, D_NORMAL):
-                back = prismatic.from_guide((dg[at + 3 * j], dg[at + 3 * j + 1],
-                                             dg[at + 3 * j + 2]))
+                back = kinds.from_type_frame(spec, j, (dg[at + 3 * j], dg[at + 3 * j + 1],
+                                                       dg[at + 3 * j + 2]))
                 for i in range(3):
                     dg[at + 3 * j + i] = back[i]
         ok = planar_slider_rotation(y, model.p, t4, add(N4, moment), dy)
         return force, pdiss, ok
-    force, moment, _, pdiss = prismatic.contact(j, model, (r4, v4, R4, w4, zero),
-                                                (gr, gv, gR, gw, zero), full, dg)
+    force, moment, _, pdiss = kinds.multi_contact(spec, j, model, (r4, v4, R4, w4, zero),
+                                                  (gr, gv, gR, gw, zero), full, dg)
     ok = slider_rotation(y, model.p, t4, add(N4, moment), dy)
     return force, pdiss, ok
 
@@ -985,7 +992,9 @@ def applied_loads(y, t2, t3, t4, model, spec, full, dg, dy):
 
     # joint P: ball = the slider's block, socket = the ground's guide (global frame)
     if p_free(spec, jp):
-        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, guide_axis(spec))
+        # the joint set as a run-time int64, not the build's literal: one build of
+        # free_slider serves every set, as one did when it took the guide's axis
+        fP, dP, ok = free_slider(joint_p, y, t4, model, N4, full, dg, dy, np.int64(spec))
         if not ok:
             return F2, N2, F3, N3, F4, fA, fB, pdiss, False
         F4 = add(F4, fP)

@@ -15,11 +15,14 @@ protocol function's own parameters, and calls the type module's function of the 
 one factory makes them all (:func:`dispatcher`, from ``joints.PROTOCOL`` and
 :data:`MODULES`: one test per distinct function, the types that take the same function of
 ``shared`` tested together); ``rk4`` and ``dopri5`` call these and name no joint and no
-type. A bushing stands in for a table joint per case (``jointset.is_bushing``), never as a
-row's type: its mask is 0 and its branches fold away; :func:`contact` tests for it before
-the row's type (``dynamics.applied_loads`` applies every joint's contact through it); it
-never has clearance, so that the loops below (which test ``jointset.has_clearance``) pass
-it by.
+type. ``dynamics`` applies the joints' contacts through them, calling no type's contact by
+name: a one-point row's through :func:`contact`, the multi-contact row's through
+:data:`multi_contact`, turned into the frame its type is written in and back
+(:func:`in_type_frame`, :func:`from_type_frame`). A bushing stands in for a table joint
+per case (``jointset.is_bushing``), never as a row's type: its mask is 0 and its branches
+fold away; :func:`contact` tests for it before the row's type (``dynamics.applied_loads``
+applies A's, B's and O's contact through it); it never has clearance, so that the loops
+below (which test ``jointset.has_clearance``) pass it by.
 
 A type touches its socket at one point (``CONTACTS`` 1: the kernel's one-point rules of
 ``rk4.accept_substep``, ``rk4.merge_wear``, ...) or at several (:data:`MULTI`: the type's own
@@ -160,14 +163,20 @@ def ball_body(j, y):
 
 
 @compiled(inline="always")
-def type_body(spec, j, y):
-    """:func:`ball_body` in the frame joint j's type is written in: the ball's body as is,
-    but for the planar slider-crank's guide (``jointset.guide_axis`` of the build's set
-    ``spec`` 1, a constant of the build), whose block the prismatic type sees in its
-    guide's frame (``prismatic.in_guide``). What ``rk4`` and ``dopri5`` hand to a type's
-    ``accept``, ``seat`` and ``penetration``."""
-    body = ball_body(j, y)
-    if guide_axis(spec) == 1 and of_kind(PRISMATIC, j):
+def turns_frame(spec, j):
+    """Whether joint j's type is written in another frame than the mechanism's: only the
+    planar slider-crank's guide (``jointset.guide_axis`` of the build's set ``spec`` 1, a
+    constant of the build), along global y, which the prismatic type sees in its guide's
+    frame (``prismatic.PLANAR_GUIDE``, along x)."""
+    return guide_axis(spec) == 1 and of_kind(PRISMATIC, j)
+
+
+@compiled(inline="always")
+def in_type_frame(spec, j, body):
+    """A body state (r, v, R, w) (global; R its rotation, w its body angular velocity) in
+    the frame joint j's type is written in: as is, but where :func:`turns_frame`
+    (``prismatic.in_guide``)."""
+    if turns_frame(spec, j):
         return prismatic.in_guide(body)
     return body
 
@@ -175,11 +184,29 @@ def type_body(spec, j, y):
 @compiled(inline="always")
 def type_vector(spec, j, v):
     """A socket-frame vector of joint j (an offset, a rate) in the frame its type is
-    written in: as is, but for the planar slider-crank's guide (``prismatic.to_guide``),
-    as :func:`type_body`."""
-    if guide_axis(spec) == 1 and of_kind(PRISMATIC, j):
+    written in: as is, but where :func:`turns_frame` (``prismatic.to_guide``)."""
+    if turns_frame(spec, j):
         return prismatic.to_guide(v)
     return v
+
+
+@compiled(inline="always")
+def from_type_frame(spec, j, v):
+    """A vector of the frame joint j's type is written in (a force, a contact normal; a
+    moment about the block's centroid in its body frame) back in global axes (in the
+    body's frame): the inverse of :func:`type_vector`, as is but where :func:`turns_frame`
+    (``prismatic.from_guide``)."""
+    if turns_frame(spec, j):
+        return prismatic.from_guide(v)
+    return v
+
+
+@compiled(inline="always")
+def type_body(spec, j, y):
+    """:func:`ball_body` in the frame joint j's type is written in (:func:`in_type_frame`):
+    what ``rk4`` and ``dopri5`` hand to a type's ``accept``, ``seat`` and
+    ``penetration``."""
+    return in_type_frame(spec, j, ball_body(j, y))
 
 
 # --------------------------------------------------------------- the protocol, by row type
@@ -284,11 +311,20 @@ def per_case(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)):
                     f"bushing's or its row's type's (:func:`per_case`).")
     return compiled(inline="always")(func)
 
+#: The types that touch at several points (their module's ``CONTACTS`` > 1: the prismatic
+#: type's block), whose joint's (:data:`MULTI_ROW`) contact :func:`multi_contact` applies.
+MULTI_TYPES = tuple(kind for kind, module in MODULES.items() if module.CONTACTS > 1)
+
+#: ``joints.PROTOCOL``'s ``contact`` of a row of a multi-contact type (:data:`MULTI_TYPES`):
+#: ``dynamics.free_slider`` applies the guide's block through it, in the frame its type is
+#: written in (:func:`in_type_frame`, :func:`from_type_frame`), naming no type.
+multi_contact = dispatcher("contact", "multi_contact", MULTI_TYPES)
+
 
 #: ``joints.PROTOCOL``'s ``contact`` of joint j, a row of a one-point type (:data:`ONE_POINT`)
 #: or a bushing (:func:`per_case`): a multi-contact type's contact is not among its
 #: branches, so that a call site typed with a one-point joint's bodies compiles none of it
-#: (the guide's block is ``dynamics.free_slider``'s, in its guide's frame).
+#: (the guide's block's is :data:`multi_contact`, which ``dynamics.free_slider`` calls).
 #: ``dynamics.applied_loads`` applies A's, B's and O's contact through it, naming no type.
 contact = per_case("contact", ONE_POINT)
 #: ``joints.PROTOCOL``'s ``rate_point`` and ``force_rate`` of joint j (:func:`per_case`):

@@ -13,7 +13,8 @@ it is registered in
 :data:`JOINT_TYPES` (tests/test_joints.py fails for a module that is not, or a
 registration without its module, functions, signatures or docs). The integrators reach
 the types through ``jointkinds``, which reads each row's type here and dispatches on it:
-they name no joint.
+they name no joint. ``dynamics`` applies each joint's contact through it too
+(``jointkinds.contact``, ``jointkinds.multi_contact``), calling no type's contact by name.
 
 What the table does not drive yet: ``dynamics.evaluate`` (the RSSP's equations of motion,
 the one kernel module that names its joints) applies joint A (crank pin in the rod), joint
