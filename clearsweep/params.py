@@ -1193,11 +1193,11 @@ def joint_set(cfg: Config) -> int:
 #: builds share included), each later one 20-28: the mixed-clearance study's 16 sets
 #: would compile 16 builds for a run of 40 s. Specialised on the spherical joints A and B,
 #: four builds at most: against the tree before builds per joint set (c64b06a), side by
-#: side, the ideal case runs 1.11x, one clearance 1.01-1.03x, two 1.01-1.02x (the step inlined,
-#: ``rk4.attempt_step``). Per full set (16 builds for the mixed study) or specialised on A,
-#: B and P as well (8) one clearance ran 1.05-1.06x and two 1.02-1.03x, short of the goals
-#: (1.10x, 1.05x) too, and the main job compiles two builds under each
-#: (benchmarks/README.md, "Builds per joint set", "The CPU's grouping, measured again").
+#: side, the ideal case runs 1.26x, one clearance 1.12x, two 1.03x. Folding O and P away
+#: together where both are ideal (eight builds) gave those three cases 1.30x, 1.14x and
+#: 1.05x, but the default test run compiled seven more builds and took 603 s against 482 s,
+#: past its budget (benchmarks/README.md, "Builds per joint set", "The CPU's grouping,
+#: measured again", "O and P folded together").
 SPECIALISED_JOINTS = jointset.named("A", "B")
 
 #: The device's: every joint. Folding O and P away halves the CUDA kernel's spill stores
