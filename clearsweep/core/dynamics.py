@@ -796,17 +796,16 @@ ROD_SIDE = tuple(_rod_side(joint) for joint in JOINTS)
 ROD_FACTOR = tuple(next((att.factors[0] for att in (joint.ball, joint.socket)
                          if att.body == "rod"), 0.0) for joint in JOINTS)
 
+
 @compiled
 def rate_mobility(j, p, t3, r3, off_ball, off_socket, solve, mobility, g):
     """Mobility W_p of joint j's relative motion at the points its type's ``rate_point``
     names (:func:`point_mobility`, every constraint in place; ``mobility``: the solve's
-    (cons, nc, minv, mr_inv); t3, r3: the rod's sines and cosines and centroid; the rod's
-    rotation formed here, where it is used: kept live across the rate loop it spilled the
-    device build). The rod's side is read at the joint's attachment on the rod
-    moved by its offset there (``off_ball`` where the rod carries the ball, ``off_socket``
-    where it carries the socket): a zero offset is the attachment itself, a contact
-    point's through the rod's frame; a joint the rod carries neither side of has no rod
-    Jacobian."""
+    (cons, nc, minv, mr_inv); t3, r3: the rod's sines and cosines and its centroid). The
+    rod's side is read at the joint's attachment on the rod moved by its offset there
+    (``off_ball`` where the rod carries the ball, ``off_socket`` where it carries the
+    socket): a zero offset is the attachment itself, a contact point's through the rod's
+    frame; a joint the rod carries neither side of has no rod Jacobian."""
     _, nc, minv, mr_inv = mobility
     R3 = rotation(t3)
     G3 = gmat(t3)
