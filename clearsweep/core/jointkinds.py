@@ -228,6 +228,27 @@ def bushing_rows(spec):
     return BUSHING
 
 
+def parameter_list(name: str) -> str:
+    """Protocol function ``name``'s parameters (``joints.PROTOCOL``) as a call's argument
+    list: ``"jp, j, pen, e"``."""
+    return ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
+
+
+def compiled_from_source(source: str, name: str, scope: dict, doc: str, label: str | None = None):
+    """Function ``name`` of the Python ``source`` (a dispatcher written here), run in this
+    module's globals and ``scope`` (the functions it calls), given the docstring ``doc``
+    (and the name ``label``, by which Numba names its cache file) and compiled like every
+    kernel function (``@compiled``, inlined); its code object is named for this file, so
+    that Numba caches its callers as it does any function of this module."""
+    namespace = dict(globals(), **scope)
+    exec(compile(source, __file__, "exec"), namespace)
+    func = namespace[name]
+    if label is not None:
+        func.__name__ = func.__qualname__ = label
+    func.__doc__ = doc
+    return compiled(inline="always")(func)
+
+
 def dispatch_source(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)) -> tuple[str, dict]:
     """The source of the dispatcher of protocol function ``name`` (``joints.PROTOCOL``) and
     the names it calls: ``name(spec, <the protocol's parameters>)`` tests row j against the
@@ -236,7 +257,7 @@ def dispatch_source(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)) -> tu
     mask: ``of_kind`` of the masks' union), and calls it with the protocol's parameters;
     the bushing's function (no row's type) is the fall-through, a row of no type's as
     before, or without the bushing among ``kinds_of`` the last type's."""
-    params = ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
+    params = parameter_list(name)
     groups: list[tuple[object, list[str]]] = []
     for kind in kinds_of:
         func = getattr(MODULES[kind], name)
@@ -264,15 +285,13 @@ def dispatcher(name: str, label: str | None = None, kinds_of: tuple[str, ...] = 
     ``joints.PROTOCOL``'s ``name`` of joint j's type, given the build's joint set first.
     Compiled from its source like every kernel function (``@compiled``, inlined: the masks
     are constants of the build, so that LLVM folds each test where j is known, as it does
-    the hand-written chains it replaces); its code object is named for this file, so that
-    Numba caches its callers as it does any function of this module."""
+    the hand-written chains it replaces; :func:`compiled_from_source`). ``label``: its
+    name (Numba names its cache file by it), ``name`` by default."""
     source, scope = dispatch_source(name, kinds_of)
-    namespace = dict(globals(), **scope)
-    exec(compile(source, __file__, "exec"), namespace)
-    func = namespace[name]
-    func.__name__ = func.__qualname__ = label or name     # Numba's cache file is named by it
-    func.__doc__ = f"``joints.PROTOCOL``'s ``{name}`` of joint j's type (:func:`dispatcher`)."
-    return compiled(inline="always")(func)
+    return compiled_from_source(
+        source, name, scope,
+        f"``joints.PROTOCOL``'s ``{name}`` of joint j's type (:func:`dispatcher`).",
+        label or name)
 
 
 elastic_law = dispatcher("elastic_law")
@@ -298,18 +317,17 @@ def per_case(name: str, kinds_of: tuple[str, ...] = tuple(MODULES)):
     types ``kinds_of``, named ``row_<name>``). Every function it serves takes ``model``
     (the bushing's test reads ``model.jp``)."""
     row = dispatcher(name, f"row_{name}", kinds_of)
-    params = ", ".join(next(fn for fn in PROTOCOL if fn.name == name).params)
+    params = parameter_list(name)
     source = (f"def {name}(spec, {params}):\n"
               f"    if is_bushing(spec, model.jp, j):\n"
               f"        return bushing_{name}({params})\n"
               f"    return row_{name}(spec, {params})\n")
-    namespace = dict(globals(), is_bushing=is_bushing,
-                     **{f"row_{name}": row, f"bushing_{name}": getattr(bushing, name)})
-    exec(compile(source, __file__, "exec"), namespace)
-    func = namespace[name]
-    func.__doc__ = (f"``joints.PROTOCOL``'s ``{name}`` of joint j as the case has it: the "
-                    f"bushing's or its row's type's (:func:`per_case`).")
-    return compiled(inline="always")(func)
+    scope = {"is_bushing": is_bushing, f"row_{name}": row, f"bushing_{name}": getattr(bushing, name)}
+    return compiled_from_source(
+        source, name, scope,
+        f"``joints.PROTOCOL``'s ``{name}`` of joint j as the case has it: the bushing's or "
+        f"its row's type's (:func:`per_case`).")
+
 
 #: The types that touch at several points (their module's ``CONTACTS`` > 1: the prismatic
 #: type's block), whose joint's (:data:`MULTI_ROW`) contact :func:`multi_contact` applies.
