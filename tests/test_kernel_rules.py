@@ -39,6 +39,7 @@ def sources():
     (r"\bdamping_factor\(", {"core/contact.py"}),
     # the map is read (bin or bilinear) in one place
     (r"\bmap_interp\(", {"core/wear.py"}),
+    (r"\bmap_bin_near\(|S_HINT_", {"core/wear.py", "core/layout.py"}),
     (r"\bworn_surface\(", {"core/wear.py", "core/spherical.py", "params.py"}),
     # bin areas come from one formula
     (r"def bin_area\b", {"core/wear.py"}),

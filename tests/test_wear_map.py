@@ -134,3 +134,70 @@ def test_a_stopped_case_keeps_map_and_worn_volume_equal():
     assert str(ds.status.values) == "penetration_exceeded"
     held = (ds.wear_map.values * areas(36, 72)[None]).sum(axis=(1, 2))
     np.testing.assert_allclose(held, ds.wear_volume.values, rtol=1e-9)
+
+
+GRIDS = [(1, 1), (1, 2), (2, 3), (12, 24), (36, 72), (180, 360), (1000, 1000)]
+
+
+def edge_directions(npolar, nazim):
+    """Directions on the bins' edges (of about 30 x 30 of them) as the bin formula's angles
+    put them, and within 1e-15 and 1e-10 rad of them; the poles, the
+    azimuth's cut with both signed zeros, and a NaN: where a hint must not decide."""
+    out = [(0.0, 0.0, 1.0), (0.0, 0.0, -1.0), (-1.0, 0.0, 0.0), (-1.0, -0.0, 0.0),
+           (-0.6, 0.0, 0.8), (-0.6, -0.0, -0.8), (0.0, 0.0, 1.0 + 2.2e-16),
+           (math.nan, 0.0, 0.0), (0.0, -0.0, 0.0)]
+    for ip in range(0, npolar + 1, max(1, npolar // 30)):
+        for ia in range(0, nazim + 1, max(1, nazim // 30)):
+            t = ip * math.pi / npolar
+            a = -math.pi + 2.0 * math.pi * ia / nazim
+            for dt, da in ((0.0, 0.0), (1e-15, -1e-15), (-1e-15, 1e-15), (1e-10, 1e-10)):
+                out.append((math.sin(t + dt) * math.cos(a + da), math.sin(t + dt) * math.sin(a + da),
+                            math.cos(t + dt)))
+    return out
+
+
+@pytest.mark.parametrize("npolar, nazim", GRIDS)
+def test_the_bin_from_the_hint_is_the_bin_from_the_angles(npolar, nazim):
+    """wear.map_bin_near gives map_bin's bin, whatever bin its hint holds: along a wandering
+    contact (steps of 1e-12 to 1e-2 rad, where it reads the hint nearly always) and on every
+    bin edge, pole and cut, reached with the hint of each bin around it."""
+    from clearsweep.core import layout as L
+    from clearsweep.core.wear import map_bin_near
+
+    s = np.zeros((2, L.N_S))
+    rng = np.random.default_rng(npolar * 7919 + nazim)
+    kept = 0
+    v = rng.normal(size=3)
+    for i in range(4000):
+        if i % 500 == 0:
+            v = rng.normal(size=3)
+        v = v + rng.normal(size=3) * 10.0 ** rng.integers(-12, -1)
+        v /= np.linalg.norm(v)
+        n = (float(v[0]), float(v[1]), float(v[2]))
+        hint = s[1].copy()
+        assert map_bin_near(n, npolar, nazim, s, 1) == map_bin(n, npolar, nazim), n
+        kept += np.array_equal(hint, s[1])
+    if npolar * nazim > 1:
+        assert kept > 0.8 * 4000            # the hint is read, not just refreshed
+    edges = edge_directions(npolar, nazim)
+    for n in edges:
+        for near in edges[::max(1, len(edges) // 60)]:
+            if not all(map(math.isfinite, near)):
+                continue
+            s[:] = 0.0
+            map_bin_near(near, npolar, nazim, s, 1)       # a hint from another direction
+            got = map_bin_near(n, npolar, nazim, s, 1)
+            assert got == map_bin(n, npolar, nazim), (n, near)
+
+
+def test_an_empty_hint_holds_no_bin():
+    """All zero (a run's start): every direction takes its bin from the angles, the hint then
+    holds that bin."""
+    from clearsweep.core import layout as L
+    from clearsweep.core.wear import map_bin_near
+
+    for n in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.6, 0.0, 0.8), (0.0, 0.0, 0.0)):
+        s = np.zeros((1, L.N_S))
+        assert map_bin_near(n, 12, 24, s, 0) == map_bin(n, 12, 24)
+        assert (s[0, L.S_HINT_IP], s[0, L.S_HINT_IA]) == map_bin(n, 12, 24)
+        assert s[0, L.S_HINT_CZ_LO] < s[0, L.S_HINT_CZ_HI]

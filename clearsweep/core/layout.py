@@ -124,6 +124,14 @@ S_BETA = 1          # contact angle beta at the last accepted step [rad]
 # 8 corners, each against the y wall and the z wall it faces), 0 = not in contact [m/s]
 S_SLOT = 2
 P_SLOTS = 16
+# a one-point joint (ball, journal) keeps in its slots the wear-map bin its contact last read
+# and that bin's edges less a margin (wear.map_bin_near): a hint, never a result (all zero:
+# none). The polar and azimuth bins; the polar edges' cosines; the azimuth edges' directions.
+S_HINT_IP = S_SLOT
+S_HINT_IA = S_SLOT + 1
+S_HINT_CZ_LO = S_SLOT + 2      # the bin holds cos(theta) above this ...
+S_HINT_CZ_HI = S_SLOT + 3      # ... and below this
+S_HINT_EDGE = S_SLOT + 4       # (x, y) of the azimuth bin's first edge, then of its second
 N_S = S_SLOT + P_SLOTS
 
 # --- the wear of a step on its way to the map, cur[j, :] and pend[j, :] (rk4.merge_wear) ---

@@ -52,6 +52,12 @@ CONTACTS = 1
 
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
+    """:func:`hinted_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
+    return hinted_gap(jp, j, wmap, p, pb, ps, Rs, None)
+
+
+@compiled
+def hinted_gap(jp, j, wmap, p, pb, ps, Rs, hint):
     """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
     of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta) (``joints.PROTOCOL``;
     the ball touches its socket at one point: the contact index k is 0 and not read).
@@ -61,6 +67,8 @@ def gap(jp, j, wmap, p, k, pb, ps, Rs):
     c_eff = c + h; delta = e - c_eff, the penetration (negative: a gap). ``slope`` is the
     gradient of h with respect to the ball centre, grad_d h = R_s grad h / e (global,
     tangent to n, dimensionless), so that grad_d delta = n - slope: the worn gap's normal.
+    ``hint``: None, or the contact state s, whose row j keeps the map bin last read
+    (``wear.map_bin_near``: the same bin, found sooner).
     """
     d = sub(pb, ps)
     e = math.sqrt(dot(d, d))
@@ -71,7 +79,7 @@ def gap(jp, j, wmap, p, k, pb, ps, Rs):
     d_s = mtv(Rs, d)
     n_s = mtv(Rs, n)
     h, grad, worn = worn_surface(wmap, j, n_s, jp[j, J_COAT], p[P_FEEDBACK] != 0.0,
-                                 p[P_INTERP] != 0.0)
+                                 p[P_INTERP] != 0.0, hint)
     slope = (0.0, 0.0, 0.0)
     if e > 0.0 and (grad[0] != 0.0 or grad[1] != 0.0 or grad[2] != 0.0):
         slope = scale(1.0 / e, mv(Rs, grad))
@@ -117,7 +125,7 @@ def contact(j, model, ball, socket, full, dg):
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
+    geo = hinted_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
     c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)

@@ -10,6 +10,13 @@ containing a direction n is read back as h(n) for c_eff(n) = c + h(n).
 import math
 
 from .compiled import compiled
+from .layout import S_HINT_CZ_HI, S_HINT_CZ_LO, S_HINT_EDGE, S_HINT_IA, S_HINT_IP
+from .target import on_device
+
+#: How far inside its bin's edges a direction must lie for :func:`map_bin_near` to take the
+#: bin from its hint: a cosine, and a sine relative to |x| + |y|; both bound the angle to
+#: the edge from below, far above the bins' rounding (some 1e-15 rad; tests/test_wear.py).
+BIN_MARGIN = 1e-9
 
 # 4-point Gauss-Legendre rule on [-1, 1]: nodes and weights
 _GX0 = 0.3399810435848563
@@ -30,6 +37,45 @@ def map_bin(n, npolar, nazim):
         ia = nazim - 1
     if ia < 0:
         ia = 0
+    return ip, ia
+
+
+@compiled
+def map_bin_near(n, npolar, nazim, s, j):
+    """:func:`map_bin` (the same integers) of unit direction n, read from the bin that the
+    hint in row j of the contact state s holds (``layout.S_HINT_*``) where n lies inside it
+    by more than :data:`BIN_MARGIN`, and computed otherwise, the hint then set to n's bin.
+
+    A contact moves little from one evaluation to the next, so the hint nearly always holds
+    and the step saves an arccosine and an arctangent per contact. The hint tests with the
+    bin's edges what the bin's formula decides with the angles: the polar bin ip holds
+    cos(theta) in (cos((ip + 1) pi / npolar), cos(ip pi / npolar)], the azimuth bin ia the
+    directions between its edges at -pi + 2 pi ia / nazim and the next (cross products,
+    whose sign says the side). Inside by the margin, the angle is at least 1e-9 rad from an
+    edge (|d theta / d cos theta| >= 1; sin x <= x), where the formula's rounding is some
+    1e-15: both give the same bin. A direction near an edge, a pole or the azimuth's cut, a
+    NaN, or an empty hint (all zero: no bounds hold) falls through to :func:`map_bin`. A
+    device build (``target.on_device``) keeps :func:`map_bin`, its registers unchanged.
+    """
+    if on_device():
+        return map_bin(n, npolar, nazim)
+    cz = n[2]
+    x = n[0]
+    y = n[1]
+    tol = BIN_MARGIN * (abs(x) + abs(y))
+    if (s[j, S_HINT_CZ_LO] < cz and cz < s[j, S_HINT_CZ_HI]
+            and s[j, S_HINT_EDGE] * y - s[j, S_HINT_EDGE + 1] * x > tol
+            and x * s[j, S_HINT_EDGE + 3] - y * s[j, S_HINT_EDGE + 2] > tol):
+        return int(s[j, S_HINT_IP]), int(s[j, S_HINT_IA])
+    ip, ia = map_bin(n, npolar, nazim)
+    s[j, S_HINT_IP] = ip
+    s[j, S_HINT_IA] = ia
+    s[j, S_HINT_CZ_LO] = math.cos((ip + 1) * math.pi / npolar) + BIN_MARGIN
+    s[j, S_HINT_CZ_HI] = math.cos(ip * math.pi / npolar) - BIN_MARGIN
+    for k in range(2):
+        edge = -math.pi + 2.0 * math.pi * (ia + k) / nazim
+        s[j, S_HINT_EDGE + 2 * k] = math.cos(edge)
+        s[j, S_HINT_EDGE + 2 * k + 1] = math.sin(edge)
     return ip, ia
 
 
@@ -214,7 +260,7 @@ def deposit(wmap, j, n, vol, area, radius, scratch):
 
 
 @compiled
-def worn_surface(wmap, j, n, coat, feedback, interp):
+def worn_surface(wmap, j, n, coat, feedback, interp, hint=None):
     """What joint j's worn socket is in unit direction n (socket frame): (h, grad, worn).
 
     h [m] is the wear depth the contact adds to the clearance, c_eff(n) = c + h
@@ -224,13 +270,17 @@ def worn_surface(wmap, j, n, coat, feedback, interp):
     for the bin read (a stepped surface, flat inside each bin). ``worn`` says whether the
     coating of thickness ``coat`` [m] (inf: none) is worn through there: the bin's depth
     reaches it. The one reading of a worn socket: the kernel's contact and the seated start
-    both call it.
+    both call it. ``hint``: None, or the contact state whose row j holds the last bin read,
+    where the stepped read takes its bin (:func:`map_bin_near`, the same bin).
     """
     h = 0.0
     grad = (0.0, 0.0, 0.0)
     worn = False
     if feedback or coat < math.inf:
-        ip, ia = map_bin(n, wmap.shape[1], wmap.shape[2])
+        if hint is None or interp:
+            ip, ia = map_bin(n, wmap.shape[1], wmap.shape[2])
+        else:
+            ip, ia = map_bin_near(n, wmap.shape[1], wmap.shape[2], hint, j)
         if feedback:
             if interp:
                 h, grad = map_interp(wmap, j, n)
