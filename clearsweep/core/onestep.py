@@ -13,8 +13,9 @@ change of contact state): one call site, which the loop reaches four or five tim
 sub-step, with the same arguments, the same arithmetic in the same order, and so the same
 bits (tests/test_onestep.py runs both on the CPU kernel's Python source). :data:`advance_one_call`
 is ``rk4.advance`` itself, its code and every function it calls, with that attempt in place
-of ``rk4.attempt_step``: nothing of the step's rules is written a second time but the
-attempt's.
+of ``rk4.attempt_step``. The two attempts share the sub-step's acceptance
+(``rk4.accept_end``) and its sample and section (``rk4.finish_substep``): nothing of the
+step's rules is written a second time but the loop of evaluations.
 
 The CPU kernel does not use it. ``core.device.soa_kernel(..., one_evaluate=True)`` builds it
 for the device (``python -m clearsweep.ptx --one-evaluate`` gives its registers and spills
@@ -30,20 +31,15 @@ from . import rk4
 from .compiled import OPTIONS, compiled
 from .dynamics import evaluate
 from .jointkinds import multi_free
-from .layout import D_RATE, P_DT, P_SETTLE, P_STAB
+from .layout import P_DT
 from .rk4 import (
     ST_OK,
-    accept_multi,
-    accept_substep,
+    accept_end,
     clear_attempt,
     copy_into,
-    keep_accepted,
+    finish_substep,
     keep_ends,
-    level_for,
-    note_first_impact,
-    record_sample,
     section_in,
-    substep_section,
 )
 
 #: Phases of a sub-step's evaluations: the three stage derivatives (0, 1, 2), the
@@ -57,22 +53,16 @@ def attempt_step_one_call(t, level, last, model, solve, wear, out, work, kept, s
                           stage):
     """``rk4.attempt_step`` (same arguments, same returns, same bits) with
     ``rk4.rk4_substep`` folded in and every evaluation of the attempt at one call site."""
-    p = model.p
-    jp = model.jp
-    stats = out.stats
     y = work.y
     k1 = work.k1
     dg = work.dg
     ksum = work.ksum
     kst = work.kst
     yt = work.yt
-    h = p[P_DT]
-    stab = p[P_STAB]
-    settle = p[P_SETTLE]
-    slides = multi_free(spec, jp)    # a multi-contact joint with clearance
+    slides = multi_free(spec, model.jp)    # a multi-contact joint with clearance
     n = y.shape[0]
     nsub = 1 << level
-    hs = h / nsub
+    hs = model.p[P_DT] / nsub
     nbuf = 0
     need = -1
     status = ST_OK
@@ -123,27 +113,14 @@ def attempt_step_one_call(t, level, last, model, solve, wear, out, work, kept, s
             phase += 1
             continue
         if phase == PHASE_END:
-            if dg[D_RATE] * hs > stab:
-                need = level_for(dg[D_RATE], h, stab)
+            need, in_settled, kept, changed, nbuf = accept_end(ts, hs, nsub, kept, nbuf, slides,
+                                                               model, wear, out, work, spec)
+            if need >= 0:
                 break
-            in_settled = ts + hs >= settle
-            if nsub > 1 and not kept:
-                keep_accepted(work.s, work.ssave, stats, work.msave, out.first, work.first_save,
-                              work.ddot_prev, work.ddot_prev_save)
-                kept = True
-            changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                           work.ddot_prev, spec)
-            if slides and accept_multi(hs, in_settled, model, stats, work.cur, y, spec):
-                changed = True
-            note_first_impact(out.first, stats, ts + hs)
             if changed:
                 phase = PHASE_AGAIN
                 continue
-        record_sample(stats, work.prev, dg, y, jp, hs,
-                      max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
-        due, tk = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
-        if due:
-            substep_section(work.secnext, tk, ts, hs, y, k1, work.ysub, work.k1sub, spec)
+        finish_substep(t, sub, ts, hs, nsub, last, in_settled, model, out, work, spec)
         sub += 1
         if sub == nsub:
             break

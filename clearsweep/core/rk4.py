@@ -1118,18 +1118,12 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
     nbuf, nsub, kept): ``need`` the level the rate asks for (-1: every sub-step taken),
     ``nbuf`` the undo buffer's rows, ``kept`` whether the step's start was kept for a
     rejection (:func:`keep_accepted`)."""
-    p = model.p
-    jp = model.jp
-    stats = out.stats
     y = work.y
     k1 = work.k1
     dg = work.dg
-    h = p[P_DT]
-    stab = p[P_STAB]
-    settle = p[P_SETTLE]
-    slides = multi_free(spec, jp)    # a multi-contact joint with clearance
+    slides = multi_free(spec, model.jp)    # a multi-contact joint with clearance
     nsub = 1 << level
-    hs = h / nsub
+    hs = model.p[P_DT] / nsub
     nbuf = 0
     need = -1
     status = ST_OK
@@ -1150,30 +1144,56 @@ def attempt_step(t, level, last, model, solve, wear, out, work, kept, spec, step
         if st != ST_OK:
             status = st
             break
-        if dg[D_RATE] * hs > stab:
-            need = level_for(dg[D_RATE], h, stab)
+        need, in_settled, kept, changed, nbuf = accept_end(ts, hs, nsub, kept, nbuf, slides,
+                                                           model, wear, out, work, spec)
+        if need >= 0:
             break
-        in_settled = ts + hs >= settle
-        if nsub > 1 and not kept:
-            keep_accepted(work.s, work.ssave, stats, work.msave, out.first, work.first_save,
-                          work.ddot_prev, work.ddot_prev_save)
-            kept = True
-        changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
-                                       work.ddot_prev, spec)
-        if slides and accept_multi(hs, in_settled, model, stats, work.cur, y, spec):
-            changed = True
-        note_first_impact(out.first, stats, ts + hs)
         if changed:
             st = evaluate(ts + hs, y, model, k1, dg, step_end, solve, spec)
             if st != ST_OK:
                 status = st
                 break
-        record_sample(stats, work.prev, dg, y, jp, hs,
-                      max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
-        due, tk = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
-        if due:
-            substep_section(work.secnext, tk, ts, hs, y, k1, work.ysub, work.k1sub, spec)
+        finish_substep(t, sub, ts, hs, nsub, last, in_settled, model, out, work, spec)
     return status, need, nbuf, nsub, kept
+
+
+@compiled(inline="always")
+def accept_end(ts, hs, nsub, kept, nbuf, slides, model, wear, out, work, spec):
+    """The sub-step from ts, evaluated at its end (``work.dg``), accepted unless the stiff
+    rate asks for a deeper level: its wear, contact episodes and first impacts, the step's
+    start kept first where a rejection may still undo them (``kept``, :func:`keep_accepted`).
+    Returns (need, in_settled, kept, changed, nbuf): ``need`` the level the rate asks for
+    (-1: accepted), ``changed`` whether the contact state changed (the end to evaluate
+    again). The one acceptance of :func:`attempt_step` and ``onestep``'s attempt."""
+    p = model.p
+    dg = work.dg
+    stats = out.stats
+    if dg[D_RATE] * hs > p[P_STAB]:
+        return level_for(dg[D_RATE], p[P_DT], p[P_STAB]), False, kept, False, nbuf
+    in_settled = ts + hs >= p[P_SETTLE]
+    if nsub > 1 and not kept:
+        keep_accepted(work.s, work.ssave, stats, work.msave, out.first, work.first_save,
+                      work.ddot_prev, work.ddot_prev_save)
+        kept = True
+    changed, nbuf = accept_substep(hs, in_settled, model, dg, stats, wear, nbuf,
+                                   work.ddot_prev, spec)
+    if slides and accept_multi(hs, in_settled, model, stats, work.cur, work.y, spec):
+        changed = True
+    note_first_impact(out.first, stats, ts + hs)
+    return -1, in_settled, kept, changed, nbuf
+
+
+@compiled(inline="always")
+def finish_substep(t, sub, ts, hs, nsub, last, in_settled, model, out, work, spec):
+    """An accepted sub-step from ts, evaluated at its end: its sample in the statistics
+    (weighted from the settling time where it straddles it) and the Poincare section that
+    falls in it (:func:`substep_section`)."""
+    settle = model.p[P_SETTLE]
+    record_sample(out.stats, work.prev, work.dg, work.y, model.jp, hs,
+                  max(0.0, (settle - ts) / hs) if in_settled else -1.0, spec)
+    due, tk = section_in(work.secnext, t, sub, hs, last and sub == nsub - 1)
+    if due:
+        substep_section(work.secnext, tk, ts, hs, work.y, work.k1, work.ysub, work.k1sub, spec)
 
 
 @compiled(inline="always")
