@@ -1193,7 +1193,8 @@ def joint_set(cfg: Config) -> int:
 #: builds share included), each later one 20-28: the mixed-clearance study's 16 sets
 #: would compile 16 builds for a run of 40 s. Specialised on the spherical joints A and B,
 #: four builds at most: against the tree before builds per joint set (c64b06a), side by
-#: side, the ideal case runs 1.26x, one clearance 1.12x, two 1.03x. Folding O and P away
+#: side, the ideal case runs 1.26x, one clearance 1.12x, two 1.03x (1.23x, 1.16x and 1.15x
+#: since a ball's map bin comes from a hint, ``wear.map_bin_near``). Folding O and P away
 #: together where both are ideal (eight builds) gave those three cases 1.30x, 1.14x and
 #: 1.05x, but the default test run compiled seven more builds and took 603 s against 482 s,
 #: past its budget (benchmarks/README.md, "Builds per joint set", "The CPU's grouping,
