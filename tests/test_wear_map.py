@@ -201,3 +201,39 @@ def test_an_empty_hint_holds_no_bin():
         assert map_bin_near(n, 12, 24, s, 0) == map_bin(n, 12, 24)
         assert (s[0, L.S_HINT_IP], s[0, L.S_HINT_IA]) == map_bin(n, 12, 24)
         assert s[0, L.S_HINT_CZ_LO] < s[0, L.S_HINT_CZ_HI]
+
+
+@pytest.mark.parametrize("nbins", [1, 2, 3, 36, 360, 100_000])
+def test_a_bearing_s_bin_from_the_hint_is_the_bin_from_the_angle(nbins):
+    """wear.angle_bin_near, a bearing map's hint, gives angle_bin's bin: along a wandering
+    in-plane direction and on every bin edge (within 1e-15 and 1e-10 rad of it, and on the
+    cut with both signed zeros), reached with the hint of bins around it."""
+    from clearsweep.core import layout as L
+    from clearsweep.core.wear import angle_bin, angle_bin_near
+
+    s = np.zeros((3, L.N_S))
+    rng = np.random.default_rng(nbins)
+    a = 0.0
+    kept = 0
+    for i in range(4000):
+        a += rng.normal() * 10.0 ** rng.integers(-12, -1)
+        r = 10.0 ** rng.integers(-3, 3)
+        y, x = r * math.sin(a), r * math.cos(a)
+        hint = s[2].copy()
+        assert angle_bin_near(y, x, nbins, s, 2) == angle_bin(y, x, nbins), (y, x)
+        kept += np.array_equal(hint, s[2])
+    if nbins > 1:
+        assert kept > 0.5 * 4000            # the hint is read (steps of 1e-4 rad and more leave
+                                            # 100,000 bins' bin: some 27 % of them)
+    points = [(0.0, -1.0), (-0.0, -1.0), (0.0, 0.0), (-0.0, 0.0), (math.nan, 1.0)]
+    for k in range(0, nbins + 1, max(1, nbins // 60)):
+        edge = -math.pi + 2.0 * math.pi * k / nbins
+        for d in (0.0, 1e-15, -1e-15, 1e-10, -1e-10):
+            points.append((math.sin(edge + d), math.cos(edge + d)))
+    for y, x in points:
+        for near in points[::max(1, len(points) // 40)]:
+            if not all(map(math.isfinite, near)):
+                continue
+            s[:] = 0.0
+            angle_bin_near(near[0], near[1], nbins, s, 2)
+            assert angle_bin_near(y, x, nbins, s, 2) == angle_bin(y, x, nbins), (y, x, near)

@@ -52,7 +52,7 @@ from .layout import (
     P_FEEDBACK,
     P_INTERP,
 )
-from .wear import angle_bin, arc_to_bins, coating_worn
+from .wear import angle_bin, angle_bin_near, arc_to_bins, coating_worn
 
 #: The joint type this module implements (registered in ``joints.JOINT_TYPES``).
 JOINT_TYPE = "revolute"
@@ -112,13 +112,23 @@ def bearing_angle(n):
 
 
 @compiled
-def map_read(wmap, j, n, interp):
+def bearing_bin(n, nazim, hint, j):
+    """The bearing map's bin holding the in-plane direction n's angle phi (``wear.angle_bin``
+    of (n_y, n_z)); ``hint``: None, or the contact state s whose row j keeps the bin read
+    last (``wear.angle_bin_near``: the same bin, found sooner)."""
+    if hint is None:
+        return angle_bin(n[2], n[1], nazim)
+    return angle_bin_near(n[2], n[1], nazim, hint, j)
+
+
+@compiled
+def map_read(wmap, j, n, interp, hint=None):
     """Depth h [m] of joint j's bearing map at the in-plane direction n and its rate
-    dh/dphi [m per rad]: the bin holding phi, or (``interp``) linear between the bin centres,
-    periodic around the bearing."""
+    dh/dphi [m per rad]: the bin holding phi (:func:`bearing_bin`), or (``interp``) linear
+    between the bin centres, periodic around the bearing."""
     nazim = wmap.shape[2]
     if not interp:
-        return wmap[j, 0, angle_bin(n[2], n[1], nazim)], 0.0
+        return wmap[j, 0, bearing_bin(n, nazim, hint, j)], 0.0
     v = (bearing_angle(n) + math.pi) / (2.0 * math.pi) * nazim - 0.5
     k = int(math.floor(v))
     fv = v - k
@@ -130,16 +140,22 @@ def map_read(wmap, j, n, interp):
 
 
 @compiled
-def worn_through(wmap, j, n, coat):
+def worn_through(wmap, j, n, coat, hint=None):
     """Whether the coating of thickness ``coat`` [m] (inf: none) is worn through in the bin
-    of the bearing map holding the in-plane direction n."""
+    of the bearing map holding the in-plane direction n (:func:`bearing_bin`)."""
     if not coat < math.inf:
         return False
-    return coating_worn(wmap[j, 0, angle_bin(n[2], n[1], wmap.shape[2])], coat)
+    return coating_worn(wmap[j, 0, bearing_bin(n, wmap.shape[2], hint, j)], coat)
 
 
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
+    """:func:`hinted_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
+    return hinted_gap(jp, j, wmap, p, pb, ps, Rs, None)
+
+
+@compiled
+def hinted_gap(jp, j, wmap, p, pb, ps, Rs, hint):
     """Gap geometry of revolute joint j with journal centre pb and bearing centre ps
     (global) in a bearing body of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff,
     delta), as ``spherical.gap`` (``joints.PROTOCOL``; one contact point, k = 0, not read).
@@ -153,7 +169,8 @@ def gap(jp, j, wmap, p, k, pb, ps, Rs):
     rotation about x. h [m] is the bearing map's depth at n_s (0 without feedback);
     ``slope`` = (dh/dphi / e) e_phi, e_phi = (0, -n_z, n_y) (global: the body's rotation
     shifts phi, not its rate), the gradient of h with respect to the journal centre, so
-    that grad_d delta = n - slope.
+    that grad_d delta = n - slope. ``hint``: None, or the contact state s, whose row j keeps
+    the map bin last read (:func:`bearing_bin`).
     """
     d = (0.0, pb[1] - ps[1], pb[2] - ps[2])
     e = math.sqrt(d[1] * d[1] + d[2] * d[2])
@@ -172,10 +189,10 @@ def gap(jp, j, wmap, p, k, pb, ps, Rs):
     h = 0.0
     slope = (0.0, 0.0, 0.0)
     if p[P_FEEDBACK] != 0.0:
-        h, dh = map_read(wmap, j, n_s, p[P_INTERP] != 0.0)
+        h, dh = map_read(wmap, j, n_s, p[P_INTERP] != 0.0, hint)
         if e > 0.0 and dh != 0.0:
             slope = (0.0, -dh / e * n[2], dh / e * n[1])
-    worn = worn_through(wmap, j, n_s, jp[j, J_COAT])
+    worn = worn_through(wmap, j, n_s, jp[j, J_COAT], hint)
     c_eff = jp[j, J_C] + h
     return e, n, d_s, n_s, h, slope, worn, c_eff, e - c_eff
 
@@ -230,7 +247,7 @@ def contact(j, model, ball, socket, full, dg):
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = gap(model.jp, j, model.wmap, model.p, 0, pb, ps, Rs)
+    geo = hinted_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
     c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)

@@ -60,23 +60,53 @@ def map_bin_near(n, npolar, nazim, s, j):
     if on_device():
         return map_bin(n, npolar, nazim)
     cz = n[2]
-    x = n[0]
-    y = n[1]
-    tol = BIN_MARGIN * (abs(x) + abs(y))
     if (s[j, S_HINT_CZ_LO] < cz and cz < s[j, S_HINT_CZ_HI]
-            and s[j, S_HINT_EDGE] * y - s[j, S_HINT_EDGE + 1] * x > tol
-            and x * s[j, S_HINT_EDGE + 3] - y * s[j, S_HINT_EDGE + 2] > tol):
+            and in_azimuth_hint(n[1], n[0], s, j)):
         return int(s[j, S_HINT_IP]), int(s[j, S_HINT_IA])
     ip, ia = map_bin(n, npolar, nazim)
     s[j, S_HINT_IP] = ip
-    s[j, S_HINT_IA] = ia
     s[j, S_HINT_CZ_LO] = math.cos((ip + 1) * math.pi / npolar) + BIN_MARGIN
     s[j, S_HINT_CZ_HI] = math.cos(ip * math.pi / npolar) - BIN_MARGIN
+    keep_azimuth_hint(s, j, ia, nazim)
+    return ip, ia
+
+
+@compiled
+def angle_bin_near(y, x, nbins, s, j):
+    """:func:`angle_bin` (the same integer) of the direction (x, y), read from the azimuth
+    bin that the hint in row j of the contact state s holds where the direction lies inside
+    it by more than :data:`BIN_MARGIN`, and computed otherwise, the hint then set to its bin:
+    a bearing map's :func:`map_bin_near` (its polar columns unused). A device build keeps
+    :func:`angle_bin`."""
+    if on_device():
+        return angle_bin(y, x, nbins)
+    if in_azimuth_hint(y, x, s, j):
+        return int(s[j, S_HINT_IA])
+    ia = angle_bin(y, x, nbins)
+    keep_azimuth_hint(s, j, ia, nbins)
+    return ia
+
+
+@compiled(inline="always")
+def in_azimuth_hint(y, x, s, j):
+    """Whether the direction (x, y) lies between the azimuth bin edges that row j of s holds
+    (``layout.S_HINT_EDGE``: their (x, y), each bin's first edge first) by more than
+    :data:`BIN_MARGIN`: each cross product's sign says the side of an edge, and against
+    BIN_MARGIN (|x| + |y|) its size bounds the angle to the edge from below."""
+    tol = BIN_MARGIN * (abs(x) + abs(y))
+    return (s[j, S_HINT_EDGE] * y - s[j, S_HINT_EDGE + 1] * x > tol
+            and x * s[j, S_HINT_EDGE + 3] - y * s[j, S_HINT_EDGE + 2] > tol)
+
+
+@compiled(inline="always")
+def keep_azimuth_hint(s, j, ia, nbins):
+    """Azimuth bin ia of ``nbins`` as row j's hint: its index and its two edges' directions,
+    at -pi + 2 pi ia / nbins and the next, as the bin formula puts them."""
+    s[j, S_HINT_IA] = ia
     for k in range(2):
-        edge = -math.pi + 2.0 * math.pi * (ia + k) / nazim
+        edge = -math.pi + 2.0 * math.pi * (ia + k) / nbins
         s[j, S_HINT_EDGE + 2 * k] = math.cos(edge)
         s[j, S_HINT_EDGE + 2 * k + 1] = math.sin(edge)
-    return ip, ia
 
 
 @compiled
