@@ -6,9 +6,10 @@ slider-crank's one-clearance case against the RSSP's (``MECHANISM_CASES``, steps
 second, the ratio).
 
 Run: ``python benchmarks/bench_engine.py [--baseline REV] [--repeats 5] [--duration 1.0]
-[--out FILE] [--rates-only] [--mechanisms]`` (``--rates-only``: the side-by-side steps/s
-alone, no cold compile, shipped configs or solve_ivp; ``--mechanisms``: the mechanisms'
-table alone). The baseline defaults to the merge-base of HEAD with ``main``; it is
+[--out FILE] [--rates-only [--bearings]] [--mechanisms]`` (``--rates-only``: the side-by-side
+steps/s alone, no cold compile, shipped configs or solve_ivp, with ``--bearings`` of the
+cases whose clearance joints are bearings, ``BEARING_CASES``; ``--mechanisms``: the
+mechanisms' table alone). The baseline defaults to the merge-base of HEAD with ``main``; it is
 exported with ``git archive`` into a temporary folder. Writes markdown to stdout (and to
 ``--out`` if given).
 """
@@ -33,6 +34,16 @@ CASES = {
     "ideal": [],
     "one clearance (B)": ["joints.B.clearance=2.5e-4"],
     "two clearances (A, B)": ["joints.A.clearance=2.5e-4", "joints.B.clearance=2.5e-4"],
+}
+
+#: Cases whose clearance joints are journals in bearings (the revolute type: the RSSP's O,
+#: the slider-crank's pins), for ``--bearings``: the bearing map's read side by side.
+BEARING_CASES = {
+    "RSSP, O": ["joints.O.clearance=2.5e-4"],
+    "RSSP, O, A and B": ["joints.O.clearance=2.5e-4", "joints.A.clearance=2.5e-4",
+                         "joints.B.clearance=2.5e-4"],
+    "slider-crank, B, 60 r/min": ["mechanism.kind=slider_crank", "mechanism.preset=flores_benchmark",
+                                  "joints.B.clearance=2.5e-4"],
 }
 
 #: The mechanisms side by side, this tree alone (the baseline may predate mechanism.kind):
@@ -147,16 +158,16 @@ def default_baseline() -> str:
 
 
 def side_by_side(trees: dict[str, Path], duration: float, repeats: int,
-                 cpu: bool = False) -> dict:
+                 cpu: bool = False, cases: dict = CASES) -> dict:
     """{tree label: {case: median steps/s}}: the trees' kernels timed alternately, each
     repeat in a fresh process per tree; per CPU second of the process with ``cpu``, else
     per wall second."""
-    rates: dict[str, dict[str, list[float]]] = {label: {c: [] for c in CASES} for label in trees}
+    rates: dict[str, dict[str, list[float]]] = {label: {c: [] for c in cases} for label in trees}
     for label, tree in trees.items():  # warm the on-disk caches
-        in_tree(tree, RATE_SNIPPET, "1e-3", json.dumps(CASES))
+        in_tree(tree, RATE_SNIPPET, "1e-3", json.dumps(cases))
     for _ in range(repeats):
         for label, tree in trees.items():
-            res = json.loads(in_tree(tree, RATE_SNIPPET, str(duration), json.dumps(CASES)))
+            res = json.loads(in_tree(tree, RATE_SNIPPET, str(duration), json.dumps(cases)))
             for case, (steps, wall, seconds) in res.items():
                 rates[label][case].append(steps / (seconds if cpu else wall))
     return {label: {c: statistics.median(v) for c, v in r.items()} for label, r in rates.items()}
@@ -371,6 +382,10 @@ def main(argv=None) -> str:
     ap.add_argument("--cpu-time", action="store_true",
                     help="steps per CPU second of each run's process (a loaded machine) rather "
                          "than per wall second")
+    ap.add_argument("--bearings", action="store_true",
+                    help="with --rates-only: time the cases with bearings in clearance "
+                         "(BEARING_CASES: O, O with A and B, the slider-crank's B) in place of "
+                         "the goal cases")
     ap.add_argument("--mechanisms", action="store_true",
                     help="the mechanisms' table alone (this tree: the slider-crank against the "
                          "RSSP, steps per CPU second)")
@@ -399,7 +414,8 @@ def main(argv=None) -> str:
         trees = {commit: base, "this tree": ROOT}
         colds = {} if args.rates_only else {label: compile_times(tree) for label, tree in trees.items()}
         load = os.getloadavg()[0]
-        rates = side_by_side(trees, args.duration, args.repeats, args.cpu_time)
+        cases = BEARING_CASES if args.bearings else CASES
+        rates = side_by_side(trees, args.duration, args.repeats, args.cpu_time, cases)
     if colds:
         lines += [
             "JIT compile (import + 10-step two-clearance case, fresh interpreter, empty cache):",
@@ -416,7 +432,7 @@ def main(argv=None) -> str:
         f"| case | {commit} | this tree | ratio |",
         "|---|---|---|---|",
         *(f"| {case} | {rates[commit][case]:,.0f} | {rates['this tree'][case]:,.0f} | "
-          f"{rates['this tree'][case] / rates[commit][case]:.2f} |" for case in CASES),
+          f"{rates['this tree'][case] / rates[commit][case]:.2f} |" for case in cases),
         "",
         f"load average (1 min) before the timed runs: {load:.1f}, after: {os.getloadavg()[0]:.1f}",
     ]
