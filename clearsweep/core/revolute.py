@@ -150,12 +150,12 @@ def worn_through(wmap, j, n, coat, hint=None):
 
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
-    """:func:`hinted_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
-    return hinted_gap(jp, j, wmap, p, pb, ps, Rs, None)
+    """:func:`bearing_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
+    return bearing_gap(jp, j, wmap, p, pb, ps, Rs, None)
 
 
 @compiled
-def hinted_gap(jp, j, wmap, p, pb, ps, Rs, hint):
+def bearing_gap(jp, j, wmap, p, pb, ps, Rs, hint):
     """Gap geometry of revolute joint j with journal centre pb and bearing centre ps
     (global) in a bearing body of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff,
     delta), as ``spherical.gap`` (``joints.PROTOCOL``; one contact point, k = 0, not read).
@@ -247,7 +247,7 @@ def contact(j, model, ball, socket, full, dg):
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = hinted_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
+    geo = bearing_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
     c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)

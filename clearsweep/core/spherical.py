@@ -52,12 +52,12 @@ CONTACTS = 1
 
 @compiled
 def gap(jp, j, wmap, p, k, pb, ps, Rs):
-    """:func:`hinted_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
-    return hinted_gap(jp, j, wmap, p, pb, ps, Rs, None)
+    """:func:`socket_gap` without a hint: the protocol's gap (``joints.PROTOCOL``)."""
+    return socket_gap(jp, j, wmap, p, pb, ps, Rs, None)
 
 
 @compiled
-def hinted_gap(jp, j, wmap, p, pb, ps, Rs, hint):
+def socket_gap(jp, j, wmap, p, pb, ps, Rs, hint):
     """Gap geometry of joint j with ball centre pb and socket centre ps (global) in a socket
     of rotation Rs: (e, n, d_s, n_s, h, slope, worn, c_eff, delta) (``joints.PROTOCOL``;
     the ball touches its socket at one point: the contact index k is 0 and not read).
@@ -125,7 +125,7 @@ def contact(j, model, ball, socket, full, dg):
     rs, vs, Rs, ws_, us = socket
     pb, _ = point_state(rb, vb, Rb, wb, ub)
     ps, _ = point_state(rs, vs, Rs, ws_, us)
-    geo = hinted_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
+    geo = socket_gap(model.jp, j, model.wmap, model.p, pb, ps, Rs, model.s)
     c = compose(j, model, ball, socket, pb, ps, geo, elastic_law(model.p, j), full)
     if full:
         store_contact(dg, j, c)
