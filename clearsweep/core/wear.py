@@ -15,7 +15,7 @@ from .target import on_device
 
 #: How far inside its bin's edges a direction must lie for :func:`map_bin_near` to take the
 #: bin from its hint: a cosine, and a sine relative to |x| + |y|; both bound the angle to
-#: the edge from below, far above the bins' rounding (some 1e-15 rad; tests/test_wear.py).
+#: the edge from below, far above the bins' rounding (some 1e-15 rad; tests/test_wear_map.py).
 BIN_MARGIN = 1e-9
 
 # 4-point Gauss-Legendre rule on [-1, 1]: nodes and weights
