@@ -125,8 +125,9 @@ S_BETA = 1          # contact angle beta at the last accepted step [rad]
 S_SLOT = 2
 P_SLOTS = 16
 # a one-point joint (ball, journal) keeps in its slots the wear-map bin its contact last read
-# and that bin's edges less a margin (wear.map_bin_near): a hint, never a result (all zero:
-# none). The polar and azimuth bins; the polar edges' cosines; the azimuth edges' directions.
+# and that bin's edges less a margin (wear.map_bin_near; a journal's bearing map the azimuth
+# columns alone, wear.angle_bin_near): a hint, never a result (all zero: none). The polar
+# and azimuth bins; the polar edges' cosines; the azimuth edges' directions.
 S_HINT_IP = S_SLOT
 S_HINT_IA = S_SLOT + 1
 S_HINT_CZ_LO = S_SLOT + 2      # the bin holds cos(theta) above this ...
